@@ -1,0 +1,294 @@
+//! The bake pipeline: scene → BVH → sample points → sample maps → cube maps → store.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use glam::{Mat4, Vec3};
+use oslf_format::{BakeParams, CameraInfo, ObjectInfo, Patch, StoreMeta, StoreWriter};
+use rayon::prelude::*;
+
+use crate::bvh::TriangleScene;
+use crate::capture::{capture_cube, strata_per_side, CaptureSettings};
+use crate::error::Result;
+use crate::integrator::{Integrator, RayStats};
+use crate::sample_map::{self, SampleMapStats};
+use crate::sample_points::{self, global_patches};
+use crate::scene::Scene;
+
+/// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε.
+pub const TESSELLATION_ERROR: f32 = 1.0 / 50.0;
+
+/// Cubes captured in parallel before they are appended in order.
+const CHUNK: usize = 32;
+
+/// How to run a bake.
+#[derive(Clone, Debug)]
+pub struct BakeOptions {
+    /// The store to write.
+    pub output: PathBuf,
+    /// Continue from `<output>.partial` if it exists (and matches this scene and settings).
+    pub resume: bool,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+    /// Capture at most this many cube maps in this run, then stop and leave `<output>.partial`
+    /// for a later `resume` (a bake in slices). `None`: run to the end.
+    pub cube_limit: Option<u32>,
+}
+
+/// What a bake did, for the summary and for tools (`--report-json`).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct BakeReport {
+    pub output: PathBuf,
+    /// Whether the store was completed (false when `cube_limit` stopped the run early).
+    pub finished: bool,
+    pub triangles: usize,
+    pub bvh_build_seconds: f64,
+    pub sample_points: usize,
+    pub points_placed: usize,
+    pub points_removed_close: usize,
+    pub points_removed_inside: usize,
+    pub sample_maps: SampleMapStats,
+    pub cubes: u32,
+    /// Cubes recovered from an interrupted bake instead of being traced again.
+    pub cubes_resumed: u32,
+    pub cube_resolution: u32,
+    pub samples_per_texel: u32,
+    pub rays_closest: u64,
+    pub rays_shadow: u64,
+    /// Capture rays per second, millions (closest + shadow, this run's cubes only).
+    pub mrays_per_second: f64,
+    pub placement_seconds: f64,
+    pub sample_map_seconds: f64,
+    pub capture_seconds: f64,
+    pub total_seconds: f64,
+    pub store_bytes: u64,
+    /// Compressed cube-map bytes per texel.
+    pub bytes_per_texel: f64,
+    /// Texels whose radiance exceeded the encoding's range and were clamped.
+    pub clamped_texels: u64,
+}
+
+/// Bakes `scene` into the store at `options.output`.
+pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
+    let start = Instant::now();
+    let settings = &scene.bake;
+    let mut report = BakeReport {
+        output: options.output.clone(),
+        cube_resolution: settings.cube_resolution,
+        samples_per_texel: strata_per_side(settings.samples_per_texel).pow(2),
+        ..Default::default()
+    };
+
+    let geometry = TriangleScene::build(
+        scene.instances(true, settings.epsilon * TESSELLATION_ERROR),
+    )?;
+    report.triangles = geometry.triangle_count();
+    report.bvh_build_seconds = geometry.build_time().as_secs_f64();
+
+    let t = Instant::now();
+    let placement = sample_points::place(&scene.objects, settings, &geometry)?;
+    report.placement_seconds = t.elapsed().as_secs_f64();
+    report.points_placed = placement.placed;
+    report.points_removed_close = placement.removed_close;
+    report.points_removed_inside = placement.removed_inside;
+    report.sample_points = placement.points.len();
+    let points = placement.points;
+
+    let t = Instant::now();
+    let patches: Vec<_> = global_patches(&scene.objects)
+        .into_iter()
+        .map(|(_, p)| p)
+        .collect();
+    let (maps, map_stats) = sample_map::build(
+        &patches,
+        &points,
+        &geometry,
+        settings.sample_map_resolution,
+        settings.phi_samplemap_deg,
+        settings.epsilon,
+    );
+    report.sample_maps = map_stats;
+    report.sample_map_seconds = t.elapsed().as_secs_f64();
+
+    let meta = store_meta(scene);
+    let mut writer = if options.resume && partial_path(&options.output).exists() {
+        StoreWriter::resume(&options.output, &meta, &points, &maps)?
+    } else {
+        StoreWriter::create(&options.output, &meta, &points, &maps)?
+    };
+    report.cubes_resumed = writer.next_cube();
+    report.cubes = writer.total_cubes();
+
+    let capture = CaptureSettings {
+        resolution: settings.cube_resolution,
+        samples_per_texel: settings.samples_per_texel,
+        distance_channel: settings.distance_channel,
+        seed: settings.seed,
+    };
+    let integrator = Integrator {
+        geometry: &geometry,
+        materials: &scene.materials,
+        lights: &scene.lights,
+        environment: &scene.environment,
+        max_bounces: settings.bounces,
+    };
+    // The environment-map baseline sees the scene without the OSLF objects.
+    let env_geometry;
+    let env_integrator = if meta.has_env_cube {
+        env_geometry = TriangleScene::build(scene.instances(false, 0.0))?;
+        Some(Integrator {
+            geometry: &env_geometry,
+            ..integrator
+        })
+    } else {
+        None
+    };
+    let centre = object_centre(scene);
+
+    let bar = progress_bar(options.progress, writer.total_cubes() as u64);
+    bar.set_position(writer.next_cube() as u64);
+    let t = Instant::now();
+    let mut rays = RayStats::default();
+    let mut bytes = 0u64;
+    let mut texels = 0u64;
+    let stop_at = options.cube_limit.map_or(writer.total_cubes(), |limit| {
+        writer
+            .next_cube()
+            .saturating_add(limit)
+            .min(writer.total_cubes())
+    });
+    while writer.next_cube() < stop_at {
+        let first = writer.next_cube() as usize;
+        let end = (first + CHUNK).min(stop_at as usize);
+        let encoded: Vec<_> = (first..end)
+            .into_par_iter()
+            .map(|i| {
+                let (cube, stats) = match points.get(i) {
+                    Some(p) => {
+                        capture_cube(&integrator, Vec3::from_array(p.position), i as u32, &capture)
+                    }
+                    None => capture_cube(
+                        env_integrator.as_ref().unwrap_or(&integrator),
+                        centre,
+                        i as u32,
+                        &capture,
+                    ),
+                };
+                let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i as u32)?;
+                Ok((enc, enc_stats, stats))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        for (enc, enc_stats, stats) in encoded {
+            rays.closest += stats.closest;
+            rays.shadow += stats.shadow;
+            report.clamped_texels += enc_stats.clamped_texels;
+            bytes += enc_stats.compressed_bytes;
+            texels += 6 * (capture.resolution as u64).pow(2);
+            writer.append(enc)?;
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    report.capture_seconds = t.elapsed().as_secs_f64();
+    report.rays_closest = rays.closest;
+    report.rays_shadow = rays.shadow;
+    report.mrays_per_second =
+        (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
+
+    if writer.next_cube() < writer.total_cubes() {
+        // Stopped by `cube_limit`: the partial file keeps every appended cube for `resume`.
+        drop(writer);
+        report.total_seconds = start.elapsed().as_secs_f64();
+        return Ok(report);
+    }
+    let summary = writer.finish()?;
+    report.finished = true;
+    report.store_bytes = summary.file_size;
+    report.bytes_per_texel = if summary.texels > 0 {
+        summary.cube_bytes as f64 / summary.texels as f64
+    } else if texels > 0 {
+        bytes as f64 / texels as f64
+    } else {
+        0.0
+    };
+    report.total_seconds = start.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Where the writer keeps an unfinished store.
+pub fn partial_path(output: &Path) -> PathBuf {
+    let mut name = output.as_os_str().to_os_string();
+    name.push(".partial");
+    PathBuf::from(name)
+}
+
+/// Everything the store says about the scene and the bake, besides the points, maps and cubes.
+pub fn store_meta(scene: &Scene) -> StoreMeta {
+    let s = &scene.bake;
+    let mut objects = Vec::new();
+    let mut patches = Vec::new();
+    for o in &scene.objects {
+        objects.push(ObjectInfo {
+            name: o.name.clone(),
+            transform: Mat4::from(o.transform).to_cols_array_2d(),
+            base_color: o.base_color.to_array(),
+            first_patch: patches.len() as u32,
+            patch_count: o.object_patches.len() as u32,
+        });
+        patches.extend(o.object_patches.iter().map(|p| Patch {
+            control_points: p.cp.map(|c| c.to_array()),
+        }));
+    }
+    StoreMeta {
+        objects,
+        patches,
+        bake: BakeParams {
+            epsilon: s.epsilon,
+            phi_samplemap_deg: s.phi_samplemap_deg,
+            cube_resolution: s.cube_resolution,
+            sample_map_resolution: s.sample_map_resolution,
+            samples_per_texel: strata_per_side(s.samples_per_texel).pow(2),
+            bounces: s.bounces,
+            seed: s.seed,
+            encoding: s.encoding,
+            distance_channel: s.distance_channel,
+            zstd_level: s.zstd_level,
+            scene_hash: scene.hash,
+        },
+        camera: scene.camera.as_ref().map(|c| CameraInfo {
+            position: c.position.to_array(),
+            target: c.target.to_array(),
+            up: c.up.to_array(),
+            vfov_deg: c.vfov_deg,
+        }),
+        has_env_cube: s.env_cube,
+    }
+}
+
+/// Centre of the bounding box of all OSLF patches' control points (world space).
+pub fn object_centre(scene: &Scene) -> Vec3 {
+    let mut lo = Vec3::splat(f32::MAX);
+    let mut hi = Vec3::splat(f32::MIN);
+    for p in scene.objects.iter().flat_map(|o| &o.patches) {
+        for c in p.cp {
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+    }
+    (lo + hi) * 0.5
+}
+
+fn progress_bar(enabled: bool, total: u64) -> indicatif::ProgressBar {
+    if !enabled {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} cube maps {bar:40} {pos}/{len} [{elapsed_precise} < ETA {eta_precise}] {per_sec}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}

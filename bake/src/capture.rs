@@ -1,0 +1,81 @@
+//! Cube-map capture at a point (thesis §3.2): six world-axis-aligned faces, in the wgpu/Vulkan
+//! face order and orientation of [`oslf_format::cube`], ray traced from the point itself so the
+//! surface ε below is visible.
+
+use glam::Vec3;
+use oslf_format::CubeImage;
+
+use crate::integrator::{Integrator, RayStats};
+use crate::ray::{Intersector, Ray};
+use crate::sampling::{hash_u64, Rng};
+
+/// Strata per texel side for `samples_per_texel`: the smallest k with k² ≥ the request.
+pub fn strata_per_side(samples_per_texel: u32) -> u32 {
+    let mut k = (samples_per_texel.max(1) as f64).sqrt().floor() as u32;
+    while k * k < samples_per_texel.max(1) {
+        k += 1;
+    }
+    k
+}
+
+/// What one capture needs besides the integrator.
+#[derive(Clone, Copy, Debug)]
+pub struct CaptureSettings {
+    pub resolution: u32,
+    pub samples_per_texel: u32,
+    pub distance_channel: bool,
+    pub seed: u64,
+}
+
+/// Captures the cube map seen from `origin`. `cube_index` selects the random streams, so a
+/// cube's texels are the same whichever thread renders them.
+pub fn capture_cube<I: Intersector>(
+    integrator: &Integrator<I>,
+    origin: Vec3,
+    cube_index: u32,
+    settings: &CaptureSettings,
+) -> (CubeImage, RayStats) {
+    let res = settings.resolution;
+    let k = strata_per_side(settings.samples_per_texel);
+    let inv_spp = 1.0 / (k * k) as f32;
+    let mut stats = RayStats::default();
+    let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
+    let mut distance: [Vec<f32>; 6] = Default::default();
+    for (face, out) in faces.iter_mut().enumerate() {
+        out.reserve((res * res) as usize);
+        for y in 0..res {
+            for x in 0..res {
+                let texel = (y * res + x) as u64;
+                let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
+                let mut rng = Rng::new(settings.seed, stream);
+                let mut sum = Vec3::ZERO;
+                for j in 0..k * k {
+                    let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
+                    let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
+                    let s = (x as f32 + sx) / res as f32;
+                    let t = (y as f32 + sy) / res as f32;
+                    let dir = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
+                    let sample = integrator.radiance(&Ray::new(origin, dir), &mut rng, &mut stats);
+                    sum += sample.radiance;
+                }
+                out.push((sum * inv_spp).to_array());
+                if settings.distance_channel {
+                    let dir =
+                        Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
+                    stats.closest += 1;
+                    let d = integrator
+                        .geometry
+                        .intersect(&Ray::new(origin, dir), f32::MAX)
+                        .map_or(f32::MAX, |h| h.t);
+                    distance[face].push(d);
+                }
+            }
+        }
+    }
+    let cube = CubeImage {
+        resolution: res,
+        faces,
+        distance: settings.distance_channel.then_some(distance),
+    };
+    (cube, stats)
+}

@@ -1,0 +1,44 @@
+//! The bake crate's one error type.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while reading a scene or baking it.
+///
+/// Every variant says *what* is wrong and *where*: a file with line and column, a pixel, a
+/// sample index.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    /// An I/O error on a named file.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A located problem in a text input (scene file, patch file, OBJ file).
+    #[error("{path}:{line}:{column}: {message}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// An image (texture or environment map) that cannot be used.
+    #[error("{path}: {message}")]
+    Image { path: PathBuf, message: String },
+    /// A pixel of an input image that is NaN, infinite or negative.
+    #[error("{path}: pixel ({x}, {y}) is {value} (must be finite and non-negative)")]
+    BadPixel {
+        path: PathBuf,
+        x: u32,
+        y: u32,
+        value: f32,
+    },
+    /// A scene that parsed but cannot be baked (no OSLF object, no sample points, ...).
+    #[error("{0}")]
+    Invalid(String),
+    // (the store's error, `Format(#[from] oslf_format::Error)`, is added once that crate exists)
+}
+
+/// Shorthand used across the crate.
+pub type Result<T> = std::result::Result<T, BakeError>;

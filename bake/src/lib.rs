@@ -1,0 +1,24 @@
+//! # oslf-bake
+//!
+//! (crate docs are written at the end of the first session; see README.md)
+
+pub mod error;
+pub mod ray;
+
+// geometry
+pub mod bezier;
+pub mod bvh;
+pub mod mesh;
+pub mod obj;
+pub mod shapes;
+
+// radiance
+pub mod camera;
+pub mod environment;
+pub mod integrator;
+pub mod light;
+pub mod material;
+pub mod sampling;
+pub mod texture;
+
+pub use error::{BakeError, Result};

@@ -1,0 +1,188 @@
+//! `oslf-bake`: bakes a scene file into an OSLF store.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use oslf_bake::bake::{bake, BakeOptions, BakeReport, TESSELLATION_ERROR};
+use oslf_bake::bvh::TriangleScene;
+use oslf_bake::camera;
+use oslf_bake::image_file;
+use oslf_bake::integrator::Integrator;
+use oslf_bake::scene::Scene;
+
+/// Bake an offset surface light field: sample points ε above the object's Bézier patches, a
+/// ray-traced HDR cube map at each, and per-patch sample maps, all written to one store.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// The scene file (TOML; see README.md "Scene files").
+    scene: PathBuf,
+    /// The store to write [default: the scene's name with .oslf, in the current directory].
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Apply the scene's `[presets.NAME]` over its `[bake]` settings.
+    #[arg(short, long)]
+    preset: Option<String>,
+    /// Continue an interrupted bake from `<output>.partial`, keeping its finished cube maps.
+    #[arg(long)]
+    resume: bool,
+    /// Capture at most N cube maps in this run, then stop, leaving `<output>.partial` for a
+    /// later `--resume` (a bake in slices).
+    #[arg(long, value_name = "N")]
+    max_cubes: Option<u32>,
+    /// Worker threads [default: all cores]. The store is byte-identical for any count.
+    #[arg(short = 'j', long)]
+    threads: Option<usize>,
+    /// Also render the scene camera with the bake's path tracer to this PNG (and an EXR beside
+    /// it) [default: <output>.preview.png; "none" to skip].
+    #[arg(long)]
+    preview: Option<PathBuf>,
+    /// Samples per pixel of the preview.
+    #[arg(long, default_value_t = 16)]
+    preview_spp: u32,
+    /// Write the bake summary as JSON to this file.
+    #[arg(long)]
+    report_json: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        if n == 0 {
+            bail!("--threads must be at least 1");
+        }
+        pool = pool.num_threads(n);
+    }
+    let pool = pool.build().context("cannot start worker threads")?;
+    pool.install(|| run_in_pool(args))
+}
+
+fn run_in_pool(args: Args) -> anyhow::Result<()> {
+    let scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    let output = args.output.clone().unwrap_or_else(|| {
+        let stem = args.scene.file_stem().unwrap_or_default();
+        PathBuf::from(stem).with_extension("oslf")
+    });
+    let options = BakeOptions {
+        output: output.clone(),
+        resume: args.resume,
+        progress: !args.quiet,
+        cube_limit: args.max_cubes,
+    };
+    let report = bake(&scene, &options)?;
+    print_summary(&report);
+    if !report.finished {
+        println!(
+            "stopped after --max-cubes; continue with --resume (the partial store is {})",
+            oslf_bake::bake::partial_path(&output).display()
+        );
+    }
+    if let Some(path) = &args.report_json {
+        let json = serde_json::to_string_pretty(&report)?;
+        std::fs::write(path, json).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+
+    let preview = match &args.preview {
+        Some(p) if p.as_os_str() == "none" => None,
+        Some(p) => Some(p.clone()),
+        None => Some(PathBuf::from(format!("{}.preview.png", output.display()))),
+    };
+    if let Some(png) = preview {
+        let Some(cam) = &scene.camera else {
+            eprintln!("no preview: the scene has no [camera]");
+            return Ok(());
+        };
+        let t = Instant::now();
+        let geometry =
+            TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))?;
+        let integrator = Integrator {
+            geometry: &geometry,
+            materials: &scene.materials,
+            lights: &scene.lights,
+            environment: &scene.environment,
+            max_bounces: scene.bake.bounces,
+        };
+        let (w, h) = (655, 460); // the thesis's image size (§6.1)
+        let (pixels, _) = camera::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
+        image_file::write_png(&png, w, h, &pixels, 1.0)?;
+        let exr = png.with_extension("exr");
+        image_file::write_exr(&exr, w, h, &pixels)?;
+        println!(
+            "preview        {} and {} ({w}x{h}, {} spp, {:.1} s)",
+            png.display(),
+            exr.display(),
+            args.preview_spp,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn print_summary(r: &BakeReport) {
+    let m = &r.sample_maps;
+    println!("store          {}", r.output.display());
+    println!(
+        "sample points  {} kept of {} placed ({} closer than ε to a surface, {} inside geometry)",
+        r.sample_points, r.points_placed, r.points_removed_close, r.points_removed_inside
+    );
+    println!(
+        "sample maps    {} texels; {} with fewer than four points ({:.3}%), {} with none",
+        m.texels,
+        m.short,
+        100.0 * m.short as f64 / m.texels.max(1) as f64,
+        m.empty
+    );
+    println!(
+        "cube maps      {} of {}² texels, {} samples per texel{}",
+        r.cubes,
+        r.cube_resolution,
+        r.samples_per_texel,
+        if r.cubes_resumed > 0 {
+            format!(" ({} recovered from the interrupted bake)", r.cubes_resumed)
+        } else {
+            String::new()
+        }
+    );
+    println!(
+        "rays           {} closest + {} shadow = {:.1} M, {:.2} Mrays/s",
+        r.rays_closest,
+        r.rays_shadow,
+        (r.rays_closest + r.rays_shadow) as f64 / 1e6,
+        r.mrays_per_second
+    );
+    println!(
+        "time           {:.1} s total: BVH {:.2} s ({} triangles), points {:.2} s, sample maps {:.2} s, cube maps {:.1} s",
+        r.total_seconds,
+        r.bvh_build_seconds,
+        r.triangles,
+        r.placement_seconds,
+        r.sample_map_seconds,
+        r.capture_seconds
+    );
+    println!(
+        "store size     {:.2} MB, {:.3} bytes per cube-map texel{}",
+        r.store_bytes as f64 / 1e6,
+        r.bytes_per_texel,
+        if r.clamped_texels > 0 {
+            format!(", {} texels clamped to the encoding's maximum", r.clamped_texels)
+        } else {
+            String::new()
+        }
+    );
+}

@@ -1,0 +1,78 @@
+//! Materials: two-sided Lambertian reflectors.
+
+use glam::{Vec2, Vec3};
+
+use crate::texture::Texture;
+use crate::{BakeError, Result};
+
+/// A Lambertian (perfectly diffuse) material, BRDF `albedo / π`, reflecting on both sides of
+/// the surface.
+///
+/// Albedo components must lie in `[0, 1]` for energy conservation. Constant and checker
+/// albedos are checked by [`Material::validate`]; image albedos (an EXR may legitimately hold
+/// values a hair above 1) are clamped to `[0, 1]` texel by texel in [`Material::eval`], and
+/// [`Material::clamped_texels`] counts the texels affected so the scene loader can warn.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub albedo: Texture,
+}
+
+impl Material {
+    /// A constant-albedo material.
+    pub fn lambertian(albedo: Vec3) -> Self {
+        Material {
+            albedo: Texture::Constant(albedo),
+        }
+    }
+
+    /// Errors if a constant or checker albedo component is outside `[0, 1]` or not finite, or
+    /// a checker scale is not finite and positive.
+    pub fn validate(&self) -> Result<()> {
+        let check = |c: Vec3, what: &str| -> Result<()> {
+            if c.is_finite() && c.min_element() >= 0.0 && c.max_element() <= 1.0 {
+                Ok(())
+            } else {
+                Err(BakeError::Invalid(format!(
+                    "{what} albedo {c} must have components in [0, 1]"
+                )))
+            }
+        };
+        match &self.albedo {
+            Texture::Constant(c) => check(*c, "constant"),
+            Texture::Checker { a, b, scale } => {
+                check(*a, "checker")?;
+                check(*b, "checker")?;
+                if scale.is_finite() && *scale > 0.0 {
+                    Ok(())
+                } else {
+                    Err(BakeError::Invalid(format!(
+                        "checker scale {scale} must be finite and positive"
+                    )))
+                }
+            }
+            Texture::Image(_) => Ok(()),
+        }
+    }
+
+    /// Number of image texels with a component above 1 (which [`Material::eval`] clamps).
+    pub fn clamped_texels(&self) -> usize {
+        match &self.albedo {
+            Texture::Image(img) => img.count_above(1.0),
+            _ => 0,
+        }
+    }
+
+    /// The albedo at `uv`, clamped to `[0, 1]` (a non-finite component reads as 0).
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        let a = self.albedo.eval(uv);
+        Vec3::new(clamp01(a.x), clamp01(a.y), clamp01(a.z))
+    }
+}
+
+fn clamp01(x: f32) -> f32 {
+    if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}

@@ -1,0 +1,51 @@
+//! Rays, surface hits and the `Intersector` interface the integrator traces against.
+
+use glam::{Vec2, Vec3};
+
+/// A ray `origin + t * dir`, `dir` of unit length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self { origin, dir }
+    }
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// Object index of geometry that is not part of an OSLF object (table, gazebo, ...).
+pub const ENVIRONMENT_OBJECT: u32 = u32::MAX;
+
+/// The closest intersection of a ray with the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// Ray parameter of the hit (distance, as ray directions are unit length).
+    pub t: f32,
+    /// World-space hit position.
+    pub position: Vec3,
+    /// Unit normal of the hit triangle's plane, oriented by the triangle's winding.
+    pub geometric_normal: Vec3,
+    /// Unit interpolated (shading) normal, on the same side as `geometric_normal`.
+    pub shading_normal: Vec3,
+    /// Texture coordinates at the hit.
+    pub uv: Vec2,
+    /// Index into the scene's material list.
+    pub material: u32,
+    /// OSLF object index, or [`ENVIRONMENT_OBJECT`].
+    pub object: u32,
+    /// Global triangle index (for tests and debugging).
+    pub triangle: u32,
+}
+
+/// Anything the integrator can trace rays against.
+pub trait Intersector: Sync {
+    /// Closest hit with `t` in `(0, t_max)`.
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit>;
+    /// Whether any surface is hit with `t` in `(0, t_max)`.
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool;
+}

@@ -1,0 +1,171 @@
+//! Sample maps (thesis §3.3): per patch and texel, the four nearest OSLF sample points that lie
+//! within φ_samplemap of the texel's normal (Eq. 3.9–3.10) AND are visible from the texel's
+//! surface point — checked by casting a ray, which enforces the free-space condition the thesis
+//! could only hope for (its lid artefact, §6.3).
+
+use std::num::NonZero;
+
+use glam::Vec3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use oslf_format::{SampleMaps, SamplePoint, INVALID_INDEX};
+use rayon::prelude::*;
+
+use crate::bezier::BezierPatch;
+use crate::ray::{Intersector, Ray};
+
+/// Visibility rays start this fraction of ε above the texel's point on the patch: above the
+/// tessellation error (at most ε/50), well below the sample points at ε.
+pub const VISIBILITY_LIFT: f32 = 0.05;
+
+/// Counts over all texels of all sample maps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SampleMapStats {
+    pub texels: u64,
+    /// Texels with fewer than four valid indices.
+    pub short: u64,
+    /// Texels with no valid index at all.
+    pub empty: u64,
+    /// Visibility rays cast.
+    pub rays: u64,
+}
+
+/// Candidate counts tried per texel, nearest first; a texel that finds four acceptable points
+/// among the first `k` stops there.
+const CANDIDATE_STEPS: [usize; 3] = [16, 64, 256];
+
+/// A spatial index over sample-point positions.
+pub struct PointIndex<'a> {
+    points: &'a [SamplePoint],
+    tree: ImmutableKdTree<f32, 3>,
+}
+
+impl<'a> PointIndex<'a> {
+    pub fn new(points: &'a [SamplePoint]) -> Self {
+        let positions: Vec<[f32; 3]> = points.iter().map(|p| p.position).collect();
+        PointIndex {
+            points,
+            tree: ImmutableKdTree::new_from_slice(&positions),
+        }
+    }
+
+    /// The `k` nearest points to `q` as (squared distance, index), sorted by distance then index.
+    pub fn nearest(&self, q: Vec3, k: usize) -> Vec<(f32, u32)> {
+        let k = k.min(self.points.len());
+        let Some(k) = NonZero::new(k) else {
+            return Vec::new();
+        };
+        let mut out: Vec<(f32, u32)> = self
+            .tree
+            .nearest_n::<SquaredEuclidean>(&q.to_array(), k)
+            .into_iter()
+            .map(|n| (n.distance, n.item as u32))
+            .collect();
+        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        out
+    }
+}
+
+/// The four indices of one texel at surface point `x` with unit normal `n`, and the number of
+/// visibility rays cast.
+pub fn texel_indices(
+    index: &PointIndex,
+    geometry: &impl Intersector,
+    x: Vec3,
+    n: Vec3,
+    cos_phi: f32,
+    lift: f32,
+) -> ([u32; 4], u64) {
+    let mut found = [INVALID_INDEX; 4];
+    let mut count = 0;
+    let mut rays = 0;
+    let origin = x + n * lift;
+    let mut tried = 0;
+    for &k in &CANDIDATE_STEPS {
+        let candidates = index.nearest(x, k);
+        for &(_, i) in &candidates[tried..] {
+            let s = Vec3::from_array(index.points[i as usize].position);
+            let to_s = s - x;
+            let len = to_s.length();
+            // Eq. 3.10: in the upper hemisphere, away from the horizon.
+            if !(len > 0.0) || n.dot(to_s / len) <= cos_phi {
+                continue;
+            }
+            let d = s - origin;
+            let dist = d.length();
+            if dist > 0.0 {
+                rays += 1;
+                if geometry.occluded(&Ray::new(origin, d / dist), dist * (1.0 - 1e-4)) {
+                    continue;
+                }
+            }
+            found[count] = i;
+            count += 1;
+            if count == 4 {
+                return (found, rays);
+            }
+        }
+        tried = candidates.len();
+        if tried == index.points.len() {
+            break;
+        }
+    }
+    (found, rays)
+}
+
+/// Builds every patch's sample map at `resolution`² texels (row-major, texel (x, y) centred on
+/// u = (x + ½)/res, v = (y + ½)/res).
+pub fn build(
+    patches: &[&BezierPatch],
+    points: &[SamplePoint],
+    geometry: &impl Intersector,
+    resolution: u32,
+    phi_samplemap_deg: f32,
+    epsilon: f32,
+) -> (SampleMaps, SampleMapStats) {
+    let index = PointIndex::new(points);
+    let cos_phi = phi_samplemap_deg.to_radians().cos();
+    let res = resolution as usize;
+    let rows: Vec<(Vec<[u32; 4]>, u64)> = (0..patches.len() * res)
+        .into_par_iter()
+        .map(|row| {
+            let patch = patches[row / res];
+            let y = row % res;
+            let v = (y as f32 + 0.5) / res as f32;
+            let mut rays = 0;
+            let texels = (0..res)
+                .map(|x| {
+                    let u = (x as f32 + 0.5) / res as f32;
+                    let p = patch.eval(u, v);
+                    let n = patch.normal(u, v);
+                    let lift = epsilon * VISIBILITY_LIFT;
+                    let (ids, r) = texel_indices(&index, geometry, p, n, cos_phi, lift);
+                    rays += r;
+                    ids
+                })
+                .collect();
+            (texels, rays)
+        })
+        .collect();
+    let mut stats = SampleMapStats::default();
+    let mut indices = Vec::with_capacity(patches.len() * res * res);
+    for (texels, rays) in rows {
+        stats.rays += rays;
+        for t in texels {
+            stats.texels += 1;
+            if t[3] == INVALID_INDEX {
+                stats.short += 1;
+            }
+            if t[0] == INVALID_INDEX {
+                stats.empty += 1;
+            }
+            indices.push(t);
+        }
+    }
+    (
+        SampleMaps {
+            resolution,
+            indices,
+        },
+        stats,
+    )
+}

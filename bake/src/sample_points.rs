@@ -1,0 +1,322 @@
+//! OSLF sample points: spread over the patches with controlled coverage, offset by ε along the
+//! normal (thesis §3.1), and culled where the free-space condition fails (§3.3).
+//!
+//! Placement is *weighted sample elimination* (Yuksel 2015, "Sample Elimination for Generating
+//! Poisson Disk Sample Sets"): many candidates are drawn uniformly by area over all patches, then
+//! the one most crowded by its neighbours is removed until the requested count remains. The
+//! result is a Poisson-disk set of exactly the requested size, deterministic for a seed.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::num::NonZero;
+
+use glam::{Vec2, Vec3};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use oslf_format::SamplePoint;
+
+use crate::bezier::BezierPatch;
+use crate::error::{BakeError, Result};
+use crate::ray::{Intersector, Ray};
+use crate::sampling::Rng;
+use crate::scene::{BakeSettings, OslfObject, SampleDensity};
+
+/// Cells per patch side used to tabulate surface area.
+const AREA_GRID: usize = 32;
+/// Candidates drawn per requested point.
+const CANDIDATES_PER_POINT: usize = 6;
+/// Directions probed around each sample point by the free-space tests.
+const PROBE_DIRECTIONS: usize = 64;
+/// A point is "closer than ε to another surface" when a probe hits within this fraction of ε.
+/// The margin below 1 absorbs the tessellation error (at most ε/50) of the point's own patch.
+pub const FREE_SPACE_TOLERANCE: f32 = 0.95;
+
+/// The outcome of [`place`].
+#[derive(Clone, Debug, Default)]
+pub struct Placement {
+    /// The kept points, in a deterministic order (patch, then elimination order).
+    pub points: Vec<SamplePoint>,
+    /// Points placed before the free-space tests.
+    pub placed: usize,
+    /// Removed: closer than ε to some surface.
+    pub removed_close: usize,
+    /// Removed: inside geometry.
+    pub removed_inside: usize,
+    /// Total surface area of the patches.
+    pub area: f32,
+    /// Rays cast by the free-space tests.
+    pub rays: u64,
+}
+
+/// All OSLF patches of a scene, in store order (objects in order, patches in order).
+pub fn global_patches(objects: &[OslfObject]) -> Vec<(u32, &BezierPatch)> {
+    objects
+        .iter()
+        .enumerate()
+        .flat_map(|(o, obj)| obj.patches.iter().map(move |p| (o as u32, p)))
+        .collect()
+}
+
+/// Places sample points over every patch of `objects`, offsets them and removes invalid ones.
+pub fn place(
+    objects: &[OslfObject],
+    settings: &BakeSettings,
+    geometry: &impl Intersector,
+) -> Result<Placement> {
+    let patches = global_patches(objects);
+    let table = AreaTable::new(&patches);
+    if !(table.total > 0.0) {
+        return Err(BakeError::Invalid(
+            "the OSLF patches have zero surface area: no sample points can be placed".into(),
+        ));
+    }
+    let count = match settings.sample_count {
+        SampleDensity::Count(n) => n as usize,
+        // Hexagonal packing: each point covers (√3/2)·h².
+        SampleDensity::Spacing(h) => {
+            let n = (table.total / (0.866_025_4 * h * h)).ceil();
+            if !(1.0..=16e6).contains(&n) {
+                return Err(BakeError::Invalid(format!(
+                    "sample_spacing {h} gives {n} points over an area of {} (allowed: 1 to 16 million)",
+                    table.total
+                )));
+            }
+            n as usize
+        }
+    };
+
+    let mut rng = Rng::new(settings.seed, PLACEMENT_STREAM);
+    let candidates: Vec<Candidate> = (0..count * CANDIDATES_PER_POINT)
+        .map(|_| table.sample(&patches, &mut rng))
+        .collect();
+    let kept = eliminate(&candidates, count, table.total);
+
+    let mut placement = Placement {
+        placed: kept.len(),
+        area: table.total,
+        ..Default::default()
+    };
+    let directions = fibonacci_sphere(PROBE_DIRECTIONS);
+    for &i in &kept {
+        let c = &candidates[i];
+        let position = c.position + c.normal * settings.epsilon;
+        match free_space(geometry, position, settings.epsilon, &directions) {
+            FreeSpace::Ok => placement.points.push(SamplePoint {
+                position: position.to_array(),
+                normal: c.normal.to_array(),
+                uv: c.uv.to_array(),
+                patch: c.patch,
+                object: c.object,
+            }),
+            FreeSpace::TooClose => placement.removed_close += 1,
+            FreeSpace::Inside => placement.removed_inside += 1,
+        }
+    }
+    placement.rays = (kept.len() * PROBE_DIRECTIONS * 2) as u64;
+    if placement.points.is_empty() {
+        return Err(BakeError::Invalid(format!(
+            "all {} sample points were removed ({} closer than ε = {} to a surface, {} inside geometry)",
+            kept.len(),
+            placement.removed_close,
+            settings.epsilon,
+            placement.removed_inside
+        )));
+    }
+    Ok(placement)
+}
+
+/// The placement RNG's stream id (cube-map texels use hashed streams of their own).
+const PLACEMENT_STREAM: u64 = 0x0051_a3c1_e5ee_d000;
+
+/// One candidate point on the surface.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    position: Vec3,
+    normal: Vec3,
+    uv: Vec2,
+    patch: u32,
+    object: u32,
+}
+
+/// Patch area tabulated on an `AREA_GRID²` grid of (u, v) cells per patch, as a CDF.
+struct AreaTable {
+    cdf: Vec<f32>,
+    total: f32,
+}
+
+impl AreaTable {
+    fn new(patches: &[(u32, &BezierPatch)]) -> Self {
+        let n = AREA_GRID;
+        let cell = 1.0 / n as f32;
+        let mut cdf = Vec::with_capacity(patches.len() * n * n);
+        let mut total = 0.0f64;
+        for (_, patch) in patches {
+            for j in 0..n {
+                for i in 0..n {
+                    let (du, dv) = patch.partials((i as f32 + 0.5) * cell, (j as f32 + 0.5) * cell);
+                    let area = du.cross(dv).length() * cell * cell;
+                    total += if area.is_finite() { area as f64 } else { 0.0 };
+                    cdf.push(total as f32);
+                }
+            }
+        }
+        AreaTable {
+            cdf,
+            total: total as f32,
+        }
+    }
+
+    /// A point drawn with density proportional to area (exact within each cell's linearisation).
+    fn sample(&self, patches: &[(u32, &BezierPatch)], rng: &mut Rng) -> Candidate {
+        let n = AREA_GRID;
+        let target = rng.next_f32() * self.total;
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
+        let patch_index = k / (n * n);
+        let cell = k % (n * n);
+        let u = ((cell % n) as f32 + rng.next_f32()) / n as f32;
+        let v = ((cell / n) as f32 + rng.next_f32()) / n as f32;
+        let (object, patch) = patches[patch_index];
+        Candidate {
+            position: patch.eval(u, v),
+            normal: patch.normal(u, v),
+            uv: Vec2::new(u, v),
+            patch: patch_index as u32,
+            object,
+        }
+    }
+}
+
+/// Weighted sample elimination down to `target` points; returns kept candidate indices in
+/// ascending order.
+fn eliminate(candidates: &[Candidate], target: usize, area: f32) -> Vec<usize> {
+    let m = candidates.len();
+    if m <= target {
+        return (0..m).collect();
+    }
+    // Yuksel 2015, Eq. 5 (surface, d = 2): r_max = sqrt(A / (2√3 N)).
+    let r_max = (area / (2.0 * 3f32.sqrt() * target as f32)).sqrt();
+    let r_min = r_max * (1.0 - (target as f32 / m as f32).powf(1.5)) * 0.65;
+    let radius = 2.0 * r_max;
+    let weight = |d: f32| {
+        let d = d.max(r_min);
+        (1.0 - d / radius).max(0.0).powi(8)
+    };
+
+    let positions: Vec<[f32; 3]> = candidates.iter().map(|c| c.position.to_array()).collect();
+    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&positions);
+    let max_items = NonZero::new(m).expect("m > target >= 0 so m >= 1");
+    let neighbours: Vec<Vec<(u32, f32)>> = positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut list: Vec<(u32, f32)> = tree
+                .nearest_n_within::<SquaredEuclidean>(p, radius * radius, max_items, false)
+                .into_iter()
+                .filter(|nb| nb.item as usize != i)
+                .map(|nb| (nb.item as u32, weight(nb.distance.sqrt())))
+                .collect();
+            list.sort_unstable_by_key(|&(j, _)| j);
+            list
+        })
+        .collect();
+
+    let mut weights: Vec<f32> = neighbours
+        .iter()
+        .map(|list| list.iter().map(|&(_, w)| w).sum())
+        .collect();
+    let mut removed = vec![false; m];
+    let mut heap: BinaryHeap<Entry> = weights
+        .iter()
+        .enumerate()
+        .map(|(i, &w)| Entry { weight: w, index: i })
+        .collect();
+    let mut remaining = m;
+    while remaining > target {
+        let Some(top) = heap.pop() else { break };
+        if removed[top.index] || top.weight != weights[top.index] {
+            continue; // stale entry
+        }
+        removed[top.index] = true;
+        remaining -= 1;
+        for &(j, w) in &neighbours[top.index] {
+            let j = j as usize;
+            if !removed[j] {
+                weights[j] -= w;
+                heap.push(Entry {
+                    weight: weights[j],
+                    index: j,
+                });
+            }
+        }
+    }
+    (0..m).filter(|&i| !removed[i]).collect()
+}
+
+/// Max-heap entry: highest weight first, ties broken by the lower index (deterministic).
+#[derive(PartialEq)]
+struct Entry {
+    weight: f32,
+    index: usize,
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.weight
+            .total_cmp(&other.weight)
+            .then_with(|| other.index.cmp(&self.index))
+    }
+}
+
+enum FreeSpace {
+    Ok,
+    TooClose,
+    Inside,
+}
+
+/// Free-space tests of §3.3 at an offset point: no surface within ε (up to
+/// [`FREE_SPACE_TOLERANCE`]), and not enclosed (most probes hitting back faces).
+fn free_space(
+    geometry: &impl Intersector,
+    position: Vec3,
+    epsilon: f32,
+    directions: &[Vec3],
+) -> FreeSpace {
+    let near = epsilon * FREE_SPACE_TOLERANCE;
+    let mut back_faces = 0;
+    for &dir in directions {
+        let ray = Ray::new(position, dir);
+        if geometry.occluded(&ray, near) {
+            return FreeSpace::TooClose;
+        }
+        if let Some(hit) = geometry.intersect(&ray, f32::MAX) {
+            if hit.geometric_normal.dot(dir) > 0.0 {
+                back_faces += 1;
+            }
+        }
+    }
+    if back_faces * 2 > directions.len() {
+        FreeSpace::Inside
+    } else {
+        FreeSpace::Ok
+    }
+}
+
+/// `n` directions spread evenly over the unit sphere (Fibonacci lattice).
+pub fn fibonacci_sphere(n: usize) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2 * i + 1) as f32 / n as f32;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * i as f32;
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}

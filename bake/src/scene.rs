@@ -1,0 +1,935 @@
+//! Scene files: the TOML text a user writes, parsed and validated into a [`Scene`].
+//!
+//! The format is documented in README.md ("Scene files"); every key there is honoured by the
+//! bake, and every unknown key is an error. Errors name the file, line and column.
+//!
+//! Conventions: Z is up; lengths are in scene units; angles in degrees; colours are linear RGB.
+//! Relative paths resolve against the directory of the scene file.
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Affine3A, Quat, Vec2, Vec3};
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer};
+use toml::Spanned;
+
+use crate::bezier::{self, BezierPatch};
+use crate::bvh::Instance;
+use crate::camera::Camera;
+use crate::environment::{Environment, LatLongMap, Sky};
+use crate::error::{BakeError, Result};
+use crate::light::Light;
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::ray::ENVIRONMENT_OBJECT;
+use crate::texture::{ImageTexture, Texture};
+use crate::{obj, shapes};
+
+/// An OSLF object: the Bézier patches a light field is baked around.
+#[derive(Clone, Debug)]
+pub struct OslfObject {
+    pub name: String,
+    /// Patches in object space, as read.
+    pub object_patches: Vec<BezierPatch>,
+    /// The same patches in world space (`transform` applied).
+    pub patches: Vec<BezierPatch>,
+    /// Object to world.
+    pub transform: Affine3A,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    /// The material's mean albedo: the C_s of Eq. 4.12 that the store carries.
+    pub base_color: Vec3,
+}
+
+/// A piece of environment geometry (everything that is not an OSLF object), in world space.
+#[derive(Clone, Debug)]
+pub struct Shape {
+    pub mesh: Mesh,
+    pub material: u32,
+}
+
+/// The bake settings after presets and defaults are applied.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeSettings {
+    /// Offset of the sample points above the surface (thesis ε).
+    pub epsilon: f32,
+    /// How many sample points to place (exact, before removal of invalid points).
+    pub sample_count: SampleDensity,
+    /// Horizon tolerance of Eq. 3.10, degrees.
+    pub phi_samplemap_deg: f32,
+    pub cube_resolution: u32,
+    pub sample_map_resolution: u32,
+    /// Rays per cube-map texel (rounded up to a square number of strata).
+    pub samples_per_texel: u32,
+    /// Diffuse bounces after the first hit (0 = direct light only).
+    pub bounces: u32,
+    pub seed: u64,
+    pub encoding: oslf_format::Encoding,
+    pub zstd_level: i32,
+    /// Store the first-hit distance of each cube-map texel (the thesis's RGBZ idea, §6.3).
+    pub distance_channel: bool,
+    /// Capture the environment-map baseline: one extra cube at the object's centre.
+    pub env_cube: bool,
+}
+
+/// How densely sample points are placed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampleDensity {
+    /// This many points over all OSLF patches.
+    Count(u32),
+    /// Points roughly this far apart (scene units).
+    Spacing(f32),
+}
+
+/// A parsed, validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// SHA-256 of the scene file's bytes.
+    pub hash: [u8; 32],
+    pub camera: Option<Camera>,
+    pub environment: Environment,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub objects: Vec<OslfObject>,
+    pub shapes: Vec<Shape>,
+    pub bake: BakeSettings,
+    /// Name of the preset applied, if any.
+    pub preset: Option<String>,
+}
+
+impl Scene {
+    /// Reads and validates a scene file, applying the named preset (from its `[presets.NAME]`).
+    pub fn load(path: &Path, preset: Option<&str>) -> Result<Scene> {
+        let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let (line, column) = line_column(
+                &String::from_utf8_lossy(e.as_bytes()),
+                e.utf8_error().valid_up_to(),
+            );
+            BakeError::Parse {
+                path: path.to_path_buf(),
+                line,
+                column,
+                message: "the scene file is not valid UTF-8".into(),
+            }
+        })?;
+        Scene::from_str(&text, path, preset)
+    }
+
+    /// Parses scene text. `path` names the file in errors and anchors relative paths.
+    pub fn from_str(text: &str, path: &Path, preset: Option<&str>) -> Result<Scene> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| {
+            let (line, column) = e
+                .span()
+                .map(|s| line_column(text, s.start))
+                .unwrap_or((1, 1));
+            BakeError::Parse {
+                path: path.to_path_buf(),
+                line,
+                column,
+                message: e.message().to_string(),
+            }
+        })?;
+        let ctx = Ctx { text, path };
+        ctx.build(raw, preset)
+    }
+
+    /// Every triangle of the scene for ray tracing: environment shapes and the OSLF objects
+    /// tessellated finely enough that the tessellation error stays below `max_error`.
+    pub fn instances(&self, include_objects: bool, max_error: f32) -> Vec<Instance> {
+        let mut out: Vec<Instance> = self
+            .shapes
+            .iter()
+            .map(|s| Instance {
+                mesh: s.mesh.clone(),
+                material: s.material,
+                object: ENVIRONMENT_OBJECT,
+            })
+            .collect();
+        if include_objects {
+            for (i, object) in self.objects.iter().enumerate() {
+                let mut mesh = Mesh::default();
+                for patch in &object.patches {
+                    mesh.append(&patch.tessellate(patch.tessellation_level(max_error)));
+                }
+                out.push(Instance {
+                    mesh,
+                    material: object.material,
+                    object: i as u32,
+                });
+            }
+        }
+        out
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text.as_bytes()[..offset];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |p| p + 1);
+    let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+    (line, column)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Raw (serde) types. Every struct denies unknown keys; validated number types reject NaN,
+// infinities and out-of-range values while parsing, so the error carries the value's position.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    camera: Option<RawCamera>,
+    environment: Option<Spanned<RawEnvironment>>,
+    #[serde(default)]
+    point_light: Vec<RawPointLight>,
+    #[serde(default)]
+    object: Vec<Spanned<RawObject>>,
+    #[serde(default)]
+    plane: Vec<RawPlane>,
+    #[serde(default, rename = "box")]
+    boxes: Vec<RawBox>,
+    #[serde(default)]
+    cylinder: Vec<RawCylinder>,
+    #[serde(default)]
+    sphere: Vec<RawSphere>,
+    #[serde(default)]
+    revolution: Vec<RawRevolution>,
+    #[serde(default)]
+    mesh: Vec<RawMesh>,
+    #[serde(default)]
+    bake: RawBake,
+    #[serde(default)]
+    presets: BTreeMap<String, RawBake>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    position: Point,
+    target: Point,
+    #[serde(default = "z_up")]
+    up: Direction,
+    #[serde(default = "default_vfov")]
+    vfov: Angle,
+}
+
+fn z_up() -> Direction {
+    Direction(Vec3::Z)
+}
+fn default_vfov() -> Angle {
+    Angle(40.0)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEnvironment {
+    sky: Option<RawSky>,
+    map: Option<RawMap>,
+    uniform: Option<Rgb>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSky {
+    /// Towards the sun.
+    sun_direction: Direction,
+    /// Irradiance of the sun on a surface facing it (linear RGB).
+    sun_irradiance: Rgb,
+    /// Apparent radius of the sun's disc, degrees.
+    #[serde(default = "default_sun_radius")]
+    sun_angular_radius: Angle,
+    /// Atmospheric turbidity (2 = very clear, 10 = hazy).
+    #[serde(default = "default_turbidity")]
+    turbidity: Positive,
+    /// Multiplier on the sky's radiance.
+    #[serde(default = "one")]
+    intensity: NonNegative,
+}
+
+fn default_sun_radius() -> Angle {
+    Angle(0.27)
+}
+fn default_turbidity() -> Positive {
+    Positive(3.0)
+}
+fn one() -> NonNegative {
+    NonNegative(1.0)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMap {
+    /// A lat-long (equirectangular) OpenEXR or Radiance HDR file.
+    path: Spanned<String>,
+    #[serde(default = "one")]
+    scale: NonNegative,
+    /// Rotation about +z, degrees.
+    #[serde(default)]
+    rotation: Finite,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPointLight {
+    position: Point,
+    /// Radiant intensity per channel.
+    intensity: Rgb,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawObject {
+    #[serde(default)]
+    name: Option<String>,
+    /// `"newell-teapot"` (the built-in data) or a path to a patch file.
+    patches: Spanned<String>,
+    /// Which patches to use, `[first, end)`; all by default.
+    select: Option<Spanned<[u32; 2]>>,
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawTransform {
+    #[serde(default)]
+    translate: Option<Point>,
+    /// Rotations about x, then y, then z, in degrees.
+    #[serde(default)]
+    rotate: Option<Point>,
+    #[serde(default)]
+    scale: Option<Positive>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    color: Option<Albedo>,
+    checker: Option<RawChecker>,
+    texture: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawChecker {
+    a: Albedo,
+    b: Albedo,
+    /// Checks per unit of texture coordinate.
+    scale: Positive,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPlane {
+    size: [Positive; 2],
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBox {
+    size: [Positive; 3],
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCylinder {
+    radius: Positive,
+    height: Positive,
+    #[serde(default = "default_segments")]
+    segments: Segments,
+    #[serde(default = "yes")]
+    capped: bool,
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSphere {
+    radius: Positive,
+    #[serde(default = "default_segments")]
+    segments: Segments,
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRevolution {
+    /// `(radius, z)` pairs, bottom to top.
+    profile: Spanned<Vec<[Finite; 2]>>,
+    #[serde(default = "default_segments")]
+    segments: Segments,
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMesh {
+    /// A Wavefront OBJ file.
+    path: Spanned<String>,
+    #[serde(default)]
+    transform: RawTransform,
+    material: Spanned<RawMaterial>,
+}
+
+fn default_segments() -> Segments {
+    Segments(48)
+}
+fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize, Default, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawBake {
+    epsilon: Option<Positive>,
+    sample_count: Option<Spanned<u32>>,
+    sample_spacing: Option<Positive>,
+    phi_samplemap: Option<Spanned<Angle>>,
+    cube_resolution: Option<Resolution>,
+    sample_map_resolution: Option<Resolution>,
+    samples_per_texel: Option<Spanned<u32>>,
+    bounces: Option<Spanned<u32>>,
+    seed: Option<u64>,
+    encoding: Option<EncodingName>,
+    zstd_level: Option<Spanned<i32>>,
+    distance_channel: Option<bool>,
+    env_cube: Option<bool>,
+}
+
+impl RawBake {
+    /// `self` with every key that `over` sets replaced.
+    fn overridden_by(&self, over: &RawBake) -> RawBake {
+        macro_rules! pick {
+            ($($f:ident),*) => { RawBake { $($f: over.$f.clone().or_else(|| self.$f.clone())),* } };
+        }
+        let mut merged = pick!(
+            epsilon,
+            sample_count,
+            sample_spacing,
+            phi_samplemap,
+            cube_resolution,
+            sample_map_resolution,
+            samples_per_texel,
+            bounces,
+            seed,
+            encoding,
+            zstd_level,
+            distance_channel,
+            env_cube
+        );
+        // A preset that sets one density key replaces the other.
+        if over.sample_count.is_some() && over.sample_spacing.is_none() {
+            merged.sample_spacing = None;
+        }
+        if over.sample_spacing.is_some() && over.sample_count.is_none() {
+            merged.sample_count = None;
+        }
+        merged
+    }
+}
+
+// --- validated scalar types ------------------------------------------------------------------
+
+macro_rules! checked_f32 {
+    ($name:ident, $what:literal, |$v:ident| $ok:expr) => {
+        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        struct $name(f32);
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+                let $v = f64::deserialize(d)? as f32;
+                if $v.is_finite() && $ok {
+                    Ok($name($v))
+                } else {
+                    Err(D::Error::custom(format!("{} must be {}", $v, $what)))
+                }
+            }
+        }
+    };
+}
+
+checked_f32!(Finite, "a finite number", |v| true);
+checked_f32!(Positive, "a finite number > 0", |v| v > 0.0);
+checked_f32!(NonNegative, "a finite number >= 0", |v| v >= 0.0);
+checked_f32!(Angle, "an angle in degrees within [0, 180]", |v| (0.0
+    ..=180.0)
+    .contains(&v));
+checked_f32!(Unit, "within [0, 1]", |v| (0.0..=1.0).contains(&v));
+
+macro_rules! checked_vec3 {
+    ($name:ident, $elem:ident, $extra:literal, |$v:ident| $ok:expr) => {
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        struct $name(Vec3);
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+                let [x, y, z] = <[$elem; 3]>::deserialize(d)?;
+                let $v = Vec3::new(x.0, y.0, z.0);
+                if $ok {
+                    Ok($name($v))
+                } else {
+                    Err(D::Error::custom($extra))
+                }
+            }
+        }
+    };
+}
+
+checked_vec3!(Point, Finite, "", |v| true);
+checked_vec3!(Rgb, NonNegative, "", |v| true);
+checked_vec3!(Albedo, Unit, "", |v| true);
+checked_vec3!(
+    Direction,
+    Finite,
+    "a direction must not be the zero vector",
+    |v| v.length_squared() > 1e-12
+);
+
+/// A texture or cube-map resolution: 1 ..= 16384.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Resolution(u32);
+impl<'de> Deserialize<'de> for Resolution {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = i64::deserialize(d)?;
+        if (1..=16384).contains(&v) {
+            Ok(Resolution(v as u32))
+        } else {
+            Err(D::Error::custom(format!(
+                "resolution {v} is out of range 1..=16384"
+            )))
+        }
+    }
+}
+
+/// Segments around a round shape: 3 ..= 4096.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Segments(u32);
+impl<'de> Deserialize<'de> for Segments {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = i64::deserialize(d)?;
+        if (3..=4096).contains(&v) {
+            Ok(Segments(v as u32))
+        } else {
+            Err(D::Error::custom(format!(
+                "segments {v} is out of range 3..=4096"
+            )))
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct EncodingName(oslf_format::Encoding);
+impl<'de> Deserialize<'de> for EncodingName {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse::<oslf_format::Encoding>()
+            .map(EncodingName)
+            .map_err(|_| {
+                D::Error::custom(format!(
+                    "unknown encoding {s:?} (expected \"rgb9e5\", \"rgba16f\" or \"rgba32f\")"
+                ))
+            })
+    }
+}
+
+// --- building the scene ----------------------------------------------------------------------
+
+struct Ctx<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn error_at(&self, span: Range<usize>, message: impl Into<String>) -> BakeError {
+        let (line, column) = line_column(self.text, span.start);
+        BakeError::Parse {
+            path: self.path.to_path_buf(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
+    /// Located version of an error from a helper that does not know where it was called from.
+    fn locate(&self, span: Range<usize>, error: BakeError) -> BakeError {
+        match error {
+            BakeError::Invalid(message) => self.error_at(span, message),
+            other => other,
+        }
+    }
+
+    fn resolve(&self, relative: &str) -> PathBuf {
+        let p = Path::new(relative);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.path
+                .parent()
+                .unwrap_or_else(|| Path::new("."))
+                .join(p)
+        }
+    }
+
+    fn existing_file(&self, path: &Spanned<String>) -> Result<PathBuf> {
+        let resolved = self.resolve(path.get_ref());
+        if resolved.is_file() {
+            Ok(resolved)
+        } else {
+            Err(self.error_at(
+                path.span(),
+                format!("file not found: {}", resolved.display()),
+            ))
+        }
+    }
+
+    fn build(&self, raw: RawScene, preset: Option<&str>) -> Result<Scene> {
+        let hash = sha256(self.text.as_bytes());
+        let bake = self.bake_settings(&raw, preset)?;
+
+        let camera = raw.camera.map(|c| Camera {
+            position: c.position.0,
+            target: c.target.0,
+            up: c.up.0.normalize(),
+            vfov_deg: c.vfov.0,
+        });
+        if let Some(c) = &camera {
+            if (c.target - c.position).length_squared() < 1e-12 || c.vfov_deg <= 0.0 {
+                return Err(BakeError::Invalid(format!(
+                    "{}: the camera's target must differ from its position and vfov must be > 0",
+                    self.path.display()
+                )));
+            }
+        }
+
+        let mut lights: Vec<Light> = raw
+            .point_light
+            .iter()
+            .map(|l| Light::Point {
+                position: l.position.0,
+                intensity: l.intensity.0,
+            })
+            .collect();
+
+        let environment = match raw.environment {
+            None => Environment::Constant(Vec3::ZERO),
+            Some(env) => {
+                let span = env.span();
+                let env = env.into_inner();
+                let count = env.sky.is_some() as u32
+                    + env.map.is_some() as u32
+                    + env.uniform.is_some() as u32;
+                if count != 1 {
+                    return Err(self.error_at(
+                        span,
+                        "[environment] needs exactly one of `sky`, `map` or `uniform`",
+                    ));
+                }
+                if let Some(sky) = env.sky {
+                    let direction = sky.sun_direction.0.normalize();
+                    let model = Sky::new(direction, sky.turbidity.0, sky.intensity.0);
+                    lights.push(Light::Sun {
+                        direction,
+                        irradiance: sky.sun_irradiance.0,
+                        angular_radius: sky.sun_angular_radius.0.to_radians(),
+                    });
+                    Environment::Sky(Arc::new(model))
+                } else if let Some(map) = env.map {
+                    let file = self.existing_file(&map.path)?;
+                    let loaded = LatLongMap::load(&file, map.scale.0, map.rotation.0)?;
+                    Environment::LatLong(Arc::new(loaded))
+                } else {
+                    Environment::Constant(env.uniform.map_or(Vec3::ZERO, |u| u.0))
+                }
+            }
+        };
+
+        let mut materials = Vec::new();
+        let mut objects = Vec::new();
+        for spanned in raw.object {
+            let span = spanned.span();
+            let o = spanned.into_inner();
+            let mut patches = if o.patches.get_ref() == "newell-teapot" {
+                bezier::newell_teapot()
+            } else {
+                let file = self.existing_file(&o.patches)?;
+                let text = std::fs::read_to_string(&file).map_err(|source| BakeError::Io {
+                    path: file.clone(),
+                    source,
+                })?;
+                bezier::parse_patch_file(&text, &file)?
+            };
+            if let Some(select) = &o.select {
+                let [first, end] = *select.get_ref();
+                if first >= end || end as usize > patches.len() {
+                    return Err(self.error_at(
+                        select.span(),
+                        format!(
+                            "select = [{first}, {end}] is not a non-empty range within the {} patches",
+                            patches.len()
+                        ),
+                    ));
+                }
+                patches = patches[first as usize..end as usize].to_vec();
+            }
+            let transform = o.transform.affine();
+            let (material, base_color) = self.material(&o.material, &mut materials)?;
+            let world = patches.iter().map(|p| p.transformed(&transform)).collect();
+            objects.push(OslfObject {
+                name: o.name.unwrap_or_else(|| format!("object{}", objects.len())),
+                object_patches: patches,
+                patches: world,
+                transform,
+                material,
+                base_color,
+            });
+            let _ = span;
+        }
+
+        let mut shapes_out = Vec::new();
+        let mut add = |mesh: Mesh,
+                       t: &RawTransform,
+                       m: &Spanned<RawMaterial>,
+                       materials: &mut Vec<Material>|
+         -> Result<()> {
+            let mut mesh = mesh;
+            mesh.transform(&t.affine());
+            let (material, _) = self.material(m, materials)?;
+            shapes_out.push(Shape { mesh, material });
+            Ok(())
+        };
+        for p in &raw.plane {
+            let mesh = shapes::plane(Vec2::new(p.size[0].0, p.size[1].0))
+                .map_err(|e| self.locate(p.material.span(), e))?;
+            add(mesh, &p.transform, &p.material, &mut materials)?;
+        }
+        for b in &raw.boxes {
+            let mesh = shapes::cuboid(Vec3::new(b.size[0].0, b.size[1].0, b.size[2].0))
+                .map_err(|e| self.locate(b.material.span(), e))?;
+            add(mesh, &b.transform, &b.material, &mut materials)?;
+        }
+        for c in &raw.cylinder {
+            let mesh = shapes::cylinder(c.radius.0, c.height.0, c.segments.0, c.capped)
+                .map_err(|e| self.locate(c.material.span(), e))?;
+            add(mesh, &c.transform, &c.material, &mut materials)?;
+        }
+        for s in &raw.sphere {
+            let mesh = shapes::sphere(s.radius.0, s.segments.0)
+                .map_err(|e| self.locate(s.material.span(), e))?;
+            add(mesh, &s.transform, &s.material, &mut materials)?;
+        }
+        for r in &raw.revolution {
+            let profile: Vec<Vec2> = r
+                .profile
+                .get_ref()
+                .iter()
+                .map(|[a, b]| Vec2::new(a.0, b.0))
+                .collect();
+            let mesh = shapes::revolution(&profile, r.segments.0)
+                .map_err(|e| self.locate(r.profile.span(), e))?;
+            add(mesh, &r.transform, &r.material, &mut materials)?;
+        }
+        for m in &raw.mesh {
+            let file = self.existing_file(&m.path)?;
+            let mesh = obj::load_obj(&file)?;
+            add(mesh, &m.transform, &m.material, &mut materials)?;
+        }
+
+        if objects.is_empty() {
+            return Err(BakeError::Invalid(format!(
+                "{}: the scene has no [[object]]: there is nothing to bake a light field around",
+                self.path.display()
+            )));
+        }
+
+        Ok(Scene {
+            path: self.path.to_path_buf(),
+            hash,
+            camera,
+            environment,
+            lights,
+            materials,
+            objects,
+            shapes: shapes_out,
+            bake,
+            preset: preset.map(str::to_string),
+        })
+    }
+
+    /// Adds a material, returning its index and its mean albedo.
+    fn material(
+        &self,
+        m: &Spanned<RawMaterial>,
+        materials: &mut Vec<Material>,
+    ) -> Result<(u32, Vec3)> {
+        let raw = m.get_ref();
+        let count =
+            raw.color.is_some() as u32 + raw.checker.is_some() as u32 + raw.texture.is_some() as u32;
+        if count != 1 {
+            return Err(self.error_at(
+                m.span(),
+                "a material needs exactly one of `color`, `checker` or `texture`",
+            ));
+        }
+        let (albedo, mean) = if let Some(c) = raw.color {
+            (Texture::Constant(c.0), c.0)
+        } else if let Some(c) = &raw.checker {
+            (
+                Texture::Checker {
+                    a: c.a.0,
+                    b: c.b.0,
+                    scale: c.scale.0,
+                },
+                (c.a.0 + c.b.0) * 0.5,
+            )
+        } else {
+            let spanned = raw.texture.as_ref().expect("counted above");
+            let file = self.existing_file(spanned)?;
+            let image = ImageTexture::load(&file)?;
+            let mean = image.mean();
+            (Texture::Image(Arc::new(image)), mean)
+        };
+        let material = Material { albedo };
+        materials.push(material);
+        Ok(((materials.len() - 1) as u32, mean))
+    }
+
+    fn bake_settings(&self, raw: &RawScene, preset: Option<&str>) -> Result<BakeSettings> {
+        let merged = match preset {
+            None => raw.bake.clone(),
+            Some(name) => match raw.presets.get(name) {
+                Some(p) => raw.bake.overridden_by(p),
+                None => {
+                    let known: Vec<&str> = raw.presets.keys().map(String::as_str).collect();
+                    return Err(BakeError::Invalid(format!(
+                        "{}: no preset named {name:?} (the scene defines: {})",
+                        self.path.display(),
+                        if known.is_empty() {
+                            "none".to_string()
+                        } else {
+                            known.join(", ")
+                        }
+                    )));
+                }
+            },
+        };
+        let sample_count = match (&merged.sample_count, &merged.sample_spacing) {
+            (Some(c), Some(_)) => {
+                return Err(self.error_at(
+                    c.span(),
+                    "give either sample_count or sample_spacing, not both",
+                ))
+            }
+            (Some(c), None) => {
+                if *c.get_ref() == 0 || *c.get_ref() > 16_000_000 {
+                    return Err(self.error_at(c.span(), "sample_count must be in 1..=16000000"));
+                }
+                SampleDensity::Count(*c.get_ref())
+            }
+            (None, Some(s)) => SampleDensity::Spacing(s.0),
+            (None, None) => SampleDensity::Count(300),
+        };
+        let phi = match &merged.phi_samplemap {
+            Some(p) if p.get_ref().0 <= 0.0 || p.get_ref().0 >= 90.0 => {
+                return Err(self.error_at(
+                    p.span(),
+                    "phi_samplemap must be in (0, 90) degrees (Eq. 3.10)",
+                ))
+            }
+            Some(p) => p.get_ref().0,
+            None => 85.0,
+        };
+        let spp = match &merged.samples_per_texel {
+            Some(s) if *s.get_ref() == 0 || *s.get_ref() > 1 << 16 => {
+                return Err(self.error_at(s.span(), "samples_per_texel must be in 1..=65536"))
+            }
+            Some(s) => *s.get_ref(),
+            None => 4,
+        };
+        let bounces = match &merged.bounces {
+            Some(b) if *b.get_ref() > 64 => {
+                return Err(self.error_at(b.span(), "bounces must be at most 64"))
+            }
+            Some(b) => *b.get_ref(),
+            None => 1,
+        };
+        let zstd_level = match &merged.zstd_level {
+            Some(z) if !(1..=22).contains(z.get_ref()) => {
+                return Err(self.error_at(z.span(), "zstd_level must be in 1..=22"))
+            }
+            Some(z) => *z.get_ref(),
+            None => 3,
+        };
+        Ok(BakeSettings {
+            epsilon: merged.epsilon.map_or(0.1, |e| e.0),
+            sample_count,
+            phi_samplemap_deg: phi,
+            cube_resolution: merged.cube_resolution.map_or(32, |r| r.0),
+            sample_map_resolution: merged.sample_map_resolution.map_or(256, |r| r.0),
+            samples_per_texel: spp,
+            bounces,
+            seed: merged.seed.unwrap_or(0),
+            encoding: merged
+                .encoding
+                .map_or(oslf_format::Encoding::Rgb9e5, |e| e.0),
+            zstd_level,
+            distance_channel: merged.distance_channel.unwrap_or(false),
+            env_cube: merged.env_cube.unwrap_or(true),
+        })
+    }
+}
+
+impl RawTransform {
+    /// Scale, then rotate about x, y, z (degrees), then translate.
+    fn affine(&self) -> Affine3A {
+        let scale = self.scale.map_or(1.0, |s| s.0);
+        let r = self.rotate.map_or(Vec3::ZERO, |r| r.0);
+        let rotation = Quat::from_rotation_z(r.z.to_radians())
+            * Quat::from_rotation_y(r.y.to_radians())
+            * Quat::from_rotation_x(r.x.to_radians());
+        let translation = self.translate.map_or(Vec3::ZERO, |t| t.0);
+        Affine3A::from_scale_rotation_translation(Vec3::splat(scale), rotation, translation)
+    }
+}
+
+fn sha256(bytes: &[u8]) -> [u8; 32] {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes).into()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_column_counts_from_one() {
+        let text = "a = 1\nbé = x\n";
+        assert_eq!(line_column(text, 0), (1, 1));
+        assert_eq!(line_column(text, 6), (2, 1));
+        // 'x' sits after the two-byte 'é': byte 12, character column 6.
+        assert_eq!(line_column(text, text.find('x').unwrap()), (2, 6));
+    }
+}

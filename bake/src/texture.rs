@@ -1,0 +1,305 @@
+//! Textures: constants, checkerboards and images, all linear RGB.
+//!
+//! Image convention: pixel row 0 is the *top* of the file; texture coordinate `v = 0` is the
+//! *bottom* (the OBJ / OpenGL convention), so texel `(x, y)` has its centre at
+//! `uv = ((x + ½)/w, 1 − (y + ½)/h)`. Lookups are bilinear and wrap (repeat) in both directions.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+
+use crate::{BakeError, Result};
+
+/// sRGB transfer function (IEC 61966-2-1), encoded `[0,1]` → linear `[0,1]`.
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Inverse sRGB transfer function, linear → encoded. Values outside `[0,1]` are clamped.
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Rec. 709 / sRGB luminance of linear RGB.
+pub fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// A texture evaluated at surface texture coordinates.
+#[derive(Clone, Debug)]
+pub enum Texture {
+    /// The same value everywhere.
+    Constant(Vec3),
+    /// Squares of side `1/scale` in uv, `a` where `⌊u·scale⌋ + ⌊v·scale⌋` is even, else `b`.
+    Checker { a: Vec3, b: Vec3, scale: f32 },
+    /// A linear RGB image (bilinear, wrapping).
+    Image(Arc<ImageTexture>),
+}
+
+impl Texture {
+    /// The texture value at `uv`. Never NaN for finite texture data; a non-finite `uv` reads the
+    /// texel at `uv = 0`.
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checker { a, b, scale } => {
+                let s = if scale.is_finite() { *scale } else { 1.0 };
+                let ix = (uv.x * s).floor() as i64;
+                let iy = (uv.y * s).floor() as i64;
+                if (ix + iy).rem_euclid(2) == 0 {
+                    *a
+                } else {
+                    *b
+                }
+            }
+            Texture::Image(img) => img.eval(uv),
+        }
+    }
+}
+
+/// A linear RGB image, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageTexture {
+    pub width: u32,
+    pub height: u32,
+    /// `width × height` texels, row-major, all finite and non-negative.
+    pub pixels: Vec<Vec3>,
+}
+
+impl ImageTexture {
+    /// Loads an image with [`load_linear_rgb`].
+    pub fn load(path: &Path) -> Result<ImageTexture> {
+        let (width, height, pixels) = load_linear_rgb(path)?;
+        Ok(ImageTexture {
+            width,
+            height,
+            pixels,
+        })
+    }
+
+    /// An image from linear texels (row-major, row 0 at the top). Errors on a size mismatch or
+    /// a NaN, infinite or negative texel.
+    pub fn from_pixels(width: u32, height: u32, pixels: Vec<Vec3>) -> Result<ImageTexture> {
+        check_pixels(Path::new("<memory>"), width, height, &pixels)?;
+        Ok(ImageTexture {
+            width,
+            height,
+            pixels,
+        })
+    }
+
+    /// The texel at integer coordinates, wrapping.
+    pub fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let x = x.rem_euclid(self.width as i64) as usize;
+        let y = y.rem_euclid(self.height as i64) as usize;
+        self.pixels[y * self.width as usize + x]
+    }
+
+    /// Bilinear lookup at `uv` (v up), wrapping in both directions.
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        if self.pixels.is_empty() || !uv.is_finite() {
+            return Vec3::ZERO;
+        }
+        let u = uv.x - uv.x.floor();
+        let v = uv.y - uv.y.floor();
+        let x = u * self.width as f32 - 0.5;
+        let y = (1.0 - v) * self.height as f32 - 0.5;
+        let x0 = x.floor();
+        let y0 = y.floor();
+        let fx = (x - x0).clamp(0.0, 1.0);
+        let fy = (y - y0).clamp(0.0, 1.0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = self.texel(x0, y0).lerp(self.texel(x0 + 1, y0), fx);
+        let bottom = self.texel(x0, y0 + 1).lerp(self.texel(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// Number of texels with some component above `limit`.
+    pub fn count_above(&self, limit: f32) -> usize {
+        self.pixels
+            .iter()
+            .filter(|p| p.max_element() > limit)
+            .count()
+    }
+}
+
+fn check_pixels(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    if width == 0 || height == 0 || (width as usize) * (height as usize) != pixels.len() {
+        return Err(BakeError::Image {
+            path: path.to_path_buf(),
+            message: format!(
+                "{} pixels for a {width} × {height} image (must be non-empty)",
+                pixels.len()
+            ),
+        });
+    }
+    for (i, p) in pixels.iter().enumerate() {
+        for value in p.to_array() {
+            if !value.is_finite() || value < 0.0 {
+                return Err(BakeError::BadPixel {
+                    path: path.to_path_buf(),
+                    x: (i % width as usize) as u32,
+                    y: (i / width as usize) as u32,
+                    value,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// Loads an image as linear RGB: `(width, height, pixels)`, row-major, row 0 at the top.
+///
+/// The format is recognised from the file's content, not its name:
+/// - OpenEXR (via the `exr` crate; the first layer with R, G and B channels, alpha ignored) and
+///   Radiance HDR (`.hdr`, RGBE) are linear already;
+/// - PNG and JPEG (8 or 16 bit, grey or colour, alpha ignored) are sRGB-encoded and are
+///   converted to linear with [`srgb_to_linear`].
+///
+/// Errors: [`BakeError::Io`] if the file cannot be opened or read, [`BakeError::Image`] if it
+/// cannot be decoded or is empty, [`BakeError::BadPixel`] for the first NaN, infinite or
+/// negative component (scanning rows from the top).
+pub fn load_linear_rgb(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+    let io_err = |source: std::io::Error| BakeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let image_err = |message: String| BakeError::Image {
+        path: path.to_path_buf(),
+        message,
+    };
+    let mut magic = [0u8; 4];
+    {
+        use std::io::Read;
+        let mut f = std::fs::File::open(path).map_err(io_err)?;
+        let mut n = 0;
+        while n < 4 {
+            let k = f.read(&mut magic[n..]).map_err(io_err)?;
+            if k == 0 {
+                break;
+            }
+            n += k;
+        }
+        if n < 4 {
+            return Err(image_err(format!(
+                "file is too short to be an image ({n} bytes)"
+            )));
+        }
+    }
+
+    let (width, height, pixels) = if magic == EXR_MAGIC {
+        load_exr(path).map_err(|e| image_err(format!("cannot read OpenEXR: {e}")))?
+    } else {
+        let reader = image::ImageReader::open(path)
+            .map_err(io_err)?
+            .with_guessed_format()
+            .map_err(io_err)?;
+        let format = reader.format();
+        let img = reader.decode().map_err(|e| match e {
+            image::ImageError::IoError(source) => io_err(source),
+            other => image_err(format!("cannot decode image: {other}")),
+        })?;
+        let linear = matches!(
+            img,
+            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+        ) || format == Some(image::ImageFormat::Hdr);
+        let rgb = img.to_rgb32f();
+        let (w, h) = rgb.dimensions();
+        let pixels: Vec<Vec3> = rgb
+            .pixels()
+            .map(|p| {
+                let c = Vec3::new(p.0[0], p.0[1], p.0[2]);
+                if linear {
+                    c
+                } else {
+                    Vec3::new(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z))
+                }
+            })
+            .collect();
+        (w, h, pixels)
+    };
+    check_pixels(path, width, height, &pixels)?;
+    Ok((width, height, pixels))
+}
+
+fn load_exr(path: &Path) -> std::result::Result<(u32, u32, Vec<Vec3>), exr::error::Error> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _channels| {
+            (
+                resolution.width(),
+                vec![Vec3::ZERO; resolution.width() * resolution.height()],
+            )
+        },
+        |(w, pixels): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            pixels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+        },
+    )?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Ok((size.width() as u32, size.height() as u32, pixels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trip_and_reference_values() {
+        for i in 0..=255 {
+            let c = i as f32 / 255.0;
+            assert!((linear_to_srgb(srgb_to_linear(c)) - c).abs() < 1e-5);
+        }
+        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
+        assert_eq!(srgb_to_linear(0.0), 0.0);
+        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
+        assert_eq!(linear_to_srgb(f32::NAN), 0.0);
+    }
+
+    #[test]
+    fn checker_squares() {
+        let t = Texture::Checker {
+            a: Vec3::ONE,
+            b: Vec3::ZERO,
+            scale: 4.0,
+        };
+        assert_eq!(t.eval(Vec2::new(0.1, 0.1)), Vec3::ONE);
+        assert_eq!(t.eval(Vec2::new(0.3, 0.1)), Vec3::ZERO);
+        assert_eq!(t.eval(Vec2::new(0.3, 0.3)), Vec3::ONE);
+        assert_eq!(t.eval(Vec2::new(-0.1, 0.1)), Vec3::ZERO);
+        assert!(t.eval(Vec2::NAN).is_finite());
+    }
+
+    #[test]
+    fn image_bilinear_wraps() {
+        let img = ImageTexture::from_pixels(
+            2,
+            1,
+            vec![Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0)],
+        )
+        .unwrap();
+        // Texel centres.
+        assert!((img.eval(Vec2::new(0.25, 0.5)) - Vec3::X).length() < 1e-6);
+        assert!((img.eval(Vec2::new(0.75, 0.5)) - Vec3::Z).length() < 1e-6);
+        // Half-way between texel 1 and (wrapped) texel 0.
+        let edge = img.eval(Vec2::new(0.0, 0.5));
+        assert!((edge - Vec3::new(0.5, 0.0, 0.5)).length() < 1e-6);
+        assert_eq!(img.eval(Vec2::new(1.25, 3.5)), img.eval(Vec2::new(0.25, 0.5)));
+        assert!(ImageTexture::from_pixels(1, 1, vec![Vec3::splat(-1.0)]).is_err());
+        assert!(ImageTexture::from_pixels(2, 1, vec![Vec3::ONE]).is_err());
+    }
+}

@@ -1,0 +1,131 @@
+//! Bad scene files give errors that name the file, line and column.
+
+use std::path::Path;
+
+use oslf_bake::scene::Scene;
+use oslf_bake::BakeError;
+
+const GOOD: &str = r#"
+[environment]
+uniform = [1.0, 1.0, 1.0]
+
+[[object]]
+patches = "newell-teapot"
+material = { color = [0.1, 0.4, 0.1] }
+
+[bake]
+sample_count = 10
+"#;
+
+fn parse(text: &str) -> Result<Scene, BakeError> {
+    Scene::from_str(text, Path::new("/scenes/test.toml"), None)
+}
+
+/// Asserts a located error at `line`:`column` whose message contains `needle`.
+fn assert_located(text: &str, line: usize, column: usize, needle: &str) {
+    match parse(text) {
+        Err(BakeError::Parse {
+            path,
+            line: l,
+            column: c,
+            message,
+        }) => {
+            assert_eq!(path, Path::new("/scenes/test.toml"));
+            assert!(
+                message.contains(needle),
+                "message {message:?} lacks {needle:?}"
+            );
+            assert_eq!((l, c), (line, column), "message: {message}");
+        }
+        Err(other) => panic!("expected a located error, got {other}"),
+        Ok(_) => panic!("expected an error for:\n{text}"),
+    }
+}
+
+#[test]
+fn the_good_scene_parses() {
+    let scene = parse(GOOD).unwrap();
+    assert_eq!(scene.objects.len(), 1);
+    assert_eq!(scene.objects[0].patches.len(), 32);
+    assert_eq!(scene.bake.phi_samplemap_deg, 85.0);
+    assert_eq!(scene.bake.sample_map_resolution, 256);
+}
+
+#[test]
+fn unknown_key() {
+    let text = GOOD.replace("sample_count = 10", "sample_count = 10\nsmaple_count = 3");
+    assert_located(&text, 11, 1, "unknown field `smaple_count`");
+}
+
+#[test]
+fn wrong_type() {
+    let text = GOOD.replace("sample_count = 10", "sample_count = \"ten\"");
+    assert_located(&text, 10, 16, "");
+}
+
+#[test]
+fn nan_and_negative_numbers() {
+    let text = GOOD.replace("[bake]", "[bake]\nepsilon = nan");
+    assert_located(&text, 10, 11, "finite");
+    let text = GOOD.replace("[bake]", "[bake]\nepsilon = -0.5");
+    assert_located(&text, 10, 11, "> 0");
+    let text = GOOD.replace("[0.1, 0.4, 0.1]", "[0.1, 1.4, 0.1]");
+    assert_located(&text, 7, 26, "[0, 1]");
+    let text = GOOD.replace("uniform = [1.0, 1.0, 1.0]", "uniform = [1.0, inf, 1.0]");
+    assert_located(&text, 3, 17, "finite");
+}
+
+#[test]
+fn missing_file_is_located_and_resolved_against_the_scene() {
+    let text = GOOD.replace("\"newell-teapot\"", "\"patches/pot.txt\"");
+    match parse(&text) {
+        Err(BakeError::Parse {
+            line,
+            column,
+            message,
+            ..
+        }) => {
+            assert_eq!((line, column), (6, 11));
+            assert!(message.contains("/scenes/patches/pot.txt"), "{message}");
+        }
+        other => panic!("expected a located error, got {other:?}"),
+    }
+}
+
+#[test]
+fn semantic_errors_are_located() {
+    // Two environments at once.
+    let text = GOOD.replace("uniform = [1.0, 1.0, 1.0]", "uniform = [1.0, 1.0, 1.0]\nmap = { path = \"x.exr\" }");
+    assert!(matches!(parse(&text), Err(BakeError::Parse { .. }) | Err(BakeError::Io { .. })));
+    // A patch range outside the data.
+    let text = GOOD.replace("patches = \"newell-teapot\"", "patches = \"newell-teapot\"\nselect = [4, 40]");
+    assert_located(&text, 7, 10, "range");
+    // Both density keys.
+    let text = GOOD.replace("sample_count = 10", "sample_count = 10\nsample_spacing = 0.1");
+    assert_located(&text, 10, 16, "not both");
+    // A material with two kinds.
+    let text = GOOD.replace(
+        "material = { color = [0.1, 0.4, 0.1] }",
+        "material = { color = [0.1, 0.4, 0.1], texture = \"wood.png\" }",
+    );
+    assert_located(&text, 7, 12, "exactly one");
+}
+
+#[test]
+fn presets_override_and_unknown_presets_are_named() {
+    let text = format!("{GOOD}\n[presets.big]\ncube_resolution = 64\nsample_spacing = 0.2\n");
+    let scene = Scene::from_str(&text, Path::new("t.toml"), Some("big")).unwrap();
+    assert_eq!(scene.bake.cube_resolution, 64);
+    assert_eq!(
+        scene.bake.sample_count,
+        oslf_bake::scene::SampleDensity::Spacing(0.2)
+    );
+    let err = Scene::from_str(&text, Path::new("t.toml"), Some("huge")).unwrap_err();
+    assert!(err.to_string().contains("big"), "{err}");
+}
+
+#[test]
+fn no_object_is_an_error() {
+    let text = "[environment]\nuniform = [1.0, 1.0, 1.0]\n";
+    assert!(matches!(parse(text), Err(BakeError::Invalid(_))));
+}

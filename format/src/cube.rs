@@ -1,0 +1,364 @@
+//! Cube-map geometry (the wgpu / Vulkan convention), cube images and their encoding.
+//!
+//! Faces are stored in layer order +X, -X, +Y, -Y, +Z, -Z (0..5), so the runtime uploads them
+//! as they are. A direction maps to a face and face coordinates `(s, t)` by the Vulkan
+//! specification's cube-map table ("Cube Map Face Selection"):
+//!
+//! | face | sc | tc | ma |
+//! |------|----|----|----|
+//! | +X   | -z | -y | x  |
+//! | -X   | +z | -y | x  |
+//! | +Y   | +x | +z | y  |
+//! | -Y   | +x | -z | y  |
+//! | +Z   | +x | -y | z  |
+//! | -Z   | -x | -y | z  |
+//!
+//! `s = (sc / |ma| + 1) / 2`, `t = (tc / |ma| + 1) / 2`. Texel row 0 is `t = 0` and comes first
+//! in memory; column 0 is `s = 0`. Texel `(x, y)` of a face of resolution `n` is centred on
+//! `s = (x + 0.5) / n`, `t = (y + 0.5) / n`. When two components tie for the largest magnitude
+//! the face is chosen in the order x, y, z.
+
+use crate::encoding::{encode_distances, encode_texels, Encoding};
+use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
+
+/// Number of faces of a cube map.
+pub const FACES: usize = 6;
+
+/// Short names of the faces, in layer order.
+pub const FACE_NAMES: [&str; FACES] = ["px", "nx", "py", "ny", "pz", "nz"];
+
+/// The face a direction points at and its face coordinates `(s, t)` in `[0, 1]`.
+///
+/// A zero or non-finite direction gives `(0, 0.5, 0.5)` (never panics).
+pub fn direction_to_face_st(dir: [f32; 3]) -> (usize, f32, f32) {
+    let [x, y, z] = dir;
+    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+        return (0, 0.5, 0.5);
+    }
+    let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+    let (face, sc, tc, ma) = if ax >= ay && ax >= az {
+        if x >= 0.0 {
+            (0, -z, -y, ax)
+        } else {
+            (1, z, -y, ax)
+        }
+    } else if ay >= az {
+        if y >= 0.0 {
+            (2, x, z, ay)
+        } else {
+            (3, x, -z, ay)
+        }
+    } else if z >= 0.0 {
+        (4, x, -y, az)
+    } else {
+        (5, -x, -y, az)
+    };
+    if ma <= 0.0 {
+        return (0, 0.5, 0.5);
+    }
+    let s = ((sc / ma + 1.0) * 0.5).clamp(0.0, 1.0);
+    let t = ((tc / ma + 1.0) * 0.5).clamp(0.0, 1.0);
+    (face, s, t)
+}
+
+/// The unit direction through face coordinates `(s, t)` of `face` (inverse of
+/// [`direction_to_face_st`]). Face indices of 6 and above are taken modulo 6.
+pub fn face_st_to_direction(face: usize, s: f32, t: f32) -> [f32; 3] {
+    let sc = 2.0 * s - 1.0;
+    let tc = 2.0 * t - 1.0;
+    let d = match face % FACES {
+        0 => [1.0, -tc, -sc],
+        1 => [-1.0, -tc, sc],
+        2 => [sc, 1.0, tc],
+        3 => [sc, -1.0, -tc],
+        4 => [sc, -tc, 1.0],
+        _ => [-sc, -tc, -1.0],
+    };
+    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if len > 0.0 && len.is_finite() {
+        [d[0] / len, d[1] / len, d[2] / len]
+    } else {
+        [1.0, 0.0, 0.0]
+    }
+}
+
+/// The unit direction through the centre of texel `(x, y)` of `face` at `resolution`
+/// (a resolution of 0 is treated as 1).
+pub fn texel_direction(face: usize, x: u32, y: u32, resolution: u32) -> [f32; 3] {
+    let n = resolution.max(1) as f32;
+    face_st_to_direction(face, (x as f32 + 0.5) / n, (y as f32 + 0.5) / n)
+}
+
+/// A decoded cube map: linear RGB radiance, row-major per face, faces in layer order.
+#[derive(Clone, Debug)]
+pub struct CubeImage {
+    /// Texels per face edge.
+    pub resolution: u32,
+    /// `resolution * resolution` texels per face, row 0 first.
+    pub faces: [Vec<[f32; 3]>; FACES],
+    /// Optional distance to the first hit per texel (`f32::MAX` where the ray escaped).
+    pub distance: Option<[Vec<f32>; FACES]>,
+}
+
+impl CubeImage {
+    /// A black cube (with a zero distance plane if `distance`).
+    pub fn black(resolution: u32, distance: bool) -> Self {
+        let n = (resolution as usize).saturating_mul(resolution as usize);
+        CubeImage {
+            resolution,
+            faces: std::array::from_fn(|_| vec![[0.0; 3]; n]),
+            distance: distance.then(|| std::array::from_fn(|_| vec![0.0; n])),
+        }
+    }
+}
+
+/// Bytes of one face's raw (decompressed) data: encoded texels, then the distance plane.
+pub fn face_raw_size(
+    encoding: Encoding,
+    resolution: u32,
+    distance_channel: bool,
+) -> Result<u64, Error> {
+    let texels = u64::from(resolution) * u64::from(resolution);
+    let per_texel = encoding.bytes_per_texel() as u64 + if distance_channel { 4 } else { 0 };
+    texels.checked_mul(per_texel).ok_or(Error::Limit {
+        what: "face raw size",
+        value: u64::MAX,
+        max: u64::MAX,
+    })
+}
+
+/// Counters from [`encode_cube`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EncodeStats {
+    /// Texels with a channel above the encoding's largest finite value (stored clamped).
+    pub clamped_texels: u64,
+    /// Raw (encoded, uncompressed) bytes of the six faces.
+    pub raw_bytes: u64,
+    /// zstd-compressed bytes of the six faces.
+    pub compressed_bytes: u64,
+}
+
+impl std::ops::AddAssign for EncodeStats {
+    fn add_assign(&mut self, o: Self) {
+        self.clamped_texels += o.clamped_texels;
+        self.raw_bytes += o.raw_bytes;
+        self.compressed_bytes += o.compressed_bytes;
+    }
+}
+
+/// A cube encoded and compressed, ready for [`crate::StoreWriter::append`].
+#[derive(Clone, Debug)]
+pub struct EncodedCube {
+    pub(crate) cube_index: u32,
+    pub(crate) encoding: Encoding,
+    pub(crate) resolution: u32,
+    pub(crate) distance_channel: bool,
+    pub(crate) raw_size: u64,
+    pub(crate) frames: [Vec<u8>; FACES],
+    pub(crate) checksums: [u64; FACES],
+}
+
+impl EncodedCube {
+    /// The cube index it was encoded for.
+    pub fn cube_index(&self) -> u32 {
+        self.cube_index
+    }
+    /// Raw (decompressed) bytes of each face.
+    pub fn face_raw_size(&self) -> u64 {
+        self.raw_size
+    }
+    /// The six zstd frames.
+    pub fn frames(&self) -> &[Vec<u8>; FACES] {
+        &self.frames
+    }
+    /// Compressed bytes of all six faces.
+    pub fn compressed_bytes(&self) -> u64 {
+        self.frames.iter().map(|f| f.len() as u64).sum()
+    }
+}
+
+/// Encodes and compresses a cube. Pure: run it in parallel.
+///
+/// Checks the cube's shape against `params` (resolution, distance channel), rejects NaN,
+/// infinite or negative radiance ([`Error::InvalidRadiance`]) and distances
+/// ([`Error::InvalidDistance`]), clamps values above the encoding's largest finite value and
+/// counts them in [`EncodeStats::clamped_texels`].
+pub fn encode_cube(
+    cube: &CubeImage,
+    params: &BakeParams,
+    cube_index: u32,
+) -> Result<(EncodedCube, EncodeStats), Error> {
+    let res = params.cube_resolution;
+    if res == 0 || res > MAX_CUBE_RESOLUTION {
+        return Err(Error::Limit {
+            what: "cube resolution",
+            value: u64::from(res),
+            max: u64::from(MAX_CUBE_RESOLUTION),
+        });
+    }
+    if cube.resolution != res {
+        return Err(Error::CubeShape {
+            cube: cube_index,
+            detail: format!(
+                "resolution {} differs from the bake's {res}",
+                cube.resolution
+            ),
+        });
+    }
+    if cube.distance.is_some() != params.distance_channel {
+        return Err(Error::CubeShape {
+            cube: cube_index,
+            detail: format!(
+                "distance plane {} but the bake's distance_channel is {}",
+                if cube.distance.is_some() {
+                    "present"
+                } else {
+                    "absent"
+                },
+                params.distance_channel
+            ),
+        });
+    }
+    let texels = (res as usize) * (res as usize); // res <= 16384: no overflow
+    let enc = params.encoding;
+    let color_bytes = texels * enc.bytes_per_texel();
+    let raw_size = face_raw_size(enc, res, params.distance_channel)?;
+    let mut raw = vec![0u8; raw_size as usize];
+    let mut compressor = zstd::bulk::Compressor::new(params.zstd_level).map_err(|e| {
+        Error::Compress {
+            cube: cube_index,
+            face: 0,
+            detail: e.to_string(),
+        }
+    })?;
+    let mut stats = EncodeStats::default();
+    let mut frames: [Vec<u8>; FACES] = Default::default();
+    let mut checksums = [0u64; FACES];
+    for face in 0..FACES {
+        let rgb = &cube.faces[face];
+        if rgb.len() != texels {
+            return Err(Error::CubeShape {
+                cube: cube_index,
+                detail: format!("face {face} has {} texels, expected {texels}", rgb.len()),
+            });
+        }
+        let (color, dist_out) = raw.split_at_mut(color_bytes);
+        stats.clamped_texels += encode_texels(enc, rgb, color).map_err(|e| match e {
+            Error::InvalidTexel { index, value } => Error::InvalidRadiance {
+                cube: cube_index,
+                face,
+                x: (index % res as usize) as u32,
+                y: (index / res as usize) as u32,
+                value,
+            },
+            other => other,
+        })?;
+        if let Some(dist) = &cube.distance {
+            let d = &dist[face];
+            if d.len() != texels {
+                return Err(Error::CubeShape {
+                    cube: cube_index,
+                    detail: format!(
+                        "distance plane of face {face} has {} texels, expected {texels}",
+                        d.len()
+                    ),
+                });
+            }
+            if let Some(i) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(Error::InvalidDistance {
+                    cube: cube_index,
+                    face,
+                    x: (i % res as usize) as u32,
+                    y: (i / res as usize) as u32,
+                    value: d.get(i).copied().unwrap_or(f32::NAN),
+                });
+            }
+            encode_distances(d, dist_out)?;
+        }
+        let frame = compressor.compress(&raw).map_err(|e| Error::Compress {
+            cube: cube_index,
+            face,
+            detail: e.to_string(),
+        })?;
+        checksums[face] = xxhash_rust::xxh3::xxh3_64(&frame);
+        stats.raw_bytes += raw_size;
+        stats.compressed_bytes += frame.len() as u64;
+        frames[face] = frame;
+    }
+    Ok((
+        EncodedCube {
+            cube_index,
+            encoding: enc,
+            resolution: res,
+            distance_channel: params.distance_channel,
+            raw_size,
+            frames,
+            checksums,
+        },
+        stats,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: [f32; 3], b: [f32; 3]) -> bool {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5)
+    }
+
+    #[test]
+    fn axes_hit_face_centres() {
+        let axes = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        for (face, a) in axes.iter().enumerate() {
+            assert_eq!(direction_to_face_st(*a), (face, 0.5, 0.5));
+            assert!(close(face_st_to_direction(face, 0.5, 0.5), *a));
+        }
+    }
+
+    #[test]
+    fn vulkan_table_corners() {
+        // +X: s grows towards -z, t grows towards -y.
+        let (f, s, t) = direction_to_face_st([1.0, -0.5, -0.5]);
+        assert_eq!((f, s, t), (0, 0.75, 0.75));
+        // +Y: s grows with +x, t grows with +z.
+        let (f, s, t) = direction_to_face_st([0.5, 1.0, 0.5]);
+        assert_eq!((f, s, t), (2, 0.75, 0.75));
+        // -Z: s grows towards -x.
+        let (f, s, _) = direction_to_face_st([-0.5, 0.0, -1.0]);
+        assert_eq!((f, s), (5, 0.75));
+    }
+
+    #[test]
+    fn round_trip_texel_directions() {
+        let n = 7;
+        for face in 0..FACES {
+            for y in 0..n {
+                for x in 0..n {
+                    let d = texel_direction(face, x, y, n);
+                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    assert!((len - 1.0).abs() < 1e-6);
+                    let (f, s, t) = direction_to_face_st(d);
+                    assert_eq!(f, face);
+                    assert!((s - (x as f32 + 0.5) / n as f32).abs() < 1e-6);
+                    assert!((t - (y as f32 + 0.5) / n as f32).abs() < 1e-6);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_directions_do_not_panic() {
+        assert_eq!(direction_to_face_st([0.0; 3]), (0, 0.5, 0.5));
+        assert_eq!(direction_to_face_st([f32::NAN, 1.0, 0.0]), (0, 0.5, 0.5));
+        let _ = face_st_to_direction(99, f32::NAN, 2.0);
+        let _ = texel_direction(0, 5, 5, 0);
+    }
+}

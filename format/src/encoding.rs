@@ -1,0 +1,345 @@
+//! Texel encodings: RGB9E5, RGBA16F and RGBA32F, and their slice encoders and decoders.
+//!
+//! All encodings store linear RGB radiance, little-endian:
+//!
+//! * [`Encoding::Rgb9e5`]: one `u32` per texel, the GL_EXT_texture_shared_exponent /
+//!   Vulkan `E5B9G9R9_UFLOAT_PACK32` / wgpu `Rgb9e5Ufloat` layout: red mantissa in bits 0..=8,
+//!   green in 9..=17, blue in 18..=26, the shared exponent (bias 15) in 27..=31; value =
+//!   `mantissa * 2^(exponent - 15 - 9)`. Largest finite value [`MAX_RGB9E5`] = 65408.
+//! * [`Encoding::Rgba16f`]: four IEEE binary16 values R, G, B, A with A = 1. Largest finite
+//!   value [`MAX_F16`] = 65504.
+//! * [`Encoding::Rgba32f`]: four IEEE binary32 values R, G, B, A with A = 1. Exact.
+//!
+//! Radiance must be finite and non-negative. Values above an encoding's largest finite value
+//! are clamped to it (never encoded as infinity) and counted.
+
+use crate::Error;
+use half::f16;
+
+/// Largest finite RGB9E5 value: `511/512 * 2^16`.
+pub const MAX_RGB9E5: f32 = 65408.0;
+/// Largest finite IEEE binary16 value.
+pub const MAX_F16: f32 = 65504.0;
+
+const RGB9E5_MANTISSA_BITS: i32 = 9;
+const RGB9E5_EXP_BIAS: i32 = 15;
+const RGB9E5_MAX_EXP: i32 = 31;
+
+/// How cube-map texels are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Encoding {
+    /// Shared-exponent RGB, 4 bytes per texel (the default).
+    #[default]
+    Rgb9e5,
+    /// Half-float RGBA, 8 bytes per texel.
+    Rgba16f,
+    /// Float RGBA, 16 bytes per texel.
+    Rgba32f,
+}
+
+impl Encoding {
+    /// All encodings, in tag order.
+    pub const ALL: [Encoding; 3] = [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f];
+
+    /// Bytes one texel takes: 4, 8 or 16.
+    pub fn bytes_per_texel(self) -> usize {
+        match self {
+            Encoding::Rgb9e5 => 4,
+            Encoding::Rgba16f => 8,
+            Encoding::Rgba32f => 16,
+        }
+    }
+
+    /// `"rgb9e5"`, `"rgba16f"` or `"rgba32f"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Encoding::Rgb9e5 => "rgb9e5",
+            Encoding::Rgba16f => "rgba16f",
+            Encoding::Rgba32f => "rgba32f",
+        }
+    }
+
+    /// The on-disk tag: 0, 1 or 2.
+    pub fn tag(self) -> u32 {
+        match self {
+            Encoding::Rgb9e5 => 0,
+            Encoding::Rgba16f => 1,
+            Encoding::Rgba32f => 2,
+        }
+    }
+
+    /// The encoding with on-disk tag `tag`.
+    pub fn from_tag(tag: u32) -> Option<Self> {
+        match tag {
+            0 => Some(Encoding::Rgb9e5),
+            1 => Some(Encoding::Rgba16f),
+            2 => Some(Encoding::Rgba32f),
+            _ => None,
+        }
+    }
+
+    /// Largest finite value a channel can hold; larger values are clamped to it.
+    pub fn max_value(self) -> f32 {
+        match self {
+            Encoding::Rgb9e5 => MAX_RGB9E5,
+            Encoding::Rgba16f => MAX_F16,
+            Encoding::Rgba32f => f32::MAX,
+        }
+    }
+}
+
+impl std::fmt::Display for Encoding {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Encoding {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "rgb9e5" => Ok(Encoding::Rgb9e5),
+            "rgba16f" => Ok(Encoding::Rgba16f),
+            "rgba32f" => Ok(Encoding::Rgba32f),
+            _ => Err(Error::UnknownEncoding(s.to_string())),
+        }
+    }
+}
+
+/// `floor(log2(v))` for a positive finite `v`, exact (read from the float's exponent bits).
+fn floor_log2(v: f32) -> i32 {
+    let bits = v.to_bits();
+    let exp = ((bits >> 23) & 0xff) as i32;
+    if exp == 0 {
+        // Subnormal: far below anything RGB9E5 can represent.
+        -127
+    } else {
+        exp - 127
+    }
+}
+
+/// Encodes linear RGB as RGB9E5 per GL_EXT_texture_shared_exponent (round to nearest).
+///
+/// Channels are clamped to `[0, MAX_RGB9E5]`; NaN becomes 0. Callers that must reject bad
+/// values (the store does) check them first.
+pub fn encode_rgb9e5(rgb: [f32; 3]) -> u32 {
+    let clamp = |v: f32| {
+        if v > 0.0 {
+            v.min(MAX_RGB9E5)
+        } else {
+            0.0 // also NaN
+        }
+    };
+    let [r, g, b] = rgb.map(clamp);
+    let max = r.max(g).max(b);
+    if max <= 0.0 {
+        return 0;
+    }
+    let mut exp = floor_log2(max).max(-RGB9E5_EXP_BIAS - 1) + 1 + RGB9E5_EXP_BIAS;
+    let scale = |e: i32| 2f64.powi(e - RGB9E5_EXP_BIAS - RGB9E5_MANTISSA_BITS);
+    let max_m = (f64::from(max) / scale(exp) + 0.5).floor();
+    if max_m >= f64::from(1u32 << RGB9E5_MANTISSA_BITS) {
+        exp += 1;
+    }
+    let exp = exp.clamp(0, RGB9E5_MAX_EXP);
+    let s = scale(exp);
+    let m = |v: f32| ((f64::from(v) / s + 0.5).floor() as u32).min(511);
+    m(r) | (m(g) << 9) | (m(b) << 18) | ((exp as u32) << 27)
+}
+
+/// Decodes an RGB9E5 texel.
+pub fn decode_rgb9e5(v: u32) -> [f32; 3] {
+    let exp = (v >> 27) as i32;
+    let s = 2f32.powi(exp - RGB9E5_EXP_BIAS - RGB9E5_MANTISSA_BITS);
+    [
+        (v & 0x1ff) as f32 * s,
+        ((v >> 9) & 0x1ff) as f32 * s,
+        ((v >> 18) & 0x1ff) as f32 * s,
+    ]
+}
+
+/// Encodes linear RGB as RGBA16F bit patterns (A = 1); channels clamped to `[0, MAX_F16]`.
+pub fn encode_rgba16f(rgb: [f32; 3]) -> [u16; 4] {
+    let c = |v: f32| {
+        let v = if v > 0.0 { v.min(MAX_F16) } else { 0.0 };
+        f16::from_f32(v).to_bits()
+    };
+    [c(rgb[0]), c(rgb[1]), c(rgb[2]), f16::ONE.to_bits()]
+}
+
+/// Decodes an RGBA16F texel's RGB.
+pub fn decode_rgba16f(v: [u16; 4]) -> [f32; 3] {
+    [
+        f16::from_bits(v[0]).to_f32(),
+        f16::from_bits(v[1]).to_f32(),
+        f16::from_bits(v[2]).to_f32(),
+    ]
+}
+
+fn is_valid(rgb: [f32; 3]) -> bool {
+    rgb.iter().all(|c| c.is_finite() && *c >= 0.0)
+}
+
+/// Encodes `src` into `out` (exactly `src.len() * encoding.bytes_per_texel()` bytes).
+///
+/// Returns how many texels had a channel above [`Encoding::max_value`] and were clamped.
+/// Fails with [`Error::InvalidTexel`] (naming the first bad texel) on NaN, infinite or
+/// negative radiance, and with [`Error::BufferSize`] on a wrong-sized `out`.
+pub fn encode_texels(encoding: Encoding, src: &[[f32; 3]], out: &mut [u8]) -> Result<u64, Error> {
+    let bpt = encoding.bytes_per_texel();
+    let expected = src.len().checked_mul(bpt);
+    if expected != Some(out.len()) {
+        return Err(Error::BufferSize {
+            what: "encoded texel output",
+            expected: expected.unwrap_or(usize::MAX) as u64,
+            actual: out.len() as u64,
+        });
+    }
+    let max = encoding.max_value();
+    let mut clamped = 0u64;
+    for (index, (rgb, dst)) in src.iter().zip(out.chunks_exact_mut(bpt)).enumerate() {
+        let rgb = *rgb;
+        if !is_valid(rgb) {
+            return Err(Error::InvalidTexel { index, value: rgb });
+        }
+        if rgb.iter().any(|c| *c > max) {
+            clamped += 1;
+        }
+        match encoding {
+            Encoding::Rgb9e5 => dst.copy_from_slice(&encode_rgb9e5(rgb).to_le_bytes()),
+            Encoding::Rgba16f => {
+                for (d, h) in dst.chunks_exact_mut(2).zip(encode_rgba16f(rgb)) {
+                    d.copy_from_slice(&h.to_le_bytes());
+                }
+            }
+            Encoding::Rgba32f => {
+                for (d, f) in dst.chunks_exact_mut(4).zip([rgb[0], rgb[1], rgb[2], 1.0]) {
+                    d.copy_from_slice(&f.to_le_bytes());
+                }
+            }
+        }
+    }
+    Ok(clamped)
+}
+
+/// Decodes `src` (exactly `out.len() * encoding.bytes_per_texel()` bytes) into `out`.
+///
+/// Decoding never fails on content: every bit pattern decodes to some value (RGBA16F and
+/// RGBA32F patterns that are NaN or infinite decode as such; the store's writer never
+/// produces them).
+pub fn decode_texels(encoding: Encoding, src: &[u8], out: &mut [[f32; 3]]) -> Result<(), Error> {
+    let bpt = encoding.bytes_per_texel();
+    let expected = out.len().checked_mul(bpt);
+    if expected != Some(src.len()) {
+        return Err(Error::BufferSize {
+            what: "encoded texel input",
+            expected: expected.unwrap_or(usize::MAX) as u64,
+            actual: src.len() as u64,
+        });
+    }
+    for (s, dst) in src.chunks_exact(bpt).zip(out.iter_mut()) {
+        *dst = match encoding {
+            Encoding::Rgb9e5 => decode_rgb9e5(u32::from_le_bytes([s[0], s[1], s[2], s[3]])),
+            Encoding::Rgba16f => {
+                let h = |i: usize| u16::from_le_bytes([s[2 * i], s[2 * i + 1]]);
+                decode_rgba16f([h(0), h(1), h(2), h(3)])
+            }
+            Encoding::Rgba32f => {
+                let f = |i: usize| {
+                    f32::from_le_bytes([s[4 * i], s[4 * i + 1], s[4 * i + 2], s[4 * i + 3]])
+                };
+                [f(0), f(1), f(2)]
+            }
+        };
+    }
+    Ok(())
+}
+
+/// Encodes a distance plane (`f32` little-endian per texel) into `out` (`4 * src.len()` bytes).
+///
+/// Values are copied as they are; [`crate::encode_cube`] rejects NaN, infinite and negative
+/// distances (escaped rays are `f32::MAX`) before calling this.
+pub fn encode_distances(src: &[f32], out: &mut [u8]) -> Result<(), Error> {
+    let expected = src.len().checked_mul(4);
+    if expected != Some(out.len()) {
+        return Err(Error::BufferSize {
+            what: "encoded distance output",
+            expected: expected.unwrap_or(usize::MAX) as u64,
+            actual: out.len() as u64,
+        });
+    }
+    for (d, dst) in src.iter().zip(out.chunks_exact_mut(4)) {
+        dst.copy_from_slice(&d.to_le_bytes());
+    }
+    Ok(())
+}
+
+/// Decodes a distance plane (`4 * out.len()` bytes of little-endian `f32`).
+pub fn decode_distances(src: &[u8], out: &mut [f32]) -> Result<(), Error> {
+    let expected = out.len().checked_mul(4);
+    if expected != Some(src.len()) {
+        return Err(Error::BufferSize {
+            what: "encoded distance input",
+            expected: expected.unwrap_or(usize::MAX) as u64,
+            actual: src.len() as u64,
+        });
+    }
+    for (s, dst) in src.chunks_exact(4).zip(out.iter_mut()) {
+        *dst = f32::from_le_bytes([s[0], s[1], s[2], s[3]]);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rgb9e5_known_values() {
+        assert_eq!(encode_rgb9e5([0.0; 3]), 0);
+        assert_eq!(decode_rgb9e5(encode_rgb9e5([1.0, 1.0, 1.0])), [1.0, 1.0, 1.0]);
+        assert_eq!(decode_rgb9e5(encode_rgb9e5([MAX_RGB9E5; 3])), [MAX_RGB9E5; 3]);
+        assert_eq!(decode_rgb9e5(encode_rgb9e5([1e9, 0.0, 0.0]))[0], MAX_RGB9E5);
+        // 1.0 = 256 * 2^(16 - 15 - 9): exponent 16, red mantissa 256.
+        assert_eq!(encode_rgb9e5([1.0, 0.0, 0.0]), 256 | (16 << 27));
+        assert_eq!(decode_rgb9e5(u32::MAX), [MAX_RGB9E5; 3]);
+    }
+
+    #[test]
+    fn f16_clamps_never_inf() {
+        let d = decode_rgba16f(encode_rgba16f([1e30, 65519.0, 7.0]));
+        assert_eq!(d, [MAX_F16, MAX_F16, 7.0]);
+    }
+
+    #[test]
+    fn encode_texels_counts_and_rejects() {
+        let src = [[1.0, 2.0, 3.0], [7e4, 0.0, 0.0]];
+        for enc in Encoding::ALL {
+            let mut out = vec![0u8; src.len() * enc.bytes_per_texel()];
+            let clamped = encode_texels(enc, &src, &mut out).unwrap();
+            assert_eq!(clamped, if enc == Encoding::Rgba32f { 0 } else { 1 });
+            let mut back = [[0.0; 3]; 2];
+            decode_texels(enc, &out, &mut back).unwrap();
+            assert_eq!(back[0], [1.0, 2.0, 3.0]);
+            let bad = [[1.0, f32::NAN, 0.0]];
+            let mut out = vec![0u8; enc.bytes_per_texel()];
+            assert!(matches!(
+                encode_texels(enc, &bad, &mut out),
+                Err(Error::InvalidTexel { index: 0, .. })
+            ));
+            let neg = [[1.0, 0.0, -1.0]];
+            assert!(encode_texels(enc, &neg, &mut out).is_err());
+        }
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for enc in Encoding::ALL {
+            assert_eq!(enc.name().parse::<Encoding>().unwrap(), enc);
+            assert_eq!(Encoding::from_tag(enc.tag()), Some(enc));
+        }
+        assert!("rgb10".parse::<Encoding>().is_err());
+        assert_eq!(Encoding::default(), Encoding::Rgb9e5);
+    }
+}

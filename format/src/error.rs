@@ -1,0 +1,212 @@
+//! The crate's one error type.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while encoding, writing, opening or reading a store.
+///
+/// Every variant says *what* is wrong and *where*: the section, the cube and face, the texel,
+/// the byte offset in the file.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// An I/O error; `context` names the file and the operation.
+    #[error("{context}: {source}")]
+    Io {
+        context: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The zero-copy views need a little-endian host.
+    #[error("OSLF stores can only be read on little-endian hosts")]
+    BigEndianHost,
+    /// The first 8 bytes are not [`crate::MAGIC`].
+    #[error("not an OSLF store: magic is {found:02x?} (expected {expected:02x?})")]
+    BadMagic { found: [u8; 8], expected: [u8; 8] },
+    /// A format version this reader does not understand.
+    #[error("unsupported OSLF store version {found} (this reader understands version {supported})")]
+    UnsupportedVersion { found: u32, supported: u32 },
+    /// The file ends before a structure it must contain.
+    #[error("truncated store: {section} needs bytes {offset}..{end} but the file has {file_size} bytes")]
+    Truncated {
+        section: &'static str,
+        offset: u64,
+        end: u64,
+        file_size: u64,
+    },
+    /// A checksum over a section (header, metadata, sample points, sample maps, table of
+    /// contents, cube record header) does not match.
+    #[error("{section} checksum mismatch at byte offset {offset}: stored {stored:#018x}, computed {computed:#018x}")]
+    ChecksumMismatch {
+        section: &'static str,
+        offset: u64,
+        stored: u64,
+        computed: u64,
+    },
+    /// A header field with an impossible value.
+    #[error("invalid header field `{field}` (byte offset {offset}): {detail}")]
+    InvalidHeader {
+        field: &'static str,
+        offset: u64,
+        detail: String,
+    },
+    /// A section that does not lie inside the file (or whose end overflows).
+    #[error("section {section} at byte offset {offset} with size {size} does not fit in the file ({file_size} bytes)")]
+    SectionOutOfBounds {
+        section: &'static str,
+        offset: u64,
+        size: u64,
+        file_size: u64,
+    },
+    /// A section offset that is not a multiple of 8.
+    #[error("section {section} starts at byte offset {offset}, which is not 8-byte aligned")]
+    Misaligned { section: &'static str, offset: u64 },
+    /// Two sections that overlap or are out of order.
+    #[error("section {second} at byte offset {offset} overlaps section {first}, which ends at {first_end}")]
+    SectionOverlap {
+        first: &'static str,
+        first_end: u64,
+        second: &'static str,
+        offset: u64,
+    },
+    /// A section whose size does not match the counts and resolutions in the header.
+    #[error("section {section} has size {found} bytes but the header's counts require {expected}")]
+    SectionSize {
+        section: &'static str,
+        found: u64,
+        expected: u64,
+    },
+    /// A problem inside the metadata section (or in a [`crate::StoreMeta`] given to the writer).
+    #[error("invalid metadata at byte offset {offset}: {detail}")]
+    InvalidMetadata { offset: u64, detail: String },
+    /// A sample point with a non-finite or out-of-range field.
+    #[error("invalid sample point {index}: {detail}")]
+    InvalidSamplePoint { index: u64, detail: String },
+    /// A sample-map entry that is out of range or not in canonical form.
+    #[error("invalid sample map entry: patch {patch}, texel ({x}, {y}), channel {channel}: {detail}")]
+    InvalidSampleMap {
+        patch: u32,
+        x: u32,
+        y: u32,
+        channel: usize,
+        detail: String,
+    },
+    /// Sample maps given to the writer whose shape does not match the metadata.
+    #[error("sample maps: {0}")]
+    SampleMapShape(String),
+    /// A table-of-contents entry that is out of range or overlaps another.
+    #[error("invalid table of contents entry for cube {cube}, face {face} (byte offset {offset}): {detail}")]
+    InvalidToc {
+        cube: u32,
+        face: usize,
+        offset: u64,
+        detail: String,
+    },
+    /// A compressed face frame whose checksum does not match its table-of-contents entry.
+    #[error("cube {cube}, face {face}: frame checksum mismatch at byte offset {offset}: stored {stored:#018x}, computed {computed:#018x}")]
+    FaceChecksum {
+        cube: u32,
+        face: usize,
+        offset: u64,
+        stored: u64,
+        computed: u64,
+    },
+    /// A face frame that does not decompress to exactly its declared raw size.
+    #[error("cube {cube}, face {face}: zstd frame at byte offset {offset} is corrupt: {detail}")]
+    Decompress {
+        cube: u32,
+        face: usize,
+        offset: u64,
+        detail: String,
+    },
+    /// A cube record header in the payload that disagrees with the table of contents.
+    #[error("cube {cube}: record header at byte offset {offset}: {detail}")]
+    InvalidCubeRecord { cube: u32, offset: u64, detail: String },
+    /// zstd failed to compress a face.
+    #[error("cube {cube}, face {face}: zstd compression failed: {detail}")]
+    Compress {
+        cube: u32,
+        face: usize,
+        detail: String,
+    },
+    /// Radiance that is NaN, infinite or negative.
+    #[error("cube {cube}, face {face}, texel ({x}, {y}): radiance {value:?} is not finite and non-negative")]
+    InvalidRadiance {
+        cube: u32,
+        face: usize,
+        x: u32,
+        y: u32,
+        value: [f32; 3],
+    },
+    /// A distance that is NaN, infinite or negative (escaped rays are stored as `f32::MAX`).
+    #[error("cube {cube}, face {face}, texel ({x}, {y}): distance {value} is not finite and non-negative (use f32::MAX for escaped rays)")]
+    InvalidDistance {
+        cube: u32,
+        face: usize,
+        x: u32,
+        y: u32,
+        value: f32,
+    },
+    /// A texel given to [`crate::encoding::encode_texels`] that is NaN, infinite or negative.
+    #[error("texel {index}: radiance {value:?} is not finite and non-negative")]
+    InvalidTexel { index: usize, value: [f32; 3] },
+    /// A cube image whose shape does not match the bake parameters.
+    #[error("cube {cube}: {detail}")]
+    CubeShape { cube: u32, detail: String },
+    /// A caller-supplied buffer of the wrong length.
+    #[error("{what}: buffer has {actual} elements, expected {expected}")]
+    BufferSize {
+        what: &'static str,
+        expected: u64,
+        actual: u64,
+    },
+    /// A cube index past the end of the store.
+    #[error("cube index {cube} out of range (the store has {count} cubes)")]
+    CubeOutOfRange { cube: u32, count: u32 },
+    /// A face index that is not 0..6.
+    #[error("face index {face} out of range (0..6)")]
+    FaceOutOfRange { face: usize },
+    /// A patch index past the end of the store.
+    #[error("patch index {patch} out of range (the store has {count} patches)")]
+    PatchOutOfRange { patch: u32, count: u32 },
+    /// A distance plane was requested from a store baked without one.
+    #[error("the store has no distance channel")]
+    NoDistanceChannel,
+    /// A cube appended out of order.
+    #[error("cube {got} appended, but the next cube must be {expected}")]
+    CubeOutOfOrder { expected: u32, got: u32 },
+    /// An encoded cube produced with parameters that differ from the store's.
+    #[error("cube {cube} was encoded with different parameters: {detail}")]
+    CubeParamsMismatch { cube: u32, detail: String },
+    /// `finish()` before every cube was appended.
+    #[error("store is incomplete: {present} of {total} cubes written")]
+    Incomplete { present: u32, total: u32 },
+    /// The file is a partial store that `finish()` never completed.
+    #[error("the store was never finished (the COMPLETE flag is clear); resume the bake")]
+    NotFinished,
+    /// `resume()` found a partial file that was started with different inputs.
+    #[error("cannot resume {path}: {what}")]
+    ResumeMismatch { path: PathBuf, what: String },
+    /// `resume()` found no partial file.
+    #[error("no partial store to resume at {0}")]
+    NoPartial(PathBuf),
+    /// An unknown encoding name.
+    #[error("unknown encoding {0:?} (expected rgb9e5, rgba16f or rgba32f)")]
+    UnknownEncoding(String),
+    /// A value past a documented limit.
+    #[error("{what} is {value}, above the limit {max}")]
+    Limit { what: &'static str, value: u64, max: u64 },
+}
+
+impl Error {
+    pub(crate) fn io(context: impl Into<String>, source: std::io::Error) -> Self {
+        Error::Io {
+            context: context.into(),
+            source,
+        }
+    }
+}
+
+/// An [`Error`] for a file path and an operation.
+pub(crate) fn io_at(path: &std::path::Path, op: &str) -> impl FnOnce(std::io::Error) -> Error {
+    let context = format!("{} ({op})", path.display());
+    move |source| Error::Io { context, source }
+}

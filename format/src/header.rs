@@ -1,0 +1,279 @@
+//! The fixed 256-byte file header (layout in the crate docs).
+
+use crate::bytes::{align8, le_u32, le_u64};
+use crate::encoding::Encoding;
+use crate::sample_map::IndexWidth;
+use crate::{Error, MAGIC, VERSION};
+use xxhash_rust::xxh3::xxh3_64;
+
+/// Bytes of the header.
+pub const HEADER_BYTES: usize = 256;
+/// Byte offset of the header checksum (it covers bytes `0..HEADER_CHECKSUM_OFFSET`).
+pub const HEADER_CHECKSUM_OFFSET: usize = 248;
+
+/// Flag bit: every face carries an `f32` distance plane.
+pub const FLAG_DISTANCE: u32 = 1;
+/// Flag bit: the last cube is the environment cube.
+pub const FLAG_ENV_CUBE: u32 = 2;
+/// Flag bit: `finish()` completed the file (table of contents present).
+pub const FLAG_COMPLETE: u32 = 4;
+const KNOWN_FLAGS: u32 = FLAG_DISTANCE | FLAG_ENV_CUBE | FLAG_COMPLETE;
+
+/// Byte range of the fields `finish()` patches (payload size, TOC offset and size, file size).
+pub(crate) const FINISH_FIELDS: std::ops::Range<usize> = 120..152;
+/// Byte range of the flags field.
+pub(crate) const FLAGS_FIELD: std::ops::Range<usize> = 12..16;
+
+/// A section's position: byte offset and size.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Section {
+    pub offset: u64,
+    pub size: u64,
+}
+
+impl Section {
+    /// One past the last byte (saturating; callers check with [`Section::checked_end`]).
+    pub fn end(&self) -> u64 {
+        self.offset.saturating_add(self.size)
+    }
+    pub(crate) fn checked_end(&self) -> Option<u64> {
+        self.offset.checked_add(self.size)
+    }
+}
+
+/// The parsed header.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Header {
+    pub version: u32,
+    pub flags: u32,
+    pub encoding: Encoding,
+    pub index_width: IndexWidth,
+    pub cube_resolution: u32,
+    pub sample_map_resolution: u32,
+    pub sample_count: u64,
+    pub cube_count: u64,
+    pub patch_count: u64,
+    pub object_count: u64,
+    pub meta: Section,
+    pub points: Section,
+    pub maps: Section,
+    pub payload: Section,
+    pub toc: Section,
+    pub file_size: u64,
+    pub meta_checksum: u64,
+    pub points_checksum: u64,
+    pub maps_checksum: u64,
+}
+
+impl Header {
+    pub fn has_distance(&self) -> bool {
+        self.flags & FLAG_DISTANCE != 0
+    }
+    pub fn has_env_cube(&self) -> bool {
+        self.flags & FLAG_ENV_CUBE != 0
+    }
+    pub fn is_complete(&self) -> bool {
+        self.flags & FLAG_COMPLETE != 0
+    }
+
+    /// Serialises the header, checksum included.
+    pub fn to_bytes(&self) -> [u8; HEADER_BYTES] {
+        let mut b = [0u8; HEADER_BYTES];
+        let mut put = |off: usize, v: &[u8]| b[off..off + v.len()].copy_from_slice(v);
+        put(0, &MAGIC);
+        put(8, &self.version.to_le_bytes());
+        put(12, &self.flags.to_le_bytes());
+        put(16, &self.encoding.tag().to_le_bytes());
+        put(20, &(self.index_width.bytes() as u32).to_le_bytes());
+        put(24, &self.cube_resolution.to_le_bytes());
+        put(28, &self.sample_map_resolution.to_le_bytes());
+        put(32, &self.sample_count.to_le_bytes());
+        put(40, &self.cube_count.to_le_bytes());
+        put(48, &self.patch_count.to_le_bytes());
+        put(56, &self.object_count.to_le_bytes());
+        let sections = [self.meta, self.points, self.maps, self.payload, self.toc];
+        for (i, s) in sections.iter().enumerate() {
+            put(64 + 16 * i, &s.offset.to_le_bytes());
+            put(72 + 16 * i, &s.size.to_le_bytes());
+        }
+        put(144, &self.file_size.to_le_bytes());
+        put(152, &self.meta_checksum.to_le_bytes());
+        put(160, &self.points_checksum.to_le_bytes());
+        put(168, &self.maps_checksum.to_le_bytes());
+        let sum = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
+        b[HEADER_CHECKSUM_OFFSET..].copy_from_slice(&sum.to_le_bytes());
+        b
+    }
+
+    /// Parses and checks the header: magic, version, checksum, flags, tags, reserved bytes.
+    /// Section positions are checked against the file by [`Header::check_layout`].
+    pub fn parse(bytes: &[u8]) -> Result<Header, Error> {
+        let Some(b) = bytes.get(..HEADER_BYTES) else {
+            return Err(Error::Truncated {
+                section: "header",
+                offset: 0,
+                end: HEADER_BYTES as u64,
+                file_size: bytes.len() as u64,
+            });
+        };
+        let mut magic = [0u8; 8];
+        magic.copy_from_slice(&b[..8]);
+        if magic != MAGIC {
+            return Err(Error::BadMagic {
+                found: magic,
+                expected: MAGIC,
+            });
+        }
+        let version = le_u32(b, 8);
+        if version != VERSION {
+            return Err(Error::UnsupportedVersion {
+                found: version,
+                supported: VERSION,
+            });
+        }
+        let stored = le_u64(b, HEADER_CHECKSUM_OFFSET);
+        let computed = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
+        if stored != computed {
+            return Err(Error::ChecksumMismatch {
+                section: "header",
+                offset: HEADER_CHECKSUM_OFFSET as u64,
+                stored,
+                computed,
+            });
+        }
+        let invalid = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
+            field,
+            offset,
+            detail,
+        };
+        let flags = le_u32(b, 12);
+        if flags & !KNOWN_FLAGS != 0 {
+            return Err(invalid(
+                "flags",
+                12,
+                format!("unknown flag bits {:#x}", flags & !KNOWN_FLAGS),
+            ));
+        }
+        let tag = le_u32(b, 16);
+        let encoding = Encoding::from_tag(tag)
+            .ok_or_else(|| invalid("encoding", 16, format!("unknown encoding tag {tag}")))?;
+        let index_width = match le_u32(b, 20) {
+            2 => IndexWidth::U16,
+            4 => IndexWidth::U32,
+            w => {
+                return Err(invalid(
+                    "index_bytes",
+                    20,
+                    format!("{w} (must be 2 or 4)"),
+                ))
+            }
+        };
+        if let Some(i) = b[176..HEADER_CHECKSUM_OFFSET].iter().position(|v| *v != 0) {
+            return Err(invalid(
+                "reserved",
+                176 + i as u64,
+                "reserved bytes must be zero".into(),
+            ));
+        }
+        let section = |i: usize| Section {
+            offset: le_u64(b, 64 + 16 * i),
+            size: le_u64(b, 72 + 16 * i),
+        };
+        Ok(Header {
+            version,
+            flags,
+            encoding,
+            index_width,
+            cube_resolution: le_u32(b, 24),
+            sample_map_resolution: le_u32(b, 28),
+            sample_count: le_u64(b, 32),
+            cube_count: le_u64(b, 40),
+            patch_count: le_u64(b, 48),
+            object_count: le_u64(b, 56),
+            meta: section(0),
+            points: section(1),
+            maps: section(2),
+            payload: section(3),
+            toc: section(4),
+            file_size: le_u64(b, 144),
+            meta_checksum: le_u64(b, 152),
+            points_checksum: le_u64(b, 160),
+            maps_checksum: le_u64(b, 168),
+        })
+    }
+
+    /// Checks that the sections lie inside a file of `file_size` bytes, in order
+    /// (metadata, points, maps, payload, TOC), 8-byte aligned, without overlaps, with only the
+    /// padding the layout allows between them, and that the TOC ends the file.
+    pub fn check_layout(&self, file_size: u64) -> Result<(), Error> {
+        if self.file_size != file_size {
+            return Err(Error::InvalidHeader {
+                field: "file_size",
+                offset: 144,
+                detail: format!(
+                    "header says {} bytes, the file has {file_size}",
+                    self.file_size
+                ),
+            });
+        }
+        let sections = [
+            ("metadata", self.meta),
+            ("sample points", self.points),
+            ("sample maps", self.maps),
+            ("cube payload", self.payload),
+            ("table of contents", self.toc),
+        ];
+        let mut prev: (&'static str, u64) = ("header", HEADER_BYTES as u64);
+        for (name, s) in sections {
+            let end = s.checked_end().filter(|e| *e <= file_size);
+            let Some(end) = end else {
+                return Err(Error::SectionOutOfBounds {
+                    section: name,
+                    offset: s.offset,
+                    size: s.size,
+                    file_size,
+                });
+            };
+            if s.offset % 8 != 0 {
+                return Err(Error::Misaligned {
+                    section: name,
+                    offset: s.offset,
+                });
+            }
+            if s.offset < prev.1 {
+                return Err(Error::SectionOverlap {
+                    first: prev.0,
+                    first_end: prev.1,
+                    second: name,
+                    offset: s.offset,
+                });
+            }
+            // Only the zero padding to the next multiple of 8 may separate sections (the
+            // payload's records are themselves padded, so the TOC follows it directly).
+            if Some(s.offset) != align8(prev.1) {
+                return Err(Error::InvalidHeader {
+                    field: name,
+                    offset: 64,
+                    detail: format!(
+                        "section starts at {} but must start at {} (right after {})",
+                        s.offset,
+                        align8(prev.1).unwrap_or(u64::MAX),
+                        prev.0
+                    ),
+                });
+            }
+            prev = (name, end);
+        }
+        if prev.1 != file_size {
+            return Err(Error::InvalidHeader {
+                field: "table of contents",
+                offset: 128,
+                detail: format!(
+                    "the table of contents ends at {} but the file has {file_size} bytes",
+                    prev.1
+                ),
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,402 @@
+//! Store metadata (objects, patches, bake parameters, camera), sample points, and the binary
+//! layout of the metadata section.
+
+use crate::bytes::{ByteReader, ByteWriter};
+use crate::encoding::Encoding;
+use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTION};
+
+/// One sample point: where a cube map was captured. 40 bytes, `#[repr(C)]`, stored as is.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SamplePoint {
+    /// The offset point (world space) where the cube was captured.
+    pub position: [f32; 3],
+    /// Unit surface normal at the base point on the patch (world space).
+    pub normal: [f32; 3],
+    /// Parameter of the base point on its patch, in `[0, 1]²`.
+    pub uv: [f32; 2],
+    /// Global patch index.
+    pub patch: u32,
+    /// Object index.
+    pub object: u32,
+}
+
+/// Bytes of one [`SamplePoint`] on disk.
+pub const SAMPLE_POINT_BYTES: usize = 40;
+const _: () = assert!(std::mem::size_of::<SamplePoint>() == SAMPLE_POINT_BYTES);
+
+/// A bicubic Bézier patch in object space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Patch {
+    /// `CP_ij` at index `4 * i + j`, `i` along u, `j` along v.
+    pub control_points: [[f32; 3]; 16],
+}
+
+/// An object made of a contiguous range of patches.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectInfo {
+    /// UTF-8 name, at most [`MAX_NAME_BYTES`] bytes.
+    pub name: String,
+    /// Column-major object-to-world matrix.
+    pub transform: [[f32; 4]; 4],
+    /// Linear RGB base colour.
+    pub base_color: [f32; 3],
+    /// First global patch index of the object.
+    pub first_patch: u32,
+    /// Number of patches of the object.
+    pub patch_count: u32,
+}
+
+/// The viewpoint the scene was set up with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraInfo {
+    pub position: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    /// Vertical field of view in degrees, in `(0, 180)`.
+    pub vfov_deg: f32,
+}
+
+/// The parameters of the bake.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeParams {
+    /// Offset of the sample points above the surface (> 0).
+    pub epsilon: f32,
+    /// Angular threshold used to build the sample maps, degrees.
+    pub phi_samplemap_deg: f32,
+    /// Cube-map face resolution, 1..=[`MAX_CUBE_RESOLUTION`].
+    pub cube_resolution: u32,
+    /// Sample-map resolution per patch, 1..=[`MAX_SAMPLE_MAP_RESOLUTION`].
+    pub sample_map_resolution: u32,
+    pub samples_per_texel: u32,
+    pub bounces: u32,
+    pub seed: u64,
+    pub encoding: Encoding,
+    /// Whether each face carries an `f32` distance plane.
+    pub distance_channel: bool,
+    /// zstd level the faces were compressed with.
+    pub zstd_level: i32,
+    /// Hash of the scene description (opaque to this crate).
+    pub scene_hash: [u8; 32],
+}
+
+impl Default for BakeParams {
+    fn default() -> Self {
+        BakeParams {
+            epsilon: 0.01,
+            phi_samplemap_deg: 10.0,
+            cube_resolution: 32,
+            sample_map_resolution: 32,
+            samples_per_texel: 16,
+            bounces: 3,
+            seed: 0,
+            encoding: Encoding::Rgb9e5,
+            distance_channel: false,
+            zstd_level: 3,
+            scene_hash: [0; 32],
+        }
+    }
+}
+
+/// Everything in the metadata section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoreMeta {
+    pub objects: Vec<ObjectInfo>,
+    pub patches: Vec<Patch>,
+    pub bake: BakeParams,
+    pub camera: Option<CameraInfo>,
+    /// One extra cube after the sample points' cubes (index = sample count): an environment
+    /// map captured at the object's centre.
+    pub has_env_cube: bool,
+}
+
+/// Bytes of the fixed part of the metadata section before the objects.
+pub(crate) const META_FIXED_BYTES: usize = 8 + 80 + 44;
+/// Minimum bytes of one object record (empty name).
+const OBJECT_MIN_BYTES: usize = 4 + 64 + 12 + 8;
+/// Bytes of one patch record.
+const PATCH_BYTES: usize = 16 * 3 * 4;
+
+/// Serialises metadata (no validation: [`decode_meta`] validates, and the writer checks its
+/// input by decoding what it encoded).
+pub(crate) fn encode_meta(meta: &StoreMeta) -> Vec<u8> {
+    let mut w = ByteWriter::default();
+    w.u32(meta.objects.len() as u32);
+    w.u32(meta.patches.len() as u32);
+    let b = &meta.bake;
+    w.f32(b.epsilon);
+    w.f32(b.phi_samplemap_deg);
+    w.u32(b.cube_resolution);
+    w.u32(b.sample_map_resolution);
+    w.u32(b.samples_per_texel);
+    w.u32(b.bounces);
+    w.u64(b.seed);
+    w.u32(b.encoding.tag());
+    w.u32(u32::from(b.distance_channel));
+    w.i32(b.zstd_level);
+    w.u32(u32::from(meta.has_env_cube));
+    w.bytes(&b.scene_hash);
+    match &meta.camera {
+        Some(c) => {
+            w.u32(1);
+            for v in c.position.iter().chain(&c.target).chain(&c.up) {
+                w.f32(*v);
+            }
+            w.f32(c.vfov_deg);
+        }
+        None => w.bytes(&[0u8; 44]),
+    }
+    for o in &meta.objects {
+        let name = o.name.as_bytes();
+        // An over-long name is written with its true length; decode_meta rejects it.
+        w.u32(u32::try_from(name.len()).unwrap_or(u32::MAX));
+        w.bytes(name);
+        for v in o.transform.iter().flatten() {
+            w.f32(*v);
+        }
+        for v in o.base_color {
+            w.f32(v);
+        }
+        w.u32(o.first_patch);
+        w.u32(o.patch_count);
+    }
+    for p in &meta.patches {
+        for v in p.control_points.iter().flatten() {
+            w.f32(*v);
+        }
+    }
+    w.into_inner()
+}
+
+fn bad(offset: u64, detail: impl Into<String>) -> Error {
+    Error::InvalidMetadata {
+        offset,
+        detail: detail.into(),
+    }
+}
+
+/// Parses and validates the metadata section; `base` is its byte offset in the file (for
+/// error messages).
+pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
+    let mut r = ByteReader::new(bytes, base, "metadata");
+    let object_count = r.u32()? as usize;
+    let patch_count = r.u32()? as usize;
+
+    let at = r.offset();
+    let epsilon = r.finite_f32("epsilon")?;
+    if epsilon <= 0.0 {
+        return Err(bad(at, format!("epsilon {epsilon} must be > 0")));
+    }
+    let at = r.offset();
+    let phi_samplemap_deg = r.finite_f32("phi_samplemap_deg")?;
+    if !(0.0..=180.0).contains(&phi_samplemap_deg) {
+        return Err(bad(
+            at,
+            format!("phi_samplemap_deg {phi_samplemap_deg} must be in [0, 180]"),
+        ));
+    }
+    let at = r.offset();
+    let cube_resolution = r.u32()?;
+    if cube_resolution == 0 || cube_resolution > MAX_CUBE_RESOLUTION {
+        return Err(bad(
+            at,
+            format!("cube_resolution {cube_resolution} must be in 1..={MAX_CUBE_RESOLUTION}"),
+        ));
+    }
+    let at = r.offset();
+    let sample_map_resolution = r.u32()?;
+    if sample_map_resolution == 0 || sample_map_resolution > MAX_SAMPLE_MAP_RESOLUTION {
+        return Err(bad(
+            at,
+            format!(
+                "sample_map_resolution {sample_map_resolution} must be in 1..={MAX_SAMPLE_MAP_RESOLUTION}"
+            ),
+        ));
+    }
+    let samples_per_texel = r.u32()?;
+    let bounces = r.u32()?;
+    let seed = r.u64()?;
+    let at = r.offset();
+    let tag = r.u32()?;
+    let encoding =
+        Encoding::from_tag(tag).ok_or_else(|| bad(at, format!("unknown encoding tag {tag}")))?;
+    let distance_channel = r.bool("distance_channel")?;
+    let at = r.offset();
+    let zstd_level = r.i32()?;
+    if !zstd::compression_level_range().contains(&zstd_level) {
+        return Err(bad(at, format!("zstd_level {zstd_level} out of range")));
+    }
+    let has_env_cube = r.bool("has_env_cube")?;
+    let mut scene_hash = [0u8; 32];
+    scene_hash.copy_from_slice(r.take(32)?);
+    let bake = BakeParams {
+        epsilon,
+        phi_samplemap_deg,
+        cube_resolution,
+        sample_map_resolution,
+        samples_per_texel,
+        bounces,
+        seed,
+        encoding,
+        distance_channel,
+        zstd_level,
+        scene_hash,
+    };
+
+    let at = r.offset();
+    let camera_present = r.bool("camera present")?;
+    let mut cam = [0f32; 10];
+    for v in &mut cam {
+        *v = r.finite_f32("camera")?;
+    }
+    let camera = if camera_present {
+        if !(cam[9] > 0.0 && cam[9] < 180.0) {
+            return Err(bad(
+                at,
+                format!("camera vfov_deg {} must be in (0, 180)", cam[9]),
+            ));
+        }
+        Some(CameraInfo {
+            position: [cam[0], cam[1], cam[2]],
+            target: [cam[3], cam[4], cam[5]],
+            up: [cam[6], cam[7], cam[8]],
+            vfov_deg: cam[9],
+        })
+    } else {
+        if cam.iter().any(|v| v.to_bits() != 0) {
+            return Err(bad(at, "absent camera must be all zero"));
+        }
+        None
+    };
+
+    if object_count > r.remaining() / OBJECT_MIN_BYTES {
+        return Err(bad(
+            base,
+            format!(
+                "object count {object_count} cannot fit in {} bytes",
+                r.remaining()
+            ),
+        ));
+    }
+    let mut objects = Vec::with_capacity(object_count);
+    let mut prev_end = 0u64;
+    for i in 0..object_count {
+        let at = r.offset();
+        let len = r.u32()? as usize;
+        if len > MAX_NAME_BYTES {
+            return Err(bad(
+                at,
+                format!("object {i}: name length {len} exceeds {MAX_NAME_BYTES}"),
+            ));
+        }
+        let name = std::str::from_utf8(r.take(len)?)
+            .map_err(|e| bad(at + 4, format!("object {i}: name is not UTF-8: {e}")))?
+            .to_string();
+        let mut transform = [[0f32; 4]; 4];
+        for v in transform.iter_mut().flatten() {
+            *v = r.finite_f32("object transform")?;
+        }
+        let mut base_color = [0f32; 3];
+        for v in &mut base_color {
+            *v = r.finite_f32("object base_color")?;
+        }
+        let at = r.offset();
+        let first_patch = r.u32()?;
+        let count = r.u32()?;
+        let end = u64::from(first_patch) + u64::from(count);
+        if u64::from(first_patch) < prev_end || end > patch_count as u64 {
+            return Err(bad(
+                at,
+                format!(
+                    "object {i}: patch range {first_patch}..{end} overlaps the previous object (ending at {prev_end}) or exceeds the patch count {patch_count}"
+                ),
+            ));
+        }
+        prev_end = end;
+        objects.push(ObjectInfo {
+            name,
+            transform,
+            base_color,
+            first_patch,
+            patch_count: count,
+        });
+    }
+
+    let needed = (patch_count as u64) * PATCH_BYTES as u64;
+    if needed != r.remaining() as u64 {
+        return Err(bad(
+            r.offset(),
+            format!(
+                "{patch_count} patches need {needed} bytes but {} remain in the section",
+                r.remaining()
+            ),
+        ));
+    }
+    let mut patches = Vec::with_capacity(patch_count);
+    for _ in 0..patch_count {
+        let mut control_points = [[0f32; 3]; 16];
+        for v in control_points.iter_mut().flatten() {
+            *v = r.finite_f32("patch control point")?;
+        }
+        patches.push(Patch { control_points });
+    }
+    Ok(StoreMeta {
+        objects,
+        patches,
+        bake,
+        camera,
+        has_env_cube,
+    })
+}
+
+/// Encodes sample points little-endian, field by field (works on any host).
+pub(crate) fn encode_points(points: &[SamplePoint]) -> Vec<u8> {
+    let mut w = ByteWriter::default();
+    for p in points {
+        for v in p.position.iter().chain(&p.normal).chain(&p.uv) {
+            w.f32(*v);
+        }
+        w.u32(p.patch);
+        w.u32(p.object);
+    }
+    w.into_inner()
+}
+
+/// Checks every sample point: finite fields, uv in `[0, 1]`, patch and object
+/// in range, patch inside its object's range.
+pub(crate) fn validate_points(points: &[SamplePoint], meta: &StoreMeta) -> Result<(), Error> {
+    for (i, p) in points.iter().enumerate() {
+        let fail = |detail: String| Error::InvalidSamplePoint {
+            index: i as u64,
+            detail,
+        };
+        if !p
+            .position
+            .iter()
+            .chain(&p.normal)
+            .chain(&p.uv)
+            .all(|v| v.is_finite())
+        {
+            return Err(fail(format!("non-finite field in {p:?}")));
+        }
+        if !p.uv.iter().all(|v| (0.0..=1.0).contains(v)) {
+            return Err(fail(format!("uv {:?} outside [0, 1]", p.uv)));
+        }
+        let object = meta.objects.get(p.object as usize).ok_or_else(|| {
+            fail(format!(
+                "object {} out of range ({} objects)",
+                p.object,
+                meta.objects.len()
+            ))
+        })?;
+        let start = u64::from(object.first_patch);
+        let end = start + u64::from(object.patch_count);
+        if !(start..end).contains(&u64::from(p.patch)) {
+            return Err(fail(format!(
+                "patch {} is not one of object {}'s patches {start}..{end}",
+                p.patch, p.object
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,597 @@
+//! Reading a store: [`Store`] validates everything structural on open, then serves zero-copy
+//! views of the sample points and maps and checked, decompressed cube faces.
+
+use std::path::Path;
+
+use crate::bytes::align8;
+use crate::cube::{face_raw_size, CubeImage, FACES};
+use crate::encoding::{decode_distances, decode_texels};
+use crate::error::io_at;
+use crate::header::{Header, Section, HEADER_BYTES};
+use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
+use crate::sample_map::{
+    validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL,
+};
+use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES, TOC_ENTRY_BYTES};
+use crate::Error;
+use xxhash_rust::xxh3::xxh3_64;
+
+/// The bytes of a store: a read-only memory map, or an 8-byte-aligned owned copy.
+enum Backing {
+    Mapped(memmap2::Mmap),
+    Owned { words: Vec<u64>, len: usize },
+}
+
+impl Backing {
+    fn bytes(&self) -> &[u8] {
+        match self {
+            Backing::Mapped(m) => m,
+            Backing::Owned { words, len } => {
+                let all: &[u8] = bytemuck::cast_slice(words);
+                all.get(..*len).unwrap_or(all)
+            }
+        }
+    }
+}
+
+/// Counters from [`Store::verify`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VerifyReport {
+    /// Cubes checked.
+    pub cubes: u32,
+    /// Faces whose checksum matched and which decompressed to their raw size.
+    pub faces: u64,
+    /// Compressed bytes checked.
+    pub compressed_bytes: u64,
+    /// Raw bytes decompressed.
+    pub raw_bytes: u64,
+}
+
+/// An open store. `Send + Sync`: share it between threads.
+///
+/// # Memory mapping
+///
+/// [`Store::open`] maps the file read-only. The file must not be modified or truncated while
+/// the store is open (the writer never modifies a finished store; it replaces it by rename).
+pub struct Store {
+    backing: Backing,
+    header: Header,
+    meta: StoreMeta,
+    face_raw_size: usize,
+}
+
+fn slice(bytes: &[u8], s: Section) -> &[u8] {
+    let start = usize::try_from(s.offset).unwrap_or(usize::MAX);
+    let end = usize::try_from(s.end()).unwrap_or(usize::MAX);
+    bytes.get(start..end).unwrap_or(&[])
+}
+
+fn check_sum(section: &'static str, bytes: &[u8], offset: u64, stored: u64) -> Result<(), Error> {
+    let computed = xxh3_64(bytes);
+    if computed != stored {
+        return Err(Error::ChecksumMismatch {
+            section,
+            offset,
+            stored,
+            computed,
+        });
+    }
+    Ok(())
+}
+
+fn expect_size(section: &'static str, found: u64, expected: Option<u64>) -> Result<(), Error> {
+    if expected != Some(found) {
+        return Err(Error::SectionSize {
+            section,
+            found,
+            expected: expected.unwrap_or(u64::MAX),
+        });
+    }
+    Ok(())
+}
+
+fn check_little_endian() -> Result<(), Error> {
+    if cfg!(target_endian = "big") {
+        return Err(Error::BigEndianHost);
+    }
+    Ok(())
+}
+
+impl Store {
+    /// Opens and validates a store (memory-mapped). Little-endian hosts only
+    /// ([`Error::BigEndianHost`] otherwise).
+    pub fn open(path: &Path) -> Result<Self, Error> {
+        check_little_endian()?;
+        let file = std::fs::File::open(path).map_err(io_at(path, "open"))?;
+        let len = file.metadata().map_err(io_at(path, "stat"))?.len();
+        if len < HEADER_BYTES as u64 {
+            return Err(Error::Truncated {
+                section: "header",
+                offset: 0,
+                end: HEADER_BYTES as u64,
+                file_size: len,
+            });
+        }
+        // SAFETY: the map is read-only and private to this `Store`; the documented contract
+        // is that a store file is not modified while open (the writer replaces stores by
+        // atomic rename, never in place). All contents are validated before use and every
+        // later access is bounds-checked, so even a concurrently modified file can give wrong
+        // data or errors, not out-of-bounds reads within this crate's code.
+        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io_at(path, "mmap"))?;
+        Self::parse(Backing::Mapped(map))
+    }
+
+    /// Validates a store held in memory (copied into an 8-byte-aligned buffer). Same checks
+    /// as [`Store::open`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, Error> {
+        check_little_endian()?;
+        let mut words = vec![0u64; bytes.len().div_ceil(8)];
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
+        if let Some(d) = dst.get_mut(..bytes.len()) {
+            d.copy_from_slice(bytes);
+        }
+        Self::parse(Backing::Owned {
+            words,
+            len: bytes.len(),
+        })
+    }
+
+    fn parse(backing: Backing) -> Result<Self, Error> {
+        let bytes = backing.bytes();
+        let file_size = bytes.len() as u64;
+        let header = Header::parse(bytes)?;
+        if !header.is_complete() {
+            return Err(Error::NotFinished);
+        }
+        header.check_layout(file_size)?;
+        let h = &header;
+
+        // Metadata.
+        let meta_bytes = slice(bytes, h.meta);
+        check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
+        let meta = decode_meta(meta_bytes, h.meta.offset)?;
+        let disagree = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
+            field,
+            offset,
+            detail: format!("{detail} (disagrees with the metadata)"),
+        };
+        let b = &meta.bake;
+        if h.encoding != b.encoding {
+            return Err(disagree("encoding", 16, format!("{}", h.encoding)));
+        }
+        if h.cube_resolution != b.cube_resolution {
+            return Err(disagree(
+                "cube_resolution",
+                24,
+                h.cube_resolution.to_string(),
+            ));
+        }
+        if h.sample_map_resolution != b.sample_map_resolution {
+            return Err(disagree(
+                "sample_map_resolution",
+                28,
+                h.sample_map_resolution.to_string(),
+            ));
+        }
+        if h.has_distance() != b.distance_channel || h.has_env_cube() != meta.has_env_cube {
+            return Err(disagree("flags", 12, format!("{:#x}", h.flags)));
+        }
+        if h.patch_count != meta.patches.len() as u64 {
+            return Err(disagree("patch_count", 48, h.patch_count.to_string()));
+        }
+        if h.object_count != meta.objects.len() as u64 {
+            return Err(disagree("object_count", 56, h.object_count.to_string()));
+        }
+
+        // Counts.
+        let expected_cubes = h.sample_count.checked_add(u64::from(h.has_env_cube()));
+        if expected_cubes != Some(h.cube_count) || h.cube_count > u64::from(u32::MAX) {
+            return Err(Error::InvalidHeader {
+                field: "cube_count",
+                offset: 40,
+                detail: format!(
+                    "{} cubes for {} sample points{} (must be their sum, at most {})",
+                    h.cube_count,
+                    h.sample_count,
+                    if h.has_env_cube() { " + 1 env cube" } else { "" },
+                    u32::MAX
+                ),
+            });
+        }
+        if h.index_width != IndexWidth::for_sample_count(h.sample_count) {
+            return Err(Error::InvalidHeader {
+                field: "index_bytes",
+                offset: 20,
+                detail: format!(
+                    "{:?} indices for {} sample points (u16 iff at most 65535)",
+                    h.index_width, h.sample_count
+                ),
+            });
+        }
+
+        // Sample points.
+        expect_size(
+            "sample points",
+            h.points.size,
+            h.sample_count.checked_mul(SAMPLE_POINT_BYTES as u64),
+        )?;
+        let point_bytes = slice(bytes, h.points);
+        check_sum(
+            "sample points",
+            point_bytes,
+            h.points.offset,
+            h.points_checksum,
+        )?;
+        let points: &[SamplePoint] =
+            bytemuck::try_cast_slice(point_bytes).map_err(|_| Error::Misaligned {
+                section: "sample points",
+                offset: h.points.offset,
+            })?;
+        validate_points(points, &meta)?;
+
+        // Sample maps.
+        let res = u64::from(h.sample_map_resolution);
+        let maps_size = res
+            .checked_mul(res)
+            .and_then(|v| v.checked_mul(ENTRIES_PER_TEXEL as u64))
+            .and_then(|v| v.checked_mul(h.index_width.bytes() as u64))
+            .and_then(|v| v.checked_mul(h.patch_count));
+        expect_size("sample maps", h.maps.size, maps_size)?;
+        let map_bytes = slice(bytes, h.maps);
+        check_sum("sample maps", map_bytes, h.maps.offset, h.maps_checksum)?;
+        let data = map_data(map_bytes, h.index_width, h.maps.offset)?;
+        validate_section(data, h.sample_map_resolution, h.sample_count)?;
+
+        // Table of contents.
+        let raw = face_raw_size(h.encoding, h.cube_resolution, h.has_distance())?;
+        let face_raw = usize::try_from(raw).map_err(|_| Error::Limit {
+            what: "face raw size",
+            value: raw,
+            max: usize::MAX as u64,
+        })?;
+        expect_size(
+            "table of contents",
+            h.toc.size,
+            h.cube_count
+                .checked_mul(TOC_CUBE_BYTES as u64)
+                .and_then(|v| v.checked_add(8)),
+        )?;
+        let toc = slice(bytes, h.toc);
+        let entries_len = toc.len().saturating_sub(8);
+        let (entries, trailer) = toc.split_at(entries_len);
+        let mut stored = [0u8; 8];
+        stored.copy_from_slice(trailer.get(..8).unwrap_or(&[0; 8]));
+        check_sum(
+            "table of contents",
+            entries,
+            h.toc.offset.saturating_add(entries_len as u64),
+            u64::from_le_bytes(stored),
+        )?;
+        check_toc(entries, h, raw)?;
+
+        Ok(Store {
+            header,
+            meta,
+            face_raw_size: face_raw,
+            backing,
+        })
+    }
+
+    fn bytes(&self) -> &[u8] {
+        self.backing.bytes()
+    }
+
+    /// The parsed header.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// Objects, patches, bake parameters, camera.
+    pub fn meta(&self) -> &StoreMeta {
+        &self.meta
+    }
+
+    /// The sample points, zero-copy.
+    pub fn sample_points(&self) -> &[SamplePoint] {
+        bytemuck::try_cast_slice(slice(self.bytes(), self.header.points)).unwrap_or(&[])
+    }
+
+    /// Index width of the sample maps.
+    pub fn index_width(&self) -> IndexWidth {
+        self.header.index_width
+    }
+
+    /// Patch `patch`'s sample map, zero-copy.
+    pub fn sample_map(&self, patch: u32) -> Result<SampleMapView<'_>, Error> {
+        let h = &self.header;
+        if u64::from(patch) >= h.patch_count {
+            return Err(Error::PatchOutOfRange {
+                patch,
+                count: u32::try_from(h.patch_count).unwrap_or(u32::MAX),
+            });
+        }
+        // Sizes were checked on open: patch_count * per_patch == maps.size fits in u64.
+        let res = u64::from(h.sample_map_resolution);
+        let per_patch = res * res * (ENTRIES_PER_TEXEL * h.index_width.bytes()) as u64;
+        let section = Section {
+            offset: h.maps.offset + per_patch * u64::from(patch),
+            size: per_patch,
+        };
+        let data = map_data(slice(self.bytes(), section), h.index_width, section.offset)?;
+        Ok(SampleMapView {
+            resolution: h.sample_map_resolution,
+            data,
+        })
+    }
+
+    /// Number of cubes (sample points, plus the environment cube if any).
+    pub fn cube_count(&self) -> u32 {
+        u32::try_from(self.header.cube_count).unwrap_or(u32::MAX)
+    }
+
+    /// The environment cube's index (the last cube), if the store has one.
+    pub fn env_cube_index(&self) -> Option<u32> {
+        self.header
+            .has_env_cube()
+            .then(|| self.cube_count().saturating_sub(1))
+    }
+
+    /// Where face `face` of cube `cube` lives.
+    pub fn face_entry(&self, cube: u32, face: usize) -> Result<FaceEntry, Error> {
+        if cube >= self.cube_count() {
+            return Err(Error::CubeOutOfRange {
+                cube,
+                count: self.cube_count(),
+            });
+        }
+        if face >= FACES {
+            return Err(Error::FaceOutOfRange { face });
+        }
+        let toc = slice(self.bytes(), self.header.toc);
+        Ok(FaceEntry::parse(
+            toc,
+            cube as usize * TOC_CUBE_BYTES + face * TOC_ENTRY_BYTES,
+        ))
+    }
+
+    /// Bytes of one face's raw data: `res² * bytes_per_texel`, plus `res² * 4` with the
+    /// distance channel.
+    pub fn face_raw_size(&self) -> usize {
+        self.face_raw_size
+    }
+
+    /// Texels per cube face edge.
+    pub fn cube_resolution(&self) -> u32 {
+        self.header.cube_resolution
+    }
+
+    /// Size of the store in bytes.
+    pub fn file_size(&self) -> u64 {
+        self.bytes().len() as u64
+    }
+
+    /// Total compressed bytes of all cube faces.
+    pub fn cube_bytes(&self) -> u64 {
+        let toc = slice(self.bytes(), self.header.toc);
+        (0..self.header.cube_count as usize * FACES)
+            .map(|i| FaceEntry::parse(toc, i * TOC_ENTRY_BYTES).compressed_size)
+            .sum()
+    }
+
+    /// Decompresses one face into `out` (exactly [`Store::face_raw_size`] bytes): the encoded
+    /// texels, then the distance plane if any, exactly as a GPU upload wants. Verifies the
+    /// frame's checksum first.
+    pub fn read_face_raw(&self, cube: u32, face: usize, out: &mut [u8]) -> Result<(), Error> {
+        let e = self.face_entry(cube, face)?;
+        if out.len() != self.face_raw_size {
+            return Err(Error::BufferSize {
+                what: "raw face output",
+                expected: self.face_raw_size as u64,
+                actual: out.len() as u64,
+            });
+        }
+        let frame = slice(
+            self.bytes(),
+            Section {
+                offset: e.offset,
+                size: e.compressed_size,
+            },
+        );
+        let computed = xxh3_64(frame);
+        if computed != e.checksum {
+            return Err(Error::FaceChecksum {
+                cube,
+                face,
+                offset: e.offset,
+                stored: e.checksum,
+                computed,
+            });
+        }
+        let n = zstd::bulk::decompress_to_buffer(frame, out).map_err(|err| Error::Decompress {
+            cube,
+            face,
+            offset: e.offset,
+            detail: err.to_string(),
+        })?;
+        if n != out.len() {
+            return Err(Error::Decompress {
+                cube,
+                face,
+                offset: e.offset,
+                detail: format!("decompressed to {n} bytes, expected {}", out.len()),
+            });
+        }
+        Ok(())
+    }
+
+    /// Decompresses and decodes one face: `rgb` takes `res²` texels; `distance`, if given,
+    /// takes the distance plane ([`Error::NoDistanceChannel`] if the store has none).
+    pub fn read_face(
+        &self,
+        cube: u32,
+        face: usize,
+        rgb: &mut [[f32; 3]],
+        distance: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
+        if distance.is_some() && !self.header.has_distance() {
+            return Err(Error::NoDistanceChannel);
+        }
+        let mut raw = vec![0u8; self.face_raw_size];
+        self.read_face_raw(cube, face, &mut raw)?;
+        let texels = (self.header.cube_resolution as usize).pow(2);
+        let color_bytes = texels * self.header.encoding.bytes_per_texel();
+        let (color, dist) = raw.split_at(color_bytes.min(raw.len()));
+        decode_texels(self.header.encoding, color, rgb)?;
+        if let Some(d) = distance {
+            decode_distances(dist, d)?;
+        }
+        Ok(())
+    }
+
+    /// Decompresses all six faces of a cube into `out` (`6 * face_raw_size` bytes), face after
+    /// face in layer order.
+    pub fn read_cube_raw(&self, cube: u32, out: &mut [u8]) -> Result<(), Error> {
+        let expected = self.face_raw_size.saturating_mul(FACES);
+        if out.len() != expected {
+            return Err(Error::BufferSize {
+                what: "raw cube output",
+                expected: expected as u64,
+                actual: out.len() as u64,
+            });
+        }
+        for (face, chunk) in out.chunks_exact_mut(self.face_raw_size.max(1)).enumerate() {
+            self.read_face_raw(cube, face, chunk)?;
+        }
+        Ok(())
+    }
+
+    /// Decompresses and decodes a whole cube.
+    pub fn read_cube(&self, cube: u32) -> Result<CubeImage, Error> {
+        let res = self.header.cube_resolution;
+        let mut image = CubeImage::black(res, self.header.has_distance());
+        for face in 0..FACES {
+            let rgb = &mut image.faces[face];
+            let dist = image.distance.as_mut().map(|d| d[face].as_mut_slice());
+            self.read_face(cube, face, rgb, dist)?;
+        }
+        Ok(image)
+    }
+
+    /// Checks every cube record header against the table of contents, every frame checksum,
+    /// and that every frame decompresses to exactly its raw size.
+    pub fn verify(&self) -> Result<VerifyReport, Error> {
+        let mut report = VerifyReport::default();
+        let mut buf = vec![0u8; self.face_raw_size];
+        for cube in 0..self.cube_count() {
+            let first = self.face_entry(cube, 0)?;
+            let rec_off = first.offset.saturating_sub(RECORD_HEADER_BYTES as u64);
+            let rec_bytes = slice(
+                self.bytes(),
+                Section {
+                    offset: rec_off,
+                    size: RECORD_HEADER_BYTES as u64,
+                },
+            );
+            let bad = |detail: String| Error::InvalidCubeRecord {
+                cube,
+                offset: rec_off,
+                detail,
+            };
+            let rec = RecordHeader::parse(rec_bytes).map_err(bad)?;
+            if rec.cube != cube {
+                return Err(bad(format!("record says cube {}", rec.cube)));
+            }
+            for face in 0..FACES {
+                let e = self.face_entry(cube, face)?;
+                if rec.faces[face] != (e.compressed_size, e.raw_size, e.checksum) {
+                    return Err(bad(format!(
+                        "face {face}: record {:?} disagrees with the table of contents {e:?}",
+                        rec.faces[face]
+                    )));
+                }
+                self.read_face_raw(cube, face, &mut buf)?;
+                report.faces += 1;
+                report.compressed_bytes += e.compressed_size;
+                report.raw_bytes += e.raw_size;
+            }
+            report.cubes += 1;
+        }
+        Ok(report)
+    }
+}
+
+fn map_data(bytes: &[u8], width: IndexWidth, offset: u64) -> Result<MapData<'_>, Error> {
+    let misaligned = |_| Error::Misaligned {
+        section: "sample maps",
+        offset,
+    };
+    Ok(match width {
+        IndexWidth::U16 => MapData::U16(bytemuck::try_cast_slice(bytes).map_err(misaligned)?),
+        IndexWidth::U32 => MapData::U32(bytemuck::try_cast_slice(bytes).map_err(misaligned)?),
+    })
+}
+
+/// Checks every TOC entry: raw size equals the face raw size, frames lie inside the payload
+/// in file order — each cube's face 0 right after its 160-byte record header (which starts at
+/// the 8-aligned end of the previous cube), each further face right after the previous one —
+/// compressed sizes within zstd's bound, and the payload ends at the 8-aligned end of the last
+/// cube.
+fn check_toc(entries: &[u8], h: &Header, raw: u64) -> Result<(), Error> {
+    let bound = zstd::zstd_safe::compress_bound(usize::try_from(raw).unwrap_or(usize::MAX)) as u64;
+    let payload_end = h.payload.end();
+    let mut cube_end = h.payload.offset;
+    for cube in 0..h.cube_count as usize {
+        let mut expected = align8(cube_end)
+            .and_then(|v| v.checked_add(RECORD_HEADER_BYTES as u64))
+            .unwrap_or(u64::MAX);
+        for face in 0..FACES {
+            let at = cube * TOC_CUBE_BYTES + face * TOC_ENTRY_BYTES;
+            let e = FaceEntry::parse(entries, at);
+            let fail = |detail: String| Error::InvalidToc {
+                cube: cube as u32,
+                face,
+                offset: h.toc.offset.saturating_add(at as u64),
+                detail,
+            };
+            if e.raw_size != raw {
+                return Err(fail(format!(
+                    "raw size {} differs from the face raw size {raw}",
+                    e.raw_size
+                )));
+            }
+            if e.compressed_size == 0 || e.compressed_size > bound {
+                return Err(fail(format!(
+                    "compressed size {} outside 1..={bound}",
+                    e.compressed_size
+                )));
+            }
+            if e.offset != expected {
+                return Err(fail(format!(
+                    "frame offset {} but the layout puts it at {expected} (overlap or gap)",
+                    e.offset
+                )));
+            }
+            let end = e.offset.checked_add(e.compressed_size);
+            match end {
+                Some(end) if end <= payload_end => expected = end,
+                _ => {
+                    return Err(fail(format!(
+                        "frame {}+{} runs past the payload end {payload_end}",
+                        e.offset, e.compressed_size
+                    )))
+                }
+            }
+        }
+        cube_end = expected;
+    }
+    if align8(cube_end) != Some(payload_end) {
+        return Err(Error::InvalidHeader {
+            field: "cube payload",
+            offset: 120,
+            detail: format!(
+                "payload ends at {payload_end} but its last cube ends at {cube_end}"
+            ),
+        });
+    }
+    Ok(())
+}
