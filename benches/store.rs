@@ -94,7 +94,9 @@ fn store_benchmarks(c: &mut Criterion) {
             b.iter(|| {
                 for cube in 0..store.cube_count() {
                     for f in 0..6 {
-                        store.read_face_raw(cube, f, &mut buffer).expect("read face");
+                        store
+                            .read_face_raw(cube, f, &mut buffer)
+                            .expect("read face");
                     }
                 }
             })

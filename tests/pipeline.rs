@@ -59,7 +59,13 @@ fn scene(dir: &Path) -> Scene {
     Scene::load(&path, None).unwrap()
 }
 
-fn bake_with_threads(scene: &Scene, output: &Path, threads: usize, limit: Option<u32>, resume: bool) {
+fn bake_with_threads(
+    scene: &Scene,
+    output: &Path,
+    threads: usize,
+    limit: Option<u32>,
+    resume: bool,
+) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -96,11 +102,17 @@ fn an_interrupted_bake_resumes_to_the_same_store() {
 
     let sliced = dir.join("sliced.oslf");
     bake_with_threads(&scene, &sliced, 2, Some(25), false);
-    assert!(!sliced.exists(), "an unfinished bake must not appear under the final name");
+    assert!(
+        !sliced.exists(),
+        "an unfinished bake must not appear under the final name"
+    );
     assert!(oslf::bake::bake::partial_path(&sliced).exists());
     bake_with_threads(&scene, &sliced, 2, None, true);
     assert!(!oslf::bake::bake::partial_path(&sliced).exists());
-    assert_eq!(std::fs::read(whole).unwrap(), std::fs::read(sliced).unwrap());
+    assert_eq!(
+        std::fs::read(whole).unwrap(),
+        std::fs::read(sliced).unwrap()
+    );
 }
 
 /// Every sample-map entry is checked without the bake's own code paths: patches are rebuilt from
@@ -156,7 +168,11 @@ fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
                     .map(|i| i as u32)
                     .collect();
                 let got = map.get(x, y).unwrap();
-                let valid: Vec<u32> = got.iter().copied().filter(|&i| i != INVALID_INDEX).collect();
+                let valid: Vec<u32> = got
+                    .iter()
+                    .copied()
+                    .filter(|&i| i != INVALID_INDEX)
+                    .collect();
                 assert_eq!(valid, expected, "patch {p} texel ({x}, {y})");
                 checked += 1;
             }
@@ -179,7 +195,10 @@ fn sample_points_sit_epsilon_above_their_patch() {
         let patch = &scene.objects[0].patches[s.patch as usize];
         let base = patch.eval(s.uv[0], s.uv[1]);
         let offset = Vec3::from_array(s.position) - base;
-        assert!((offset.length() - eps).abs() < 1e-4 * eps.max(1.0), "{offset}");
+        assert!(
+            (offset.length() - eps).abs() < 1e-4 * eps.max(1.0),
+            "{offset}"
+        );
         assert!(offset.normalize().dot(Vec3::from_array(s.normal)) > 0.9999);
     }
     // Every cube decodes, finite and non-negative, and the environment cube is there.
@@ -192,4 +211,3 @@ fn sample_points_sit_epsilon_above_their_patch() {
     }
     store.verify().unwrap();
 }
-

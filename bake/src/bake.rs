@@ -79,9 +79,8 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
         ..Default::default()
     };
 
-    let geometry = TriangleScene::build(
-        scene.instances(true, settings.epsilon * TESSELLATION_ERROR),
-    )?;
+    let geometry =
+        TriangleScene::build(scene.instances(true, settings.epsilon * TESSELLATION_ERROR))?;
     report.triangles = geometry.triangle_count();
     report.bvh_build_seconds = geometry.build_time().as_secs_f64();
 
@@ -164,9 +163,12 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
             .into_par_iter()
             .map(|i| {
                 let (cube, stats) = match points.get(i) {
-                    Some(p) => {
-                        capture_cube(&integrator, Vec3::from_array(p.position), i as u32, &capture)
-                    }
+                    Some(p) => capture_cube(
+                        &integrator,
+                        Vec3::from_array(p.position),
+                        i as u32,
+                        &capture,
+                    ),
                     None => capture_cube(
                         env_integrator.as_ref().unwrap_or(&integrator),
                         centre,

@@ -67,6 +67,7 @@ impl BezierPatch {
     }
 
     /// The surface point `x(u, v)`.
+    #[allow(clippy::needless_range_loop)] // i, j are the CP_ij indices of Eq. 3.1
     pub fn eval(&self, u: f32, v: f32) -> Vec3 {
         // Eq. 3.1, 3.3: x(u,v) = Σ_i Σ_j CP_ij B_i^3(u) B_j^3(v)
         let (bu, bv) = (bernstein3(param(u)), bernstein3(param(v)));
@@ -79,6 +80,7 @@ impl BezierPatch {
         x.as_vec3()
     }
 
+    #[allow(clippy::needless_range_loop)] // i, j are the CP_ij indices
     fn jet(&self, u: f64, v: f64) -> Jet {
         // Derivatives of Eq. 3.1 through the hodograph: differences of control points, so a
         // collapsed row of identical points gives an exactly zero derivative (no cancellation).
@@ -99,7 +101,8 @@ impl BezierPatch {
         }
         for i in 0..3 {
             for j in 0..3 {
-                let d = (self.p(i + 1, j + 1) - self.p(i + 1, j)) - (self.p(i, j + 1) - self.p(i, j));
+                let d =
+                    (self.p(i + 1, j + 1) - self.p(i + 1, j)) - (self.p(i, j + 1) - self.p(i, j));
                 duv += d * (bu2[i] * bv2[j]);
             }
         }
@@ -235,7 +238,7 @@ impl BezierPatch {
     /// `M_vv = 6 max|Δ²_v CP|`. The result is clamped to `1..=MAX_TESSELLATION_LEVEL`; a
     /// non-positive or NaN `max_error` gives `MAX_TESSELLATION_LEVEL`.
     pub fn tessellation_level(&self, max_error: f32) -> u32 {
-        if !(max_error > 0.0) {
+        if max_error.is_nan() || max_error <= 0.0 {
             return MAX_TESSELLATION_LEVEL;
         }
         let (mut muu, mut muv, mut mvv) = (0.0f64, 0.0f64, 0.0f64);
@@ -250,8 +253,8 @@ impl BezierPatch {
                     mvv = mvv.max(d.length());
                 }
                 if i < 3 && j < 3 {
-                    let d = self.p(i + 1, j + 1) - self.p(i + 1, j) - self.p(i, j + 1)
-                        + self.p(i, j);
+                    let d =
+                        self.p(i + 1, j + 1) - self.p(i + 1, j) - self.p(i, j + 1) + self.p(i, j);
                     muv = muv.max(d.length());
                 }
             }
@@ -316,7 +319,7 @@ pub fn parse_patch_file(text: &str, path: &Path) -> Result<Vec<BezierPatch>> {
         let mut fields = Vec::new();
         let col_of = |byte: usize| content[..byte].chars().count() + 1;
         let mut start: Option<usize> = None; // byte offset of the current field
-        // Column of a comma not yet followed by a field (a comma must sit between two fields).
+                                             // Column of a comma not yet followed by a field (a comma must sit between two fields).
         let mut pending_comma: Option<usize> = None;
         for (b, ch) in content.char_indices() {
             let sep = ch == ',' || ch.is_whitespace();
@@ -366,7 +369,10 @@ pub fn parse_patch_file(text: &str, path: &Path) -> Result<Vec<BezierPatch>> {
             return Err(err(
                 line.number,
                 f.column,
-                format!("expected a single {what} count, found {} fields", line.fields.len()),
+                format!(
+                    "expected a single {what} count, found {} fields",
+                    line.fields.len()
+                ),
             ));
         }
         let f = &line.fields[0];
@@ -473,10 +479,7 @@ pub fn parse_patch_file(text: &str, path: &Path) -> Result<Vec<BezierPatch>> {
                     return Err(err(
                         line,
                         column,
-                        format!(
-                            "control-point index {i} out of range 1..={}",
-                            points.len()
-                        ),
+                        format!("control-point index {i} out of range 1..={}", points.len()),
                     ));
                 }
                 *c = points[i - 1];

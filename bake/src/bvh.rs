@@ -1,0 +1,623 @@
+//! Triangle scene acceleration: one obvhs compressed wide BVH (CWBVH) over every triangle of
+//! every instance, with a watertight ray–triangle test.
+//!
+//! Robustness (rays start at sample points a tiny ε above surfaces, scenes may sit far from
+//! the origin):
+//! - the ray–triangle test is the watertight test of Woop, Benthin and Wald (JCGT 2013) with
+//!   pbrt-v3's conservative rounding-error bound on `t`: a hit is reported only if `t` is
+//!   provably positive, so a ray started exactly on a surface never re-hits it at `t ≈ 0`,
+//!   while hits at `t` far below any fixed epsilon are still found;
+//! - the node test is obvhs's SIMD slab test, changed to clip at `t = 0` instead of obvhs's
+//!   fixed `1e-4` (which would cull geometry closer than `1e-4` to the origin), to use exact
+//!   reciprocal directions, and to widen every slab by its own rounding error.
+
+use std::time::{Duration, Instant};
+
+use glam::{UVec2, Vec2, Vec3, Vec3A};
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::cwbvh::node::CwBvhNode;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ploc::PlocBuilder;
+use obvhs::BvhBuildParams;
+
+use crate::mesh::Mesh;
+use crate::ray::{Intersector, Ray, SurfaceHit};
+use crate::{BakeError, Result};
+
+/// A world-space mesh with the material and OSLF object its triangles belong to.
+#[derive(Clone, Debug, Default)]
+pub struct Instance {
+    /// Geometry, already in world space.
+    pub mesh: Mesh,
+    /// Index into the scene's material list.
+    pub material: u32,
+    /// OSLF object index, or [`crate::ray::ENVIRONMENT_OBJECT`].
+    pub object: u32,
+}
+
+/// Per-triangle shading data, stored in BVH order.
+#[derive(Clone, Copy, Debug)]
+struct TriangleAttributes {
+    normals: [Vec3; 3],
+    uvs: [Vec2; 3],
+    geometric_normal: Vec3,
+    material: u32,
+    object: u32,
+    /// Index of the triangle in the concatenation of all instances' triangle lists.
+    global: u32,
+}
+
+/// Every triangle of a scene in one CWBVH.
+pub struct TriangleScene {
+    bvh: CwBvh,
+    /// Triangle corners in BVH leaf order (`bvh` primitive slot = index).
+    vertices: Vec<[Vec3; 3]>,
+    attributes: Vec<TriangleAttributes>,
+    /// Slots of `vertices` in input order (for the brute-force reference).
+    input_order: Vec<u32>,
+    build_time: Duration,
+    bounds: (Vec3, Vec3),
+}
+
+/// Traversal stack depth of obvhs's `traverse!` (its `TRAVERSAL_STACK_SIZE`).
+const MAX_BVH_DEPTH: usize = 32;
+
+impl TriangleScene {
+    /// Builds the BVH over all instances' triangles. Instances must be valid meshes
+    /// ([`Mesh::validate`]); zero-area triangles are dropped. Fails if nothing is left.
+    pub fn build(instances: Vec<Instance>) -> Result<TriangleScene> {
+        let mut vertices = Vec::new();
+        let mut attributes = Vec::new();
+        let mut global = 0u64;
+        for (k, inst) in instances.iter().enumerate() {
+            inst.mesh
+                .validate()
+                .map_err(|e| BakeError::Invalid(format!("instance {k}: {e}")))?;
+            for t in &inst.mesh.triangles {
+                let g = global;
+                global += 1;
+                let [a, b, c] = t.map(|i| inst.mesh.positions[i as usize]);
+                let Some(gn) = (b - a).cross(c - a).try_normalize() else {
+                    continue; // zero area (or too small to have a normal)
+                };
+                let g = u32::try_from(g)
+                    .map_err(|_| BakeError::Invalid("scene has more than 2^32 triangles".into()))?;
+                vertices.push([a, b, c]);
+                attributes.push(TriangleAttributes {
+                    normals: t.map(|i| inst.mesh.normals[i as usize]),
+                    uvs: t.map(|i| inst.mesh.uvs[i as usize]),
+                    geometric_normal: gn,
+                    material: inst.material,
+                    object: inst.object,
+                    global: g,
+                });
+            }
+        }
+        if vertices.is_empty() {
+            return Err(BakeError::Invalid(if global == 0 {
+                "scene has no triangles".into()
+            } else {
+                format!("all {global} triangles of the scene have zero area")
+            }));
+        }
+        if vertices.len() >= (u32::MAX / 2) as usize {
+            return Err(BakeError::Invalid("scene has too many triangles".into()));
+        }
+        let start = Instant::now();
+        let aabbs: Vec<Aabb> = vertices
+            .iter()
+            .map(|v| Aabb::from_points(&v.map(Vec3A::from)))
+            .collect();
+        let params = BvhBuildParams::medium_build();
+        let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+            params.ploc_search_distance,
+            &aabbs,
+            (0..aabbs.len() as u32).collect(),
+            params.sort_precision,
+            params.search_depth_threshold,
+        );
+        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+        let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+        // Put the triangles in leaf order so a primitive slot indexes them directly.
+        let vertices_bvh: Vec<[Vec3; 3]> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| vertices[i as usize])
+            .collect();
+        let attributes_bvh: Vec<TriangleAttributes> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| attributes[i as usize])
+            .collect();
+        let build_time = start.elapsed();
+        if vertices_bvh.len() != vertices.len() || bvh.nodes.is_empty() {
+            return Err(BakeError::Invalid(format!(
+                "BVH build produced {} primitives for {} triangles",
+                vertices_bvh.len(),
+                vertices.len()
+            )));
+        }
+        let depth = cwbvh_depth(&bvh.nodes);
+        if depth > MAX_BVH_DEPTH {
+            return Err(BakeError::Invalid(format!(
+                "degenerate geometry: BVH depth {depth} exceeds {MAX_BVH_DEPTH}"
+            )));
+        }
+        let mut input_order = vec![0u32; vertices.len()];
+        for (slot, &i) in bvh.primitive_indices.iter().enumerate() {
+            input_order[i as usize] = slot as u32;
+        }
+        let bounds = vertices.iter().flatten().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        Ok(TriangleScene {
+            bvh,
+            vertices: vertices_bvh,
+            attributes: attributes_bvh,
+            input_order,
+            build_time,
+            bounds,
+        })
+    }
+
+    /// Number of (non-degenerate) triangles in the BVH.
+    pub fn triangle_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Wall time of the BVH construction proper (bounding boxes, PLOC, reinsertion, CWBVH
+    /// conversion and reordering).
+    pub fn build_time(&self) -> Duration {
+        self.build_time
+    }
+
+    /// Axis-aligned bounds `(min, max)` of all triangles.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    /// Closest hit by testing every triangle (in input order): the reference for tests.
+    pub fn intersect_brute_force(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        let pr = PreparedRay::new(ray, t_max)?;
+        let mut best: Option<(usize, TriHit)> = None;
+        let mut t_best = t_max;
+        for &slot in &self.input_order {
+            let slot = slot as usize;
+            if let Some(h) = intersect_triangle(&self.vertices[slot], &pr, t_best) {
+                t_best = h.t;
+                best = Some((slot, h));
+            }
+        }
+        best.map(|(slot, h)| self.surface_hit(slot, &h))
+    }
+
+    fn surface_hit(&self, slot: usize, h: &TriHit) -> SurfaceHit {
+        let a = &self.attributes[slot];
+        let [p0, p1, p2] = self.vertices[slot];
+        let [b0, b1, b2] = h.barycentric;
+        let gn = a.geometric_normal;
+        let mut sn = (a.normals[0] * b0 + a.normals[1] * b1 + a.normals[2] * b2).normalize_or(gn);
+        if sn.dot(gn) < 0.0 {
+            sn = -sn;
+        }
+        SurfaceHit {
+            t: h.t,
+            position: p0 * b0 + p1 * b1 + p2 * b2,
+            geometric_normal: gn,
+            shading_normal: sn,
+            uv: a.uvs[0] * b0 + a.uvs[1] * b1 + a.uvs[2] * b2,
+            material: a.material,
+            object: a.object,
+            triangle: a.global,
+        }
+    }
+}
+
+impl Intersector for TriangleScene {
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        let pr = PreparedRay::new(ray, t_max)?;
+        let mut t_best = t_max;
+        let mut best: Option<(usize, TriHit)> = None;
+        let mut state = self.bvh.new_traversal(Vec3A::from(pr.dir));
+        let mut node: &CwBvhNode;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            intersect_node(node, &pr, t_best, state.oct_inv4),
+            {
+                let slot = state.primitive_id as usize;
+                if let Some(h) = intersect_triangle(&self.vertices[slot], &pr, t_best) {
+                    t_best = h.t;
+                    best = Some((slot, h));
+                }
+            }
+        );
+        best.map(|(slot, h)| self.surface_hit(slot, &h))
+    }
+
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let Some(pr) = PreparedRay::new(ray, t_max) else {
+            return false;
+        };
+        let mut state = self.bvh.new_traversal(Vec3A::from(pr.dir));
+        let mut node: &CwBvhNode;
+        let mut hit = false;
+        'outer: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                intersect_node(node, &pr, t_max, state.oct_inv4),
+                {
+                    let slot = state.primitive_id as usize;
+                    if intersect_triangle(&self.vertices[slot], &pr, t_max).is_some() {
+                        hit = true;
+                        break 'outer;
+                    }
+                }
+            );
+        }
+        hit
+    }
+}
+
+/// Depth (levels of nodes) of a CWBVH.
+fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
+    let mut depth = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((i, d)) = stack.pop() {
+        depth = depth.max(d);
+        let Some(n) = nodes.get(i) else { continue };
+        for k in 0..n.imask.count_ones() as usize {
+            stack.push((n.child_base_idx as usize + k, d + 1));
+        }
+    }
+    depth
+}
+
+/// Per-ray constants of the watertight test and the node test.
+struct PreparedRay {
+    origin: Vec3,
+    dir: Vec3,
+    /// Rows of the permute-and-shear transform: `x' = rx·p`, `y' = ry·p`, `z' = p[kz]`.
+    rx: Vec3,
+    ry: Vec3,
+    rz: Vec3,
+    /// `1 / d[kz]`.
+    sz: f32,
+    /// Reciprocal direction for the slab test (tiny components clamped to ±1e20).
+    inv_dir: Vec3A,
+    /// Distance from a triangle's plane within which the origin counts as on the triangle.
+    self_tolerance: f32,
+}
+
+impl PreparedRay {
+    /// `None` for a ray that cannot hit anything (non-finite or zero direction, non-finite
+    /// origin, `t_max` not positive or NaN).
+    fn new(ray: &Ray, t_max: f32) -> Option<Self> {
+        let (o, d) = (ray.origin, ray.dir);
+        if !o.is_finite() || !d.is_finite() || d == Vec3::ZERO || t_max.is_nan() || t_max <= 0.0 {
+            return None;
+        }
+        let a = d.abs();
+        let kz = if a.x > a.y {
+            if a.x > a.z {
+                0
+            } else {
+                2
+            }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
+        let kx = (kz + 1) % 3;
+        let ky = (kx + 1) % 3;
+        let unit = |k: usize| Vec3::AXES[k];
+        let sx = -d[kx] / d[kz];
+        let sy = -d[ky] / d[kz];
+        let inv = |c: f32| {
+            if c.abs() < 1e-20 {
+                if c < 0.0 {
+                    -1e20
+                } else {
+                    1e20
+                }
+            } else {
+                1.0 / c
+            }
+        };
+        Some(Self {
+            origin: o,
+            dir: d,
+            rx: unit(kx) + unit(kz) * sx,
+            ry: unit(ky) + unit(kz) * sy,
+            rz: unit(kz),
+            sz: 1.0 / d[kz],
+            inv_dir: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+            self_tolerance: SELF_TOLERANCE * o.abs().max_element(),
+        })
+    }
+}
+
+/// A ray–triangle hit: distance and barycentric weights of the three corners.
+#[derive(Clone, Copy, Debug)]
+struct TriHit {
+    t: f32,
+    barycentric: [f32; 3],
+}
+
+/// pbrt's γ(n) = nε / (1 − nε) for f32 (ε = 2⁻²⁴).
+const fn gamma(n: f32) -> f32 {
+    let e = f32::EPSILON * 0.5;
+    n * e / (1.0 - n * e)
+}
+
+/// Watertight ray–triangle intersection (Woop, Benthin, Wald 2013; pbrt-v3 §3.6.2) with
+/// `t` in `(δ_t, t_max)`, δ_t the conservative rounding-error bound of `t`.
+#[inline(always)]
+fn intersect_triangle(v: &[Vec3; 3], r: &PreparedRay, t_max: f32) -> Option<TriHit> {
+    let p0 = v[0] - r.origin;
+    let p1 = v[1] - r.origin;
+    let p2 = v[2] - r.origin;
+    let (x0, x1, x2) = (r.rx.dot(p0), r.rx.dot(p1), r.rx.dot(p2));
+    let (y0, y1, y2) = (r.ry.dot(p0), r.ry.dot(p1), r.ry.dot(p2));
+    let mut e0 = x1 * y2 - y1 * x2;
+    let mut e1 = x2 * y0 - y2 * x0;
+    let mut e2 = x0 * y1 - y0 * x1;
+    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        // Exact edge functions on (near) edges: what makes the test watertight.
+        let (x0, x1, x2) = (f64::from(x0), f64::from(x1), f64::from(x2));
+        let (y0, y1, y2) = (f64::from(y0), f64::from(y1), f64::from(y2));
+        e0 = (x1 * y2 - y1 * x2) as f32;
+        e1 = (x2 * y0 - y2 * x0) as f32;
+        e2 = (x0 * y1 - y0 * x1) as f32;
+    }
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+    let z0 = r.rz.dot(p0) * r.sz;
+    let z1 = r.rz.dot(p1) * r.sz;
+    let z2 = r.rz.dot(p2) * r.sz;
+    let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+    // t in (0, t_max), exclusive at both ends.
+    if det < 0.0 && (t_scaled >= 0.0 || t_scaled <= t_max * det) {
+        return None;
+    }
+    if det > 0.0 && (t_scaled <= 0.0 || t_scaled >= t_max * det) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    // Conservative bound on the rounding error of t (pbrt-v3, "Conservative Ray–Bounds
+    // Intersections" / triangle t error): reject hits not provably in front of the origin.
+    let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
+    let delta_z = gamma(3.0) * max_zt;
+    let max_xt = x0.abs().max(x1.abs()).max(x2.abs());
+    let max_yt = y0.abs().max(y1.abs()).max(y2.abs());
+    let delta_x = gamma(5.0) * (max_xt + max_zt);
+    let delta_y = gamma(5.0) * (max_yt + max_zt);
+    let delta_e = 2.0 * (gamma(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let delta_t =
+        3.0 * (gamma(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+    if t.is_nan() || t <= delta_t {
+        return None;
+    }
+    // Self-intersection guard: a ray whose origin lies on this triangle's plane up to the
+    // rounding of a computed surface point (a few ulps of the origin's coordinates) started
+    // on this surface and must not re-hit it.
+    let n = (v[1] - v[0]).cross(v[2] - v[0]);
+    let plane_distance = t * r.dir.dot(n).abs();
+    if plane_distance <= r.self_tolerance * n.length() {
+        return None;
+    }
+    Some(TriHit {
+        t,
+        barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det],
+    })
+}
+
+/// Relative self-intersection tolerance: 4 ulps (2⁻²¹) of the origin's largest coordinate
+/// (≈1.4e-6 for a teapot at the origin, so ε down to 1e-6 of its size still works).
+pub const SELF_TOLERANCE: f32 = 1.0 / (1u32 << 21) as f32;
+
+/// Relative rounding error allowed for in each slab distance (a few ulps).
+const SLAB_PAD: f32 = 1e-6;
+
+/// The CWBVH node test: which of the node's 8 children the ray enters within `[0, t_max]`.
+/// Same as obvhs's `CwBvhNode::intersect_ray_simd` except for the clip at 0 (not 1e-4), the
+/// exact reciprocal direction and the per-axis rounding pad.
+#[inline(always)]
+fn intersect_node(node: &CwBvhNode, r: &PreparedRay, t_max: f32, oct_inv4: u32) -> u32 {
+    let extent = node.compute_extent();
+    let adj_dir_inv = extent * r.inv_dir;
+    let adj_origin = (Vec3A::from(node.p) - Vec3A::from(r.origin)) * r.inv_dir;
+    let pad = (adj_origin.abs() + adj_dir_inv.abs() * 255.0) * SLAB_PAD;
+    let neg = (r.dir.x < 0.0, r.dir.y < 0.0, r.dir.z < 0.0);
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, neg, t_max);
+    let mut hit_mask = 0u32;
+    for child in 0..8 {
+        if lanes & (1 << child) != 0 {
+            let child_bits = obvhs::cwbvh::node::extract_byte64(child_bits8, child);
+            let bit_index = obvhs::cwbvh::node::extract_byte64(bit_index8, child);
+            hit_mask |= child_bits << bit_index;
+        }
+    }
+    hit_mask
+}
+
+/// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (SSE version).
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+#[inline(always)]
+fn node_lanes(
+    node: &CwBvhNode,
+    adj_dir_inv: Vec3A,
+    adj_origin: Vec3A,
+    pad: Vec3A,
+    neg: (bool, bool, bool),
+    t_max: f32,
+) -> u32 {
+    use std::arch::x86_64::*;
+    #[inline(always)]
+    fn q4(v: &[u8; 8], i: usize) -> __m128 {
+        let b = &v[i * 4..i * 4 + 4];
+        // SAFETY: SSE2 is enabled (cfg above); _mm_set_ps has no memory preconditions.
+        unsafe { _mm_set_ps(b[3] as f32, b[2] as f32, b[1] as f32, b[0] as f32) }
+    }
+    let mut mask = 0u32;
+    // SAFETY: SSE2 is enabled (cfg above); these intrinsics only operate on registers.
+    unsafe {
+        let axis = |lo: &[u8; 8], hi: &[u8; 8], i: usize, negd: bool, a: f32, o: f32, p: f32| {
+            let (ql, qh) = (q4(lo, i), q4(hi, i));
+            let (near, far) = if negd { (qh, ql) } else { (ql, qh) };
+            let (a, o) = (_mm_set1_ps(a), _mm_set1_ps(o));
+            let p = _mm_set1_ps(p);
+            let t0 = _mm_sub_ps(_mm_add_ps(_mm_mul_ps(near, a), o), p);
+            let t1 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(far, a), o), p);
+            (t0, t1)
+        };
+        for i in 0..2 {
+            let (x0, x1) = axis(
+                &node.child_min_x,
+                &node.child_max_x,
+                i,
+                neg.0,
+                adj_dir_inv.x,
+                adj_origin.x,
+                pad.x,
+            );
+            let (y0, y1) = axis(
+                &node.child_min_y,
+                &node.child_max_y,
+                i,
+                neg.1,
+                adj_dir_inv.y,
+                adj_origin.y,
+                pad.y,
+            );
+            let (z0, z1) = axis(
+                &node.child_min_z,
+                &node.child_max_z,
+                i,
+                neg.2,
+                adj_dir_inv.z,
+                adj_origin.z,
+                pad.z,
+            );
+            let tmin = _mm_max_ps(_mm_max_ps(x0, y0), _mm_max_ps(z0, _mm_setzero_ps()));
+            let tmax = _mm_min_ps(_mm_min_ps(x1, y1), _mm_min_ps(z1, _mm_set1_ps(t_max)));
+            let m = _mm_movemask_ps(_mm_cmple_ps(tmin, tmax)) as u32;
+            mask |= m << (4 * i);
+        }
+    }
+    mask
+}
+
+/// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (portable version).
+#[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+#[inline(always)]
+fn node_lanes(
+    node: &CwBvhNode,
+    adj_dir_inv: Vec3A,
+    adj_origin: Vec3A,
+    pad: Vec3A,
+    neg: (bool, bool, bool),
+    t_max: f32,
+) -> u32 {
+    let mut mask = 0u32;
+    for c in 0..8 {
+        let lo = Vec3A::new(
+            node.child_min_x[c] as f32,
+            node.child_min_y[c] as f32,
+            node.child_min_z[c] as f32,
+        );
+        let hi = Vec3A::new(
+            node.child_max_x[c] as f32,
+            node.child_max_y[c] as f32,
+            node.child_max_z[c] as f32,
+        );
+        let pick = |n: bool, l: f32, h: f32| if n { (h, l) } else { (l, h) };
+        let (nx, fx) = pick(neg.0, lo.x, hi.x);
+        let (ny, fy) = pick(neg.1, lo.y, hi.y);
+        let (nz, fz) = pick(neg.2, lo.z, hi.z);
+        let near = Vec3A::new(nx, ny, nz) * adj_dir_inv + adj_origin - pad;
+        let far = Vec3A::new(fx, fy, fz) * adj_dir_inv + adj_origin + pad;
+        if near.max_element().max(0.0) <= far.min_element().min(t_max) {
+            mask |= 1 << c;
+        }
+    }
+    mask
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes;
+
+    #[test]
+    fn single_triangle_scene() {
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![Vec3::Z; 3],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y],
+            triangles: vec![[0, 1, 2]],
+        };
+        let s = TriangleScene::build(vec![Instance {
+            mesh,
+            material: 3,
+            object: 7,
+        }])
+        .unwrap();
+        let ray = Ray::new(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z);
+        let h = s.intersect(&ray, f32::INFINITY).unwrap();
+        assert!((h.t - 1.0).abs() < 1e-6);
+        assert_eq!((h.material, h.object, h.triangle), (3, 7, 0));
+        assert!((h.uv - Vec2::new(0.25, 0.25)).length() < 1e-6);
+        assert!(s.occluded(&ray, 2.0));
+        assert!(!s.occluded(&ray, 1.0)); // t_max exclusive
+        assert!(s.intersect(&ray, 0.5).is_none());
+    }
+
+    #[test]
+    fn rejects_empty_and_degenerate() {
+        assert!(TriangleScene::build(vec![]).is_err());
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+            normals: vec![Vec3::Z; 3],
+            uvs: vec![Vec2::ZERO; 3],
+            triangles: vec![[0, 1, 2]],
+        };
+        assert!(TriangleScene::build(vec![Instance {
+            mesh,
+            material: 0,
+            object: 0
+        }])
+        .is_err());
+    }
+
+    #[test]
+    fn bad_rays_miss() {
+        let s = TriangleScene::build(vec![Instance {
+            mesh: shapes::cuboid(Vec3::ONE).unwrap(),
+            material: 0,
+            object: 0,
+        }])
+        .unwrap();
+        let o = Vec3::new(0.0, 0.0, 5.0);
+        assert!(s.intersect(&Ray::new(o, Vec3::ZERO), 10.0).is_none());
+        assert!(s.intersect(&Ray::new(o, Vec3::NAN), 10.0).is_none());
+        assert!(s.intersect(&Ray::new(o, -Vec3::Z), f32::NAN).is_none());
+        assert!(!s.occluded(&Ray::new(o, -Vec3::Z), -1.0));
+        assert!(s.intersect(&Ray::new(o, -Vec3::Z), f32::INFINITY).is_some());
+    }
+}

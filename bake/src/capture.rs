@@ -60,8 +60,7 @@ pub fn capture_cube<I: Intersector>(
                 }
                 out.push((sum * inv_spp).to_array());
                 if settings.distance_channel {
-                    let dir =
-                        Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
+                    let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
                     stats.closest += 1;
                     let d = integrator
                         .geometry

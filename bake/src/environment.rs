@@ -147,11 +147,7 @@ impl LatLongSampler {
         let theta = uv.y * PI;
         let phi = (uv.x - 0.5) * 2.0 * PI;
         let sin_theta = theta.sin();
-        let m = Vec3::new(
-            sin_theta * phi.cos(),
-            sin_theta * phi.sin(),
-            theta.cos(),
-        );
+        let m = Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), theta.cos());
         let dir = self.to_world(m);
         let denom = 2.0 * PI * PI * sin_theta;
         if denom > 0.0 && pdf_uv > 0.0 {

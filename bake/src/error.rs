@@ -37,7 +37,9 @@ pub enum BakeError {
     /// A scene that parsed but cannot be baked (no OSLF object, no sample points, ...).
     #[error("{0}")]
     Invalid(String),
-    // (the store's error, `Format(#[from] oslf_format::Error)`, is added once that crate exists)
+    /// The store could not be written or resumed.
+    #[error(transparent)]
+    Format(#[from] oslf_format::Error),
 }
 
 /// Shorthand used across the crate.

@@ -22,7 +22,13 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Resul
 
 /// Tone maps linear RGB (exposure, then the ACES filmic fit of Narkowicz 2015, then the sRGB
 /// curve) and writes an 8-bit PNG. NaN or negative values map to black.
-pub fn write_png(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    exposure: f32,
+) -> Result<()> {
     check_size(path, width, height, pixels)?;
     let mut bytes = Vec::with_capacity(pixels.len() * 3);
     for p in pixels {
@@ -42,7 +48,10 @@ fn check_size(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<(
     if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
         return Err(BakeError::Image {
             path: path.to_path_buf(),
-            message: format!("{} pixels do not make a {width}x{height} image", pixels.len()),
+            message: format!(
+                "{} pixels do not make a {width}x{height} image",
+                pixels.len()
+            ),
         });
     }
     Ok(())
@@ -59,7 +68,11 @@ pub fn aces(x: f32) -> f32 {
 
 /// Linear [0, 1] to an 8-bit sRGB value.
 pub fn to_srgb8(linear: f32) -> u8 {
-    let l = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
+    let l = if linear.is_nan() {
+        0.0
+    } else {
+        linear.clamp(0.0, 1.0)
+    };
     let s = if l <= 0.003_130_8 {
         12.92 * l
     } else {

@@ -234,7 +234,7 @@ impl<I: Intersector> Integrator<'_, I> {
             bounce += 1;
             if bounce >= RUSSIAN_ROULETTE_START {
                 let q = throughput.max_element().min(0.95);
-                if !(q > 0.0) || rng.next_f32() >= q {
+                if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
                     break;
                 }
                 throughput /= q;

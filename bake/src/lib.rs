@@ -21,4 +21,12 @@ pub mod material;
 pub mod sampling;
 pub mod texture;
 
+// the bake
+pub mod bake;
+pub mod capture;
+pub mod image_file;
+pub mod sample_map;
+pub mod sample_points;
+pub mod scene;
+
 pub use error::{BakeError, Result};

@@ -180,7 +180,10 @@ fn print_summary(r: &BakeReport) {
         r.store_bytes as f64 / 1e6,
         r.bytes_per_texel,
         if r.clamped_texels > 0 {
-            format!(", {} texels clamped to the encoding's maximum", r.clamped_texels)
+            format!(
+                ", {} texels clamped to the encoding's maximum",
+                r.clamped_texels
+            )
         } else {
             String::new()
         }

@@ -192,7 +192,9 @@ mod tests {
     fn transform_normals_inverse_transpose() {
         let mut m = unit_triangle();
         // A shear: normals must stay perpendicular to the transformed surface.
-        let a = Affine3A::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.7, 0.3, 2.0, 5.0, 6.0, 7.0]);
+        let a = Affine3A::from_cols_array(&[
+            1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.7, 0.3, 2.0, 5.0, 6.0, 7.0,
+        ]);
         m.normals = vec![Vec3::new(1.0, 1.0, 1.0).normalize(); 3];
         let tangent = Vec3::new(1.0, -1.0, 0.0);
         m.transform(&a);

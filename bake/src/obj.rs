@@ -1,0 +1,188 @@
+//! Wavefront OBJ loading (geometry only; materials are assigned by the scene file).
+
+use std::io::{BufRead, Read};
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use crate::mesh::Mesh;
+use crate::{BakeError, Result};
+
+/// A `BufRead` over a byte slice that remembers how far the parser has read, so a parse error
+/// can be located at the line where it was detected.
+struct CountingReader<'a> {
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl Read for CountingReader<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = buf.len().min(self.data.len() - self.pos);
+        buf[..n].copy_from_slice(&self.data[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+impl BufRead for CountingReader<'_> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        Ok(&self.data[self.pos..])
+    }
+    fn consume(&mut self, amt: usize) {
+        self.pos = (self.pos + amt).min(self.data.len());
+    }
+}
+
+impl CountingReader<'_> {
+    /// 1-based number of the last line handed to the parser.
+    fn current_line(&self) -> usize {
+        let read = &self.data[..self.pos];
+        let newlines = read.iter().filter(|&&b| b == b'\n').count();
+        if read.last() == Some(&b'\n') {
+            newlines.max(1)
+        } else {
+            newlines + 1
+        }
+    }
+}
+
+/// Loads all objects of an OBJ file into one mesh: polygons triangulated, one index per
+/// vertex. Missing normals are computed (smooth, area weighted; also when the file's normals
+/// are zero or non-finite), missing uvs are 0. Materials and `mtllib` files are ignored.
+///
+/// Errors name the file; parse errors also give the line where the parser detected them
+/// (for index errors that can be the end of the object, as the parser checks them there).
+pub fn load_obj(path: &Path) -> Result<Mesh> {
+    let data = std::fs::read(path).map_err(|source| BakeError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut reader = CountingReader {
+        data: &data,
+        pos: 0,
+    };
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::GenericFailure)
+    })
+    .map_err(|e| BakeError::Parse {
+        path: path.to_path_buf(),
+        line: reader.current_line(),
+        column: 1,
+        message: format!("OBJ {e}"),
+    })?;
+    let mut mesh = Mesh::new();
+    for model in &models {
+        let m = &model.mesh;
+        let n = m.positions.len() / 3;
+        let mut part = Mesh {
+            positions: m
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            normals: Vec::new(),
+            uvs: if m.texcoords.len() == 2 * n {
+                m.texcoords
+                    .chunks_exact(2)
+                    .map(|t| Vec2::new(t[0], t[1]))
+                    .collect()
+            } else {
+                vec![Vec2::ZERO; n]
+            },
+            triangles: m
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+        };
+        if let Some(i) = part.positions.iter().position(|p| !p.is_finite()) {
+            return Err(BakeError::Invalid(format!(
+                "{}: object {:?}: vertex {} has a non-finite position",
+                path.display(),
+                model.name,
+                i + 1
+            )));
+        }
+        let given: Vec<Vec3> = m
+            .normals
+            .chunks_exact(3)
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        if given.len() == n
+            && given
+                .iter()
+                .all(|v| v.is_finite() && v.length_squared() > 0.0)
+        {
+            part.normals = given.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
+        } else {
+            part.compute_smooth_normals();
+        }
+        for uv in &mut part.uvs {
+            if !uv.is_finite() {
+                *uv = Vec2::ZERO;
+            }
+        }
+        part.validate().map_err(|e| {
+            BakeError::Invalid(format!("{}: object {:?}: {e}", path.display(), model.name))
+        })?;
+        mesh.append(&part);
+    }
+    if mesh.triangles.is_empty() {
+        return Err(BakeError::Invalid(format!(
+            "{}: contains no faces",
+            path.display()
+        )));
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("oslf-obj-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn loads_quad_and_computes_normals() {
+        let p = write(
+            "quad.obj",
+            "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+        );
+        let m = load_obj(&p).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        assert!(m.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
+        assert!(m.uvs.iter().all(|uv| *uv == Vec2::ZERO));
+        assert!((m.area() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn errors_are_located() {
+        let p = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n");
+        match load_obj(&p) {
+            Err(BakeError::Parse { path, line, .. }) => {
+                assert_eq!(path, p);
+                assert_eq!(line, 3);
+            }
+            other => panic!("{other:?}"),
+        }
+        let missing = std::env::temp_dir().join("oslf-no-such-file.obj");
+        assert!(matches!(load_obj(&missing), Err(BakeError::Io { .. })));
+        let p = write("empty.obj", "v 0 0 0\n");
+        assert!(load_obj(&p).is_err());
+        let p = write("oob.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");
+        let e = load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("oob.obj"), "{e}");
+    }
+}

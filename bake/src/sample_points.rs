@@ -230,7 +230,10 @@ fn eliminate(candidates: &[Candidate], target: usize, area: f32) -> Vec<usize> {
     let mut heap: BinaryHeap<Entry> = weights
         .iter()
         .enumerate()
-        .map(|(i, &w)| Entry { weight: w, index: i })
+        .map(|(i, &w)| Entry {
+            weight: w,
+            index: i,
+        })
         .collect();
     let mut remaining = m;
     while remaining > target {

@@ -389,7 +389,13 @@ impl Distribution2D {
             .map(|row| {
                 let s: f64 = row
                     .iter()
-                    .map(|&v| if v.is_finite() && v > 0.0 { v as f64 } else { 0.0 })
+                    .map(|&v| {
+                        if v.is_finite() && v > 0.0 {
+                            v as f64
+                        } else {
+                            0.0
+                        }
+                    })
                     .sum();
                 (s / width as f64) as f32
             })

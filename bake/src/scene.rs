@@ -180,7 +180,10 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
         .iter()
         .rposition(|&b| b == b'\n')
         .map_or(0, |p| p + 1);
-    let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+    let column = String::from_utf8_lossy(&before[line_start..])
+        .chars()
+        .count()
+        + 1;
     (line, column)
 }
 
@@ -587,10 +590,7 @@ impl Ctx<'_> {
         if p.is_absolute() {
             p.to_path_buf()
         } else {
-            self.path
-                .parent()
-                .unwrap_or_else(|| Path::new("."))
-                .join(p)
+            self.path.parent().unwrap_or_else(|| Path::new(".")).join(p)
         }
     }
 
@@ -650,12 +650,12 @@ impl Ctx<'_> {
                 }
                 if let Some(sky) = env.sky {
                     let direction = sky.sun_direction.0.normalize();
-                    let model = Sky::new(direction, sky.turbidity.0, sky.intensity.0);
-                    lights.push(Light::Sun {
-                        direction,
-                        irradiance: sky.sun_irradiance.0,
-                        angular_radius: sky.sun_angular_radius.0.to_radians(),
-                    });
+                    let model = Sky::new(direction, sky.turbidity.0, sky.intensity.0)
+                        .map_err(|e| self.locate(span.clone(), e))?;
+                    lights.push(
+                        model
+                            .sun_light(sky.sun_irradiance.0, sky.sun_angular_radius.0.to_radians()),
+                    );
                     Environment::Sky(Arc::new(model))
                 } else if let Some(map) = env.map {
                     let file = self.existing_file(&map.path)?;
@@ -786,8 +786,9 @@ impl Ctx<'_> {
         materials: &mut Vec<Material>,
     ) -> Result<(u32, Vec3)> {
         let raw = m.get_ref();
-        let count =
-            raw.color.is_some() as u32 + raw.checker.is_some() as u32 + raw.texture.is_some() as u32;
+        let count = raw.color.is_some() as u32
+            + raw.checker.is_some() as u32
+            + raw.texture.is_some() as u32;
         if count != 1 {
             return Err(self.error_at(
                 m.span(),
@@ -809,7 +810,8 @@ impl Ctx<'_> {
             let spanned = raw.texture.as_ref().expect("counted above");
             let file = self.existing_file(spanned)?;
             let image = ImageTexture::load(&file)?;
-            let mean = image.mean();
+            let mean =
+                image.pixels.iter().copied().sum::<Vec3>() / image.pixels.len().max(1) as f32;
             (Texture::Image(Arc::new(image)), mean)
         };
         let material = Material { albedo };

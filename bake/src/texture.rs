@@ -22,7 +22,11 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 
 /// Inverse sRGB transfer function, linear → encoded. Values outside `[0,1]` are clamped.
 pub fn linear_to_srgb(c: f32) -> f32 {
-    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
+    let c = if c.is_finite() {
+        c.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     if c <= 0.003_130_8 {
         12.92 * c
     } else {
@@ -225,7 +229,11 @@ pub fn load_linear_rgb(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
                 if linear {
                     c
                 } else {
-                    Vec3::new(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z))
+                    Vec3::new(
+                        srgb_to_linear(c.x),
+                        srgb_to_linear(c.y),
+                        srgb_to_linear(c.z),
+                    )
                 }
             })
             .collect();
@@ -298,7 +306,10 @@ mod tests {
         // Half-way between texel 1 and (wrapped) texel 0.
         let edge = img.eval(Vec2::new(0.0, 0.5));
         assert!((edge - Vec3::new(0.5, 0.0, 0.5)).length() < 1e-6);
-        assert_eq!(img.eval(Vec2::new(1.25, 3.5)), img.eval(Vec2::new(0.25, 0.5)));
+        assert_eq!(
+            img.eval(Vec2::new(1.25, 3.5)),
+            img.eval(Vec2::new(0.25, 0.5))
+        );
         assert!(ImageTexture::from_pixels(1, 1, vec![Vec3::splat(-1.0)]).is_err());
         assert!(ImageTexture::from_pixels(2, 1, vec![Vec3::ONE]).is_err());
     }

@@ -95,13 +95,25 @@ fn missing_file_is_located_and_resolved_against_the_scene() {
 #[test]
 fn semantic_errors_are_located() {
     // Two environments at once.
-    let text = GOOD.replace("uniform = [1.0, 1.0, 1.0]", "uniform = [1.0, 1.0, 1.0]\nmap = { path = \"x.exr\" }");
-    assert!(matches!(parse(&text), Err(BakeError::Parse { .. }) | Err(BakeError::Io { .. })));
+    let text = GOOD.replace(
+        "uniform = [1.0, 1.0, 1.0]",
+        "uniform = [1.0, 1.0, 1.0]\nmap = { path = \"x.exr\" }",
+    );
+    assert!(matches!(
+        parse(&text),
+        Err(BakeError::Parse { .. }) | Err(BakeError::Io { .. })
+    ));
     // A patch range outside the data.
-    let text = GOOD.replace("patches = \"newell-teapot\"", "patches = \"newell-teapot\"\nselect = [4, 40]");
+    let text = GOOD.replace(
+        "patches = \"newell-teapot\"",
+        "patches = \"newell-teapot\"\nselect = [4, 40]",
+    );
     assert_located(&text, 7, 10, "range");
     // Both density keys.
-    let text = GOOD.replace("sample_count = 10", "sample_count = 10\nsample_spacing = 0.1");
+    let text = GOOD.replace(
+        "sample_count = 10",
+        "sample_count = 10\nsample_spacing = 0.1",
+    );
     assert_located(&text, 10, 16, "not both");
     // A material with two kinds.
     let text = GOOD.replace(

@@ -224,13 +224,12 @@ pub fn encode_cube(
     let color_bytes = texels * enc.bytes_per_texel();
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
-    let mut compressor = zstd::bulk::Compressor::new(params.zstd_level).map_err(|e| {
-        Error::Compress {
+    let mut compressor =
+        zstd::bulk::Compressor::new(params.zstd_level).map_err(|e| Error::Compress {
             cube: cube_index,
             face: 0,
             detail: e.to_string(),
-        }
-    })?;
+        })?;
     let mut stats = EncodeStats::default();
     let mut frames: [Vec<u8>; FACES] = Default::default();
     let mut checksums = [0u64; FACES];

@@ -298,8 +298,14 @@ mod tests {
     #[test]
     fn rgb9e5_known_values() {
         assert_eq!(encode_rgb9e5([0.0; 3]), 0);
-        assert_eq!(decode_rgb9e5(encode_rgb9e5([1.0, 1.0, 1.0])), [1.0, 1.0, 1.0]);
-        assert_eq!(decode_rgb9e5(encode_rgb9e5([MAX_RGB9E5; 3])), [MAX_RGB9E5; 3]);
+        assert_eq!(
+            decode_rgb9e5(encode_rgb9e5([1.0, 1.0, 1.0])),
+            [1.0, 1.0, 1.0]
+        );
+        assert_eq!(
+            decode_rgb9e5(encode_rgb9e5([MAX_RGB9E5; 3])),
+            [MAX_RGB9E5; 3]
+        );
         assert_eq!(decode_rgb9e5(encode_rgb9e5([1e9, 0.0, 0.0]))[0], MAX_RGB9E5);
         // 1.0 = 256 * 2^(16 - 15 - 9): exponent 16, red mantissa 256.
         assert_eq!(encode_rgb9e5([1.0, 0.0, 0.0]), 256 | (16 << 27));

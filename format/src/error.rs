@@ -22,10 +22,14 @@ pub enum Error {
     #[error("not an OSLF store: magic is {found:02x?} (expected {expected:02x?})")]
     BadMagic { found: [u8; 8], expected: [u8; 8] },
     /// A format version this reader does not understand.
-    #[error("unsupported OSLF store version {found} (this reader understands version {supported})")]
+    #[error(
+        "unsupported OSLF store version {found} (this reader understands version {supported})"
+    )]
     UnsupportedVersion { found: u32, supported: u32 },
     /// The file ends before a structure it must contain.
-    #[error("truncated store: {section} needs bytes {offset}..{end} but the file has {file_size} bytes")]
+    #[error(
+        "truncated store: {section} needs bytes {offset}..{end} but the file has {file_size} bytes"
+    )]
     Truncated {
         section: &'static str,
         offset: u64,
@@ -81,7 +85,9 @@ pub enum Error {
     #[error("invalid sample point {index}: {detail}")]
     InvalidSamplePoint { index: u64, detail: String },
     /// A sample-map entry that is out of range or not in canonical form.
-    #[error("invalid sample map entry: patch {patch}, texel ({x}, {y}), channel {channel}: {detail}")]
+    #[error(
+        "invalid sample map entry: patch {patch}, texel ({x}, {y}), channel {channel}: {detail}"
+    )]
     InvalidSampleMap {
         patch: u32,
         x: u32,
@@ -119,7 +125,11 @@ pub enum Error {
     },
     /// A cube record header in the payload that disagrees with the table of contents.
     #[error("cube {cube}: record header at byte offset {offset}: {detail}")]
-    InvalidCubeRecord { cube: u32, offset: u64, detail: String },
+    InvalidCubeRecord {
+        cube: u32,
+        offset: u64,
+        detail: String,
+    },
     /// zstd failed to compress a face.
     #[error("cube {cube}, face {face}: zstd compression failed: {detail}")]
     Compress {
@@ -193,7 +203,11 @@ pub enum Error {
     UnknownEncoding(String),
     /// A value past a documented limit.
     #[error("{what} is {value}, above the limit {max}")]
-    Limit { what: &'static str, value: u64, max: u64 },
+    Limit {
+        what: &'static str,
+        value: u64,
+        max: u64,
+    },
 }
 
 impl Error {

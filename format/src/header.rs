@@ -21,6 +21,8 @@ const KNOWN_FLAGS: u32 = FLAG_DISTANCE | FLAG_ENV_CUBE | FLAG_COMPLETE;
 
 /// Byte range of the fields `finish()` patches (payload size, TOC offset and size, file size).
 pub(crate) const FINISH_FIELDS: std::ops::Range<usize> = 120..152;
+/// Byte range of the metadata, points and maps checksums.
+pub(crate) const SECTION_CHECKSUMS: std::ops::Range<usize> = 152..176;
 /// Byte range of the flags field.
 pub(crate) const FLAGS_FIELD: std::ops::Range<usize> = 12..16;
 
@@ -160,13 +162,7 @@ impl Header {
         let index_width = match le_u32(b, 20) {
             2 => IndexWidth::U16,
             4 => IndexWidth::U32,
-            w => {
-                return Err(invalid(
-                    "index_bytes",
-                    20,
-                    format!("{w} (must be 2 or 4)"),
-                ))
-            }
+            w => return Err(invalid("index_bytes", 20, format!("{w} (must be 2 or 4)"))),
         };
         if let Some(i) = b[176..HEADER_CHECKSUM_OFFSET].iter().position(|v| *v != 0) {
             return Err(invalid(

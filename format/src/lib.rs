@@ -1,4 +1,147 @@
-//! OSLF store (layout documented below; filled in at the end).
+//! # The OSLF store
+//!
+//! An OSLF store holds an *offset surface light field* (Jason Ang, 2003): HDR cube maps captured
+//! at sample points offset by ε above the Bézier patches of an object, plus per-patch *sample
+//! maps* giving, for each texel of a patch's (u, v) domain, the 4 nearest sample points. The
+//! bake writes it with [`StoreWriter`]; the runtime reads it with [`Store`], which memory-maps
+//! the file and validates every structural byte before trusting it.
+//!
+//! This documentation is the format specification: it is complete enough to write a reader in
+//! another language.
+//!
+//! ## Conventions
+//!
+//! * All integers are little-endian; all floats are IEEE-754 little-endian. `u64` for every
+//!   offset and size (stores larger than 4 GiB work).
+//! * Every offset is absolute (from the start of the file). Every section starts at a multiple
+//!   of 8; the bytes between the end of a section and the next multiple of 8 are zero padding.
+//! * Checksums are **xxh3-64 with seed 0** (`XXH3_64bits`) of the bytes named.
+//! * Sections appear in this order, each starting at the 8-aligned end of the previous one,
+//!   with no other gaps:
+//!   `header (256 B) | metadata | sample points | sample maps | cube payload | table of contents`.
+//!   The table of contents ends the file.
+//!
+//! ## Header (256 bytes at offset 0)
+//!
+//! | offset | type      | field |
+//! |-------:|-----------|-------|
+//! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
+//! | 8      | `u32`     | version = [`VERSION`] (1) |
+//! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
+//! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F |
+//! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
+//! | 24     | `u32`     | cube face resolution `n` (1..=16384) |
+//! | 28     | `u32`     | sample-map resolution `m` per patch (1..=16384) |
+//! | 32     | `u64`     | sample_count (sample points) |
+//! | 40     | `u64`     | cube_count = sample_count + (1 if environment cube) (≤ 2³²−1) |
+//! | 48     | `u64`     | patch_count |
+//! | 56     | `u64`     | object_count |
+//! | 64     | `u64` ×2  | metadata offset (= 256), size |
+//! | 80     | `u64` ×2  | sample points offset, size (= 40 × sample_count) |
+//! | 96     | `u64` ×2  | sample maps offset, size (= patch_count × m² × 4 × index bytes) |
+//! | 112    | `u64` ×2  | cube payload offset, size |
+//! | 128    | `u64` ×2  | table of contents offset, size (= 192 × cube_count + 8) |
+//! | 144    | `u64`     | file size in bytes |
+//! | 152    | `u64`     | checksum of the metadata section |
+//! | 160    | `u64`     | checksum of the sample points section |
+//! | 168    | `u64`     | checksum of the sample maps section |
+//! | 176    | 72 bytes  | reserved, zero |
+//! | 248    | `u64`     | checksum of header bytes 0..248 |
+//!
+//! A reader checks, in order: magic, version, header checksum, flags, tags, reserved bytes;
+//! refuses files without the COMPLETE flag ([`Error::NotFinished`]); then the section layout
+//! against the real file size; then each section's checksum before parsing it. The header's
+//! encoding, resolutions, flags and counts must agree with the metadata.
+//!
+//! ## Metadata section
+//!
+//! | bytes | content |
+//! |------:|---------|
+//! | 4, 4  | `u32` object_count, `u32` patch_count (equal to the header's) |
+//! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag, `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
+//! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
+//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count |
+//! | 192 × patch_count | patches, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
+//!
+//! The section must end exactly after the last patch. Every float is finite. Object patch
+//! ranges lie inside `0..patch_count`, in ascending order, without overlaps.
+//!
+//! ## Sample points section
+//!
+//! sample_count records of 40 bytes ([`SamplePoint`], `#[repr(C)]`): `f32`×3 position (the
+//! offset point, world space), `f32`×3 normal (unit surface normal at the base point), `f32`×2
+//! uv on the patch (each in `[0, 1]`), `u32` patch (global index), `u32` object. Floats finite;
+//! `object < object_count`; `patch` inside that object's patch range.
+//!
+//! ## Sample maps section
+//!
+//! Uncompressed, for zero-copy upload: patch-major, then row `y` (v), then column `x` (u);
+//! texel `(x, y)` is centred at `u = (x + 0.5)/m`, `v = (y + 0.5)/m`. Each texel holds 4
+//! indices (`u16` or `u32` per the header), sorted nearest first; a missing entry is `0xFFFF`
+//! (`u16`) or `0xFFFF_FFFF` (`u32`) and may appear only after all present ones. Every present
+//! index is `< sample_count`. In memory, missing entries read as [`INVALID_INDEX`].
+//!
+//! ## Cube payload section
+//!
+//! cube_count *records*, in cube order, each starting at a multiple of 8:
+//!
+//! | bytes | content |
+//! |------:|---------|
+//! | 4     | `u32` record magic `"OSCR"` |
+//! | 4     | `u32` cube index |
+//! | 144   | per face (6): `u64` compressed size, `u64` raw size, `u64` checksum of the frame |
+//! | 8     | `u64` checksum of the record's bytes 0..152 |
+//! | …     | the six zstd frames, back to back, faces in layer order +X, −X, +Y, −Y, +Z, −Z |
+//! | 0–7   | zero padding to a multiple of 8 |
+//!
+//! Each face is one independent zstd frame that decompresses to exactly the *raw size*
+//! `n² × bytes_per_texel (+ n² × 4 with the distance channel)`: the `n²` encoded texels (row 0
+//! first, column 0 first; see [`cube`] for the orientation), then, with the distance channel,
+//! `n²` `f32` distances to the first hit (`f32::MAX` where the ray escaped). The records make
+//! a partial file recoverable without its table of contents ([`StoreWriter::resume`]). Cube
+//! `sample_count`, if the environment flag is set, is an environment map captured at the
+//! object's centre.
+//!
+//! ## Table of contents
+//!
+//! cube_count × 6 entries of 32 bytes — `u64` frame offset, `u64` compressed size, `u64` raw
+//! size, `u64` frame checksum — cube-major, faces in layer order; then a `u64` checksum of all
+//! the entries. Readers check: raw size equals the face raw size; compressed size in
+//! `1..=ZSTD_compressBound(raw)`; face 0 of each cube starts 160 bytes (its record header)
+//! after the 8-aligned end of the previous cube (the payload start for cube 0); each further
+//! face starts where the previous one ends; all frames lie inside the payload, which ends at
+//! the 8-aligned end of the last cube. Frames are checked against their checksum on every read
+//! and must decompress to exactly their raw size (decompression writes into a buffer of the
+//! declared size, so a frame can never expand further).
+//!
+//! ## Encodings and measured accuracy
+//!
+//! See [`encoding`] for the bit layouts. Radiance must be finite and non-negative; values above
+//! the largest finite value (RGB9E5 65408, RGBA16F 65504) are clamped to it and counted in
+//! [`EncodeStats::clamped_texels`]. RGBA32F is exact. Measured by `tests/accuracy.rs` over
+//! 20 001 log-spaced values in 1e-4..6e4 times the colour ratios (1,1,1), (1,0.5,0.25),
+//! (1,1e-3,0), (0.2,1,0.7), (0.01,0.1,1) (100 005 texels):
+//!
+//! | encoding | largest channel: max / mean relative error | any channel, error relative to the largest channel: max | each channel, relative error: max / mean |
+//! |----------|-------------------------------|------------------|--------------------|
+//! | RGB9E5   | 1.935e-3 / 7.04e-4 (bound 2⁻⁹ = 1.953e-3) | 1.940e-3 (bound 2⁻⁹) | 1.0 / 5.6e-2 (channels far below the largest share its exponent and lose precision, down to 0) |
+//! | RGBA16F  | 4.84e-4 / 1.76e-4 | 4.84e-4 | 4.88e-4 / 1.76e-4 for channels ≥ 6.1e-5 (bound 2⁻¹¹ = 4.883e-4; below, absolute error ≤ 2⁻²⁵) |
+//!
+//! ## Limits and host requirements
+//!
+//! Cube resolution ≤ [`MAX_CUBE_RESOLUTION`] (16384), sample-map resolution ≤
+//! [`MAX_SAMPLE_MAP_RESOLUTION`] (16384), object names ≤ 4096 bytes, cube count ≤ 2³²−1.
+//! The zero-copy views ([`Store::sample_points`], [`SampleMapView::as_u16`]) reinterpret the
+//! little-endian bytes in place, so [`Store::open`] and [`Store::from_bytes`] return
+//! [`Error::BigEndianHost`] on big-endian hosts. The writer works on any host.
+//!
+//! ## Writing
+//!
+//! [`StoreWriter`] writes `<path>.partial` beside the target, appends cube records as they
+//! come ([`encode_cube`] is pure, so encode in parallel), syncs every 64 cubes or 64 MiB, and
+//! `finish()` writes the table of contents, patches the header (flags, payload size, TOC
+//! position, file size — bytes 12..16 and 120..152), syncs, renames over the target and syncs
+//! the directory: a crash leaves either no store or a complete one under the final name.
 
 pub(crate) mod bytes;
 pub mod cube;

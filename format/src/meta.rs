@@ -110,8 +110,6 @@ pub struct StoreMeta {
     pub has_env_cube: bool,
 }
 
-/// Bytes of the fixed part of the metadata section before the objects.
-pub(crate) const META_FIXED_BYTES: usize = 8 + 80 + 44;
 /// Minimum bytes of one object record (empty name).
 const OBJECT_MIN_BYTES: usize = 4 + 64 + 12 + 8;
 /// Bytes of one patch record.

@@ -202,7 +202,7 @@ pub(crate) fn validate_section(
 ) -> Result<(), Error> {
     let per_patch = (resolution as usize).saturating_mul(resolution as usize);
     let per_patch_entries = per_patch.saturating_mul(ENTRIES_PER_TEXEL).max(1);
-    let mut check = |i: usize, entries: [u32; 4]| {
+    let check = |i: usize, entries: [u32; 4]| {
         let patch = (i / per_patch_entries) as u32;
         let texel = (i % per_patch_entries) / ENTRIES_PER_TEXEL;
         check_texel(entries, sample_count, patch, texel, resolution)

@@ -9,9 +9,7 @@ use crate::encoding::{decode_distances, decode_texels};
 use crate::error::io_at;
 use crate::header::{Header, Section, HEADER_BYTES};
 use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
-use crate::sample_map::{
-    validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL,
-};
+use crate::sample_map::{validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL};
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES, TOC_ENTRY_BYTES};
 use crate::Error;
 use xxhash_rust::xxh3::xxh3_64;
@@ -193,7 +191,11 @@ impl Store {
                     "{} cubes for {} sample points{} (must be their sum, at most {})",
                     h.cube_count,
                     h.sample_count,
-                    if h.has_env_cube() { " + 1 env cube" } else { "" },
+                    if h.has_env_cube() {
+                        " + 1 env cube"
+                    } else {
+                        ""
+                    },
                     u32::MAX
                 ),
             });
@@ -588,9 +590,7 @@ fn check_toc(entries: &[u8], h: &Header, raw: u64) -> Result<(), Error> {
         return Err(Error::InvalidHeader {
             field: "cube payload",
             offset: 120,
-            detail: format!(
-                "payload ends at {payload_end} but its last cube ends at {cube_end}"
-            ),
+            detail: format!("payload ends at {payload_end} but its last cube ends at {cube_end}"),
         });
     }
     Ok(())

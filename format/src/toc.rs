@@ -1,7 +1,7 @@
 //! The table of contents and the cube records of the payload section.
 
-use crate::bytes::le_u64;
 use crate::bytes::le_u32;
+use crate::bytes::le_u64;
 use crate::cube::FACES;
 use xxhash_rust::xxh3::xxh3_64;
 
@@ -33,9 +33,14 @@ const RECORD_CHECKSUM_OFFSET: usize = 152;
 impl FaceEntry {
     pub(crate) fn to_bytes(self) -> [u8; TOC_ENTRY_BYTES] {
         let mut b = [0u8; TOC_ENTRY_BYTES];
-        for (i, v) in [self.offset, self.compressed_size, self.raw_size, self.checksum]
-            .iter()
-            .enumerate()
+        for (i, v) in [
+            self.offset,
+            self.compressed_size,
+            self.raw_size,
+            self.checksum,
+        ]
+        .iter()
+        .enumerate()
         {
             b[8 * i..8 * i + 8].copy_from_slice(&v.to_le_bytes());
         }

@@ -1,0 +1,293 @@
+//! `oslf-store`: inspect, verify and export OSLF stores.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+use oslf_format::cube::{FACES, FACE_NAMES};
+use oslf_format::{Store, INVALID_INDEX};
+
+#[derive(Parser)]
+#[command(
+    name = "oslf-store",
+    version,
+    about = "Inspect, verify and export OSLF stores"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print a summary: header, counts, resolutions, bake parameters, sizes.
+    Info {
+        store: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Check every checksum and decompress every face (non-zero exit on failure).
+    Verify { store: PathBuf },
+    /// Export one cube as OpenEXR (f32 RGB).
+    ExportCube {
+        store: PathBuf,
+        index: u32,
+        #[arg(short, long)]
+        output: PathBuf,
+        #[arg(long, value_enum, default_value_t = Layout::Cross)]
+        layout: Layout,
+    },
+    /// Export one patch's sample map as a false-colour PNG (colour from a hash of the index;
+    /// missing entries black).
+    ExportSampleMap {
+        store: PathBuf,
+        patch: u32,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Which of the 4 entries to show (0 = nearest).
+        #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..4))]
+        channel: u8,
+        /// Pixels per sample-map texel.
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+        scale: u32,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Layout {
+    /// One 4x3 horizontal-cross image (+Y above, -X +Z +X -Z across, -Y below).
+    Cross,
+    /// Six files OUT_px.exr, OUT_nx.exr, OUT_py.exr, OUT_ny.exr, OUT_pz.exr, OUT_nz.exr.
+    Faces,
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn open(path: &Path) -> Result<Store> {
+    Store::open(path).with_context(|| format!("cannot open {}", path.display()))
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info { store, json } => info(&store, json),
+        Command::Verify { store } => {
+            let s = open(&store)?;
+            let r = s
+                .verify()
+                .with_context(|| format!("{} failed verification", store.display()))?;
+            println!(
+                "{}: OK — {} cubes, {} faces, {} compressed bytes, {} raw bytes checked",
+                store.display(),
+                r.cubes,
+                r.faces,
+                r.compressed_bytes,
+                r.raw_bytes
+            );
+            Ok(())
+        }
+        Command::ExportCube {
+            store,
+            index,
+            output,
+            layout,
+        } => export_cube(&open(&store)?, index, &output, layout),
+        Command::ExportSampleMap {
+            store,
+            patch,
+            output,
+            channel,
+            scale,
+        } => export_sample_map(&open(&store)?, patch, &output, channel as usize, scale),
+    }
+}
+
+fn info(path: &Path, json: bool) -> Result<()> {
+    let s = open(path)?;
+    let h = s.header();
+    let m = s.meta();
+    let b = &m.bake;
+    let texels = u64::from(s.cube_count()) * FACES as u64 * u64::from(h.cube_resolution).pow(2);
+    let cube_bytes = s.cube_bytes();
+    let raw_bytes = u64::from(s.cube_count()) * FACES as u64 * s.face_raw_size() as u64;
+    let bytes_per_texel = if texels > 0 {
+        cube_bytes as f64 / texels as f64
+    } else {
+        0.0
+    };
+    let ratio = if cube_bytes > 0 {
+        raw_bytes as f64 / cube_bytes as f64
+    } else {
+        0.0
+    };
+    let hex: String = b.scene_hash.iter().map(|v| format!("{v:02x}")).collect();
+    if json {
+        let v = serde_json::json!({
+            "path": path.display().to_string(),
+            "version": h.version,
+            "flags": h.flags,
+            "encoding": b.encoding.name(),
+            "encoded_bytes_per_texel": b.encoding.bytes_per_texel(),
+            "distance_channel": b.distance_channel,
+            "env_cube_index": s.env_cube_index(),
+            "sample_points": h.sample_count,
+            "cubes": s.cube_count(),
+            "patches": m.patches.len(),
+            "objects": m.objects.iter().map(|o| serde_json::json!({
+                "name": o.name, "first_patch": o.first_patch, "patch_count": o.patch_count,
+                "base_color": o.base_color,
+            })).collect::<Vec<_>>(),
+            "cube_resolution": b.cube_resolution,
+            "sample_map_resolution": b.sample_map_resolution,
+            "index_width_bytes": s.index_width().bytes(),
+            "bake": {
+                "epsilon": b.epsilon, "phi_samplemap_deg": b.phi_samplemap_deg,
+                "samples_per_texel": b.samples_per_texel, "bounces": b.bounces,
+                "seed": b.seed, "zstd_level": b.zstd_level, "scene_hash": hex,
+            },
+            "camera": m.camera.as_ref().map(|c| serde_json::json!({
+                "position": c.position, "target": c.target, "up": c.up, "vfov_deg": c.vfov_deg,
+            })),
+            "file_size": s.file_size(),
+            "face_raw_size": s.face_raw_size(),
+            "cube_bytes": cube_bytes,
+            "raw_cube_bytes": raw_bytes,
+            "texels": texels,
+            "disk_bytes_per_texel": bytes_per_texel,
+            "compression_ratio": ratio,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!("store            {}", path.display());
+    println!("format version   {} (flags {:#x})", h.version, h.flags);
+    println!(
+        "encoding         {} ({} bytes/texel raw){}",
+        b.encoding,
+        b.encoding.bytes_per_texel(),
+        if b.distance_channel {
+            " + f32 distance"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "cubes            {} ({} sample points{})",
+        s.cube_count(),
+        h.sample_count,
+        match s.env_cube_index() {
+            Some(i) => format!(" + environment cube {i}"),
+            None => String::new(),
+        }
+    );
+    println!(
+        "objects          {} ({} patches)",
+        m.objects.len(),
+        m.patches.len()
+    );
+    for o in &m.objects {
+        println!(
+            "  {:?}: patches {}..{}",
+            o.name,
+            o.first_patch,
+            u64::from(o.first_patch) + u64::from(o.patch_count)
+        );
+    }
+    println!("cube resolution  {0}x{0} per face", b.cube_resolution);
+    println!(
+        "sample maps      {0}x{0} per patch, {1}-byte indices",
+        b.sample_map_resolution,
+        s.index_width().bytes()
+    );
+    println!(
+        "bake             epsilon {}, phi {} deg, {} spp, {} bounces, seed {}, zstd level {}",
+        b.epsilon, b.phi_samplemap_deg, b.samples_per_texel, b.bounces, b.seed, b.zstd_level
+    );
+    println!("scene hash       {hex}");
+    if let Some(c) = &m.camera {
+        println!(
+            "camera           position {:?}, target {:?}, up {:?}, vfov {} deg",
+            c.position, c.target, c.up, c.vfov_deg
+        );
+    }
+    println!("file size        {} bytes", s.file_size());
+    println!("cube data        {cube_bytes} bytes compressed, {raw_bytes} raw, {texels} texels");
+    println!("on disk          {bytes_per_texel:.3} bytes/texel, compression ratio {ratio:.2}x");
+    Ok(())
+}
+
+fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> {
+    let cube = s.read_cube(index)?;
+    let n = cube.resolution as usize;
+    match layout {
+        Layout::Faces => {
+            let stem = out.with_extension("");
+            for (face, name) in FACE_NAMES.iter().enumerate() {
+                let mut file = stem.as_os_str().to_os_string();
+                file.push(format!("_{name}.exr"));
+                let path = PathBuf::from(file);
+                let texels = &cube.faces[face];
+                exr::prelude::write_rgb_file(&path, n, n, |x, y| {
+                    let [r, g, b] = texels.get(y * n + x).copied().unwrap_or([0.0; 3]);
+                    (r, g, b)
+                })
+                .with_context(|| format!("cannot write {}", path.display()))?;
+                println!("wrote {}", path.display());
+            }
+        }
+        Layout::Cross => {
+            // (column, row) of each face in the 4x3 cross, faces in layer order.
+            const CELLS: [(usize, usize); FACES] = [(2, 1), (0, 1), (1, 0), (1, 2), (1, 1), (3, 1)];
+            let (w, h) = (4 * n, 3 * n);
+            exr::prelude::write_rgb_file(out, w, h, |x, y| {
+                let (cx, cy) = (x / n.max(1), y / n.max(1));
+                let face = CELLS.iter().position(|c| *c == (cx, cy));
+                let [r, g, b] = face
+                    .and_then(|f| cube.faces[f].get((y % n) * n + x % n))
+                    .copied()
+                    .unwrap_or([0.0; 3]);
+                (r, g, b)
+            })
+            .with_context(|| format!("cannot write {}", out.display()))?;
+            println!("wrote {}", out.display());
+        }
+    }
+    Ok(())
+}
+
+/// A bright colour from a hash of a sample index.
+fn index_colour(i: u32) -> [u8; 3] {
+    let h = xxhash_rust::xxh3::xxh3_64(&i.to_le_bytes());
+    let c = |shift: u32| 64 + ((h >> shift) & 0xff) as u8 % 192;
+    [c(0), c(8), c(16)]
+}
+
+fn export_sample_map(s: &Store, patch: u32, out: &Path, channel: usize, scale: u32) -> Result<()> {
+    let view = s.sample_map(patch)?;
+    let res = view.resolution();
+    let Some(size) = res.checked_mul(scale).filter(|v| *v <= 65536) else {
+        bail!("image too large: {res} x {scale}");
+    };
+    let img = image::RgbImage::from_fn(size, size, |x, y| {
+        let e = view.get(x / scale, y / scale).unwrap_or([INVALID_INDEX; 4]);
+        let i = e.get(channel).copied().unwrap_or(INVALID_INDEX);
+        image::Rgb(if i == INVALID_INDEX {
+            [0, 0, 0]
+        } else {
+            index_colour(i)
+        })
+    });
+    img.save(out)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    println!("wrote {}", out.display());
+    Ok(())
+}

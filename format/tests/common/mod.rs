@@ -1,0 +1,224 @@
+//! Shared test fixtures: small synthetic stores.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use oslf_format::*;
+
+/// A deterministic xorshift generator.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        let mut x = self.0.max(1);
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        x
+    }
+    pub fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    /// Log-uniform HDR value in 1e-4..6e4, sometimes exactly 0.
+    pub fn hdr(&mut self) -> f32 {
+        if self.next_u64().is_multiple_of(17) {
+            0.0
+        } else {
+            10f32.powf(-4.0 + self.unit() * 8.77)
+        }
+    }
+}
+
+pub struct Fixture {
+    pub meta: StoreMeta,
+    pub points: Vec<SamplePoint>,
+    pub maps: SampleMaps,
+    pub cubes: Vec<CubeImage>,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct Spec {
+    pub encoding: Encoding,
+    pub cube_res: u32,
+    pub map_res: u32,
+    pub points: usize,
+    pub patches: usize,
+    pub distance: bool,
+    pub env: bool,
+    pub seed: u64,
+}
+
+impl Default for Spec {
+    fn default() -> Self {
+        Spec {
+            encoding: Encoding::Rgb9e5,
+            cube_res: 4,
+            map_res: 3,
+            points: 5,
+            patches: 3,
+            distance: false,
+            env: true,
+            seed: 1,
+        }
+    }
+}
+
+pub fn fixture(spec: Spec) -> Fixture {
+    let mut rng = Rng(spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let patches: Vec<Patch> = (0..spec.patches)
+        .map(|p| Patch {
+            control_points: std::array::from_fn(|k| {
+                [(k / 4) as f32, (k % 4) as f32, p as f32 * 0.5]
+            }),
+        })
+        .collect();
+    // Two objects when there are at least two patches.
+    let split = (spec.patches / 2) as u32;
+    let mut objects = vec![ObjectInfo {
+        name: "teapot body ✓".into(),
+        transform: [
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.5, -1.0, 2.0, 1.0],
+        ],
+        base_color: [0.8, 0.6, 0.2],
+        first_patch: 0,
+        patch_count: split,
+    }];
+    objects.push(ObjectInfo {
+        name: "lid".into(),
+        transform: objects[0].transform,
+        base_color: [0.1, 0.2, 0.3],
+        first_patch: split,
+        patch_count: spec.patches as u32 - split,
+    });
+    let meta = StoreMeta {
+        objects,
+        patches,
+        bake: BakeParams {
+            epsilon: 0.05,
+            phi_samplemap_deg: 12.5,
+            cube_resolution: spec.cube_res,
+            sample_map_resolution: spec.map_res,
+            samples_per_texel: 64,
+            bounces: 4,
+            seed: spec.seed,
+            encoding: spec.encoding,
+            distance_channel: spec.distance,
+            zstd_level: 3,
+            scene_hash: std::array::from_fn(|i| i as u8 ^ spec.seed as u8),
+        },
+        camera: spec.seed.is_multiple_of(2).then_some(CameraInfo {
+            position: [0.0, 1.0, 5.0],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 1.0, 0.0],
+            vfov_deg: 40.0,
+        }),
+        has_env_cube: spec.env,
+    };
+    let points: Vec<SamplePoint> = (0..spec.points)
+        .map(|i| {
+            let patch = (i % spec.patches.max(1)) as u32;
+            SamplePoint {
+                position: [rng.unit(), rng.unit(), rng.unit()],
+                normal: [0.0, 0.0, 1.0],
+                uv: [rng.unit(), rng.unit()],
+                patch,
+                object: u32::from(patch >= split),
+            }
+        })
+        .collect();
+    let texels = spec.patches * (spec.map_res as usize).pow(2);
+    let indices = (0..texels)
+        .map(|_| {
+            let valid = (rng.next_u64() % 5) as usize;
+            let valid = valid.min(spec.points);
+            std::array::from_fn(|k| {
+                if k < valid {
+                    (rng.next_u64() % spec.points as u64) as u32
+                } else {
+                    INVALID_INDEX
+                }
+            })
+        })
+        .collect();
+    let maps = SampleMaps {
+        resolution: spec.map_res,
+        indices,
+    };
+    let n = (spec.cube_res as usize).pow(2);
+    let total = spec.points + usize::from(spec.env);
+    let cubes = (0..total)
+        .map(|_| CubeImage {
+            resolution: spec.cube_res,
+            faces: std::array::from_fn(|_| {
+                (0..n)
+                    .map(|_| {
+                        let a = rng.hdr();
+                        [a, a * rng.unit(), rng.hdr()]
+                    })
+                    .collect()
+            }),
+            distance: spec.distance.then(|| {
+                std::array::from_fn(|_| {
+                    (0..n)
+                        .map(|_| {
+                            if rng.next_u64().is_multiple_of(5) {
+                                f32::MAX
+                            } else {
+                                rng.unit() * 10.0
+                            }
+                        })
+                        .collect()
+                })
+            }),
+        })
+        .collect();
+    Fixture {
+        meta,
+        points,
+        maps,
+        cubes,
+    }
+}
+
+/// A fresh, unique path in a temp dir (the dir lives as long as the returned guard).
+pub fn temp_store(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join(name);
+    (dir, path)
+}
+
+/// Writes the fixture as a complete store at `path`.
+pub fn write(path: &Path, f: &Fixture) -> StoreSummary {
+    let mut w = StoreWriter::create(path, &f.meta, &f.points, &f.maps).expect("create");
+    for (i, c) in f.cubes.iter().enumerate() {
+        let (e, _) = encode_cube(c, &f.meta.bake, i as u32).expect("encode");
+        w.append(e).expect("append");
+    }
+    w.finish().expect("finish")
+}
+
+/// Writes the fixture and returns the store's bytes.
+pub fn store_bytes(spec: Spec) -> Vec<u8> {
+    let f = fixture(spec);
+    let (_dir, path) = temp_store("s.oslf");
+    write(&path, &f);
+    std::fs::read(&path).expect("read")
+}
+
+/// Relative error tolerance per encoding for a channel, relative to the texel's largest
+/// channel (shared-exponent formats lose small channels) — see the crate docs.
+pub fn close(enc: Encoding, want: [f32; 3], got: [f32; 3]) -> bool {
+    let max = want.iter().fold(0f32, |a, b| a.max(*b));
+    want.iter().zip(got).all(|(w, g)| {
+        let err = (w - g).abs();
+        match enc {
+            Encoding::Rgba32f => err == 0.0,
+            Encoding::Rgba16f => err <= w.abs() * 4.9e-4 + 6.0e-8,
+            Encoding::Rgb9e5 => err <= max * 1.96e-3 + 3.0e-8,
+        }
+    })
+}

@@ -1,0 +1,675 @@
+//! Damaged and crafted files: each gives the right typed error, never a panic.
+
+mod common;
+
+use common::*;
+use oslf_format::header::{Header, HEADER_BYTES, HEADER_CHECKSUM_OFFSET};
+use oslf_format::*;
+use proptest::prelude::*;
+use xxhash_rust::xxh3::xxh3_64;
+
+fn good() -> Vec<u8> {
+    store_bytes(Spec {
+        encoding: Encoding::Rgba16f,
+        cube_res: 4,
+        map_res: 3,
+        points: 6,
+        patches: 3,
+        distance: true,
+        env: true,
+        seed: 11,
+    })
+}
+
+fn header(bytes: &[u8]) -> Header {
+    Header::parse(bytes).unwrap()
+}
+
+fn put_u64(b: &mut [u8], off: usize, v: u64) {
+    b[off..off + 8].copy_from_slice(&v.to_le_bytes());
+}
+fn put_u32(b: &mut [u8], off: usize, v: u32) {
+    b[off..off + 4].copy_from_slice(&v.to_le_bytes());
+}
+
+/// Recomputes the header checksum so that deeper checks are reached.
+fn reseal(b: &mut [u8]) {
+    let sum = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
+    put_u64(b, HEADER_CHECKSUM_OFFSET, sum);
+}
+
+/// Recomputes the metadata, points and maps checksums, the TOC trailer and the header checksum.
+fn reseal_all(b: &mut [u8]) {
+    let h = header_unchecked(b);
+    let sum = |s: oslf_format::header::Section, b: &[u8]| {
+        xxh3_64(&b[s.offset as usize..s.end() as usize])
+    };
+    let m = sum(h.meta, b);
+    let p = sum(h.points, b);
+    let s = sum(h.maps, b);
+    put_u64(b, 152, m);
+    put_u64(b, 160, p);
+    put_u64(b, 168, s);
+    let toc_entries_end = (h.toc.end() - 8) as usize;
+    let t = xxh3_64(&b[h.toc.offset as usize..toc_entries_end]);
+    put_u64(b, toc_entries_end, t);
+    reseal(b);
+}
+
+fn header_unchecked(b: &[u8]) -> Header {
+    let mut c = b[..HEADER_BYTES].to_vec();
+    reseal(&mut c);
+    Header::parse(&c).unwrap()
+}
+
+fn open(b: &[u8]) -> Result<Store, Error> {
+    Store::from_bytes(b)
+}
+
+#[test]
+fn the_good_file_opens() {
+    let b = good();
+    let s = open(&b).unwrap();
+    s.verify().unwrap();
+}
+
+#[test]
+fn truncation_at_every_section_boundary() {
+    let b = good();
+    let h = header(&b);
+    let mut cuts = vec![0, 1, 7, 8, 100, HEADER_BYTES - 1, HEADER_BYTES];
+    for s in [h.meta, h.points, h.maps, h.payload, h.toc] {
+        cuts.extend([s.offset as usize, s.end() as usize, s.end() as usize - 1]);
+    }
+    cuts.push(b.len() - 1);
+    for cut in cuts {
+        if cut >= b.len() {
+            continue;
+        }
+        let e = open(&b[..cut])
+            .err()
+            .unwrap_or_else(|| panic!("cut {cut} opened"));
+        if cut < HEADER_BYTES {
+            assert!(
+                matches!(
+                    e,
+                    Error::Truncated {
+                        section: "header",
+                        ..
+                    }
+                ),
+                "{cut}: {e}"
+            );
+        } else {
+            assert!(
+                matches!(
+                    e,
+                    Error::InvalidHeader {
+                        field: "file_size",
+                        ..
+                    }
+                ),
+                "{cut}: {e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn truncation_at_random_points_with_patched_file_size() {
+    // Also lie about the file size, so that the section bounds checks are reached.
+    let b = good();
+    let mut rng = Rng(99);
+    for _ in 0..300 {
+        let cut = HEADER_BYTES + (rng.next_u64() as usize % (b.len() - HEADER_BYTES));
+        let mut t = b[..cut].to_vec();
+        put_u64(&mut t, 144, cut as u64);
+        reseal(&mut t);
+        let e = open(&t).err().unwrap_or_else(|| panic!("cut {cut} opened"));
+        assert!(
+            matches!(
+                e,
+                Error::SectionOutOfBounds { .. } | Error::InvalidHeader { .. }
+            ),
+            "{cut}: {e}"
+        );
+    }
+}
+
+#[test]
+fn wrong_magic_and_version() {
+    let mut b = good();
+    b[0] ^= 0x20;
+    assert!(matches!(open(&b), Err(Error::BadMagic { .. })));
+    let mut b = good();
+    put_u32(&mut b, 8, 2);
+    assert!(matches!(
+        open(&b),
+        Err(Error::UnsupportedVersion {
+            found: 2,
+            supported: 1
+        })
+    ));
+}
+
+#[test]
+fn flipped_bytes_in_each_section() {
+    let b = good();
+    let h = header(&b);
+    // Header (past magic and version).
+    for off in [12usize, 30, 70, 150, 200, 250] {
+        let mut c = b.clone();
+        c[off] ^= 0x10;
+        assert!(
+            matches!(
+                open(&c),
+                Err(Error::ChecksumMismatch {
+                    section: "header",
+                    ..
+                })
+            ),
+            "{off}"
+        );
+    }
+    let cases = [
+        (h.meta, "metadata"),
+        (h.points, "sample points"),
+        (h.maps, "sample maps"),
+        (h.toc, "table of contents"),
+    ];
+    for (s, name) in cases {
+        for off in [s.offset, s.offset + s.size / 2, s.end() - 9] {
+            let mut c = b.clone();
+            c[off as usize] ^= 0x01;
+            let e = open(&c).err().expect("opened");
+            assert!(
+                matches!(&e, Error::ChecksumMismatch { section, .. } if *section == name),
+                "{name} @ {off}: {e}"
+            );
+        }
+    }
+    // Payload: the file opens, but reading or verifying the damaged face fails.
+    let s = open(&b).unwrap();
+    let e = s.face_entry(2, 3).unwrap();
+    let mut c = b.clone();
+    c[(e.offset + e.compressed_size / 2) as usize] ^= 0x40;
+    let damaged = open(&c).unwrap();
+    let mut raw = vec![0u8; damaged.face_raw_size()];
+    assert!(matches!(
+        damaged.read_face_raw(2, 3, &mut raw),
+        Err(Error::FaceChecksum {
+            cube: 2,
+            face: 3,
+            ..
+        })
+    ));
+    assert!(damaged.read_face_raw(2, 2, &mut raw).is_ok());
+    assert!(matches!(
+        damaged.verify(),
+        Err(Error::FaceChecksum {
+            cube: 2,
+            face: 3,
+            ..
+        })
+    ));
+    // A cube record header.
+    let mut c = b.clone();
+    let first = s.face_entry(1, 0).unwrap();
+    c[first.offset as usize - 100] ^= 1;
+    assert!(matches!(
+        open(&c).unwrap().verify(),
+        Err(Error::InvalidCubeRecord { cube: 1, .. })
+    ));
+}
+
+#[test]
+fn absurd_offsets_and_lengths() {
+    let b = good();
+    let h = header(&b);
+    let patched = |f: &dyn Fn(&mut Vec<u8>)| {
+        let mut c = b.clone();
+        f(&mut c);
+        reseal(&mut c);
+        open(&c).err().expect("opened")
+    };
+    // Metadata size u64::MAX: overflows.
+    let e = patched(&|c| put_u64(c, 72, u64::MAX));
+    assert!(
+        matches!(
+            e,
+            Error::SectionOutOfBounds {
+                section: "metadata",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // TOC offset far past the end.
+    let e = patched(&|c| put_u64(c, 128, 1 << 60));
+    assert!(
+        matches!(
+            e,
+            Error::SectionOutOfBounds {
+                section: "table of contents",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // Misaligned points.
+    let e = patched(&|c| put_u64(c, 80, h.points.offset + 4));
+    assert!(
+        matches!(
+            e,
+            Error::Misaligned {
+                section: "sample points",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // Points overlapping the metadata.
+    let e = patched(&|c| put_u64(c, 80, h.meta.offset));
+    assert!(
+        matches!(
+            e,
+            Error::SectionOverlap {
+                first: "metadata",
+                second: "sample points",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // A gap before the maps.
+    let e = patched(&|c| put_u64(c, 96, h.maps.offset + 8));
+    assert!(matches!(e, Error::InvalidHeader { .. }), "{e}");
+    // Wrong file size.
+    let e = patched(&|c| put_u64(c, 144, b.len() as u64 + 8));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "file_size",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // Absurd counts.
+    let e = patched(&|c| put_u64(c, 40, u64::MAX));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "cube_count",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| {
+        put_u64(c, 32, u64::MAX - 1);
+        put_u64(c, 40, u64::MAX);
+    });
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "cube_count",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| put_u64(c, 48, 1 << 40));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "patch_count",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| put_u32(c, 24, 1 << 30));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "cube_resolution",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| put_u32(c, 16, 9));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "encoding",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| put_u32(c, 20, 3));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "index_bytes",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| put_u32(c, 20, 4));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "index_bytes",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| put_u32(c, 12, 0x100 | 7));
+    assert!(
+        matches!(e, Error::InvalidHeader { field: "flags", .. }),
+        "{e}"
+    );
+    let e = patched(&|c| c[200] = 1);
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "reserved",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // The COMPLETE flag cleared.
+    let e = patched(&|c| put_u32(c, 12, 3));
+    assert!(matches!(e, Error::NotFinished), "{e}");
+    // Points section size inconsistent with the count.
+    let e = patched(&|c| put_u64(c, 32, 5));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "cube_count",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = patched(&|c| {
+        put_u64(c, 32, 5);
+        put_u64(c, 40, 6);
+    });
+    assert!(
+        matches!(
+            e,
+            Error::SectionSize {
+                section: "sample points",
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn crafted_metadata_sample_points_maps_and_toc() {
+    let b = good();
+    let h = header(&b);
+    let crafted = |f: &dyn Fn(&mut Vec<u8>)| {
+        let mut c = b.clone();
+        f(&mut c);
+        reseal_all(&mut c);
+        open(&c).err().expect("opened")
+    };
+    let m = h.meta.offset as usize;
+    // Object count absurd.
+    let e = crafted(&|c| put_u32(c, m, u32::MAX));
+    assert!(matches!(e, Error::InvalidMetadata { .. }), "{e}");
+    // Patch count absurd.
+    let e = crafted(&|c| put_u32(c, m + 4, u32::MAX));
+    assert!(matches!(e, Error::InvalidMetadata { .. }), "{e}");
+    // NaN epsilon.
+    let e = crafted(&|c| put_u32(c, m + 8, f32::NAN.to_bits()));
+    assert!(
+        matches!(e, Error::InvalidMetadata { offset, .. } if offset == m as u64 + 8),
+        "{e}"
+    );
+    // Cube resolution above the cap.
+    let e = crafted(&|c| put_u32(c, m + 16, 16385));
+    assert!(matches!(e, Error::InvalidMetadata { .. }), "{e}");
+    // First object's name length absurd (objects start after 8 + 80 + 44 bytes).
+    let e = crafted(&|c| put_u32(c, m + 132, 0x7fff_ffff));
+    assert!(matches!(e, Error::InvalidMetadata { .. }), "{e}");
+    // Sample point with NaN position / out-of-range patch.
+    let p = h.points.offset as usize;
+    let e = crafted(&|c| put_u32(c, p + 40, f32::INFINITY.to_bits()));
+    assert!(
+        matches!(e, Error::InvalidSamplePoint { index: 1, .. }),
+        "{e}"
+    );
+    let e = crafted(&|c| put_u32(c, p + 40 * 2 + 32, 77));
+    assert!(
+        matches!(e, Error::InvalidSamplePoint { index: 2, .. }),
+        "{e}"
+    );
+    // Sample-map index out of range (u16 maps: 0xFFF0 >= 6 points).
+    let s = h.maps.offset as usize;
+    let e = crafted(&|c| {
+        c[s..s + 8].copy_from_slice(&[0xF0, 0xFF, 0, 0, 0xFF, 0xFF, 0xFF, 0xFF]);
+    });
+    assert!(
+        matches!(
+            e,
+            Error::InvalidSampleMap {
+                patch: 0,
+                x: 0,
+                y: 0,
+                channel: 0,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // A valid index after a missing one, in patch 1 texel (2, 1).
+    let t = s + (9 + 3 + 2) * 8; // patch 1 (9 texels), row 1, column 2
+    let e = crafted(&|c| {
+        c[t..t + 8].copy_from_slice(&[1, 0, 0xFF, 0xFF, 2, 0, 0xFF, 0xFF]);
+    });
+    assert!(
+        matches!(
+            e,
+            Error::InvalidSampleMap {
+                patch: 1,
+                x: 2,
+                y: 1,
+                channel: 2,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // TOC: a compressed size that overlaps the next frame; a wrong raw size; a huge offset.
+    let toc = h.toc.offset as usize;
+    let e = crafted(&|c| {
+        let v = u64::from_le_bytes(c[toc + 8..toc + 16].try_into().unwrap());
+        put_u64(c, toc + 8, v + 1);
+    });
+    assert!(
+        matches!(
+            e,
+            Error::InvalidToc {
+                cube: 0,
+                face: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = crafted(&|c| put_u64(c, toc + 32 * 7 + 16, 1 << 40));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidToc {
+                cube: 1,
+                face: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = crafted(&|c| put_u64(c, toc + 32 * 3, u64::MAX - 3));
+    assert!(
+        matches!(
+            e,
+            Error::InvalidToc {
+                cube: 0,
+                face: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let last = h.toc.size as usize - 8 - 32;
+    let e = crafted(&|c| put_u64(c, toc + last + 8, 1 << 50));
+    assert!(matches!(e, Error::InvalidToc { face: 5, .. }), "{e}");
+}
+
+#[test]
+fn zip_bomb_frames_are_rejected() {
+    // A frame that decompresses to more than the declared raw size (with checksums fixed).
+    let b = good();
+    let s = open(&b).unwrap();
+    let e = s.face_entry(0, 0).unwrap();
+    let raw = s.face_raw_size();
+    let bomb = zstd::bulk::compress(&vec![0u8; raw * 100], 3).unwrap();
+    assert!(
+        bomb.len() as u64 <= e.compressed_size,
+        "bomb must fit in place"
+    );
+    let mut c = b.clone();
+    let o = e.offset as usize;
+    c[o..o + bomb.len()].copy_from_slice(&bomb);
+    // Pad the rest of the frame with a zstd skippable frame is not needed: zstd rejects
+    // trailing garbage or the size check does; fix the checksum so decompression is reached.
+    let frame = &c[o..o + e.compressed_size as usize];
+    let sum = xxh3_64(frame);
+    let h = header(&b);
+    put_u64(&mut c, h.toc.offset as usize + 24, sum);
+    reseal_all(&mut c);
+    let store = open(&c).unwrap();
+    let mut out = vec![0u8; raw];
+    assert!(matches!(
+        store.read_face_raw(0, 0, &mut out),
+        Err(Error::Decompress {
+            cube: 0,
+            face: 0,
+            ..
+        })
+    ));
+}
+
+#[test]
+fn wrong_buffers_and_indices() {
+    let s = open(&good()).unwrap();
+    let mut small = vec![0u8; 3];
+    assert!(matches!(
+        s.read_face_raw(0, 0, &mut small),
+        Err(Error::BufferSize { .. })
+    ));
+    assert!(matches!(
+        s.face_entry(99, 0),
+        Err(Error::CubeOutOfRange { cube: 99, count: 7 })
+    ));
+    assert!(matches!(
+        s.face_entry(0, 6),
+        Err(Error::FaceOutOfRange { face: 6 })
+    ));
+    assert!(matches!(
+        s.sample_map(3),
+        Err(Error::PatchOutOfRange { patch: 3, count: 3 })
+    ));
+    let mut rgb = vec![[0.0; 3]; 16];
+    assert!(s.read_face(0, 0, &mut rgb, None).is_ok());
+    let mut rgb = vec![[0.0; 3]; 15];
+    assert!(matches!(
+        s.read_face(0, 0, &mut rgb, None),
+        Err(Error::BufferSize { .. })
+    ));
+    let no_dist = open(&store_bytes(Spec::default())).unwrap();
+    let mut rgb = vec![[0.0; 3]; 16];
+    let mut d = vec![0.0; 16];
+    assert!(matches!(
+        no_dist.read_face(0, 0, &mut rgb, Some(&mut d)),
+        Err(Error::NoDistanceChannel)
+    ));
+}
+
+#[test]
+fn open_missing_and_empty_files() {
+    let (_dir, path) = temp_store("none.oslf");
+    assert!(matches!(Store::open(&path), Err(Error::Io { .. })));
+    std::fs::write(&path, b"").unwrap();
+    assert!(matches!(Store::open(&path), Err(Error::Truncated { .. })));
+    assert!(matches!(
+        Store::from_bytes(&[]),
+        Err(Error::Truncated { .. })
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+    /// Random byte damage anywhere: an error or a store whose every operation returns
+    /// (never a panic); with the checksums resealed, deeper parsers see the damage too.
+    #[test]
+    fn random_damage_never_panics(
+        flips in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..6),
+        do_reseal in any::<bool>(),
+        cut in proptest::option::of(any::<usize>()),
+    ) {
+        let mut c = GOOD.with(|g| g.clone());
+        for (pos, v) in flips {
+            let n = c.len();
+            c[pos % n] ^= v | 1;
+        }
+        if do_reseal
+            && c.len() >= HEADER_BYTES
+            && Header::parse(&{ let mut h = c[..HEADER_BYTES].to_vec(); reseal(&mut h); h }).is_ok()
+        {
+            {
+                let h = header_unchecked(&c);
+                let ok = [h.meta, h.points, h.maps, h.toc].iter().all(|s| {
+                    s.offset.checked_add(s.size).is_some_and(|e| e <= c.len() as u64) && s.size >= 8
+                });
+                if ok { reseal_all(&mut c); } else { reseal(&mut c); }
+            }
+        }
+        if let Some(cut) = cut {
+            let n = c.len();
+            c.truncate(cut % n);
+        }
+        if let Ok(s) = Store::from_bytes(&c) {
+            let _ = s.verify();
+            for p in 0..4 { let _ = s.sample_map(p).map(|m| m.get(0, 0)); }
+            let mut rgb = vec![[0.0; 3]; 16];
+            let _ = s.read_face(0, 0, &mut rgb, None);
+        }
+    }
+}
+
+thread_local! {
+    static GOOD: Vec<u8> = good();
+}

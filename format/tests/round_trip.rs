@@ -1,0 +1,174 @@
+//! Write with `StoreWriter`, read back with `Store::open` and `Store::from_bytes`, compare.
+
+mod common;
+
+use common::*;
+use oslf_format::*;
+use proptest::prelude::*;
+
+fn check_store(store: &Store, f: &Fixture, spec: Spec) {
+    assert_eq!(store.meta(), &f.meta);
+    assert_eq!(store.sample_points(), f.points.as_slice());
+    assert_eq!(store.cube_count() as usize, f.cubes.len());
+    assert_eq!(
+        store.env_cube_index(),
+        spec.env.then_some(spec.points as u32)
+    );
+    let res = spec.map_res;
+    let per_patch = (res * res) as usize;
+    for patch in 0..spec.patches as u32 {
+        let view = store.sample_map(patch).unwrap();
+        assert_eq!(view.resolution(), res);
+        assert_eq!(
+            view.width(),
+            if spec.points <= 65535 {
+                IndexWidth::U16
+            } else {
+                IndexWidth::U32
+            }
+        );
+        match view.width() {
+            IndexWidth::U16 => assert_eq!(view.as_u16().unwrap().len(), per_patch * 4),
+            IndexWidth::U32 => assert_eq!(view.as_u32().unwrap().len(), per_patch * 4),
+        }
+        for y in 0..res {
+            for x in 0..res {
+                let want = f.maps.indices[patch as usize * per_patch + (y * res + x) as usize];
+                assert_eq!(view.get(x, y), Some(want));
+            }
+        }
+        assert_eq!(view.get(res, 0), None);
+    }
+    assert!(store.sample_map(spec.patches as u32).is_err());
+    for (i, want) in f.cubes.iter().enumerate() {
+        let got = store.read_cube(i as u32).unwrap();
+        assert_eq!(got.resolution, want.resolution);
+        for face in 0..6 {
+            for (w, g) in want.faces[face].iter().zip(&got.faces[face]) {
+                assert!(
+                    close(spec.encoding, *w, *g),
+                    "{:?} cube {i} face {face}: {w:?} -> {g:?}",
+                    spec.encoding
+                );
+            }
+        }
+        assert_eq!(got.distance, want.distance);
+        let mut raw = vec![0u8; store.face_raw_size() * 6];
+        store.read_cube_raw(i as u32, &mut raw).unwrap();
+    }
+    let report = store.verify().unwrap();
+    assert_eq!(report.cubes as usize, f.cubes.len());
+    assert_eq!(report.faces as usize, f.cubes.len() * 6);
+}
+
+fn round_trip(spec: Spec) {
+    let f = fixture(spec);
+    let (_dir, path) = temp_store("rt.oslf");
+    let summary = write(&path, &f);
+    assert!(!oslf_format::writer::partial_path(&path).exists());
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(summary.file_size, bytes.len() as u64);
+    let opened = Store::open(&path).unwrap();
+    check_store(&opened, &f, spec);
+    assert_eq!(opened.file_size(), summary.file_size);
+    assert_eq!(opened.cube_bytes(), summary.cube_bytes);
+    let copied = Store::from_bytes(&bytes).unwrap();
+    check_store(&copied, &f, spec);
+}
+
+fn encoding() -> impl Strategy<Value = Encoding> {
+    prop_oneof![
+        Just(Encoding::Rgb9e5),
+        Just(Encoding::Rgba16f),
+        Just(Encoding::Rgba32f)
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn small_stores_round_trip(
+        encoding in encoding(),
+        cube_res in prop_oneof![1u32..=8, Just(16u32), Just(33u32)],
+        map_res in prop_oneof![1u32..=8, Just(17u32)],
+        points in 1usize..12,
+        patches in 1usize..5,
+        distance in any::<bool>(),
+        env in any::<bool>(),
+        seed in any::<u64>(),
+    ) {
+        round_trip(Spec { encoding, cube_res, map_res, points, patches, distance, env, seed });
+    }
+}
+
+#[test]
+fn larger_resolution_round_trips() {
+    for encoding in Encoding::ALL {
+        round_trip(Spec {
+            encoding,
+            cube_res: 64,
+            map_res: 32,
+            points: 2,
+            patches: 2,
+            distance: true,
+            env: true,
+            seed: 7,
+        });
+    }
+}
+
+#[test]
+fn zero_sample_points_with_env_cube() {
+    round_trip(Spec {
+        points: 0,
+        env: true,
+        ..Spec::default()
+    });
+}
+
+#[test]
+fn u32_indices_above_65535_points() {
+    for points in [65535usize, 65536] {
+        let spec = Spec {
+            encoding: Encoding::Rgb9e5,
+            cube_res: 1,
+            map_res: 4,
+            points,
+            patches: 3,
+            distance: false,
+            env: points == 65536,
+            seed: 3,
+        };
+        let mut f = fixture(spec);
+        // Make sure large indices actually occur.
+        f.maps.indices[0] = [points as u32 - 1, 0, INVALID_INDEX, INVALID_INDEX];
+        let (_dir, path) = temp_store("wide.oslf");
+        write(&path, &f);
+        let store = Store::open(&path).unwrap();
+        let view = store.sample_map(0).unwrap();
+        let want = if points <= 65535 {
+            IndexWidth::U16
+        } else {
+            IndexWidth::U32
+        };
+        assert_eq!(view.width(), want);
+        assert_eq!(
+            view.get(0, 0),
+            Some([points as u32 - 1, 0, INVALID_INDEX, INVALID_INDEX])
+        );
+        check_store(&store, &f, spec);
+    }
+}
+
+#[test]
+fn summary_counts() {
+    let spec = Spec::default();
+    let f = fixture(spec);
+    let (_dir, path) = temp_store("sum.oslf");
+    let s = write(&path, &f);
+    assert_eq!(s.cubes as usize, f.cubes.len());
+    assert_eq!(s.texels, f.cubes.len() as u64 * 6 * 16);
+    assert_eq!(s.raw_cube_bytes, s.texels * 4);
+    assert_eq!(s.sample_points, spec.points as u64);
+}

@@ -1,0 +1,325 @@
+//! Writer behaviour: validation, resume after a kill, byte-identical output.
+
+mod common;
+
+use common::*;
+use oslf_format::writer::partial_path;
+use oslf_format::*;
+
+fn spec() -> Spec {
+    Spec {
+        encoding: Encoding::Rgb9e5,
+        cube_res: 8,
+        map_res: 4,
+        points: 9,
+        patches: 3,
+        distance: true,
+        env: true,
+        seed: 5,
+    }
+}
+
+fn reference(f: &Fixture) -> Vec<u8> {
+    let (_dir, path) = temp_store("ref.oslf");
+    write(&path, f);
+    std::fs::read(&path).unwrap()
+}
+
+fn encoded(f: &Fixture, i: usize) -> EncodedCube {
+    encode_cube(&f.cubes[i], &f.meta.bake, i as u32).unwrap().0
+}
+
+/// Appends `n` cubes, then drops the writer without finishing (a kill after a flush).
+fn start(path: &std::path::Path, f: &Fixture, n: usize) {
+    let mut w = StoreWriter::create(path, &f.meta, &f.points, &f.maps).unwrap();
+    for i in 0..n {
+        w.append(encoded(f, i)).unwrap();
+    }
+    w.sync().unwrap();
+}
+
+fn complete(path: &std::path::Path, f: &Fixture) -> StoreSummary {
+    let mut w = StoreWriter::resume(path, &f.meta, &f.points, &f.maps).unwrap();
+    for i in w.next_cube() as usize..f.cubes.len() {
+        w.append(encoded(f, i)).unwrap();
+    }
+    w.finish().unwrap()
+}
+
+#[test]
+fn resume_recovers_complete_cubes_and_is_byte_identical() {
+    let f = fixture(spec());
+    let want = reference(&f);
+    for n in [0usize, 1, 4, 10] {
+        let (_dir, path) = temp_store("r.oslf");
+        start(&path, &f, n);
+        assert!(!path.exists(), "nothing under the final name before finish");
+        let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+        assert_eq!(w.next_cube() as usize, n);
+        assert_eq!(w.total_cubes() as usize, f.cubes.len());
+        drop(w);
+        complete(&path, &f);
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            want,
+            "resumed after {n} cubes"
+        );
+        assert!(!partial_path(&path).exists());
+    }
+}
+
+#[test]
+fn resume_truncates_a_torn_record() {
+    let f = fixture(spec());
+    let want = reference(&f);
+    let (_dir, path) = temp_store("torn.oslf");
+    start(&path, &f, 6);
+    let partial = partial_path(&path);
+    let full = std::fs::metadata(&partial).unwrap().len();
+    // Tear the last record at several points (inside its header, inside its frames).
+    let store = Store::from_bytes(&want).unwrap();
+    let rec5 = store.face_entry(5, 0).unwrap().offset - 160;
+    let end5 = store.face_entry(6, 0).unwrap().offset - 160;
+    assert_eq!(end5, full);
+    for cut in [rec5 + 1, rec5 + 159, rec5 + 160, rec5 + 200, end5 - 1] {
+        let bytes = std::fs::read(&partial).unwrap();
+        std::fs::write(&partial, &bytes[..cut as usize]).unwrap();
+        let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+        assert_eq!(w.next_cube(), 5, "cut at {cut}");
+        drop(w);
+        assert_eq!(std::fs::metadata(&partial).unwrap().len(), rec5);
+        // Put cube 5 back for the next cut.
+        let mut w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+        w.append(encoded(&f, 5)).unwrap();
+        w.sync().unwrap();
+    }
+    // A damaged frame in cube 3: cubes 3.. are dropped.
+    let mut bytes = std::fs::read(&partial).unwrap();
+    let e = store.face_entry(3, 2).unwrap();
+    bytes[e.offset as usize + 3] ^= 0xff;
+    std::fs::write(&partial, &bytes).unwrap();
+    let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+    assert_eq!(w.next_cube(), 3);
+    drop(w);
+    complete(&path, &f);
+    assert_eq!(std::fs::read(&path).unwrap(), want);
+}
+
+#[test]
+fn resume_after_a_kill_inside_finish() {
+    // finish() got as far as writing the TOC and patching the header, but not the rename.
+    let f = fixture(spec());
+    let want = reference(&f);
+    let (_dir, path) = temp_store("fin.oslf");
+    let partial = partial_path(&path);
+    std::fs::write(&partial, &want).unwrap();
+    let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+    assert_eq!(w.next_cube() as usize, f.cubes.len());
+    w.finish().unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), want);
+}
+
+#[test]
+fn resume_with_different_inputs_is_a_mismatch() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("mm.oslf");
+    start(&path, &f, 2);
+    let mut meta = f.meta.clone();
+    meta.bake.seed += 1;
+    let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("metadata")),
+        "{e}"
+    );
+    let mut meta = f.meta.clone();
+    meta.bake.encoding = Encoding::Rgba16f;
+    let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("header")),
+        "{e}"
+    );
+    let mut points = f.points.clone();
+    points[4].position[1] += 1.0;
+    let e = StoreWriter::resume(&path, &f.meta, &points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("point 4")),
+        "{e}"
+    );
+    let mut maps = f.maps.clone();
+    maps.indices[7] = [0, 1, 2, 3];
+    let e = StoreWriter::resume(&path, &f.meta, &f.points, &maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("sample maps")),
+        "{e}"
+    );
+    // The unchanged inputs still resume.
+    assert_eq!(
+        StoreWriter::resume(&path, &f.meta, &f.points, &f.maps)
+            .unwrap()
+            .next_cube(),
+        2
+    );
+}
+
+#[test]
+fn resume_without_partial() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("nothing.oslf");
+    assert!(matches!(
+        StoreWriter::resume(&path, &f.meta, &f.points, &f.maps),
+        Err(Error::NoPartial(_))
+    ));
+}
+
+#[test]
+fn append_checks_order_and_params() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("order.oslf");
+    let mut w = StoreWriter::create(&path, &f.meta, &f.points, &f.maps).unwrap();
+    assert!(matches!(
+        w.append(encoded(&f, 1)),
+        Err(Error::CubeOutOfOrder {
+            expected: 0,
+            got: 1
+        })
+    ));
+    let mut other = f.meta.bake.clone();
+    other.encoding = Encoding::Rgba32f;
+    let (e, _) = encode_cube(&f.cubes[0], &other, 0).unwrap();
+    assert!(matches!(
+        w.append(e),
+        Err(Error::CubeParamsMismatch { cube: 0, .. })
+    ));
+    let (e, _) = encode_cube(&f.cubes[0], &f.meta.bake, 99).unwrap();
+    assert!(matches!(
+        w.append(e),
+        Err(Error::CubeOutOfRange { cube: 99, .. })
+    ));
+    w.append(encoded(&f, 0)).unwrap();
+    assert!(matches!(
+        w.finish(),
+        Err(Error::Incomplete {
+            present: 1,
+            total: 10
+        })
+    ));
+    assert!(!path.exists());
+}
+
+#[test]
+fn create_validates_inputs() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("bad.oslf");
+    let mut maps = f.maps.clone();
+    maps.indices[5] = [0, 9, INVALID_INDEX, INVALID_INDEX];
+    assert!(matches!(
+        StoreWriter::create(&path, &f.meta, &f.points, &maps),
+        Err(Error::InvalidSampleMap { channel: 1, .. })
+    ));
+    let mut maps = f.maps.clone();
+    maps.indices[5] = [INVALID_INDEX, 1, INVALID_INDEX, INVALID_INDEX];
+    assert!(matches!(
+        StoreWriter::create(&path, &f.meta, &f.points, &maps),
+        Err(Error::InvalidSampleMap { channel: 1, .. })
+    ));
+    let mut maps = f.maps.clone();
+    maps.indices.pop();
+    assert!(matches!(
+        StoreWriter::create(&path, &f.meta, &f.points, &maps),
+        Err(Error::SampleMapShape(_))
+    ));
+    let mut points = f.points.clone();
+    points[2].normal[0] = f32::NAN;
+    assert!(matches!(
+        StoreWriter::create(&path, &f.meta, &points, &f.maps),
+        Err(Error::InvalidSamplePoint { index: 2, .. })
+    ));
+    let mut meta = f.meta.clone();
+    meta.objects[1].patch_count += 1;
+    assert!(matches!(
+        StoreWriter::create(&path, &meta, &f.points, &f.maps),
+        Err(Error::InvalidMetadata { .. })
+    ));
+    let mut meta = f.meta.clone();
+    meta.objects[0].name = "x".repeat(5000);
+    assert!(matches!(
+        StoreWriter::create(&path, &meta, &f.points, &f.maps),
+        Err(Error::InvalidMetadata { .. })
+    ));
+    let mut meta = f.meta.clone();
+    meta.camera = Some(CameraInfo {
+        position: [0.0; 3],
+        target: [0.0; 3],
+        up: [0.0; 3],
+        vfov_deg: f32::INFINITY,
+    });
+    assert!(matches!(
+        StoreWriter::create(&path, &meta, &f.points, &f.maps),
+        Err(Error::InvalidMetadata { .. })
+    ));
+}
+
+#[test]
+fn encode_cube_rejects_bad_radiance_and_counts_clamps() {
+    let f = fixture(spec());
+    let mut c = f.cubes[0].clone();
+    c.faces[4][8 * 3 + 5] = [1.0, f32::NAN, 0.0];
+    assert!(matches!(
+        encode_cube(&c, &f.meta.bake, 7),
+        Err(Error::InvalidRadiance {
+            cube: 7,
+            face: 4,
+            x: 5,
+            y: 3,
+            ..
+        })
+    ));
+    let mut c = f.cubes[0].clone();
+    c.faces[1][2] = [-1.0, 0.0, 0.0];
+    assert!(matches!(
+        encode_cube(&c, &f.meta.bake, 0),
+        Err(Error::InvalidRadiance {
+            face: 1,
+            x: 2,
+            y: 0,
+            ..
+        })
+    ));
+    let mut c = f.cubes[0].clone();
+    c.distance.as_mut().unwrap()[5][9] = f32::INFINITY;
+    assert!(matches!(
+        encode_cube(&c, &f.meta.bake, 0),
+        Err(Error::InvalidDistance {
+            face: 5,
+            x: 1,
+            y: 1,
+            ..
+        })
+    ));
+    let mut c = f.cubes[0].clone();
+    c.faces[0][0] = [1e6, 0.0, 0.0];
+    c.faces[2][0] = [0.0, 70000.0, 0.0];
+    let (_, stats) = encode_cube(&c, &f.meta.bake, 0).unwrap();
+    assert_eq!(stats.clamped_texels, 2);
+    assert_eq!(stats.raw_bytes, 6 * 64 * 8);
+    let mut c = f.cubes[0].clone();
+    c.faces[3].pop();
+    assert!(matches!(
+        encode_cube(&c, &f.meta.bake, 0),
+        Err(Error::CubeShape { .. })
+    ));
+    let mut c = f.cubes[0].clone();
+    c.distance = None;
+    assert!(matches!(
+        encode_cube(&c, &f.meta.bake, 0),
+        Err(Error::CubeShape { .. })
+    ));
+}
