@@ -116,7 +116,8 @@ fn an_interrupted_bake_resumes_to_the_same_store() {
 }
 
 /// Every sample-map entry is checked without the bake's own code paths: patches are rebuilt from
-/// the store, nearest points found by a full scan, visibility by a brute-force intersector.
+/// the store, nearest points found by a full scan (of which the bake examines the nearest
+/// `MAX_CANDIDATES`), visibility by a brute-force intersector.
 #[test]
 fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
     let dir = temp_dir("samplemaps");
@@ -151,6 +152,7 @@ fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
                 order.sort_by(|&a, &b| dist(a).total_cmp(&dist(b)).then(a.cmp(&b)));
                 let expected: Vec<u32> = order
                     .into_iter()
+                    .take(oslf::bake::sample_map::MAX_CANDIDATES)
                     .filter(|&i| {
                         let s = Vec3::from_array(points[i].position);
                         let d = (s - t).normalize();

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use glam::{Mat4, Vec3};
-use oslf_format::{BakeParams, CameraInfo, ObjectInfo, Patch, StoreMeta, StoreWriter};
+use oslf_format::{BakeParams, CameraInfo, ObjectInfo, Patch, SamplePoint, StoreMeta, StoreWriter};
 use rayon::prelude::*;
 
 use crate::bvh::TriangleScene;
@@ -47,6 +47,8 @@ pub struct BakeReport {
     pub points_placed: usize,
     pub points_removed_close: usize,
     pub points_removed_inside: usize,
+    /// Points added where sample-map texels found fewer than four (§6.3).
+    pub points_added: usize,
     pub sample_maps: SampleMapStats,
     pub cubes: u32,
     /// Cubes recovered from an interrupted bake instead of being traced again.
@@ -90,22 +92,52 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     report.points_placed = placement.placed;
     report.points_removed_close = placement.removed_close;
     report.points_removed_inside = placement.removed_inside;
-    report.sample_points = placement.points.len();
     let points = placement.points;
 
     let t = Instant::now();
-    let patches: Vec<_> = global_patches(&scene.objects)
-        .into_iter()
-        .map(|(_, p)| p)
-        .collect();
-    let (maps, map_stats) = sample_map::build(
-        &patches,
-        &points,
-        &geometry,
-        settings.sample_map_resolution,
-        settings.phi_samplemap_deg,
-        settings.epsilon,
-    );
+    let object_patches = global_patches(&scene.objects);
+    let patches: Vec<_> = object_patches.iter().map(|&(_, p)| p).collect();
+    let build_maps = |points: &[SamplePoint]| {
+        sample_map::build(
+            &patches,
+            points,
+            &geometry,
+            settings.sample_map_resolution,
+            settings.phi_samplemap_deg,
+            settings.epsilon,
+        )
+    };
+    let mut points = points;
+    let (mut maps, mut map_stats) = build_maps(&points);
+    // §6.3: add points where texels found fewer than four, at halving spacings.
+    let mut min_distance = placement.radius;
+    let mut rays = map_stats.rays;
+    for _ in 0..sample_points::REFINE_ROUNDS {
+        let short = sample_map::short_texels(&maps);
+        if short.is_empty() {
+            break;
+        }
+        let budget = report.points_placed.saturating_sub(report.points_added);
+        let added = sample_points::refine(
+            &mut points,
+            &short,
+            &object_patches,
+            settings.sample_map_resolution,
+            settings.epsilon,
+            min_distance,
+            budget,
+            &geometry,
+        );
+        if added == 0 {
+            break;
+        }
+        report.points_added += added;
+        (maps, map_stats) = build_maps(&points);
+        rays += map_stats.rays;
+        min_distance *= 0.5;
+    }
+    map_stats.rays = rays;
+    report.sample_points = points.len();
     report.sample_maps = map_stats;
     report.sample_map_seconds = t.elapsed().as_secs_f64();
 

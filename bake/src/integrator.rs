@@ -172,7 +172,9 @@ impl<I: Intersector> Integrator<'_, I> {
 
             // Delta lights.
             for light in self.lights {
-                let Some(ls) = light.sample_li(origin) else {
+                // Irradiance at the shading point itself; the shadow ray leaves from the
+                // offset origin.
+                let Some(ls) = light.sample_li(p) else {
                     continue;
                 };
                 let cos = ns.dot(ls.dir);

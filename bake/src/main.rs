@@ -138,8 +138,12 @@ fn print_summary(r: &BakeReport) {
     let m = &r.sample_maps;
     println!("store          {}", r.output.display());
     println!(
-        "sample points  {} kept of {} placed ({} closer than ε to a surface, {} inside geometry)",
-        r.sample_points, r.points_placed, r.points_removed_close, r.points_removed_inside
+        "sample points  {}: {} placed, {} closer than ε to a surface, {} inside geometry, {} added where texels had fewer than four",
+        r.sample_points,
+        r.points_placed,
+        r.points_removed_close,
+        r.points_removed_inside,
+        r.points_added
     );
     println!(
         "sample maps    {} texels; {} with fewer than four points ({:.3}%), {} with none",

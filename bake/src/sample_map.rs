@@ -30,8 +30,12 @@ pub struct SampleMapStats {
 }
 
 /// Candidate counts tried per texel, nearest first; a texel that finds four acceptable points
-/// among the first `k` stops there.
-const CANDIDATE_STEPS: [usize; 3] = [16, 64, 256];
+/// among the first `k` stops there. Only the [`MAX_CANDIDATES`] nearest points are considered:
+/// points farther than that are too far to represent the texel's light field.
+const CANDIDATE_STEPS: [usize; 2] = [16, MAX_CANDIDATES];
+
+/// How many of a texel's nearest sample points are examined at most.
+pub const MAX_CANDIDATES: usize = 64;
 
 /// A spatial index over sample-point positions.
 pub struct PointIndex<'a> {
@@ -110,6 +114,21 @@ pub fn texel_indices(
         }
     }
     (found, rays)
+}
+
+/// Texels with fewer than four indices, as (patch, x, y), in storage order.
+pub fn short_texels(maps: &SampleMaps) -> Vec<(u32, u32, u32)> {
+    let res = maps.resolution as usize;
+    maps.indices
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t[3] == INVALID_INDEX)
+        .map(|(i, _)| {
+            let patch = i / (res * res);
+            let texel = i % (res * res);
+            (patch as u32, (texel % res) as u32, (texel / res) as u32)
+        })
+        .collect()
 }
 
 /// Builds every patch's sample map at `resolution`² texels (row-major, texel (x, y) centred on

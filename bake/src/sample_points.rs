@@ -30,6 +30,9 @@ const PROBE_DIRECTIONS: usize = 64;
 /// The margin below 1 absorbs the tessellation error (at most ε/50) of the point's own patch.
 pub const FREE_SPACE_TOLERANCE: f32 = 0.95;
 
+/// Rounds of [`refine`] the bake runs at most.
+pub const REFINE_ROUNDS: usize = 3;
+
 /// The outcome of [`place`].
 #[derive(Clone, Debug, Default)]
 pub struct Placement {
@@ -43,6 +46,10 @@ pub struct Placement {
     pub removed_inside: usize,
     /// Total surface area of the patches.
     pub area: f32,
+    /// Poisson-disk radius of the placement (about half the typical spacing).
+    pub radius: f32,
+    /// Points added by [`refine`] where sample-map texels found fewer than four.
+    pub added: usize,
     /// Rays cast by the free-space tests.
     pub rays: u64,
 }
@@ -93,6 +100,7 @@ pub fn place(
     let mut placement = Placement {
         placed: kept.len(),
         area: table.total,
+        radius: poisson_radius(table.total, count),
         ..Default::default()
     };
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
@@ -195,8 +203,7 @@ fn eliminate(candidates: &[Candidate], target: usize, area: f32) -> Vec<usize> {
     if m <= target {
         return (0..m).collect();
     }
-    // Yuksel 2015, Eq. 5 (surface, d = 2): r_max = sqrt(A / (2√3 N)).
-    let r_max = (area / (2.0 * 3f32.sqrt() * target as f32)).sqrt();
+    let r_max = poisson_radius(area, target);
     let r_min = r_max * (1.0 - (target as f32 / m as f32).powf(1.5)) * 0.65;
     let radius = 2.0 * r_max;
     let weight = |d: f32| {
@@ -255,6 +262,68 @@ fn eliminate(candidates: &[Candidate], target: usize, area: f32) -> Vec<usize> {
         }
     }
     (0..m).filter(|&i| !removed[i]).collect()
+}
+
+/// Yuksel 2015, Eq. 5 (surface, d = 2): the largest Poisson-disk radius of `n` points on an
+/// area `a`, r_max = sqrt(A / (2√3 N)).
+fn poisson_radius(area: f32, n: usize) -> f32 {
+    (area / (2.0 * 3f32.sqrt() * n.max(1) as f32)).sqrt()
+}
+
+/// Adds sample points where sample-map texels found fewer than four (thesis §6.3: density must
+/// let every texel find its points within φ_samplemap). A candidate sits ε above each short
+/// texel's surface point; texels are visited in order and a candidate is kept when it lies at
+/// least `min_distance` from every existing and newly kept point and passes the free-space
+/// tests. At most `max_new` points are added. Returns how many were added.
+#[allow(clippy::too_many_arguments)]
+pub fn refine(
+    points: &mut Vec<SamplePoint>,
+    short_texels: &[(u32, u32, u32)],
+    patches: &[(u32, &BezierPatch)],
+    resolution: u32,
+    epsilon: f32,
+    min_distance: f32,
+    max_new: usize,
+    geometry: &impl Intersector,
+) -> usize {
+    let existing: Vec<[f32; 3]> = points.iter().map(|p| p.position).collect();
+    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&existing);
+    let directions = fibonacci_sphere(PROBE_DIRECTIONS);
+    let min_sq = min_distance * min_distance;
+    let mut added: Vec<SamplePoint> = Vec::new();
+    for &(patch_index, x, y) in short_texels {
+        if added.len() >= max_new {
+            break;
+        }
+        let Some(&(object, patch)) = patches.get(patch_index as usize) else {
+            continue;
+        };
+        let u = (x as f32 + 0.5) / resolution as f32;
+        let v = (y as f32 + 0.5) / resolution as f32;
+        let normal = patch.normal(u, v);
+        let position = patch.eval(u, v) + normal * epsilon;
+        let q = position.to_array();
+        let near_existing =
+            !existing.is_empty() && tree.nearest_one::<SquaredEuclidean>(&q).distance < min_sq;
+        let near_new = added
+            .iter()
+            .any(|p| Vec3::from_array(p.position).distance_squared(position) < min_sq);
+        if near_existing || near_new {
+            continue;
+        }
+        if let FreeSpace::Ok = free_space(geometry, position, epsilon, &directions) {
+            added.push(SamplePoint {
+                position: q,
+                normal: normal.to_array(),
+                uv: [u, v],
+                patch: patch_index,
+                object,
+            });
+        }
+    }
+    let n = added.len();
+    points.extend(added);
+    n
 }
 
 /// Max-heap entry: highest weight first, ties broken by the lower index (deterministic).
