@@ -1,3 +1,14 @@
-//! Offset surface light fields: the bake, format and runtime crates in one place.
+//! # oslf: offset surface light fields
+//!
+//! One place to reach the project's crates:
+//!
+//! * [`format`] (`oslf-format`): the store, a memory-mapped, compressed, checked file whose
+//!   crate docs are its byte-layout specification;
+//! * [`bake`] (`oslf-bake`): scene files to stores — sample points, ray-traced cube maps,
+//!   visibility-culled sample maps.
+//!
+//! The GPU runtime joins them as `oslf::runtime`. This package also owns the end-to-end tests
+//! (`tests/`) and the store benchmark (`benches/store.rs`).
+
 pub use oslf_bake as bake;
 pub use oslf_format as format;

@@ -59,7 +59,7 @@ fn check_size(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<(
 
 /// ACES filmic tone curve (Narkowicz 2015 fit); maps [0, ∞) to [0, 1).
 pub fn aces(x: f32) -> f32 {
-    if !(x > 0.0) {
+    if x.is_nan() || x <= 0.0 {
         return 0.0;
     }
     let x = x.min(1e6);

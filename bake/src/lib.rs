@@ -1,6 +1,23 @@
-//! # oslf-bake
+//! # oslf-bake: from a scene file to an OSLF store
 //!
-//! (crate docs are written at the end of the first session; see README.md)
+//! The baker of offset surface light fields (Jason Ang, *Offset Surface Light Fields*, 2003).
+//! It reads a scene ([`scene`]), places sample points ε above the object's Bézier patches
+//! ([`sample_points`], thesis §3.1 and §3.3), ray traces an HDR cube map of the scene at each
+//! ([`capture`], §3.2), finds for every texel of every patch's sample map the four nearest
+//! sample points that are within φ_samplemap of the normal *and* visible ([`sample_map`],
+//! Eq. 3.9–3.10), and streams it all into one store through `oslf-format` ([`bake`]).
+//!
+//! Modules, by role:
+//!
+//! | role | modules |
+//! | --- | --- |
+//! | geometry | [`bezier`] (patches, Eq. 3.1–3.4, robust normals, tessellation), [`mesh`], [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
+//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (pinhole renders) |
+//! | the bake | [`scene`] (TOML scene files with located errors), [`sample_points`], [`sample_map`], [`capture`], [`bake`] (the pipeline, resumable, deterministic), [`image_file`] (EXR and tone-mapped PNG output) |
+//!
+//! Conventions: Z is up; radiance is linear RGB in `f32`; cube maps use the wgpu/Vulkan face
+//! order and orientation of `oslf_format::cube`. Every random number comes from a stream keyed
+//! by (seed, cube, face, texel) or (seed, pixel), so results do not depend on the thread count.
 
 pub mod error;
 pub mod ray;

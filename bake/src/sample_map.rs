@@ -91,7 +91,7 @@ pub fn texel_indices(
             let to_s = s - x;
             let len = to_s.length();
             // Eq. 3.10: in the upper hemisphere, away from the horizon.
-            if !(len > 0.0) || n.dot(to_s / len) <= cos_phi {
+            if len.is_nan() || len <= 0.0 || n.dot(to_s / len) <= cos_phi {
                 continue;
             }
             let d = s - origin;

@@ -71,7 +71,7 @@ pub fn place(
 ) -> Result<Placement> {
     let patches = global_patches(objects);
     let table = AreaTable::new(&patches);
-    if !(table.total > 0.0) {
+    if table.total.is_nan() || table.total <= 0.0 {
         return Err(BakeError::Invalid(
             "the OSLF patches have zero surface area: no sample points can be placed".into(),
         ));
