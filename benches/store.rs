@@ -2,6 +2,9 @@
 //! bytes per texel of each encoding at the default zstd level, and decompression throughput
 //! of one core (`read_face_raw`, checksum included).
 //!
+//! Cubes are stored with the default face filter ([`Filter::Predict`]); the unfiltered size is
+//! printed beside it.
+//!
 //! `cargo bench --bench store`. The lossless RGBA32F bake is cached in
 //! `target/bench-data/`; each encoding is re-encoded from it, so all see the same radiance.
 
@@ -10,7 +13,9 @@ use std::path::{Path, PathBuf};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use oslf::bake::bake::{bake, BakeOptions};
 use oslf::bake::scene::Scene;
-use oslf::format::{encode_cube, Encoding, SampleMaps, Store, StoreWriter};
+use oslf::format::{
+    encode_cube, encode_cube_with_filter, Encoding, Filter, SampleMaps, Store, StoreWriter,
+};
 
 fn data_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
@@ -38,7 +43,9 @@ fn reference_store() -> PathBuf {
 }
 
 /// Re-encodes every cube of `source` with `encoding` into a new store.
-fn reencode(source: &Store, encoding: Encoding) -> (PathBuf, u64, u64) {
+/// Returns the store's path, its compressed cube bytes, the texel count and the compressed
+/// cube bytes without a face filter (`Filter::None`, for comparison).
+fn reencode(source: &Store, encoding: Encoding) -> (PathBuf, u64, u64, u64) {
     let path = data_dir().join(format!("gazebo-quick-{}.oslf", encoding.name()));
     let mut meta = source.meta().clone();
     meta.bake.encoding = encoding;
@@ -58,28 +65,33 @@ fn reencode(source: &Store, encoding: Encoding) -> (PathBuf, u64, u64) {
         indices,
     };
     let mut writer = StoreWriter::create(&path, &meta, &points, &maps).expect("create store");
-    let (mut compressed, mut texels) = (0u64, 0u64);
+    let (mut compressed, mut texels, mut unfiltered) = (0u64, 0u64, 0u64);
     for c in 0..source.cube_count() {
         let cube = source.read_cube(c).expect("read cube");
         let (enc, stats) = encode_cube(&cube, &meta.bake, c).expect("encode");
         compressed += stats.compressed_bytes;
+        let (_, plain) =
+            encode_cube_with_filter(&cube, &meta.bake, c, Filter::None).expect("encode");
+        unfiltered += plain.compressed_bytes;
         texels += 6 * (cube.resolution as u64).pow(2);
         writer.append(enc).expect("append");
     }
     writer.finish().expect("finish");
-    (path, compressed, texels)
+    (path, compressed, texels, unfiltered)
 }
 
 fn store_benchmarks(c: &mut Criterion) {
     let reference = Store::open(&reference_store()).expect("open reference store");
     let mut group = c.benchmark_group("read_face_raw");
     for encoding in [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f] {
-        let (path, compressed, texels) = reencode(&reference, encoding);
+        let (path, compressed, texels, unfiltered) = reencode(&reference, encoding);
         println!(
-            "{:8} zstd level {}: {:.3} bytes per texel ({} cubes of {}², {:.2} MB of cube data; raw {} bytes per texel)",
+            "{:8} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} unfiltered; {} cubes of {}², {:.2} MB of cube data; raw {} bytes per texel)",
             encoding.name(),
             reference.meta().bake.zstd_level,
             compressed as f64 / texels as f64,
+            Filter::default(),
+            unfiltered as f64 / texels as f64,
             reference.cube_count(),
             reference.cube_resolution(),
             compressed as f64 / 1e6,

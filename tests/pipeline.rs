@@ -213,3 +213,38 @@ fn sample_points_sit_epsilon_above_their_patch() {
     }
     store.verify().unwrap();
 }
+
+/// With the distance channel on, each sample point's cube sees its own surface ε below: the
+/// texel looking along −normal reports a first hit at about ε.
+#[test]
+fn the_distance_channel_sees_the_surface_epsilon_below() {
+    let dir = temp_dir("distance");
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        SCENE
+            .replace("cube_resolution = 4", "cube_resolution = 16")
+            .replace("seed = 7", "seed = 7\ndistance_channel = true"),
+    )
+    .unwrap();
+    let scene = Scene::load(&path, None).unwrap();
+    let out = dir.join("d.oslf");
+    bake_with_threads(&scene, &out, 2, None, false);
+    let store = Store::open(&out).unwrap();
+    let eps = store.meta().bake.epsilon;
+    let res = store.cube_resolution();
+    for (i, s) in store.sample_points().iter().enumerate() {
+        let cube = store.read_cube(i as u32).unwrap();
+        let distance = cube.distance.as_ref().expect("distance channel");
+        let down = -Vec3::from_array(s.normal);
+        let (face, fs, ft) = oslf::format::cube::direction_to_face_st(down.to_array());
+        let x = ((fs * res as f32) as u32).min(res - 1);
+        let y = ((ft * res as f32) as u32).min(res - 1);
+        let d = distance[face][(y * res + x) as usize];
+        // The texel's centre direction is within half a texel (≈ 0.1 rad here) of −normal.
+        assert!(
+            d > 0.5 * eps && d < 1.5 * eps,
+            "sample {i}: distance {d}, ε {eps}"
+        );
+    }
+}

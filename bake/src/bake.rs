@@ -11,6 +11,7 @@ use crate::bvh::TriangleScene;
 use crate::capture::{capture_cube, strata_per_side, CaptureSettings};
 use crate::error::Result;
 use crate::integrator::{Integrator, RayStats};
+use crate::ray::EmptyScene;
 use crate::sample_map::{self, SampleMapStats};
 use crate::sample_points::{self, global_patches};
 use crate::scene::Scene;
@@ -164,13 +165,8 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
         max_bounces: settings.bounces,
     };
     // The environment-map baseline sees the scene without the OSLF objects.
-    let env_geometry;
-    let env_integrator = if meta.has_env_cube {
-        env_geometry = TriangleScene::build(scene.instances(false, 0.0))?;
-        Some(Integrator {
-            geometry: &env_geometry,
-            ..integrator
-        })
+    let env_geometry = if meta.has_env_cube && !scene.shapes.is_empty() {
+        Some(TriangleScene::build(scene.instances(false, 0.0))?)
     } else {
         None
     };
@@ -201,12 +197,26 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
                         i as u32,
                         &capture,
                     ),
-                    None => capture_cube(
-                        env_integrator.as_ref().unwrap_or(&integrator),
-                        centre,
-                        i as u32,
-                        &capture,
-                    ),
+                    // The one cube past the sample points: the environment-map baseline.
+                    None => match &env_geometry {
+                        Some(geometry) => {
+                            let env = Integrator {
+                                geometry,
+                                ..integrator
+                            };
+                            capture_cube(&env, centre, i as u32, &capture)
+                        }
+                        None => {
+                            let env = Integrator {
+                                geometry: &EmptyScene,
+                                materials: integrator.materials,
+                                lights: integrator.lights,
+                                environment: integrator.environment,
+                                max_bounces: integrator.max_bounces,
+                            };
+                            capture_cube(&env, centre, i as u32, &capture)
+                        }
+                    },
                 };
                 let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i as u32)?;
                 Ok((enc, enc_stats, stats))

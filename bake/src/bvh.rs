@@ -293,6 +293,12 @@ struct PreparedRay {
     inv_dir: Vec3A,
     /// Distance from a triangle's plane within which the origin counts as on the triangle.
     self_tolerance: f32,
+    /// Byte offsets of the near and far child planes per axis (see [`plane_offsets`]).
+    #[cfg_attr(
+        not(all(target_arch = "x86_64", target_feature = "sse2")),
+        allow(dead_code)
+    )]
+    planes: [[usize; 2]; 3],
 }
 
 impl PreparedRay {
@@ -340,6 +346,7 @@ impl PreparedRay {
             sz: 1.0 / d[kz],
             inv_dir: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
             self_tolerance: SELF_TOLERANCE * o.abs().max_element(),
+            planes: plane_offsets(d),
         })
     }
 }
@@ -442,18 +449,39 @@ fn intersect_node(node: &CwBvhNode, r: &PreparedRay, t_max: f32, oct_inv4: u32) 
     let adj_dir_inv = extent * r.inv_dir;
     let adj_origin = (Vec3A::from(node.p) - Vec3A::from(r.origin)) * r.inv_dir;
     let pad = (adj_origin.abs() + adj_dir_inv.abs() * 255.0) * SLAB_PAD;
-    let neg = (r.dir.x < 0.0, r.dir.y < 0.0, r.dir.z < 0.0);
+    let mut lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, r, t_max);
+    if lanes == 0 {
+        return 0;
+    }
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, neg, t_max);
     let mut hit_mask = 0u32;
-    for child in 0..8 {
-        if lanes & (1 << child) != 0 {
-            let child_bits = obvhs::cwbvh::node::extract_byte64(child_bits8, child);
-            let bit_index = obvhs::cwbvh::node::extract_byte64(bit_index8, child);
-            hit_mask |= child_bits << bit_index;
-        }
+    while lanes != 0 {
+        let child = lanes.trailing_zeros() as usize;
+        lanes &= lanes - 1;
+        let child_bits = obvhs::cwbvh::node::extract_byte64(child_bits8, child);
+        let bit_index = obvhs::cwbvh::node::extract_byte64(bit_index8, child);
+        hit_mask |= child_bits << bit_index;
     }
     hit_mask
+}
+
+/// Byte offsets in [`CwBvhNode`] of the quantised child planes.
+const CHILD_MIN_X: usize = std::mem::offset_of!(CwBvhNode, child_min_x);
+const CHILD_MAX_X: usize = std::mem::offset_of!(CwBvhNode, child_max_x);
+const CHILD_MIN_Y: usize = std::mem::offset_of!(CwBvhNode, child_min_y);
+const CHILD_MAX_Y: usize = std::mem::offset_of!(CwBvhNode, child_max_y);
+const CHILD_MIN_Z: usize = std::mem::offset_of!(CwBvhNode, child_min_z);
+const CHILD_MAX_Z: usize = std::mem::offset_of!(CwBvhNode, child_max_z);
+
+/// Offsets of the near and far planes per axis for a ray direction: `(near, far)` is
+/// `(min, max)` for a non-negative component and `(max, min)` for a negative one.
+fn plane_offsets(d: Vec3) -> [[usize; 2]; 3] {
+    let pick = |neg: bool, lo: usize, hi: usize| if neg { [hi, lo] } else { [lo, hi] };
+    [
+        pick(d.x < 0.0, CHILD_MIN_X, CHILD_MAX_X),
+        pick(d.y < 0.0, CHILD_MIN_Y, CHILD_MAX_Y),
+        pick(d.z < 0.0, CHILD_MIN_Z, CHILD_MAX_Z),
+    ]
 }
 
 /// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (SSE version).
@@ -464,63 +492,45 @@ fn node_lanes(
     adj_dir_inv: Vec3A,
     adj_origin: Vec3A,
     pad: Vec3A,
-    neg: (bool, bool, bool),
+    r: &PreparedRay,
     t_max: f32,
 ) -> u32 {
     use std::arch::x86_64::*;
-    #[inline(always)]
-    fn q4(v: &[u8; 8], i: usize) -> __m128 {
-        let b = &v[i * 4..i * 4 + 4];
-        // SAFETY: SSE2 is enabled (cfg above); _mm_set_ps has no memory preconditions.
-        unsafe { _mm_set_ps(b[3] as f32, b[2] as f32, b[1] as f32, b[0] as f32) }
-    }
-    let mut mask = 0u32;
-    // SAFETY: SSE2 is enabled (cfg above); these intrinsics only operate on registers.
+    let base = (node as *const CwBvhNode).cast::<u8>();
+    // SAFETY: SSE2 is enabled (cfg above). Every offset is that of an `[u8; 8]` field of
+    // `CwBvhNode` (see `plane_offsets`), so each 8-byte unaligned load stays inside `*node`.
     unsafe {
-        let axis = |lo: &[u8; 8], hi: &[u8; 8], i: usize, negd: bool, a: f32, o: f32, p: f32| {
-            let (ql, qh) = (q4(lo, i), q4(hi, i));
-            let (near, far) = if negd { (qh, ql) } else { (ql, qh) };
-            let (a, o) = (_mm_set1_ps(a), _mm_set1_ps(o));
-            let p = _mm_set1_ps(p);
-            let t0 = _mm_sub_ps(_mm_add_ps(_mm_mul_ps(near, a), o), p);
-            let t1 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(far, a), o), p);
-            (t0, t1)
+        let zero = _mm_setzero_si128();
+        // The 8 quantised planes at `offset` as two vectors of 4 floats (children 0–3, 4–7).
+        let planes = |offset: usize| {
+            let bytes = _mm_loadl_epi64(base.add(offset).cast::<__m128i>());
+            let words = _mm_unpacklo_epi8(bytes, zero);
+            (
+                _mm_cvtepi32_ps(_mm_unpacklo_epi16(words, zero)),
+                _mm_cvtepi32_ps(_mm_unpackhi_epi16(words, zero)),
+            )
         };
-        for i in 0..2 {
-            let (x0, x1) = axis(
-                &node.child_min_x,
-                &node.child_max_x,
-                i,
-                neg.0,
-                adj_dir_inv.x,
-                adj_origin.x,
-                pad.x,
-            );
-            let (y0, y1) = axis(
-                &node.child_min_y,
-                &node.child_max_y,
-                i,
-                neg.1,
-                adj_dir_inv.y,
-                adj_origin.y,
-                pad.y,
-            );
-            let (z0, z1) = axis(
-                &node.child_min_z,
-                &node.child_max_z,
-                i,
-                neg.2,
-                adj_dir_inv.z,
-                adj_origin.z,
-                pad.z,
-            );
-            let tmin = _mm_max_ps(_mm_max_ps(x0, y0), _mm_max_ps(z0, _mm_setzero_ps()));
-            let tmax = _mm_min_ps(_mm_min_ps(x1, y1), _mm_min_ps(z1, _mm_set1_ps(t_max)));
-            let m = _mm_movemask_ps(_mm_cmple_ps(tmin, tmax)) as u32;
-            mask |= m << (4 * i);
-        }
+        let axis = |offsets: [usize; 2], a: f32, o: f32, p: f32| {
+            let (near0, near1) = planes(offsets[0]);
+            let (far0, far1) = planes(offsets[1]);
+            let (a, o, p) = (_mm_set1_ps(a), _mm_set1_ps(o), _mm_set1_ps(p));
+            let t0 = |q| _mm_sub_ps(_mm_add_ps(_mm_mul_ps(q, a), o), p);
+            let t1 = |q| _mm_add_ps(_mm_add_ps(_mm_mul_ps(q, a), o), p);
+            (t0(near0), t0(near1), t1(far0), t1(far1))
+        };
+        let (x00, x01, x10, x11) = axis(r.planes[0], adj_dir_inv.x, adj_origin.x, pad.x);
+        let (y00, y01, y10, y11) = axis(r.planes[1], adj_dir_inv.y, adj_origin.y, pad.y);
+        let (z00, z01, z10, z11) = axis(r.planes[2], adj_dir_inv.z, adj_origin.z, pad.z);
+        let lo = _mm_setzero_ps();
+        let hi = _mm_set1_ps(t_max);
+        let tmin0 = _mm_max_ps(_mm_max_ps(x00, y00), _mm_max_ps(z00, lo));
+        let tmax0 = _mm_min_ps(_mm_min_ps(x10, y10), _mm_min_ps(z10, hi));
+        let tmin1 = _mm_max_ps(_mm_max_ps(x01, y01), _mm_max_ps(z01, lo));
+        let tmax1 = _mm_min_ps(_mm_min_ps(x11, y11), _mm_min_ps(z11, hi));
+        let m0 = _mm_movemask_ps(_mm_cmple_ps(tmin0, tmax0)) as u32;
+        let m1 = _mm_movemask_ps(_mm_cmple_ps(tmin1, tmax1)) as u32;
+        m0 | (m1 << 4)
     }
-    mask
 }
 
 /// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (portable version).
@@ -531,9 +541,10 @@ fn node_lanes(
     adj_dir_inv: Vec3A,
     adj_origin: Vec3A,
     pad: Vec3A,
-    neg: (bool, bool, bool),
+    r: &PreparedRay,
     t_max: f32,
 ) -> u32 {
+    let neg = (r.dir.x < 0.0, r.dir.y < 0.0, r.dir.z < 0.0);
     let mut mask = 0u32;
     for c in 0..8 {
         let lo = Vec3A::new(

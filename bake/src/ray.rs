@@ -49,3 +49,17 @@ pub trait Intersector: Sync {
     /// Whether any surface is hit with `t` in `(0, t_max)`.
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool;
 }
+
+/// A scene with no surfaces: every ray escapes. (The environment-map baseline of a scene whose
+/// only geometry is the OSLF object sees nothing but the environment.)
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmptyScene;
+
+impl Intersector for EmptyScene {
+    fn intersect(&self, _: &Ray, _: f32) -> Option<SurfaceHit> {
+        None
+    }
+    fn occluded(&self, _: &Ray, _: f32) -> bool {
+        false
+    }
+}

@@ -19,6 +19,7 @@
 //! the face is chosen in the order x, y, z.
 
 use crate::encoding::{encode_distances, encode_texels, Encoding};
+use crate::filter::{filter_face, Filter};
 use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
 
 /// Number of faces of a cube map.
@@ -151,6 +152,7 @@ impl std::ops::AddAssign for EncodeStats {
 pub struct EncodedCube {
     pub(crate) cube_index: u32,
     pub(crate) encoding: Encoding,
+    pub(crate) filter: Filter,
     pub(crate) resolution: u32,
     pub(crate) distance_channel: bool,
     pub(crate) raw_size: u64,
@@ -166,6 +168,10 @@ impl EncodedCube {
     /// Raw (decompressed) bytes of each face.
     pub fn face_raw_size(&self) -> u64 {
         self.raw_size
+    }
+    /// The face filter the frames were written with.
+    pub fn filter(&self) -> Filter {
+        self.filter
     }
     /// The six zstd frames.
     pub fn frames(&self) -> &[Vec<u8>; FACES] {
@@ -183,10 +189,24 @@ impl EncodedCube {
 /// infinite or negative radiance ([`Error::InvalidRadiance`]) and distances
 /// ([`Error::InvalidDistance`]), clamps values above the encoding's largest finite value and
 /// counts them in [`EncodeStats::clamped_texels`].
+///
+/// Faces are filtered with [`Filter::default`] ([`Filter::Predict`]), the filter
+/// [`crate::StoreWriter::create`] records; see [`encode_cube_with_filter`].
 pub fn encode_cube(
     cube: &CubeImage,
     params: &BakeParams,
     cube_index: u32,
+) -> Result<(EncodedCube, EncodeStats), Error> {
+    encode_cube_with_filter(cube, params, cube_index, Filter::default())
+}
+
+/// [`encode_cube`] with an explicit face filter (for stores created with
+/// [`crate::StoreWriter::create_with_filter`]).
+pub fn encode_cube_with_filter(
+    cube: &CubeImage,
+    params: &BakeParams,
+    cube_index: u32,
+    filter: Filter,
 ) -> Result<(EncodedCube, EncodeStats), Error> {
     let res = params.cube_resolution;
     if res == 0 || res > MAX_CUBE_RESOLUTION {
@@ -224,6 +244,7 @@ pub fn encode_cube(
     let color_bytes = texels * enc.bytes_per_texel();
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
+    let mut filtered = vec![0u8; raw_size as usize];
     let mut compressor =
         zstd::bulk::Compressor::new(params.zstd_level).map_err(|e| Error::Compress {
             cube: cube_index,
@@ -274,11 +295,21 @@ pub fn encode_cube(
             }
             encode_distances(d, dist_out)?;
         }
-        let frame = compressor.compress(&raw).map_err(|e| Error::Compress {
-            cube: cube_index,
-            face,
-            detail: e.to_string(),
-        })?;
+        filter_face(
+            filter,
+            enc,
+            res,
+            params.distance_channel,
+            &raw,
+            &mut filtered,
+        )?;
+        let frame = compressor
+            .compress(&filtered)
+            .map_err(|e| Error::Compress {
+                cube: cube_index,
+                face,
+                detail: e.to_string(),
+            })?;
         checksums[face] = xxhash_rust::xxh3::xxh3_64(&frame);
         stats.raw_bytes += raw_size;
         stats.compressed_bytes += frame.len() as u64;
@@ -288,6 +319,7 @@ pub fn encode_cube(
         EncodedCube {
             cube_index,
             encoding: enc,
+            filter,
             resolution: res,
             distance_channel: params.distance_channel,
             raw_size,

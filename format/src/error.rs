@@ -198,6 +198,11 @@ pub enum Error {
     /// `resume()` found no partial file.
     #[error("no partial store to resume at {0}")]
     NoPartial(PathBuf),
+    /// A face filter id this reader does not know (header bytes 176..180).
+    #[error(
+        "unknown face filter id {id} at byte offset {offset} (this reader knows 0 none, 1 predict)"
+    )]
+    UnknownFilter { id: u32, offset: u64 },
     /// An unknown encoding name.
     #[error("unknown encoding {0:?} (expected rgb9e5, rgba16f or rgba32f)")]
     UnknownEncoding(String),

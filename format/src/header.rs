@@ -2,6 +2,7 @@
 
 use crate::bytes::{align8, le_u32, le_u64};
 use crate::encoding::Encoding;
+use crate::filter::Filter;
 use crate::sample_map::IndexWidth;
 use crate::{Error, MAGIC, VERSION};
 use xxhash_rust::xxh3::xxh3_64;
@@ -10,6 +11,11 @@ use xxhash_rust::xxh3::xxh3_64;
 pub const HEADER_BYTES: usize = 256;
 /// Byte offset of the header checksum (it covers bytes `0..HEADER_CHECKSUM_OFFSET`).
 pub const HEADER_CHECKSUM_OFFSET: usize = 248;
+
+/// Byte offset of the face filter id (`u32`).
+pub const FILTER_OFFSET: usize = 176;
+/// First reserved (zero) byte.
+const RESERVED_START: usize = 180;
 
 /// Flag bit: every face carries an `f32` distance plane.
 pub const FLAG_DISTANCE: u32 = 1;
@@ -49,6 +55,8 @@ pub struct Header {
     pub version: u32,
     pub flags: u32,
     pub encoding: Encoding,
+    /// The face filter (bytes 176..180).
+    pub filter: Filter,
     pub index_width: IndexWidth,
     pub cube_resolution: u32,
     pub sample_map_resolution: u32,
@@ -102,6 +110,7 @@ impl Header {
         put(152, &self.meta_checksum.to_le_bytes());
         put(160, &self.points_checksum.to_le_bytes());
         put(168, &self.maps_checksum.to_le_bytes());
+        put(FILTER_OFFSET, &self.filter.id().to_le_bytes());
         let sum = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
         b[HEADER_CHECKSUM_OFFSET..].copy_from_slice(&sum.to_le_bytes());
         b
@@ -164,10 +173,18 @@ impl Header {
             4 => IndexWidth::U32,
             w => return Err(invalid("index_bytes", 20, format!("{w} (must be 2 or 4)"))),
         };
-        if let Some(i) = b[176..HEADER_CHECKSUM_OFFSET].iter().position(|v| *v != 0) {
+        let filter_id = le_u32(b, FILTER_OFFSET);
+        let filter = Filter::from_id(filter_id).ok_or(Error::UnknownFilter {
+            id: filter_id,
+            offset: FILTER_OFFSET as u64,
+        })?;
+        if let Some(i) = b[RESERVED_START..HEADER_CHECKSUM_OFFSET]
+            .iter()
+            .position(|v| *v != 0)
+        {
             return Err(invalid(
                 "reserved",
-                176 + i as u64,
+                (RESERVED_START + i) as u64,
                 "reserved bytes must be zero".into(),
             ));
         }
@@ -179,6 +196,7 @@ impl Header {
             version,
             flags,
             encoding,
+            filter,
             index_width,
             cube_resolution: le_u32(b, 24),
             sample_map_resolution: le_u32(b, 28),

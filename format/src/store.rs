@@ -7,6 +7,7 @@ use crate::bytes::align8;
 use crate::cube::{face_raw_size, CubeImage, FACES};
 use crate::encoding::{decode_distances, decode_texels};
 use crate::error::io_at;
+use crate::filter::{unfilter_face, Filter};
 use crate::header::{Header, Section, HEADER_BYTES};
 use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
 use crate::sample_map::{validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL};
@@ -30,6 +31,20 @@ impl Backing {
             }
         }
     }
+}
+
+/// Per-thread zstd decompression context and filter scratch buffer, reused between reads.
+#[derive(Default)]
+struct Decoder {
+    dctx: Option<zstd::bulk::Decompressor<'static>>,
+    scratch: Vec<u8>,
+}
+
+/// Larger scratch buffers are freed after each read rather than kept per thread.
+const MAX_KEPT_SCRATCH: usize = 64 << 20;
+
+thread_local! {
+    static DECODER: std::cell::RefCell<Decoder> = std::cell::RefCell::new(Decoder::default());
 }
 
 /// Counters from [`Store::verify`].
@@ -409,21 +424,54 @@ impl Store {
                 computed,
             });
         }
-        let n = zstd::bulk::decompress_to_buffer(frame, out).map_err(|err| Error::Decompress {
+        let h = &self.header;
+        let fail = |detail: String| Error::Decompress {
             cube,
             face,
             offset: e.offset,
-            detail: err.to_string(),
-        })?;
-        if n != out.len() {
-            return Err(Error::Decompress {
-                cube,
-                face,
-                offset: e.offset,
-                detail: format!("decompressed to {n} bytes, expected {}", out.len()),
-            });
-        }
-        Ok(())
+            detail,
+        };
+        DECODER.with(|cell| {
+            let mut state = cell.borrow_mut();
+            let state = &mut *state;
+            if state.dctx.is_none() {
+                state.dctx =
+                    Some(zstd::bulk::Decompressor::new().map_err(|e| fail(e.to_string()))?);
+            }
+            let Some(dctx) = state.dctx.as_mut() else {
+                return Err(fail("no zstd decompression context".into()));
+            };
+            let target: &mut [u8] = match h.filter {
+                Filter::None => out,
+                Filter::Predict => {
+                    state.scratch.resize(out.len(), 0);
+                    &mut state.scratch
+                }
+            };
+            let n = dctx
+                .decompress_to_buffer(frame, target)
+                .map_err(|err| fail(err.to_string()))?;
+            if n != target.len() {
+                return Err(fail(format!(
+                    "decompressed to {n} bytes, expected {}",
+                    target.len()
+                )));
+            }
+            if h.filter != Filter::None {
+                unfilter_face(
+                    h.filter,
+                    h.encoding,
+                    h.cube_resolution,
+                    h.has_distance(),
+                    &state.scratch,
+                    out,
+                )?;
+            }
+            if state.scratch.capacity() > MAX_KEPT_SCRATCH {
+                state.scratch = Vec::new();
+            }
+            Ok(())
+        })
     }
 
     /// Decompresses and decodes one face: `rgb` takes `res²` texels; `distance`, if given,

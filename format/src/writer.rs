@@ -16,8 +16,8 @@ use crate::bytes::align8;
 use crate::cube::{face_raw_size, EncodedCube, FACES};
 use crate::error::io_at;
 use crate::header::{
-    Header, Section, FINISH_FIELDS, FLAGS_FIELD, FLAG_COMPLETE, FLAG_DISTANCE, FLAG_ENV_CUBE,
-    HEADER_BYTES, SECTION_CHECKSUMS,
+    Header, Section, FILTER_OFFSET, FINISH_FIELDS, FLAGS_FIELD, FLAG_COMPLETE, FLAG_DISTANCE,
+    FLAG_ENV_CUBE, HEADER_BYTES, SECTION_CHECKSUMS,
 };
 use crate::meta::{
     decode_meta, encode_meta, encode_points, validate_points, SamplePoint, StoreMeta,
@@ -25,7 +25,7 @@ use crate::meta::{
 };
 use crate::sample_map::{encode_maps, SampleMaps};
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES};
-use crate::{Error, VERSION};
+use crate::{Error, Filter, VERSION};
 use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
 /// Sync the partial file at least every this many cubes.
@@ -88,7 +88,12 @@ struct Prefix {
 }
 
 impl Prefix {
-    fn build(meta: &StoreMeta, points: &[SamplePoint], maps: &SampleMaps) -> Result<Self, Error> {
+    fn build(
+        meta: &StoreMeta,
+        points: &[SamplePoint],
+        maps: &SampleMaps,
+        filter: Filter,
+    ) -> Result<Self, Error> {
         let meta_bytes = encode_meta(meta);
         // Validate by decoding what was encoded (same checks as the reader).
         let meta_offset = HEADER_BYTES as u64;
@@ -136,6 +141,7 @@ impl Prefix {
             version: VERSION,
             flags,
             encoding: meta.bake.encoding,
+            filter,
             index_width,
             cube_resolution: meta.bake.cube_resolution,
             sample_map_resolution: meta.bake.sample_map_resolution,
@@ -180,13 +186,28 @@ impl StoreWriter {
     /// Starts a new store: validates the inputs (metadata, every sample point, every
     /// sample-map index `< points.len()`), writes `<path>.partial` (replacing any old one)
     /// up to the cube payload and syncs it.
+    ///
+    /// The store records [`Filter::default`], the filter [`crate::encode_cube`] uses.
     pub fn create(
         path: &Path,
         meta: &StoreMeta,
         points: &[SamplePoint],
         maps: &SampleMaps,
     ) -> Result<Self, Error> {
-        let prefix = Prefix::build(meta, points, maps)?;
+        Self::create_with_filter(path, meta, points, maps, Filter::default())
+    }
+
+    /// [`StoreWriter::create`] recording face filter `filter`: every appended cube must be
+    /// encoded with it ([`crate::cube::encode_cube_with_filter`]). [`StoreWriter::resume`]
+    /// continues only partial files that use the default filter.
+    pub fn create_with_filter(
+        path: &Path,
+        meta: &StoreMeta,
+        points: &[SamplePoint],
+        maps: &SampleMaps,
+        filter: Filter,
+    ) -> Result<Self, Error> {
+        let prefix = Prefix::build(meta, points, maps, filter)?;
         let partial = partial_path(path);
         let file = File::create(&partial).map_err(io_at(&partial, "create"))?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
@@ -229,7 +250,7 @@ impl StoreWriter {
         maps: &SampleMaps,
     ) -> Result<Self, Error> {
         let partial = partial_path(path);
-        let prefix = Prefix::build(meta, points, maps)?;
+        let prefix = Prefix::build(meta, points, maps, Filter::default())?;
         let mut file = match OpenOptions::new().read(true).write(true).open(&partial) {
             Ok(f) => f,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -266,6 +287,19 @@ impl StoreWriter {
         normalise(&mut want);
         if got != want {
             let at = got.iter().zip(&want).position(|(a, b)| a != b).unwrap_or(0);
+            if (FILTER_OFFSET..FILTER_OFFSET + 4).contains(&at) {
+                return Err(mismatch(format!(
+                    "the partial file uses face filter id {}, this writer filter {} (id {})",
+                    u32::from_le_bytes([
+                        got[FILTER_OFFSET],
+                        got[FILTER_OFFSET + 1],
+                        got[FILTER_OFFSET + 2],
+                        got[FILTER_OFFSET + 3]
+                    ]),
+                    Filter::default(),
+                    Filter::default().id()
+                )));
+            }
             return Err(mismatch(format!(
                 "header differs at byte {at} (encoding, resolutions, counts or section sizes changed)"
             )));
@@ -430,17 +464,20 @@ impl StoreWriter {
         }
         let h = &self.header;
         if cube.encoding != h.encoding
+            || cube.filter != h.filter
             || cube.resolution != h.cube_resolution
             || cube.distance_channel != h.has_distance()
         {
             return Err(Error::CubeParamsMismatch {
                 cube: index,
                 detail: format!(
-                    "cube: {} {}² distance={}, store: {} {}² distance={}",
+                    "cube: {} filter {} {}² distance={}, store: {} filter {} {}² distance={}",
                     cube.encoding,
+                    cube.filter,
                     cube.resolution,
                     cube.distance_channel,
                     h.encoding,
+                    h.filter,
                     h.cube_resolution,
                     h.has_distance()
                 ),

@@ -172,3 +172,74 @@ fn summary_counts() {
     assert_eq!(s.raw_cube_bytes, s.texels * 4);
     assert_eq!(s.sample_points, spec.points as u64);
 }
+
+#[test]
+fn both_filters_round_trip_and_are_recorded() {
+    for filter in Filter::ALL {
+        for encoding in Encoding::ALL {
+            let spec = Spec {
+                encoding,
+                cube_res: 9,
+                distance: true,
+                ..Spec::default()
+            };
+            let f = fixture(spec);
+            let (_dir, path) = temp_store("filter.oslf");
+            let mut w = StoreWriter::create_with_filter(&path, &f.meta, &f.points, &f.maps, filter)
+                .unwrap();
+            for (i, c) in f.cubes.iter().enumerate() {
+                let (e, _) = encode_cube_with_filter(c, &f.meta.bake, i as u32, filter).unwrap();
+                assert_eq!(e.filter(), filter);
+                w.append(e).unwrap();
+            }
+            w.finish().unwrap();
+            let store = Store::open(&path).unwrap();
+            assert_eq!(store.header().filter, filter);
+            let bytes = std::fs::read(&path).unwrap();
+            assert_eq!(
+                u32::from_le_bytes(bytes[176..180].try_into().unwrap()),
+                filter.id()
+            );
+            check_store(&store, &f, spec);
+            // The raw bytes read back are exactly the encoded texels and distances.
+            let n = 81;
+            for (i, c) in f.cubes.iter().enumerate() {
+                let mut raw = vec![0u8; store.face_raw_size()];
+                for face in 0..6 {
+                    store.read_face_raw(i as u32, face, &mut raw).unwrap();
+                    let mut want = vec![0u8; n * encoding.bytes_per_texel()];
+                    encoding::encode_texels(encoding, &c.faces[face], &mut want).unwrap();
+                    assert_eq!(&raw[..want.len()], want.as_slice());
+                    let d = c.distance.as_ref().unwrap();
+                    let dist: Vec<u8> = d[face].iter().flat_map(|v| v.to_le_bytes()).collect();
+                    assert_eq!(&raw[want.len()..], dist.as_slice());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_cube_with_another_filter_is_refused() {
+    let spec = Spec::default();
+    let f = fixture(spec);
+    let (_dir, path) = temp_store("mix.oslf");
+    let mut w = StoreWriter::create(&path, &f.meta, &f.points, &f.maps).unwrap();
+    let (e, _) = encode_cube_with_filter(&f.cubes[0], &f.meta.bake, 0, Filter::None).unwrap();
+    assert!(matches!(
+        w.append(e),
+        Err(Error::CubeParamsMismatch { cube: 0, .. })
+    ));
+    // A partial file written with another filter is not resumed.
+    drop(w);
+    let mut w =
+        StoreWriter::create_with_filter(&path, &f.meta, &f.points, &f.maps, Filter::None).unwrap();
+    let (e, _) = encode_cube_with_filter(&f.cubes[0], &f.meta.bake, 0, Filter::None).unwrap();
+    w.append(e).unwrap();
+    w.sync().unwrap();
+    drop(w);
+    assert!(matches!(
+        StoreWriter::resume(&path, &f.meta, &f.points, &f.maps),
+        Err(Error::ResumeMismatch { .. })
+    ));
+}

@@ -1,0 +1,105 @@
+//! The `oslf-bake` command: a small bake end to end, and bad input.
+
+use std::process::Command;
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("oslf-bake-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const SCENE: &str = r#"
+[camera]
+position = [6.0, -6.0, 4.0]
+target = [0.0, 0.0, 1.0]
+
+[environment.sky]
+sun_direction = [0.6, -0.4, 0.7]
+sun_irradiance = [5.0, 5.0, 5.0]
+
+[[object]]
+patches = "newell-teapot"
+select = [20, 28]
+material = { color = [0.1, 0.4, 0.1] }
+
+[bake]
+sample_count = 12
+cube_resolution = 2
+sample_map_resolution = 4
+samples_per_texel = 1
+"#;
+
+#[test]
+fn bakes_a_store_with_summary_preview_and_json_report() {
+    let dir = temp_dir("ok");
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("lid.oslf"))
+        .args(["--preview-spp", "1", "-q", "--report-json"])
+        .arg(dir.join("report.json"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for needle in [
+        "sample points",
+        "Mrays/s",
+        "bytes per cube-map texel",
+        "fewer than four",
+    ] {
+        assert!(
+            stdout.contains(needle),
+            "summary lacks {needle:?}:\n{stdout}"
+        );
+    }
+    assert!(dir.join("lid.oslf").exists());
+    assert!(dir.join("lid.oslf.preview.png").exists());
+    assert!(dir.join("lid.oslf.preview.exr").exists());
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["finished"], true);
+    assert!(report["sample_points"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn a_bad_scene_fails_with_a_located_message() {
+    let dir = temp_dir("bad");
+    let scene = dir.join("bad.toml");
+    std::fs::write(
+        &scene,
+        SCENE.replace("sample_count = 12", "sample_count = -3"),
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("bad.oslf"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("{}:16:16", scene.display())),
+        "{stderr}"
+    );
+    assert!(!dir.join("bad.oslf").exists());
+}
+
+#[test]
+fn a_missing_scene_file_is_named() {
+    let out = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+        .arg("/nonexistent/scene.toml")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("/nonexistent/scene.toml"), "{stderr}");
+}
