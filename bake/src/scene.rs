@@ -199,6 +199,8 @@ struct RawScene {
     #[serde(default)]
     point_light: Vec<RawPointLight>,
     #[serde(default)]
+    directional_light: Vec<RawDirectionalLight>,
+    #[serde(default)]
     object: Vec<Spanned<RawObject>>,
     #[serde(default)]
     plane: Vec<RawPlane>,
@@ -290,6 +292,34 @@ struct RawPointLight {
     position: Point,
     /// Radiant intensity per channel.
     intensity: Rgb,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDirectionalLight {
+    /// Towards the light.
+    direction: Direction,
+    /// Irradiance on a surface facing the light.
+    irradiance: Rgb,
+    /// Apparent radius of the light's visible disc, degrees (0: invisible to camera rays).
+    #[serde(default)]
+    angular_radius: AngleRadius,
+}
+
+/// The apparent radius of a directional light's disc: [0, 90) degrees.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct AngleRadius(f32);
+impl<'de> Deserialize<'de> for AngleRadius {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = f64::deserialize(d)? as f32;
+        if v.is_finite() && (0.0..90.0).contains(&v) {
+            Ok(AngleRadius(v))
+        } else {
+            Err(D::Error::custom(format!(
+                "{v} must be an angle in degrees within [0, 90)"
+            )))
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -633,6 +663,11 @@ impl Ctx<'_> {
                 intensity: l.intensity.0,
             })
             .collect();
+        lights.extend(raw.directional_light.iter().map(|l| Light::Sun {
+            direction: l.direction.0.normalize(),
+            irradiance: l.irradiance.0,
+            angular_radius: l.angular_radius.0.to_radians(),
+        }));
 
         let environment = match raw.environment {
             None => Environment::Constant(Vec3::ZERO),

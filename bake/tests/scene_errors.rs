@@ -141,3 +141,14 @@ fn no_object_is_an_error() {
     let text = "[environment]\nuniform = [1.0, 1.0, 1.0]\n";
     assert!(matches!(parse(text), Err(BakeError::Invalid(_))));
 }
+
+#[test]
+fn directional_lights_are_lights() {
+    let text = format!(
+        "{GOOD}\n[[directional_light]]\ndirection = [0.0, 0.0, 2.0]\nirradiance = [3.0, 3.0, 3.0]\n"
+    );
+    let scene = parse(&text).unwrap();
+    assert_eq!(scene.lights.len(), 1);
+    let text = text.replace("[0.0, 0.0, 2.0]", "[0.0, 0.0, 0.0]");
+    assert_located(&text, 14, 13, "zero vector");
+}
