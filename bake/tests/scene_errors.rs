@@ -150,5 +150,5 @@ fn directional_lights_are_lights() {
     let scene = parse(&text).unwrap();
     assert_eq!(scene.lights.len(), 1);
     let text = text.replace("[0.0, 0.0, 2.0]", "[0.0, 0.0, 0.0]");
-    assert_located(&text, 14, 13, "zero vector");
+    assert_located(&text, 13, 13, "zero vector");
 }
