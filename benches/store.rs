@@ -46,7 +46,8 @@ fn reference_store() -> PathBuf {
 /// Returns the store's path, its compressed cube bytes, the texel count and the compressed
 /// cube bytes without a face filter (`Filter::None`, for comparison).
 fn reencode(source: &Store, encoding: Encoding) -> (PathBuf, u64, u64, u64) {
-    let path = data_dir().join(format!("gazebo-quick-{}.oslf", encoding.name()));
+    // A name of its own: the RGBA32F copy must not replace the reference it is read from.
+    let path = data_dir().join(format!("gazebo-quick-{}-reencoded.oslf", encoding.name()));
     let mut meta = source.meta().clone();
     meta.bake.encoding = encoding;
     let points = source.sample_points().to_vec();

@@ -110,7 +110,10 @@ impl TriangleScene {
             .iter()
             .map(|v| Aabb::from_points(&v.map(Vec3A::from)))
             .collect();
-        let params = BvhBuildParams::medium_build();
+        let params = BvhBuildParams {
+            pre_split: false,
+            ..BvhBuildParams::slow_build()
+        };
         let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
             params.ploc_search_distance,
             &aabbs,
@@ -310,6 +313,7 @@ impl PreparedRay {
             return None;
         }
         let a = d.abs();
+        // kz: the axis of the largest |d| component; kx = kz + 1, ky = kz + 2 (mod 3).
         let kz = if a.x > a.y {
             if a.x > a.z {
                 0
@@ -321,11 +325,13 @@ impl PreparedRay {
         } else {
             2
         };
-        let kx = (kz + 1) % 3;
-        let ky = (kx + 1) % 3;
-        let unit = |k: usize| Vec3::AXES[k];
-        let sx = -d[kx] / d[kz];
-        let sy = -d[ky] / d[kz];
+        let (ex, ey, ez, dx, dy, dz) = match kz {
+            0 => (Vec3::Y, Vec3::Z, Vec3::X, d.y, d.z, d.x),
+            1 => (Vec3::Z, Vec3::X, Vec3::Y, d.z, d.x, d.y),
+            _ => (Vec3::X, Vec3::Y, Vec3::Z, d.x, d.y, d.z),
+        };
+        let sx = -dx / dz;
+        let sy = -dy / dz;
         let inv = |c: f32| {
             if c.abs() < 1e-20 {
                 if c < 0.0 {
@@ -340,10 +346,10 @@ impl PreparedRay {
         Some(Self {
             origin: o,
             dir: d,
-            rx: unit(kx) + unit(kz) * sx,
-            ry: unit(ky) + unit(kz) * sy,
-            rz: unit(kz),
-            sz: 1.0 / d[kz],
+            rx: ex + ez * sx,
+            ry: ey + ez * sy,
+            rz: ez,
+            sz: 1.0 / dz,
             inv_dir: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
             self_tolerance: SELF_TOLERANCE * o.abs().max_element(),
             planes: plane_offsets(d),

@@ -262,6 +262,10 @@ pub struct Distribution1D {
     cdf: Vec<f32>,
     /// `∫₀¹ f = Σ fᵢ / n` (after the all-zero fallback).
     integral: f32,
+    /// Guide table (`n` cells) for [`Self::sample_continuous`]: `guide[g]` is a lower bound on
+    /// the number of `cdf` entries `<= u` for every `u` in cell `g = ⌊u·n⌋`, so the search
+    /// becomes a short forward scan with the same result as a binary search.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
@@ -288,10 +292,19 @@ impl Distribution1D {
             cdf.push((acc / sum) as f32);
         }
         cdf[n] = 1.0;
+        // Every f32 `u` with ⌊u·n⌋ = g (f32 product) is ≥ g/n·(1 − 2⁻²³); the threshold sits
+        // safely below that, so `guide[g]` never exceeds the true count.
+        let guide = (0..n)
+            .map(|g| {
+                let lo = g as f64 / n as f64 * (1.0 - 1e-6);
+                cdf.partition_point(|&c| f64::from(c) <= lo) as u32
+            })
+            .collect();
         Distribution1D {
             func: f,
             cdf,
             integral: (sum / n as f64) as f32,
+            guide,
         }
     }
 
@@ -324,8 +337,16 @@ impl Distribution1D {
         } else {
             0.0
         };
-        // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1.
-        let i = (self.cdf.partition_point(|&c| c <= u).max(1) - 1).min(n - 1);
+        // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1. `count` is the number of
+        // cdf entries <= u (cdf is non-decreasing), found by scanning up from the guide's lower
+        // bound: the same value as `self.cdf.partition_point(|&c| c <= u)`.
+        let g = ((u * n as f32) as usize).min(n - 1);
+        let mut count = self.guide[g] as usize;
+        while count < self.cdf.len() && self.cdf[count] <= u {
+            count += 1;
+        }
+        debug_assert_eq!(count, self.cdf.partition_point(|&c| c <= u));
+        let i = (count.max(1) - 1).min(n - 1);
         let width = self.cdf[i + 1] - self.cdf[i];
         let du = if width > 0.0 {
             ((u - self.cdf[i]) / width).clamp(0.0, ONE_MINUS_EPSILON)

@@ -154,7 +154,7 @@ pub fn unfilter_face(
 }
 
 /// The two prediction neighbours of texel `(x, y)` (row-major index `i`): `(a, b)` =
-/// (left, up); in row 0 both are the left texel, in column 0 both are the texel above.
+/// (left, above); in row 0 both are the left texel, in column 0 both are the texel above.
 /// `None` for texel (0, 0).
 #[inline(always)]
 fn neighbours(n: usize, x: usize, y: usize, i: usize) -> Option<(usize, usize)> {
@@ -173,13 +173,11 @@ fn neighbours(n: usize, x: usize, y: usize, i: usize) -> Option<(usize, usize)> 
 /// A 9-bit mantissa `m` of a texel with exponent `from`, rescaled to exponent `to`.
 #[inline(always)]
 fn rescale(m: u32, from: u32, to: u32) -> u32 {
-    if from >= to {
-        let d = (from - to).min(9);
-        (m << d).min(511)
-    } else {
-        let k = to - from; // 1..=31
-        (m + (1 << (k - 1))) >> k
-    }
+    // Branch-free: with `from >= to`, `k = 0` and this is `min(511, m << d)`; otherwise
+    // `d = 0` and it is `(m + 2^(k-1)) >> k` (m <= 511).
+    let d = from.saturating_sub(to).min(9);
+    let k = to.saturating_sub(from).min(31);
+    (((m & 511) << d).min(511) + ((1u32 << k) >> 1)) >> k
 }
 
 #[inline(always)]
@@ -194,12 +192,7 @@ fn zigzag9(r: u32) -> u32 {
 
 #[inline(always)]
 fn unzigzag9(z: u32) -> u32 {
-    let z = z & 511;
-    if z & 1 == 0 {
-        z >> 1
-    } else {
-        (512 - ((z + 1) >> 1)) & 511
-    }
+    ((z & 511) >> 1 ^ (z & 1).wrapping_neg()) & 511
 }
 
 #[inline(always)]
@@ -277,22 +270,37 @@ fn rgb9e5_inverse(n: usize, t: usize, filtered: &[u8], out: &mut [u8]) {
     let (pg, rest) = rest.split_at(t);
     let (pr, pb) = rest.split_at(t);
     let mut tex = vec![0u32; t];
-    let mut i = 0;
+    let decode = |i: usize, nb: Nb| {
+        let h = u32::from(p0[i]);
+        let e = h & 31;
+        let g =
+            predict_g(&nb, e).wrapping_add(unzigzag9(u32::from(pg[i]) | (h >> 6 & 1) << 8)) & 511;
+        let r = predict_rb(&nb, e, g, 0)
+            .wrapping_add(unzigzag9(u32::from(pr[i]) | (h >> 5 & 1) << 8))
+            & 511;
+        let b = predict_rb(&nb, e, g, 2).wrapping_add(unzigzag9(u32::from(pb[i]) | (h >> 7) << 8))
+            & 511;
+        r | g << 9 | b << 18 | e << 27
+    };
     for y in 0..n {
-        for x in 0..n {
-            let h = u32::from(p0[i]);
-            let e = h & 31;
-            let nb = rgb9e5_neighbours(&tex, neighbours(n, x, y, i));
-            let g = predict_g(&nb, e).wrapping_add(unzigzag9(u32::from(pg[i]) | (h >> 6 & 1) << 8))
-                & 511;
-            let r = predict_rb(&nb, e, g, 0)
-                .wrapping_add(unzigzag9(u32::from(pr[i]) | (h >> 5 & 1) << 8))
-                & 511;
-            let b = predict_rb(&nb, e, g, 2)
-                .wrapping_add(unzigzag9(u32::from(pb[i]) | (h >> 7) << 8))
-                & 511;
-            tex[i] = r | g << 9 | b << 18 | e << 27;
-            i += 1;
+        let row = y * n;
+        // Column 0 (and texel (0, 0)) through the general path.
+        tex[row] = decode(row, rgb9e5_neighbours(&tex, neighbours(n, 0, y, row)));
+        if y == 0 {
+            for i in 1..n {
+                let l = fields(tex[i - 1]);
+                tex[i] = decode(i, Some((l, l)));
+            }
+        } else {
+            let (above, cur) = tex.split_at_mut(row);
+            let above = &above[row - n..];
+            let cur = &mut cur[..n];
+            let mut left = fields(cur[0]);
+            for x in 1..n {
+                let v = decode(row + x, Some((left, fields(above[x]))));
+                cur[x] = v;
+                left = fields(v);
+            }
         }
     }
     for (o, v) in out.chunks_exact_mut(4).zip(&tex) {

@@ -136,6 +136,7 @@ fn info(path: &Path, json: bool) -> Result<()> {
             "version": h.version,
             "flags": h.flags,
             "encoding": b.encoding.name(),
+            "face_filter": h.filter.name(),
             "encoded_bytes_per_texel": b.encoding.bytes_per_texel(),
             "distance_channel": b.distance_channel,
             "env_cube_index": s.env_cube_index(),
@@ -170,6 +171,7 @@ fn info(path: &Path, json: bool) -> Result<()> {
     }
     println!("store            {}", path.display());
     println!("format version   {} (flags {:#x})", h.version, h.flags);
+    println!("face filter      {} (id {})", h.filter, h.filter.id());
     println!(
         "encoding         {} ({} bytes/texel raw){}",
         b.encoding,

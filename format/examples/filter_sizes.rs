@@ -1,4 +1,6 @@
-//! Temporary: bytes per texel of each encoding and filter for the cubes of a store.
+//! Bytes per texel of the cubes of a store re-encoded in each encoding, with and without the
+//! face filter (zstd at the store's level). Bake losslessly (RGBA32F) first, then
+//! `cargo run --release -p oslf-format --example filter_sizes -- store.oslf`.
 use oslf_format::{encode_cube_with_filter, Encoding, Filter, Store};
 
 fn main() {
@@ -10,7 +12,7 @@ fn main() {
     let texels = cubes.len() as f64 * 6.0 * f64::from(store.cube_resolution()).powi(2);
     println!("{path}: spp {}", store.meta().bake.samples_per_texel);
     for enc in Encoding::ALL {
-        let mut params = store.meta().bake;
+        let mut params = store.meta().bake.clone();
         params.encoding = enc;
         let mut line = format!("  {:8}", enc.name());
         for filter in Filter::ALL {
