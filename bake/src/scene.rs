@@ -306,22 +306,6 @@ struct RawDirectionalLight {
     angular_radius: AngleRadius,
 }
 
-/// The apparent radius of a directional light's disc: [0, 90) degrees.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct AngleRadius(f32);
-impl<'de> Deserialize<'de> for AngleRadius {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let v = f64::deserialize(d)? as f32;
-        if v.is_finite() && (0.0..90.0).contains(&v) {
-            Ok(AngleRadius(v))
-        } else {
-            Err(D::Error::custom(format!(
-                "{v} must be an angle in degrees within [0, 90)"
-            )))
-        }
-    }
-}
-
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawObject {
@@ -513,6 +497,10 @@ checked_f32!(Angle, "an angle in degrees within [0, 180]", |v| (0.0
     ..=180.0)
     .contains(&v));
 checked_f32!(Unit, "within [0, 1]", |v| (0.0..=1.0).contains(&v));
+// The apparent radius of a directional light's disc.
+checked_f32!(AngleRadius, "an angle in degrees within [0, 90)", |v| (0.0
+    ..90.0)
+    .contains(&v));
 
 macro_rules! checked_vec3 {
     ($name:ident, $elem:ident, $extra:literal, |$v:ident| $ok:expr) => {
@@ -542,37 +530,36 @@ checked_vec3!(
     |v| v.length_squared() > 1e-12
 );
 
-/// A texture or cube-map resolution: 1 ..= 16384.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Resolution(u32);
-impl<'de> Deserialize<'de> for Resolution {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let v = i64::deserialize(d)?;
-        if (1..=16384).contains(&v) {
-            Ok(Resolution(v as u32))
-        } else {
-            Err(D::Error::custom(format!(
-                "resolution {v} is out of range 1..=16384"
-            )))
+/// An integer key within `$min..=$max`.
+macro_rules! checked_u32 {
+    ($name:ident, $what:literal, $min:expr, $max:expr) => {
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        struct $name(u32);
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+                let v = i64::deserialize(d)?;
+                if (i64::from($min)..=i64::from($max)).contains(&v) {
+                    Ok($name(v as u32))
+                } else {
+                    Err(D::Error::custom(format!(
+                        "{} {v} is out of range {}..={}",
+                        $what, $min, $max
+                    )))
+                }
+            }
         }
-    }
+    };
 }
 
-/// Segments around a round shape: 3 ..= 4096.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Segments(u32);
-impl<'de> Deserialize<'de> for Segments {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let v = i64::deserialize(d)?;
-        if (3..=4096).contains(&v) {
-            Ok(Segments(v as u32))
-        } else {
-            Err(D::Error::custom(format!(
-                "segments {v} is out of range 3..=4096"
-            )))
-        }
-    }
-}
+// A texture or cube-map resolution, as the store allows.
+checked_u32!(
+    Resolution,
+    "resolution",
+    1u32,
+    oslf_format::MAX_CUBE_RESOLUTION
+);
+// Segments around a round shape.
+checked_u32!(Segments, "segments", 3u32, 4096u32);
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct EncodingName(oslf_format::Encoding);
