@@ -1,0 +1,107 @@
+//! The GPU: a headless wgpu device, or one the application owns, and the error sink that turns
+//! wgpu's validation errors into [`RuntimeError::Gpu`].
+
+use std::sync::{Arc, Mutex};
+
+use crate::error::{Result, RuntimeError};
+
+/// A wgpu device and queue with the limits the renderer may use.
+///
+/// Build one with [`Gpu::headless`], or wrap an application's own device with
+/// [`Gpu::from_device`]. Uncaptured wgpu errors are collected, and every renderer call checks
+/// them ([`Gpu::take_errors`]), so a validation error surfaces as an error, never as a silent
+/// black image.
+pub struct Gpu {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter's name, driver and backend, for reports.
+    pub adapter_name: String,
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl Gpu {
+    /// Creates a headless device on the best adapter there is (a real GPU, else a software
+    /// rasterizer such as lavapipe), requesting the adapter's own limits: wgpu's defaults
+    /// allow only 256 texture array layers.
+    ///
+    /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
+    pub fn headless() -> Result<Self> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| RuntimeError::NoAdapter(e.to_string()))?;
+        Self::on_adapter(&adapter)
+    }
+
+    /// Creates a device on `adapter` with the adapter's limits.
+    pub fn on_adapter(adapter: &wgpu::Adapter) -> Result<Self> {
+        let info = adapter.get_info();
+        let adapter_name = format!("{} ({}, {:?})", info.name, info.driver, info.backend);
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("oslf"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits,
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| RuntimeError::Device {
+            adapter: adapter_name.clone(),
+            message: e.to_string(),
+        })?;
+        Ok(Self::from_device(device, queue, adapter_name))
+    }
+
+    /// Wraps a device and queue the application owns. Create it with the limits the store
+    /// needs ([`crate::Renderer::new`] says which it lacks).
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_name: String) -> Self {
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&errors);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        Self {
+            device,
+            queue,
+            adapter_name,
+            errors,
+        }
+    }
+
+    /// The limits of the device.
+    pub fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+
+    /// Returns an error if wgpu reported any since the last call.
+    pub fn take_errors(&self) -> Result<()> {
+        let mut v = self.errors.lock().map_err(|_| {
+            RuntimeError::Gpu("the GPU error log was poisoned by a panic".to_string())
+        })?;
+        if v.is_empty() {
+            Ok(())
+        } else {
+            let all = v.join("; ");
+            v.clear();
+            Err(RuntimeError::Gpu(all))
+        }
+    }
+
+    /// Waits until the GPU has finished all submitted work.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| RuntimeError::Gpu(e.to_string()))?;
+        Ok(())
+    }
+}

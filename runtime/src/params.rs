@@ -1,0 +1,341 @@
+//! Shading parameters: which terms to render, how to blend the four sample points, and the
+//! Ashikhmin–Shirley settings. Shared by the GPU shader (as [`ShadeUniform`]) and the CPU
+//! reference.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, RuntimeError};
+
+/// What a frame shows. Each term can be rendered alone, as the thesis's figures do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// Surface reconstruction F_recon alone (3.11–3.12): the baked, diffuse object.
+    Recon,
+    /// The mirror term F_refl alone (4.6–4.7), not scaled by C_s (thesis Figures 4.1–4.6).
+    Mirror,
+    /// P = F_recon + C_s · F_refl (4.12).
+    ReconMirror,
+    /// The Ashikhmin–Shirley term alone by Monte Carlo (5.5–5.12), plus the diffuse term 5.4
+    /// when R_d > 0.
+    Glossy,
+    /// P = F_recon + C_s · (Ashikhmin–Shirley) (4.12 with the BRDF of chapter 5).
+    ReconGlossy,
+}
+
+impl Mode {
+    /// Every mode, in CLI order.
+    pub const ALL: [Mode; 5] = [
+        Mode::Recon,
+        Mode::Mirror,
+        Mode::ReconMirror,
+        Mode::Glossy,
+        Mode::ReconGlossy,
+    ];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Recon => "recon",
+            Mode::Mirror => "mirror",
+            Mode::ReconMirror => "recon-mirror",
+            Mode::Glossy => "glossy",
+            Mode::ReconGlossy => "recon-glossy",
+        }
+    }
+
+    /// The shader's term flags: 1 recon, 2 mirror, 4 glossy, 8 scale by C_s.
+    pub fn terms(self) -> u32 {
+        match self {
+            Mode::Recon => 1,
+            Mode::Mirror => 2,
+            Mode::ReconMirror => 1 | 2 | 8,
+            Mode::Glossy => 4,
+            Mode::ReconGlossy => 1 | 4 | 8,
+        }
+    }
+}
+
+/// How the four sample points' radiance is blended (chapter 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Blend {
+    /// The sample point closest to the shaded point (4.3).
+    Distance,
+    /// The sample point whose direction is closest to the lookup direction (4.4–4.5).
+    Angle,
+    /// B^avg = 1/4 (4.9).
+    Average,
+    /// B^r: cosine lobe of power N around the reflection vector (4.10).
+    Reflection,
+    /// B^n: cosine lobe of power N around the normal (4.11).
+    Normal,
+}
+
+impl Blend {
+    /// Every blend, in CLI order.
+    pub const ALL: [Blend; 5] = [
+        Blend::Distance,
+        Blend::Angle,
+        Blend::Average,
+        Blend::Reflection,
+        Blend::Normal,
+    ];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Blend::Distance => "distance",
+            Blend::Angle => "angle",
+            Blend::Average => "avg",
+            Blend::Reflection => "r",
+            Blend::Normal => "n",
+        }
+    }
+
+    fn tag(self) -> u32 {
+        match self {
+            Blend::Distance => 0,
+            Blend::Angle => 1,
+            Blend::Average => 2,
+            Blend::Reflection => 3,
+            Blend::Normal => 4,
+        }
+    }
+}
+
+/// Where reflected radiance comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Source {
+    /// The four sample points of the shaded texel: the OSLF.
+    Oslf,
+    /// The baseline the thesis compares against: one cube map captured at the object's centre,
+    /// indexed by direction alone.
+    EnvMap,
+}
+
+/// The two Monte Carlo integration orders of §5.2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Order {
+    /// Integrate at each sample point with its own M random vectors, then blend (the thesis's
+    /// choice).
+    PerPoint,
+    /// For each of M random vectors blend the four sample points, then integrate.
+    PerDirection,
+}
+
+macro_rules! from_str_by_name {
+    ($t:ty, $what:literal) => {
+        impl std::str::FromStr for $t {
+            type Err = RuntimeError;
+            fn from_str(s: &str) -> Result<Self> {
+                Self::ALL
+                    .into_iter()
+                    .find(|v| v.name() == s)
+                    .ok_or_else(|| {
+                        let names: Vec<_> = Self::ALL.iter().map(|v| v.name()).collect();
+                        RuntimeError::Parameter(format!(
+                            concat!("unknown ", $what, " {:?} (one of {})"),
+                            s,
+                            names.join(", ")
+                        ))
+                    })
+            }
+        }
+    };
+}
+from_str_by_name!(Mode, "mode");
+from_str_by_name!(Blend, "blend");
+
+/// Everything a frame's shading depends on besides the camera.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShadingParams {
+    /// Which terms.
+    pub mode: Mode,
+    /// The blend of the four sample points.
+    pub blend: Blend,
+    /// The lobe power N of B^r and B^n (0 gives B^avg); 0..=1e6.
+    pub blend_n: f32,
+    /// OSLF or the environment-map baseline.
+    pub source: Source,
+    /// φ_shader in degrees (§6.3): reconstruction uses the nearest sample point within this
+    /// angle of the shaded normal; 0..=180.
+    pub phi_shader_deg: f32,
+    /// Monte Carlo samples per integration (M); 1..=65536.
+    pub m: u32,
+    /// The integration order of §5.2.
+    pub order: Order,
+    /// Specular reflectance at normal incidence R_s, in [0, 1].
+    pub rs: f32,
+    /// Diffuse reflectance R_d of the optional diffuse term 5.4, in [0, 1].
+    pub rd: f32,
+    /// Phong-like exponents n_u (along ∂x/∂u) and n_v, in [0, 1e7].
+    pub nu: f32,
+    /// See `nu`.
+    pub nv: f32,
+    /// Seed of the per-pixel random numbers.
+    pub seed: u32,
+}
+
+impl Default for ShadingParams {
+    /// The thesis's settings: reconstruction plus mirror reflection blended with B^n, N = 4;
+    /// φ_shader = 65°; Ashikhmin–Shirley R_s = 1, R_d = 0, n_u = n_v = 100, M = 16.
+    fn default() -> Self {
+        Self {
+            mode: Mode::ReconMirror,
+            blend: Blend::Normal,
+            blend_n: 4.0,
+            source: Source::Oslf,
+            phi_shader_deg: 65.0,
+            m: 16,
+            order: Order::PerPoint,
+            rs: 1.0,
+            rd: 0.0,
+            nu: 100.0,
+            nv: 100.0,
+            seed: 0,
+        }
+    }
+}
+
+impl ShadingParams {
+    /// Errors naming the first parameter outside its range (NaN included).
+    pub fn validate(&self) -> Result<()> {
+        let check = |name: &str, v: f32, lo: f32, hi: f32| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(RuntimeError::Parameter(format!(
+                    "{name} = {v} must be in [{lo}, {hi}]"
+                )))
+            }
+        };
+        check("N", self.blend_n, 0.0, 1e6)?;
+        check("phi_shader", self.phi_shader_deg, 0.0, 180.0)?;
+        check("R_s", self.rs, 0.0, 1.0)?;
+        check("R_d", self.rd, 0.0, 1.0)?;
+        check("n_u", self.nu, 0.0, 1e7)?;
+        check("n_v", self.nv, 0.0, 1e7)?;
+        if !(1..=65536).contains(&self.m) {
+            return Err(RuntimeError::Parameter(format!(
+                "M = {} must be in [1, 65536]",
+                self.m
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The shader's uniform block (`Params` in shade.wgsl and gbuffer.wgsl), 160 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadeUniform {
+    pub view_proj: [[f32; 4]; 4],
+    pub camera_pos: [f32; 4],
+    pub size: [u32; 2],
+    pub terms: u32,
+    pub blend: u32,
+    pub blend_n: f32,
+    pub source: u32,
+    pub m: u32,
+    pub order: u32,
+    pub rs: f32,
+    pub rd: f32,
+    pub nu: f32,
+    pub nv: f32,
+    pub cos_phi_shader: f32,
+    pub seed: u32,
+    pub sample_count: u32,
+    pub env_cube: u32,
+    pub map_res: u32,
+    pub index16: u32,
+    pub cube_res: u32,
+    pub slots_per_texture: u32,
+}
+
+/// What the uniform needs from the store and the cache besides the parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct StoreConstants {
+    pub sample_count: u32,
+    /// The environment cube's index, or `u32::MAX`.
+    pub env_cube: u32,
+    pub map_res: u32,
+    pub index16: bool,
+    pub cube_res: u32,
+    pub slots_per_texture: u32,
+}
+
+impl ShadeUniform {
+    /// Packs parameters, camera and store constants for the shader.
+    pub fn new(
+        p: &ShadingParams,
+        view_proj: glam::Mat4,
+        camera_pos: glam::Vec3,
+        size: [u32; 2],
+        k: &StoreConstants,
+    ) -> Self {
+        Self {
+            view_proj: view_proj.to_cols_array_2d(),
+            camera_pos: camera_pos.extend(1.0).to_array(),
+            size,
+            terms: p.mode.terms(),
+            blend: p.blend.tag(),
+            blend_n: p.blend_n,
+            source: match p.source {
+                Source::Oslf => 0,
+                Source::EnvMap => 1,
+            },
+            m: p.m,
+            order: match p.order {
+                Order::PerPoint => 0,
+                Order::PerDirection => 1,
+            },
+            rs: p.rs,
+            rd: p.rd,
+            nu: p.nu,
+            nv: p.nv,
+            cos_phi_shader: p.phi_shader_deg.to_radians().cos(),
+            seed: p.seed,
+            sample_count: k.sample_count,
+            env_cube: k.env_cube,
+            map_res: k.map_res,
+            index16: u32::from(k.index16),
+            cube_res: k.cube_res,
+            slots_per_texture: k.slots_per_texture,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_is_160_bytes_as_in_the_shader() {
+        assert_eq!(std::mem::size_of::<ShadeUniform>(), 160);
+    }
+
+    #[test]
+    fn names_round_trip_and_bad_values_are_named() {
+        for m in Mode::ALL {
+            assert_eq!(m.name().parse::<Mode>().unwrap(), m);
+        }
+        for b in Blend::ALL {
+            assert_eq!(b.name().parse::<Blend>().unwrap(), b);
+        }
+        let e = "shiny".parse::<Mode>().unwrap_err().to_string();
+        assert!(e.contains("shiny") && e.contains("recon-mirror"), "{e}");
+        let p = ShadingParams {
+            nu: f32::NAN,
+            ..Default::default()
+        };
+        assert!(p.validate().unwrap_err().to_string().contains("n_u"));
+        let p = ShadingParams {
+            m: 0,
+            ..Default::default()
+        };
+        assert!(p.validate().unwrap_err().to_string().contains("M = 0"));
+    }
+}

@@ -1,0 +1,597 @@
+//! The CPU reference of shade.wgsl: the same shading in Rust `f32`, function for function and
+//! in the same operation order, so that GPU images can be checked against it (the parity
+//! tests) and so that users without a GPU can still evaluate a G-buffer.
+//!
+//! Residency and feedback work as on the GPU: a [`CubeTexels`] says which faces are available,
+//! and every face a lookup *would* read with everything resident is marked in the feedback
+//! masks (bit `f` of entry `cube` = face `f` needed).
+
+use std::f32::consts::PI;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use glam::Vec3;
+use oslf_bake::bezier::BezierPatch;
+use oslf_format::{SampleMapView, INVALID_INDEX};
+
+use crate::params::ShadeUniform;
+
+/// Where the reference reads cube-map texels.
+pub trait CubeTexels: Sync {
+    /// Texel `(x, y)` of `face` of cube `cube`, or `None` when that face is not available
+    /// (not resident, the GPU's fallback case).
+    fn texel(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<Vec3>;
+    /// Whether any face of `cube` is available.
+    fn resident(&self, cube: u32) -> bool;
+}
+
+/// One pixel of the G-buffer, as gbuffer.wgsl writes it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GTexel {
+    /// World position and patch id + 1 (0 = background).
+    pub position_patch: [f32; 4],
+    /// Octahedral normal, u, v.
+    pub normal_uv: [f32; 4],
+}
+
+/// Everything the shader reads besides the G-buffer.
+pub struct Shader<'a, C: CubeTexels> {
+    pub uniform: ShadeUniform,
+    /// Sample-point positions (world space).
+    pub samples: &'a [Vec3],
+    /// World-space patches and their base colours C_s.
+    pub patches: &'a [BezierPatch],
+    pub colors: &'a [Vec3],
+    /// One sample map per patch.
+    pub maps: &'a [SampleMapView<'a>],
+    pub cubes: &'a C,
+    /// Feedback masks, one per cube (sample points, then the environment cube).
+    pub feedback: &'a [AtomicU32],
+}
+
+/// PCG hash (Jarzynski & Olano 2020), as `pcg` in shade.wgsl.
+pub fn pcg(v: u32) -> u32 {
+    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+    let h = pcg(pixel.wrapping_add(pcg(i.wrapping_add(pcg(j.wrapping_mul(8).wrapping_add(k))))));
+    (h >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+/// Face and face coordinates of a direction: [`oslf_format::cube::direction_to_face_st`].
+pub fn face_st(d: Vec3) -> (usize, f32, f32) {
+    oslf_format::cube::direction_to_face_st(d.to_array())
+}
+
+/// Candidates of a texel: the sample map's four entries with their directions from x.
+#[derive(Clone, Copy, Debug)]
+struct Candidates {
+    idx: [u32; 4],
+    s: [Vec3; 4],
+    count: u32,
+}
+
+fn bern3(t: f32) -> [f32; 4] {
+    let s = 1.0 - t;
+    [s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t]
+}
+
+fn bern2(t: f32) -> [f32; 3] {
+    let s = 1.0 - t;
+    [s * s, 2.0 * t * s, t * t]
+}
+
+/// ∂x/∂u through the hodograph, in `f32` (as `patch_du` in shade.wgsl).
+pub fn patch_du(p: &BezierPatch, u: f32, v: f32) -> Vec3 {
+    let (bu, bv) = (bern2(u), bern3(v));
+    let mut du = Vec3::ZERO;
+    for (i, bui) in bu.iter().enumerate() {
+        for (j, bvj) in bv.iter().enumerate() {
+            let d = p.cp[4 * (i + 1) + j] - p.cp[4 * i + j];
+            du += d * (bui * bvj);
+        }
+    }
+    du * 3.0
+}
+
+/// Unit tangent orthogonal to `n` from ∂x/∂u, or the frame of Duff et al. (2017) where ∂x/∂u
+/// vanishes or is parallel to `n` (as `tangent_frame` in shade.wgsl).
+pub fn tangent_frame(n: Vec3, du: Vec3) -> Vec3 {
+    let t = du - n * n.dot(du);
+    let l2 = t.dot(t);
+    if l2 > 1e-12 * du.dot(du).max(1e-30) {
+        return t / l2.sqrt();
+    }
+    let sgn = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    Vec3::new(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x)
+}
+
+struct AsSample {
+    l: Vec3,
+    weight: f32,
+}
+
+fn fresnel(rs: f32, c: f32) -> f32 {
+    // Eq. 5.7 (Schlick)
+    let k = (1.0 - c).clamp(0.0, 1.0);
+    let k2 = k * k;
+    rs + (1.0 - rs) * k2 * k2 * k
+}
+
+/// Replaces NaN and infinities by 0 (as `finite3`).
+fn finite3(c: Vec3) -> Vec3 {
+    Vec3::from_array(c.to_array().map(|x| if x.is_finite() { x } else { 0.0 }))
+}
+
+impl<C: CubeTexels> Shader<'_, C> {
+    fn lookup(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
+        let (face, s, t) = face_st(dir);
+        if let Some(f) = self.feedback.get(cube as usize) {
+            f.fetch_or(1 << face, Ordering::Relaxed);
+        }
+        let n = self.uniform.cube_res;
+        let nf = n as f32;
+        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
+        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
+        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
+        let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
+        let (wx, wy) = (fx - fx.floor(), fy - fy.floor());
+        let t00 = self.cubes.texel(cube, face, x0, y0)?;
+        let t10 = self.cubes.texel(cube, face, x1, y0)?;
+        let t01 = self.cubes.texel(cube, face, x0, y1)?;
+        let t11 = self.cubes.texel(cube, face, x1, y1)?;
+        let top = t00 + (t10 - t00) * wx;
+        let bottom = t01 + (t11 - t01) * wx;
+        Some(top + (bottom - top) * wy)
+    }
+
+    fn candidates(&self, patch: u32, u: f32, v: f32, x: Vec3, n: Vec3) -> Candidates {
+        let m = self.uniform.map_res;
+        let tx = ((u.clamp(0.0, 1.0) * m as f32) as u32).min(m - 1);
+        let ty = ((v.clamp(0.0, 1.0) * m as f32) as u32).min(m - 1);
+        let raw = self
+            .maps
+            .get(patch as usize)
+            .and_then(|map| map.get(tx, ty))
+            .unwrap_or([INVALID_INDEX; 4]);
+        let mut c = Candidates {
+            idx: [INVALID_INDEX; 4],
+            s: [n; 4],
+            count: 0,
+        };
+        for j in 0..4 {
+            let idx = raw[j];
+            if idx != INVALID_INDEX && idx < self.uniform.sample_count {
+                c.idx[j] = idx;
+                let d = self.samples[idx as usize] - x;
+                let l2 = d.dot(d);
+                if l2 > 0.0 {
+                    c.s[j] = d / l2.sqrt();
+                }
+                c.count += 1;
+            }
+        }
+        c
+    }
+
+    fn is_resident(&self, cube: u32) -> bool {
+        self.cubes.resident(cube)
+    }
+
+    fn blend_weights(&self, c: &Candidates, a: Vec3) -> [f32; 4] {
+        let u = &self.uniform;
+        let mut w = [0.0f32; 4];
+        let (mut best, mut best_dot, mut first) = (0usize, -2.0f32, 4usize);
+        for j in 0..4 {
+            if c.idx[j] == INVALID_INDEX {
+                continue;
+            }
+            if first == 4 {
+                first = j;
+            }
+            let d = a.dot(c.s[j]);
+            if d > best_dot {
+                best_dot = d;
+                best = j;
+            }
+        }
+        if first == 4 {
+            return w;
+        }
+        match u.blend {
+            0 => w[first] = 1.0, // Eq. 4.3
+            1 => w[best] = 1.0,  // Eq. 4.4-4.5
+            _ => {
+                for j in 0..4 {
+                    if c.idx[j] == INVALID_INDEX {
+                        continue;
+                    }
+                    if u.blend == 2 || u.blend_n == 0.0 {
+                        w[j] = 1.0; // Eq. 4.9
+                    } else if best_dot > 0.0 {
+                        let r = a.dot(c.s[j]).max(0.0) / best_dot;
+                        if r > 0.0 {
+                            w[j] = r.powf(u.blend_n); // Eq. 4.10, 4.11
+                        }
+                    }
+                }
+                if best_dot <= 0.0 && u.blend != 2 && u.blend_n != 0.0 {
+                    w[best] = 1.0;
+                }
+            }
+        }
+        w
+    }
+
+    fn blend_lookup(&self, c: &Candidates, w: [f32; 4], dir: Vec3) -> Option<Vec3> {
+        let mut acc = Vec3::ZERO;
+        let mut wsum = 0.0;
+        for j in 0..4 {
+            if w[j] > 0.0 {
+                if let Some(l) = self.lookup(c.idx[j], dir) {
+                    acc += l * w[j];
+                    wsum += w[j];
+                }
+            }
+        }
+        (wsum > 0.0).then(|| acc / wsum)
+    }
+
+    fn env_lookup(&self, dir: Vec3) -> Vec3 {
+        if self.uniform.env_cube == INVALID_INDEX {
+            return Vec3::ZERO;
+        }
+        self.lookup(self.uniform.env_cube, dir)
+            .unwrap_or(Vec3::ZERO)
+    }
+
+    fn recon_choice(&self, c: &Candidates, n: Vec3, resident_only: bool) -> usize {
+        let (mut best, mut best_dot) = (4usize, -2.0f32);
+        for j in 0..4 {
+            if c.idx[j] == INVALID_INDEX {
+                continue;
+            }
+            if resident_only && !self.is_resident(c.idx[j]) {
+                continue;
+            }
+            let d = n.dot(c.s[j]);
+            if d >= self.uniform.cos_phi_shader {
+                return j;
+            }
+            if d > best_dot {
+                best_dot = d;
+                best = j;
+            }
+        }
+        best
+    }
+
+    fn recon(&self, c: &Candidates, x: Vec3, n: Vec3) -> Vec3 {
+        let ideal = self.recon_choice(c, n, false);
+        if ideal == 4 {
+            return Vec3::ZERO;
+        }
+        let i = c.idx[ideal];
+        if let Some(l) = self.lookup(i, x - self.samples[i as usize]) {
+            return l;
+        }
+        let j = self.recon_choice(c, n, true);
+        if j == 4 {
+            return Vec3::ZERO;
+        }
+        let i = c.idx[j];
+        self.lookup(i, x - self.samples[i as usize])
+            .unwrap_or(Vec3::ZERO)
+    }
+
+    fn mirror(&self, c: &Candidates, n: Vec3, r: Vec3) -> Vec3 {
+        if self.uniform.source == 1 || c.count == 0 {
+            return self.env_lookup(r);
+        }
+        let axis = if self.uniform.blend == 4 { n } else { r };
+        self.blend_lookup(c, self.blend_weights(c, axis), r)
+            .unwrap_or_else(|| self.env_lookup(r))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn sample_as(
+        &self,
+        i: u32,
+        xi1r: f32,
+        xi2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+    ) -> AsSample {
+        let u = &self.uniform;
+        let xi1 = (i as f32 + xi1r) / u.m as f32;
+        let q = ((xi1 * 4.0) as u32).min(3);
+        let xq = xi1 * 4.0 - q as f32;
+        let half_angle = 0.5 * PI * xq;
+        let mut phi =
+            ((u.nu + 1.0).sqrt() * half_angle.sin()).atan2((u.nv + 1.0).sqrt() * half_angle.cos());
+        phi = match q {
+            1 => PI - phi,
+            2 => PI + phi,
+            3 => 2.0 * PI - phi,
+            _ => phi,
+        };
+        let (cp, sp) = (phi.cos(), phi.sin());
+        let e = u.nu * cp * cp + u.nv * sp * sp;
+        let cos_theta = (1.0 - xi2).powf(1.0 / (e + 1.0));
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let h = t * (sin_theta * cp) + b * (sin_theta * sp) + n * cos_theta;
+        let vh = v.dot(h);
+        let l = 2.0 * vh * h - v;
+        let nl = n.dot(l);
+        let weight = if vh > 0.0 && nl > 0.0 {
+            fresnel(u.rs, vh) * nl / nv.max(nl)
+        } else {
+            0.0
+        };
+        AsSample { l, weight }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn sample_diffuse(
+        &self,
+        i: u32,
+        r1: f32,
+        r2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        nv: f32,
+    ) -> AsSample {
+        let u = &self.uniform;
+        let xi1 = (i as f32 + r1) / u.m as f32;
+        let phi = 2.0 * PI * xi1;
+        let rad = r2.sqrt();
+        let z = (1.0 - r2).max(0.0).sqrt();
+        let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
+        let nl = n.dot(l);
+        let fv = 1.0 - (1.0 - 0.5 * nv.max(0.0)).powf(5.0);
+        let fl = 1.0 - (1.0 - 0.5 * nl.max(0.0)).powf(5.0);
+        let weight = if nl > 0.0 {
+            28.0 / 23.0 * u.rd * (1.0 - u.rs) * fv * fl // Eq. 5.4 × π
+        } else {
+            0.0
+        };
+        AsSample { l, weight }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn integrate(
+        &self,
+        c: &Candidates,
+        cube: u32,
+        j: u32,
+        pixel: u32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+    ) -> (Vec3, bool) {
+        let u = &self.uniform;
+        let mut acc = Vec3::ZERO;
+        let mut ok = true;
+        let wn = self.blend_weights(c, n);
+        for i in 0..u.m {
+            for k in 0..2 {
+                let s = if k == 0 {
+                    self.sample_as(
+                        i,
+                        rand(pixel, i, j, 0),
+                        rand(pixel, i, j, 1),
+                        n,
+                        t,
+                        b,
+                        v,
+                        nv,
+                    )
+                } else {
+                    if u.rd <= 0.0 {
+                        continue;
+                    }
+                    self.sample_diffuse(i, rand(pixel, i, j, 2), rand(pixel, i, j, 3), n, t, b, nv)
+                };
+                if s.weight <= 0.0 {
+                    continue;
+                }
+                let li = if cube != INVALID_INDEX {
+                    match self.lookup(cube, s.l) {
+                        Some(l) => l,
+                        None => {
+                            ok = false;
+                            Vec3::ZERO
+                        }
+                    }
+                } else {
+                    let w = if u.blend != 4 {
+                        self.blend_weights(c, s.l)
+                    } else {
+                        wn
+                    };
+                    self.blend_lookup(c, w, s.l)
+                        .unwrap_or_else(|| self.env_lookup(s.l))
+                };
+                acc += li * s.weight;
+            }
+        }
+        (acc / u.m.max(1) as f32, ok)
+    }
+
+    fn glossy(&self, c: &Candidates, pixel: u32, n: Vec3, t: Vec3, v: Vec3, r: Vec3) -> Vec3 {
+        let u = &self.uniform;
+        let b = n.cross(t);
+        let nv = n.dot(v);
+        if u.source == 1 || c.count == 0 {
+            if u.env_cube == INVALID_INDEX {
+                return Vec3::ZERO;
+            }
+            return self.integrate(c, u.env_cube, 4, pixel, n, t, b, v, nv).0;
+        }
+        if u.order == 1 {
+            return self.integrate(c, INVALID_INDEX, 4, pixel, n, t, b, v, nv).0;
+        }
+        let axis = if u.blend == 4 { n } else { r };
+        let w = self.blend_weights(c, axis);
+        let mut acc = Vec3::ZERO;
+        let mut wsum = 0.0;
+        for j in 0..4 {
+            if w[j] > 0.0 {
+                let (est, ok) = self.integrate(c, c.idx[j], j as u32, pixel, n, t, b, v, nv);
+                if ok {
+                    acc += est * w[j];
+                    wsum += w[j];
+                }
+            }
+        }
+        if wsum > 0.0 {
+            return acc / wsum;
+        }
+        if u.env_cube == INVALID_INDEX {
+            return Vec3::ZERO;
+        }
+        self.integrate(c, u.env_cube, 4, pixel, n, t, b, v, nv).0
+    }
+
+    /// Shades pixel `(px, py)` with G-buffer texel `g`; `[0; 4]` for background, else the
+    /// colour with alpha 1 (as `shade` in shade.wgsl).
+    pub fn shade(&self, px: u32, py: u32, g: &GTexel) -> [f32; 4] {
+        let u = &self.uniform;
+        if g.position_patch[3] < 0.5 {
+            return [0.0; 4];
+        }
+        let patch = (g.position_patch[3] - 0.5) as u32;
+        let x = Vec3::new(
+            g.position_patch[0],
+            g.position_patch[1],
+            g.position_patch[2],
+        );
+        let n = crate::geometry::oct_decode([g.normal_uv[0], g.normal_uv[1]]);
+        let (pu, pv) = (g.normal_uv[2], g.normal_uv[3]);
+        let c = self.candidates(patch, pu, pv, x, n);
+        let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
+        let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
+        let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
+        let mut spec = Vec3::ZERO;
+        if u.terms & 2 != 0 {
+            spec = self.mirror(&c, n, r);
+        } else if u.terms & 4 != 0 {
+            let du = self
+                .patches
+                .get(patch as usize)
+                .map_or(Vec3::ZERO, |p| patch_du(p, pu, pv));
+            let t = tangent_frame(n, du);
+            spec = self.glossy(&c, pixel, n, t, v, r);
+        }
+        if u.terms & 8 != 0 {
+            spec *= self
+                .colors
+                .get(patch as usize)
+                .copied()
+                .unwrap_or(Vec3::ONE);
+        }
+        let mut color = spec;
+        if u.terms & 1 != 0 {
+            color += self.recon(&c, x, n); // Eq. 3.12, 4.12
+        }
+        let c = finite3(color);
+        [c.x, c.y, c.z, 1.0]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tangent_frames_are_unit_and_orthogonal_even_where_du_vanishes() {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(0.6, 0.0, -0.8),
+            Vec3::new(-1e-8, 1.0, 0.0).normalize(),
+        ] {
+            for du in [Vec3::ZERO, n * 3.0, Vec3::X, Vec3::new(1e-30, 0.0, 0.0)] {
+                let t = tangent_frame(n, du);
+                assert!(t.is_finite(), "{n} {du}");
+                assert!((t.length() - 1.0).abs() < 1e-5, "{n} {du} {t}");
+                assert!(t.dot(n).abs() < 1e-5, "{n} {du} {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn fresnel_is_schlick_at_both_ends() {
+        assert_eq!(fresnel(0.04, 1.0), 0.04);
+        assert!((fresnel(0.04, 0.0) - 1.0).abs() < 1e-6);
+        assert!((fresnel(0.04, -0.5) - 1.0).abs() < 1e-6);
+    }
+}
+
+/// Every cube of a store, decoded to linear RGB: the reference's view of "everything
+/// resident".
+pub struct StoreCubes {
+    resolution: u32,
+    cubes: Vec<Vec<Vec3>>,
+    /// Optional residency masks (the GPU cache's indirection table): a face is available
+    /// only where its bit is set.
+    pub masks: Option<Vec<u32>>,
+}
+
+impl StoreCubes {
+    /// Decodes every cube of `store` (in parallel). Errors name the cube.
+    pub fn decode(store: &oslf_format::Store) -> crate::Result<Self> {
+        use rayon::prelude::*;
+        let resolution = store.cube_resolution();
+        let cubes = (0..store.cube_count())
+            .into_par_iter()
+            .map(|cube| {
+                let image = store
+                    .read_cube(cube)
+                    .map_err(|source| crate::RuntimeError::Cube { cube, source })?;
+                Ok(image
+                    .faces
+                    .iter()
+                    .flat_map(|f| f.iter().map(|&t| Vec3::from_array(t)))
+                    .collect())
+            })
+            .collect::<crate::Result<Vec<Vec<Vec3>>>>()?;
+        Ok(Self {
+            resolution,
+            cubes,
+            masks: None,
+        })
+    }
+}
+
+impl CubeTexels for StoreCubes {
+    fn texel(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<Vec3> {
+        if let Some(m) = &self.masks {
+            if m.get(cube as usize).copied().unwrap_or(0) & (1 << face) == 0 {
+                return None;
+            }
+        }
+        let n = self.resolution as usize;
+        self.cubes
+            .get(cube as usize)?
+            .get(face * n * n + y as usize * n + x as usize)
+            .copied()
+    }
+
+    fn resident(&self, cube: u32) -> bool {
+        match &self.masks {
+            Some(m) => m.get(cube as usize).copied().unwrap_or(0) & 63 != 0,
+            None => (cube as usize) < self.cubes.len(),
+        }
+    }
+}

@@ -1,0 +1,502 @@
+// OSLF shading: one compute invocation per pixel, reading the G-buffer written by gbuffer.wgsl.
+//
+// Every function here has a twin in `reference.rs` (the CPU reference) with the same operation
+// order; the parity tests compare the two. Bindings are declared in the order of
+// `Renderer::shade_layout` (renderer.rs).
+
+struct Params {
+    view_proj: mat4x4<f32>,
+    camera_pos: vec4<f32>,
+    size: vec2<u32>,
+    // Bit flags: 1 = F_recon, 2 = mirror F_refl, 4 = glossy (Ashikhmin–Shirley),
+    // 8 = scale the reflection term by C_s (Eq. 4.12).
+    terms: u32,
+    // 0 closest distance (4.3), 1 closest angle (4.4), 2 B^avg (4.9), 3 B^r (4.10), 4 B^n (4.11)
+    blend: u32,
+    blend_n: f32,
+    // 0 = the OSLF sample points, 1 = the environment-map baseline (one cube at the centre)
+    source: u32,
+    m: u32,
+    // 0 = integrate per sample point, then blend; 1 = blend per direction, then integrate (§5.2)
+    order: u32,
+    rs: f32,
+    rd: f32,
+    nu: f32,
+    nv: f32,
+    cos_phi_shader: f32,
+    seed: u32,
+    sample_count: u32,
+    env_cube: u32,
+    map_res: u32,
+    index16: u32,
+    cube_res: u32,
+    slots_per_texture: u32,
+};
+
+struct PatchGpu {
+    cp: array<vec4<f32>, 16>,
+    color: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var gb_position: texture_2d<f32>;
+@group(0) @binding(2) var gb_normal: texture_2d<f32>;
+@group(0) @binding(3) var sample_maps: texture_2d_array<u32>;
+@group(0) @binding(4) var<storage, read> samples: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> patches: array<PatchGpu>;
+@group(0) @binding(6) var<storage, read> slots: array<u32>;
+@group(0) @binding(7) var<storage, read_write> feedback: array<atomic<u32>>;
+@group(0) @binding(8) var pool0: texture_2d_array<f32>;
+@group(0) @binding(9) var pool1: texture_2d_array<f32>;
+@group(0) @binding(10) var pool2: texture_2d_array<f32>;
+@group(0) @binding(11) var pool3: texture_2d_array<f32>;
+@group(0) @binding(12) var out_image: texture_storage_2d<rgba32float, write>;
+
+const INVALID: u32 = 0xffffffffu;
+const PI: f32 = 3.14159265358979;
+
+// ---- random numbers: PCG hash (Jarzynski & Olano 2020), identical in reference.rs ----
+
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+    let h = pcg(pixel + pcg(i + pcg(j * 8u + k)));
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+// ---- cube maps ----
+
+// Face and face coordinates (s, t) of a direction: the Vulkan table in oslf_format::cube.
+fn face_st(d: vec3<f32>) -> vec3<f32> {
+    let a = abs(d);
+    var face = 0u;
+    var sc = 0.0;
+    var tc = 0.0;
+    var ma = 0.0;
+    if (a.x >= a.y && a.x >= a.z) {
+        ma = a.x;
+        tc = -d.y;
+        if (d.x >= 0.0) { face = 0u; sc = -d.z; } else { face = 1u; sc = d.z; }
+    } else if (a.y >= a.z) {
+        ma = a.y;
+        sc = d.x;
+        if (d.y >= 0.0) { face = 2u; tc = d.z; } else { face = 3u; tc = -d.z; }
+    } else {
+        ma = a.z;
+        tc = -d.y;
+        if (d.z >= 0.0) { face = 4u; sc = d.x; } else { face = 5u; sc = -d.x; }
+    }
+    if (!(ma > 0.0)) {
+        return vec3<f32>(0.0, 0.5, 0.5);
+    }
+    let s = clamp((sc / ma + 1.0) * 0.5, 0.0, 1.0);
+    let t = clamp((tc / ma + 1.0) * 0.5, 0.0, 1.0);
+    return vec3<f32>(f32(face), s, t);
+}
+
+fn load_texel(slot: u32, face: u32, x: u32, y: u32) -> vec3<f32> {
+    let tex = slot / P.slots_per_texture;
+    let layer = i32((slot % P.slots_per_texture) * 6u + face);
+    let c = vec2<i32>(i32(x), i32(y));
+    switch tex {
+        case 0u: { return textureLoad(pool0, c, layer, 0).rgb; }
+        case 1u: { return textureLoad(pool1, c, layer, 0).rgb; }
+        case 2u: { return textureLoad(pool2, c, layer, 0).rgb; }
+        default: { return textureLoad(pool3, c, layer, 0).rgb; }
+    }
+}
+
+// Radiance of cube `cube` towards `dir`, bilinear within the face (clamped at its edges).
+// Marks the face as needed in the feedback buffer. `w` is 1 when the face was resident,
+// 0 when not (then the colour is 0 and must not be used).
+fn lookup(cube: u32, dir: vec3<f32>) -> vec4<f32> {
+    let fst = face_st(dir);
+    let face = u32(fst.x);
+    atomicOr(&feedback[cube], 1u << face);
+    let entry = slots[cube];
+    if ((entry & (1u << face)) == 0u) {
+        return vec4<f32>(0.0);
+    }
+    let slot = entry >> 6u;
+    let n = P.cube_res;
+    let nf = f32(n);
+    let fx = clamp(fst.y * nf - 0.5, 0.0, nf - 1.0);
+    let fy = clamp(fst.z * nf - 0.5, 0.0, nf - 1.0);
+    let x0 = u32(floor(fx));
+    let y0 = u32(floor(fy));
+    let x1 = min(x0 + 1u, n - 1u);
+    let y1 = min(y0 + 1u, n - 1u);
+    let wx = fx - floor(fx);
+    let wy = fy - floor(fy);
+    let t00 = load_texel(slot, face, x0, y0);
+    let t10 = load_texel(slot, face, x1, y0);
+    let t01 = load_texel(slot, face, x0, y1);
+    let t11 = load_texel(slot, face, x1, y1);
+    let top = t00 + (t10 - t00) * wx;
+    let bottom = t01 + (t11 - t01) * wx;
+    return vec4<f32>(top + (bottom - top) * wy, 1.0);
+}
+
+// ---- geometry ----
+
+fn oct_decode(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        let sx = select(-1.0, 1.0, n.x >= 0.0);
+        let sy = select(-1.0, 1.0, n.y >= 0.0);
+        n = vec3<f32>((1.0 - abs(n.y)) * sx, (1.0 - abs(n.x)) * sy, n.z);
+    }
+    return normalize(n);
+}
+
+fn bern3(t: f32) -> vec4<f32> {
+    let s = 1.0 - t;
+    return vec4<f32>(s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t);
+}
+
+fn bern2(t: f32) -> vec3<f32> {
+    let s = 1.0 - t;
+    return vec3<f32>(s * s, 2.0 * t * s, t * t);
+}
+
+// ∂x/∂u of patch p at (u, v) through the hodograph (derivative of Eq. 3.1).
+fn patch_du(p: u32, u: f32, v: f32) -> vec3<f32> {
+    let bu = bern2(u);
+    let bv = bern3(v);
+    var du = vec3<f32>(0.0);
+    for (var i = 0u; i < 3u; i++) {
+        for (var j = 0u; j < 4u; j++) {
+            let d = patches[p].cp[4u * (i + 1u) + j].xyz - patches[p].cp[4u * i + j].xyz;
+            du += d * (bu[i] * bv[j]);
+        }
+    }
+    return du * 3.0;
+}
+
+// Unit tangent from ∂x/∂u made orthogonal to n; where ∂x/∂u vanishes or is parallel to n (a
+// collapsed patch edge) the frame of Duff et al. (2017) built from n alone.
+fn tangent_frame(n: vec3<f32>, du: vec3<f32>) -> vec3<f32> {
+    let t = du - n * dot(n, du);
+    let l2 = dot(t, t);
+    if (l2 > 1e-12 * max(dot(du, du), 1e-30)) {
+        return t * inverseSqrt(l2);
+    }
+    let sgn = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    return vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+}
+
+// ---- blending (chapter 4) ----
+
+struct Candidates {
+    idx: array<u32, 4>,
+    s: array<vec3<f32>, 4>,
+    count: u32,
+};
+
+fn candidates(pid: u32, u: f32, v: f32, x: vec3<f32>, n: vec3<f32>) -> Candidates {
+    var c: Candidates;
+    let m = P.map_res;
+    let tx = min(u32(clamp(u, 0.0, 1.0) * f32(m)), m - 1u);
+    let ty = min(u32(clamp(v, 0.0, 1.0) * f32(m)), m - 1u);
+    let raw = textureLoad(sample_maps, vec2<i32>(i32(tx), i32(ty)), i32(pid), 0);
+    c.count = 0u;
+    for (var j = 0u; j < 4u; j++) {
+        var idx = raw[j];
+        if (P.index16 == 1u && idx == 0xffffu) {
+            idx = INVALID;
+        }
+        c.idx[j] = INVALID;
+        c.s[j] = n;
+        if (idx != INVALID && idx < P.sample_count) {
+            c.idx[j] = idx;
+            let d = samples[idx].xyz - x;
+            let l2 = dot(d, d);
+            if (l2 > 0.0) {
+                c.s[j] = d * inverseSqrt(l2);
+            }
+            c.count += 1u;
+        }
+    }
+    return c;
+}
+
+fn is_resident(cube: u32) -> bool {
+    return (slots[cube] & 63u) != 0u;
+}
+
+// Blend weights B_j for axis `a` (the reflection vector for B^r, the normal for B^n, the
+// sample direction when blending per direction). Weights are relative to the largest, so
+// B^r and B^n with huge N never underflow to an all-zero sum; if every ⟨a, s_j⟩ ≤ 0 the
+// closest in angle gets weight 1.
+fn blend_weights(c: Candidates, a: vec3<f32>) -> vec4<f32> {
+    var w = vec4<f32>(0.0);
+    var best = 0u;
+    var best_dot = -2.0;
+    var first = 4u;
+    for (var j = 0u; j < 4u; j++) {
+        if (c.idx[j] == INVALID) { continue; }
+        if (first == 4u) { first = j; }
+        let d = dot(a, c.s[j]);
+        if (d > best_dot) { best_dot = d; best = j; }
+    }
+    if (first == 4u) { return w; }
+    switch P.blend {
+        case 0u: { w[first] = 1.0; }              // Eq. 4.3
+        case 1u: { w[best] = 1.0; }               // Eq. 4.4-4.5
+        default: {
+            for (var j = 0u; j < 4u; j++) {
+                if (c.idx[j] == INVALID) { continue; }
+                if (P.blend == 2u || P.blend_n == 0.0) {
+                    w[j] = 1.0;                   // Eq. 4.9 (B^r, B^n with N = 0 reduce to it)
+                } else if (best_dot > 0.0) {
+                    let r = max(dot(a, c.s[j]), 0.0) / best_dot;
+                    if (r > 0.0) { w[j] = pow(r, P.blend_n); }   // Eq. 4.10, 4.11
+                }
+            }
+            if (best_dot <= 0.0 && P.blend != 2u && P.blend_n != 0.0) {
+                w[best] = 1.0;
+            }
+        }
+    }
+    return w;
+}
+
+// Blended radiance towards `dir` from the candidates with weights `w` (Eq. 4.7). Lookups
+// that are not resident are left out and the rest renormalized; `.w` is 0 when none was.
+fn blend_lookup(c: Candidates, w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
+    var acc = vec3<f32>(0.0);
+    var wsum = 0.0;
+    for (var j = 0u; j < 4u; j++) {
+        if (w[j] > 0.0) {
+            let l = lookup(c.idx[j], dir);
+            if (l.w > 0.0) {
+                acc += l.rgb * w[j];
+                wsum += w[j];
+            }
+        }
+    }
+    if (wsum > 0.0) {
+        return vec4<f32>(acc / wsum, 1.0);
+    }
+    return vec4<f32>(0.0);
+}
+
+// The environment-map baseline towards `dir`, or 0 when the store has none.
+fn env_lookup(dir: vec3<f32>) -> vec3<f32> {
+    if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
+    return lookup(P.env_cube, dir).rgb;
+}
+
+// ---- surface reconstruction (3.11–3.12, §6.3) ----
+
+fn recon_choice(c: Candidates, n: vec3<f32>, resident_only: bool) -> u32 {
+    var best = 4u;
+    var best_dot = -2.0;
+    for (var j = 0u; j < 4u; j++) {
+        if (c.idx[j] == INVALID) { continue; }
+        if (resident_only && !is_resident(c.idx[j])) { continue; }
+        let d = dot(n, c.s[j]);
+        if (d >= P.cos_phi_shader) { return j; }
+        if (d > best_dot) { best_dot = d; best = j; }
+    }
+    return best;
+}
+
+fn recon(c: Candidates, x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    // The choice with every cube resident is what the frame needs (marked in the feedback).
+    let ideal = recon_choice(c, n, false);
+    if (ideal == 4u) { return vec3<f32>(0.0); }
+    let want = lookup(c.idx[ideal], x - samples[c.idx[ideal]].xyz);
+    if (want.w > 0.0) { return want.rgb; }
+    let j = recon_choice(c, n, true);
+    if (j == 4u) { return vec3<f32>(0.0); }
+    let got = lookup(c.idx[j], x - samples[c.idx[j]].xyz);
+    return got.rgb * got.w;
+}
+
+// ---- mirror reflection (chapter 4) ----
+
+fn mirror(c: Candidates, n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    if (P.source == 1u || c.count == 0u) {
+        return env_lookup(r);
+    }
+    var axis = r;
+    if (P.blend == 4u) { axis = n; }
+    let b = blend_lookup(c, blend_weights(c, axis), r);
+    if (b.w > 0.0) { return b.rgb; }
+    return env_lookup(r);
+}
+
+// ---- Ashikhmin–Shirley by Monte Carlo (chapter 5) ----
+
+struct AsSample {
+    l: vec3<f32>,
+    // f_r ⟨n,l⟩ / p(l): the weight of L_i(l) in Eq. 5.12; 0 for samples below the surface.
+    weight: f32,
+};
+
+fn fresnel(rs: f32, c: f32) -> f32 {
+    // Eq. 5.7 (Schlick)
+    let k = clamp(1.0 - c, 0.0, 1.0);
+    let k2 = k * k;
+    return rs + (1.0 - rs) * k2 * k2 * k;
+}
+
+// Sample i of M from the specular lobe, stratified in ξ1 over the four quadrants (Eq. 5.9 with
+// the exponent in φ, see NOTES.md), reflected about h (5.10). With k = v the estimator
+// f_sr ⟨n,l⟩ / p(l) of 5.5, 5.8, 5.11 reduces to F(⟨v,h⟩) ⟨n,l⟩ / max(⟨n,v⟩, ⟨n,l⟩):
+// no exponent, no 0/0 at h = n, finite for any n_u, n_v.
+fn sample_as(i: u32, xi1r: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> AsSample {
+    var out: AsSample;
+    let xi1 = (f32(i) + xi1r) / f32(P.m);
+    let q = min(u32(xi1 * 4.0), 3u);
+    let xq = xi1 * 4.0 - f32(q);
+    let half_angle = 0.5 * PI * xq;
+    var phi = atan2(sqrt(P.nu + 1.0) * sin(half_angle), sqrt(P.nv + 1.0) * cos(half_angle));
+    if (q == 1u) { phi = PI - phi; } else if (q == 2u) { phi = PI + phi; } else if (q == 3u) { phi = 2.0 * PI - phi; }
+    let cp = cos(phi);
+    let sp = sin(phi);
+    let e = P.nu * cp * cp + P.nv * sp * sp;
+    let cos_theta = pow(1.0 - xi2, 1.0 / (e + 1.0));
+    let sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    let h = t * (sin_theta * cp) + b * (sin_theta * sp) + n * cos_theta;
+    let vh = dot(v, h);
+    out.l = 2.0 * vh * h - v;
+    out.weight = 0.0;
+    let nl = dot(n, out.l);
+    if (vh > 0.0 && nl > 0.0) {
+        out.weight = fresnel(P.rs, vh) * nl / max(nv, nl);
+    }
+    return out;
+}
+
+// Cosine-weighted sample for the diffuse term 5.4: f_dr ⟨n,l⟩ / p(l) = π f_dr.
+fn sample_diffuse(i: u32, r1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, nv: f32) -> AsSample {
+    var out: AsSample;
+    let xi1 = (f32(i) + r1) / f32(P.m);
+    let phi = 2.0 * PI * xi1;
+    let rad = sqrt(r2);
+    let z = sqrt(max(0.0, 1.0 - r2));
+    out.l = t * (rad * cos(phi)) + b * (rad * sin(phi)) + n * z;
+    let nl = dot(n, out.l);
+    let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
+    let fl = 1.0 - pow(1.0 - 0.5 * max(nl, 0.0), 5.0);
+    out.weight = select(0.0, 28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv * fl, nl > 0.0); // Eq. 5.4 × π
+    return out;
+}
+
+// Integrates over one source: cube `cube` (order A per point), or the blend of the candidates
+// per direction (order B, cube = INVALID). `.w` = 0 when a needed cube was not resident.
+fn integrate(c: Candidates, cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
+    var acc = vec3<f32>(0.0);
+    var ok = 1.0;
+    let wn = blend_weights(c, n);
+    for (var i = 0u; i < P.m; i++) {
+        for (var k = 0u; k < 2u; k++) {
+            var s: AsSample;
+            if (k == 0u) {
+                s = sample_as(i, rand(pixel, i, j, 0u), rand(pixel, i, j, 1u), n, t, b, v, nv);
+            } else {
+                if (P.rd <= 0.0) { continue; }
+                s = sample_diffuse(i, rand(pixel, i, j, 2u), rand(pixel, i, j, 3u), n, t, b, nv);
+            }
+            if (s.weight <= 0.0) { continue; }
+            var li = vec3<f32>(0.0);
+            if (cube != INVALID) {
+                let l = lookup(cube, s.l);
+                if (l.w == 0.0) { ok = 0.0; }
+                li = l.rgb;
+            } else {
+                var w = wn;
+                if (P.blend != 4u) { w = blend_weights(c, s.l); }
+                let l = blend_lookup(c, w, s.l);
+                if (l.w > 0.0) { li = l.rgb; } else { li = env_lookup(s.l); }
+            }
+            acc += li * s.weight;
+        }
+    }
+    return vec4<f32>(acc / f32(max(P.m, 1u)), ok);
+}
+
+fn glossy(c: Candidates, pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    let b = cross(n, t);
+    let nv = dot(n, v);
+    if (P.source == 1u || c.count == 0u) {
+        if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
+        return integrate(c, P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
+    }
+    if (P.order == 1u) {
+        return integrate(c, INVALID, 4u, pixel, n, t, b, v, nv).rgb;
+    }
+    // Order A: integrate at each sample point with its own random vectors, then blend (4.7).
+    var axis = r;
+    if (P.blend == 4u) { axis = n; }
+    let w = blend_weights(c, axis);
+    var acc = vec3<f32>(0.0);
+    var wsum = 0.0;
+    for (var j = 0u; j < 4u; j++) {
+        if (w[j] > 0.0) {
+            let est = integrate(c, c.idx[j], j, pixel, n, t, b, v, nv);
+            if (est.w > 0.0) {
+                acc += est.rgb * w[j];
+                wsum += w[j];
+            }
+        }
+    }
+    if (wsum > 0.0) { return acc / wsum; }
+    if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
+    return integrate(c, P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
+}
+
+// Replaces NaN and infinities by 0 so that nothing non-finite reaches a pixel.
+fn finite3(c: vec3<f32>) -> vec3<f32> {
+    var o = c;
+    for (var k = 0u; k < 3u; k++) {
+        let x = c[k];
+        if (!(x == x) || abs(x) > 3.0e38) { o[k] = 0.0; }
+    }
+    return o;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= P.size.x || gid.y >= P.size.y) { return; }
+    let px = vec2<i32>(i32(gid.x), i32(gid.y));
+    let g0 = textureLoad(gb_position, px, 0);
+    let g1 = textureLoad(gb_normal, px, 0);
+    if (g0.w < 0.5) {
+        textureStore(out_image, px, vec4<f32>(0.0));
+        return;
+    }
+    let pid = u32(g0.w - 0.5);
+    let x = g0.xyz;
+    let n = oct_decode(g1.xy);
+    let u = g1.z;
+    let v_param = g1.w;
+    let c = candidates(pid, u, v_param, x, n);
+    let v = normalize(P.camera_pos.xyz - x);
+    let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
+    let pixel = pcg(gid.x + pcg(gid.y + pcg(P.seed)));
+
+    var spec = vec3<f32>(0.0);
+    if ((P.terms & 2u) != 0u) {
+        spec = mirror(c, n, r);
+    } else if ((P.terms & 4u) != 0u) {
+        let t = tangent_frame(n, patch_du(pid, u, v_param));
+        spec = glossy(c, pixel, n, t, v, r);
+    }
+    if ((P.terms & 8u) != 0u) {
+        spec *= patches[pid].color.rgb;
+    }
+    var color = spec;
+    if ((P.terms & 1u) != 0u) {
+        color += recon(c, x, n); // Eq. 3.12, 4.12
+    }
+    textureStore(out_image, px, vec4<f32>(finite3(color), 1.0));
+}

@@ -1,0 +1,115 @@
+//! A small store baked once per test binary, and image comparisons.
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use oslf_bake::bake::{bake, BakeOptions};
+use oslf_bake::scene::Scene;
+
+/// The teapot on a checkered table beside a wall, under a point light and a uniform sky, at
+/// toy resolutions: small enough to bake in a second, rich enough that every shading term
+/// differs from the others.
+pub const SCENE: &str = r#"
+[camera]
+position = [5.5, -6.5, 4.5]
+target = [0.0, 0.0, 1.0]
+vfov = 36.0
+
+[environment]
+uniform = [0.6, 0.7, 0.9]
+
+[[point_light]]
+position = [3.0, -2.0, 6.0]
+intensity = [40.0, 38.0, 35.0]
+
+[[object]]
+name = "teapot"
+patches = "newell-teapot"
+select = [0, 28]
+material = { color = [0.1, 0.42, 0.12] }
+
+[[box]]
+size = [8.0, 6.0, 0.2]
+transform = { translate = [0.0, 0.0, -0.1] }
+material = { checker = { a = [0.6, 0.5, 0.3], b = [0.3, 0.2, 0.1], scale = 2.0 } }
+
+[[box]]
+size = [0.3, 6.0, 4.0]
+transform = { translate = [-4.0, 0.0, 2.0] }
+material = { color = [0.7, 0.7, 0.7] }
+
+[bake]
+epsilon = 0.1
+sample_count = 120
+cube_resolution = 8
+sample_map_resolution = 16
+samples_per_texel = 1
+bounces = 1
+seed = 3
+"#;
+
+/// The path of the baked test store (baked on first use).
+pub fn store_path() -> PathBuf {
+    static PATH: OnceLock<PathBuf> = OnceLock::new();
+    PATH.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("oslf-runtime-tests-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene_path = dir.join("scene.toml");
+        std::fs::write(&scene_path, SCENE).unwrap();
+        let scene = Scene::load(&scene_path, None).unwrap();
+        let output = dir.join("teapot.oslf");
+        let options = BakeOptions {
+            output: output.clone(),
+            resume: false,
+            progress: false,
+            cube_limit: None,
+        };
+        bake(&scene, &options).unwrap();
+        output
+    })
+    .clone()
+}
+
+pub fn open_store() -> oslf_format::Store {
+    oslf_format::Store::open(&store_path()).unwrap()
+}
+
+/// Compares two images over the pixels where `a` has alpha 1. Returns (object pixels, share
+/// of them within `tol` relative (of max(1, |reference|)), mean absolute difference).
+pub fn compare(gpu: &[[f32; 4]], cpu: &[[f32; 4]], tol: f32) -> (usize, f64, f64) {
+    assert_eq!(gpu.len(), cpu.len());
+    let (mut n, mut ok, mut sum) = (0usize, 0usize, 0f64);
+    for (g, c) in gpu.iter().zip(cpu) {
+        assert_eq!(g[3], c[3], "object masks differ");
+        if c[3] != 1.0 {
+            continue;
+        }
+        n += 1;
+        let mut good = true;
+        for k in 0..3 {
+            let d = (g[k] - c[k]).abs();
+            sum += f64::from(d);
+            if d > tol * c[k].abs().max(1.0) {
+                good = false;
+            }
+        }
+        ok += usize::from(good);
+    }
+    (n, ok as f64 / n.max(1) as f64, sum / (3 * n.max(1)) as f64)
+}
+
+/// Mean of the colour channels over object pixels.
+pub fn mean(img: &[[f32; 4]]) -> f64 {
+    let (mut s, mut n) = (0f64, 0usize);
+    for p in img.iter().filter(|p| p[3] == 1.0) {
+        s += f64::from(p[0] + p[1] + p[2]) / 3.0;
+        n += 1;
+    }
+    s / n.max(1) as f64
+}
+
+/// Every channel of every pixel finite.
+pub fn all_finite(img: &[[f32; 4]]) -> bool {
+    img.iter().all(|p| p.iter().all(|c| c.is_finite()))
+}
