@@ -1,0 +1,150 @@
+//! The LRU cube-map cache: budgets, granularity, fallback, statistics.
+
+mod common;
+
+use common::{all_finite, compare, mean, open_store};
+use oslf_runtime::reference::StoreCubes;
+use oslf_runtime::{CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams};
+
+fn options() -> RenderOptions {
+    RenderOptions {
+        width: 80,
+        height: 60,
+        ..Default::default()
+    }
+}
+
+fn renderer(slots: Option<u32>, granularity: Granularity) -> Renderer {
+    let config = CacheConfig {
+        gpu_slots: slots,
+        ram_bytes: 1 << 20,
+        granularity,
+    };
+    Renderer::new(Gpu::headless().unwrap(), open_store(), config).unwrap()
+}
+
+#[test]
+fn a_budget_holding_the_working_set_gives_the_unlimited_image_and_less_degrades_gracefully() {
+    let params = ShadingParams::default(); // recon + C_s mirror, B^n N=4
+    let mut full = renderer(None, Granularity::Cube);
+    let camera = full.default_view();
+    let exact = full.render(&camera, &params, &options()).unwrap();
+    let working_set = exact.stats.requests as u32;
+    assert!(working_set > 10 && working_set < full.store().cube_count());
+    assert_eq!(
+        exact.stats.misses,
+        exact.stats.requests - 1,
+        "cold: only the pinned environment cube hits"
+    );
+
+    // Exactly the working set: the same image, bit for bit.
+    let mut fit = renderer(Some(working_set), Granularity::Cube);
+    let frame = fit.render(&camera, &params, &options()).unwrap();
+    assert_eq!(frame.stats.unresolved, 0);
+    assert_eq!(
+        frame.pixels, exact.pixels,
+        "a budget that holds the working set changes the image"
+    );
+    // Warm: the next frame hits everything and loads nothing.
+    let warm = fit.render(&camera, &params, &options()).unwrap();
+    assert_eq!(
+        (warm.stats.hits, warm.stats.misses, warm.stats.loads),
+        (warm.stats.requests, 0, 0)
+    );
+    assert_eq!(warm.passes, 1);
+
+    // Half the working set: finite, close, and the shortfall reported.
+    let mut half = renderer(Some(working_set / 2), Granularity::Cube);
+    let frame = half.render(&camera, &params, &options()).unwrap();
+    assert!(frame.stats.unresolved > 0, "{:?}", frame.stats);
+    assert!(all_finite(&frame.pixels));
+    assert_ne!(frame.pixels, exact.pixels);
+    let (_, _, mae) = compare(&frame.pixels, &exact.pixels, 1e-3);
+    println!(
+        "half budget: mean |Δ| {mae:.4} of mean {:.4}",
+        mean(&exact.pixels)
+    );
+    assert!(mae < 0.5 * mean(&exact.pixels), "fallback far off: {mae}");
+
+    // The CPU reference with the same residency reproduces the fallback image.
+    let mut cubes = StoreCubes::decode(half.store()).unwrap();
+    cubes.masks = Some(half.cache().indirection());
+    let (cpu, _) = half.reference_image(&camera, &params, &cubes).unwrap();
+    let (_, share, _) = compare(&frame.pixels, &cpu, 2e-3);
+    assert!(share >= 0.995, "fallback parity {share}");
+}
+
+#[test]
+fn cube_granularity_loads_whole_cubes_and_face_granularity_only_what_is_read() {
+    let params = ShadingParams {
+        mode: Mode::Recon,
+        ..Default::default()
+    };
+    let mut cube = renderer(None, Granularity::Cube);
+    let mut face = renderer(None, Granularity::Face);
+    let camera = cube.default_view();
+    let a = cube.render(&camera, &params, &options()).unwrap();
+    let b = face.render(&camera, &params, &options()).unwrap();
+    assert_eq!(a.pixels, b.pixels);
+    println!("cube: {:?}\nface: {:?}", a.stats, b.stats);
+    assert!(b.stats.bytes_uploaded < a.stats.bytes_uploaded);
+    assert!(b.stats.requests > a.stats.requests, "faces outnumber cubes");
+    let texel_bytes = (cube.store().cube_resolution().pow(2) * 4) as u64;
+    assert_eq!(a.stats.bytes_uploaded, a.stats.loads * 6 * texel_bytes);
+    assert_eq!(b.stats.bytes_uploaded, b.stats.loads * texel_bytes);
+}
+
+#[test]
+fn lru_evicts_the_least_recently_used_and_statistics_add_up() {
+    let params = ShadingParams::default();
+    let mut r = renderer(Some(40), Granularity::Cube);
+    let camera = r.default_view();
+    let mut other = camera;
+    other.position = camera.target + (camera.target - camera.position); // the far side
+    for c in [camera, other, camera] {
+        let f = r.render(&c, &params, &options()).unwrap();
+        assert!(all_finite(&f.pixels));
+        assert_eq!(f.stats.hits + f.stats.misses, f.stats.requests);
+    }
+    let s = r.cache().cumulative.clone();
+    println!("{s:?}");
+    assert_eq!(s.frames, 3);
+    assert!(s.evictions > 0, "a 40-slot cache over two views must evict");
+    assert!(
+        s.ram_hits > 0,
+        "the RAM level serves faces evicted from the GPU"
+    );
+    assert!(s.miss_rate > 0.0 && s.miss_rate < 1.0);
+    let json = serde_json::to_string(&s).unwrap();
+    assert!(json.contains("\"miss_rate\""));
+}
+
+#[test]
+fn impossible_budgets_and_sizes_are_refused_with_the_reason() {
+    let e = Renderer::new(
+        Gpu::headless().unwrap(),
+        open_store(),
+        CacheConfig {
+            gpu_slots: Some(1 << 30),
+            ..Default::default()
+        },
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("at most"), "{e}");
+    let mut r = renderer(None, Granularity::Cube);
+    let camera = r.default_view();
+    let e = r
+        .render(
+            &camera,
+            &ShadingParams::default(),
+            &RenderOptions {
+                width: 0,
+                ..options()
+            },
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("image size"), "{e}");
+}
