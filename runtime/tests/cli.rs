@@ -1,0 +1,104 @@
+//! `oslf-render` end to end: outputs, statistics, and errors that say what and where.
+
+mod common;
+
+use std::process::Command;
+
+fn render(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_oslf-render"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn renders_exr_and_png_and_prints_cache_statistics() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap().join("cli");
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join("frame.exr");
+    let json = dir.join("stats.json");
+    let out = render(&[
+        store.to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--mode",
+        "recon-glossy",
+        "--blend",
+        "r",
+        "-N",
+        "8",
+        "-M",
+        "4",
+        "--nu",
+        "1000",
+        "--nv",
+        "10",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--granularity",
+        "face",
+        "--stats-json",
+        json.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("miss rate"), "{stdout}");
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        &exr,
+        |res, _| vec![[0f32; 4]; res.width() * res.height()],
+        |px, pos, (r, g, b, a): (f32, f32, f32, f32)| px[pos.y() * 64 + pos.x()] = [r, g, b, a],
+    )
+    .unwrap();
+    let px = &image.layer_data.channel_data.pixels;
+    assert_eq!(px.len(), 64 * 48);
+    assert!(px.iter().any(|p| p[3] == 1.0) && px.iter().any(|p| p[3] == 0.0));
+    assert!(px.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    assert!(exr.with_extension("png").exists());
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(stats["frame"]["requests"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn bad_inputs_give_clear_errors_and_a_failing_exit() {
+    let dir = std::env::temp_dir().join(format!("oslf-render-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let missing = dir.join("nope.oslf");
+    let out = render(&[missing.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("nope.oslf"), "{err}");
+
+    let foreign = dir.join("foreign.oslf");
+    std::fs::write(&foreign, b"this is not a store, just some bytes of text").unwrap();
+    let out = render(&[foreign.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("foreign.oslf"), "{err}");
+
+    let store = common::store_path();
+    for (flag, value, says) in [
+        ("--nu", "-1", "n_u"),
+        ("--mode", "shiny", "shiny"),
+        ("-M", "0", "M = 0"),
+        ("--cache-slots", "0", "at least one slot"),
+    ] {
+        let out = render(&[
+            store.to_str().unwrap(),
+            flag,
+            value,
+            "-o",
+            dir.join("x.exr").to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag} {value}");
+        assert!(err.contains(says), "{flag} {value}: {err}");
+    }
+}
