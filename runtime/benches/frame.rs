@@ -1,0 +1,200 @@
+//! Frame times of every shading mode, cold and warm cache, at 655×460 and 1280×720.
+//!
+//! ```sh
+//! cargo bench -p oslf-runtime --bench frame                 # bakes examples/gazebo.toml (quick preset) once
+//! OSLF_STORE=path/to/store.oslf cargo bench -p oslf-runtime --bench frame
+//! OSLF_BENCH_FILTER=mirror cargo bench -p oslf-runtime --bench frame   # only matching modes
+//! ```
+//!
+//! *Cold*: a new renderer's first frame (empty cache: decode, upload, two shading passes).
+//! *Warm*: the median of 7 frames after it, every cube resident (one pass, nothing loaded).
+//! *Cache cost*: the warm frame's time spent in the cache (feedback readback, planning,
+//! uploads) is included in the warm time; cold − warm is the cost of filling the cache.
+//! Frames are timed to GPU completion without reading the image back. Writes a Markdown
+//! table to stdout and CSV to `target/frame-times.csv`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use oslf_bake::bake::{bake, BakeOptions};
+use oslf_bake::scene::Scene;
+use oslf_format::Store;
+use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams, Source};
+
+fn store_path() -> PathBuf {
+    if let Ok(p) = std::env::var("OSLF_STORE") {
+        return PathBuf::from(p);
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let out = root.join("target").join("bench-gazebo.oslf");
+    if !out.exists() {
+        eprintln!(
+            "baking examples/gazebo.toml (quick preset) to {}",
+            out.display()
+        );
+        let scene = Scene::load(&root.join("examples").join("gazebo.toml"), None).unwrap();
+        let options = BakeOptions {
+            output: out.clone(),
+            resume: false,
+            progress: false,
+            cube_limit: None,
+        };
+        bake(&scene, &options).unwrap();
+    }
+    out
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    // `cargo bench` passes --bench; ignore arguments.
+    let path = store_path();
+    // OSLF_BENCH_FILTER=text runs only the modes whose label contains it.
+    let filter = std::env::var("OSLF_BENCH_FILTER").unwrap_or_default();
+    let base = ShadingParams::default();
+    let cases: Vec<(&str, ShadingParams)> = vec![
+        (
+            "recon",
+            ShadingParams {
+                mode: Mode::Recon,
+                ..base
+            },
+        ),
+        (
+            "mirror, envmap baseline",
+            ShadingParams {
+                mode: Mode::Mirror,
+                source: Source::EnvMap,
+                ..base
+            },
+        ),
+        (
+            "mirror, B^n N=4",
+            ShadingParams {
+                mode: Mode::Mirror,
+                ..base
+            },
+        ),
+        (
+            "recon + mirror, B^n N=4",
+            ShadingParams {
+                mode: Mode::ReconMirror,
+                ..base
+            },
+        ),
+        (
+            "recon + mirror, closest distance",
+            ShadingParams {
+                mode: Mode::ReconMirror,
+                blend: Blend::Distance,
+                ..base
+            },
+        ),
+        (
+            "recon + mirror, B^r N=4",
+            ShadingParams {
+                mode: Mode::ReconMirror,
+                blend: Blend::Reflection,
+                ..base
+            },
+        ),
+        (
+            "glossy M=16, per point",
+            ShadingParams {
+                mode: Mode::Glossy,
+                m: 16,
+                ..base
+            },
+        ),
+        (
+            "glossy M=16, per direction",
+            ShadingParams {
+                mode: Mode::Glossy,
+                m: 16,
+                order: oslf_runtime::Order::PerDirection,
+                ..base
+            },
+        ),
+        (
+            "recon + glossy M=16",
+            ShadingParams {
+                mode: Mode::ReconGlossy,
+                m: 16,
+                ..base
+            },
+        ),
+        (
+            "glossy envmap M=16",
+            ShadingParams {
+                mode: Mode::Glossy,
+                m: 16,
+                source: Source::EnvMap,
+                ..base
+            },
+        ),
+    ];
+    let mut csv =
+        String::from("mode,width,height,cold_ms,warm_ms,warm_fps,cold_passes,cubes_loaded\n");
+    println!("store: {}", path.display());
+    let mut adapter = String::new();
+    println!("| mode | size | cold frame (ms) | warm frame (ms) | warm frames/s |");
+    println!("| --- | --- | ---: | ---: | ---: |");
+    for (w, h) in [(655u32, 460u32), (1280, 720)] {
+        for (label, params) in &cases {
+            if !filter.is_empty() && !label.contains(filter.as_str()) {
+                continue;
+            }
+            let store = Store::open(&path).unwrap();
+            let gpu = Gpu::headless().unwrap();
+            adapter = gpu.adapter_name.clone();
+            // OSLF_BENCH_SLOTS=n limits the GPU cache (default: every cube).
+            let slots = std::env::var("OSLF_BENCH_SLOTS")
+                .ok()
+                .map(|s| s.parse().unwrap());
+            let mut r = Renderer::new(
+                gpu,
+                store,
+                CacheConfig {
+                    gpu_slots: slots,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let camera = r.default_view();
+            let opts = RenderOptions {
+                width: w,
+                height: h,
+                read_pixels: false,
+                ..Default::default()
+            };
+            let t = Instant::now();
+            let cold = r.render(&camera, params, &opts).unwrap();
+            let cold_ms = t.elapsed().as_secs_f64() * 1e3;
+            let mut warm = Vec::new();
+            for _ in 0..7 {
+                let t = Instant::now();
+                let f = r.render(&camera, params, &opts).unwrap();
+                warm.push(t.elapsed().as_secs_f64() * 1e3);
+                assert_eq!(f.stats.misses, 0);
+            }
+            let warm_ms = median(warm);
+            println!(
+                "| {label} | {w}×{h} | {cold_ms:.1} | {warm_ms:.1} | {:.2} |",
+                1e3 / warm_ms
+            );
+            csv.push_str(&format!(
+                "{label},{w},{h},{cold_ms:.2},{warm_ms:.2},{:.3},{},{}\n",
+                1e3 / warm_ms,
+                cold.passes,
+                cold.stats.loads
+            ));
+        }
+    }
+    println!("adapter: {adapter}");
+    let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/frame-times.csv");
+    std::fs::write(&out, csv).unwrap();
+    println!("wrote {}", out.display());
+}
