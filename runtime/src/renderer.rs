@@ -97,7 +97,11 @@ pub struct Renderer {
     gbuffer_group: wgpu::BindGroup,
     gbuffer_pipeline: wgpu::RenderPipeline,
     shade_layout: wgpu::BindGroupLayout,
-    shade_pipeline: wgpu::ComputePipeline,
+    shade_module: wgpu::ShaderModule,
+    shade_pipeline_layout: wgpu::PipelineLayout,
+    /// One pipeline per (terms, blend, source, order): the override constants of shade.wgsl.
+    shade_pipelines: std::collections::HashMap<[u32; 4], wgpu::ComputePipeline>,
+    current: [u32; 4],
     targets: Option<SizedTargets>,
     cube_count: u32,
 }
@@ -499,15 +503,6 @@ impl Renderer {
                 bind_group_layouts: &[Some(&shade_layout)],
                 immediate_size: 0,
             });
-        let shade_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("shade"),
-            layout: Some(&shade_pipeline_layout),
-            module: &shade_module,
-            entry_point: Some("shade"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-
         let constants = StoreConstants {
             sample_count,
             env_cube,
@@ -538,7 +533,10 @@ impl Renderer {
             gbuffer_group,
             gbuffer_pipeline,
             shade_layout,
-            shade_pipeline,
+            shade_module,
+            shade_pipeline_layout,
+            shade_pipelines: Default::default(),
+            current: [0; 4],
             targets: None,
             cube_count,
         };
@@ -780,6 +778,30 @@ impl Renderer {
         params.validate()?;
         self.ensure_targets(opts.width, opts.height)?;
         let u = self.uniform(camera, params, opts.width, opts.height);
+        self.current = [u.terms, u.blend, u.source, u.order];
+        if !self.shade_pipelines.contains_key(&self.current) {
+            let names = ["TERMS", "BLEND", "SOURCE", "ORDER"];
+            let constants: Vec<(&str, f64)> = names
+                .iter()
+                .zip(self.current)
+                .map(|(n, v)| (*n, f64::from(v)))
+                .collect();
+            let pipeline =
+                self.gpu
+                    .device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some("shade"),
+                        layout: Some(&self.shade_pipeline_layout),
+                        module: &self.shade_module,
+                        entry_point: Some("shade"),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            zero_initialize_workgroup_memory: true,
+                        },
+                        cache: None,
+                    });
+            self.shade_pipelines.insert(self.current, pipeline);
+        }
         self.gpu
             .queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
@@ -887,7 +909,11 @@ impl Renderer {
                 label: Some("shade"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.shade_pipeline);
+            let pipeline = self
+                .shade_pipelines
+                .get(&self.current)
+                .ok_or_else(|| RuntimeError::Gpu("no shading pipeline for this mode".into()))?;
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &targets.shade_group, &[]);
             pass.dispatch_workgroups(
                 targets.width.div_ceil(WORKGROUP),

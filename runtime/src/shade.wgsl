@@ -33,6 +33,15 @@ struct Params {
     slots_per_texture: u32,
 };
 
+// The mode's switches are pipeline-overridable constants (set from the same values as the
+// uniform's `terms`, `blend`, `source`, `order`): one pipeline per combination, so code a mode
+// does not use is not in its shader. On lavapipe every branch runs under an execution mask
+// whether or not any lane takes it, so unused code is not free (measured: 20× on the baseline).
+override TERMS: u32 = 1u;
+override BLEND: u32 = 4u;
+override SOURCE: u32 = 0u;
+override ORDER: u32 = 0u;
+
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
     color: vec4<f32>,
@@ -193,37 +202,55 @@ fn tangent_frame(n: vec3<f32>, du: vec3<f32>) -> vec3<f32> {
 
 // ---- blending (chapter 4) ----
 
+// Vectors, not arrays: lavapipe gives every local array that is indexed dynamically its own
+// scratch memory, initialized per invocation even where the code is never reached (a 10×
+// slowdown measured with runtime/examples/lvp_probe.rs); dynamic vector indexing is cheap.
 struct Candidates {
-    idx: array<u32, 4>,
-    s: array<vec3<f32>, 4>,
+    idx: vec4<u32>,
+    // Directions s_j from the shaded point to sample point j, by component.
+    sx: vec4<f32>,
+    sy: vec4<f32>,
+    sz: vec4<f32>,
     count: u32,
 };
 
-fn candidates(pid: u32, u: f32, v: f32, x: vec3<f32>, n: vec3<f32>) -> Candidates {
-    var c: Candidates;
+// The shaded pixel's candidates (one per invocation; a private global rather than a value
+// passed to every function keeps lavapipe from copying it at each call site).
+var<private> cand: Candidates;
+
+fn cand_s(j: u32) -> vec3<f32> {
+    return vec3<f32>(cand.sx[j], cand.sy[j], cand.sz[j]);
+}
+
+fn set_s(j: u32, d: vec3<f32>) {
+    cand.sx[j] = d.x;
+    cand.sy[j] = d.y;
+    cand.sz[j] = d.z;
+}
+
+fn candidates(pid: u32, u: f32, v: f32, x: vec3<f32>, n: vec3<f32>) {
     let m = P.map_res;
     let tx = min(u32(clamp(u, 0.0, 1.0) * f32(m)), m - 1u);
     let ty = min(u32(clamp(v, 0.0, 1.0) * f32(m)), m - 1u);
     let raw = textureLoad(sample_maps, vec2<i32>(i32(tx), i32(ty)), i32(pid), 0);
-    c.count = 0u;
+    cand.count = 0u;
     for (var j = 0u; j < 4u; j++) {
         var idx = raw[j];
         if (P.index16 == 1u && idx == 0xffffu) {
             idx = INVALID;
         }
-        c.idx[j] = INVALID;
-        c.s[j] = n;
+        cand.idx[j] = INVALID;
+        set_s(j, n);
         if (idx != INVALID && idx < P.sample_count) {
-            c.idx[j] = idx;
+            cand.idx[j] = idx;
             let d = samples[idx].xyz - x;
             let l2 = dot(d, d);
             if (l2 > 0.0) {
-                c.s[j] = d * inverseSqrt(l2);
+                set_s(j, d * inverseSqrt(l2));
             }
-            c.count += 1u;
+            cand.count += 1u;
         }
     }
-    return c;
 }
 
 fn is_resident(cube: u32) -> bool {
@@ -234,32 +261,32 @@ fn is_resident(cube: u32) -> bool {
 // sample direction when blending per direction). Weights are relative to the largest, so
 // B^r and B^n with huge N never underflow to an all-zero sum; if every ⟨a, s_j⟩ ≤ 0 the
 // closest in angle gets weight 1.
-fn blend_weights(c: Candidates, a: vec3<f32>) -> vec4<f32> {
+fn blend_weights(a: vec3<f32>) -> vec4<f32> {
     var w = vec4<f32>(0.0);
     var best = 0u;
     var best_dot = -2.0;
     var first = 4u;
     for (var j = 0u; j < 4u; j++) {
-        if (c.idx[j] == INVALID) { continue; }
+        if (cand.idx[j] == INVALID) { continue; }
         if (first == 4u) { first = j; }
-        let d = dot(a, c.s[j]);
+        let d = dot(a, cand_s(j));
         if (d > best_dot) { best_dot = d; best = j; }
     }
     if (first == 4u) { return w; }
-    switch P.blend {
+    switch BLEND {
         case 0u: { w[first] = 1.0; }              // Eq. 4.3
         case 1u: { w[best] = 1.0; }               // Eq. 4.4-4.5
         default: {
             for (var j = 0u; j < 4u; j++) {
-                if (c.idx[j] == INVALID) { continue; }
-                if (P.blend == 2u || P.blend_n == 0.0) {
+                if (cand.idx[j] == INVALID) { continue; }
+                if (BLEND == 2u || P.blend_n == 0.0) {
                     w[j] = 1.0;                   // Eq. 4.9 (B^r, B^n with N = 0 reduce to it)
                 } else if (best_dot > 0.0) {
-                    let r = max(dot(a, c.s[j]), 0.0) / best_dot;
+                    let r = max(dot(a, cand_s(j)), 0.0) / best_dot;
                     if (r > 0.0) { w[j] = pow(r, P.blend_n); }   // Eq. 4.10, 4.11
                 }
             }
-            if (best_dot <= 0.0 && P.blend != 2u && P.blend_n != 0.0) {
+            if (best_dot <= 0.0 && BLEND != 2u && P.blend_n != 0.0) {
                 w[best] = 1.0;
             }
         }
@@ -269,12 +296,12 @@ fn blend_weights(c: Candidates, a: vec3<f32>) -> vec4<f32> {
 
 // Blended radiance towards `dir` from the candidates with weights `w` (Eq. 4.7). Lookups
 // that are not resident are left out and the rest renormalized; `.w` is 0 when none was.
-fn blend_lookup(c: Candidates, w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
+fn blend_lookup(w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     for (var j = 0u; j < 4u; j++) {
         if (w[j] > 0.0) {
-            let l = lookup(c.idx[j], dir);
+            let l = lookup(cand.idx[j], dir);
             if (l.w > 0.0) {
                 acc += l.rgb * w[j];
                 wsum += w[j];
@@ -295,40 +322,40 @@ fn env_lookup(dir: vec3<f32>) -> vec3<f32> {
 
 // ---- surface reconstruction (3.11–3.12, §6.3) ----
 
-fn recon_choice(c: Candidates, n: vec3<f32>, resident_only: bool) -> u32 {
+fn recon_choice(n: vec3<f32>, resident_only: bool) -> u32 {
     var best = 4u;
     var best_dot = -2.0;
     for (var j = 0u; j < 4u; j++) {
-        if (c.idx[j] == INVALID) { continue; }
-        if (resident_only && !is_resident(c.idx[j])) { continue; }
-        let d = dot(n, c.s[j]);
+        if (cand.idx[j] == INVALID) { continue; }
+        if (resident_only && !is_resident(cand.idx[j])) { continue; }
+        let d = dot(n, cand_s(j));
         if (d >= P.cos_phi_shader) { return j; }
         if (d > best_dot) { best_dot = d; best = j; }
     }
     return best;
 }
 
-fn recon(c: Candidates, x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+fn recon(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     // The choice with every cube resident is what the frame needs (marked in the feedback).
-    let ideal = recon_choice(c, n, false);
+    let ideal = recon_choice(n, false);
     if (ideal == 4u) { return vec3<f32>(0.0); }
-    let want = lookup(c.idx[ideal], x - samples[c.idx[ideal]].xyz);
+    let want = lookup(cand.idx[ideal], x - samples[cand.idx[ideal]].xyz);
     if (want.w > 0.0) { return want.rgb; }
-    let j = recon_choice(c, n, true);
+    let j = recon_choice(n, true);
     if (j == 4u) { return vec3<f32>(0.0); }
-    let got = lookup(c.idx[j], x - samples[c.idx[j]].xyz);
+    let got = lookup(cand.idx[j], x - samples[cand.idx[j]].xyz);
     return got.rgb * got.w;
 }
 
 // ---- mirror reflection (chapter 4) ----
 
-fn mirror(c: Candidates, n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
-    if (P.source == 1u || c.count == 0u) {
+fn mirror(n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    if (SOURCE == 1u || cand.count == 0u) {
         return env_lookup(r);
     }
     var axis = r;
-    if (P.blend == 4u) { axis = n; }
-    let b = blend_lookup(c, blend_weights(c, axis), r);
+    if (BLEND == 4u) { axis = n; }
+    let b = blend_lookup(blend_weights(axis), r);
     if (b.w > 0.0) { return b.rgb; }
     return env_lookup(r);
 }
@@ -393,10 +420,10 @@ fn sample_diffuse(i: u32, r1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<
 
 // Integrates over one source: cube `cube` (order A per point), or the blend of the candidates
 // per direction (order B, cube = INVALID). `.w` = 0 when a needed cube was not resident.
-fn integrate(c: Candidates, cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
+fn integrate(cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var ok = 1.0;
-    let wn = blend_weights(c, n);
+    let wn = blend_weights(n);
     for (var i = 0u; i < P.m; i++) {
         for (var k = 0u; k < 2u; k++) {
             var s: AsSample;
@@ -414,8 +441,8 @@ fn integrate(c: Candidates, cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3
                 li = l.rgb;
             } else {
                 var w = wn;
-                if (P.blend != 4u) { w = blend_weights(c, s.l); }
-                let l = blend_lookup(c, w, s.l);
+                if (BLEND != 4u) { w = blend_weights(s.l); }
+                let l = blend_lookup(w, s.l);
                 if (l.w > 0.0) { li = l.rgb; } else { li = env_lookup(s.l); }
             }
             acc += li * s.weight;
@@ -424,25 +451,25 @@ fn integrate(c: Candidates, cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3
     return vec4<f32>(acc / f32(max(P.m, 1u)), ok);
 }
 
-fn glossy(c: Candidates, pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+fn glossy(pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     let b = cross(n, t);
     let nv = dot(n, v);
-    if (P.source == 1u || c.count == 0u) {
+    if (SOURCE == 1u || cand.count == 0u) {
         if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
-        return integrate(c, P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
+        return integrate(P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
     }
-    if (P.order == 1u) {
-        return integrate(c, INVALID, 4u, pixel, n, t, b, v, nv).rgb;
+    if (ORDER == 1u) {
+        return integrate(INVALID, 4u, pixel, n, t, b, v, nv).rgb;
     }
     // Order A: integrate at each sample point with its own random vectors, then blend (4.7).
     var axis = r;
-    if (P.blend == 4u) { axis = n; }
-    let w = blend_weights(c, axis);
+    if (BLEND == 4u) { axis = n; }
+    let w = blend_weights(axis);
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     for (var j = 0u; j < 4u; j++) {
         if (w[j] > 0.0) {
-            let est = integrate(c, c.idx[j], j, pixel, n, t, b, v, nv);
+            let est = integrate(cand.idx[j], j, pixel, n, t, b, v, nv);
             if (est.w > 0.0) {
                 acc += est.rgb * w[j];
                 wsum += w[j];
@@ -451,7 +478,7 @@ fn glossy(c: Candidates, pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r
     }
     if (wsum > 0.0) { return acc / wsum; }
     if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
-    return integrate(c, P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
+    return integrate(P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
 }
 
 // Replaces NaN and infinities by 0 so that nothing non-finite reaches a pixel.
@@ -479,24 +506,24 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = oct_decode(g1.xy);
     let u = g1.z;
     let v_param = g1.w;
-    let c = candidates(pid, u, v_param, x, n);
+    candidates(pid, u, v_param, x, n);
     let v = normalize(P.camera_pos.xyz - x);
     let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
     let pixel = pcg(gid.x + pcg(gid.y + pcg(P.seed)));
 
     var spec = vec3<f32>(0.0);
-    if ((P.terms & 2u) != 0u) {
-        spec = mirror(c, n, r);
-    } else if ((P.terms & 4u) != 0u) {
+    if ((TERMS & 2u) != 0u) {
+        spec = mirror(n, r);
+    } else if ((TERMS & 4u) != 0u) {
         let t = tangent_frame(n, patch_du(pid, u, v_param));
-        spec = glossy(c, pixel, n, t, v, r);
+        spec = glossy(pixel, n, t, v, r);
     }
-    if ((P.terms & 8u) != 0u) {
+    if ((TERMS & 8u) != 0u) {
         spec *= patches[pid].color.rgb;
     }
     var color = spec;
-    if ((P.terms & 1u) != 0u) {
-        color += recon(c, x, n); // Eq. 3.12, 4.12
+    if ((TERMS & 1u) != 0u) {
+        color += recon(x, n); // Eq. 3.12, 4.12
     }
     textureStore(out_image, px, vec4<f32>(finite3(color), 1.0));
 }
