@@ -102,6 +102,8 @@ pub struct Renderer {
     /// One pipeline per (terms, blend, source, order): the override constants of shade.wgsl.
     shade_pipelines: std::collections::HashMap<[u32; 4], wgpu::ComputePipeline>,
     current: [u32; 4],
+    /// Pool textures that hold slots (the rest are one-slot placeholders).
+    pools_in_use: u32,
     targets: Option<SizedTargets>,
     cube_count: u32,
 }
@@ -537,6 +539,7 @@ impl Renderer {
             shade_pipeline_layout,
             shade_pipelines: Default::default(),
             current: [0; 4],
+            pools_in_use: slots.div_ceil(slots_per_texture),
             targets: None,
             cube_count,
         };
@@ -781,11 +784,12 @@ impl Renderer {
         self.current = [u.terms, u.blend, u.source, u.order];
         if !self.shade_pipelines.contains_key(&self.current) {
             let names = ["TERMS", "BLEND", "SOURCE", "ORDER"];
-            let constants: Vec<(&str, f64)> = names
+            let mut constants: Vec<(&str, f64)> = names
                 .iter()
                 .zip(self.current)
                 .map(|(n, v)| (*n, f64::from(v)))
                 .collect();
+            constants.push(("POOLS", f64::from(self.pools_in_use)));
             let pipeline =
                 self.gpu
                     .device

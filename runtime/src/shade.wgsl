@@ -41,6 +41,7 @@ override TERMS: u32 = 1u;
 override BLEND: u32 = 4u;
 override SOURCE: u32 = 0u;
 override ORDER: u32 = 0u;
+override POOLS: u32 = 4u;
 
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
@@ -111,12 +112,15 @@ fn load_texel(slot: u32, face: u32, x: u32, y: u32) -> vec3<f32> {
     let tex = slot / P.slots_per_texture;
     let layer = i32((slot % P.slots_per_texture) * 6u + face);
     let c = vec2<i32>(i32(x), i32(y));
-    switch tex {
-        case 0u: { return textureLoad(pool0, c, layer, 0).rgb; }
-        case 1u: { return textureLoad(pool1, c, layer, 0).rgb; }
-        case 2u: { return textureLoad(pool2, c, layer, 0).rgb; }
-        default: { return textureLoad(pool3, c, layer, 0).rgb; }
+    // POOLS (the number of pool textures in use) is a constant, so unused arrays drop out.
+    if (POOLS == 1u || tex == 0u) {
+        return textureLoad(pool0, c, layer, 0).rgb;
+    } else if (POOLS == 2u || tex == 1u) {
+        return textureLoad(pool1, c, layer, 0).rgb;
+    } else if (POOLS == 3u || tex == 2u) {
+        return textureLoad(pool2, c, layer, 0).rgb;
     }
+    return textureLoad(pool3, c, layer, 0).rgb;
 }
 
 // Radiance of cube `cube` towards `dir`, bilinear within the face (clamped at its edges).
