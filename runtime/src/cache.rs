@@ -136,6 +136,10 @@ pub struct CacheConfig {
     pub ram_bytes: u64,
     /// Unit of loading.
     pub granularity: Granularity,
+    /// Most cubes per pool texture array; `None` = as many as the device's array-layer limit
+    /// allows (`max_texture_array_layers / 6`). Lower it to spread the pool over several
+    /// arrays (tests do, to exercise that path on any device).
+    pub slots_per_texture: Option<u32>,
 }
 
 impl Default for CacheConfig {
@@ -144,6 +148,7 @@ impl Default for CacheConfig {
             gpu_slots: None,
             ram_bytes: 256 << 20,
             granularity: Granularity::Cube,
+            slots_per_texture: None,
         }
     }
 }

@@ -196,7 +196,23 @@ impl Renderer {
                 limits.max_texture_array_layers
             )));
         }
-        let slots_per_texture = limits.max_texture_array_layers / 6;
+        let device_per_texture = limits.max_texture_array_layers / 6;
+        let slots_per_texture = match config.slots_per_texture {
+            Some(0) => {
+                return Err(RuntimeError::Parameter(
+                    "slots per pool texture must be at least 1".into(),
+                ))
+            }
+            Some(s) if s > device_per_texture => {
+                return Err(RuntimeError::Limits(format!(
+                    "{s} cubes per texture array need {} layers; the device allows {}",
+                    u64::from(s) * 6,
+                    limits.max_texture_array_layers
+                )))
+            }
+            Some(s) => s,
+            None => device_per_texture,
+        };
         if slots_per_texture == 0 {
             return Err(RuntimeError::Limits(
                 "the device allows fewer than 6 texture array layers".into(),

@@ -19,6 +19,7 @@ fn renderer(slots: Option<u32>, granularity: Granularity) -> Renderer {
         gpu_slots: slots,
         ram_bytes: 1 << 20,
         granularity,
+        slots_per_texture: None,
     };
     Renderer::new(Gpu::headless().unwrap(), open_store(), config).unwrap()
 }

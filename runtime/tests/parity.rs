@@ -229,3 +229,25 @@ fn extreme_parameters_stay_finite_and_agree() {
         check(&mut r, &cubes, p, label);
     }
 }
+
+#[test]
+fn a_pool_spread_over_four_texture_arrays_renders_the_same() {
+    let store = open_store();
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let count = store.cube_count();
+    let config = CacheConfig {
+        slots_per_texture: Some(count.div_ceil(4)),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, config).unwrap();
+    assert_eq!(r.cache().slots(), count);
+    let base = ShadingParams::default();
+    for mode in [Mode::ReconMirror, Mode::Glossy] {
+        check(
+            &mut r,
+            &cubes,
+            ShadingParams { mode, m: 4, ..base },
+            &format!("{mode:?} over 4 arrays"),
+        );
+    }
+}

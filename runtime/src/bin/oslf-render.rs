@@ -185,6 +185,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         gpu_slots,
         ram_bytes: (args.ram_mb * 1e6) as u64,
         granularity: args.granularity,
+        slots_per_texture: None,
     };
     let gpu = Gpu::headless()?;
     let adapter = gpu.adapter_name.clone();
