@@ -1,0 +1,439 @@
+//! An interactive OSLF viewer: `cargo run --release --example viewer -- STORE`.
+//!
+//! Drag with the left mouse button to orbit, scroll to zoom. Keys:
+//!
+//! | key | does |
+//! | --- | --- |
+//! | 1 … 5 | mode: recon, mirror, recon + mirror, glossy, recon + glossy |
+//! | B | next blend: distance, angle, avg, r, n |
+//! | E | OSLF ↔ environment-map baseline |
+//! | O | integration order: per point ↔ per direction |
+//! | Up / Down | blend power N × 2 / ÷ 2 |
+//! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
+//! | ] / [ | M × 2 / ÷ 2 |
+//! | + / - | exposure × 1.25 / ÷ 1.25 |
+//! | Esc | quit |
+//!
+//! The window title shows the mode, its parameters, the frame time and the cache statistics of
+//! the last frame; a line per second goes to stdout. Frames stream: a cube map that is not
+//! resident falls back for one frame and is loaded for the next.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{anyhow, Context};
+use glam::Vec3;
+use oslf::bake::camera::Camera;
+use oslf::runtime::{
+    Blend, CacheConfig, Frame, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams, Source,
+};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BlitUniform {
+    exposure: f32,
+    encode_srgb: u32,
+    pad: [u32; 2],
+}
+
+struct Orbit {
+    target: Vec3,
+    distance: f32,
+    yaw: f32,
+    pitch: f32,
+    up: Vec3,
+    vfov: f32,
+}
+
+impl Orbit {
+    fn from_camera(c: &Camera) -> Self {
+        let d = c.position - c.target;
+        let distance = d.length().max(1e-3);
+        Self {
+            target: c.target,
+            distance,
+            yaw: d.y.atan2(d.x),
+            pitch: (d.z / distance).clamp(-1.0, 1.0).asin(),
+            up: Vec3::Z,
+            vfov: c.vfov_deg,
+        }
+    }
+
+    fn camera(&self) -> Camera {
+        let dir = Vec3::new(
+            self.pitch.cos() * self.yaw.cos(),
+            self.pitch.cos() * self.yaw.sin(),
+            self.pitch.sin(),
+        );
+        Camera {
+            position: self.target + dir * self.distance,
+            target: self.target,
+            up: self.up,
+            vfov_deg: self.vfov,
+        }
+    }
+}
+
+struct State {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    renderer: Renderer,
+    blit_layout: wgpu::BindGroupLayout,
+    blit_pipeline: wgpu::RenderPipeline,
+    blit_uniform: wgpu::Buffer,
+}
+
+struct App {
+    store: PathBuf,
+    state: Option<State>,
+    params: ShadingParams,
+    orbit: Option<Orbit>,
+    exposure: f32,
+    dragging: bool,
+    cursor: Option<(f64, f64)>,
+    last_report: Instant,
+    error: Option<anyhow::Error>,
+}
+
+fn main() -> anyhow::Result<()> {
+    let store = std::env::args_os()
+        .nth(1)
+        .map(PathBuf::from)
+        .ok_or_else(|| anyhow!("usage: cargo run --release --example viewer -- STORE"))?;
+    let event_loop = EventLoop::new().context("cannot open a window (no display?)")?;
+    let mut app = App {
+        store,
+        state: None,
+        params: ShadingParams::default(),
+        orbit: None,
+        exposure: 1.0,
+        dragging: false,
+        cursor: None,
+        last_report: Instant::now(),
+        error: None,
+    };
+    event_loop.run_app(&mut app)?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+impl App {
+    fn init(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let store = oslf::format::Store::open(&self.store)
+            .with_context(|| format!("cannot open store {}", self.store.display()))?;
+        let window = Arc::new(
+            event_loop.create_window(
+                Window::default_attributes()
+                    .with_title("oslf viewer")
+                    .with_inner_size(winit::dpi::PhysicalSize::new(655, 460)),
+            )?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let surface = instance.create_surface(Arc::clone(&window))?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: Some(&surface),
+            apply_limit_buckets: false,
+        }))?;
+        let gpu = Gpu::on_adapter(&adapter)?;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| anyhow!("the adapter cannot present to this window"))?;
+        let caps = surface.get_capabilities(&adapter);
+        if let Some(f) = caps.formats.iter().find(|f| !f.is_srgb()) {
+            config.format = *f;
+        }
+        surface.configure(&gpu.device, &config);
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("viewer_blit.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("viewer_blit.wgsl").into()),
+        });
+        let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("blit"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("blit"),
+            bind_group_layouts: &[Some(&blit_layout)],
+            immediate_size: 0,
+        });
+        let blit_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("blit"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(config.format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let blit_uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("blit"),
+            size: std::mem::size_of::<BlitUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let renderer = Renderer::new(gpu, store, CacheConfig::default())?;
+        self.orbit = Some(Orbit::from_camera(&renderer.default_view()));
+        println!("adapter {}", renderer.gpu().adapter_name);
+        self.state = Some(State {
+            window,
+            surface,
+            config,
+            renderer,
+            blit_layout,
+            blit_pipeline,
+            blit_uniform,
+        });
+        Ok(())
+    }
+
+    fn draw(&mut self) -> anyhow::Result<()> {
+        let (Some(s), Some(orbit)) = (self.state.as_mut(), self.orbit.as_ref()) else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let opts = RenderOptions {
+            width: s.config.width,
+            height: s.config.height,
+            resolve_misses: false,
+            max_passes: 1,
+            read_pixels: false,
+        };
+        let frame: Frame = s.renderer.render(&orbit.camera(), &self.params, &opts)?;
+        let texture = match s.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                s.surface.configure(&s.renderer.gpu().device, &s.config);
+                return Ok(());
+            }
+            _ => return Ok(()),
+        };
+        let gpu = s.renderer.gpu();
+        let image = s
+            .renderer
+            .output_texture()
+            .ok_or_else(|| anyhow!("no image rendered"))?
+            .create_view(&Default::default());
+        let u = BlitUniform {
+            exposure: self.exposure,
+            encode_srgb: u32::from(!s.config.format.is_srgb()),
+            pad: [0; 2],
+        };
+        gpu.queue
+            .write_buffer(&s.blit_uniform, 0, bytemuck::bytes_of(&u));
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("blit"),
+            layout: &s.blit_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: s.blit_uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&image),
+                },
+            ],
+        });
+        let view = texture.texture.create_view(&Default::default());
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("blit"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&s.blit_pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.queue.present(texture);
+        gpu.take_errors()?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let p = &self.params;
+        let st = &frame.stats;
+        let title = format!(
+            "oslf — {} {}{} N={} n_u={} n_v={} M={} {:?} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
+            p.mode.name(),
+            p.blend.name(),
+            if p.source == Source::EnvMap { " envmap" } else { "" },
+            p.blend_n,
+            p.nu,
+            p.nv,
+            p.m,
+            p.order,
+            st.requests,
+            st.misses,
+            100.0 * st.miss_rate,
+            st.loads,
+            st.evictions,
+            st.unresolved
+        );
+        s.window.set_title(&title);
+        if self.last_report.elapsed().as_secs_f64() >= 1.0 {
+            println!("{title}");
+            self.last_report = Instant::now();
+        }
+        s.window.request_redraw();
+        Ok(())
+    }
+
+    fn key(&mut self, key: &Key) -> bool {
+        let p = &mut self.params;
+        match key {
+            Key::Named(NamedKey::Escape) => return false,
+            Key::Named(NamedKey::ArrowUp) => p.blend_n = (p.blend_n * 2.0).clamp(1.0, 1e6),
+            Key::Named(NamedKey::ArrowDown) => p.blend_n = (p.blend_n / 2.0).max(0.0),
+            Key::Character(c) => match c.as_str() {
+                "1" | "2" | "3" | "4" | "5" => {
+                    p.mode = Mode::ALL[c.parse::<usize>().unwrap_or(1) - 1];
+                }
+                "b" => {
+                    let i = Blend::ALL.iter().position(|b| *b == p.blend).unwrap_or(0);
+                    p.blend = Blend::ALL[(i + 1) % Blend::ALL.len()];
+                }
+                "e" => {
+                    p.source = match p.source {
+                        Source::Oslf => Source::EnvMap,
+                        Source::EnvMap => Source::Oslf,
+                    }
+                }
+                "o" => {
+                    p.order = match p.order {
+                        Order::PerPoint => Order::PerDirection,
+                        Order::PerDirection => Order::PerPoint,
+                    }
+                }
+                "u" => p.nu = (p.nu * 2.0).clamp(1.0, 1e7),
+                "j" => p.nu /= 2.0,
+                "i" => p.nv = (p.nv * 2.0).clamp(1.0, 1e7),
+                "k" => p.nv /= 2.0,
+                "]" => p.m = (p.m * 2).min(65536),
+                "[" => p.m = (p.m / 2).max(1),
+                "+" | "=" => self.exposure *= 1.25,
+                "-" => self.exposure /= 1.25,
+                _ => {}
+            },
+            _ => {}
+        }
+        true
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_none() {
+            if let Err(e) = self.init(event_loop) {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(s) = self.state.as_mut() {
+                    s.config.width = size.width.max(1);
+                    s.config.height = size.height.max(1);
+                    s.surface.configure(&s.renderer.gpu().device, &s.config);
+                }
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.draw() {
+                    self.error = Some(e);
+                    event_loop.exit();
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                if !self.key(&event.logical_key) {
+                    event_loop.exit();
+                }
+            }
+            WindowEvent::MouseInput {
+                button: MouseButton::Left,
+                state,
+                ..
+            } => self.dragging = state == ElementState::Pressed,
+            WindowEvent::CursorMoved { position, .. } => {
+                if let (true, Some((x, y)), Some(o)) =
+                    (self.dragging, self.cursor, self.orbit.as_mut())
+                {
+                    o.yaw -= (position.x - x) as f32 * 0.01;
+                    o.pitch = (o.pitch + (position.y - y) as f32 * 0.01).clamp(-1.5, 1.5);
+                }
+                self.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                if let Some(o) = self.orbit.as_mut() {
+                    let steps = match delta {
+                        MouseScrollDelta::LineDelta(_, y) => y,
+                        MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                    };
+                    o.distance *= 0.9f32.powf(steps);
+                }
+            }
+            _ => {}
+        }
+    }
+}
