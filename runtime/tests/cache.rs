@@ -149,3 +149,36 @@ fn impossible_budgets_and_sizes_are_refused_with_the_reason() {
         .to_string();
     assert!(e.contains("image size"), "{e}");
 }
+
+#[test]
+fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
+    let path = common::store_path();
+    let store = open_store();
+    let mut bytes = std::fs::read(&path).unwrap();
+    // Damage one face of every cube the first frame needs: here simply faces 0..6 of cube 3.
+    for face in 0..6 {
+        let e = store.face_entry(3, face).unwrap();
+        bytes[e.offset as usize + (e.compressed_size as usize) / 2] ^= 0x5a;
+    }
+    let damaged = path.with_file_name("damaged.oslf");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let store = oslf_format::Store::open(&damaged).unwrap();
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let params = ShadingParams::default();
+    let mut total_errors = 0;
+    // Orbit until cube 3 is needed; every frame must render.
+    for k in 0..8 {
+        let mut c = camera;
+        let a = k as f32 * std::f32::consts::FRAC_PI_4;
+        let d = c.position - c.target;
+        c.position = c.target + glam::Vec3::new(d.x * a.cos() - d.y * a.sin(), d.x * a.sin() + d.y * a.cos(), d.z);
+        let f = r.render(&c, &params, &options()).unwrap();
+        assert!(all_finite(&f.pixels));
+        total_errors += f.stats.decode_errors;
+    }
+    assert!(total_errors > 0, "cube 3 was never needed");
+    let errors = &r.cache().errors;
+    assert!(errors.iter().any(|e| e.contains("cube 3") && e.contains("checksum")), "{errors:?}");
+    assert_eq!(r.cache().resident_faces(3), 0, "a damaged cube must not become resident");
+}
