@@ -99,9 +99,9 @@ pub struct Renderer {
     shade_layout: wgpu::BindGroupLayout,
     shade_module: wgpu::ShaderModule,
     shade_pipeline_layout: wgpu::PipelineLayout,
-    /// One pipeline per (terms, blend, source, order): the override constants of shade.wgsl.
-    shade_pipelines: std::collections::HashMap<[u32; 4], wgpu::ComputePipeline>,
-    current: [u32; 4],
+    /// One pipeline per (terms, blend, source, order, diffuse): shade.wgsl's override constants.
+    shade_pipelines: std::collections::HashMap<[u32; 5], wgpu::ComputePipeline>,
+    current: [u32; 5],
     /// Pool textures that hold slots (the rest are one-slot placeholders).
     pools_in_use: u32,
     targets: Option<SizedTargets>,
@@ -554,7 +554,7 @@ impl Renderer {
             shade_module,
             shade_pipeline_layout,
             shade_pipelines: Default::default(),
-            current: [0; 4],
+            current: [0; 5],
             pools_in_use: slots.div_ceil(slots_per_texture),
             targets: None,
             cube_count,
@@ -797,7 +797,7 @@ impl Renderer {
         params.validate()?;
         self.ensure_targets(opts.width, opts.height)?;
         let u = self.uniform(camera, params, opts.width, opts.height);
-        self.current = [u.terms, u.blend, u.source, u.order];
+        self.current = [u.terms, u.blend, u.source, u.order, u32::from(u.rd > 0.0)];
         if !self.shade_pipelines.contains_key(&self.current) {
             let names = ["TERMS", "BLEND", "SOURCE", "ORDER"];
             let mut constants: Vec<(&str, f64)> = names
@@ -806,6 +806,7 @@ impl Renderer {
                 .map(|(n, v)| (*n, f64::from(v)))
                 .collect();
             constants.push(("POOLS", f64::from(self.pools_in_use)));
+            constants.push(("DIFFUSE", f64::from(self.current[4])));
             let pipeline =
                 self.gpu
                     .device

@@ -42,6 +42,7 @@ override BLEND: u32 = 4u;
 override SOURCE: u32 = 0u;
 override ORDER: u32 = 0u;
 override POOLS: u32 = 4u;
+override DIFFUSE: bool = false;
 
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
@@ -422,67 +423,83 @@ fn sample_diffuse(i: u32, r1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<
     return out;
 }
 
-// Integrates over one source: cube `cube` (order A per point), or the blend of the candidates
-// per direction (order B, cube = INVALID). `.w` = 0 when a needed cube was not resident.
+// The radiance of one sample direction: cube `cube`, or (per direction, cube = INVALID) the
+// blend of the candidates with the environment cube where none is resident. `.w` = 0 when a
+// cube's face was not resident.
+fn sample_radiance(cube: u32, wn: vec4<f32>, l: vec3<f32>) -> vec4<f32> {
+    if (ORDER == 1u && cube == INVALID) {
+        var w = wn;
+        if (BLEND != 4u) { w = blend_weights(l); }
+        let b = blend_lookup(w, l);
+        if (b.w > 0.0) { return b; }
+        return vec4<f32>(env_lookup(l), 1.0);
+    }
+    return lookup(cube, l);
+}
+
+// Integrates over one source (Eq. 5.12): cube `cube` (per point), or the blend of the
+// candidates per direction (cube = INVALID). `.w` = 0 when a needed face was not resident.
+// The diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE).
 fn integrate(cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var ok = 1.0;
-    let wn = blend_weights(n);
+    var wn = vec4<f32>(0.0);
+    if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
     for (var i = 0u; i < P.m; i++) {
-        for (var k = 0u; k < 2u; k++) {
-            var s: AsSample;
-            if (k == 0u) {
-                s = sample_as(i, rand(pixel, i, j, 0u), rand(pixel, i, j, 1u), n, t, b, v, nv);
-            } else {
-                if (P.rd <= 0.0) { continue; }
-                s = sample_diffuse(i, rand(pixel, i, j, 2u), rand(pixel, i, j, 3u), n, t, b, nv);
-            }
-            if (s.weight <= 0.0) { continue; }
-            var li = vec3<f32>(0.0);
-            if (cube != INVALID) {
-                let l = lookup(cube, s.l);
+        let s = sample_as(i, rand(pixel, i, j, 0u), rand(pixel, i, j, 1u), n, t, b, v, nv);
+        if (s.weight > 0.0) {
+            let l = sample_radiance(cube, wn, s.l);
+            if (l.w == 0.0) { ok = 0.0; }
+            acc += l.rgb * s.weight;
+        }
+        if (DIFFUSE) {
+            let d = sample_diffuse(i, rand(pixel, i, j, 2u), rand(pixel, i, j, 3u), n, t, b, nv);
+            if (d.weight > 0.0) {
+                let l = sample_radiance(cube, wn, d.l);
                 if (l.w == 0.0) { ok = 0.0; }
-                li = l.rgb;
-            } else {
-                var w = wn;
-                if (BLEND != 4u) { w = blend_weights(s.l); }
-                let l = blend_lookup(w, s.l);
-                if (l.w > 0.0) { li = l.rgb; } else { li = env_lookup(s.l); }
+                acc += l.rgb * d.weight;
             }
-            acc += li * s.weight;
         }
     }
     return vec4<f32>(acc / f32(max(P.m, 1u)), ok);
 }
 
+// Per point (order A): integrate at each candidate with its own random vectors, then blend
+// (4.7); the environment cube (j = 4) when no candidate is usable. Per direction (order B):
+// one integration over the blend. One loop with one call site: lavapipe pays for every
+// inlined copy whether it runs or not.
 fn glossy(pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     let b = cross(n, t);
     let nv = dot(n, v);
-    if (SOURCE == 1u || cand.count == 0u) {
-        if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
-        return integrate(P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
-    }
-    if (ORDER == 1u) {
+    let use_env = SOURCE == 1u || cand.count == 0u;
+    if (ORDER == 1u && !use_env) {
         return integrate(INVALID, 4u, pixel, n, t, b, v, nv).rgb;
     }
-    // Order A: integrate at each sample point with its own random vectors, then blend (4.7).
     var axis = r;
     if (BLEND == 4u) { axis = n; }
-    let w = blend_weights(axis);
+    var w = vec4<f32>(0.0);
+    if (!use_env) { w = blend_weights(axis); }
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
-    for (var j = 0u; j < 4u; j++) {
-        if (w[j] > 0.0) {
-            let est = integrate(cand.idx[j], j, pixel, n, t, b, v, nv);
-            if (est.w > 0.0) {
-                acc += est.rgb * w[j];
-                wsum += w[j];
-            }
+    let first = select(0u, 4u, ORDER == 1u || SOURCE == 1u);
+    for (var j = first; j < 5u; j++) {
+        var cube = INVALID;
+        var wj = 0.0;
+        if (j < 4u) {
+            if (w[j] > 0.0) { cube = cand.idx[j]; wj = w[j]; }
+        } else if (wsum == 0.0) {
+            cube = P.env_cube;
+            wj = 1.0;
+        }
+        if (cube == INVALID) { continue; }
+        let est = integrate(cube, j, pixel, n, t, b, v, nv);
+        if (est.w > 0.0 || j == 4u) {
+            acc += est.rgb * wj;
+            wsum += wj;
         }
     }
     if (wsum > 0.0) { return acc / wsum; }
-    if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
-    return integrate(P.env_cube, 4u, pixel, n, t, b, v, nv).rgb;
+    return vec3<f32>(0.0);
 }
 
 // Replaces NaN and infinities by 0 so that nothing non-finite reaches a pixel.
