@@ -355,12 +355,20 @@ fn recon(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 // ---- mirror reflection (chapter 4) ----
 
 fn mirror(n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
-    if (SOURCE == 1u || cand.count == 0u) {
-        return env_lookup(r);
+    var b = vec4<f32>(0.0);
+    if (SOURCE == 0u && cand.count > 0u) {
+        var axis = r;
+        if (BLEND == 4u) { axis = n; }
+        let w = blend_weights(axis);
+        if (BLEND <= 1u) {
+            // One candidate has weight 1: one lookup instead of four masked ones.
+            var j = 0u;
+            if (w.y > 0.0) { j = 1u; } else if (w.z > 0.0) { j = 2u; } else if (w.w > 0.0) { j = 3u; }
+            b = lookup(cand.idx[j], r);
+        } else {
+            b = blend_lookup(w, r);
+        }
     }
-    var axis = r;
-    if (BLEND == 4u) { axis = n; }
-    let b = blend_lookup(blend_weights(axis), r);
     if (b.w > 0.0) { return b.rgb; }
     return env_lookup(r);
 }

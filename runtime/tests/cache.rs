@@ -172,13 +172,27 @@ fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
         let mut c = camera;
         let a = k as f32 * std::f32::consts::FRAC_PI_4;
         let d = c.position - c.target;
-        c.position = c.target + glam::Vec3::new(d.x * a.cos() - d.y * a.sin(), d.x * a.sin() + d.y * a.cos(), d.z);
+        c.position = c.target
+            + glam::Vec3::new(
+                d.x * a.cos() - d.y * a.sin(),
+                d.x * a.sin() + d.y * a.cos(),
+                d.z,
+            );
         let f = r.render(&c, &params, &options()).unwrap();
         assert!(all_finite(&f.pixels));
         total_errors += f.stats.decode_errors;
     }
     assert!(total_errors > 0, "cube 3 was never needed");
     let errors = &r.cache().errors;
-    assert!(errors.iter().any(|e| e.contains("cube 3") && e.contains("checksum")), "{errors:?}");
-    assert_eq!(r.cache().resident_faces(3), 0, "a damaged cube must not become resident");
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("cube 3") && e.contains("checksum")),
+        "{errors:?}"
+    );
+    assert_eq!(
+        r.cache().resident_faces(3),
+        0,
+        "a damaged cube must not become resident"
+    );
 }
