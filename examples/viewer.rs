@@ -405,10 +405,10 @@ impl ApplicationHandler for App {
                     event_loop.exit();
                 }
             }
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
-                if !self.key(&event.logical_key) {
-                    event_loop.exit();
-                }
+            WindowEvent::KeyboardInput { event, .. }
+                if event.state == ElementState::Pressed && !self.key(&event.logical_key) =>
+            {
+                event_loop.exit();
             }
             WindowEvent::MouseInput {
                 button: MouseButton::Left,

@@ -127,6 +127,9 @@ fn finite3(c: Vec3) -> Vec3 {
     Vec3::from_array(c.to_array().map(|x| if x.is_finite() { x } else { 0.0 }))
 }
 
+// `j` indexes the four candidates' parallel arrays (indices, directions, weights), as in
+// shade.wgsl.
+#[allow(clippy::needless_range_loop)]
 impl<C: CubeTexels> Shader<'_, C> {
     fn lookup(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
         let (face, s, t) = face_st(dir);
@@ -509,35 +512,6 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tangent_frames_are_unit_and_orthogonal_even_where_du_vanishes() {
-        for n in [
-            Vec3::Z,
-            -Vec3::Z,
-            Vec3::new(0.6, 0.0, -0.8),
-            Vec3::new(-1e-8, 1.0, 0.0).normalize(),
-        ] {
-            for du in [Vec3::ZERO, n * 3.0, Vec3::X, Vec3::new(1e-30, 0.0, 0.0)] {
-                let t = tangent_frame(n, du);
-                assert!(t.is_finite(), "{n} {du}");
-                assert!((t.length() - 1.0).abs() < 1e-5, "{n} {du} {t}");
-                assert!(t.dot(n).abs() < 1e-5, "{n} {du} {t}");
-            }
-        }
-    }
-
-    #[test]
-    fn fresnel_is_schlick_at_both_ends() {
-        assert_eq!(fresnel(0.04, 1.0), 0.04);
-        assert!((fresnel(0.04, 0.0) - 1.0).abs() < 1e-6);
-        assert!((fresnel(0.04, -0.5) - 1.0).abs() < 1e-6);
-    }
-}
-
 /// Every cube of a store, decoded to linear RGB: the reference's view of "everything
 /// resident".
 pub struct StoreCubes {
@@ -593,5 +567,34 @@ impl CubeTexels for StoreCubes {
             Some(m) => m.get(cube as usize).copied().unwrap_or(0) & 63 != 0,
             None => (cube as usize) < self.cubes.len(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tangent_frames_are_unit_and_orthogonal_even_where_du_vanishes() {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(0.6, 0.0, -0.8),
+            Vec3::new(-1e-8, 1.0, 0.0).normalize(),
+        ] {
+            for du in [Vec3::ZERO, n * 3.0, Vec3::X, Vec3::new(1e-30, 0.0, 0.0)] {
+                let t = tangent_frame(n, du);
+                assert!(t.is_finite(), "{n} {du}");
+                assert!((t.length() - 1.0).abs() < 1e-5, "{n} {du} {t}");
+                assert!(t.dot(n).abs() < 1e-5, "{n} {du} {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn fresnel_is_schlick_at_both_ends() {
+        assert_eq!(fresnel(0.04, 1.0), 0.04);
+        assert!((fresnel(0.04, 0.0) - 1.0).abs() < 1e-6);
+        assert!((fresnel(0.04, -0.5) - 1.0).abs() < 1e-6);
     }
 }

@@ -1,4 +1,5 @@
 //! A small store baked once per test binary, and image comparisons.
+#![allow(dead_code)] // each test binary uses its own part
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
