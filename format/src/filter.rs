@@ -441,6 +441,13 @@ impl RowValues {
         }
     }
 
+    /// Makes the row `n` columns wide (contents unspecified until filled).
+    fn resize(&mut self, n: usize) {
+        for c in [&mut self.g, &mut self.r, &mut self.b] {
+            c.resize(n + 2, 0.0);
+        }
+    }
+
     /// Fills the row from texels `tex` (length n).
     fn fill(&mut self, tex: &[u32]) {
         let n = tex.len();
@@ -472,74 +479,77 @@ fn pack_residuals(e: u32, zr: u32, zg: u32, zb: u32) -> [u8; 4] {
     ]
 }
 
-/// Row 0 of filter 2, forward or inverse: each texel predicted from its left neighbour
-/// (taken as all three taps), texel 0 from nothing (predictions 0). `decode` selects the
-/// direction: forward reads `tex` and writes `planes`; inverse reads `planes`, writes `tex`.
-fn rows_first_row(tex: &mut [u32], planes: &mut [&mut [u8]; 4], decode: bool) {
-    let mut left: Option<u32> = None;
-    for (x, v) in tex.iter_mut().enumerate() {
-        let (sg, sr, sb) = match left {
-            None => (0.0, 0.0, 0.0),
-            Some(l) => {
-                let (el, ml) = fields(l);
-                let (g, r, b) = (
-                    channel_value(ml[1], el),
-                    channel_value(ml[0], el),
-                    channel_value(ml[2], el),
-                );
-                (tap_sum(g, g, g), tap_sum(r, r, r), tap_sum(b, b, b))
-            }
-        };
-        let get = |p: &[u8]| u32::from(p.get(x).copied().unwrap_or(0));
-        if decode {
-            let h = get(planes[0]);
-            let e = h & 31;
-            let g = (rows_predict_g(sg, e) + unzigzag9(get(planes[1]) | (h >> 6 & 1) << 8)) & 511;
-            let r = (rows_predict_rb(sr, sg, e, g) + unzigzag9(get(planes[2]) | (h >> 5 & 1) << 8))
-                & 511;
-            let b =
-                (rows_predict_rb(sb, sg, e, g) + unzigzag9(get(planes[3]) | (h >> 7) << 8)) & 511;
-            *v = r | g << 9 | b << 18 | e << 27;
-        } else {
-            let (e, m) = fields(*v);
-            let zg = zigzag9(m[1].wrapping_sub(rows_predict_g(sg, e)));
-            let zr = zigzag9(m[0].wrapping_sub(rows_predict_rb(sr, sg, e, m[1])));
-            let zb = zigzag9(m[2].wrapping_sub(rows_predict_rb(sb, sg, e, m[1])));
-            for (p, byte) in planes.iter_mut().zip(pack_residuals(e, zr, zg, zb)) {
-                if let Some(o) = p.get_mut(x) {
-                    *o = byte;
-                }
-            }
+/// Neighbour sums `(S_G, S_R, S_B)` of a texel in row 0 of filter 2: its left neighbour as
+/// all three taps, or zeros for texel 0.
+#[inline(always)]
+fn first_row_sums(left: Option<u32>) -> (f32, f32, f32) {
+    match left {
+        None => (0.0, 0.0, 0.0),
+        Some(l) => {
+            let (el, ml) = fields(l);
+            let (g, r, b) = (
+                channel_value(ml[1], el),
+                channel_value(ml[0], el),
+                channel_value(ml[2], el),
+            );
+            (tap_sum(g, g, g), tap_sum(r, r, r), tap_sum(b, b, b))
         }
-        left = Some(*v);
     }
+}
+
+/// Residual plane bytes `[plane 0, G, R, B]` of texel `v` with neighbour sums `sums`.
+#[inline(always)]
+fn rows_encode_texel(v: u32, (sg, sr, sb): (f32, f32, f32)) -> [u8; 4] {
+    let (e, m) = fields(v);
+    let zg = zigzag9(m[1].wrapping_sub(rows_predict_g(sg, e)));
+    let zr = zigzag9(m[0].wrapping_sub(rows_predict_rb(sr, sg, e, m[1])));
+    let zb = zigzag9(m[2].wrapping_sub(rows_predict_rb(sb, sg, e, m[1])));
+    pack_residuals(e, zr, zg, zb)
+}
+
+/// Texel from its residual plane bytes `[h, zg, zr, zb]` and neighbour sums `sums`.
+#[inline(always)]
+fn rows_decode_texel([h, zg, zr, zb]: [u8; 4], (sg, sr, sb): (f32, f32, f32)) -> u32 {
+    let h = u32::from(h);
+    let e = h & 31;
+    let g = (rows_predict_g(sg, e) + unzigzag9(u32::from(zg) | (h >> 6 & 1) << 8)) & 511;
+    let r = (rows_predict_rb(sr, sg, e, g) + unzigzag9(u32::from(zr) | (h >> 5 & 1) << 8)) & 511;
+    let b = (rows_predict_rb(sb, sg, e, g) + unzigzag9(u32::from(zb) | (h >> 7) << 8)) & 511;
+    r | g << 9 | b << 18 | e << 27
 }
 
 fn rows_forward(n: usize, t: usize, raw: &[u8], out: &mut [u8]) {
     if n == 0 {
         return;
     }
-    let mut tex: Vec<u32> = raw
+    let tex: Vec<u32> = raw
         .chunks_exact(4)
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
     let (p0, rest) = out.split_at_mut(t);
     let (pg, rest) = rest.split_at_mut(t);
     let (pr, pb) = rest.split_at_mut(t);
-    rows_first_row(&mut tex[..n], &mut [p0, pg, pr, pb], false);
+    let mut planes = [p0, pg, pr, pb];
+    let mut left = None;
+    for (x, &v) in tex[..n].iter().enumerate() {
+        for (p, byte) in planes
+            .iter_mut()
+            .zip(rows_encode_texel(v, first_row_sums(left)))
+        {
+            p[x] = byte;
+        }
+        left = Some(v);
+    }
+    let [p0, pg, pr, pb] = planes;
     let mut above = RowValues::new(n);
     for y in 1..n {
         above.fill(&tex[(y - 1) * n..y * n]);
         let row = &tex[y * n..(y + 1) * n];
         for (x, &v) in row.iter().enumerate() {
-            let (e, m) = fields(v);
             let sg = tap_sum(above.g[x], above.g[x + 1], above.g[x + 2]);
             let sr = tap_sum(above.r[x], above.r[x + 1], above.r[x + 2]);
             let sb = tap_sum(above.b[x], above.b[x + 1], above.b[x + 2]);
-            let zg = zigzag9(m[1].wrapping_sub(rows_predict_g(sg, e)));
-            let zr = zigzag9(m[0].wrapping_sub(rows_predict_rb(sr, sg, e, m[1])));
-            let zb = zigzag9(m[2].wrapping_sub(rows_predict_rb(sb, sg, e, m[1])));
-            let [b0, bg, br, bb] = pack_residuals(e, zr, zg, zb);
+            let [b0, bg, br, bb] = rows_encode_texel(v, (sg, sr, sb));
             let i = y * n + x;
             p0[i] = b0;
             pg[i] = bg;
@@ -611,29 +621,63 @@ fn decode_row_dispatch(
     decode_row(planes, above, cur, row)
 }
 
+/// Reusable buffers of [`rows_inverse`]: the previous and current row's values, one row of
+/// texels.
+struct RowsScratch {
+    above: RowValues,
+    cur: RowValues,
+    row: Vec<u32>,
+}
+
+thread_local! {
+    static ROWS_SCRATCH: std::cell::RefCell<RowsScratch> = std::cell::RefCell::new(RowsScratch {
+        above: RowValues::new(0),
+        cur: RowValues::new(0),
+        row: Vec::new(),
+    });
+}
+
 fn rows_inverse(n: usize, t: usize, filtered: &[u8], out: &mut [u8]) {
     if n == 0 {
         return;
     }
-    let mut row = vec![0u32; n];
-    let mut above = RowValues::new(n);
+    ROWS_SCRATCH.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut scratch) => rows_inverse_with(n, t, filtered, out, &mut scratch),
+        // Only reachable through re-entrance, which this module never does; stay correct.
+        Err(_) => rows_inverse_with(
+            n,
+            t,
+            filtered,
+            out,
+            &mut RowsScratch {
+                above: RowValues::new(n),
+                cur: RowValues::new(n),
+                row: Vec::new(),
+            },
+        ),
+    })
+}
+
+fn rows_inverse_with(n: usize, t: usize, filtered: &[u8], out: &mut [u8], s: &mut RowsScratch) {
+    for v in [&mut s.above, &mut s.cur] {
+        v.resize(n);
+    }
+    s.row.resize(n, 0);
     let (p0, rest) = filtered.split_at(t);
     let (pg, rest) = rest.split_at(t);
     let (pr, pb) = rest.split_at(t);
-    {
-        // Row 0 shares the scalar code of the forward filter, reading copies of its planes.
-        let mut first: [Vec<u8>; 4] = [p0, pg, pr, pb].map(|p| p[..n].to_vec());
-        let [a, b, c, d] = &mut first;
-        rows_first_row(&mut row, &mut [a, b, c, d], true);
+    let mut left = None;
+    for (x, v) in s.row.iter_mut().enumerate() {
+        *v = rows_decode_texel([p0[x], pg[x], pr[x], pb[x]], first_row_sums(left));
+        left = Some(*v);
     }
     let mut out_rows = out.chunks_exact_mut(4 * n);
     if let Some(o) = out_rows.next() {
-        for (o, v) in o.chunks_exact_mut(4).zip(&row) {
+        for (o, v) in o.chunks_exact_mut(4).zip(&s.row) {
             o.copy_from_slice(&v.to_le_bytes());
         }
     }
-    above.fill(&row);
-    let mut cur = RowValues::new(n);
+    s.above.fill(&s.row);
     for (y, o) in (1..n).zip(out_rows) {
         let span = y * n..(y + 1) * n;
         let planes = [
@@ -642,12 +686,12 @@ fn rows_inverse(n: usize, t: usize, filtered: &[u8], out: &mut [u8]) {
             &pr[span.clone()],
             &pb[span],
         ];
-        decode_row_dispatch(planes, &above, &mut cur, &mut row);
-        for (o, v) in o.chunks_exact_mut(4).zip(row.iter()) {
+        decode_row_dispatch(planes, &s.above, &mut s.cur, &mut s.row);
+        for (o, v) in o.chunks_exact_mut(4).zip(s.row.iter()) {
             o.copy_from_slice(&v.to_le_bytes());
         }
-        cur.pad(n);
-        std::mem::swap(&mut above, &mut cur);
+        s.cur.pad(n);
+        std::mem::swap(&mut s.above, &mut s.cur);
     }
 }
 
