@@ -914,7 +914,7 @@ mod tests {
     fn predict_rows_reference(n: usize, tex: &[u32]) -> Vec<u8> {
         let t = n * n;
         let value = |v: u32, shift: u32| ((v >> shift) & 511) as f32 * 2f32.powi((v >> 27) as i32);
-        let round = |x: f32| (x + 0.5).min(511.0).max(0.0).trunc() as u32;
+        let round = |x: f32| (x + 0.5).clamp(0.0, 511.0).trunc() as u32;
         let mut out = vec![0u8; 4 * t];
         for y in 0..n {
             for x in 0..n {
