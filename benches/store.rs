@@ -126,6 +126,12 @@ fn reencode(source: &Store, encoding: Encoding, cubes: u32) -> (PathBuf, u64, u6
     (path, compressed, texels, unfiltered, predict)
 }
 
+/// Nanoseconds this thread has run on a CPU (Linux: /proc/thread-self/schedstat), if known.
+fn thread_cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
 fn store_benchmarks(c: &mut Criterion) {
     let source = reference_store();
     let reference = Store::open(&source).expect("open reference store");
@@ -164,6 +170,33 @@ fn store_benchmarks(c: &mut Criterion) {
         let face = store.face_raw_size();
         let faces = store.cube_count() as usize * 6;
         let mut buffer = vec![0u8; face];
+        // The same work timed by this thread's CPU time as well as wall time: on a shared
+        // machine the wall time also counts time the thread waited for a core.
+        let (wall, cpu) = {
+            let start = (std::time::Instant::now(), thread_cpu_ns());
+            let mut bytes = 0u64;
+            while bytes < 2_000_000_000 {
+                for cube in 0..store.cube_count() {
+                    for f in 0..6 {
+                        store
+                            .read_face_raw(cube, f, &mut buffer)
+                            .expect("read face");
+                    }
+                }
+                bytes += (face * faces) as u64;
+            }
+            let wall = bytes as f64 / start.0.elapsed().as_secs_f64() / 1e9;
+            let cpu = thread_cpu_ns()
+                .zip(start.1)
+                .map(|(b, a)| bytes as f64 / (b - a) as f64);
+            (wall, cpu)
+        };
+        println!(
+            "{:8} read_face_raw: {:.3} GB/s of wall time, {} GB/s of this thread's CPU time",
+            encoding.name(),
+            wall,
+            cpu.map_or("(unknown)".to_string(), |c| format!("{c:.3}"))
+        );
         group.throughput(Throughput::Bytes((face * faces) as u64));
         group.bench_function(encoding.name(), |b| {
             b.iter(|| {
