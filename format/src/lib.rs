@@ -181,13 +181,12 @@
 //! vector registers without a texel-to-texel dependency; filter 1's left neighbour chains
 //! the texels of a row.
 //!
-//! Measured on the example scene (`cargo run --release -p oslf-format --example filter_sizes`
-//! on stores baked with `oslf-bake`; zstd level 3, 4 samples per texel), RGB9E5 bytes per
-//! texel none → predict → predict-rows: quick preset (489 cubes of 32²) 3.490 → 3.432 →
-//! 3.443; 128² cubes (thesis preset settings) 3.380 → 3.108 → 3.095. RGBA16F/RGBA32F
-//! (predict and predict-rows agree) at 32²: 5.706 → 4.658, 10.039 → 9.207. The cube maps
-//! are dominated by Monte Carlo noise, which no lossless filter removes (README.md,
-//! "Measured").
+//! Measured on cube maps of the example scene (`cargo bench --bench store`; zstd level 3, 4
+//! samples per texel), bytes per texel none → predict → predict-rows: quick preset (489 cubes
+//! of 32²) RGB9E5 3.490 → 3.432 → 3.443, RGBA16F 5.706 → 4.658 → 4.658, RGBA32F 10.039 →
+//! 9.207 → 9.207; thesis preset (`OSLF_BENCH_STORE=thesis.oslf OSLF_BENCH_CUBES=300`, the first
+//! 300 of its 1240 cubes of 128²) RGB9E5 3.411 → 3.155 → 3.142. The cube maps are dominated by
+//! Monte Carlo noise, which no lossless filter removes (README.md, "Measured").
 //!
 //! ## Encodings and measured accuracy
 //!
