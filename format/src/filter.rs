@@ -392,12 +392,12 @@ fn channel_value(m: u32, e: u32) -> f32 {
 #[inline(always)]
 fn round_mantissa(x: f32) -> u32 {
     // Written as comparisons, not `f32::min`/`max`, so that it vectorises; NaN (which the
-    // callers never pass) would give 0.
+    // callers never pass) fails `y < 511.0` and gives 511.
     let y = x + 0.5;
     let y = if y < 511.0 { y } else { 511.0 };
     let y = if y >= 0.0 { y } else { 0.0 };
-    // SAFETY: `y` is in [0, 511] (a NaN fails `y >= 0.0` and became 0), so it is finite and
-    // its truncation fits an i32.
+    // SAFETY: after the two comparisons `y` is in [0, 511] (NaN became 511, anything below 0
+    // became 0), so it is finite and its truncation fits an i32.
     unsafe { y.to_int_unchecked::<i32>() as u32 }
 }
 
