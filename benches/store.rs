@@ -1,12 +1,18 @@
-//! Store benchmark on cube maps baked from the example scene (quick preset):
-//! bytes per texel of each encoding at the default zstd level, and decompression throughput
-//! of one core (`read_face_raw`, checksum included).
+//! Store benchmark on cube maps baked from the example scene: bytes per texel of each encoding
+//! at the default zstd level, and decompression throughput of one core (`read_face_raw`:
+//! checksum, zstd and unfilter).
 //!
-//! Cubes are stored with the default face filter ([`Filter::Predict`]); the unfiltered size is
-//! printed beside it.
+//! Cubes are stored with the default face filter ([`Filter::PredictRows`]); the sizes with
+//! filter 1 (`predict`) and unfiltered are printed beside it.
 //!
-//! `cargo bench --bench store`. The lossless RGBA32F bake is cached in
-//! `target/bench-data/`; each encoding is re-encoded from it, so all see the same radiance.
+//! `cargo bench --bench store`: the quick preset (32² cube maps), baked losslessly (RGBA32F)
+//! once and cached in `target/bench-data/`; each encoding is re-encoded from it, so all see
+//! the same radiance.
+//!
+//! `OSLF_BENCH_STORE=path.oslf [OSLF_BENCH_CUBES=N] cargo bench --bench store`: the cube maps
+//! of an existing store instead (its first N cubes), e.g. the thesis preset's 128² cube maps
+//! from `oslf-bake examples/gazebo.toml --preset thesis`. Re-encoding an RGB9E5 store to RGB9E5
+//! is exact; its RGBA16F/RGBA32F figures are then of RGB9E5-quantised radiance.
 
 use std::path::{Path, PathBuf};
 
@@ -23,8 +29,12 @@ fn data_dir() -> PathBuf {
     dir
 }
 
-/// The example scene baked losslessly (RGBA32F), baked once and cached.
+/// The example scene baked losslessly (RGBA32F), baked once and cached, or the store named
+/// by `OSLF_BENCH_STORE`.
 fn reference_store() -> PathBuf {
+    if let Some(path) = std::env::var_os("OSLF_BENCH_STORE") {
+        return PathBuf::from(path);
+    }
     let path = data_dir().join("gazebo-quick-rgba32f.oslf");
     if !path.exists() {
         let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gazebo.toml");
@@ -45,9 +55,9 @@ fn reference_store() -> PathBuf {
 /// Re-encodes every cube of `source` with `encoding` into a new store.
 /// Returns the store's path, its compressed cube bytes, the texel count and the compressed
 /// cube bytes without a face filter (`Filter::None`, for comparison).
-fn reencode(source: &Store, encoding: Encoding) -> (PathBuf, u64, u64, u64) {
+fn reencode(source: &Store, encoding: Encoding, cubes: u32) -> (PathBuf, u64, u64, u64, u64) {
     // A name of its own: the RGBA32F copy must not replace the reference it is read from.
-    let path = data_dir().join(format!("gazebo-quick-{}-reencoded.oslf", encoding.name()));
+    let path = data_dir().join(format!("gazebo-bench-{}-reencoded.oslf", encoding.name()));
     let mut meta = source.meta().clone();
     meta.bake.encoding = encoding;
     let points = source.sample_points().to_vec();
@@ -65,36 +75,94 @@ fn reencode(source: &Store, encoding: Encoding) -> (PathBuf, u64, u64, u64) {
         resolution: res,
         indices,
     };
+    // With fewer cubes than the source: a store of the first `cubes` sample points, sample
+    // maps cut to them, no environment cube.
+    let cubes = if cubes >= source.cube_count() {
+        source.cube_count()
+    } else {
+        let cubes = cubes.min(points.len() as u32);
+        meta.has_env_cube = false;
+        cubes
+    };
+    let (points, maps) = if cubes == source.cube_count() {
+        (points, maps)
+    } else {
+        let indices = maps
+            .indices
+            .iter()
+            .map(|texel| {
+                // The texel's points that remain, nearest first, then invalid entries.
+                let mut kept = [oslf::format::INVALID_INDEX; 4];
+                for (slot, &i) in kept.iter_mut().zip(texel.iter().filter(|&&i| i < cubes)) {
+                    *slot = i;
+                }
+                kept
+            })
+            .collect();
+        (
+            points[..cubes as usize].to_vec(),
+            SampleMaps {
+                resolution: maps.resolution,
+                indices,
+            },
+        )
+    };
     let mut writer = StoreWriter::create(&path, &meta, &points, &maps).expect("create store");
-    let (mut compressed, mut texels, mut unfiltered) = (0u64, 0u64, 0u64);
-    for c in 0..source.cube_count() {
+    let (mut compressed, mut texels, mut unfiltered, mut predict) = (0u64, 0u64, 0u64, 0u64);
+    for c in 0..cubes {
         let cube = source.read_cube(c).expect("read cube");
         let (enc, stats) = encode_cube(&cube, &meta.bake, c).expect("encode");
         compressed += stats.compressed_bytes;
         let (_, plain) =
             encode_cube_with_filter(&cube, &meta.bake, c, Filter::None).expect("encode");
         unfiltered += plain.compressed_bytes;
+        let (_, p) =
+            encode_cube_with_filter(&cube, &meta.bake, c, Filter::Predict).expect("encode");
+        predict += p.compressed_bytes;
         texels += 6 * (cube.resolution as u64).pow(2);
         writer.append(enc).expect("append");
     }
     writer.finish().expect("finish");
-    (path, compressed, texels, unfiltered)
+    (path, compressed, texels, unfiltered, predict)
+}
+
+/// Nanoseconds this thread has run on a CPU (Linux: /proc/thread-self/schedstat), if known.
+fn thread_cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
 }
 
 fn store_benchmarks(c: &mut Criterion) {
-    let reference = Store::open(&reference_store()).expect("open reference store");
+    let source = reference_store();
+    let reference = Store::open(&source).expect("open reference store");
+    let cubes = std::env::var("OSLF_BENCH_CUBES")
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+        .map_or(reference.cube_count(), |n| {
+            n.clamp(1, reference.cube_count())
+        });
+    let bake = &reference.meta().bake;
+    println!(
+        "cube maps: {} of {} cubes of {}² from {} ({} samples per texel, {} bounces, stored as {})",
+        cubes,
+        reference.cube_count(),
+        reference.cube_resolution(),
+        source.display(),
+        bake.samples_per_texel,
+        bake.bounces,
+        bake.encoding.name()
+    );
     let mut group = c.benchmark_group("read_face_raw");
     for encoding in [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f] {
-        let (path, compressed, texels, unfiltered) = reencode(&reference, encoding);
+        let (path, compressed, texels, unfiltered, predict) = reencode(&reference, encoding, cubes);
         println!(
-            "{:8} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} unfiltered; {} cubes of {}², {:.2} MB of cube data; raw {} bytes per texel)",
+            "{:8} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} with predict, {:.3} unfiltered; {:.2} MB of cube data; raw {} bytes per texel)",
             encoding.name(),
             reference.meta().bake.zstd_level,
             compressed as f64 / texels as f64,
             Filter::default(),
+            predict as f64 / texels as f64,
             unfiltered as f64 / texels as f64,
-            reference.cube_count(),
-            reference.cube_resolution(),
             compressed as f64 / 1e6,
             encoding.bytes_per_texel()
         );
@@ -102,6 +170,33 @@ fn store_benchmarks(c: &mut Criterion) {
         let face = store.face_raw_size();
         let faces = store.cube_count() as usize * 6;
         let mut buffer = vec![0u8; face];
+        // The same work timed by this thread's CPU time as well as wall time: on a shared
+        // machine the wall time also counts time the thread waited for a core.
+        let (wall, cpu) = {
+            let start = (std::time::Instant::now(), thread_cpu_ns());
+            let mut bytes = 0u64;
+            while bytes < 2_000_000_000 {
+                for cube in 0..store.cube_count() {
+                    for f in 0..6 {
+                        store
+                            .read_face_raw(cube, f, &mut buffer)
+                            .expect("read face");
+                    }
+                }
+                bytes += (face * faces) as u64;
+            }
+            let wall = bytes as f64 / start.0.elapsed().as_secs_f64() / 1e9;
+            let cpu = thread_cpu_ns()
+                .zip(start.1)
+                .map(|(b, a)| bytes as f64 / (b - a) as f64);
+            (wall, cpu)
+        };
+        println!(
+            "{:8} read_face_raw: {:.3} GB/s of wall time, {} GB/s of this thread's CPU time",
+            encoding.name(),
+            wall,
+            cpu.map_or("(unknown)".to_string(), |c| format!("{c:.3}"))
+        );
         group.throughput(Throughput::Bytes((face * faces) as u64));
         group.bench_function(encoding.name(), |b| {
             b.iter(|| {

@@ -63,12 +63,27 @@ pub struct BakeReport {
     pub placement_seconds: f64,
     pub sample_map_seconds: f64,
     pub capture_seconds: f64,
+    /// CPU time all of the process's threads spent during the capture, where the system
+    /// reports it (Linux). On a shared machine, capture rays per CPU-second do not depend on
+    /// what else runs; `mrays_per_second` (wall time) does.
+    pub capture_cpu_seconds: Option<f64>,
     pub total_seconds: f64,
     pub store_bytes: u64,
     /// Compressed cube-map bytes per texel.
     pub bytes_per_texel: f64,
     /// Texels whose radiance exceeded the encoding's range and were clamped.
     pub clamped_texels: u64,
+}
+
+/// CPU nanoseconds run so far by the process's live threads (Linux `schedstat`), if known.
+/// The worker pool's threads live for the whole bake, so differences cover them all.
+fn process_cpu_ns() -> Option<u64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        total = total.saturating_add(stat.split_whitespace().next()?.parse().ok()?);
+    }
+    Some(total)
 }
 
 /// Bakes `scene` into the store at `options.output`.
@@ -175,6 +190,7 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     let bar = progress_bar(options.progress, writer.total_cubes() as u64);
     bar.set_position(writer.next_cube() as u64);
     let t = Instant::now();
+    let cpu_start = process_cpu_ns();
     let mut rays = RayStats::default();
     let mut bytes = 0u64;
     let mut texels = 0u64;
@@ -234,6 +250,9 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     }
     bar.finish_and_clear();
     report.capture_seconds = t.elapsed().as_secs_f64();
+    report.capture_cpu_seconds = process_cpu_ns()
+        .zip(cpu_start)
+        .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9);
     report.rays_closest = rays.closest;
     report.rays_shadow = rays.shadow;
     report.mrays_per_second =

@@ -54,6 +54,10 @@ pub struct TriangleScene {
     bvh: CwBvh,
     /// Triangle corners in BVH leaf order (`bvh` primitive slot = index).
     vertices: Vec<[Vec3; 3]>,
+    /// Per slot of `vertices`: the unnormalised normal `(v1 − v0) × (v2 − v0)` and its
+    /// length, for the self-intersection guard of [`intersect_triangle`] (computed once here
+    /// instead of at every accepted hit; the same expression, so the same bits).
+    planes: Vec<[f32; 4]>,
     attributes: Vec<TriangleAttributes>,
     /// Slots of `vertices` in input order (for the brute-force reference).
     input_order: Vec<u32>,
@@ -134,6 +138,7 @@ impl TriangleScene {
             .iter()
             .map(|&i| attributes[i as usize])
             .collect();
+        let planes = vertices_bvh.iter().map(triangle_plane).collect();
         let build_time = start.elapsed();
         if vertices_bvh.len() != vertices.len() || bvh.nodes.is_empty() {
             return Err(BakeError::Invalid(format!(
@@ -159,6 +164,7 @@ impl TriangleScene {
         Ok(TriangleScene {
             bvh,
             vertices: vertices_bvh,
+            planes,
             attributes: attributes_bvh,
             input_order,
             build_time,
@@ -189,7 +195,9 @@ impl TriangleScene {
         let mut t_best = t_max;
         for &slot in &self.input_order {
             let slot = slot as usize;
-            if let Some(h) = intersect_triangle(&self.vertices[slot], &pr, t_best) {
+            if let Some(h) =
+                intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_best)
+            {
                 t_best = h.t;
                 best = Some((slot, h));
             }
@@ -233,7 +241,9 @@ impl Intersector for TriangleScene {
             intersect_node(node, &pr, t_best, state.oct_inv4),
             {
                 let slot = state.primitive_id as usize;
-                if let Some(h) = intersect_triangle(&self.vertices[slot], &pr, t_best) {
+                if let Some(h) =
+                    intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_best)
+                {
                     t_best = h.t;
                     best = Some((slot, h));
                 }
@@ -257,7 +267,9 @@ impl Intersector for TriangleScene {
                 intersect_node(node, &pr, t_max, state.oct_inv4),
                 {
                     let slot = state.primitive_id as usize;
-                    if intersect_triangle(&self.vertices[slot], &pr, t_max).is_some() {
+                    if intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_max)
+                        .is_some()
+                    {
                         hit = true;
                         break 'outer;
                     }
@@ -373,7 +385,12 @@ const fn gamma(n: f32) -> f32 {
 /// Watertight ray–triangle intersection (Woop, Benthin, Wald 2013; pbrt-v3 §3.6.2) with
 /// `t` in `(δ_t, t_max)`, δ_t the conservative rounding-error bound of `t`.
 #[inline(always)]
-fn intersect_triangle(v: &[Vec3; 3], r: &PreparedRay, t_max: f32) -> Option<TriHit> {
+fn intersect_triangle(
+    v: &[Vec3; 3],
+    plane: &[f32; 4],
+    r: &PreparedRay,
+    t_max: f32,
+) -> Option<TriHit> {
     let p0 = v[0] - r.origin;
     let p1 = v[1] - r.origin;
     let p2 = v[2] - r.origin;
@@ -428,15 +445,21 @@ fn intersect_triangle(v: &[Vec3; 3], r: &PreparedRay, t_max: f32) -> Option<TriH
     // Self-intersection guard: a ray whose origin lies on this triangle's plane up to the
     // rounding of a computed surface point (a few ulps of the origin's coordinates) started
     // on this surface and must not re-hit it.
-    let n = (v[1] - v[0]).cross(v[2] - v[0]);
+    let n = Vec3::new(plane[0], plane[1], plane[2]);
     let plane_distance = t * r.dir.dot(n).abs();
-    if plane_distance <= r.self_tolerance * n.length() {
+    if plane_distance <= r.self_tolerance * plane[3] {
         return None;
     }
     Some(TriHit {
         t,
         barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det],
     })
+}
+
+/// The unnormalised normal of a triangle and its length (see `TriangleScene::planes`).
+fn triangle_plane(v: &[Vec3; 3]) -> [f32; 4] {
+    let n = (v[1] - v[0]).cross(v[2] - v[0]);
+    [n.x, n.y, n.z, n.length()]
 }
 
 /// Relative self-intersection tolerance: 4 ulps (2⁻²¹) of the origin's largest coordinate

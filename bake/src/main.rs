@@ -163,12 +163,21 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+    let rays = (r.rays_closest + r.rays_shadow) as f64;
     println!(
-        "rays           {} closest + {} shadow = {:.1} M, {:.2} Mrays/s",
+        "rays           {} closest + {} shadow = {:.1} M, {:.2} Mrays/s{}",
         r.rays_closest,
         r.rays_shadow,
-        (r.rays_closest + r.rays_shadow) as f64 / 1e6,
-        r.mrays_per_second
+        rays / 1e6,
+        r.mrays_per_second,
+        match r.capture_cpu_seconds {
+            Some(cpu) if cpu > 0.0 => format!(
+                " ({:.2} Mrays per CPU-second, {:.1} CPU-s)",
+                rays / cpu / 1e6,
+                cpu
+            ),
+            _ => String::new(),
+        }
     );
     println!(
         "time           {:.1} s total: BVH {:.2} s ({} triangles), points {:.2} s, sample maps {:.2} s, cube maps {:.1} s",

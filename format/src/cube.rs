@@ -190,7 +190,7 @@ impl EncodedCube {
 /// ([`Error::InvalidDistance`]), clamps values above the encoding's largest finite value and
 /// counts them in [`EncodeStats::clamped_texels`].
 ///
-/// Faces are filtered with [`Filter::default`] ([`Filter::Predict`]), the filter
+/// Faces are filtered with [`Filter::default`] ([`Filter::PredictRows`]), the filter
 /// [`crate::StoreWriter::create`] records; see [`encode_cube_with_filter`].
 pub fn encode_cube(
     cube: &CubeImage,

@@ -200,7 +200,7 @@ pub enum Error {
     NoPartial(PathBuf),
     /// A face filter id this reader does not know (header bytes 176..180).
     #[error(
-        "unknown face filter id {id} at byte offset {offset} (this reader knows 0 none, 1 predict)"
+        "unknown face filter id {id} at byte offset {offset} (this reader knows 0 none, 1 predict, 2 predict-rows)"
     )]
     UnknownFilter { id: u32, offset: u64 },
     /// An unknown encoding name.

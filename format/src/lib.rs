@@ -45,7 +45,7 @@
 //! | 152    | `u64`     | checksum of the metadata section |
 //! | 160    | `u64`     | checksum of the sample points section |
 //! | 168    | `u64`     | checksum of the sample maps section |
-//! | 176    | `u32`     | face filter: 0 none, 1 predict (see "Face filters"); other ids are refused ([`Error::UnknownFilter`]) |
+//! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows (see "Face filters"; writers use 2); other ids are refused ([`Error::UnknownFilter`]) |
 //! | 180    | 68 bytes  | reserved, zero |
 //! | 248    | `u64`     | checksum of header bytes 0..248 |
 //!
@@ -99,7 +99,7 @@
 //! `n² × bytes_per_texel (+ n² × 4 with the distance channel)`. The *raw face* is the `n²`
 //! encoded texels (row 0 first, column 0 first; see [`cube`] for the orientation), then, with
 //! the distance channel, `n²` `f32` distances to the first hit (`f32::MAX` where the ray
-//! escaped). With filter 0 the frame holds the raw face itself; with filter 1 it holds the raw
+//! escaped). With filter 0 the frame holds the raw face itself; with filter 1 or 2 it holds the raw
 //! face transformed as "Face filters" describes (same size), and readers undo the filter. The records make
 //! a partial file recoverable without its table of contents ([`StoreWriter::resume`]). Cube
 //! `sample_count`, if the environment flag is set, is an environment map captured at the
@@ -160,12 +160,33 @@
 //! for texel (0, 0)); `z = zigzag(D − pD)` as above with `W = 4`; four byte planes of `t`
 //! bytes, plane `j` = byte `j` of `z` (least significant first).
 //!
-//! Measured on the example scene (`cargo bench --bench store`: 489 cubes of 32², 4 samples
-//! per texel, zstd level 3), bytes per texel unfiltered → predict: RGB9E5 3.490 → 3.432,
-//! RGBA16F 5.706 → 4.658, RGBA32F 10.039 → 9.207; at 16 samples per texel 3.490 → 3.155,
-//! 5.709 → 4.313, 9.963 → 8.850; at 64, 3.437 → 2.865, 5.578 → 4.019, 9.845 → 8.660
-//! (`examples/filter_sizes.rs`). The cube maps are dominated by Monte Carlo noise, which no
-//! lossless filter removes.
+//! **Filter 2 (predict-rows)** is filter 1 except for RGB9E5 texels: RGBA16F, RGBA32F and
+//! the distance plane are transformed exactly as filter 1 does, and the RGB9E5 output planes,
+//! `zigzag9` and decoding order (green, then red and blue) are those of filter 1; only the
+//! predictions `pG`, `pR`, `pB` differ. They are computed in IEEE-754 binary32 arithmetic,
+//! every operation rounded to nearest-even, in the order written (no fused multiply-add):
+//!
+//! * the *value* of channel `C` of a texel with exponent `e` is `V_C = C · 2^e` (exact);
+//! * taps: for `y ≥ 1`, `a = (max(x−1, 0), y−1)`, `b = (x, y−1)`, `c = (min(x+1, n−1), y−1)`
+//!   (the row above, edge texels repeated); for `y = 0`, `x ≥ 1`, `a = b = c = (x−1, 0)` (the
+//!   left texel); texel (0, 0) has no taps and takes `S_R = S_G = S_B = 0`;
+//! * sums `S_C = (V_C(a) + 2·V_C(b)) + V_C(c)` for C in R, G, B;
+//! * `q = 2^(−e−2)` for the texel's own exponent `e`; `round(x) = trunc(min(x + 0.5, 511))`
+//!   (an integer in 0..=511; the sum `x + 0.5` is rounded to binary32 first);
+//! * `pG = round(S_G · q)`;
+//! * for C in R, B: `pC = round(S_C · q)` if `S_G = 0`, else `pC = round(G · (S_C / S_G))`,
+//!   `G` this texel's green mantissa (as binary32).
+//!
+//! Every row after the first depends only on the row above, so decoders reconstruct a row in
+//! vector registers without a texel-to-texel dependency; filter 1's left neighbour chains
+//! the texels of a row.
+//!
+//! Measured on cube maps of the example scene (`cargo bench --bench store`; zstd level 3, 4
+//! samples per texel), bytes per texel none → predict → predict-rows: quick preset (489 cubes
+//! of 32²) RGB9E5 3.490 → 3.432 → 3.443, RGBA16F 5.706 → 4.658 → 4.658, RGBA32F 10.039 →
+//! 9.207 → 9.207; thesis preset (`OSLF_BENCH_STORE=thesis.oslf OSLF_BENCH_CUBES=300`, the first
+//! 300 of its 1240 cubes of 128²) RGB9E5 3.411 → 3.155 → 3.142. The cube maps are dominated by
+//! Monte Carlo noise, which no lossless filter removes (README.md, "Measured").
 //!
 //! ## Encodings and measured accuracy
 //!

@@ -443,7 +443,7 @@ impl Store {
             };
             let target: &mut [u8] = match h.filter {
                 Filter::None => out,
-                Filter::Predict => {
+                Filter::Predict | Filter::PredictRows => {
                     state.scratch.resize(out.len(), 0);
                     &mut state.scratch
                 }
