@@ -21,7 +21,8 @@
 //! (pinned, always resident) and reconstruction gives 0. The shader never reads a slot that
 //! does not hold the cube asked for.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -85,7 +86,7 @@ pub struct CacheStats {
     pub ram_misses: u64,
     /// Faces dropped from the RAM level.
     pub ram_evictions: u64,
-    /// Bytes decoded (zstd + filter) from the store.
+    /// Bytes of encoded texels decoded (zstd + filter) from the store.
     pub bytes_decoded: u64,
     /// Bytes uploaded to the GPU.
     pub bytes_uploaded: u64,
@@ -95,6 +96,9 @@ pub struct CacheStats {
     pub upload_seconds: f64,
     /// Faces that failed to decode (checksum, damaged frame); their sample point falls back.
     pub decode_errors: u64,
+    /// Wall time of the cache's whole per-frame work on the CPU: reading the feedback masks,
+    /// planning, decoding, uploading and writing the indirection table.
+    pub cache_seconds: f64,
 }
 
 impl CacheStats {
@@ -115,6 +119,7 @@ impl CacheStats {
         self.decode_seconds += o.decode_seconds;
         self.upload_seconds += o.upload_seconds;
         self.decode_errors += o.decode_errors;
+        self.cache_seconds += o.cache_seconds;
         self.update_rate();
     }
 
@@ -183,6 +188,9 @@ pub struct CubeCache {
     ram_budget: u64,
     frame: u64,
     face_texel_bytes: usize,
+    in_flight: HashSet<(u32, u8)>,
+    arrivals_tx: Sender<Arrival>,
+    arrivals_rx: Receiver<Arrival>,
     /// Counters since the cache was made (the renderer adds each frame's).
     pub cumulative: CacheStats,
     /// Decode errors met so far (cube and message), for reports.
@@ -190,6 +198,22 @@ pub struct CubeCache {
 }
 
 const FREE: u32 = u32::MAX;
+
+/// A face decoded in the background: cube, face, its texels or the error, seconds taken.
+type Arrival = (u32, u8, Result<Arc<[u8]>, oslf_format::Error>, f64);
+
+/// Decompresses one face and keeps its encoded texels (the distance plane is not uploaded).
+fn decode_face(
+    store: &Store,
+    cube: u32,
+    face: u8,
+    texel_bytes: usize,
+) -> Result<Arc<[u8]>, oslf_format::Error> {
+    let mut raw = vec![0u8; store.face_raw_size()];
+    store.read_face_raw(cube, face as usize, &mut raw)?;
+    raw.truncate(texel_bytes);
+    Ok(Arc::from(raw))
+}
 
 impl CubeCache {
     /// An empty cache for `cube_count` cubes with `slots` GPU slots. `face_texel_bytes` is the
@@ -201,6 +225,7 @@ impl CubeCache {
         ram_budget: u64,
         face_texel_bytes: usize,
     ) -> Self {
+        let (arrivals_tx, arrivals_rx) = channel();
         Self {
             granularity,
             slot_owner: vec![FREE; slots as usize],
@@ -214,6 +239,9 @@ impl CubeCache {
             ram_budget,
             frame: 0,
             face_texel_bytes,
+            in_flight: HashSet::new(),
+            arrivals_tx,
+            arrivals_rx,
             cumulative: CacheStats::default(),
             errors: Vec::new(),
         }
@@ -257,13 +285,27 @@ impl CubeCache {
     /// Turns a frame's feedback masks (bit `f` of `needed[cube]` = face `f` read) into the
     /// frame's statistics and the uploads that make the needed faces resident, as far as the
     /// budget allows. Needed cubes are served in index order (deterministic).
-    pub fn plan(&mut self, needed: &[u32], store: &Store) -> (Vec<Upload>, CacheStats) {
+    ///
+    /// With `wait`, faces missing from the RAM level are decoded now (in parallel) and uploaded
+    /// this frame. Without, they are decoded on the rayon pool in the background and uploaded
+    /// by the first `plan` after they arrive (streaming, for interactive viewers).
+    pub fn plan(
+        &mut self,
+        needed: &[u32],
+        store: &Arc<Store>,
+        wait: bool,
+    ) -> (Vec<Upload>, CacheStats) {
         self.frame += 1;
         let frame = self.frame;
         let mut stats = CacheStats {
             frames: 1,
             ..Default::default()
         };
+        while let Ok((cube, face, r, seconds)) = self.arrivals_rx.try_recv() {
+            self.in_flight.remove(&(cube, face));
+            stats.decode_seconds += seconds;
+            let _ = self.record_decoded(cube, face, r, frame, &mut stats);
+        }
         let mut needed: Vec<u8> = needed.iter().map(|&m| (m & 63) as u8).collect();
         needed.resize(self.cube_slot.len(), 0);
         if let Some(p) = self.pinned {
@@ -348,6 +390,7 @@ impl CubeCache {
         }
 
         // RAM level first, then decode the rest in parallel.
+        let texel_bytes = self.face_texel_bytes;
         let mut ready: Vec<(u32, u8, u32, Arc<[u8]>)> = Vec::new();
         let mut to_decode = Vec::new();
         for &(cube, face, slot) in &wanted_faces {
@@ -360,31 +403,37 @@ impl CubeCache {
                 None => to_decode.push((cube, face, slot)),
             }
         }
-        let start = Instant::now();
-        let raw_size = store.face_raw_size();
-        let texel_bytes = self.face_texel_bytes;
-        let decoded: Vec<_> = to_decode
-            .par_iter()
-            .map(|&(cube, face, slot)| {
-                let mut raw = vec![0u8; raw_size];
-                let r = store.read_face_raw(cube, face as usize, &mut raw);
-                raw.truncate(texel_bytes);
-                (cube, face, slot, r.map(|()| Arc::<[u8]>::from(raw)))
-            })
-            .collect();
-        stats.decode_seconds = start.elapsed().as_secs_f64();
-        for (cube, face, slot, r) in decoded {
-            stats.ram_misses += 1;
-            match r {
-                Ok(texels) => {
-                    stats.bytes_decoded += raw_size as u64;
-                    self.ram_insert(cube, face, Arc::clone(&texels), frame, &mut stats);
+        if wait {
+            let start = Instant::now();
+            let decoded: Vec<_> = to_decode
+                .par_iter()
+                .map(|&(cube, face, slot)| {
+                    (
+                        cube,
+                        face,
+                        slot,
+                        decode_face(store, cube, face, texel_bytes),
+                    )
+                })
+                .collect();
+            stats.decode_seconds += start.elapsed().as_secs_f64();
+            for (cube, face, slot, r) in decoded {
+                if let Some(texels) = self.record_decoded(cube, face, r, frame, &mut stats) {
                     ready.push((cube, face, slot, texels));
                 }
-                Err(e) => {
-                    stats.decode_errors += 1;
-                    self.failed[cube as usize] = true;
-                    self.errors.push(format!("cube {cube} face {face}: {e}"));
+            }
+        } else {
+            // Streaming: decode on the rayon pool, off the render thread; the faces arrive in a
+            // later frame's plan().
+            for &(cube, face, _) in &to_decode {
+                if self.in_flight.insert((cube, face)) {
+                    let tx = self.arrivals_tx.clone();
+                    let store = Arc::clone(store);
+                    rayon::spawn(move || {
+                        let start = Instant::now();
+                        let r = decode_face(&store, cube, face, texel_bytes);
+                        let _ = tx.send((cube, face, r, start.elapsed().as_secs_f64()));
+                    });
                 }
             }
         }
@@ -413,6 +462,31 @@ impl CubeCache {
         };
         stats.update_rate();
         (uploads, stats)
+    }
+
+    /// Books a decoded face into the RAM level (or its failure); returns its texels.
+    fn record_decoded(
+        &mut self,
+        cube: u32,
+        face: u8,
+        r: Result<Arc<[u8]>, oslf_format::Error>,
+        frame: u64,
+        stats: &mut CacheStats,
+    ) -> Option<Arc<[u8]>> {
+        stats.ram_misses += 1;
+        match r {
+            Ok(texels) => {
+                stats.bytes_decoded += texels.len() as u64;
+                self.ram_insert(cube, face, Arc::clone(&texels), frame, stats);
+                Some(texels)
+            }
+            Err(e) => {
+                stats.decode_errors += 1;
+                self.failed[cube as usize] = true;
+                self.errors.push(format!("cube {cube} face {face}: {e}"));
+                None
+            }
+        }
     }
 
     /// A free slot, or the least recently used one not needed this frame (evicting its cube).

@@ -2,6 +2,7 @@
 //! pass that shades every pixel from the sample maps and the cached cube maps (shade.wgsl),
 //! and the feedback loop that feeds the [`CubeCache`].
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Mat4, Vec3};
@@ -77,7 +78,7 @@ struct SizedTargets {
 /// Renders one store. See the crate docs for the frame's steps.
 pub struct Renderer {
     gpu: Gpu,
-    store: Store,
+    store: Arc<Store>,
     mesh: ObjectMesh,
     cache: CubeCache,
     constants: StoreConstants,
@@ -531,7 +532,7 @@ impl Renderer {
         };
         let mut renderer = Self {
             gpu,
-            store,
+            store: Arc::new(store),
             mesh,
             cache,
             constants,
@@ -564,7 +565,7 @@ impl Renderer {
         if env_cube != u32::MAX {
             let mut needed = vec![0u32; cube_count as usize];
             needed[env_cube as usize] = 63;
-            let (uploads, _) = renderer.cache.plan(&needed, &renderer.store);
+            let (uploads, _) = renderer.cache.plan(&needed, &renderer.store, true);
             let _ = renderer.apply(&uploads);
         }
         renderer.write_slots();
@@ -831,10 +832,13 @@ impl Renderer {
         let max_passes = opts.max_passes.max(1);
         loop {
             passes += 1;
-            let needed = self.shade_pass(passes == 1)?;
-            let (uploads, mut frame_stats) = self.cache.plan(&needed, &self.store);
+            let (needed, readback) = self.shade_pass(passes == 1)?;
+            let start = Instant::now();
+            let (uploads, mut frame_stats) =
+                self.cache.plan(&needed, &self.store, opts.resolve_misses);
             frame_stats.upload_seconds = self.apply(&uploads);
             self.write_slots();
+            frame_stats.cache_seconds = readback + start.elapsed().as_secs_f64();
             let missed = frame_stats.misses > 0 && !uploads.is_empty();
             match &mut stats {
                 None => stats = Some(frame_stats),
@@ -848,6 +852,7 @@ impl Renderer {
                     s.bytes_uploaded += frame_stats.bytes_uploaded;
                     s.decode_seconds += frame_stats.decode_seconds;
                     s.upload_seconds += frame_stats.upload_seconds;
+                    s.cache_seconds += frame_stats.cache_seconds;
                     s.decode_errors += frame_stats.decode_errors;
                     s.unresolved = frame_stats.unresolved;
                 }
@@ -875,8 +880,8 @@ impl Renderer {
     }
 
     /// Runs the G-buffer pass (if `geometry`) and the shading pass, and returns the feedback
-    /// masks.
-    fn shade_pass(&mut self, geometry: bool) -> Result<Vec<u32>> {
+    /// masks and the seconds spent copying them out of the mapped buffer.
+    fn shade_pass(&mut self, geometry: bool) -> Result<(Vec<u32>, f64)> {
         let targets = self
             .targets
             .as_ref()
@@ -944,10 +949,12 @@ impl Renderer {
         }
         encoder.copy_buffer_to_buffer(&self.feedback, 0, &self.feedback_readback, 0, None);
         self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.wait()?;
+        let start = Instant::now();
         let bytes = map_read(&self.gpu, &self.feedback_readback)?;
         let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
         masks.truncate(self.cube_count as usize);
-        Ok(masks)
+        Ok((masks, start.elapsed().as_secs_f64()))
     }
 
     fn read_texture_rgba32f(

@@ -196,3 +196,40 @@ fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
         "a damaged cube must not become resident"
     );
 }
+
+#[test]
+fn streaming_decodes_off_the_render_thread_and_converges_to_the_exact_image() {
+    let params = ShadingParams::default();
+    let mut exact_r = renderer(None, Granularity::Cube);
+    let camera = exact_r.default_view();
+    let exact = exact_r.render(&camera, &params, &options()).unwrap();
+
+    let mut r = renderer(None, Granularity::Cube);
+    let stream = RenderOptions {
+        resolve_misses: false,
+        ..options()
+    };
+    let first = r.render(&camera, &params, &stream).unwrap();
+    assert_eq!(first.passes, 1);
+    assert!(first.stats.misses > 0);
+    assert_eq!(
+        first.stats.loads, 0,
+        "nothing decoded yet: decoding runs in the background"
+    );
+    assert!(all_finite(&first.pixels));
+    let mut frames = 1;
+    loop {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let f = r.render(&camera, &params, &stream).unwrap();
+        frames += 1;
+        if f.stats.misses == 0 {
+            assert_eq!(
+                f.pixels, exact.pixels,
+                "streamed image differs once everything is resident"
+            );
+            break;
+        }
+        assert!(frames < 200, "streaming never converged: {:?}", f.stats);
+    }
+    println!("converged after {frames} frames");
+}
