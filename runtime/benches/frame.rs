@@ -80,6 +80,30 @@ fn main() {
             },
         ),
         (
+            "mirror, closest distance",
+            ShadingParams {
+                mode: Mode::Mirror,
+                blend: Blend::Distance,
+                ..base
+            },
+        ),
+        (
+            "mirror, closest angle",
+            ShadingParams {
+                mode: Mode::Mirror,
+                blend: Blend::Angle,
+                ..base
+            },
+        ),
+        (
+            "mirror, B^r N=4",
+            ShadingParams {
+                mode: Mode::Mirror,
+                blend: Blend::Reflection,
+                ..base
+            },
+        ),
+        (
             "recon + mirror, B^n N=4",
             ShadingParams {
                 mode: Mode::ReconMirror,
