@@ -109,50 +109,73 @@ fn face_st(d: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(f32(face), s, t);
 }
 
-fn load_texel(slot: u32, face: u32, x: u32, y: u32) -> vec3<f32> {
-    let tex = slot / P.slots_per_texture;
-    let layer = i32((slot % P.slots_per_texture) * 6u + face);
-    let c = vec2<i32>(i32(x), i32(y));
+// Texel `c` of array layer `layer` of pool texture `tex`.
+fn load_texel(tex: u32, layer: i32, c: vec2<u32>) -> vec3<f32> {
+    let p = vec2<i32>(c);
     // POOLS (the number of pool textures in use) is a constant, so unused arrays drop out.
     if (POOLS == 1u || tex == 0u) {
-        return textureLoad(pool0, c, layer, 0).rgb;
+        return textureLoad(pool0, p, layer, 0).rgb;
     } else if (POOLS == 2u || tex == 1u) {
-        return textureLoad(pool1, c, layer, 0).rgb;
+        return textureLoad(pool1, p, layer, 0).rgb;
     } else if (POOLS == 3u || tex == 2u) {
-        return textureLoad(pool2, c, layer, 0).rgb;
+        return textureLoad(pool2, p, layer, 0).rgb;
     }
-    return textureLoad(pool3, c, layer, 0).rgb;
+    return textureLoad(pool3, p, layer, 0).rgb;
 }
 
-// Radiance of cube `cube` towards `dir`, bilinear within the face (clamped at its edges).
-// Marks the face as needed in the feedback buffer. `w` is 1 when the face was resident,
-// 0 when not (then the colour is 0 and must not be used).
-fn lookup(cube: u32, dir: vec3<f32>) -> vec4<f32> {
+// Where a direction lands in a cube map: face, the four texels around it (clamped at the
+// face's edges) and the bilinear weights. The same for every cube, so a blend computes it once.
+struct Tap {
+    face: u32,
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+    wx: f32,
+    wy: f32,
+};
+
+fn tap(dir: vec3<f32>) -> Tap {
     let fst = face_st(dir);
-    let face = u32(fst.x);
-    atomicOr(&feedback[cube], 1u << face);
-    let entry = slots[cube];
-    if ((entry & (1u << face)) == 0u) {
-        return vec4<f32>(0.0);
-    }
-    let slot = entry >> 6u;
+    var t: Tap;
+    t.face = u32(fst.x);
     let n = P.cube_res;
     let nf = f32(n);
     let fx = clamp(fst.y * nf - 0.5, 0.0, nf - 1.0);
     let fy = clamp(fst.z * nf - 0.5, 0.0, nf - 1.0);
-    let x0 = u32(floor(fx));
-    let y0 = u32(floor(fy));
-    let x1 = min(x0 + 1u, n - 1u);
-    let y1 = min(y0 + 1u, n - 1u);
-    let wx = fx - floor(fx);
-    let wy = fy - floor(fy);
-    let t00 = load_texel(slot, face, x0, y0);
-    let t10 = load_texel(slot, face, x1, y0);
-    let t01 = load_texel(slot, face, x0, y1);
-    let t11 = load_texel(slot, face, x1, y1);
-    let top = t00 + (t10 - t00) * wx;
-    let bottom = t01 + (t11 - t01) * wx;
-    return vec4<f32>(top + (bottom - top) * wy, 1.0);
+    t.x0 = u32(floor(fx));
+    t.y0 = u32(floor(fy));
+    t.x1 = min(t.x0 + 1u, n - 1u);
+    t.y1 = min(t.y0 + 1u, n - 1u);
+    t.wx = fx - floor(fx);
+    t.wy = fy - floor(fy);
+    return t;
+}
+
+// Radiance of cube `cube` at tap `t`, bilinear within the face. Marks the face as needed in the
+// feedback buffer. `w` is 1 when the face was resident, 0 when not (then the colour is 0 and
+// must not be used).
+fn fetch(cube: u32, t: Tap) -> vec4<f32> {
+    atomicOr(&feedback[cube], 1u << t.face);
+    let entry = slots[cube];
+    if ((entry & (1u << t.face)) == 0u) {
+        return vec4<f32>(0.0);
+    }
+    let slot = entry >> 6u;
+    let tex = slot / P.slots_per_texture;
+    let layer = i32((slot % P.slots_per_texture) * 6u + t.face);
+    let t00 = load_texel(tex, layer, vec2<u32>(t.x0, t.y0));
+    let t10 = load_texel(tex, layer, vec2<u32>(t.x1, t.y0));
+    let t01 = load_texel(tex, layer, vec2<u32>(t.x0, t.y1));
+    let t11 = load_texel(tex, layer, vec2<u32>(t.x1, t.y1));
+    let top = t00 + (t10 - t00) * t.wx;
+    let bottom = t01 + (t11 - t01) * t.wx;
+    return vec4<f32>(top + (bottom - top) * t.wy, 1.0);
+}
+
+// Radiance of cube `cube` towards `dir` (see `fetch`).
+fn lookup(cube: u32, dir: vec3<f32>) -> vec4<f32> {
+    return fetch(cube, tap(dir));
 }
 
 // ---- geometry ----
@@ -302,11 +325,12 @@ fn blend_weights(a: vec3<f32>) -> vec4<f32> {
 // Blended radiance towards `dir` from the candidates with weights `w` (Eq. 4.7). Lookups
 // that are not resident are left out and the rest renormalized; `.w` is 0 when none was.
 fn blend_lookup(w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
+    let t = tap(dir);
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     for (var j = 0u; j < 4u; j++) {
         if (w[j] > 0.0) {
-            let l = lookup(cand.idx[j], dir);
+            let l = fetch(cand.idx[j], t);
             if (l.w > 0.0) {
                 acc += l.rgb * w[j];
                 wsum += w[j];
