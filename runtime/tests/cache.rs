@@ -233,3 +233,29 @@ fn streaming_decodes_off_the_render_thread_and_converges_to_the_exact_image() {
     }
     println!("converged after {frames} frames");
 }
+
+#[test]
+fn renders_on_a_device_the_application_owns() {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))
+    .unwrap();
+    let gpu = Gpu::from_device(device.clone(), queue, "application device".into());
+    let mut r = Renderer::new(gpu, open_store(), CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let frame = r
+        .render(&camera, &ShadingParams::default(), &options())
+        .unwrap();
+    assert!(mean(&frame.pixels) > 1e-3);
+    // The application's handle still works beside the renderer.
+    let _ = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: 16,
+        usage: wgpu::BufferUsages::UNIFORM,
+        mapped_at_creation: false,
+    });
+}
