@@ -324,8 +324,7 @@ fn blend_weights(a: vec3<f32>) -> vec4<f32> {
 
 // Blended radiance towards `dir` from the candidates with weights `w` (Eq. 4.7). Lookups
 // that are not resident are left out and the rest renormalized; `.w` is 0 when none was.
-fn blend_lookup(w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
-    let t = tap(dir);
+fn blend_fetch(w: vec4<f32>, t: Tap) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     for (var j = 0u; j < 4u; j++) {
@@ -341,6 +340,10 @@ fn blend_lookup(w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
         return vec4<f32>(acc / wsum, 1.0);
     }
     return vec4<f32>(0.0);
+}
+
+fn blend_lookup(w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
+    return blend_fetch(w, tap(dir));
 }
 
 // The environment-map baseline towards `dir`, or 0 when the store has none.
@@ -379,6 +382,8 @@ fn recon(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 // ---- mirror reflection (chapter 4) ----
 
 fn mirror(n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    // Every cube is looked up towards r: one tap serves the candidates and the fallback.
+    let t = tap(r);
     var b = vec4<f32>(0.0);
     if (SOURCE == 0u && cand.count > 0u) {
         var axis = r;
@@ -388,13 +393,14 @@ fn mirror(n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
             // One candidate has weight 1: one lookup instead of four masked ones.
             var j = 0u;
             if (w.y > 0.0) { j = 1u; } else if (w.z > 0.0) { j = 2u; } else if (w.w > 0.0) { j = 3u; }
-            b = lookup(cand.idx[j], r);
+            b = fetch(cand.idx[j], t);
         } else {
-            b = blend_lookup(w, r);
+            b = blend_fetch(w, t);
         }
     }
     if (b.w > 0.0) { return b.rgb; }
-    return env_lookup(r);
+    if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
+    return fetch(P.env_cube, t).rgb;
 }
 
 // ---- Ashikhmin–Shirley by Monte Carlo (chapter 5) ----
