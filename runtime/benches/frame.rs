@@ -11,8 +11,10 @@
 //! *Cache per warm frame*: the CPU time the cache costs a frame whose cubes are all resident
 //! (copying the feedback masks out, planning, writing the indirection table), included in the
 //! warm time; cold − warm is the cost of filling the cache (and of compiling the pipeline).
-//! Frames are timed to GPU completion without reading the image back. Writes a Markdown
-//! table to stdout and CSV to `target/frame-times.csv`.
+//! Frames are timed to GPU completion without reading the image back. Then, for each mirror
+//! blend, OSLF and environment-map frames interleaved (21 each, medians) give the ratio of the
+//! two in the same machine state. Writes Markdown tables to stdout and CSV to
+//! `target/frame-times.csv`.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -222,6 +224,66 @@ fn main() {
         }
     }
     println!("adapter: {adapter}");
+
+    // OSLF mirror against the environment-map baseline, frames interleaved so that both see
+    // the same machine state: the median of 21 warm frames each, per blend.
+    println!();
+    println!("| mirror blend | size | OSLF warm (ms) | environment map warm (ms) | ratio |");
+    println!("| --- | --- | ---: | ---: | ---: |");
+    for (w, h) in [(655u32, 460u32), (1280, 720)] {
+        let opts = RenderOptions {
+            width: w,
+            height: h,
+            read_pixels: false,
+            ..Default::default()
+        };
+        let env = ShadingParams {
+            mode: Mode::Mirror,
+            source: Source::EnvMap,
+            ..base
+        };
+        let mut r_env = Renderer::new(
+            Gpu::headless().unwrap(),
+            Store::open(&path).unwrap(),
+            CacheConfig::default(),
+        )
+        .unwrap();
+        let camera = r_env.default_view();
+        r_env.render(&camera, &env, &opts).unwrap();
+        for blend in Blend::ALL {
+            if !filter.is_empty() && !"mirror ratio".contains(filter.as_str()) {
+                continue;
+            }
+            let oslf = ShadingParams {
+                mode: Mode::Mirror,
+                blend,
+                ..base
+            };
+            let mut r = Renderer::new(
+                Gpu::headless().unwrap(),
+                Store::open(&path).unwrap(),
+                CacheConfig::default(),
+            )
+            .unwrap();
+            r.render(&camera, &oslf, &opts).unwrap();
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            for _ in 0..21 {
+                let t = Instant::now();
+                r.render(&camera, &oslf, &opts).unwrap();
+                a.push(t.elapsed().as_secs_f64() * 1e3);
+                let t = Instant::now();
+                r_env.render(&camera, &env, &opts).unwrap();
+                b.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            let (a, b) = (median(a), median(b));
+            println!(
+                "| {} | {w}×{h} | {a:.1} | {b:.1} | {:.2} |",
+                blend.name(),
+                a / b
+            );
+            csv.push_str(&format!("ratio {},{w},{h},,{a:.2},,,,\n", blend.name()));
+        }
+    }
     let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/frame-times.csv");
     std::fs::write(&out, csv).unwrap();
     println!("wrote {}", out.display());
