@@ -26,6 +26,9 @@
 //! * **CPU reference** ([`reference`]): the same shading in Rust, function for function, used
 //!   by the parity tests against the GPU.
 //!
+//! * **Metrics** ([`metrics`]): RMSE in CIELAB and linear RGB and PSNR over a mask (§6.1), and
+//!   the `oslf-compare` command.
+//!
 //! Cube maps are bound as 2D texture arrays (six layers per slot) and filtered bilinearly
 //! inside a face by the shader itself, so that the CPU reference can reproduce the filtering
 //! exactly. Numbers: f32 throughout; non-finite results are replaced by 0 before they reach a
@@ -44,6 +47,7 @@ pub mod cache;
 mod error;
 pub mod geometry;
 pub mod gpu;
+pub mod metrics;
 pub mod params;
 pub mod reference;
 pub mod renderer;

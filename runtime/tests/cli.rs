@@ -114,3 +114,65 @@ fn bad_inputs_give_clear_errors_and_a_failing_exit() {
         assert!(err.contains(says), "{flag} {value}: {err}");
     }
 }
+
+#[test]
+fn compare_reports_cielab_and_rgb_errors_between_renders() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap().join("compare");
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    for (name, mode, w) in [
+        ("a.exr", "recon", "64"),
+        ("b.exr", "recon-mirror", "64"),
+        ("c.exr", "recon", "32"),
+    ] {
+        let out = render(&[
+            store.to_str().unwrap(),
+            "-o",
+            &exr(name),
+            "--mode",
+            mode,
+            "--width",
+            w,
+            "--height",
+            "48",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let compare = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_oslf-compare"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let json = exr("m.json");
+    let out = compare(&[&exr("a.exr"), &exr("b.exr"), "--json", &json]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(m["pixels"].as_u64().unwrap() > 100);
+    assert!(
+        m["rmse_lab"][0].as_f64().unwrap() > 0.1,
+        "adding reflections changes L*"
+    );
+    let out = compare(&[&exr("a.exr"), &exr("a.exr")]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.contains("inf dB"),
+        "{stdout}"
+    );
+    let out = compare(&[&exr("a.exr"), &exr("c.exr")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("64x48") && err.contains("32x48"),
+        "{err}"
+    );
+}

@@ -1,0 +1,137 @@
+//! `oslf-compare`: RMSE in CIELAB and linear RGB, and PSNR, between two OpenEXR images over a
+//! mask (thesis §6.1). See `oslf_runtime::metrics` for the exact conversion.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use oslf_runtime::metrics::{compare, Metrics};
+
+/// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,
+/// the thesis's scale), RMSE of linear R, G, B, and PSNR, over the reference's object mask.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// The reference image (OpenEXR; linear RGB, alpha = object mask).
+    reference: PathBuf,
+    /// The image to judge (OpenEXR, same size).
+    test: PathBuf,
+    /// Which pixels count: `reference` (its alpha > 0.5), `both` (both alphas), `all`.
+    #[arg(long, default_value = "reference")]
+    mask: String,
+    /// The linear value that is reference white (L* = 100).
+    #[arg(long, default_value_t = 1.0)]
+    white: f64,
+    /// Also write the result as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Also append the result as one CSV row (header written when the file is new).
+    #[arg(long)]
+    csv: Option<PathBuf>,
+}
+
+fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a]
+        },
+    )
+    .with_context(|| format!("cannot read OpenEXR {}", path.display()))?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Ok((size.width(), size.height(), pixels))
+}
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let (w, h, a) = read_exr(&args.reference)?;
+    let (w2, h2, b) = read_exr(&args.test)?;
+    if (w, h) != (w2, h2) {
+        bail!(
+            "{} is {w}x{h} but {} is {w2}x{h2}",
+            args.reference.display(),
+            args.test.display()
+        );
+    }
+    let m: Metrics = match args.mask.as_str() {
+        "reference" => compare(&a, &b, w, |i| a[i][3] > 0.5, args.white),
+        "both" => compare(&a, &b, w, |i| a[i][3] > 0.5 && b[i][3] > 0.5, args.white),
+        "all" => compare(&a, &b, w, |_| true, args.white),
+        other => bail!("unknown --mask {other:?} (reference, both or all)"),
+    }
+    .with_context(|| {
+        format!(
+            "comparing {} with {}",
+            args.test.display(),
+            args.reference.display()
+        )
+    })?;
+    if m.pixels == 0 {
+        bail!(
+            "the mask selects no pixel (is the reference's alpha an object mask? try --mask all)"
+        );
+    }
+    let psnr = m.psnr_db.map_or("inf".to_string(), |p| format!("{p:.2}"));
+    println!("pixels      {}", m.pixels);
+    println!(
+        "RMSE L*a*b* {:.4} {:.4} {:.4}   (/100: {:.6} {:.6} {:.6})",
+        m.rmse_lab[0],
+        m.rmse_lab[1],
+        m.rmse_lab[2],
+        m.rmse_lab_normalized[0],
+        m.rmse_lab_normalized[1],
+        m.rmse_lab_normalized[2]
+    );
+    println!(
+        "RMSE RGB    {:.6} {:.6} {:.6}",
+        m.rmse_rgb[0], m.rmse_rgb[1], m.rmse_rgb[2]
+    );
+    println!("PSNR        {psnr} dB (white {})", m.white);
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&m)?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = &args.csv {
+        use std::io::Write;
+        let new = !path.exists();
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        if new {
+            writeln!(f, "reference,test,pixels,rmse_l,rmse_a,rmse_b,rmse_l_norm,rmse_a_norm,rmse_b_norm,rmse_r,rmse_g,rmse_b_rgb,psnr_db,white")?;
+        }
+        writeln!(
+            f,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            args.reference.display(),
+            args.test.display(),
+            m.pixels,
+            m.rmse_lab[0],
+            m.rmse_lab[1],
+            m.rmse_lab[2],
+            m.rmse_lab_normalized[0],
+            m.rmse_lab_normalized[1],
+            m.rmse_lab_normalized[2],
+            m.rmse_rgb[0],
+            m.rmse_rgb[1],
+            m.rmse_rgb[2],
+            m.psnr_db.map_or("inf".to_string(), |p| p.to_string()),
+            m.white
+        )?;
+    }
+    Ok(())
+}
