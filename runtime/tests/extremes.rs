@@ -1,0 +1,156 @@
+//! Extremes the renderer must hold: 32-bit sample-map indices (more than 65 535 sample
+//! points, many more cubes than GPU slots), 1² cube maps and sample maps, and HDR radiance
+//! from 0 and 1e-20 up to the RGB9E5 maximum.
+
+mod common;
+
+use common::{all_finite, compare, mean};
+use oslf_format::{
+    encode_cube, BakeParams, CubeImage, Encoding, IndexWidth, ObjectInfo, Patch, SampleMaps,
+    SamplePoint, Store, StoreMeta, StoreWriter,
+};
+use oslf_runtime::reference::StoreCubes;
+use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams};
+
+/// A flat unit patch facing +z with `points` sample points ε above it, 1² cube
+/// maps whose six texels span 0 … 6.5e4, and `map_res`² sample maps of pseudo-random
+/// indices.
+fn synthetic_store(points: usize, map_res: u32) -> std::path::PathBuf {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let eps = 0.01f32;
+    let patch = Patch {
+        // u along y, v along x: the normal ∂x/∂v × ∂x/∂u is +z.
+        control_points: std::array::from_fn(|k| [(k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0, 0.0]),
+    };
+    let meta = StoreMeta {
+        objects: vec![ObjectInfo {
+            name: "plane".into(),
+            transform: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+            ],
+            base_color: [0.5, 0.5, 0.5],
+            first_patch: 0,
+            patch_count: 1,
+        }],
+        patches: vec![patch],
+        bake: BakeParams {
+            epsilon: eps,
+            cube_resolution: 1,
+            sample_map_resolution: map_res,
+            samples_per_texel: 1,
+            encoding: Encoding::Rgb9e5,
+            ..Default::default()
+        },
+        camera: None,
+        has_env_cube: true,
+    };
+    let sample_points: Vec<SamplePoint> = (0..points)
+        .map(|_| {
+            let (u, v) = (
+                (next() % 10_000) as f32 / 1e4,
+                (next() % 10_000) as f32 / 1e4,
+            );
+            SamplePoint {
+                position: [v, u, eps],
+                normal: [0.0, 0.0, 1.0],
+                uv: [u, v],
+                patch: 0,
+                object: 0,
+            }
+        })
+        .collect();
+    let maps = SampleMaps {
+        resolution: map_res,
+        indices: (0..map_res * map_res)
+            .map(|_| std::array::from_fn(|_| (next() % points as u64) as u32))
+            .collect(),
+    };
+    let dir = std::env::temp_dir().join(format!("oslf-runtime-extremes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("synthetic-{points}-{map_res}.oslf"));
+    let mut w = StoreWriter::create(&path, &meta, &sample_points, &maps).unwrap();
+    let values = [0.0f32, 1e-20, 0.5, 3.0, 6.5e4, 1e-3];
+    for cube in 0..=points as u32 {
+        let mut image = CubeImage::black(1, false);
+        for (f, face) in image.faces.iter_mut().enumerate() {
+            let v = values[(f + cube as usize) % values.len()];
+            face[0] = [v, v * 0.5, v * 0.25];
+        }
+        let (encoded, _) = encode_cube(&image, &meta.bake, cube).unwrap();
+        w.append(encoded).unwrap();
+    }
+    w.finish().unwrap();
+    path
+}
+
+#[test]
+fn more_than_65535_sample_points_with_one_texel_cube_maps_and_a_small_cache() {
+    let path = synthetic_store(70_000, 64);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.index_width(), IndexWidth::U32);
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let config = CacheConfig {
+        gpu_slots: Some(300),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, config).unwrap();
+    let camera = r.default_view();
+    let opts = RenderOptions {
+        width: 64,
+        height: 48,
+        ..Default::default()
+    };
+    for mode in [Mode::Recon, Mode::ReconMirror, Mode::Glossy] {
+        let params = ShadingParams {
+            mode,
+            m: 4,
+            ..Default::default()
+        };
+        let frame = r.render(&camera, &params, &opts).unwrap();
+        assert!(all_finite(&frame.pixels), "{mode:?}");
+        let mut resident = StoreCubes::decode(r.store()).unwrap();
+        resident.masks = Some(r.cache().indirection());
+        let (cpu, _) = r.reference_image(&camera, &params, &resident).unwrap();
+        let (n, share, _) = compare(&frame.pixels, &cpu, 2e-3);
+        println!(
+            "{mode:?}: {n} pixels, {share} agree, mean {}, {:?}",
+            mean(&cpu),
+            frame.stats
+        );
+        assert!(n > 100, "{mode:?}: the plane covers {n} pixels");
+        assert!(share >= 0.995, "{mode:?}: {share}");
+        assert!(mean(&cpu) > 0.0, "{mode:?}: black");
+        // With every cube available the reference is finite too.
+        let (full, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+        assert!(all_finite(&full));
+    }
+}
+
+#[test]
+fn one_texel_sample_maps_render() {
+    let path = synthetic_store(50, 1);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.index_width(), IndexWidth::U16);
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let opts = RenderOptions {
+        width: 48,
+        height: 32,
+        ..Default::default()
+    };
+    let params = ShadingParams::default();
+    let frame = r.render(&camera, &params, &opts).unwrap();
+    let (cpu, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+    let (n, share, _) = compare(&frame.pixels, &cpu, 2e-3);
+    assert!(n > 50 && share >= 0.995, "{n} {share}");
+}
