@@ -66,7 +66,7 @@ impl std::str::FromStr for Granularity {
 pub struct CacheStats {
     /// Frames counted.
     pub frames: u64,
-    /// Units the frame needed.
+    /// Units the frame needed (the pinned environment cube counts as one each frame).
     pub requests: u64,
     /// Needed units that were resident when the frame was shaded.
     pub hits: u64,
@@ -108,9 +108,18 @@ impl CacheStats {
         self.requests += o.requests;
         self.hits += o.hits;
         self.misses += o.misses;
+        let unresolved = self.unresolved + o.unresolved;
+        self.add_loading(o);
+        self.unresolved = unresolved;
+    }
+
+    /// Adds what another shading pass of the same frame loaded and spent (its requests,
+    /// hits and misses are the frame's again and are not counted twice); the over-budget count
+    /// becomes the later pass's.
+    pub fn add_loading(&mut self, o: &CacheStats) {
         self.loads += o.loads;
         self.evictions += o.evictions;
-        self.unresolved += o.unresolved;
+        self.unresolved = o.unresolved;
         self.ram_hits += o.ram_hits;
         self.ram_misses += o.ram_misses;
         self.ram_evictions += o.ram_evictions;

@@ -842,20 +842,7 @@ impl Renderer {
             let missed = frame_stats.misses > 0 && !uploads.is_empty();
             match &mut stats {
                 None => stats = Some(frame_stats),
-                Some(s) => {
-                    s.loads += frame_stats.loads;
-                    s.evictions += frame_stats.evictions;
-                    s.ram_hits += frame_stats.ram_hits;
-                    s.ram_misses += frame_stats.ram_misses;
-                    s.ram_evictions += frame_stats.ram_evictions;
-                    s.bytes_decoded += frame_stats.bytes_decoded;
-                    s.bytes_uploaded += frame_stats.bytes_uploaded;
-                    s.decode_seconds += frame_stats.decode_seconds;
-                    s.upload_seconds += frame_stats.upload_seconds;
-                    s.cache_seconds += frame_stats.cache_seconds;
-                    s.decode_errors += frame_stats.decode_errors;
-                    s.unresolved = frame_stats.unresolved;
-                }
+                Some(s) => s.add_loading(&frame_stats),
             }
             if !(opts.resolve_misses && missed && passes < max_passes) {
                 break;
