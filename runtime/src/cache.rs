@@ -2,9 +2,9 @@
 //!
 //! * **RAM level**: decoded faces (the store's raw face bytes after zstd and the prediction
 //!   filter, ready to upload) under a byte budget, least recently used evicted first.
-//! * **GPU level**: a pool of cube-map *slots* (six array layers each, spread over up to
-//!   [`MAX_POOL_TEXTURES`] texture arrays, since one array holds at most
-//!   `max_texture_array_layers` layers). An indirection table maps each cube (sample point) to
+//! * **GPU level**: a pool of cube-map *slots* (six faces each, laid side by side in the
+//!   layers of up to [`MAX_POOL_TEXTURES`] 2D texture arrays: a layer holds as many faces as
+//!   the device's widest texture allows, an array at most `max_texture_array_layers` layers). An indirection table maps each cube (sample point) to
 //!   `slot << 6 | resident-face mask`; the shader reads only faces whose bit is set.
 //!
 //! Each frame the shader marks, in a feedback buffer, every face it *would* read with
@@ -144,7 +144,8 @@ impl CacheStats {
 /// Cache sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CacheConfig {
-    /// GPU slots (cubes); `None` = one per cube of the store, as far as the device allows.
+    /// GPU slots (cubes); `None` = one per cube of the store, as far as the device allows and
+    /// up to [`crate::renderer::DEFAULT_POOL_BYTES`] of texels.
     pub gpu_slots: Option<u32>,
     /// RAM level budget in bytes of decoded faces.
     pub ram_bytes: u64,

@@ -20,6 +20,8 @@ use crate::reference::GTexel;
 const GBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The GPU pool's default size when no slot budget is given: 1 GiB of cube-map texels.
+pub const DEFAULT_POOL_BYTES: u64 = 1 << 30;
 const WORKGROUP: u32 = 8;
 
 /// Frame options.
@@ -84,6 +86,8 @@ pub struct Renderer {
     constants: StoreConstants,
     encoding: Encoding,
     slots_per_texture: u32,
+    /// 2^face_shift faces side by side in each pool layer.
+    face_shift: u32,
     uniform: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
@@ -197,7 +201,14 @@ impl Renderer {
                 limits.max_texture_array_layers
             )));
         }
-        let device_per_texture = limits.max_texture_array_layers / 6;
+        // Faces lie side by side in a layer, 2^face_shift per layer (as many as the widest 2D
+        // texture takes): one array then holds far more cubes than its layer count allows,
+        // and lavapipe, which runs every branch under a mask, reads one array instead of
+        // several (a measured 2.23× → 1.67× for mirror B^n against the baseline).
+        let row_max = (limits.max_texture_dimension_2d / res).max(1);
+        let shift_max = 31 - row_max.leading_zeros();
+        let device_per_texture = ((u64::from(limits.max_texture_array_layers) << shift_max) / 6)
+            .min(u64::from(u32::MAX / MAX_POOL_TEXTURES)) as u32;
         let slots_per_texture = match config.slots_per_texture {
             Some(0) => {
                 return Err(RuntimeError::Parameter(
@@ -233,8 +244,18 @@ impl Renderer {
                 )))
             }
             Some(s) => s,
-            None => cube_count.clamp(1, device_slots),
+            None => {
+                // Every cube, up to DEFAULT_POOL_BYTES of texels.
+                let cube_bytes =
+                    6 * u64::from(res).pow(2) * header.encoding.bytes_per_texel() as u64;
+                let by_memory =
+                    (DEFAULT_POOL_BYTES / cube_bytes.max(1)).clamp(1, u64::from(u32::MAX));
+                cube_count.clamp(1, device_slots).min(by_memory as u32)
+            }
         };
+        // No wider than one array's share of the pool needs.
+        let faces_per_texture = u64::from(slots.min(slots_per_texture)) * 6;
+        let face_shift = (64 - (faces_per_texture.max(1) - 1).leading_zeros()).min(shift_max);
         let encoding = header.encoding;
         let face_texel_bytes = (res as usize).pow(2) * encoding.bytes_per_texel();
 
@@ -391,12 +412,14 @@ impl Renderer {
                 .saturating_sub(t * slots_per_texture)
                 .min(slots_per_texture)
                 .max(1);
+            let faces = in_this * 6;
+            let per_layer = 1u32 << face_shift;
             let tex = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("cube pool"),
                 size: wgpu::Extent3d {
-                    width: res,
+                    width: res * faces.min(per_layer),
                     height: res,
-                    depth_or_array_layers: in_this * 6,
+                    depth_or_array_layers: faces.div_ceil(per_layer),
                 },
                 mip_level_count: 1,
                 sample_count: 1,
@@ -538,6 +561,7 @@ impl Renderer {
             constants,
             encoding,
             slots_per_texture,
+            face_shift,
             uniform,
             indices,
             index_count: 0,
@@ -633,16 +657,16 @@ impl Renderer {
         let bpt = self.encoding.bytes_per_texel() as u32;
         for u in uploads {
             let tex = (u.slot / self.slots_per_texture) as usize;
-            let layer = (u.slot % self.slots_per_texture) * 6 + u.face as u32;
+            let g = (u.slot % self.slots_per_texture) * 6 + u.face as u32;
+            let (layer, x) = (
+                g >> self.face_shift,
+                (g & ((1 << self.face_shift) - 1)) * res,
+            );
             self.gpu.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
                     texture: &self.pool[tex],
                     mip_level: 0,
-                    origin: wgpu::Origin3d {
-                        x: 0,
-                        y: 0,
-                        z: layer,
-                    },
+                    origin: wgpu::Origin3d { x, y: 0, z: layer },
                     aspect: wgpu::TextureAspect::All,
                 },
                 &u.texels,
@@ -807,6 +831,7 @@ impl Renderer {
                 .map(|(n, v)| (*n, f64::from(v)))
                 .collect();
             constants.push(("POOLS", f64::from(self.pools_in_use)));
+            constants.push(("FACE_SHIFT", f64::from(self.face_shift)));
             constants.push(("DIFFUSE", f64::from(self.current[4])));
             let pipeline =
                 self.gpu

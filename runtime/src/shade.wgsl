@@ -42,6 +42,8 @@ override BLEND: u32 = 4u;
 override SOURCE: u32 = 0u;
 override ORDER: u32 = 0u;
 override POOLS: u32 = 4u;
+// 2^FACE_SHIFT faces lie side by side in each pool layer (renderer.rs).
+override FACE_SHIFT: u32 = 0u;
 override DIFFUSE: bool = false;
 
 struct PatchGpu {
@@ -162,12 +164,19 @@ fn fetch(cube: u32, t: Tap) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     let slot = entry >> 6u;
-    let tex = slot / P.slots_per_texture;
-    let layer = i32((slot % P.slots_per_texture) * 6u + t.face);
-    let t00 = load_texel(tex, layer, vec2<u32>(t.x0, t.y0));
-    let t10 = load_texel(tex, layer, vec2<u32>(t.x1, t.y0));
-    let t01 = load_texel(tex, layer, vec2<u32>(t.x0, t.y1));
-    let t11 = load_texel(tex, layer, vec2<u32>(t.x1, t.y1));
+    var tex = 0u;
+    var local = slot;
+    if (POOLS > 1u) {
+        tex = slot / P.slots_per_texture;
+        local = slot % P.slots_per_texture;
+    }
+    let g = local * 6u + t.face;
+    let layer = i32(g >> FACE_SHIFT);
+    let x = (g & ((1u << FACE_SHIFT) - 1u)) * P.cube_res;
+    let t00 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y0));
+    let t10 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y0));
+    let t01 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y1));
+    let t11 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y1));
     let top = t00 + (t10 - t00) * t.wx;
     let bottom = t01 + (t11 - t01) * t.wx;
     return vec4<f32>(top + (bottom - top) * t.wy, 1.0);
