@@ -298,37 +298,34 @@ fn is_resident(cube: u32) -> bool {
 // sample direction when blending per direction). Weights are relative to the largest, so
 // B^r and B^n with huge N never underflow to an all-zero sum; if every ⟨a, s_j⟩ ≤ 0 the
 // closest in angle gets weight 1.
+fn one_hot(j: u32) -> vec4<f32> {
+    return vec4<f32>(vec4<u32>(0u, 1u, 2u, 3u) == vec4<u32>(j));
+}
+
 fn blend_weights(a: vec3<f32>) -> vec4<f32> {
-    var w = vec4<f32>(0.0);
+    // Written without loops or dynamic indices (see `Candidates`); the CPU reference's loops
+    // compute the same values.
+    let valid = cand.idx != vec4<u32>(INVALID);
+    let d = vec4<f32>(dot(a, cand_s(0u)), dot(a, cand_s(1u)), dot(a, cand_s(2u)), dot(a, cand_s(3u)));
+    if (!any(valid)) { return vec4<f32>(0.0); }
+    var first = 3u;
+    if (valid.z) { first = 2u; }
+    if (valid.y) { first = 1u; }
+    if (valid.x) { first = 0u; }
     var best = 0u;
     var best_dot = -2.0;
-    var first = 4u;
-    for (var j = 0u; j < 4u; j++) {
-        if (cand.idx[j] == INVALID) { continue; }
-        if (first == 4u) { first = j; }
-        let d = dot(a, cand_s(j));
-        if (d > best_dot) { best_dot = d; best = j; }
-    }
-    if (first == 4u) { return w; }
-    switch BLEND {
-        case 0u: { w[first] = 1.0; }              // Eq. 4.3
-        case 1u: { w[best] = 1.0; }               // Eq. 4.4-4.5
-        default: {
-            for (var j = 0u; j < 4u; j++) {
-                if (cand.idx[j] == INVALID) { continue; }
-                if (BLEND == 2u || P.blend_n == 0.0) {
-                    w[j] = 1.0;                   // Eq. 4.9 (B^r, B^n with N = 0 reduce to it)
-                } else if (best_dot > 0.0) {
-                    let r = max(dot(a, cand_s(j)), 0.0) / best_dot;
-                    if (r > 0.0) { w[j] = pow(r, P.blend_n); }   // Eq. 4.10, 4.11
-                }
-            }
-            if (best_dot <= 0.0 && BLEND != 2u && P.blend_n != 0.0) {
-                w[best] = 1.0;
-            }
-        }
-    }
-    return w;
+    if (valid.x && d.x > best_dot) { best_dot = d.x; best = 0u; }
+    if (valid.y && d.y > best_dot) { best_dot = d.y; best = 1u; }
+    if (valid.z && d.z > best_dot) { best_dot = d.z; best = 2u; }
+    if (valid.w && d.w > best_dot) { best_dot = d.w; best = 3u; }
+    if (BLEND == 0u) { return one_hot(first); }     // Eq. 4.3
+    if (BLEND == 1u) { return one_hot(best); }      // Eq. 4.4-4.5
+    // Eq. 4.9 (B^r, B^n with N = 0 reduce to it)
+    if (BLEND == 2u || P.blend_n == 0.0) { return select(vec4<f32>(0.0), vec4<f32>(1.0), valid); }
+    if (best_dot <= 0.0) { return one_hot(best); }
+    // Eq. 4.10, 4.11, relative to the largest so that no power underflows to an all-zero sum.
+    let r = max(d, vec4<f32>(0.0)) / best_dot;
+    return select(vec4<f32>(0.0), pow(r, vec4<f32>(P.blend_n)), valid & (r > vec4<f32>(0.0)));
 }
 
 // Blended radiance towards `dir` from the candidates with weights `w` (Eq. 4.7). Lookups
