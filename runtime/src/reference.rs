@@ -73,6 +73,8 @@ struct Candidates {
     count: u32,
 }
 
+// f32 twins of shade.wgsl's Bernstein polynomials; `oslf_bake::bezier` evaluates in f64, which
+// the GPU cannot match.
 fn bern3(t: f32) -> [f32; 4] {
     let s = 1.0 - t;
     [s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t]
