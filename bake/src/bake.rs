@@ -187,7 +187,7 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     };
     let centre = object_centre(scene);
 
-    let bar = progress_bar(options.progress, writer.total_cubes() as u64);
+    let bar = progress_bar(options.progress, writer.total_cubes() as u64, "cube maps");
     bar.set_position(writer.next_cube() as u64);
     let t = Instant::now();
     let cpu_start = process_cpu_ns();
@@ -341,14 +341,15 @@ pub fn object_centre(scene: &Scene) -> Vec3 {
     (lo + hi) * 0.5
 }
 
-fn progress_bar(enabled: bool, total: u64) -> indicatif::ProgressBar {
+/// A progress bar with ETA on stderr (hidden when not `enabled`), counting `what`.
+pub(crate) fn progress_bar(enabled: bool, total: u64, what: &str) -> indicatif::ProgressBar {
     if !enabled {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(total);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
-            "{spinner} cube maps {bar:40} {pos}/{len} [{elapsed_precise} < ETA {eta_precise}] {per_sec}",
+            &format!("{{spinner}} {what} {{bar:40}} {{pos}}/{{len}} [{{elapsed_precise}} < ETA {{eta_precise}}] {{per_sec}}"),
         )
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );

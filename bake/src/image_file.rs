@@ -20,6 +20,26 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Resul
     })
 }
 
+/// Writes linear RGB and alpha (an object mask) as a 32-bit float OpenEXR file. `pixels` is
+/// row-major, top row first.
+pub fn write_exr_rgba(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<()> {
+    if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
+        return Err(BakeError::Image {
+            path: path.to_path_buf(),
+            message: format!("{} pixels do not make a {width}x{height} image", pixels.len()),
+        });
+    }
+    let w = width as usize;
+    exr::prelude::write_rgba_file(path, w, height as usize, |x, y| {
+        let p = pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    })
+    .map_err(|e| BakeError::Image {
+        path: path.to_path_buf(),
+        message: format!("cannot write OpenEXR: {e}"),
+    })
+}
+
 /// Tone maps linear RGB (exposure, then the ACES filmic fit of Narkowicz 2015, then the sRGB
 /// curve) and writes an 8-bit PNG. NaN or negative values map to black.
 pub fn write_png(

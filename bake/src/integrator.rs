@@ -130,7 +130,6 @@ impl<I: Intersector> Integrator<'_, I> {
     /// Radiance arriving at `ray.origin` from direction `-ray.dir` (`ray.dir` unit length).
     /// The first segment starts exactly at `ray.origin`. Every ray traced is counted in `stats`.
     pub fn radiance(&self, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
-        let env_active = !self.environment.is_black();
         stats.closest += 1;
         let Some(first) = self.geometry.intersect(ray, f32::MAX) else {
             let mut l = self.environment.eval(ray.dir);
@@ -142,12 +141,27 @@ impl<I: Intersector> Integrator<'_, I> {
                 distance: f32::MAX,
             };
         };
-        let distance = first.t;
+        Sample {
+            radiance: self.radiance_leaving(&first, ray.dir, rng, stats),
+            distance: first.t,
+        }
+    }
 
+    /// Radiance leaving the surface at `first` towards `-incoming`: the path tracer of
+    /// [`Integrator::radiance`] from its first hit on. The ground-truth renders start here at
+    /// hits they found themselves (on the OSLF object alone).
+    pub fn radiance_leaving(
+        &self,
+        first: &SurfaceHit,
+        incoming: Vec3,
+        rng: &mut Rng,
+        stats: &mut RayStats,
+    ) -> Vec3 {
+        let env_active = !self.environment.is_black();
         let mut radiance = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
-        let mut hit: SurfaceHit = first;
-        let mut incoming = ray.dir;
+        let mut hit: SurfaceHit = *first;
+        let mut incoming = incoming;
         let mut bounce = 0u32;
         loop {
             // Orient the normals towards the incoming ray (two-sided surfaces).
@@ -244,10 +258,7 @@ impl<I: Intersector> Integrator<'_, I> {
             hit = next;
             incoming = wi;
         }
-        Sample {
-            radiance: finite_or_zero(radiance),
-            distance,
-        }
+        finite_or_zero(radiance)
     }
 }
 

@@ -12,8 +12,9 @@
 //! | role | modules |
 //! | --- | --- |
 //! | geometry | [`bezier`] (patches, Eq. 3.1–3.4, robust normals, tessellation), [`mesh`], [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
-//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (pinhole renders) |
+//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (pinhole renders), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
 //! | the bake | [`scene`] (TOML scene files with located errors), [`sample_points`], [`sample_map`], [`capture`], [`bake`] (the pipeline, resumable, deterministic), [`image_file`] (EXR and tone-mapped PNG output) |
+//! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf-truth` command) |
 //!
 //! Conventions: Z is up; radiance is linear RGB in `f32`; cube maps use the wgpu/Vulkan face
 //! order and orientation of `oslf_format::cube`. Every random number comes from a stream keyed
@@ -30,6 +31,7 @@ pub mod obj;
 pub mod shapes;
 
 // radiance
+pub mod ashikhmin_shirley;
 pub mod camera;
 pub mod environment;
 pub mod integrator;
@@ -41,6 +43,7 @@ pub mod texture;
 // the bake
 pub mod bake;
 pub mod capture;
+pub mod ground_truth;
 pub mod image_file;
 pub mod sample_map;
 pub mod sample_points;

@@ -220,7 +220,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         println!("cpu reference  {:.2} s", t.elapsed().as_secs_f64());
     }
     let rgb: Vec<Vec3> = pixels.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
-    write_exr_rgba(&args.output, args.width, args.height, &pixels)?;
+    oslf_bake::image_file::write_exr_rgba(&args.output, args.width, args.height, &pixels)?;
     let png = args.output.with_extension("png");
     image_file::write_png(&png, args.width, args.height, &rgb, args.exposure)?;
 
@@ -288,12 +288,3 @@ fn print_stats(label: &str, s: &CacheStats) {
     );
 }
 
-/// Linear RGBA f32 OpenEXR, alpha = object mask.
-fn write_exr_rgba(path: &std::path::Path, w: u32, h: u32, px: &[[f32; 4]]) -> anyhow::Result<()> {
-    let width = w as usize;
-    exr::prelude::write_rgba_file(path, width, h as usize, |x, y| {
-        let p = px[y * width + x];
-        (p[0], p[1], p[2], p[3])
-    })
-    .with_context(|| format!("cannot write {}", path.display()))
-}

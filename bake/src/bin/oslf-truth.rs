@@ -1,0 +1,206 @@
+//! `oslf-truth`: ray-traced ground truth for the runtime's modes (see
+//! `oslf_bake::ground_truth`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use glam::Vec3;
+use oslf_bake::ashikhmin_shirley::AsLobe;
+use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
+use oslf_bake::image_file;
+use oslf_bake::scene::Scene;
+
+/// Render the ground truth a runtime image is judged against: the scene's camera, one ray per
+/// pixel centre onto the OSLF object alone, shaded with the bake's path tracer in the scene the
+/// store was baked from. Writes OpenEXR (linear RGB, alpha = object mask) and a PNG beside it.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// The scene file the store was baked from.
+    scene: PathBuf,
+    /// The preset the store was baked with (it may change `bounces`).
+    #[arg(short, long)]
+    preset: Option<String>,
+    /// Check that this store was baked from this scene (scene hash and bounces).
+    #[arg(long)]
+    store: Option<PathBuf>,
+    /// Comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy (the runtime's modes).
+    #[arg(short, long, default_value = "recon,mirror,recon-mirror")]
+    modes: String,
+    /// Output prefix: writes PREFIX-MODE.exr and PREFIX-MODE.png.
+    #[arg(short, long, default_value = "truth")]
+    output: PathBuf,
+    /// Samples per pixel (paths for recon and mirror, lobe samples for glossy).
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    #[arg(long, default_value_t = 655)]
+    width: u32,
+    #[arg(long, default_value_t = 460)]
+    height: u32,
+    /// Ashikhmin–Shirley specular reflectance R_s.
+    #[arg(long, default_value_t = 1.0)]
+    rs: f64,
+    /// Ashikhmin–Shirley exponent along the tangent ∂x/∂u.
+    #[arg(long, default_value_t = 100.0)]
+    nu: f64,
+    /// Ashikhmin–Shirley exponent along the bitangent.
+    #[arg(long, default_value_t = 100.0)]
+    nv: f64,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Exposure of the PNG previews.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Worker threads [default: all cores]; the images are identical for any count.
+    #[arg(short = 'j', long)]
+    threads: Option<usize>,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+const MODES: [&str; 5] = ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"];
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        if n == 0 {
+            bail!("--threads must be at least 1");
+        }
+        pool = pool.num_threads(n);
+    }
+    let pool = pool.build().context("cannot start worker threads")?;
+    pool.install(|| render_all(&args))
+}
+
+fn render_all(args: &Args) -> anyhow::Result<()> {
+    let modes: Vec<&str> = args.modes.split(',').map(str::trim).collect();
+    for m in &modes {
+        if !MODES.contains(m) {
+            bail!("--modes: unknown mode {m:?} (expected one of {})", MODES.join(", "));
+        }
+    }
+    let scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    if let Some(path) = &args.store {
+        let store = oslf_format::Store::open(path)?;
+        let bake = &store.meta().bake;
+        if bake.scene_hash != scene.hash {
+            bail!(
+                "{} was not baked from {} (the scene file's hash differs)",
+                path.display(),
+                args.scene.display()
+            );
+        }
+        if bake.bounces != scene.bake.bounces {
+            bail!(
+                "{} was baked with {} bounces, the scene (preset {:?}) has {}: pass the store's --preset",
+                path.display(),
+                bake.bounces,
+                args.preset,
+                scene.bake.bounces
+            );
+        }
+    }
+    let Some(camera) = scene.camera else {
+        bail!(
+            "{}: the scene has no [camera]; the ground truth is rendered from it",
+            args.scene.display()
+        );
+    };
+    let truth = GroundTruth::new(&scene, camera)?;
+    let settings = TruthSettings {
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        seed: args.seed,
+        progress: !args.quiet,
+    };
+    let lobe = AsLobe {
+        rs: args.rs,
+        nu: args.nu,
+        nv: args.nv,
+    };
+    let wants = |m: &str| modes.contains(&m);
+    let recon = if wants("recon") || wants("recon-mirror") || wants("recon-glossy") {
+        Some(timed("recon", || truth.render(Term::Recon, &settings))?)
+    } else {
+        None
+    };
+    let mirror = if wants("mirror") || wants("recon-mirror") {
+        Some(timed("mirror", || truth.render(Term::Mirror, &settings))?)
+    } else {
+        None
+    };
+    let glossy = if wants("glossy") || wants("recon-glossy") {
+        Some(timed("glossy", || truth.render(Term::Glossy(lobe), &settings))?)
+    } else {
+        None
+    };
+    for m in &modes {
+        let image = match *m {
+            "recon" => recon.clone(),
+            "mirror" => mirror.clone(),
+            "glossy" => glossy.clone(),
+            "recon-mirror" => recon
+                .as_ref()
+                .zip(mirror.as_ref())
+                .map(|(a, b)| compose(a, b))
+                .transpose()?,
+            "recon-glossy" => recon
+                .as_ref()
+                .zip(glossy.as_ref())
+                .map(|(a, b)| compose(a, b))
+                .transpose()?,
+            _ => None,
+        };
+        let Some(image) = image else { continue };
+        let exr = output_path(&args.output, m, "exr");
+        write(&exr, &image, args.exposure)?;
+        println!("{m:<13} {}", exr.display());
+    }
+    Ok(())
+}
+
+fn timed(
+    name: &str,
+    f: impl FnOnce() -> oslf_bake::Result<TruthImage>,
+) -> anyhow::Result<TruthImage> {
+    let image = f()?;
+    let rays = image.rays.total() as f64;
+    eprintln!(
+        "{name:<13} {:.1} s, {:.1} M rays, {:.2} Mrays/s",
+        image.seconds,
+        rays / 1e6,
+        rays / image.seconds.max(1e-9) / 1e6
+    );
+    Ok(image)
+}
+
+fn output_path(prefix: &Path, mode: &str, ext: &str) -> PathBuf {
+    let mut name = prefix.as_os_str().to_os_string();
+    name.push(format!("-{mode}.{ext}"));
+    PathBuf::from(name)
+}
+
+fn write(exr: &Path, image: &TruthImage, exposure: f32) -> anyhow::Result<()> {
+    image_file::write_exr_rgba(exr, image.width, image.height, &image.pixels)?;
+    let rgb: Vec<Vec3> = image
+        .pixels
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    image_file::write_png(&exr.with_extension("png"), image.width, image.height, &rgb, exposure)?;
+    Ok(())
+}

@@ -1,0 +1,339 @@
+//! Ray-traced ground truth for measuring the runtime (thesis chapter 6).
+//!
+//! Renders what each runtime mode approximates, from the scene camera, with the bake's own
+//! path tracer ([`Integrator`]) in the scene the store was baked from, so that a difference
+//! measures the method and not a different scene:
+//!
+//! | [`Term`] | the pixel | runtime mode it judges |
+//! | --- | --- | --- |
+//! | `Recon` | radiance leaving the (Lambertian) object towards the camera: the scene as baked | `recon` (Table 6.1) |
+//! | `Mirror` | radiance arriving at the object's surface along the mirror direction r = 2⟨n,v⟩n − v (Eq. 2.4, thesis Figure 1.1a) | `mirror` (Table 6.2) |
+//! | `Glossy` | the Ashikhmin–Shirley specular term ∫ ρ_s(v,l) L_i(l) ⟨n,l⟩ dl (Eq. 5.3), integrated by importance sampling the lobe ([`AsLobe`]) | `glossy` with R_d = 0 |
+//!
+//! [`compose`] adds a term to the reconstruction as the runtime does: F_recon + C_s · term
+//! (Eq. 4.12), giving the full images of `recon-mirror` and `recon-glossy` (Figure 6.3a).
+//!
+//! # What is held equal to the runtime
+//! - Pixels: one primary ray through each pixel centre (the runtime rasterizes one sample per
+//!   pixel), against the OSLF object's patches *alone*, tessellated as for the bake (error
+//!   below ε/50): the runtime draws the object and nothing else, so occluders between camera
+//!   and object are ignored here too. Alpha is 1 where the object is hit, 0 elsewhere.
+//! - Shading frame: the exact Bézier normal at the hit's (u, v) ([`BezierPatch::normal`]), and
+//!   the tangent from ∂x/∂u made orthogonal to it, as `shade.wgsl` does.
+//! - The light the reflections see is the bake's: the same scene with the object in it as a
+//!   Lambertian surface (one level of self-reflection, as the OSLF represents), the same
+//!   `bounces`. Reflected rays leave from the hit point offset along the tessellation's
+//!   geometric normal ([`offset_origin`]) towards the viewer's side.
+//!
+//! # Estimators
+//! `spp` samples per pixel. `Recon` averages `spp` paths from the hit; `Mirror` averages `spp`
+//! paths along r; `Glossy` draws `spp` stratified lobe samples and weights each path's radiance
+//! by ρ_s⟨n,l⟩ / p(l), the BRDF and its density evaluated separately ([`AsLobe::eval`],
+//! [`AsLobe::light_pdf`]). Surfaces seen from behind (⟨n,v⟩ ≤ 0) get no glossy light, as in the
+//! runtime. Every pixel has its own random stream keyed by (seed, term, x, y): the image does
+//! not depend on the number of threads.
+
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use crate::ashikhmin_shirley::AsLobe;
+use crate::bake::{progress_bar, TESSELLATION_ERROR};
+use crate::bezier::BezierPatch;
+use crate::bvh::{Instance, TriangleScene};
+use crate::camera::Camera;
+use crate::integrator::{offset_origin, Integrator, RayStats};
+use crate::ray::{Intersector, Ray, SurfaceHit};
+use crate::sampling::{hash_u64, stratified_2d, Frame, Rng};
+use crate::scene::Scene;
+use crate::{BakeError, Result};
+
+/// Which term a ground-truth image holds (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Term {
+    Recon,
+    Mirror,
+    Glossy(AsLobe),
+}
+
+impl Term {
+    fn tag(&self) -> u64 {
+        match self {
+            Term::Recon => 1,
+            Term::Mirror => 2,
+            Term::Glossy(_) => 3,
+        }
+    }
+}
+
+/// Image size and sampling of a ground-truth render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TruthSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel (0 is treated as 1).
+    pub spp: u32,
+    pub seed: u64,
+    /// Show a progress bar with ETA on stderr.
+    pub progress: bool,
+}
+
+impl Default for TruthSettings {
+    /// The thesis's 655×460 at 256 samples per pixel.
+    fn default() -> Self {
+        Self {
+            width: 655,
+            height: 460,
+            spp: 256,
+            seed: 0,
+            progress: false,
+        }
+    }
+}
+
+/// A ground-truth image.
+#[derive(Clone, Debug)]
+pub struct TruthImage {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB and the object mask in alpha, row-major, top row first.
+    pub pixels: Vec<[f32; 4]>,
+    /// C_s of the object under each pixel (zero off the object), for [`compose`].
+    pub base_color: Vec<Vec3>,
+    pub rays: RayStats,
+    pub seconds: f64,
+}
+
+/// The scene prepared for ground-truth renders.
+pub struct GroundTruth<'s> {
+    scene: &'s Scene,
+    /// Everything, the object included: what reflected rays and paths see.
+    geometry: TriangleScene,
+    /// The object's patches alone, `SurfaceHit::object` = global patch index (store order).
+    object: TriangleScene,
+    patches: Vec<BezierPatch>,
+    colors: Vec<Vec3>,
+    camera: Camera,
+}
+
+impl<'s> GroundTruth<'s> {
+    /// Builds both BVHs. `camera` is the view (the scene's `[camera]` for measurement).
+    pub fn new(scene: &'s Scene, camera: Camera) -> Result<Self> {
+        camera.validate()?;
+        let max_error = scene.bake.epsilon * TESSELLATION_ERROR;
+        let geometry = TriangleScene::build(scene.instances(true, max_error))?;
+        let mut instances = Vec::new();
+        let mut patches = Vec::new();
+        let mut colors = Vec::new();
+        for object in &scene.objects {
+            for patch in &object.patches {
+                instances.push(Instance {
+                    mesh: patch.tessellate(patch.tessellation_level(max_error)),
+                    material: object.material,
+                    object: patches.len() as u32,
+                });
+                patches.push(*patch);
+                colors.push(object.base_color);
+            }
+        }
+        let object = TriangleScene::build(instances)?;
+        Ok(Self {
+            scene,
+            geometry,
+            object,
+            patches,
+            colors,
+            camera,
+        })
+    }
+
+    fn integrator(&self) -> Integrator<'_, TriangleScene> {
+        Integrator {
+            geometry: &self.geometry,
+            materials: &self.scene.materials,
+            lights: &self.scene.lights,
+            environment: &self.scene.environment,
+            max_bounces: self.scene.bake.bounces,
+        }
+    }
+
+    /// Renders one term. Rows run in parallel; the result does not depend on the thread count.
+    pub fn render(&self, term: Term, settings: &TruthSettings) -> Result<TruthImage> {
+        let (w, h) = (settings.width, settings.height);
+        if w == 0 || h == 0 {
+            return Err(BakeError::Invalid(format!(
+                "ground-truth image size {w}x{h} must be at least 1x1"
+            )));
+        }
+        if let Term::Glossy(lobe) = term {
+            if !(lobe.rs.is_finite() && (0.0..=1.0).contains(&lobe.rs))
+                || !(lobe.nu.is_finite() && lobe.nu >= 0.0)
+                || !(lobe.nv.is_finite() && lobe.nv >= 0.0)
+            {
+                return Err(BakeError::Invalid(format!(
+                    "Ashikhmin–Shirley lobe {lobe:?}: R_s must be in [0, 1] and n_u, n_v finite and ≥ 0"
+                )));
+            }
+        }
+        let start = Instant::now();
+        let bar = progress_bar(settings.progress, u64::from(h), "rows");
+        let integrator = self.integrator();
+        let rows: Vec<(Vec<[f32; 4]>, Vec<Vec3>, RayStats)> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                let mut stats = RayStats::default();
+                let mut row = Vec::with_capacity(w as usize);
+                let mut colors = Vec::with_capacity(w as usize);
+                for x in 0..w {
+                    let mut rng = Rng::new(
+                        settings.seed,
+                        hash_u64(&[settings.seed, term.tag(), u64::from(x), u64::from(y)]),
+                    );
+                    let (px, c) =
+                        self.pixel(&integrator, term, x, y, settings, &mut rng, &mut stats);
+                    row.push(px);
+                    colors.push(c);
+                }
+                bar.inc(1);
+                (row, colors, stats)
+            })
+            .collect();
+        bar.finish_and_clear();
+        let mut pixels = Vec::with_capacity(w as usize * h as usize);
+        let mut base_color = Vec::with_capacity(pixels.capacity());
+        let mut rays = RayStats::default();
+        for (row, colors, stats) in rows {
+            pixels.extend(row);
+            base_color.extend(colors);
+            rays.add(&stats);
+        }
+        Ok(TruthImage {
+            width: w,
+            height: h,
+            pixels,
+            base_color,
+            rays,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The object hit through pixel `(x, y)`'s centre, if any.
+    pub fn primary_hit(&self, x: u32, y: u32, width: u32, height: u32) -> Option<(Ray, SurfaceHit)> {
+        let ray = self
+            .camera
+            .ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
+        self.object.intersect(&ray, f32::MAX).map(|hit| (ray, hit))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn pixel(
+        &self,
+        integrator: &Integrator<'_, TriangleScene>,
+        term: Term,
+        x: u32,
+        y: u32,
+        settings: &TruthSettings,
+        rng: &mut Rng,
+        stats: &mut RayStats,
+    ) -> ([f32; 4], Vec3) {
+        stats.closest += 1;
+        let Some((ray, hit)) = self.primary_hit(x, y, settings.width, settings.height) else {
+            return ([0.0; 4], Vec3::ZERO);
+        };
+        let pid = hit.object as usize;
+        let (Some(patch), Some(&color)) = (self.patches.get(pid), self.colors.get(pid)) else {
+            return ([0.0; 4], Vec3::ZERO);
+        };
+        let spp = settings.spp.max(1);
+        let (u, v) = (hit.uv.x, hit.uv.y);
+        let n = patch.normal(u, v);
+        let view = -ray.dir;
+        let mut ng = hit.geometric_normal;
+        if ng.dot(view) < 0.0 {
+            ng = -ng;
+        }
+        let origin = offset_origin(hit.position, ng);
+        let mut sum = Vec3::ZERO;
+        match term {
+            Term::Recon => {
+                for _ in 0..spp {
+                    sum += integrator.radiance_leaving(&hit, ray.dir, rng, stats);
+                }
+            }
+            Term::Mirror => {
+                let r = (2.0 * n.dot(view) * n - view).normalize_or(n); // Eq. 2.4
+                for _ in 0..spp {
+                    sum += integrator.radiance(&Ray::new(origin, r), rng, stats).radiance;
+                }
+            }
+            Term::Glossy(lobe) => {
+                let (du, _) = patch.partials(u, v);
+                let t = (du - n * n.dot(du))
+                    .try_normalize()
+                    .unwrap_or_else(|| Frame::from_normal(n).x);
+                let b = n.cross(t);
+                let local = |d: Vec3| DVec3::new(d.dot(t).into(), d.dot(b).into(), d.dot(n).into());
+                let v_local = local(view);
+                if v_local.z > 0.0 {
+                    for s in 0..spp {
+                        let xi = stratified_2d(s, spp, rng);
+                        let Some(l) = lobe.sample_light(v_local, [xi.x.into(), xi.y.into()])
+                        else {
+                            continue;
+                        };
+                        let pdf = lobe.light_pdf(v_local, l);
+                        if !(pdf > 0.0 && pdf.is_finite()) {
+                            continue;
+                        }
+                        let weight = lobe.eval(v_local, l) * l.z / pdf; // Eq. 5.12
+                        let dir = (t * l.x as f32 + b * l.y as f32 + n * l.z as f32)
+                            .normalize_or(n);
+                        let li = integrator.radiance(&Ray::new(origin, dir), rng, stats);
+                        sum += li.radiance * weight as f32;
+                    }
+                }
+            }
+        }
+        let c = sum / spp as f32;
+        let c = if c.is_finite() { c } else { Vec3::ZERO };
+        ([c.x, c.y, c.z, 1.0], color)
+    }
+}
+
+/// F_recon + C_s · `term` per pixel (Eq. 4.12): the full image of `recon-mirror` or
+/// `recon-glossy`. Both images must be of the same view and size.
+pub fn compose(recon: &TruthImage, term: &TruthImage) -> Result<TruthImage> {
+    if (recon.width, recon.height) != (term.width, term.height)
+        || recon.pixels.len() != term.pixels.len()
+    {
+        return Err(BakeError::Invalid(format!(
+            "cannot compose a {}x{} and a {}x{} image",
+            recon.width, recon.height, term.width, term.height
+        )));
+    }
+    let pixels = recon
+        .pixels
+        .iter()
+        .zip(&term.pixels)
+        .zip(&recon.base_color)
+        .map(|((a, b), c)| {
+            [
+                a[0] + c.x * b[0],
+                a[1] + c.y * b[1],
+                a[2] + c.z * b[2],
+                a[3].max(b[3]),
+            ]
+        })
+        .collect();
+    let mut rays = recon.rays;
+    rays.add(&term.rays);
+    Ok(TruthImage {
+        width: recon.width,
+        height: recon.height,
+        pixels,
+        base_color: recon.base_color.clone(),
+        rays,
+        seconds: recon.seconds + term.seconds,
+    })
+}
