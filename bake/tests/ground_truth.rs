@@ -1,0 +1,194 @@
+//! The ground-truth renderer against closed forms: a flat patch under a uniform environment
+//! reflects the environment exactly (mirror), leaves albedo × L (diffuse), and reflects
+//! L × the Ashikhmin–Shirley directional albedo, integrated here by quadrature (glossy).
+
+use std::f64::consts::PI;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use glam::DVec3;
+use oslf_bake::ashikhmin_shirley::AsLobe;
+use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthSettings};
+use oslf_bake::scene::Scene;
+
+const ENV: [f32; 3] = [0.5, 0.6, 0.8];
+const ALBEDO: [f32; 3] = [0.6, 0.5, 0.4];
+
+/// A flat 2×2 bicubic patch in the plane z = 0 under a uniform sky, seen obliquely from the
+/// side its normal faces.
+fn plane_scene() -> Scene {
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    let dir = std::env::temp_dir().join(format!(
+        "oslf-gt-{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut text = String::from("1\n");
+    text += &(1..=16).map(|i| i.to_string()).collect::<Vec<_>>().join(",");
+    text += "\n16\n";
+    for i in 0..4 {
+        for j in 0..4 {
+            text += &format!("{},{},0\n", -1.0 + 2.0 * i as f32 / 3.0, -1.0 + 2.0 * j as f32 / 3.0);
+        }
+    }
+    std::fs::write(dir.join("plane.txt"), text).unwrap();
+    let scene = format!(
+        r#"
+[camera]
+position = [0.2, -1.3, 1.4]
+target = [0.0, 0.0, 0.0]
+vfov = 50.0
+
+[environment]
+uniform = {ENV:?}
+
+[[object]]
+name = "plane"
+patches = "plane.txt"
+material = {{ color = {ALBEDO:?} }}
+"#
+    );
+    let path: PathBuf = dir.join("plane.toml");
+    let mut s = Scene::from_str(&scene, &path, None).unwrap();
+    // The test needs the normal to face the camera (+z); flip the view otherwise.
+    let n = s.objects[0].patches[0].normal(0.5, 0.5);
+    if n.z < 0.0 {
+        let c = s.camera.as_mut().unwrap();
+        c.position.z = -c.position.z;
+    }
+    s
+}
+
+fn settings(spp: u32) -> TruthSettings {
+    TruthSettings {
+        width: 16,
+        height: 12,
+        spp,
+        seed: 3,
+        progress: false,
+    }
+}
+
+#[test]
+fn mirror_of_a_flat_patch_in_a_uniform_sky_is_the_sky() {
+    let scene = plane_scene();
+    let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
+    let image = truth.render(Term::Mirror, &settings(4)).unwrap();
+    let covered = image.pixels.iter().filter(|p| p[3] == 1.0).count();
+    assert!(covered > 100, "the patch covers {covered} of 192 pixels");
+    for p in image.pixels.iter().filter(|p| p[3] == 1.0) {
+        for k in 0..3 {
+            assert!((p[k] - ENV[k]).abs() < 1e-6, "{p:?}");
+        }
+    }
+    // Off the object: zero, alpha 0.
+    assert!(image.pixels.iter().filter(|p| p[3] == 0.0).all(|p| p[..3] == [0.0; 3]));
+}
+
+#[test]
+fn the_diffuse_patch_leaves_albedo_times_the_sky() {
+    let scene = plane_scene();
+    let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
+    let image = truth.render(Term::Recon, &settings(256)).unwrap();
+    let on: Vec<_> = image.pixels.iter().filter(|p| p[3] == 1.0).collect();
+    for k in 0..3 {
+        let mean = on.iter().map(|p| f64::from(p[k])).sum::<f64>() / on.len() as f64;
+        let expected = f64::from(ALBEDO[k] * ENV[k]);
+        assert!((mean / expected - 1.0).abs() < 0.01, "channel {k}: {mean} vs {expected}");
+    }
+    // recon + C_s · mirror (Eq. 4.12), C_s = the albedo.
+    let mirror = truth.render(Term::Mirror, &settings(1)).unwrap();
+    let full = compose(&image, &mirror).unwrap();
+    for ((f, r), m) in full.pixels.iter().zip(&image.pixels).zip(&mirror.pixels) {
+        for k in 0..3 {
+            assert!((f[k] - (r[k] + ALBEDO[k] * m[k])).abs() < 1e-6);
+        }
+    }
+}
+
+#[test]
+fn the_glossy_term_is_the_lobe_albedo_times_the_sky() {
+    let scene = plane_scene();
+    let camera = scene.camera.unwrap();
+    let truth = GroundTruth::new(&scene, camera).unwrap();
+    let patch = scene.objects[0].patches[0];
+    for lobe in [
+        AsLobe { rs: 1.0, nu: 10.0, nv: 10.0 },
+        AsLobe { rs: 0.3, nu: 10.0, nv: 200.0 },
+    ] {
+        let s = settings(1024);
+        let image = truth.render(Term::Glossy(lobe), &s).unwrap();
+        let mut checked = 0;
+        for y in 0..s.height {
+            for x in (0..s.width).step_by(3) {
+                let Some((ray, hit)) = truth.primary_hit(x, y, s.width, s.height) else {
+                    continue;
+                };
+                // The frame the ground truth documents: the Bézier normal, ∂x/∂u made orthogonal.
+                let n = patch.normal(hit.uv.x, hit.uv.y);
+                let (du, _) = patch.partials(hit.uv.x, hit.uv.y);
+                let t = (du - n * n.dot(du)).normalize();
+                let b = n.cross(t);
+                let view = -ray.dir;
+                let v = DVec3::new(view.dot(t).into(), view.dot(b).into(), view.dot(n).into());
+                let albedo = quadrature(&lobe, v);
+                let p = image.pixels[(y * s.width + x) as usize];
+                for k in 0..3 {
+                    let expected = albedo * f64::from(ENV[k]);
+                    let got = f64::from(p[k]);
+                    assert!(
+                        (got / expected - 1.0).abs() < 0.03,
+                        "{lobe:?} pixel ({x}, {y}) channel {k}: {got} vs {expected}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 20);
+    }
+}
+
+/// ∫ ρ_s(v, l) ⟨n, l⟩ dl over the hemisphere, midpoint rule.
+fn quadrature(lobe: &AsLobe, v: DVec3) -> f64 {
+    let (nt, np) = (600, 1200);
+    let (dt, dp) = (0.5 * PI / nt as f64, 2.0 * PI / np as f64);
+    let mut sum = 0.0;
+    for i in 0..nt {
+        let t = (i as f64 + 0.5) * dt;
+        for j in 0..np {
+            let p = (j as f64 + 0.5) * dp;
+            let l = DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+            sum += lobe.eval(v, l) * l.z * t.sin() * dt * dp;
+        }
+    }
+    sum
+}
+
+#[test]
+fn ground_truth_does_not_depend_on_the_thread_count() {
+    let scene = plane_scene();
+    let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
+    let lobe = AsLobe { rs: 1.0, nu: 50.0, nv: 50.0 };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let a = truth.render(Term::Recon, &settings(8)).unwrap();
+            let b = truth.render(Term::Glossy(lobe), &settings(8)).unwrap();
+            (a.pixels, b.pixels)
+        })
+    };
+    assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn bad_settings_are_errors() {
+    let scene = plane_scene();
+    let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
+    let mut s = settings(1);
+    s.width = 0;
+    assert!(truth.render(Term::Recon, &s).is_err());
+    let bad = AsLobe { rs: 1.0, nu: f64::NAN, nv: 1.0 };
+    let e = truth.render(Term::Glossy(bad), &settings(1)).unwrap_err().to_string();
+    assert!(e.contains("n_u"), "{e}");
+}
