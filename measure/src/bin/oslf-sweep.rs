@@ -1,0 +1,325 @@
+//! `oslf-sweep`: the speed/accuracy sweep and the sensitivity analysis (see
+//! `oslf_measure::sweep`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
+use oslf_bake::image_file;
+use oslf_bake::scene::Scene;
+use oslf_measure::judge::render_truth;
+use oslf_measure::pareto::pareto_front;
+use oslf_measure::plot::{plot_tradeoff, PlotPoint, PlotText};
+use oslf_measure::sweep::{blend_label, parse_vary, run_sweep, SweepConfig, SweepRow};
+use oslf_measure::table::Table;
+use oslf_runtime::{Mode, Order, ShadingParams};
+
+/// Bake variants of a scene and render them with variants of the runtime settings, one setting
+/// changed at a time from the defaults; judge every combination against the ray-traced ground
+/// truth (RMSE of L*) and time it. Writes sweep.csv, sweep.json, the sensitivity table
+/// (sensitivity.md) and the plot of error against frame time with its Pareto front
+/// (tradeoff.png, tradeoff.svg) to the output directory.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// The scene file; its settings (with --preset) are the defaults.
+    scene: PathBuf,
+    #[arg(short, long)]
+    preset: Option<String>,
+    /// KEY=V1,V2,...: bake keys epsilon, sample_count, cube_resolution, phi_samplemap,
+    /// samples_per_texel, sample_map_resolution; runtime keys phi_shader, blend (distance,
+    /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction). Repeatable.
+    /// [default: cube_resolution=16,64 sample_count=150,600 epsilon=0.05,0.2 phi_samplemap=60
+    /// phi_shader=45,85 blend=distance,angle,avg,r4,envmap]
+    #[arg(long)]
+    vary: Vec<String>,
+    /// The runtime mode judged (its ground truth is rendered).
+    #[arg(long, default_value = "recon-mirror")]
+    mode: Mode,
+    /// The default blend and power N (as --vary blend= takes it: distance, angle, avg, rN, nN).
+    #[arg(long, default_value = "n4")]
+    blend: String,
+    /// Default φ_shader (degrees).
+    #[arg(long, default_value_t = 65.0)]
+    phi_shader: f32,
+    /// Glossy modes: samples M, R_s, n_u, n_v, order.
+    #[arg(short = 'M', long, default_value_t = 16)]
+    m: u32,
+    #[arg(long, default_value_t = 1.0)]
+    rs: f32,
+    #[arg(long, default_value_t = 100.0)]
+    nu: f32,
+    #[arg(long, default_value_t = 100.0)]
+    nv: f32,
+    #[arg(long, default_value = "per-point")]
+    order: String,
+    /// Samples per pixel of the ground truth.
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    #[arg(long, default_value_t = 655)]
+    width: u32,
+    #[arg(long, default_value_t = 460)]
+    height: u32,
+    /// Warm frames timed per configuration (median reported).
+    #[arg(long, default_value_t = 5)]
+    frames: u32,
+    /// Output directory (the variant stores go to OUT/stores and are reused by later runs
+    /// when their settings match).
+    #[arg(short, long, default_value = "sweep")]
+    out: PathBuf,
+    /// No progress output.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+const DEFAULT_VARY: [&str; 6] = [
+    "cube_resolution=16,64",
+    "sample_count=150,600",
+    "epsilon=0.05,0.2",
+    "phi_samplemap=60",
+    "phi_shader=45,85",
+    "blend=distance,angle,avg,r4,envmap",
+];
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    let Some(camera) = scene.camera else {
+        bail!("{}: the scene has no [camera] to judge from", args.scene.display());
+    };
+    let mut params = ShadingParams {
+        mode: args.mode,
+        phi_shader_deg: args.phi_shader,
+        m: args.m,
+        rs: args.rs,
+        nu: args.nu,
+        nv: args.nv,
+        order: match args.order.as_str() {
+            "per-point" => Order::PerPoint,
+            "per-direction" => Order::PerDirection,
+            o => bail!("--order {o:?}: per-point or per-direction"),
+        },
+        ..ShadingParams::default()
+    };
+    oslf_measure::sweep::apply_runtime(
+        &mut params,
+        &oslf_measure::sweep::Change {
+            key: "blend".into(),
+            value: args.blend.clone(),
+        },
+    )
+    .context("--blend")?;
+    let specs: Vec<String> = if args.vary.is_empty() {
+        DEFAULT_VARY.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.vary.clone()
+    };
+    let mut changes = Vec::new();
+    for s in &specs {
+        changes.extend(parse_vary(s)?);
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+
+    let truth_settings = TruthSettings {
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+        seed: 1,
+        progress: !args.quiet,
+    };
+    let gt = GroundTruth::new(&scene, camera)?;
+    let truth = render_truth(&gt, &params, &truth_settings)?;
+    let truth_path = args.out.join(format!("truth-{}.exr", params.mode.name()));
+    image_file::write_exr_rgba(&truth_path, truth.width, truth.height, &truth.pixels)?;
+    if !args.quiet {
+        eprintln!("ground truth {} ({:.1} s)", truth_path.display(), truth.seconds);
+    }
+
+    let config = SweepConfig {
+        scene: &scene,
+        params,
+        changes,
+        store_dir: args.out.join("stores"),
+        warm_frames: args.frames,
+        progress: !args.quiet,
+    };
+    let quiet = args.quiet;
+    let rows = run_sweep(&config, &truth, |r| {
+        if !quiet {
+            eprintln!(
+                "{:<40} L* {:7.3}  {:8.2} ms",
+                r.label(),
+                r.judgement.metrics.rmse_lab[0],
+                r.judgement.frame_ms
+            );
+        }
+    })?;
+    let points: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.judgement.frame_ms, r.judgement.metrics.rmse_lab[0]))
+        .collect();
+    let front = pareto_front(&points);
+    write_outputs(&args, &params, &rows, &front)
+}
+
+fn write_outputs(
+    args: &Args,
+    params: &ShadingParams,
+    rows: &[SweepRow],
+    front: &[bool],
+) -> anyhow::Result<()> {
+    let mut all = Table::new(
+        &format!(
+            "Sweep: mode {}, defaults {} (blend {}, φ_shader {}°), {}x{}",
+            params.mode.name(),
+            args.scene.display(),
+            blend_label(params),
+            params.phi_shader_deg,
+            args.width,
+            args.height
+        ),
+        &[
+            "configuration",
+            "sample points",
+            "bake s",
+            "store MB",
+            "frame ms",
+            "RMSE L*",
+            "RMSE a*",
+            "RMSE b*",
+            "RMSE R",
+            "RMSE G",
+            "RMSE B",
+            "PSNR dB",
+            "pixels",
+            "Pareto",
+        ],
+    );
+    for (r, on) in rows.iter().zip(front) {
+        let m = &r.judgement.metrics;
+        all.push(vec![
+            r.label(),
+            r.sample_points.to_string(),
+            format!("{:.1}", r.bake_seconds),
+            format!("{:.2}", r.store_bytes as f64 / 1e6),
+            format!("{:.1}", r.judgement.frame_ms),
+            format!("{:.3}", m.rmse_lab[0]),
+            format!("{:.3}", m.rmse_lab[1]),
+            format!("{:.3}", m.rmse_lab[2]),
+            format!("{:.4}", m.rmse_rgb[0]),
+            format!("{:.4}", m.rmse_rgb[1]),
+            format!("{:.4}", m.rmse_rgb[2]),
+            m.psnr_db.map_or("–".into(), |p| format!("{p:.2}")),
+            m.pixels.to_string(),
+            if *on { "yes".into() } else { String::new() },
+        ]);
+    }
+    let sensitivity = sensitivity_table(rows);
+    print!("{}\n{}", all.to_text(), sensitivity.to_text());
+    let front_labels: Vec<String> = rows
+        .iter()
+        .zip(front)
+        .filter(|(_, f)| **f)
+        .map(|(r, _)| r.label())
+        .collect();
+    let default_on_front = rows.iter().zip(front).any(|(r, f)| r.is_default() && *f);
+    println!(
+        "\nPareto front (RMSE L* against frame time): {}\nthe defaults are {}on the front",
+        front_labels.join("; "),
+        if default_on_front { "" } else { "NOT " }
+    );
+    write(&args.out.join("sweep.csv"), &all.to_csv())?;
+    write(
+        &args.out.join("sensitivity.md"),
+        &format!("{}\n{}", sensitivity.to_markdown(), all.to_markdown()),
+    )?;
+    let json = serde_json::json!({
+        "mode": params.mode.name(),
+        "scene": args.scene,
+        "width": args.width,
+        "height": args.height,
+        "truth_spp": args.spp,
+        "rows": rows.iter().zip(front).map(|(r, f)| serde_json::json!({
+            "label": r.label(), "pareto": f, "row": r,
+        })).collect::<Vec<_>>(),
+    });
+    write(&args.out.join("sweep.json"), &serde_json::to_string_pretty(&json)?)?;
+    let points: Vec<PlotPoint> = rows
+        .iter()
+        .zip(front)
+        .map(|(r, f)| PlotPoint {
+            label: r.label(),
+            time_ms: r.judgement.frame_ms,
+            error: r.judgement.metrics.rmse_lab[0],
+            on_front: *f,
+            is_default: r.is_default(),
+        })
+        .collect();
+    let text = PlotText {
+        caption: format!("{}: error against frame time", params.mode.name()),
+        x: "frame time, ms (log scale)".into(),
+        y: "RMSE of L* against the ground truth".into(),
+    };
+    plot_tradeoff(
+        &points,
+        &text,
+        &args.out.join("tradeoff.png"),
+        &args.out.join("tradeoff.svg"),
+        (960, 640),
+    )?;
+    println!(
+        "wrote {}/sweep.csv, sweep.json, sensitivity.md, tradeoff.png, tradeoff.svg",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Rows with at most one change, grouped by the changed key: how the error moves around the
+/// defaults (thesis §8.1.1).
+fn sensitivity_table(rows: &[SweepRow]) -> Table {
+    let mut t = Table::new(
+        "Sensitivity: one setting changed from the defaults",
+        &["setting", "value", "RMSE L*", "Δ L*", "frame ms", "bake s", "store MB"],
+    );
+    let Some(base) = rows.iter().find(|r| r.is_default()) else {
+        return t;
+    };
+    let e0 = base.judgement.metrics.rmse_lab[0];
+    let mut push = |key: &str, value: &str, r: &SweepRow| {
+        let e = r.judgement.metrics.rmse_lab[0];
+        t.push(vec![
+            key.into(),
+            value.into(),
+            format!("{e:.3}"),
+            format!("{:+.3}", e - e0),
+            format!("{:.1}", r.judgement.frame_ms),
+            format!("{:.1}", r.bake_seconds),
+            format!("{:.2}", r.store_bytes as f64 / 1e6),
+        ]);
+    };
+    push("(defaults)", "", base);
+    for r in rows {
+        let change = match (&r.bake_change, &r.runtime_change) {
+            (Some(c), None) | (None, Some(c)) => c,
+            _ => continue,
+        };
+        push(&change.key, &change.value, r);
+    }
+    t
+}
+
+fn write(path: &Path, text: &str) -> anyhow::Result<()> {
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+}

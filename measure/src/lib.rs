@@ -1,0 +1,29 @@
+//! # oslf-measure: what each setting costs and buys
+//!
+//! Users of offset surface light fields trade speed for accuracy: cube-map resolution, sample
+//! density, ε, the blend and its power N, Monte Carlo samples M, the cache. This crate measures
+//! that trade on a user's own scene, against the ray-traced ground truth of
+//! [`oslf_bake::ground_truth`], with the image metrics of [`oslf_runtime::metrics`] (RMSE in
+//! CIELAB and linear RGB, PSNR; thesis §6.1).
+//!
+//! | module | what |
+//! | --- | --- |
+//! | [`judge`] | render one runtime configuration, compare it with the truth, time it |
+//! | [`table`] | result tables as aligned text, Markdown and CSV |
+//! | [`pareto`] | the Pareto front of (time, error) |
+//! | [`plot`] | the error-against-time plot with its front (PNG and SVG) |
+//! | [`sweep`] | bake variants of a scene, judge every variant with every runtime setting |
+//!
+//! Commands: `oslf-tables` reproduces the thesis's Tables 6.1 and 6.2 and a new
+//! Ashikhmin–Shirley table on a scene; `oslf-sweep` runs the speed/accuracy sweep and the
+//! sensitivity analysis (thesis §8.1.1) and draws the plot. The cache-statistics tool is the
+//! runtime's `oslf-cache-stats`.
+
+pub mod error;
+pub mod judge;
+pub mod pareto;
+pub mod plot;
+pub mod sweep;
+pub mod table;
+
+pub use error::{MeasureError, Result};

@@ -1,0 +1,406 @@
+//! The speed/accuracy sweep and the sensitivity analysis (thesis §8.1.1).
+//!
+//! Starting from a scene's settings (the *defaults*), each `--vary KEY=V1,V2,…` changes one
+//! setting at a time. Bake keys give bake variants (each baked to its own store); runtime keys
+//! give runtime variants. Every bake variant is judged with every runtime variant against one
+//! ground truth of the unchanged scene ([`crate::judge`]), which records bake time, store size,
+//! frame time and error. Rows where exactly one setting differs from the defaults are the
+//! sensitivity analysis; all rows together give the Pareto front of error against frame time.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use oslf_bake::bake::{bake, BakeOptions, BakeReport};
+use oslf_bake::ground_truth::TruthImage;
+use oslf_bake::scene::{BakeSettings, SampleDensity, Scene};
+use oslf_format::Store;
+use oslf_runtime::{Blend, CacheConfig, Gpu, Order, Renderer, ShadingParams, Source};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{MeasureError, Result};
+use crate::judge::{judge, Judgement};
+
+/// Bake settings the sweep can vary.
+pub const BAKE_KEYS: [&str; 6] = [
+    "epsilon",
+    "sample_count",
+    "cube_resolution",
+    "phi_samplemap",
+    "samples_per_texel",
+    "sample_map_resolution",
+];
+
+/// Runtime settings the sweep can vary. `blend` takes `distance`, `angle`, `avg`, `rN`
+/// (B^r with power N), `nN` (B^n) or `envmap` (the environment-map baseline).
+pub const RUNTIME_KEYS: [&str; 4] = ["phi_shader", "blend", "m", "order"];
+
+/// One setting changed from the defaults: `key = value`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Change {
+    pub key: String,
+    pub value: String,
+}
+
+/// Parses `KEY=V1,V2,…` into one change per value, checking the key and every value.
+pub fn parse_vary(spec: &str) -> Result<Vec<Change>> {
+    let (key, values) = spec.split_once('=').ok_or_else(|| {
+        MeasureError::Invalid(format!("--vary {spec:?}: expected KEY=V1,V2,..."))
+    })?;
+    let key = key.trim();
+    if !BAKE_KEYS.contains(&key) && !RUNTIME_KEYS.contains(&key) {
+        return Err(MeasureError::Invalid(format!(
+            "--vary: unknown key {key:?} (bake: {}; runtime: {})",
+            BAKE_KEYS.join(", "),
+            RUNTIME_KEYS.join(", ")
+        )));
+    }
+    let changes: Vec<Change> = values
+        .split(',')
+        .map(|v| Change {
+            key: key.to_string(),
+            value: v.trim().to_string(),
+        })
+        .collect();
+    for c in &changes {
+        if BAKE_KEYS.contains(&key) {
+            apply_bake(&mut BakeSettings::clone(&default_settings()), c)?;
+        } else {
+            apply_runtime(&mut ShadingParams::default(), c)?;
+        }
+    }
+    Ok(changes)
+}
+
+fn default_settings() -> BakeSettings {
+    BakeSettings {
+        epsilon: 0.1,
+        sample_count: SampleDensity::Count(300),
+        phi_samplemap_deg: 85.0,
+        cube_resolution: 32,
+        sample_map_resolution: 256,
+        samples_per_texel: 4,
+        bounces: 1,
+        seed: 0,
+        encoding: oslf_format::Encoding::Rgb9e5,
+        zstd_level: 3,
+        distance_channel: false,
+        env_cube: true,
+    }
+}
+
+fn parse<T: std::str::FromStr>(c: &Change) -> Result<T> {
+    c.value.parse::<T>().map_err(|_| {
+        MeasureError::Invalid(format!("--vary {}: {:?} is not a valid value", c.key, c.value))
+    })
+}
+
+fn check(c: &Change, ok: bool, range: &str) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(MeasureError::Invalid(format!(
+            "--vary {}: {} is outside {range}",
+            c.key, c.value
+        )))
+    }
+}
+
+/// Applies a bake change to `s` (the ranges are the scene file's).
+pub fn apply_bake(s: &mut BakeSettings, c: &Change) -> Result<()> {
+    match c.key.as_str() {
+        "epsilon" => {
+            let v: f32 = parse(c)?;
+            check(c, v.is_finite() && v > 0.0, "(0, ∞)")?;
+            s.epsilon = v;
+        }
+        "sample_count" => {
+            let v: u32 = parse(c)?;
+            check(c, v >= 1, "[1, ∞)")?;
+            s.sample_count = SampleDensity::Count(v);
+        }
+        "cube_resolution" => {
+            let v: u32 = parse(c)?;
+            check(c, (1..=16384).contains(&v), "[1, 16384]")?;
+            s.cube_resolution = v;
+        }
+        "phi_samplemap" => {
+            let v: f32 = parse(c)?;
+            check(c, v > 0.0 && v < 90.0, "(0, 90)")?;
+            s.phi_samplemap_deg = v;
+        }
+        "samples_per_texel" => {
+            let v: u32 = parse(c)?;
+            check(c, v >= 1, "[1, ∞)")?;
+            s.samples_per_texel = v;
+        }
+        "sample_map_resolution" => {
+            let v: u32 = parse(c)?;
+            check(c, (1..=16384).contains(&v), "[1, 16384]")?;
+            s.sample_map_resolution = v;
+        }
+        k => return Err(MeasureError::Invalid(format!("{k} is not a bake setting"))),
+    }
+    Ok(())
+}
+
+/// Applies a runtime change to `p`.
+pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
+    match c.key.as_str() {
+        "phi_shader" => p.phi_shader_deg = parse(c)?,
+        "m" => p.m = parse(c)?,
+        "order" => {
+            p.order = match c.value.as_str() {
+                "per-point" => Order::PerPoint,
+                "per-direction" => Order::PerDirection,
+                _ => return check(c, false, "{per-point, per-direction}"),
+            }
+        }
+        "blend" => {
+            let v = c.value.as_str();
+            p.source = Source::Oslf;
+            match v {
+                "distance" => p.blend = Blend::Distance,
+                "angle" => p.blend = Blend::Angle,
+                "avg" => p.blend = Blend::Average,
+                "envmap" => p.source = Source::EnvMap,
+                _ if v.len() > 1 && (v.starts_with('r') || v.starts_with('n')) => {
+                    p.blend = if v.starts_with('r') {
+                        Blend::Reflection
+                    } else {
+                        Blend::Normal
+                    };
+                    p.blend_n = v[1..].parse().map_err(|_| {
+                        MeasureError::Invalid(format!("--vary blend: {v:?}: expected rN or nN"))
+                    })?;
+                }
+                _ => {
+                    return check(c, false, "{distance, angle, avg, rN, nN, envmap}");
+                }
+            }
+        }
+        k => return Err(MeasureError::Invalid(format!("{k} is not a runtime setting"))),
+    }
+    p.validate()?;
+    Ok(())
+}
+
+/// A short name of a blend setting, as `--vary blend=` takes it.
+pub fn blend_label(p: &ShadingParams) -> String {
+    if p.source == Source::EnvMap {
+        return "envmap".into();
+    }
+    match p.blend {
+        Blend::Distance => "distance".into(),
+        Blend::Angle => "angle".into(),
+        Blend::Average => "avg".into(),
+        Blend::Reflection => format!("r{}", p.blend_n),
+        Blend::Normal => format!("n{}", p.blend_n),
+    }
+}
+
+/// How to run a sweep.
+pub struct SweepConfig<'a> {
+    /// The scene with its default settings.
+    pub scene: &'a Scene,
+    /// The default runtime settings.
+    pub params: ShadingParams,
+    /// Bake and runtime changes, each applied alone.
+    pub changes: Vec<Change>,
+    /// Where the variant stores go (`<dir>/<label>.oslf`, reused when their recorded settings
+    /// match).
+    pub store_dir: PathBuf,
+    pub warm_frames: u32,
+    pub progress: bool,
+}
+
+/// One judged configuration.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepRow {
+    /// The bake change (`None`: the defaults).
+    pub bake_change: Option<Change>,
+    /// The runtime change (`None`: the defaults).
+    pub runtime_change: Option<Change>,
+    pub store: PathBuf,
+    pub bake_seconds: f64,
+    pub store_bytes: u64,
+    pub sample_points: usize,
+    pub judgement: Judgement,
+}
+
+impl SweepRow {
+    /// `defaults`, or the changes, as `key=value[, key=value]`.
+    pub fn label(&self) -> String {
+        let parts: Vec<String> = [&self.bake_change, &self.runtime_change]
+            .into_iter()
+            .flatten()
+            .map(|c| format!("{}={}", c.key, c.value))
+            .collect();
+        if parts.is_empty() {
+            "defaults".into()
+        } else {
+            parts.join(", ")
+        }
+    }
+
+    pub fn is_default(&self) -> bool {
+        self.bake_change.is_none() && self.runtime_change.is_none()
+    }
+}
+
+/// What the sweep records beside each store, to reuse it in a later run.
+#[derive(Serialize, Deserialize)]
+struct StoreRecord {
+    settings: String,
+    scene_hash: String,
+    bake_seconds: f64,
+    store_bytes: u64,
+    sample_points: usize,
+}
+
+fn record_path(store: &Path) -> PathBuf {
+    let mut s = store.as_os_str().to_os_string();
+    s.push(".sweep.json");
+    PathBuf::from(s)
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Bakes `scene` to `path` unless a store baked with the same settings is already there.
+fn bake_or_reuse(scene: &Scene, path: &Path, progress: bool) -> Result<StoreRecord> {
+    let settings = format!("{:?}", scene.bake);
+    let hash = hex(&scene.hash);
+    let record = record_path(path);
+    if path.exists() {
+        if let Ok(text) = std::fs::read_to_string(&record) {
+            if let Ok(r) = serde_json::from_str::<StoreRecord>(&text) {
+                if r.settings == settings && r.scene_hash == hash {
+                    return Ok(r);
+                }
+            }
+        }
+    }
+    let report: BakeReport = bake(
+        scene,
+        &BakeOptions {
+            output: path.to_path_buf(),
+            resume: false,
+            progress,
+            cube_limit: None,
+        },
+    )?;
+    let r = StoreRecord {
+        settings,
+        scene_hash: hash,
+        bake_seconds: report.total_seconds,
+        store_bytes: report.store_bytes,
+        sample_points: report.sample_points,
+    };
+    let json = serde_json::to_string_pretty(&r).map_err(|e| MeasureError::Invalid(e.to_string()))?;
+    std::fs::write(&record, json).map_err(|e| MeasureError::Output {
+        path: record.clone(),
+        message: e.to_string(),
+    })?;
+    Ok(r)
+}
+
+/// Runs the sweep against `truth` (the ground truth of `config.params.mode` for the scene's
+/// camera). Calls `on_row` as each row is measured.
+pub fn run_sweep(
+    config: &SweepConfig,
+    truth: &TruthImage,
+    mut on_row: impl FnMut(&SweepRow),
+) -> Result<Vec<SweepRow>> {
+    let bake_changes: Vec<Option<&Change>> = std::iter::once(None)
+        .chain(
+            config
+                .changes
+                .iter()
+                .filter(|c| BAKE_KEYS.contains(&c.key.as_str()))
+                .map(Some),
+        )
+        .collect();
+    let runtime_changes: Vec<Option<&Change>> = std::iter::once(None)
+        .chain(
+            config
+                .changes
+                .iter()
+                .filter(|c| RUNTIME_KEYS.contains(&c.key.as_str()))
+                .map(Some),
+        )
+        .collect();
+    std::fs::create_dir_all(&config.store_dir).map_err(|e| MeasureError::Output {
+        path: config.store_dir.clone(),
+        message: e.to_string(),
+    })?;
+    let mut rows = Vec::new();
+    for bc in &bake_changes {
+        let mut scene = config.scene.clone();
+        let name = match bc {
+            Some(c) => {
+                apply_bake(&mut scene.bake, c)?;
+                format!("{}-{}", c.key, c.value)
+            }
+            None => "defaults".to_string(),
+        };
+        let path = config.store_dir.join(format!("{name}.oslf"));
+        let t = Instant::now();
+        let record = bake_or_reuse(&scene, &path, config.progress)?;
+        if config.progress {
+            eprintln!(
+                "store {} ({:.1} s{})",
+                path.display(),
+                t.elapsed().as_secs_f64(),
+                if t.elapsed().as_secs_f64() < 1.0 { ", reused" } else { "" }
+            );
+        }
+        let store = Store::open(&path)?;
+        let mut renderer = Renderer::new(Gpu::headless()?, store, CacheConfig::default())?;
+        let camera = renderer.default_view();
+        for rc in &runtime_changes {
+            let mut params = config.params;
+            if let Some(c) = rc {
+                apply_runtime(&mut params, c)?;
+            }
+            if params.source == Source::EnvMap && renderer.store().env_cube_index().is_none() {
+                return Err(MeasureError::Invalid(format!(
+                    "{} has no environment cube for blend=envmap (env_cube = true)",
+                    path.display()
+                )));
+            }
+            let (judgement, _) = judge(&mut renderer, &camera, &params, truth, config.warm_frames)?;
+            let row = SweepRow {
+                bake_change: bc.cloned(),
+                runtime_change: rc.cloned(),
+                store: path.clone(),
+                bake_seconds: record.bake_seconds,
+                store_bytes: record.store_bytes,
+                sample_points: record.sample_points,
+                judgement,
+            };
+            on_row(&row);
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vary_specs_are_checked() {
+        let c = parse_vary("cube_resolution=16,64").unwrap();
+        assert_eq!(c.len(), 2);
+        assert_eq!((c[1].key.as_str(), c[1].value.as_str()), ("cube_resolution", "64"));
+        assert!(parse_vary("blend=distance,n16,r4,envmap,avg").is_ok());
+        for bad in ["cube_resolution", "colour=1", "epsilon=-1", "blend=x4", "blend=nq", "m=0", "phi_shader=200"] {
+            assert!(parse_vary(bad).is_err(), "{bad}");
+        }
+        let mut p = ShadingParams::default();
+        apply_runtime(&mut p, &Change { key: "blend".into(), value: "r8".into() }).unwrap();
+        assert_eq!((p.blend, p.blend_n, blend_label(&p)), (Blend::Reflection, 8.0, "r8".to_string()));
+    }
+}
