@@ -13,7 +13,7 @@ use crate::error::{MeasureError, Result};
 #[derive(Clone, Debug)]
 pub struct PlotPoint {
     pub label: String,
-    /// Frame time, milliseconds (x, log scale).
+    /// Frame time, milliseconds (x).
     pub time_ms: f64,
     /// Error (y).
     pub error: f64,
@@ -95,7 +95,8 @@ fn draw<DB: DrawingBackend>(
         y0 = y0.min(p.error);
         y1 = y1.max(p.error);
     }
-    let (x0, x1) = (x0 / 1.3, x1 * 1.3);
+    let xpad = (x1 - x0) * 0.08 + 1e-3 * x1;
+    let (x0, x1) = ((x0 - xpad).max(0.0), x1 + 3.0 * xpad);
     let pad = ((y1 - y0) * 0.08).max(1e-6 * y1.abs().max(1e-12));
     let (y0, y1) = ((y0 - pad).max(0.0), y1 + pad);
     let mut chart = ChartBuilder::on(&root)
@@ -103,9 +104,10 @@ fn draw<DB: DrawingBackend>(
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d((x0..x1).log_scale(), y0..y1)?;
+        .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
         .configure_mesh()
+        .light_line_style(WHITE)
         .x_desc(&text.x)
         .y_desc(&text.y)
         .label_style((FONT, 13))
@@ -138,7 +140,7 @@ fn draw<DB: DrawingBackend>(
     chart.draw_series(front.iter().map(|p| {
         Text::new(
             p.label.clone(),
-            (p.time_ms * 1.04, p.error),
+            (p.time_ms + 0.01 * (x1 - x0), p.error),
             (FONT, 12).into_font().color(&BLACK),
         )
     }))?;

@@ -269,7 +269,7 @@ fn write_outputs(
         .collect();
     let text = PlotText {
         caption: format!("{}: error against frame time", params.mode.name()),
-        x: "frame time, ms (log scale)".into(),
+        x: "frame time, ms".into(),
         y: "RMSE of L* against the ground truth".into(),
     };
     plot_tradeoff(
