@@ -183,23 +183,66 @@ mod tests {
     #[test]
     fn sampler_and_pdf_integrate_to_the_albedo() {
         for (lobe, v, grid) in [
-            (AsLobe { rs: 1.0, nu: 10.0, nv: 10.0 }, dir(30.0, 0.0), (800, 1600)),
-            (AsLobe { rs: 0.5, nu: 100.0, nv: 100.0 }, dir(60.0, 40.0), (1600, 3200)),
-            (AsLobe { rs: 1.0, nu: 1000.0, nv: 1000.0 }, dir(10.0, 0.0), (4000, 4000)),
-            (AsLobe { rs: 1.0, nu: 10.0, nv: 1000.0 }, dir(45.0, 20.0), (3000, 6000)),
+            (
+                AsLobe {
+                    rs: 1.0,
+                    nu: 10.0,
+                    nv: 10.0,
+                },
+                dir(30.0, 0.0),
+                (800, 1600),
+            ),
+            (
+                AsLobe {
+                    rs: 0.5,
+                    nu: 100.0,
+                    nv: 100.0,
+                },
+                dir(60.0, 40.0),
+                (1600, 3200),
+            ),
+            (
+                AsLobe {
+                    rs: 1.0,
+                    nu: 1000.0,
+                    nv: 1000.0,
+                },
+                dir(10.0, 0.0),
+                (4000, 4000),
+            ),
+            (
+                AsLobe {
+                    rs: 1.0,
+                    nu: 10.0,
+                    nv: 1000.0,
+                },
+                dir(45.0, 20.0),
+                (3000, 6000),
+            ),
         ] {
             let q = albedo_quadrature(&lobe, v, grid.0, grid.1);
             let mc = albedo_monte_carlo(&lobe, v, 400);
             assert!(q > 0.05 && q < 1.2, "{lobe:?}: albedo {q}");
-            assert!((mc - q).abs() < 0.01 * q, "{lobe:?} at {v:?}: MC {mc} vs quadrature {q}");
+            assert!(
+                (mc - q).abs() < 0.01 * q,
+                "{lobe:?} at {v:?}: MC {mc} vs quadrature {q}"
+            );
         }
     }
 
     #[test]
     fn the_half_vector_density_integrates_to_one() {
         for lobe in [
-            AsLobe { rs: 1.0, nu: 0.0, nv: 0.0 },
-            AsLobe { rs: 1.0, nu: 10.0, nv: 300.0 },
+            AsLobe {
+                rs: 1.0,
+                nu: 0.0,
+                nv: 0.0,
+            },
+            AsLobe {
+                rs: 1.0,
+                nu: 10.0,
+                nv: 300.0,
+            },
         ] {
             let (nt, np) = (2000, 2000);
             let (dt, dp) = (0.5 * PI / nt as f64, 2.0 * PI / np as f64);
@@ -219,18 +262,35 @@ mod tests {
 
     #[test]
     fn invert_undoes_sample() {
-        let lobe = AsLobe { rs: 1.0, nu: 30.0, nv: 700.0 };
-        for &u in &[[0.1, 0.2], [0.3, 0.9], [0.55, 0.5], [0.8, 0.01], [0.99, 0.7]] {
+        let lobe = AsLobe {
+            rs: 1.0,
+            nu: 30.0,
+            nv: 700.0,
+        };
+        for &u in &[
+            [0.1, 0.2],
+            [0.3, 0.9],
+            [0.55, 0.5],
+            [0.8, 0.01],
+            [0.99, 0.7],
+        ] {
             let h = lobe.sample_half(u);
             let back = lobe.invert_half(h);
-            assert!((back[0] - u[0]).abs() < 1e-9 && (back[1] - u[1]).abs() < 1e-9, "{u:?} -> {back:?}");
+            assert!(
+                (back[0] - u[0]).abs() < 1e-9 && (back[1] - u[1]).abs() < 1e-9,
+                "{u:?} -> {back:?}"
+            );
         }
     }
 
     #[test]
     fn extremes_stay_finite() {
         // h = n exactly (the exponent's 0/0), huge and anisotropic exponents, grazing v.
-        let lobe = AsLobe { rs: 1.0, nu: 1e6, nv: 1.0 };
+        let lobe = AsLobe {
+            rs: 1.0,
+            nu: 1e6,
+            nv: 1.0,
+        };
         let n = DVec3::Z;
         assert_eq!(lobe.half_pdf(n), lobe.norm() / (2.0 * PI));
         assert!(lobe.eval(n, n).is_finite());
@@ -244,7 +304,11 @@ mod tests {
             }
         }
         assert_eq!(lobe.fresnel(1.0), 1.0);
-        let f = AsLobe { rs: 0.04, nu: 1.0, nv: 1.0 };
+        let f = AsLobe {
+            rs: 0.04,
+            nu: 1.0,
+            nv: 1.0,
+        };
         assert!((f.fresnel(0.0) - 1.0).abs() < 1e-12 && (f.fresnel(1.0) - 0.04).abs() < 1e-12);
     }
 }

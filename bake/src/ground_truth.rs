@@ -219,7 +219,13 @@ impl<'s> GroundTruth<'s> {
     }
 
     /// The object hit through pixel `(x, y)`'s centre, if any.
-    pub fn primary_hit(&self, x: u32, y: u32, width: u32, height: u32) -> Option<(Ray, SurfaceHit)> {
+    pub fn primary_hit(
+        &self,
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+    ) -> Option<(Ray, SurfaceHit)> {
         let ray = self
             .camera
             .ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
@@ -264,7 +270,9 @@ impl<'s> GroundTruth<'s> {
             Term::Mirror => {
                 let r = (2.0 * n.dot(view) * n - view).normalize_or(n); // Eq. 2.4
                 for _ in 0..spp {
-                    sum += integrator.radiance(&Ray::new(origin, r), rng, stats).radiance;
+                    sum += integrator
+                        .radiance(&Ray::new(origin, r), rng, stats)
+                        .radiance;
                 }
             }
             Term::Glossy(lobe) => {
@@ -278,8 +286,7 @@ impl<'s> GroundTruth<'s> {
                 if v_local.z > 0.0 {
                     for s in 0..spp {
                         let xi = stratified_2d(s, spp, rng);
-                        let Some(l) = lobe.sample_light(v_local, [xi.x.into(), xi.y.into()])
-                        else {
+                        let Some(l) = lobe.sample_light(v_local, [xi.x.into(), xi.y.into()]) else {
                             continue;
                         };
                         let pdf = lobe.light_pdf(v_local, l);
@@ -287,8 +294,8 @@ impl<'s> GroundTruth<'s> {
                             continue;
                         }
                         let weight = lobe.eval(v_local, l) * l.z / pdf; // Eq. 5.12
-                        let dir = (t * l.x as f32 + b * l.y as f32 + n * l.z as f32)
-                            .normalize_or(n);
+                        let dir =
+                            (t * l.x as f32 + b * l.y as f32 + n * l.z as f32).normalize_or(n);
                         let li = integrator.radiance(&Ray::new(origin, dir), rng, stats);
                         sum += li.radiance * weight as f32;
                     }

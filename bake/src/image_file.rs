@@ -26,7 +26,10 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]])
     if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
         return Err(BakeError::Image {
             path: path.to_path_buf(),
-            message: format!("{} pixels do not make a {width}x{height} image", pixels.len()),
+            message: format!(
+                "{} pixels do not make a {width}x{height} image",
+                pixels.len()
+            ),
         });
     }
     let w = width as usize;

@@ -25,11 +25,18 @@ fn plane_scene() -> Scene {
     ));
     std::fs::create_dir_all(&dir).unwrap();
     let mut text = String::from("1\n");
-    text += &(1..=16).map(|i| i.to_string()).collect::<Vec<_>>().join(",");
+    text += &(1..=16)
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
     text += "\n16\n";
     for i in 0..4 {
         for j in 0..4 {
-            text += &format!("{},{},0\n", -1.0 + 2.0 * i as f32 / 3.0, -1.0 + 2.0 * j as f32 / 3.0);
+            text += &format!(
+                "{},{},0\n",
+                -1.0 + 2.0 * i as f32 / 3.0,
+                -1.0 + 2.0 * j as f32 / 3.0
+            );
         }
     }
     std::fs::write(dir.join("plane.txt"), text).unwrap();
@@ -83,7 +90,11 @@ fn mirror_of_a_flat_patch_in_a_uniform_sky_is_the_sky() {
         }
     }
     // Off the object: zero, alpha 0.
-    assert!(image.pixels.iter().filter(|p| p[3] == 0.0).all(|p| p[..3] == [0.0; 3]));
+    assert!(image
+        .pixels
+        .iter()
+        .filter(|p| p[3] == 0.0)
+        .all(|p| p[..3] == [0.0; 3]));
 }
 
 #[test]
@@ -95,7 +106,10 @@ fn the_diffuse_patch_leaves_albedo_times_the_sky() {
     for k in 0..3 {
         let mean = on.iter().map(|p| f64::from(p[k])).sum::<f64>() / on.len() as f64;
         let expected = f64::from(ALBEDO[k] * ENV[k]);
-        assert!((mean / expected - 1.0).abs() < 0.01, "channel {k}: {mean} vs {expected}");
+        assert!(
+            (mean / expected - 1.0).abs() < 0.01,
+            "channel {k}: {mean} vs {expected}"
+        );
     }
     // recon + C_s · mirror (Eq. 4.12), C_s = the albedo.
     let mirror = truth.render(Term::Mirror, &settings(1)).unwrap();
@@ -114,8 +128,16 @@ fn the_glossy_term_is_the_lobe_albedo_times_the_sky() {
     let truth = GroundTruth::new(&scene, camera).unwrap();
     let patch = scene.objects[0].patches[0];
     for lobe in [
-        AsLobe { rs: 1.0, nu: 10.0, nv: 10.0 },
-        AsLobe { rs: 0.3, nu: 10.0, nv: 200.0 },
+        AsLobe {
+            rs: 1.0,
+            nu: 10.0,
+            nv: 10.0,
+        },
+        AsLobe {
+            rs: 0.3,
+            nu: 10.0,
+            nv: 200.0,
+        },
     ] {
         let s = settings(1024);
         let image = truth.render(Term::Glossy(lobe), &s).unwrap();
@@ -169,9 +191,16 @@ fn quadrature(lobe: &AsLobe, v: DVec3) -> f64 {
 fn ground_truth_does_not_depend_on_the_thread_count() {
     let scene = plane_scene();
     let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
-    let lobe = AsLobe { rs: 1.0, nu: 50.0, nv: 50.0 };
+    let lobe = AsLobe {
+        rs: 1.0,
+        nu: 50.0,
+        nv: 50.0,
+    };
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| {
             let a = truth.render(Term::Recon, &settings(8)).unwrap();
             let b = truth.render(Term::Glossy(lobe), &settings(8)).unwrap();
@@ -188,7 +217,14 @@ fn bad_settings_are_errors() {
     let mut s = settings(1);
     s.width = 0;
     assert!(truth.render(Term::Recon, &s).is_err());
-    let bad = AsLobe { rs: 1.0, nu: f64::NAN, nv: 1.0 };
-    let e = truth.render(Term::Glossy(bad), &settings(1)).unwrap_err().to_string();
+    let bad = AsLobe {
+        rs: 1.0,
+        nu: f64::NAN,
+        nv: 1.0,
+    };
+    let e = truth
+        .render(Term::Glossy(bad), &settings(1))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("n_u"), "{e}");
 }

@@ -9,9 +9,9 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
         .iter()
         .map(|p| {
             ok(p)
-                && !points.iter().any(|q| {
-                    ok(q) && q.0 <= p.0 && q.1 <= p.1 && (q.0 < p.0 || q.1 < p.1)
-                })
+                && !points
+                    .iter()
+                    .any(|q| ok(q) && q.0 <= p.0 && q.1 <= p.1 && (q.0 < p.0 || q.1 < p.1))
         })
         .collect()
 }
@@ -22,7 +22,14 @@ mod tests {
 
     #[test]
     fn dominated_points_are_off_the_front() {
-        let pts = [(1.0, 5.0), (2.0, 3.0), (3.0, 3.5), (4.0, 1.0), (2.0, 3.0), (f64::NAN, 0.0)];
+        let pts = [
+            (1.0, 5.0),
+            (2.0, 3.0),
+            (3.0, 3.5),
+            (4.0, 1.0),
+            (2.0, 3.0),
+            (f64::NAN, 0.0),
+        ];
         assert_eq!(pareto_front(&pts), [true, true, false, true, true, false]);
         assert!(pareto_front(&[]).is_empty());
     }

@@ -61,7 +61,9 @@ pub fn plot_tradeoff(
         .filter(|p| p.time_ms.is_finite() && p.time_ms > 0.0 && p.error.is_finite())
         .collect();
     if finite.is_empty() {
-        return Err(MeasureError::Invalid("nothing to plot: no finite point".into()));
+        return Err(MeasureError::Invalid(
+            "nothing to plot: no finite point".into(),
+        ));
     }
     register_font()?;
     {
@@ -193,7 +195,9 @@ mod tests {
         let img = image::open(&png).unwrap().to_rgb8();
         assert_eq!(img.dimensions(), (640, 400));
         // Something red (the front) and something not white was drawn.
-        assert!(img.pixels().any(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60));
+        assert!(img
+            .pixels()
+            .any(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60));
         let s = std::fs::read_to_string(&svg).unwrap();
         assert!(s.contains("<svg") && s.contains("Pareto front") && s.contains("c0"));
         assert!(plot_tradeoff(&[], &text, &png, &svg, (64, 64)).is_err());

@@ -43,9 +43,9 @@ pub struct Change {
 
 /// Parses `KEY=V1,V2,…` into one change per value, checking the key and every value.
 pub fn parse_vary(spec: &str) -> Result<Vec<Change>> {
-    let (key, values) = spec.split_once('=').ok_or_else(|| {
-        MeasureError::Invalid(format!("--vary {spec:?}: expected KEY=V1,V2,..."))
-    })?;
+    let (key, values) = spec
+        .split_once('=')
+        .ok_or_else(|| MeasureError::Invalid(format!("--vary {spec:?}: expected KEY=V1,V2,...")))?;
     let key = key.trim();
     if !BAKE_KEYS.contains(&key) && !RUNTIME_KEYS.contains(&key) {
         return Err(MeasureError::Invalid(format!(
@@ -90,7 +90,10 @@ fn default_settings() -> BakeSettings {
 
 fn parse<T: std::str::FromStr>(c: &Change) -> Result<T> {
     c.value.parse::<T>().map_err(|_| {
-        MeasureError::Invalid(format!("--vary {}: {:?} is not a valid value", c.key, c.value))
+        MeasureError::Invalid(format!(
+            "--vary {}: {:?} is not a valid value",
+            c.key, c.value
+        ))
     })
 }
 
@@ -178,7 +181,11 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
                 }
             }
         }
-        k => return Err(MeasureError::Invalid(format!("{k} is not a runtime setting"))),
+        k => {
+            return Err(MeasureError::Invalid(format!(
+                "{k} is not a runtime setting"
+            )))
+        }
     }
     p.validate()?;
     Ok(())
@@ -297,7 +304,8 @@ fn bake_or_reuse(scene: &Scene, path: &Path, progress: bool) -> Result<StoreReco
         store_bytes: report.store_bytes,
         sample_points: report.sample_points,
     };
-    let json = serde_json::to_string_pretty(&r).map_err(|e| MeasureError::Invalid(e.to_string()))?;
+    let json =
+        serde_json::to_string_pretty(&r).map_err(|e| MeasureError::Invalid(e.to_string()))?;
     std::fs::write(&record, json).map_err(|e| MeasureError::Output {
         path: record.clone(),
         message: e.to_string(),
@@ -352,7 +360,11 @@ pub fn run_sweep(
                 "store {} ({:.1} s{})",
                 path.display(),
                 t.elapsed().as_secs_f64(),
-                if t.elapsed().as_secs_f64() < 1.0 { ", reused" } else { "" }
+                if t.elapsed().as_secs_f64() < 1.0 {
+                    ", reused"
+                } else {
+                    ""
+                }
             );
         }
         let store = Store::open(&path)?;
@@ -394,13 +406,34 @@ mod tests {
     fn vary_specs_are_checked() {
         let c = parse_vary("cube_resolution=16,64").unwrap();
         assert_eq!(c.len(), 2);
-        assert_eq!((c[1].key.as_str(), c[1].value.as_str()), ("cube_resolution", "64"));
+        assert_eq!(
+            (c[1].key.as_str(), c[1].value.as_str()),
+            ("cube_resolution", "64")
+        );
         assert!(parse_vary("blend=distance,n16,r4,envmap,avg").is_ok());
-        for bad in ["cube_resolution", "colour=1", "epsilon=-1", "blend=x4", "blend=nq", "m=0", "phi_shader=200"] {
+        for bad in [
+            "cube_resolution",
+            "colour=1",
+            "epsilon=-1",
+            "blend=x4",
+            "blend=nq",
+            "m=0",
+            "phi_shader=200",
+        ] {
             assert!(parse_vary(bad).is_err(), "{bad}");
         }
         let mut p = ShadingParams::default();
-        apply_runtime(&mut p, &Change { key: "blend".into(), value: "r8".into() }).unwrap();
-        assert_eq!((p.blend, p.blend_n, blend_label(&p)), (Blend::Reflection, 8.0, "r8".to_string()));
+        apply_runtime(
+            &mut p,
+            &Change {
+                key: "blend".into(),
+                value: "r8".into(),
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            (p.blend, p.blend_n, blend_label(&p)),
+            (Blend::Reflection, 8.0, "r8".to_string())
+        );
     }
 }

@@ -119,8 +119,13 @@ mod tests {
         t.push(vec!["a, b".into(), "0.125".into()]);
         t.push(vec!["c".into(), "12.5".into()]);
         let text = t.to_text();
-        assert!(text.contains("a, b   0.125\n") && text.contains("c       12.5\n"), "{text}");
-        assert!(t.to_markdown().contains("| method | error |\n| --- | ---: |\n| a, b | 0.125 |"));
+        assert!(
+            text.contains("a, b    0.125\n") && text.contains("c        12.5\n"),
+            "{text}"
+        );
+        assert!(t
+            .to_markdown()
+            .contains("| method | error |\n| --- | ---: |\n| a, b | 0.125 |"));
         assert_eq!(t.to_csv(), "method,error\n\"a, b\",0.125\nc,12.5\n");
     }
 }

@@ -89,7 +89,10 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
     let modes: Vec<&str> = args.modes.split(',').map(str::trim).collect();
     for m in &modes {
         if !MODES.contains(m) {
-            bail!("--modes: unknown mode {m:?} (expected one of {})", MODES.join(", "));
+            bail!(
+                "--modes: unknown mode {m:?} (expected one of {})",
+                MODES.join(", ")
+            );
         }
     }
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
@@ -144,7 +147,9 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         None
     };
     let glossy = if wants("glossy") || wants("recon-glossy") {
-        Some(timed("glossy", || truth.render(Term::Glossy(lobe), &settings))?)
+        Some(timed("glossy", || {
+            truth.render(Term::Glossy(lobe), &settings)
+        })?)
     } else {
         None
     };
@@ -201,6 +206,12 @@ fn write(exr: &Path, image: &TruthImage, exposure: f32) -> anyhow::Result<()> {
         .iter()
         .map(|p| Vec3::new(p[0], p[1], p[2]))
         .collect();
-    image_file::write_png(&exr.with_extension("png"), image.width, image.height, &rgb, exposure)?;
+    image_file::write_png(
+        &exr.with_extension("png"),
+        image.width,
+        image.height,
+        &rgb,
+        exposure,
+    )?;
     Ok(())
 }

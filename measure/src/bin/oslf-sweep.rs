@@ -96,7 +96,10 @@ fn main() -> ExitCode {
 fn run(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let Some(camera) = scene.camera else {
-        bail!("{}: the scene has no [camera] to judge from", args.scene.display());
+        bail!(
+            "{}: the scene has no [camera] to judge from",
+            args.scene.display()
+        );
     };
     let mut params = ShadingParams {
         mode: args.mode,
@@ -144,7 +147,11 @@ fn run(args: Args) -> anyhow::Result<()> {
     let truth_path = args.out.join(format!("truth-{}.exr", params.mode.name()));
     image_file::write_exr_rgba(&truth_path, truth.width, truth.height, &truth.pixels)?;
     if !args.quiet {
-        eprintln!("ground truth {} ({:.1} s)", truth_path.display(), truth.seconds);
+        eprintln!(
+            "ground truth {} ({:.1} s)",
+            truth_path.display(),
+            truth.seconds
+        );
     }
 
     let config = SweepConfig {
@@ -255,7 +262,10 @@ fn write_outputs(
             "label": r.label(), "pareto": f, "row": r,
         })).collect::<Vec<_>>(),
     });
-    write(&args.out.join("sweep.json"), &serde_json::to_string_pretty(&json)?)?;
+    write(
+        &args.out.join("sweep.json"),
+        &serde_json::to_string_pretty(&json)?,
+    )?;
     let points: Vec<PlotPoint> = rows
         .iter()
         .zip(front)
@@ -291,7 +301,9 @@ fn write_outputs(
 fn sensitivity_table(rows: &[SweepRow]) -> Table {
     let mut t = Table::new(
         "Sensitivity: one setting changed from the defaults",
-        &["setting", "value", "RMSE L*", "Δ L*", "frame ms", "bake s", "store MB"],
+        &[
+            "setting", "value", "RMSE L*", "Δ L*", "frame ms", "bake s", "store MB",
+        ],
     );
     let Some(base) = rows.iter().find(|r| r.is_default()) else {
         return t;

@@ -41,7 +41,11 @@ struct Args {
     #[arg(long, value_delimiter = ',', default_value = "4,16,64,256")]
     glossy_m: Vec<u32>,
     /// Lobes n_u:n_v of the Ashikhmin–Shirley table.
-    #[arg(long, value_delimiter = ',', default_value = "10:10,100:100,1000:1000,10:1000")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "10:10,100:100,1000:1000,10:1000"
+    )]
     lobes: Vec<String>,
     /// Skip the Ashikhmin–Shirley table.
     #[arg(long)]
@@ -130,7 +134,10 @@ fn ms(j: &Judgement) -> String {
 fn run(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let Some(camera) = scene.camera else {
-        bail!("{}: the scene has no [camera] to judge from", args.scene.display());
+        bail!(
+            "{}: the scene has no [camera] to judge from",
+            args.scene.display()
+        );
     };
     let mut stores = Vec::new();
     for path in &args.stores {
@@ -175,7 +182,12 @@ fn run(args: Args) -> anyhow::Result<()> {
         ..ShadingParams::default()
     };
     let truth_of = |mode: Mode, nu: f32, nv: f32, name: &str| -> anyhow::Result<TruthImage> {
-        let p = ShadingParams { mode, nu, nv, ..base };
+        let p = ShadingParams {
+            mode,
+            nu,
+            nv,
+            ..base
+        };
         let t = render_truth(&gt, &p, &settings)?;
         let path = args.out.join(format!("truth-{name}.exr"));
         image_file::write_exr_rgba(&path, t.width, t.height, &t.pixels)?;
@@ -199,7 +211,17 @@ fn run(args: Args) -> anyhow::Result<()> {
     // Table 6.1 and 6.2, per store.
     let mut t61 = Table::new(
         "Table 6.1: reconstruction error (RMSE against the ground truth; L*, a*, b* ÷ 100)",
-        &["cube maps", "sample points", "L*", "a*", "b*", "R", "G", "B", "frame ms"],
+        &[
+            "cube maps",
+            "sample points",
+            "L*",
+            "a*",
+            "b*",
+            "R",
+            "G",
+            "B",
+            "frame ms",
+        ],
     );
     let mut mirror_methods: Vec<(String, ShadingParams)> = vec![(
         "EnvMap".into(),
@@ -257,7 +279,10 @@ fn run(args: Args) -> anyhow::Result<()> {
         let points = store.sample_points().len();
         let res = store.cube_resolution();
         if store.env_cube_index().is_none() {
-            bail!("{} has no environment cube (bake with env_cube = true)", path.display());
+            bail!(
+                "{} has no environment cube (bake with env_cube = true)",
+                path.display()
+            );
         }
         let mut r = Renderer::new(Gpu::headless()?, store, CacheConfig::default())?;
         let recon = ShadingParams {
@@ -345,7 +370,8 @@ fn run(args: Args) -> anyhow::Result<()> {
     );
     for r in &bench.records {
         let m = &r.judgement.metrics;
-        csv += &format!(
+        csv +=
+            &format!(
             "{},{},{},{},{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6},{},{:.3},{:.3}\n",
             r.table,
             oslf_measure::table::csv_cell(&r.store.display().to_string()),
@@ -375,7 +401,13 @@ fn run(args: Args) -> anyhow::Result<()> {
     };
     write("tables.md", &md)?;
     write("tables.csv", &csv)?;
-    write("tables.json", &serde_json::to_string_pretty(&bench.records)?)?;
-    println!("wrote {}/tables.md, tables.csv, tables.json", args.out.display());
+    write(
+        "tables.json",
+        &serde_json::to_string_pretty(&bench.records)?,
+    )?;
+    println!(
+        "wrote {}/tables.md, tables.csv, tables.json",
+        args.out.display()
+    );
     Ok(())
 }

@@ -287,4 +287,3 @@ fn print_stats(label: &str, s: &CacheStats) {
         }
     );
 }
-
