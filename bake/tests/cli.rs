@@ -103,3 +103,55 @@ fn a_missing_scene_file_is_named() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("/nonexistent/scene.toml"), "{stderr}");
 }
+
+#[test]
+fn oslf_truth_writes_every_mode_and_checks_the_store() {
+    let dir = temp_dir("truth");
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let bake = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("lid.oslf"))
+        .args(["--preview", "none", "-q"])
+        .output()
+        .unwrap();
+    assert!(bake.status.success());
+    let truth = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_oslf-truth"))
+            .arg(&scene)
+            .args(["--width", "40", "--height", "30", "--spp", "2", "-q", "-o"])
+            .arg(dir.join("t"))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = truth(&[
+        "--modes",
+        "recon,mirror,recon-mirror,glossy,recon-glossy",
+        "--store",
+        dir.join("lid.oslf").to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for m in ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"] {
+        for ext in ["exr", "png"] {
+            assert!(dir.join(format!("t-{m}.{ext}")).exists(), "t-{m}.{ext}");
+        }
+    }
+    let e = truth(&["--modes", "mirror,shiny"]);
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("unknown mode \"shiny\""));
+    // A store baked from a different scene file is refused.
+    let other = dir.join("other.toml");
+    std::fs::write(&other, SCENE.replace("sample_count = 12", "sample_count = 13")).unwrap();
+    let e = Command::new(env!("CARGO_BIN_EXE_oslf-truth"))
+        .arg(&other)
+        .args(["--store", dir.join("lid.oslf").to_str().unwrap(), "-q"])
+        .output()
+        .unwrap();
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("was not baked from"));
+    let e = truth(&["--nu=-1", "--modes", "glossy"]);
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("n_u"));
+}
