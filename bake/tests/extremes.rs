@@ -183,6 +183,7 @@ fn scaled_bakes_match_the_unit_scene() {
     // agreed on 97.0 % of texels: shadow and environment rays started ε above the surface.
     for scale in [1e-3, 1e3] {
         let a = compare_with_unit_scene(DVec3::ZERO, scale, 12, 0.0);
+        assert_eq!(a.texels, 12 * 6 * 64);
         assert!(a.radiance >= 0.995, "scale {scale}: {a:?}");
         assert!(a.distance >= 0.995, "scale {scale}: {a:?}");
         assert!((a.mean_ratio - 1.0).abs() < 2e-3, "scale {scale}: {a:?}");
@@ -201,6 +202,7 @@ fn translated_bakes_match_the_unit_scene() {
         (DVec3::new(1e5, -1e5, 1e5), 1e3),
     ] {
         let a = compare_with_unit_scene(translate, scale, 12, 8.0 * ulp / scale);
+        assert_eq!(a.texels, 12 * 6 * 64);
         assert!(a.radiance >= 0.94, "{translate} {scale}: {a:?}");
         assert!(a.distance >= 0.98, "{translate} {scale}: {a:?}");
         assert!(
