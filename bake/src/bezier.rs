@@ -241,6 +241,27 @@ impl BezierPatch {
         if max_error.is_nan() || max_error <= 0.0 {
             return MAX_TESSELLATION_LEVEL;
         }
+        let n = (self.interpolation_bound() / f64::from(max_error))
+            .sqrt()
+            .ceil();
+        if n.is_nan() {
+            return MAX_TESSELLATION_LEVEL;
+        }
+        (n as u32).clamp(1, MAX_TESSELLATION_LEVEL)
+    }
+
+    /// The bound of [`Self::tessellation_level`] at its largest grid,
+    /// `MAX_TESSELLATION_LEVEL²` quads: the smallest tessellation error this patch is
+    /// guaranteed to reach. Anything asking for less (an ε too small for the patch) gets
+    /// this much instead.
+    pub fn min_tessellation_error(&self) -> f32 {
+        let n = f64::from(MAX_TESSELLATION_LEVEL);
+        (self.interpolation_bound() / (n * n)) as f32
+    }
+
+    /// `(M_uu + 2 M_uv + M_vv) / 8` of [`Self::tessellation_level`]: the linear-interpolation
+    /// error on a grid of parameter spacing `h` is at most `h²` times this.
+    fn interpolation_bound(&self) -> f64 {
         let (mut muu, mut muv, mut mvv) = (0.0f64, 0.0f64, 0.0f64);
         for i in 0..4 {
             for j in 0..4 {
@@ -259,12 +280,7 @@ impl BezierPatch {
                 }
             }
         }
-        let bound = (6.0 * muu + 2.0 * 9.0 * muv + 6.0 * mvv) / 8.0;
-        let n = (bound / f64::from(max_error)).sqrt().ceil();
-        if n.is_nan() {
-            return MAX_TESSELLATION_LEVEL;
-        }
-        (n as u32).clamp(1, MAX_TESSELLATION_LEVEL)
+        (6.0 * muu + 2.0 * 9.0 * muv + 6.0 * mvv) / 8.0
     }
 }
 

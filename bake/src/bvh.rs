@@ -223,6 +223,7 @@ impl TriangleScene {
             material: a.material,
             object: a.object,
             triangle: a.global,
+            extent: p0.abs().max(p1.abs()).max(p2.abs()).max_element(),
         }
     }
 }

@@ -30,14 +30,20 @@
 //! Primary rays are traced exactly from their origin (the bake shoots them from OSLF sample
 //! points ε above the surface). Secondary rays start at `p + n_g · δ` on the side of the
 //! geometric normal facing the outgoing direction, with
-//! `δ = 10⁻⁴ + 10⁻⁵ · max(|p.x|, |p.y|, |p.z|)`:
-//! - the relative term, ≈ 80–170 ulps of the largest hit coordinate, covers the rounding error
-//!   of the computed hit point (a few ulps for a watertight ray–triangle test) and of the next
-//!   intersection test at the new origin, with a wide margin; it stays far from visible
-//!   (10⁻⁵ of the distance to the origin, 1 unit at 10⁵ units where one ulp is 0.0078);
-//! - the absolute term covers hit points near the origin on triangles whose vertices are far
-//!   from it (a ground plane 100 units wide: interpolation error ≈ a few ulps of 100 ≈ 10⁻⁵),
-//!   and is tiny against ε = 0.1 at the thesis's scale (teapot ≈ 3 units).
+//! `δ = 2⁻¹⁹ · e`, `e` = [`SurfaceHit::extent`], the largest coordinate magnitude of the hit
+//! triangle's corners:
+//! - the hit position is interpolated from those corners, so its rounding error is a few ulps
+//!   of `e` (pbrt's bound is γ₇·e ≈ 2⁻²¹·e); δ is 4× that bound (8–16 ulps of `e`), and the
+//!   ray–triangle test adds its own guard (a hit is accepted only at a `t` provably above its
+//!   rounding error, and not on the plane of a triangle through the origin, `bvh`);
+//! - δ is *relative* only: the bake of a scene scaled by s is the bake of the unscaled scene
+//!   scaled by s (tested from s = 10⁻³ to 10³ in `tests/extremes.rs`). An absolute term (this
+//!   crate had 10⁻⁴) is as large as ε for an object of a few thousandths of a unit and lets
+//!   light leak into its creases. Using `e` rather than `|p|` covers hit points near the origin
+//!   on a triangle whose corners are far from it (a ground plane 100 units wide);
+//! - far from the origin δ grows with the coordinates: 0.19 units at 10⁵, where one ulp is
+//!   0.0078. That is what f32 resolves there; the scene validation refuses an ε that f32 cannot
+//!   resolve at the object's distance from the origin (`scene::min_epsilon`).
 //!
 //! Back faces: the geometric normal is flipped towards the incoming ray and the shading normal
 //! onto the same side. Directions below the geometric surface (possible with shading normals)
@@ -59,10 +65,9 @@ use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame, Rn
 
 /// Vertex index from which Russian roulette may end a path.
 const RUSSIAN_ROULETTE_START: u32 = 3;
-/// Absolute part of the ray-origin offset (see the module documentation).
-pub const OFFSET_ABSOLUTE: f32 = 1e-4;
-/// Relative part of the ray-origin offset (see the module documentation).
-pub const OFFSET_RELATIVE: f32 = 1e-5;
+/// The ray-origin offset relative to the hit triangle's extent, 2⁻¹⁹ (see the module
+/// documentation).
+pub const OFFSET_RELATIVE: f32 = 1.0 / (1u32 << 19) as f32;
 
 /// Rays traced, by kind.
 #[derive(Default, Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,9 +111,10 @@ pub struct Integrator<'a, I: Intersector> {
     pub max_bounces: u32,
 }
 
-/// The origin for a ray leaving `p` on the side of `n` (unit), see the module documentation.
-pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
-    let delta = OFFSET_ABSOLUTE + OFFSET_RELATIVE * p.abs().max_element();
+/// The origin for a ray leaving the hit point `p` on the side of `n` (unit); `extent` is the
+/// hit's [`SurfaceHit::extent`] (see the module documentation).
+pub fn offset_origin(p: Vec3, n: Vec3, extent: f32) -> Vec3 {
+    let delta = OFFSET_RELATIVE * extent.max(p.abs().max_element());
     p + n * delta
 }
 
@@ -182,7 +188,7 @@ impl<I: Intersector> Integrator<'_, I> {
             }
             let f = albedo * FRAC_1_PI;
             let p = hit.position;
-            let origin = offset_origin(p, ng);
+            let origin = offset_origin(p, ng, hit.extent);
 
             // Delta lights.
             for light in self.lights {

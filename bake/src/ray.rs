@@ -40,6 +40,12 @@ pub struct SurfaceHit {
     pub object: u32,
     /// Global triangle index (for tests and debugging).
     pub triangle: u32,
+    /// The largest coordinate magnitude of the points that define the hit primitive (a
+    /// triangle's corners). `position` is interpolated from them, so its rounding error is a
+    /// few ulps of this (not of `position` itself, which may lie near the origin on a large
+    /// triangle); secondary rays are offset by a multiple of it
+    /// ([`crate::integrator::offset_origin`]).
+    pub extent: f32,
 }
 
 /// Anything the integrator can trace rays against.

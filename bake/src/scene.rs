@@ -28,6 +28,10 @@ use crate::ray::ENVIRONMENT_OBJECT;
 use crate::texture::{ImageTexture, Texture};
 use crate::{obj, shapes};
 
+/// The smallest ε relative to an object's largest coordinate magnitude, 2⁻²⁰ (twice
+/// [`crate::bvh::SELF_TOLERANCE`]); see `check_epsilon`.
+pub const MIN_EPSILON_RELATIVE: f32 = 2.0 * crate::bvh::SELF_TOLERANCE;
+
 /// An OSLF object: the Bézier patches a light field is baked around.
 #[derive(Clone, Debug)]
 pub struct OslfObject {
@@ -424,7 +428,7 @@ fn yes() -> bool {
 #[derive(Deserialize, Default, Clone)]
 #[serde(deny_unknown_fields)]
 struct RawBake {
-    epsilon: Option<Positive>,
+    epsilon: Option<Spanned<Positive>>,
     sample_count: Option<Spanned<u32>>,
     sample_spacing: Option<Positive>,
     phi_samplemap: Option<Spanned<Angle>>,
@@ -625,7 +629,7 @@ impl Ctx<'_> {
 
     fn build(&self, raw: RawScene, preset: Option<&str>) -> Result<Scene> {
         let hash = sha256(self.text.as_bytes());
-        let bake = self.bake_settings(&raw, preset)?;
+        let (bake, epsilon_span) = self.bake_settings(&raw, preset)?;
 
         let camera = raw.camera.map(|c| Camera {
             position: c.position.0,
@@ -720,15 +724,16 @@ impl Ctx<'_> {
             let transform = o.transform.affine();
             let (material, base_color) = self.material(&o.material, &mut materials)?;
             let world = patches.iter().map(|p| p.transformed(&transform)).collect();
-            objects.push(OslfObject {
+            let object = OslfObject {
                 name: o.name.unwrap_or_else(|| format!("object{}", objects.len())),
                 object_patches: patches,
                 patches: world,
                 transform,
                 material,
                 base_color,
-            });
-            let _ = span;
+            };
+            self.check_epsilon(bake.epsilon, epsilon_span.clone(), &object, span)?;
+            objects.push(object);
         }
 
         let mut shapes_out = Vec::new();
@@ -841,7 +846,12 @@ impl Ctx<'_> {
         Ok(((materials.len() - 1) as u32, mean))
     }
 
-    fn bake_settings(&self, raw: &RawScene, preset: Option<&str>) -> Result<BakeSettings> {
+    /// The bake settings and where `epsilon` was given (if it was).
+    fn bake_settings(
+        &self,
+        raw: &RawScene,
+        preset: Option<&str>,
+    ) -> Result<(BakeSettings, Option<Range<usize>>)> {
         let merged = match preset {
             None => raw.bake.clone(),
             Some(name) => match raw.presets.get(name) {
@@ -907,8 +917,9 @@ impl Ctx<'_> {
             Some(z) => *z.get_ref(),
             None => 3,
         };
-        Ok(BakeSettings {
-            epsilon: merged.epsilon.map_or(0.1, |e| e.0),
+        let epsilon_span = merged.epsilon.as_ref().map(Spanned::span);
+        let settings = BakeSettings {
+            epsilon: merged.epsilon.as_ref().map_or(0.1, |e| e.get_ref().0),
             sample_count,
             phi_samplemap_deg: phi,
             cube_resolution: merged.cube_resolution.map_or(32, |r| r.0),
@@ -922,7 +933,69 @@ impl Ctx<'_> {
             zstd_level,
             distance_channel: merged.distance_channel.unwrap_or(false),
             env_cube: merged.env_cube.unwrap_or(true),
-        })
+        };
+        Ok((settings, epsilon_span))
+    }
+
+    /// Refuses an ε that the bake cannot honour for `object` (located at `epsilon_span`, or at
+    /// the object when ε is the default). Two limits, both reported with the smallest ε that
+    /// works:
+    /// - f32: a sample point must lie at least [`MIN_EPSILON_RELATIVE`] × the object's largest
+    ///   coordinate magnitude above its surface, twice the ray–triangle test's self-intersection
+    ///   tolerance ([`crate::bvh::SELF_TOLERANCE`]); below it, rays from a sample point pass
+    ///   through the surface under it. (10⁵ units from the origin: ε ≥ 0.095.)
+    /// - tessellation: the ray-traced triangles must follow the patches within ε/50
+    ///   ([`crate::bake::TESSELLATION_ERROR`]), which the finest grid
+    ///   ([`bezier::MAX_TESSELLATION_LEVEL`]² quads per patch) must reach. (The Newell teapot at
+    ///   scale 1: ε ≥ 3.2·10⁻³.)
+    fn check_epsilon(
+        &self,
+        epsilon: f32,
+        epsilon_span: Option<Range<usize>>,
+        object: &OslfObject,
+        object_span: Range<usize>,
+    ) -> Result<()> {
+        let span = epsilon_span.unwrap_or(object_span);
+        let extent = object
+            .patches
+            .iter()
+            .flat_map(|p| p.cp)
+            .fold(0f32, |m, c| m.max(c.abs().max_element()));
+        let f32_limit = MIN_EPSILON_RELATIVE * extent;
+        if epsilon < f32_limit {
+            let ulp = f32::EPSILON * extent;
+            return Err(self.error_at(
+                span,
+                format!(
+                    "epsilon = {epsilon} is too small for object {:?}: its coordinates reach \
+                     {extent:.4e}, where f32 positions are up to {ulp:.2e} apart, and sample points \
+                     must sit at least 2^-20 of that ({f32_limit:.4e}) above the surface; use \
+                     epsilon >= {f32_limit:.4e} or move the object nearer the origin",
+                    object.name
+                ),
+            ));
+        }
+        let (worst, patch) = object
+            .patches
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.min_tessellation_error(), i))
+            .fold((0f32, 0), |a, b| if b.0 > a.0 { b } else { a });
+        let tess_limit = worst / crate::bake::TESSELLATION_ERROR;
+        if epsilon < tess_limit {
+            return Err(self.error_at(
+                span,
+                format!(
+                    "epsilon = {epsilon} is too small for object {:?}: the ray-traced \
+                     triangles must follow the patches within epsilon/50, but patch {patch} \
+                     still deviates by up to {worst:.3e} at the finest tessellation ({}² \
+                     quads); use epsilon >= {tess_limit:.4e}",
+                    object.name,
+                    bezier::MAX_TESSELLATION_LEVEL
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 

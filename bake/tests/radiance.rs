@@ -85,6 +85,7 @@ impl Shape {
             material,
             object: 0,
             triangle: 0,
+            extent: ray.at(t).abs().max_element(),
         })
     }
 }
@@ -918,6 +919,7 @@ fn degenerate_hits_stay_finite() {
                 material: if ray.dir.z > 0.0 { 0 } else { 7 },
                 object: 0,
                 triangle: 0,
+                extent: 1.0,
             })
         }
         fn occluded(&self, _ray: &Ray, _t_max: f32) -> bool {

@@ -1,7 +1,7 @@
 //! The object's Bézier patches as triangle meshes for the G-buffer pass: every vertex carries
 //! its patch id and patch parameters (u, v), so the shader can find its sample-map texel.
 
-use glam::{Affine3A, Mat4, Vec3};
+use glam::{DAffine3, DMat4, DVec3, Vec3};
 use oslf_bake::bezier::BezierPatch;
 use oslf_format::Store;
 
@@ -18,9 +18,19 @@ pub struct GVertex {
 /// Largest tessellation grid per patch.
 pub const MAX_LEVEL: u32 = 64;
 
-/// The tessellated object: world-space patches and their triangles.
+/// The tessellated object: its patches and triangles relative to [`ObjectMesh::origin`].
+///
+/// Object-relative coordinates: the G-buffer stores positions in f32, and 10⁵ units from the
+/// world origin f32 positions are 0.0078 apart, a large fraction of ε; the look-up direction
+/// from a sample point to the shaded point (Eq. 3.11) then turns by degrees. Relative to the
+/// object's centre the same positions keep 24 bits of the object's own size. The renderer
+/// subtracts `origin` from the sample points and the camera as well.
 pub struct ObjectMesh {
-    /// Every patch of the store, transformed to world space, in store order.
+    /// World position of this mesh's coordinate origin: the centre of the control points'
+    /// bounds, as f32.
+    pub origin: Vec3,
+    /// Every patch of the store, transformed to world space minus `origin` (in f64, then
+    /// rounded), in store order.
     pub patches: Vec<BezierPatch>,
     /// The base colour C_s of each patch's object.
     pub colors: Vec<Vec3>,
@@ -36,20 +46,35 @@ impl ObjectMesh {
     /// from [`BezierPatch::normal`], which takes the limit at collapsed edges (never NaN).
     pub fn from_store(store: &Store, max_error: f32) -> Self {
         let meta = store.meta();
-        let mut patches = Vec::with_capacity(meta.patches.len());
+        let mut world: Vec<[DVec3; 16]> = Vec::with_capacity(meta.patches.len());
         let mut colors = Vec::with_capacity(meta.patches.len());
         for object in &meta.objects {
-            let m = Mat4::from_cols_array_2d(&object.transform);
-            let affine = Affine3A::from_mat4(m);
+            let affine = DAffine3::from_mat4(DMat4::from_cols_array_2d(
+                &object.transform.map(|c| c.map(f64::from)),
+            ));
             let first = object.first_patch as usize;
             let end = first + object.patch_count as usize;
             for p in &meta.patches[first..end] {
-                let patch =
-                    BezierPatch::new(p.control_points.map(Vec3::from_array)).transformed(&affine);
-                patches.push(patch);
+                world.push(
+                    p.control_points
+                        .map(|c| affine.transform_point3(Vec3::from_array(c).as_dvec3())),
+                );
                 colors.push(Vec3::from_array(object.base_color));
             }
         }
+        let (lo, hi) = world.iter().flatten().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &c| (lo.min(c), hi.max(c)),
+        );
+        let origin = if world.is_empty() {
+            Vec3::ZERO
+        } else {
+            ((lo + hi) * 0.5).as_vec3()
+        };
+        let patches: Vec<BezierPatch> = world
+            .iter()
+            .map(|cp| BezierPatch::new(cp.map(|c| (c - origin.as_dvec3()).as_vec3())))
+            .collect();
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         for (id, patch) in patches.iter().enumerate() {
@@ -69,6 +94,7 @@ impl ObjectMesh {
             }
         }
         Self {
+            origin,
             patches,
             colors,
             vertices,
@@ -76,14 +102,20 @@ impl ObjectMesh {
         }
     }
 
-    /// The centre of the bounding box of all control points.
+    /// The centre of the bounding box of all control points (world space).
     pub fn centre(&self) -> Vec3 {
         let (lo, hi) = self.bounds();
         (lo + hi) * 0.5
     }
 
-    /// Axis-aligned bounds of all control points.
+    /// Axis-aligned bounds of all control points (world space).
     pub fn bounds(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.relative_bounds();
+        (lo + self.origin, hi + self.origin)
+    }
+
+    /// Axis-aligned bounds of all control points relative to [`Self::origin`].
+    pub fn relative_bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for p in &self.patches {

@@ -281,7 +281,11 @@ impl Renderer {
         let mut positions: Vec<[f32; 4]> = store
             .sample_points()
             .iter()
-            .map(|s| [s.position[0], s.position[1], s.position[2], 1.0])
+            .map(|s| {
+                (Vec3::from_array(s.position) - mesh.origin)
+                    .extend(1.0)
+                    .to_array()
+            })
             .collect();
         if positions.is_empty() {
             positions.push([0.0; 4]);
@@ -641,10 +645,17 @@ impl Renderer {
         width: u32,
         height: u32,
     ) -> ShadeUniform {
+        // Object-relative coordinates (see `ObjectMesh`): the G-buffer, the sample points and
+        // the camera all have `mesh.origin` subtracted.
+        let relative = Camera {
+            position: camera.position - self.mesh.origin,
+            target: camera.target - self.mesh.origin,
+            ..*camera
+        };
         ShadeUniform::new(
             params,
-            view_projection(camera, width, height),
-            camera.position,
+            view_projection(&relative, width, height),
+            relative.position,
             [width, height],
             &self.constants,
         )
@@ -1126,7 +1137,7 @@ impl Renderer {
             .store
             .sample_points()
             .iter()
-            .map(|s| Vec3::from_array(s.position))
+            .map(|s| Vec3::from_array(s.position) - self.mesh.origin)
             .collect();
         let maps = (0..self.mesh.patches.len() as u32)
             .map(|p| self.store.sample_map(p))
