@@ -259,7 +259,7 @@ impl<'s> GroundTruth<'s> {
         if ng.dot(view) < 0.0 {
             ng = -ng;
         }
-        let origin = offset_origin(hit.position, ng);
+        let origin = offset_origin(hit.position, ng, hit.extent);
         let mut sum = Vec3::ZERO;
         match term {
             Term::Recon => {
