@@ -167,10 +167,8 @@ impl<'s> GroundTruth<'s> {
             )));
         }
         if let Term::Glossy(lobe) = term {
-            if !(lobe.rs.is_finite() && (0.0..=1.0).contains(&lobe.rs))
-                || !(lobe.nu.is_finite() && lobe.nu >= 0.0)
-                || !(lobe.nv.is_finite() && lobe.nv >= 0.0)
-            {
+            let exponent_ok = |n: f64| n.is_finite() && n >= 0.0;
+            if !((0.0..=1.0).contains(&lobe.rs) && exponent_ok(lobe.nu) && exponent_ok(lobe.nv)) {
                 return Err(BakeError::Invalid(format!(
                     "Ashikhmin–Shirley lobe {lobe:?}: R_s must be in [0, 1] and n_u, n_v finite and ≥ 0"
                 )));
