@@ -44,6 +44,7 @@
 //! ```
 
 pub mod cache;
+pub mod cli;
 mod error;
 pub mod geometry;
 pub mod gpu;
@@ -51,6 +52,7 @@ pub mod metrics;
 pub mod params;
 pub mod reference;
 pub mod renderer;
+pub mod replay;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, Granularity};
 pub use error::{Result, RuntimeError};
