@@ -127,8 +127,9 @@ impl CameraPath {
     /// of revolutions does not show the first view twice in a row at the seam).
     ///
     /// The steady state is every frame at an angle of 360° or more when there is one (the
-    /// second revolution onwards, whose views the first revolution has shown: with a budget
-    /// holding every cube they miss nothing); otherwise the last ⌊frames/2⌋ frames.
+    /// second revolution onwards); otherwise the last ⌊frames/2⌋ frames. When a revolution
+    /// takes a whole number of frames (`360 · frames / degrees`), the second revolution shows
+    /// exactly the first's cameras, so a budget holding every cube misses nothing there.
     pub fn orbit(start: Camera, frames: u32, degrees: f32) -> Result<Self> {
         check_frames(frames, "--frames")?;
         check_degrees(degrees)?;
@@ -138,7 +139,9 @@ impl CameraPath {
         let step = f64::from(degrees) / n as f64;
         let cameras = (0..n)
             .map(|i| {
-                let angle = (step * i as f64).to_radians() as f32;
+                // Reduced to one turn first, so that a later revolution's frame is the same
+                // camera, bit for bit, as the first revolution's at the same angle.
+                let angle = (step * i as f64).rem_euclid(360.0).to_radians() as f32;
                 Camera {
                     position: start.target + Quat::from_axis_angle(axis, angle) * offset,
                     ..start
@@ -631,9 +634,9 @@ mod tests {
         for (i, c) in p.cameras.iter().enumerate() {
             assert!((c.position - c.target).length() - 3.0 < 1e-5);
             assert!((c.position.z - 1.0).abs() < 1e-5);
-            // The second revolution repeats the first's views.
+            // The second revolution repeats the first's views exactly.
             if i >= 4 {
-                assert!((c.position - p.cameras[i - 4].position).length() < 1e-4);
+                assert_eq!(c.position, p.cameras[i - 4].position);
             }
         }
         assert!((p.cameras[1].position - Vec3::new(0.0, 3.0, 1.0)).length() < 1e-4);

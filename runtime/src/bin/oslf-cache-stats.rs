@@ -72,10 +72,10 @@ struct Args {
     #[arg(long, value_delimiter = ',', default_value = "still,orbit")]
     paths: Vec<PathKind>,
     /// Frames of the still path.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 3)]
     still_frames: u32,
     /// Frames of the orbit.
-    #[arg(long, default_value_t = 36)]
+    #[arg(long, default_value_t = 24)]
     frames: u32,
     /// Total angle of the orbit in degrees (720: two revolutions, the second the steady state).
     #[arg(long, default_value_t = 720.0)]
