@@ -12,7 +12,11 @@
 //! renderer then loads and shades again, and what it loads counts in `loads`, never as more
 //! requests. So a frame requests its working set once, unlike the thesis, whose software
 //! renderer counted every texel lookup (a two-item cache could hit 75 % there; here a cache
-//! smaller than a frame's working set misses the rest every frame).
+//! smaller than a frame's working set misses the rest every frame). The GPU budget is in
+//! cube-map slots for both granularities; with [`Granularity::Face`] a slot holds only the
+//! faces read. When a needed face is not resident, reconstruction falls back to another
+//! candidate and marks the face it reads as well (shade.wgsl), so under a budget short of the
+//! working set a frame can request a few more units than with everything resident.
 //!
 //! **Phases.** `cold`: the first frame (an empty cache). `steady`: for a still view, every
 //! frame after the first; for an orbit that reaches 360°, every frame at 360° or more (the

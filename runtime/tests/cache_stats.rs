@@ -60,7 +60,7 @@ fn run(
     rows
 }
 
-fn phase<'a>(rows: &'a [Row], phase: Phase) -> &'a Row {
+fn phase(rows: &[Row], phase: Phase) -> &Row {
     rows.iter().find(|r| r.phase == phase.name()).unwrap()
 }
 
@@ -240,7 +240,7 @@ fn the_command_prints_a_table_that_agrees_with_its_csv_and_json() {
     let cubes = json["cube_maps"].as_u64().unwrap();
     assert!(rows
         .iter()
-        .any(|r| r.size == "25%" && u64::from(r.slots) == (cubes + 3) / 4));
+        .any(|r| r.size == "25%" && u64::from(r.slots) == cubes.div_ceil(4)));
     assert!(rows
         .iter()
         .any(|r| r.size == "all" && u64::from(r.slots) == cubes));
@@ -271,8 +271,9 @@ fn the_command_prints_a_table_that_agrees_with_its_csv_and_json() {
     }
 
     // The table: one line per row, its numbers the CSV's (rounded as the table says).
-    let mut table: HashMap<(String, String, String, String, String, String), Vec<String>> =
-        HashMap::new();
+    // (mode, blend, unit, slots, path, phase) → the numbers.
+    type Key = (String, String, String, String, String, String);
+    let mut table: HashMap<Key, Vec<String>> = HashMap::new();
     for line in stdout.lines() {
         let t: Vec<&str> = line.split_whitespace().collect();
         if t.len() < 17 || !["recon", "mirror"].contains(&t[0]) {

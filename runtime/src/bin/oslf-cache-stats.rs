@@ -36,12 +36,18 @@ use oslf_runtime::{Blend, CacheConfig, Gpu, Granularity, Mode, RenderOptions, Re
 /// first, an orbit's frames at 360° and more (the second revolution onwards) or, for an orbit
 /// shorter than that, its last half; all = every frame of the orbit.
 ///
-/// Columns: slots = GPU cache size in cube maps (as asked); over = needed units the budget
-/// could not hold after the frame's last pass; MB decoded = texel bytes decompressed from the
-/// store (faces found in the RAM level, --ram-mb, are not decoded again); decode ms = wall
-/// time decoding, summed over the phase; frame ms = mean wall time of a frame, all passes, to
-/// GPU completion. Before each path one frame looking away from the object compiles the
-/// mode's pipeline; it is not counted.
+/// The GPU budget is in cube-map slots for both granularities: a slot holds one cube's faces,
+/// and with face granularity only the faces read are loaded into it (fewer bytes decoded and
+/// uploaded, not more cubes held). When a needed face is missing, reconstruction falls back
+/// to another candidate and marks what it reads too, so a budget short of the working set
+/// can add a few requests.
+///
+/// Columns: unit = granularity; slots = GPU cache size in cube maps (as asked); over = needed
+/// units the budget could not hold after the frame's last pass; MB decoded = texel bytes
+/// decompressed from the store (faces found in the RAM level, --ram-mb, are not decoded
+/// again); decode ms = wall time decoding, summed over the phase; frame ms = mean wall time of
+/// a frame, all passes, to GPU completion. Before each path one frame looking away from the
+/// object compiles the mode's pipeline; it is not counted.
 #[derive(Parser, Debug)]
 #[command(version, about, allow_negative_numbers = true)]
 struct Args {
