@@ -28,6 +28,12 @@
 //!
 //! * **Metrics** ([`metrics`]): RMSE in CIELAB and linear RGB and PSNR over a mask (§6.1), and
 //!   the `oslf-compare` command.
+//! * **Cache replay** ([`replay`]): camera paths (a still view, an orbit), the replay of a path
+//!   with a fresh renderer, and its cache counters summed per phase (cold start, steady state,
+//!   whole path) into rows, table and CSV: the `oslf-cache-stats` command (thesis Tables
+//!   6.3–6.7).
+//! * **Command line** ([`cli`]): the shading and camera flags and cache budgets shared by the
+//!   commands.
 //!
 //! Cube maps are bound as 2D texture arrays (six layers per slot) and filtered bilinearly
 //! inside a face by the shader itself, so that the CPU reference can reproduce the filtering
@@ -44,6 +50,7 @@
 //! ```
 
 pub mod cache;
+pub mod cli;
 mod error;
 pub mod geometry;
 pub mod gpu;
@@ -51,6 +58,7 @@ pub mod metrics;
 pub mod params;
 pub mod reference;
 pub mod renderer;
+pub mod replay;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, Granularity};
 pub use error::{Result, RuntimeError};

@@ -1,0 +1,380 @@
+//! `oslf-cache-stats`: replays renders of a store (a still view and an orbit) for lists of
+//! modes, blends, cache granularities and GPU cache sizes, and reports the cache's requests,
+//! hits, misses, miss rate, loads, evictions, bytes decoded and times per phase, as an aligned
+//! table (thesis Tables 6.3–6.7) and as CSV and JSON. See `oslf_runtime::replay`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use oslf_format::Store;
+use oslf_runtime::cli::{self, CameraArgs, ShadingArgs};
+use oslf_runtime::replay::{self, CacheSize, CameraPath, PathKind, Row, RowKey};
+use oslf_runtime::{Blend, CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer};
+
+/// Replay renders of an OSLF store through the LRU cube-map cache and report its statistics,
+/// per mode, blend, granularity and cache size, for a still view and an orbiting camera (the
+/// thesis's Tables 6.3–6.7, plus the orbit's cold start and steady state).
+///
+/// Every (mode, blend, granularity, size, path) gets a fresh renderer, so its cache starts
+/// empty; the paths are the same for all. The still path shows the store's camera (or
+/// --camera-*) for --still-frames frames; the orbit starts there and turns --orbit-degrees
+/// about the vertical axis through the target in --frames equal steps.
+///
+/// A request is one unit a frame's shading needs, counted once per frame however many pixels
+/// read it: a cube map with granularity cube (the thesis's "read full image": any miss loads
+/// all six faces), a face with granularity face (only the faces read are loaded). The pinned
+/// environment cube counts every frame (1 cube or 6 faces) and always hits. A hit is a
+/// requested unit resident on the GPU when the frame is first shaded, a miss one that is not
+/// (misses = requests − hits). By default misses are resolved: the renderer loads them and
+/// shades again (loads count those, not requests); --streaming renders as the viewer does
+/// instead: misses fall back this frame and are decoded in the background.
+///
+/// Phases: cold = the first frame (empty cache); steady = a still view's frames after the
+/// first, an orbit's frames at 360° and more (the second revolution onwards) or, for an orbit
+/// shorter than that, its last half; all = every frame of the orbit.
+///
+/// The GPU budget is in cube-map slots for both granularities: a slot holds one cube's faces,
+/// and with face granularity only the faces read are loaded into it (fewer bytes decoded and
+/// uploaded, not more cubes held). When a needed face is missing, reconstruction falls back
+/// to another candidate and marks what it reads too, so a budget short of the working set
+/// can add a few requests.
+///
+/// Columns: unit = granularity; slots = GPU cache size in cube maps (as asked); over = needed
+/// units the budget could not hold after the frame's last pass; MB decoded = texel bytes
+/// decompressed from the store (faces found in the RAM level, --ram-mb, are not decoded
+/// again); decode ms = wall time decoding, summed over the phase; frame ms = mean wall time of
+/// a frame, all passes, to GPU completion. Before each path one frame looking away from the
+/// object compiles the mode's pipeline; it is not counted.
+#[derive(Parser, Debug)]
+#[command(version, about, allow_negative_numbers = true)]
+struct Args {
+    /// The store (written by oslf-bake).
+    store: PathBuf,
+    /// Modes, comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy.
+    #[arg(long, value_delimiter = ',', default_value = "recon,mirror,glossy")]
+    modes: Vec<Mode>,
+    /// Blends, comma-separated (distance, angle, avg, r, n); recon does not blend and runs once.
+    #[arg(long = "blend", value_delimiter = ',', default_value = "n")]
+    blends: Vec<Blend>,
+    #[command(flatten)]
+    shading: ShadingArgs,
+    /// GPU cache sizes, comma-separated: a number of cube-map slots, a percentage of the
+    /// store's cube maps (25%), or all.
+    #[arg(long, value_delimiter = ',', default_value = "10%,50%,all")]
+    slots: Vec<CacheSize>,
+    /// GPU cache sizes in MB of cube-map texels instead of --slots, comma-separated.
+    #[arg(long, value_delimiter = ',', conflicts_with = "slots")]
+    cache_mb: Vec<f64>,
+    /// RAM cache budget in MB of decoded faces.
+    #[arg(long, default_value_t = 256.0)]
+    ram_mb: f64,
+    /// Granularities, comma-separated: cube (load whole cubes) and face (load faces read).
+    #[arg(long, value_delimiter = ',', default_value = "cube,face")]
+    granularity: Vec<Granularity>,
+    /// Paths, comma-separated: still and orbit.
+    #[arg(long, value_delimiter = ',', default_value = "still,orbit")]
+    paths: Vec<PathKind>,
+    /// Frames of the still path.
+    #[arg(long, default_value_t = 3)]
+    still_frames: u32,
+    /// Frames of the orbit.
+    #[arg(long, default_value_t = 24)]
+    frames: u32,
+    /// Total angle of the orbit in degrees (720: two revolutions, the second the steady state).
+    #[arg(long, default_value_t = 720.0)]
+    orbit_degrees: f32,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Image width.
+    #[arg(long, default_value_t = 655)]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 460)]
+    height: u32,
+    /// Stream as the viewer does (misses fall back, decodes in the background) instead of
+    /// loading the misses and shading again.
+    #[arg(long)]
+    streaming: bool,
+    /// Also write the rows as CSV to this file.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Also write the rows and the settings as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// No progress lines on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// One renderer's worth of work, with what it cost to set up.
+#[derive(serde::Serialize)]
+struct ReplayInfo {
+    mode: String,
+    blend: String,
+    granularity: String,
+    size: String,
+    slots: u32,
+    path: String,
+    /// `Renderer::new`: tessellation, uploads, the pool.
+    renderer_ms: f64,
+    /// The priming frame (pipeline compile).
+    setup_ms: f64,
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    if args.modes.is_empty() || args.blends.is_empty() || args.granularity.is_empty() {
+        bail!("--modes, --blend and --granularity each need at least one value");
+    }
+    if args.paths.is_empty() {
+        bail!("--paths needs at least one of still, orbit");
+    }
+    replay::check_frames(args.still_frames, "--still-frames")?;
+    replay::check_frames(args.frames, "--frames")?;
+    replay::check_degrees(args.orbit_degrees)?;
+    if args.width == 0 || args.height == 0 {
+        bail!("--width and --height must be at least 1");
+    }
+    let ram_bytes = cli::ram_bytes(args.ram_mb)?;
+    let open = |path: &Path| {
+        Store::open(path).with_context(|| format!("cannot open store {}", path.display()))
+    };
+    let store = open(&args.store)?;
+    args.shading.check_store(&store, &args.store)?;
+    let sizes: Vec<CacheSize> = if args.cache_mb.is_empty() {
+        args.slots.clone()
+    } else {
+        args.cache_mb
+            .iter()
+            .map(|&mb| CacheSize::Megabytes(mb))
+            .collect()
+    };
+    if sizes.is_empty() {
+        bail!("--slots needs at least one size");
+    }
+    let budgets = sizes
+        .iter()
+        .map(|s| Ok((s.label(), s.gpu_slots(&store)?)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    // Every (mode, blend) to run: recon does not blend.
+    let mut shadings = Vec::new();
+    for &mode in &args.modes {
+        if mode == Mode::Recon {
+            shadings.push((mode, None, args.shading.params(mode, args.blends[0])?));
+        } else {
+            for &blend in &args.blends {
+                shadings.push((mode, Some(blend), args.shading.params(mode, blend)?));
+            }
+        }
+    }
+    shadings.dedup_by_key(|s| (s.0, s.1));
+
+    let gpu = Gpu::headless()?;
+    let (device, queue, adapter) = (
+        gpu.device.clone(),
+        gpu.queue.clone(),
+        gpu.adapter_name.clone(),
+    );
+    let config = |granularity, gpu_slots| CacheConfig {
+        gpu_slots,
+        ram_bytes,
+        granularity,
+        slots_per_texture: None,
+    };
+    // The paths, from the store's camera (a renderer knows the default view).
+    let probe = Renderer::new(gpu, store, config(Granularity::Cube, Some(1)))?;
+    let start = args.camera.apply(probe.default_view())?;
+    let store_info = (
+        probe.store().sample_points().len(),
+        probe.store().cube_count(),
+        probe.store().cube_resolution(),
+        cli::cube_bytes(probe.store()),
+    );
+    drop(probe);
+    let mut paths = Vec::new();
+    for &kind in &args.paths {
+        if paths.iter().any(|p: &CameraPath| p.kind == kind) {
+            continue;
+        }
+        paths.push(match kind {
+            PathKind::Still => CameraPath::still(start, args.still_frames)?,
+            PathKind::Orbit => CameraPath::orbit(start, args.frames, args.orbit_degrees)?,
+        });
+    }
+    let options = RenderOptions {
+        width: args.width,
+        height: args.height,
+        resolve_misses: !args.streaming,
+        read_pixels: false,
+        ..Default::default()
+    };
+
+    let total = shadings.len() * args.granularity.len() * budgets.len() * paths.len();
+    let mut rows: Vec<Row> = Vec::new();
+    let mut infos = Vec::new();
+    let run_start = Instant::now();
+    let mut done = 0;
+    for (mode, blend, params) in &shadings {
+        for &granularity in &args.granularity {
+            for (label, gpu_slots) in &budgets {
+                for path in &paths {
+                    let t = Instant::now();
+                    let mut renderer = Renderer::new(
+                        Gpu::from_device(device.clone(), queue.clone(), adapter.clone()),
+                        open(&args.store)?,
+                        config(granularity, *gpu_slots),
+                    )
+                    .with_context(|| format!("cache size {label}"))?;
+                    let renderer_ms = t.elapsed().as_secs_f64() * 1e3;
+                    let result = replay::replay(&mut renderer, path, params, &options)?;
+                    let key = RowKey {
+                        mode: *mode,
+                        blend: *blend,
+                        granularity,
+                        size: label.clone(),
+                        slots: renderer.cache().slots(),
+                    };
+                    for e in &renderer.cache().errors {
+                        eprintln!("warning: {e} (that sample point fell back)");
+                    }
+                    let new_rows = replay::rows(&key, path, &result);
+                    done += 1;
+                    if !args.quiet {
+                        let all = new_rows.last();
+                        eprintln!(
+                            "[{done}/{total}] {} {} {} {} {}: {} frames, {:.1}% misses, {:.2} s",
+                            mode.name(),
+                            blend.map_or("-", Blend::name),
+                            key.granularity_name(),
+                            label,
+                            path.kind.name(),
+                            result.frames.len(),
+                            all.map_or(0.0, |r| 100.0 * r.miss_rate),
+                            t.elapsed().as_secs_f64()
+                        );
+                    }
+                    infos.push(ReplayInfo {
+                        mode: mode.name().into(),
+                        blend: blend.map_or("-", Blend::name).into(),
+                        granularity: key.granularity_name().into(),
+                        size: label.clone(),
+                        slots: key.slots,
+                        path: path.kind.name().into(),
+                        renderer_ms,
+                        setup_ms: result.setup_seconds * 1e3,
+                    });
+                    rows.extend(new_rows);
+                }
+            }
+        }
+    }
+    let elapsed = run_start.elapsed().as_secs_f64();
+
+    let (points, cubes, res, cube_bytes) = store_info;
+    println!("adapter  {adapter}");
+    println!(
+        "store    {}: {points} sample points, {cubes} cube maps of 6×{res}² ({:.4} MB each)",
+        args.store.display(),
+        cube_bytes as f64 / 1e6
+    );
+    println!(
+        "frames   {}×{}, misses {}; RAM level {} MB",
+        args.width,
+        args.height,
+        if args.streaming {
+            "streamed (the viewer's way: fall back, decode in the background)"
+        } else {
+            "resolved (loaded, then shaded again)"
+        },
+        args.ram_mb
+    );
+    for p in &paths {
+        match p.kind {
+            PathKind::Still => println!(
+                "still    {} frames of one view; steady: {}",
+                p.cameras.len(),
+                p.steady_note
+            ),
+            PathKind::Orbit => println!(
+                "orbit    {} frames over {}° ({:.2}° apart); steady: {}",
+                p.cameras.len(),
+                args.orbit_degrees,
+                f64::from(args.orbit_degrees) / p.cameras.len() as f64,
+                p.steady_note
+            ),
+        }
+    }
+    println!(
+        "units    requests, hits, misses, loads and over: cubes (unit cube) or faces (unit face)"
+    );
+    println!();
+    print!("{}", replay::format_table(&rows));
+    println!();
+    println!(
+        "{} renderers in {elapsed:.1} s (each: setup {:.0}–{:.0} ms, pipeline compile {:.0}–{:.0} ms, not counted above)",
+        infos.len(),
+        infos.iter().map(|i| i.renderer_ms).fold(f64::INFINITY, f64::min),
+        infos.iter().map(|i| i.renderer_ms).fold(0.0, f64::max),
+        infos.iter().map(|i| i.setup_ms).fold(f64::INFINITY, f64::min),
+        infos.iter().map(|i| i.setup_ms).fold(0.0, f64::max),
+    );
+
+    if let Some(path) = &args.csv {
+        std::fs::write(path, replay::to_csv(&rows))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(path) = &args.json {
+        let json = serde_json::json!({
+            "store": args.store,
+            "adapter": adapter,
+            "sample_points": points,
+            "cube_maps": cubes,
+            "cube_resolution": res,
+            "cube_bytes": cube_bytes,
+            "width": args.width,
+            "height": args.height,
+            "streaming": args.streaming,
+            "ram_bytes": ram_bytes,
+            "shading": {
+                "blend_n": args.shading.blend_n,
+                "envmap": args.shading.envmap,
+                "phi_shader": args.shading.phi_shader,
+                "m": args.shading.m,
+                "order": args.shading.order,
+                "rs": args.shading.rs,
+                "rd": args.shading.rd,
+                "nu": args.shading.nu,
+                "nv": args.shading.nv,
+                "seed": args.shading.seed,
+            },
+            "paths": paths.iter().map(|p| serde_json::json!({
+                "path": p.kind.name(),
+                "frames": p.cameras.len(),
+                "degrees": match p.kind {
+                    PathKind::Still => 0.0,
+                    PathKind::Orbit => args.orbit_degrees,
+                },
+                "steady_from_frame": p.steady_from + 1,
+                "steady": p.steady_note,
+            })).collect::<Vec<_>>(),
+            "replays": infos,
+            "seconds": elapsed,
+            "rows": rows,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}

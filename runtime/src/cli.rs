@@ -1,0 +1,173 @@
+//! Command-line pieces shared by the runtime's commands (`oslf-render`, `oslf-cache-stats`):
+//! the shading and camera flags (clap argument groups), their value parsers, and cache budgets
+//! given in megabytes.
+
+use std::path::Path;
+
+use clap::Args;
+use glam::Vec3;
+use oslf_bake::camera::Camera;
+use oslf_format::Store;
+
+use crate::error::{Result, RuntimeError};
+use crate::params::{Blend, Mode, Order, ShadingParams, Source};
+
+/// The shading flags besides mode and blend (which each command takes its own way).
+#[derive(Args, Clone, Debug)]
+pub struct ShadingArgs {
+    /// Lobe power N of the r and n blends (0 = avg).
+    #[arg(short = 'N', long = "blend-n", default_value_t = 4.0)]
+    pub blend_n: f32,
+    /// Use the environment-map baseline (one cube at the object's centre) instead of the OSLF.
+    #[arg(long)]
+    pub envmap: bool,
+    /// φ_shader in degrees (§6.3).
+    #[arg(long, default_value_t = 65.0)]
+    pub phi_shader: f32,
+    /// Monte Carlo samples M per integration (glossy modes).
+    #[arg(short = 'M', long, default_value_t = 16)]
+    pub m: u32,
+    /// Integration order of §5.2: per-point (integrate, then blend) or per-direction.
+    #[arg(long, default_value = "per-point", value_parser = parse_order)]
+    pub order: Order,
+    /// Ashikhmin–Shirley specular reflectance R_s.
+    #[arg(long, default_value_t = 1.0)]
+    pub rs: f32,
+    /// Ashikhmin–Shirley diffuse reflectance R_d (adds the diffuse term 5.4 when > 0).
+    #[arg(long, default_value_t = 0.0)]
+    pub rd: f32,
+    /// Exponent n_u (along the patch's u direction).
+    #[arg(long, default_value_t = 100.0)]
+    pub nu: f32,
+    /// Exponent n_v.
+    #[arg(long, default_value_t = 100.0)]
+    pub nv: f32,
+    /// Seed of the Monte Carlo random numbers.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+}
+
+impl ShadingArgs {
+    /// The parameters for `mode` and `blend`, validated.
+    pub fn params(&self, mode: Mode, blend: Blend) -> Result<ShadingParams> {
+        let params = ShadingParams {
+            mode,
+            blend,
+            blend_n: self.blend_n,
+            source: if self.envmap {
+                Source::EnvMap
+            } else {
+                Source::Oslf
+            },
+            phi_shader_deg: self.phi_shader,
+            m: self.m,
+            order: self.order,
+            rs: self.rs,
+            rd: self.rd,
+            nu: self.nu,
+            nv: self.nv,
+            seed: self.seed,
+        };
+        params.validate()?;
+        Ok(params)
+    }
+
+    /// Errors when `--envmap` is asked for and `store` (at `path`) has no environment cube.
+    pub fn check_store(&self, store: &Store, path: &Path) -> Result<()> {
+        if self.envmap && store.env_cube_index().is_none() {
+            return Err(RuntimeError::Parameter(format!(
+                "{} has no environment cube (bake with env_cube = true)",
+                path.display()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The camera flags: each replaces one part of the store's camera.
+#[derive(Args, Clone, Debug)]
+pub struct CameraArgs {
+    /// Camera position x,y,z [default: the store's camera, else one framing the object].
+    #[arg(long, value_parser = parse_vec3)]
+    pub camera_pos: Option<Vec3>,
+    /// Camera target x,y,z.
+    #[arg(long, value_parser = parse_vec3)]
+    pub camera_target: Option<Vec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long)]
+    pub vfov: Option<f32>,
+}
+
+impl CameraArgs {
+    /// `camera` with the given parts replaced, validated.
+    pub fn apply(&self, mut camera: Camera) -> Result<Camera> {
+        if let Some(p) = self.camera_pos {
+            camera.position = p;
+        }
+        if let Some(p) = self.camera_target {
+            camera.target = p;
+        }
+        if let Some(v) = self.vfov {
+            camera.vfov_deg = v;
+        }
+        camera
+            .validate()
+            .map_err(|e| RuntimeError::Parameter(e.to_string()))?;
+        Ok(camera)
+    }
+}
+
+/// `per-point` or `per-direction`.
+pub fn parse_order(s: &str) -> std::result::Result<Order, String> {
+    match s {
+        "per-point" => Ok(Order::PerPoint),
+        "per-direction" => Ok(Order::PerDirection),
+        _ => Err(format!("unknown order {s:?} (per-point or per-direction)")),
+    }
+}
+
+/// Three finite numbers `x,y,z`.
+pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
+        _ => Err(format!("{s:?} is not three finite numbers x,y,z")),
+    }
+}
+
+/// Bytes of one cube map's texels in the GPU pool (six faces, the store's encoding).
+pub fn cube_bytes(store: &Store) -> u64 {
+    let res = u64::from(store.cube_resolution());
+    6 * res * res * store.header().encoding.bytes_per_texel() as u64
+}
+
+/// The GPU slots `--cache-mb MB` buys: whole cube maps of [`cube_bytes`], at least one.
+pub fn slots_for_megabytes(store: &Store, mb: f64) -> Result<u32> {
+    if !(mb.is_finite() && mb > 0.0) {
+        return Err(RuntimeError::Parameter(
+            "--cache-mb must be a positive number".into(),
+        ));
+    }
+    let cube_bytes = cube_bytes(store);
+    let slots = (mb * 1e6 / cube_bytes as f64).floor();
+    if slots < 1.0 {
+        return Err(RuntimeError::Parameter(format!(
+            "--cache-mb {mb} holds no cube map ({:.3} MB each)",
+            cube_bytes as f64 / 1e6
+        )));
+    }
+    Ok(slots.min(f64::from(u32::MAX)) as u32)
+}
+
+/// The RAM level's byte budget for `--ram-mb MB`.
+pub fn ram_bytes(mb: f64) -> Result<u64> {
+    if !(mb.is_finite() && mb >= 0.0) {
+        return Err(RuntimeError::Parameter(
+            "--ram-mb must be a non-negative number".into(),
+        ));
+    }
+    Ok((mb * 1e6) as u64)
+}
