@@ -956,44 +956,59 @@ impl Ctx<'_> {
         object_span: Range<usize>,
     ) -> Result<()> {
         let span = epsilon_span.unwrap_or(object_span);
-        let extent = object
-            .patches
-            .iter()
-            .flat_map(|p| p.cp)
-            .fold(0f32, |m, c| m.max(c.abs().max_element()));
-        let f32_limit = MIN_EPSILON_RELATIVE * extent;
-        if epsilon < f32_limit {
-            let ulp = f32::EPSILON * extent;
-            return Err(self.error_at(
-                span,
-                format!(
-                    "epsilon = {epsilon} is too small for object {:?}: its coordinates reach \
-                     {extent:.4e}, where f32 positions are up to {ulp:.2e} apart, and sample points \
-                     must sit at least 2^-20 of that ({f32_limit:.4e}) above the surface; use \
-                     epsilon >= {f32_limit:.4e} or move the object nearer the origin",
-                    object.name
-                ),
-            ));
+        match epsilon_problem(epsilon, object) {
+            Some(message) => Err(self.error_at(span, message)),
+            None => Ok(()),
         }
-        let (worst, patch) = object
-            .patches
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.min_tessellation_error(), i))
-            .fold((0f32, 0), |a, b| if b.0 > a.0 { b } else { a });
-        let tess_limit = worst / crate::bake::TESSELLATION_ERROR;
-        if epsilon < tess_limit {
-            return Err(self.error_at(
-                span,
-                format!(
-                    "epsilon = {epsilon} is too small for object {:?}: the ray-traced \
-                     triangles must follow the patches within epsilon/50, but patch {patch} \
-                     still deviates by up to {worst:.3e} at the finest tessellation ({}² \
-                     quads); use epsilon >= {tess_limit:.4e}",
-                    object.name,
-                    bezier::MAX_TESSELLATION_LEVEL
-                ),
-            ));
+    }
+}
+
+/// Why the bake cannot honour `epsilon` for `object`, if it cannot (see `Ctx::check_epsilon`).
+fn epsilon_problem(epsilon: f32, object: &OslfObject) -> Option<String> {
+    let extent = object
+        .patches
+        .iter()
+        .flat_map(|p| p.cp)
+        .fold(0f32, |m, c| m.max(c.abs().max_element()));
+    let f32_limit = MIN_EPSILON_RELATIVE * extent;
+    if epsilon < f32_limit {
+        let ulp = f32::EPSILON * extent;
+        return Some(format!(
+            "epsilon = {epsilon} is too small for object {:?}: its coordinates reach \
+             {extent:.4e}, where f32 positions are up to {ulp:.2e} apart, and sample points \
+             must sit at least 2^-20 of that ({f32_limit:.4e}) above the surface; use \
+             epsilon >= {f32_limit:.4e} or move the object nearer the origin",
+            object.name
+        ));
+    }
+    let (worst, patch) = object
+        .patches
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.min_tessellation_error(), i))
+        .fold((0f32, 0), |a, b| if b.0 > a.0 { b } else { a });
+    let tess_limit = worst / crate::bake::TESSELLATION_ERROR;
+    if epsilon < tess_limit {
+        return Some(format!(
+            "epsilon = {epsilon} is too small for object {:?}: the ray-traced \
+             triangles must follow the patches within epsilon/50, but patch {patch} \
+             still deviates by up to {worst:.3e} at the finest tessellation ({}² \
+             quads); use epsilon >= {tess_limit:.4e}",
+            object.name,
+            bezier::MAX_TESSELLATION_LEVEL
+        ));
+    }
+    None
+}
+
+impl Scene {
+    /// Checks bake settings changed after loading (tools that vary them, e.g. a sweep) against
+    /// the limits the scene file's parser enforces on ε for each object.
+    pub fn check_epsilon(&self) -> Result<()> {
+        for object in &self.objects {
+            if let Some(message) = epsilon_problem(self.bake.epsilon, object) {
+                return Err(BakeError::Invalid(message));
+            }
         }
         Ok(())
     }

@@ -342,16 +342,24 @@ pub fn run_sweep(
         path: config.store_dir.clone(),
         message: e.to_string(),
     })?;
-    let mut rows = Vec::new();
+    // Every variant is checked before the first is baked.
+    let mut variants = Vec::with_capacity(bake_changes.len());
     for bc in &bake_changes {
         let mut scene = config.scene.clone();
         let name = match bc {
             Some(c) => {
                 apply_bake(&mut scene.bake, c)?;
+                scene
+                    .check_epsilon()
+                    .map_err(|e| MeasureError::Invalid(format!("--vary {}: {e}", c.key)))?;
                 format!("{}-{}", c.key, c.value)
             }
             None => "defaults".to_string(),
         };
+        variants.push((bc, scene, name));
+    }
+    let mut rows = Vec::new();
+    for (bc, scene, name) in variants {
         let path = config.store_dir.join(format!("{name}.oslf"));
         let t = Instant::now();
         let record = bake_or_reuse(&scene, &path, config.progress)?;

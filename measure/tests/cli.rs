@@ -236,6 +236,20 @@ fn bad_input_is_a_clear_error() {
     assert!(!ok && e.contains("unknown key \"colour\""), "{e}");
     let (ok, _, e) = run(sweep, &[s(&f.scene), "--vary", "epsilon=-1", "-q"]);
     assert!(!ok && e.contains("epsilon"), "{e}");
+    // An ε the bake cannot honour for this object is refused before anything is baked.
+    let (ok, _, e) = run(
+        sweep,
+        &[
+            s(&f.scene),
+            "--vary",
+            "epsilon=0.0001",
+            "-o",
+            s(&f.dir.join("bad")),
+            "-q",
+        ],
+    );
+    assert!(!ok && e.contains("too small"), "{e}");
+    assert!(!f.dir.join("bad/stores/defaults.oslf").exists());
     let (ok, _, e) = run(tables, &[s(&f.scene), "--store", "/nonexistent.oslf", "-q"]);
     assert!(!ok && e.contains("/nonexistent.oslf"), "{e}");
 }
