@@ -68,6 +68,8 @@ pub struct BakeReport {
     /// what else runs; `mrays_per_second` (wall time) does.
     pub capture_cpu_seconds: Option<f64>,
     pub total_seconds: f64,
+    /// CPU time of the whole bake, all threads (Linux; see `capture_cpu_seconds`).
+    pub cpu_seconds: Option<f64>,
     pub store_bytes: u64,
     /// Compressed cube-map bytes per texel.
     pub bytes_per_texel: f64,
@@ -89,6 +91,12 @@ fn process_cpu_ns() -> Option<u64> {
 /// Bakes `scene` into the store at `options.output`.
 pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     let start = Instant::now();
+    let bake_cpu_start = process_cpu_ns();
+    let cpu_since_start = || {
+        process_cpu_ns()
+            .zip(bake_cpu_start)
+            .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9)
+    };
     let settings = &scene.bake;
     let mut report = BakeReport {
         output: options.output.clone(),
@@ -262,6 +270,7 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
         // Stopped by `cube_limit`: the partial file keeps every appended cube for `resume`.
         drop(writer);
         report.total_seconds = start.elapsed().as_secs_f64();
+        report.cpu_seconds = cpu_since_start();
         return Ok(report);
     }
     let summary = writer.finish()?;
@@ -275,6 +284,7 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
         0.0
     };
     report.total_seconds = start.elapsed().as_secs_f64();
+    report.cpu_seconds = cpu_since_start();
     Ok(report)
 }
 

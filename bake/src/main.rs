@@ -180,8 +180,10 @@ fn print_summary(r: &BakeReport) {
         }
     );
     println!(
-        "time           {:.1} s total: BVH {:.2} s ({} triangles), points {:.2} s, sample maps {:.2} s, cube maps {:.1} s",
+        "time           {:.1} s total{}: BVH {:.2} s ({} triangles), points {:.2} s, sample maps {:.2} s, cube maps {:.1} s",
         r.total_seconds,
+        r.cpu_seconds
+            .map_or(String::new(), |c| format!(" ({c:.1} CPU-s)")),
         r.bvh_build_seconds,
         r.triangles,
         r.placement_seconds,

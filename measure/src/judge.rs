@@ -65,6 +65,53 @@ pub fn judge(
     ))
 }
 
+/// One configuration to time: an index into the renderers, the view and the settings.
+#[derive(Clone, Copy, Debug)]
+pub struct TimedJob {
+    pub renderer: usize,
+    pub camera: Camera,
+    pub params: ShadingParams,
+}
+
+/// Times every job `rounds` times, interleaved (each job once, then each again, …), after one
+/// untimed frame each, so that the load of a shared machine falls on every job alike; returns
+/// each job's median frame time in ms (timed to GPU completion, image not read back).
+pub fn time_interleaved(
+    renderers: &mut [Renderer],
+    jobs: &[TimedJob],
+    width: u32,
+    height: u32,
+    rounds: u32,
+) -> Result<Vec<f64>> {
+    let opts = RenderOptions {
+        width,
+        height,
+        read_pixels: false,
+        ..RenderOptions::default()
+    };
+    let mut frame = |job: &TimedJob| -> Result<f64> {
+        let r = renderers.get_mut(job.renderer).ok_or_else(|| {
+            MeasureError::Invalid(format!("no renderer {} to time", job.renderer))
+        })?;
+        let t = Instant::now();
+        r.render(&job.camera, &job.params, &opts)?;
+        Ok(t.elapsed().as_secs_f64() * 1e3)
+    };
+    for job in jobs {
+        frame(job)?;
+    }
+    let mut times = vec![Vec::with_capacity(rounds as usize); jobs.len()];
+    for _ in 0..rounds {
+        for (job, t) in jobs.iter().zip(&mut times) {
+            t.push(frame(job)?);
+        }
+    }
+    Ok(times
+        .iter_mut()
+        .map(|t| median(t).unwrap_or(f64::NAN))
+        .collect())
+}
+
 /// The error of a rendered frame against the truth, over pixels on the object in both.
 pub fn compare_frame(truth: &TruthImage, frame: &Frame) -> Result<Metrics> {
     if (frame.width, frame.height) != (truth.width, truth.height) {

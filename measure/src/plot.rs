@@ -1,6 +1,7 @@
-//! The speed/accuracy plot: error against frame time, every configuration a point, the Pareto
-//! front drawn through its points, the defaults marked. PNG and SVG, drawn with plotters; text
-//! is set in the embedded DejaVu Sans, so no system fonts are needed.
+//! The speed/accuracy plot: one panel per kind of time (e.g. frame time, bake time), error
+//! against it, every configuration a point, the panel's Pareto front drawn through its points and
+//! labelled, the defaults marked. PNG and SVG, drawn with plotters; text is set in the embedded
+//! DejaVu Sans, so no system fonts are needed.
 
 use std::path::Path;
 use std::sync::Once;
@@ -13,7 +14,7 @@ use crate::error::{MeasureError, Result};
 #[derive(Clone, Debug)]
 pub struct PlotPoint {
     pub label: String,
-    /// Frame time, milliseconds (x).
+    /// The time (x): a frame's milliseconds, a bake's seconds, …
     pub time_ms: f64,
     /// Error (y).
     pub error: f64,
@@ -27,6 +28,13 @@ pub struct PlotText {
     pub caption: String,
     pub x: String,
     pub y: String,
+}
+
+/// One panel: its points and titles.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    pub points: Vec<PlotPoint>,
+    pub text: PlotText,
 }
 
 const FONT: &str = "sans-serif";
@@ -48,33 +56,43 @@ fn draw_err<E: std::error::Error>(path: &Path) -> impl Fn(E) -> MeasureError + '
     }
 }
 
-/// Writes the plot as PNG (`png`) and SVG (`svg`), `size` pixels.
-pub fn plot_tradeoff(
-    points: &[PlotPoint],
-    text: &PlotText,
-    png: &Path,
-    svg: &Path,
-    size: (u32, u32),
-) -> Result<()> {
-    let finite: Vec<&PlotPoint> = points
+/// Writes the panels side by side as PNG (`png`) and SVG (`svg`), `size` pixels in all.
+pub fn plot_tradeoff(panels: &[Panel], png: &Path, svg: &Path, size: (u32, u32)) -> Result<()> {
+    let panels: Vec<(Vec<&PlotPoint>, &PlotText)> = panels
         .iter()
-        .filter(|p| p.time_ms.is_finite() && p.time_ms > 0.0 && p.error.is_finite())
+        .map(|p| {
+            let finite = p
+                .points
+                .iter()
+                .filter(|q| q.time_ms.is_finite() && q.time_ms > 0.0 && q.error.is_finite())
+                .collect();
+            (finite, &p.text)
+        })
         .collect();
-    if finite.is_empty() {
+    if panels.is_empty() || panels.iter().any(|(p, _)| p.is_empty()) {
         return Err(MeasureError::Invalid(
-            "nothing to plot: no finite point".into(),
+            "nothing to plot: a panel has no finite point".into(),
         ));
     }
     register_font()?;
-    {
-        let backend = SVGBackend::new(svg, size);
-        draw(backend.into_drawing_area(), &finite, text).map_err(draw_err(svg))?;
+    fn all<DB: DrawingBackend>(
+        root: DrawingArea<DB, plotters::coord::Shift>,
+        panels: &[(Vec<&PlotPoint>, &PlotText)],
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let areas = root.split_evenly((1, panels.len()));
+        for (area, (points, text)) in areas.into_iter().zip(panels) {
+            draw(area, points, text)?;
+        }
+        root.present()
     }
+    all(SVGBackend::new(svg, size).into_drawing_area(), &panels).map_err(draw_err(svg))?;
     let mut buffer = vec![0u8; size.0 as usize * size.1 as usize * 3];
-    {
-        let backend = BitMapBackend::with_buffer(&mut buffer, size);
-        draw(backend.into_drawing_area(), &finite, text).map_err(draw_err(png))?;
-    }
+    all(
+        BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area(),
+        &panels,
+    )
+    .map_err(draw_err(png))?;
     image::save_buffer(png, &buffer, size.0, size.1, image::ColorType::Rgb8).map_err(|e| {
         MeasureError::Output {
             path: png.to_path_buf(),
@@ -88,7 +106,6 @@ fn draw<DB: DrawingBackend>(
     points: &[&PlotPoint],
     text: &PlotText,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    root.fill(&WHITE)?;
     let (mut x0, mut x1) = (f64::MAX, f64::MIN);
     let (mut y0, mut y1) = (f64::MAX, f64::MIN);
     for p in points {
@@ -162,7 +179,6 @@ fn draw<DB: DrawingBackend>(
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
-    root.present()?;
     Ok(())
 }
 
@@ -191,7 +207,8 @@ mod tests {
             y: "RMSE L*".into(),
         };
         let (png, svg) = (dir.join("p.png"), dir.join("p.svg"));
-        plot_tradeoff(&pts, &text, &png, &svg, (640, 400)).unwrap();
+        let panel = Panel { points: pts, text };
+        plot_tradeoff(&[panel.clone(), panel.clone()], &png, &svg, (640, 400)).unwrap();
         let img = image::open(&png).unwrap().to_rgb8();
         assert_eq!(img.dimensions(), (640, 400));
         // Something red (the front) and something not white was drawn.
@@ -200,6 +217,11 @@ mod tests {
             .any(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60));
         let s = std::fs::read_to_string(&svg).unwrap();
         assert!(s.contains("<svg") && s.contains("Pareto front") && s.contains("c0"));
-        assert!(plot_tradeoff(&[], &text, &png, &svg, (64, 64)).is_err());
+        assert!(plot_tradeoff(&[], &png, &svg, (64, 64)).is_err());
+        let empty = Panel {
+            points: vec![],
+            text: panel.text,
+        };
+        assert!(plot_tradeoff(&[empty], &png, &svg, (64, 64)).is_err());
     }
 }

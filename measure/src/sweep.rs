@@ -18,7 +18,7 @@ use oslf_runtime::{Blend, CacheConfig, Gpu, Order, Renderer, ShadingParams, Sour
 use serde::{Deserialize, Serialize};
 
 use crate::error::{MeasureError, Result};
-use crate::judge::{judge, Judgement};
+use crate::judge::{judge, time_interleaved, Judgement, TimedJob};
 
 /// Bake settings the sweep can vary.
 pub const BAKE_KEYS: [&str; 6] = [
@@ -229,6 +229,9 @@ pub struct SweepRow {
     pub runtime_change: Option<Change>,
     pub store: PathBuf,
     pub bake_seconds: f64,
+    /// CPU time of the bake, all threads: less sensitive than `bake_seconds` to what else
+    /// runs on the machine.
+    pub bake_cpu_seconds: Option<f64>,
     pub store_bytes: u64,
     pub sample_points: usize,
     pub judgement: Judgement,
@@ -260,6 +263,8 @@ struct StoreRecord {
     settings: String,
     scene_hash: String,
     bake_seconds: f64,
+    #[serde(default)]
+    bake_cpu_seconds: Option<f64>,
     store_bytes: u64,
     sample_points: usize,
 }
@@ -301,6 +306,7 @@ fn bake_or_reuse(scene: &Scene, path: &Path, progress: bool) -> Result<StoreReco
         settings,
         scene_hash: hash,
         bake_seconds: report.total_seconds,
+        bake_cpu_seconds: report.cpu_seconds,
         store_bytes: report.store_bytes,
         sample_points: report.sample_points,
     };
@@ -313,8 +319,31 @@ fn bake_or_reuse(scene: &Scene, path: &Path, progress: bool) -> Result<StoreReco
     Ok(r)
 }
 
+/// `scene` with a bake change applied, checked against the limits the scene file's parser
+/// enforces (ε for each object).
+pub fn bake_variant(scene: &Scene, change: &Change) -> Result<Scene> {
+    let mut variant = scene.clone();
+    apply_bake(&mut variant.bake, change)?;
+    variant
+        .check_epsilon()
+        .map_err(|e| MeasureError::Invalid(format!("--vary {}: {e}", change.key)))?;
+    Ok(variant)
+}
+
+/// Checks every bake change against `scene` (before anything slow runs).
+pub fn check_changes(scene: &Scene, changes: &[Change]) -> Result<()> {
+    for c in changes
+        .iter()
+        .filter(|c| BAKE_KEYS.contains(&c.key.as_str()))
+    {
+        bake_variant(scene, c)?;
+    }
+    Ok(())
+}
+
 /// Runs the sweep against `truth` (the ground truth of `config.params.mode` for the scene's
-/// camera). Calls `on_row` as each row is measured.
+/// camera). Calls `on_row` as each row's error is measured; frame times are measured at the
+/// end, `warm_frames` rounds interleaved over every row.
 pub fn run_sweep(
     config: &SweepConfig,
     truth: &TruthImage,
@@ -345,20 +374,18 @@ pub fn run_sweep(
     // Every variant is checked before the first is baked.
     let mut variants = Vec::with_capacity(bake_changes.len());
     for bc in &bake_changes {
-        let mut scene = config.scene.clone();
-        let name = match bc {
-            Some(c) => {
-                apply_bake(&mut scene.bake, c)?;
-                scene
-                    .check_epsilon()
-                    .map_err(|e| MeasureError::Invalid(format!("--vary {}: {e}", c.key)))?;
-                format!("{}-{}", c.key, c.value)
-            }
-            None => "defaults".to_string(),
+        let (scene, name) = match bc {
+            Some(c) => (
+                bake_variant(config.scene, c)?,
+                format!("{}-{}", c.key, c.value),
+            ),
+            None => (config.scene.clone(), "defaults".to_string()),
         };
         variants.push((bc, scene, name));
     }
     let mut rows = Vec::new();
+    let mut renderers = Vec::new();
+    let mut jobs = Vec::new();
     for (bc, scene, name) in variants {
         let path = config.store_dir.join(format!("{name}.oslf"));
         let t = Instant::now();
@@ -389,19 +416,38 @@ pub fn run_sweep(
                     path.display()
                 )));
             }
-            let (judgement, _) = judge(&mut renderer, &camera, &params, truth, config.warm_frames)?;
+            let (judgement, _) = judge(&mut renderer, &camera, &params, truth, 0)?;
             let row = SweepRow {
                 bake_change: bc.cloned(),
                 runtime_change: rc.cloned(),
                 store: path.clone(),
                 bake_seconds: record.bake_seconds,
+                bake_cpu_seconds: record.bake_cpu_seconds,
                 store_bytes: record.store_bytes,
                 sample_points: record.sample_points,
                 judgement,
             };
             on_row(&row);
             rows.push(row);
+            jobs.push(TimedJob {
+                renderer: renderers.len(),
+                camera,
+                params,
+            });
         }
+        renderers.push(renderer);
+    }
+    // Frame times last, interleaved over every configuration (see `time_interleaved`).
+    let times = time_interleaved(
+        &mut renderers,
+        &jobs,
+        truth.width,
+        truth.height,
+        config.warm_frames,
+    )?;
+    for (row, ms) in rows.iter_mut().zip(times) {
+        row.judgement.frame_ms = ms;
+        row.judgement.warm_frames = config.warm_frames;
     }
     Ok(rows)
 }

@@ -11,16 +11,19 @@ use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
 use oslf_measure::judge::render_truth;
 use oslf_measure::pareto::pareto_front;
-use oslf_measure::plot::{plot_tradeoff, PlotPoint, PlotText};
-use oslf_measure::sweep::{blend_label, parse_vary, run_sweep, SweepConfig, SweepRow};
+use oslf_measure::plot::{plot_tradeoff, Panel, PlotPoint, PlotText};
+use oslf_measure::sweep::{
+    blend_label, check_changes, parse_vary, run_sweep, SweepConfig, SweepRow,
+};
 use oslf_measure::table::Table;
 use oslf_runtime::{Mode, Order, ShadingParams};
 
 /// Bake variants of a scene and render them with variants of the runtime settings, one setting
 /// changed at a time from the defaults; judge every combination against the ray-traced ground
-/// truth (RMSE of L*) and time it. Writes sweep.csv, sweep.json, the sensitivity table
-/// (sensitivity.md) and the plot of error against frame time with its Pareto front
-/// (tradeoff.png, tradeoff.svg) to the output directory.
+/// truth (RMSE of L*) and time it (frame times interleaved over all configurations; bake CPU
+/// time). Writes sweep.csv, sweep.json, the sensitivity table (sensitivity.md) and the plot of
+/// error against frame time and against bake time, each with its Pareto front (tradeoff.png,
+/// tradeoff.svg), to the output directory.
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
@@ -132,6 +135,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     for s in &specs {
         changes.extend(parse_vary(s)?);
     }
+    check_changes(&scene, &changes)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
@@ -166,26 +170,39 @@ fn run(args: Args) -> anyhow::Result<()> {
     let rows = run_sweep(&config, &truth, |r| {
         if !quiet {
             eprintln!(
-                "{:<40} L* {:7.3}  {:8.2} ms",
+                "{:<40} L* {:7.3}",
                 r.label(),
-                r.judgement.metrics.rmse_lab[0],
-                r.judgement.frame_ms
+                r.judgement.metrics.rmse_lab[0]
             );
         }
     })?;
-    let points: Vec<(f64, f64)> = rows
-        .iter()
-        .map(|r| (r.judgement.frame_ms, r.judgement.metrics.rmse_lab[0]))
-        .collect();
-    let front = pareto_front(&points);
-    write_outputs(&args, &params, &rows, &front)
+    let error = |r: &SweepRow| r.judgement.metrics.rmse_lab[0];
+    let frame_front = pareto_front(
+        &rows
+            .iter()
+            .map(|r| (r.judgement.frame_ms, error(r)))
+            .collect::<Vec<_>>(),
+    );
+    let bake_front = pareto_front(
+        &rows
+            .iter()
+            .map(|r| (bake_cost(r), error(r)))
+            .collect::<Vec<_>>(),
+    );
+    write_outputs(&args, &params, &rows, &frame_front, &bake_front)
+}
+
+/// The bake's CPU seconds (all threads), or its wall seconds where CPU time is not known.
+fn bake_cost(r: &SweepRow) -> f64 {
+    r.bake_cpu_seconds.unwrap_or(r.bake_seconds)
 }
 
 fn write_outputs(
     args: &Args,
     params: &ShadingParams,
     rows: &[SweepRow],
-    front: &[bool],
+    frame_front: &[bool],
+    bake_front: &[bool],
 ) -> anyhow::Result<()> {
     let mut all = Table::new(
         &format!(
@@ -201,6 +218,7 @@ fn write_outputs(
             "configuration",
             "sample points",
             "bake s",
+            "bake CPU-s",
             "store MB",
             "frame ms",
             "RMSE L*",
@@ -211,15 +229,17 @@ fn write_outputs(
             "RMSE B",
             "PSNR dB",
             "pixels",
-            "Pareto",
+            "front: frame",
+            "front: bake",
         ],
     );
-    for (r, on) in rows.iter().zip(front) {
+    for ((r, on), on_bake) in rows.iter().zip(frame_front).zip(bake_front) {
         let m = &r.judgement.metrics;
         all.push(vec![
             r.label(),
             r.sample_points.to_string(),
             format!("{:.1}", r.bake_seconds),
+            r.bake_cpu_seconds.map_or("–".into(), |c| format!("{c:.1}")),
             format!("{:.2}", r.store_bytes as f64 / 1e6),
             format!("{:.1}", r.judgement.frame_ms),
             format!("{:.3}", m.rmse_lab[0]),
@@ -230,23 +250,26 @@ fn write_outputs(
             format!("{:.4}", m.rmse_rgb[2]),
             m.psnr_db.map_or("–".into(), |p| format!("{p:.2}")),
             m.pixels.to_string(),
-            if *on { "yes".into() } else { String::new() },
+            if *on { "yes".into() } else { "no".into() },
+            if *on_bake { "yes".into() } else { "no".into() },
         ]);
     }
     let sensitivity = sensitivity_table(rows);
     print!("{}\n{}", all.to_text(), sensitivity.to_text());
-    let front_labels: Vec<String> = rows
-        .iter()
-        .zip(front)
-        .filter(|(_, f)| **f)
-        .map(|(r, _)| r.label())
-        .collect();
-    let default_on_front = rows.iter().zip(front).any(|(r, f)| r.is_default() && *f);
-    println!(
-        "\nPareto front (RMSE L* against frame time): {}\nthe defaults are {}on the front",
-        front_labels.join("; "),
-        if default_on_front { "" } else { "NOT " }
-    );
+    for (name, front) in [("frame time", frame_front), ("bake CPU time", bake_front)] {
+        let labels: Vec<String> = rows
+            .iter()
+            .zip(front)
+            .filter(|(_, f)| **f)
+            .map(|(r, _)| r.label())
+            .collect();
+        let default_on = rows.iter().zip(front).any(|(r, f)| r.is_default() && *f);
+        println!(
+            "\nPareto front of RMSE L* against {name}: {}\nthe defaults are {}on it",
+            labels.join("; "),
+            if default_on { "" } else { "NOT " }
+        );
+    }
     write(&args.out.join("sweep.csv"), &all.to_csv())?;
     write(
         &args.out.join("sensitivity.md"),
@@ -258,36 +281,45 @@ fn write_outputs(
         "width": args.width,
         "height": args.height,
         "truth_spp": args.spp,
-        "rows": rows.iter().zip(front).map(|(r, f)| serde_json::json!({
-            "label": r.label(), "pareto": f, "row": r,
+        "rows": rows.iter().zip(frame_front).zip(bake_front).map(|((r, f), b)| serde_json::json!({
+            "label": r.label(), "front_frame_time": f, "front_bake_time": b, "row": r,
         })).collect::<Vec<_>>(),
     });
     write(
         &args.out.join("sweep.json"),
         &serde_json::to_string_pretty(&json)?,
     )?;
-    let points: Vec<PlotPoint> = rows
-        .iter()
-        .zip(front)
-        .map(|(r, f)| PlotPoint {
-            label: r.label(),
-            time_ms: r.judgement.frame_ms,
-            error: r.judgement.metrics.rmse_lab[0],
-            on_front: *f,
-            is_default: r.is_default(),
-        })
-        .collect();
-    let text = PlotText {
-        caption: format!("{}: error against frame time", params.mode.name()),
-        x: "frame time, ms".into(),
-        y: "RMSE of L* against the ground truth".into(),
+    let panel = |front: &[bool], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
+        points: rows
+            .iter()
+            .zip(front)
+            .map(|(r, f)| PlotPoint {
+                label: r.label(),
+                time_ms: time(r),
+                error: r.judgement.metrics.rmse_lab[0],
+                on_front: *f,
+                is_default: r.is_default(),
+            })
+            .collect(),
+        text: PlotText {
+            caption: format!("{}: error against {what}", params.mode.name()),
+            x: x.into(),
+            y: "RMSE of L* against the ground truth".into(),
+        },
     };
     plot_tradeoff(
-        &points,
-        &text,
+        &[
+            panel(
+                frame_front,
+                &|r| r.judgement.frame_ms,
+                "frame time, ms",
+                "frame time",
+            ),
+            panel(bake_front, &bake_cost, "bake, CPU seconds", "bake time"),
+        ],
         &args.out.join("tradeoff.png"),
         &args.out.join("tradeoff.svg"),
-        (960, 640),
+        (1500, 640),
     )?;
     println!(
         "wrote {}/sweep.csv, sweep.json, sensitivity.md, tradeoff.png, tradeoff.svg",
@@ -317,7 +349,7 @@ fn sensitivity_table(rows: &[SweepRow]) -> Table {
             format!("{e:.3}"),
             format!("{:+.3}", e - e0),
             format!("{:.1}", r.judgement.frame_ms),
-            format!("{:.1}", r.bake_seconds),
+            format!("{:.1}", bake_cost(r)),
             format!("{:.2}", r.store_bytes as f64 / 1e6),
         ]);
     };

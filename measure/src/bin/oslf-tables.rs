@@ -2,7 +2,7 @@
 //! user's scene, against ray-traced ground truth, with the frame time of each method measured in
 //! the same run.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{bail, Context};
@@ -11,9 +11,9 @@ use oslf_bake::ground_truth::{GroundTruth, TruthImage, TruthSettings};
 use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
 use oslf_format::Store;
-use oslf_measure::judge::{judge, render_truth, Judgement};
+use oslf_measure::judge::{judge, render_truth, time_interleaved, Judgement, TimedJob};
 use oslf_measure::sweep::blend_label;
-use oslf_measure::table::Table;
+use oslf_measure::table::{csv_cell, Table};
 use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, Order, Renderer, ShadingParams, Source};
 
 /// Reproduce the thesis's tables on a scene: Table 6.1 (reconstruction error) and Table 6.2
@@ -21,7 +21,8 @@ use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, Order, Renderer, ShadingParams
 /// given (e.g. two cube-map resolutions), and the Ashikhmin–Shirley error for n_u = n_v ∈ {10,
 /// 100, 1000} and an anisotropic lobe, M ∈ {4, 16, 64, 256}, both integration orders. Errors
 /// are RMSE of L* (÷ 100, the thesis's scale) against the ground truth; frame times are medians
-/// of warm frames in the same run. Writes tables.md, tables.csv, tables.json and the ground
+/// of warm frames in the same run, interleaved over every method so that the load of a shared
+/// machine falls on all alike. Writes tables.md, tables.csv, tables.json and the ground
 /// truth images to the output directory.
 #[derive(Parser, Debug)]
 #[command(version, about)]
@@ -54,7 +55,7 @@ struct Args {
     width: u32,
     #[arg(long, default_value_t = 460)]
     height: u32,
-    /// Warm frames timed per method (median reported).
+    /// Warm frames timed per method (median reported), in interleaved rounds.
     #[arg(long, default_value_t = 5)]
     frames: u32,
     #[arg(short, long, default_value = "tables")]
@@ -82,53 +83,92 @@ struct Record {
     method: String,
     params: ShadingParams,
     judgement: Judgement,
+    #[serde(skip)]
+    renderer: usize,
 }
 
+/// Every measurement of the run; errors first, frame times at the end, interleaved.
 struct Bench<'a> {
     args: &'a Args,
+    renderers: Vec<(PathBuf, Renderer)>,
     records: Vec<Record>,
 }
 
 impl Bench<'_> {
+    /// Renders `params` on renderer `r` and records its error against `truth`.
     fn measure(
         &mut self,
         table: &'static str,
-        renderer: &mut Renderer,
-        path: &Path,
-        method: String,
+        r: usize,
+        method: &str,
         params: ShadingParams,
         truth: &TruthImage,
-    ) -> anyhow::Result<Judgement> {
+    ) -> anyhow::Result<()> {
+        let (path, renderer) = &mut self.renderers[r];
         let camera = renderer.default_view();
-        let (j, _) = judge(renderer, &camera, &params, truth, self.args.frames)
+        let (j, _) = judge(renderer, &camera, &params, truth, 0)
             .with_context(|| format!("{table}: {method} on {}", path.display()))?;
+        let res = renderer.store().cube_resolution();
         if !self.args.quiet {
             eprintln!(
-                "{table:<10} {:<28} {:>4}²  L* {:7.3}  {:8.2} ms",
-                method,
-                renderer.store().cube_resolution(),
-                j.metrics.rmse_lab[0],
-                j.frame_ms
+                "{table:<4} {method:<40} {res:>4}²  L* {:7.3}",
+                j.metrics.rmse_lab[0]
             );
         }
         self.records.push(Record {
             table,
-            store: path.to_path_buf(),
-            cube_resolution: renderer.store().cube_resolution(),
-            method,
+            store: path.clone(),
+            cube_resolution: res,
+            method: method.to_string(),
             params,
-            judgement: j.clone(),
+            judgement: j,
+            renderer: r,
         });
-        Ok(j)
+        Ok(())
+    }
+
+    /// Times every record's frame, `--frames` rounds interleaved over all of them.
+    fn time(&mut self) -> anyhow::Result<()> {
+        let jobs: Vec<TimedJob> = self
+            .records
+            .iter()
+            .map(|rec| TimedJob {
+                renderer: rec.renderer,
+                camera: self.renderers[rec.renderer].1.default_view(),
+                params: rec.params,
+            })
+            .collect();
+        let mut renderers: Vec<Renderer> = self.renderers.drain(..).map(|(_, r)| r).collect();
+        let times = time_interleaved(
+            &mut renderers,
+            &jobs,
+            self.args.width,
+            self.args.height,
+            self.args.frames,
+        )?;
+        for (rec, t) in self.records.iter_mut().zip(times) {
+            rec.judgement.frame_ms = t;
+            rec.judgement.warm_frames = self.args.frames;
+        }
+        Ok(())
+    }
+
+    fn find(&self, table: &str, r: usize, method: &str) -> Option<&Judgement> {
+        self.records
+            .iter()
+            .find(|x| x.table == table && x.renderer == r && x.method == method)
+            .map(|x| &x.judgement)
     }
 }
 
-fn l100(j: &Judgement) -> String {
-    format!("{:.4}", j.metrics.rmse_lab_normalized[0])
+fn l100(j: Option<&Judgement>) -> String {
+    j.map_or("–".into(), |j| {
+        format!("{:.4}", j.metrics.rmse_lab_normalized[0])
+    })
 }
 
-fn ms(j: &Judgement) -> String {
-    format!("{:.1}", j.frame_ms)
+fn ms(j: Option<&Judgement>) -> String {
+    j.map_or("–".into(), |j| format!("{:.1}", j.frame_ms))
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
@@ -149,6 +189,12 @@ fn run(args: Args) -> anyhow::Result<()> {
                 "{} was not baked from {} with these settings (scene hash or bounces differ; pass the store's --preset)",
                 path.display(),
                 args.scene.display()
+            );
+        }
+        if store.env_cube_index().is_none() {
+            bail!(
+                "{} has no environment cube (bake with env_cube = true)",
+                path.display()
             );
         }
         stores.push((path.clone(), store));
@@ -192,7 +238,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         let path = args.out.join(format!("truth-{name}.exr"));
         image_file::write_exr_rgba(&path, t.width, t.height, &t.pixels)?;
         if !args.quiet {
-            eprintln!("truth      {:<28} {:.1} s", path.display(), t.seconds);
+            eprintln!("truth {:<40} {:.1} s", path.display(), t.seconds);
         }
         Ok(t)
     };
@@ -201,14 +247,102 @@ fn run(args: Args) -> anyhow::Result<()> {
 
     let mut bench = Bench {
         args: &args,
+        renderers: Vec::new(),
         records: Vec::new(),
     };
-    let res_names: Vec<String> = stores
+    let mut points = Vec::new();
+    for (path, store) in stores {
+        points.push(store.sample_points().len());
+        let r = Renderer::new(Gpu::headless()?, store, CacheConfig::default())?;
+        bench.renderers.push((path, r));
+    }
+    let n_stores = bench.renderers.len();
+    let resolutions: Vec<u32> = bench
+        .renderers
         .iter()
-        .map(|(_, s)| format!("{}²", s.cube_resolution()))
+        .map(|(_, r)| r.store().cube_resolution())
         .collect();
 
-    // Table 6.1 and 6.2, per store.
+    // Table 6.1 and 6.2: every store.
+    let mut mirror_methods: Vec<(String, ShadingParams)> = vec![(
+        "EnvMap".into(),
+        ShadingParams {
+            mode: Mode::Mirror,
+            source: Source::EnvMap,
+            ..base
+        },
+    )];
+    for (name, blend) in [
+        ("closest distance (4.3)", Blend::Distance),
+        ("closest angle (4.4)", Blend::Angle),
+        ("B^avg (4.9)", Blend::Average),
+    ] {
+        let p = ShadingParams {
+            mode: Mode::Mirror,
+            blend,
+            ..base
+        };
+        mirror_methods.push((name.into(), p));
+    }
+    for (name, blend) in [("B^r", Blend::Reflection), ("B^n", Blend::Normal)] {
+        for n in [1.0, 4.0, 8.0, 16.0] {
+            let p = ShadingParams {
+                mode: Mode::Mirror,
+                blend,
+                blend_n: n,
+                ..base
+            };
+            mirror_methods.push((format!("{name} N={n}"), p));
+        }
+    }
+    for r in 0..n_stores {
+        let recon = ShadingParams {
+            mode: Mode::Recon,
+            ..base
+        };
+        bench.measure("6.1", r, "recon", recon, &recon_truth)?;
+        for (name, p) in &mirror_methods {
+            bench.measure("6.2", r, name, *p, &mirror_truth)?;
+        }
+    }
+
+    // The Ashikhmin–Shirley table: the finest store.
+    let glossy_methods = [
+        (Order::PerPoint, Source::Oslf, "per point"),
+        (Order::PerDirection, Source::Oslf, "per direction"),
+        (Order::PerPoint, Source::EnvMap, "EnvMap"),
+    ];
+    let as_name = |nu: f32, nv: f32, m: u32, label: &str| format!("AS {nu}:{nv} M={m} {label}");
+    let finest = n_stores - 1;
+    if !args.no_glossy {
+        for &(nu, nv) in &lobes {
+            let truth = truth_of(Mode::Glossy, nu, nv, &format!("glossy-{nu}-{nv}"))?;
+            for &m in &args.glossy_m {
+                for (order, source, label) in glossy_methods {
+                    let p = ShadingParams {
+                        mode: Mode::Glossy,
+                        nu,
+                        nv,
+                        m,
+                        order,
+                        source,
+                        ..base
+                    };
+                    bench.measure("AS", finest, &as_name(nu, nv, m, label), p, &truth)?;
+                }
+            }
+        }
+    }
+    if !args.quiet {
+        eprintln!(
+            "timing {} configurations, {} interleaved rounds",
+            bench.records.len(),
+            args.frames
+        );
+    }
+    bench.time()?;
+
+    // The tables.
     let mut t61 = Table::new(
         "Table 6.1: reconstruction error (RMSE against the ground truth; L*, a*, b* ÷ 100)",
         &[
@@ -223,138 +357,65 @@ fn run(args: Args) -> anyhow::Result<()> {
             "frame ms",
         ],
     );
-    let mut mirror_methods: Vec<(String, ShadingParams)> = vec![(
-        "EnvMap".into(),
-        ShadingParams {
-            mode: Mode::Mirror,
-            source: Source::EnvMap,
-            ..base
-        },
-    )];
-    for (name, blend, n) in [
-        ("closest distance (4.3)", Blend::Distance, 0.0),
-        ("closest angle (4.4)", Blend::Angle, 0.0),
-        ("B^avg (4.9)", Blend::Average, 0.0),
-    ] {
-        mirror_methods.push((
-            name.into(),
-            ShadingParams {
-                mode: Mode::Mirror,
-                blend,
-                blend_n: n,
-                ..base
-            },
-        ));
-    }
-    for (name, blend) in [("B^r", Blend::Reflection), ("B^n", Blend::Normal)] {
-        for n in [1.0, 4.0, 8.0, 16.0] {
-            mirror_methods.push((
-                format!("{name} N={n}"),
-                ShadingParams {
-                    mode: Mode::Mirror,
-                    blend,
-                    blend_n: n,
-                    ..base
-                },
-            ));
-        }
-    }
-    let mut headers = vec!["method".to_string()];
-    for r in &res_names {
-        headers.push(format!("L* {r}"));
-        headers.push(format!("÷ EnvMap {r}"));
-        headers.push(format!("ms {r}"));
-    }
-    let header_refs: Vec<&str> = headers.iter().map(String::as_str).collect();
-    let mut t62 = Table::new(
-        "Table 6.2: mirror-reflection error (RMSE of L* ÷ 100 against the ground truth), ratio to the environment map, frame time",
-        &header_refs,
-    );
-    let mut cells: Vec<Vec<String>> = mirror_methods
-        .iter()
-        .map(|(n, _)| vec![n.clone()])
-        .collect();
-    let mut renderers = Vec::new();
-    for (path, store) in stores {
-        let points = store.sample_points().len();
-        let res = store.cube_resolution();
-        if store.env_cube_index().is_none() {
-            bail!(
-                "{} has no environment cube (bake with env_cube = true)",
-                path.display()
-            );
-        }
-        let mut r = Renderer::new(Gpu::headless()?, store, CacheConfig::default())?;
-        let recon = ShadingParams {
-            mode: Mode::Recon,
-            ..base
-        };
-        let j = bench.measure("6.1", &mut r, &path, "recon".into(), recon, &recon_truth)?;
-        let (lab, rgb) = (j.metrics.rmse_lab_normalized, j.metrics.rmse_rgb);
+    for r in 0..n_stores {
+        let j = bench.find("6.1", r, "recon");
+        let (lab, rgb) = j.map_or(([f64::NAN; 3], [f64::NAN; 3]), |j| {
+            (j.metrics.rmse_lab_normalized, j.metrics.rmse_rgb)
+        });
         t61.push(vec![
-            format!("{res}²"),
-            points.to_string(),
+            format!("{}²", resolutions[r]),
+            points[r].to_string(),
             format!("{:.4}", lab[0]),
             format!("{:.4}", lab[1]),
             format!("{:.4}", lab[2]),
             format!("{:.4}", rgb[0]),
             format!("{:.4}", rgb[1]),
             format!("{:.4}", rgb[2]),
-            ms(&j),
+            ms(j),
         ]);
-        let mut env_error = f64::NAN;
-        for (k, (name, p)) in mirror_methods.iter().enumerate() {
-            let j = bench.measure("6.2", &mut r, &path, name.clone(), *p, &mirror_truth)?;
-            let e = j.metrics.rmse_lab[0];
-            if k == 0 {
-                env_error = e;
-            }
-            cells[k].push(l100(&j));
-            cells[k].push(format!("{:.3}", e / env_error));
-            cells[k].push(ms(&j));
-        }
-        renderers.push((path, r));
     }
-    for row in cells {
+    let mut headers = vec!["method".to_string()];
+    for res in &resolutions {
+        headers.push(format!("L* {res}²"));
+        headers.push(format!("÷ EnvMap {res}²"));
+        headers.push(format!("ms {res}²"));
+    }
+    let header_refs: Vec<&str> = headers.iter().map(String::as_str).collect();
+    let mut t62 = Table::new(
+        "Table 6.2: mirror-reflection error (RMSE of L* ÷ 100 against the ground truth), ratio to the environment map, frame time",
+        &header_refs,
+    );
+    for (name, _) in &mirror_methods {
+        let mut row = vec![name.clone()];
+        for r in 0..n_stores {
+            let j = bench.find("6.2", r, name);
+            let env = bench.find("6.2", r, "EnvMap");
+            row.push(l100(j));
+            row.push(j.zip(env).map_or("–".into(), |(j, e)| {
+                format!("{:.3}", j.metrics.rmse_lab[0] / e.metrics.rmse_lab[0])
+            }));
+            row.push(ms(j));
+        }
         t62.push(row);
     }
-
-    // The Ashikhmin–Shirley table on the finest store.
     let mut tas = Table::new(
-        "Ashikhmin–Shirley (R_s = 1, R_d = 0, blend B^n N=4): RMSE of L* ÷ 100 against the ground truth, frame time",
+        &format!(
+            "Ashikhmin–Shirley (R_s = 1, R_d = 0, blend B^n N=4, {}² cube maps): RMSE of L* ÷ 100 against the ground truth, frame time",
+            resolutions[finest]
+        ),
         &[
             "n_u", "n_v", "M", "per point L*", "ms", "per direction L*", "ms", "EnvMap L*", "ms",
         ],
     );
-    if !args.no_glossy {
-        let Some((path, r)) = renderers.last_mut() else {
-            bail!("no store");
-        };
-        for &(nu, nv) in &lobes {
-            let truth = truth_of(Mode::Glossy, nu, nv, &format!("glossy-{nu}-{nv}"))?;
-            for &m in &args.glossy_m {
-                let mut row = vec![nu.to_string(), nv.to_string(), m.to_string()];
-                for (order, source, label) in [
-                    (Order::PerPoint, Source::Oslf, "per point"),
-                    (Order::PerDirection, Source::Oslf, "per direction"),
-                    (Order::PerPoint, Source::EnvMap, "EnvMap"),
-                ] {
-                    let p = ShadingParams {
-                        mode: Mode::Glossy,
-                        nu,
-                        nv,
-                        m,
-                        order,
-                        source,
-                        ..base
-                    };
-                    let name = format!("AS {nu}:{nv} M={m} {label} ({})", blend_label(&p));
-                    let j = bench.measure("AS", r, path, name, p, &truth)?;
-                    row.push(l100(&j));
-                    row.push(ms(&j));
-                }
-                tas.push(row);
+    for &(nu, nv) in &lobes {
+        for &m in &args.glossy_m {
+            let mut row = vec![nu.to_string(), nv.to_string(), m.to_string()];
+            for (_, _, label) in glossy_methods {
+                let j = bench.find("AS", finest, &as_name(nu, nv, m, label));
+                row.push(l100(j));
+                row.push(ms(j));
             }
+            tas.push(row);
         }
     }
 
@@ -370,19 +431,22 @@ fn run(args: Args) -> anyhow::Result<()> {
     );
     for r in &bench.records {
         let m = &r.judgement.metrics;
-        csv +=
-            &format!(
+        csv += &format!(
             "{},{},{},{},{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6},{},{:.3},{:.3}\n",
             r.table,
-            oslf_measure::table::csv_cell(&r.store.display().to_string()),
+            csv_cell(&r.store.display().to_string()),
             r.cube_resolution,
-            oslf_measure::table::csv_cell(&r.method),
+            csv_cell(&r.method),
             r.params.mode.name(),
             blend_label(&r.params),
             r.params.nu,
             r.params.nv,
             r.params.m,
-            if r.params.order == Order::PerPoint { "per-point" } else { "per-direction" },
+            if r.params.order == Order::PerPoint {
+                "per-point"
+            } else {
+                "per-direction"
+            },
             m.pixels,
             m.rmse_lab[0],
             m.rmse_lab[1],
