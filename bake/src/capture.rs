@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 use oslf_format::CubeImage;
+use rayon::prelude::*;
 
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::{Intersector, Ray};
@@ -38,14 +39,35 @@ pub fn capture_cube<I: Intersector>(
     let res = settings.resolution;
     let k = strata_per_side(settings.samples_per_texel);
     let inv_spp = 1.0 / (k * k) as f32;
-    let mut stats = RayStats::default();
+    let texels = (res as usize) * (res as usize);
     let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
     let mut distance: [Vec<f32>; 6] = Default::default();
-    for (face, out) in faces.iter_mut().enumerate() {
-        out.reserve((res * res) as usize);
-        for y in 0..res {
+    for face in 0..6 {
+        faces[face] = vec![[0.0; 3]; texels];
+        if settings.distance_channel {
+            distance[face] = vec![0.0; texels];
+        }
+    }
+    // Rows in parallel (nested in the bake's parallel cubes): a large cube keeps every thread
+    // busy on its own, so the bake can hold few cubes in flight. Each texel has its own random
+    // stream, so the result does not depend on the split.
+    let mut rows: Vec<(usize, u32, &mut [[f32; 3]], Option<&mut [f32]>)> = Vec::new();
+    for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
+        let dist_rows: Vec<Option<&mut [f32]>> = if settings.distance_channel {
+            dist.chunks_mut(res as usize).map(Some).collect()
+        } else {
+            (0..res).map(|_| None).collect()
+        };
+        for (y, (row, d)) in out.chunks_mut(res as usize).zip(dist_rows).enumerate() {
+            rows.push((face, y as u32, row, d));
+        }
+    }
+    let stats = rows
+        .into_par_iter()
+        .map(|(face, y, row, mut dist_row)| {
+            let mut stats = RayStats::default();
             for x in 0..res {
-                let texel = (y * res + x) as u64;
+                let texel = u64::from(y) * u64::from(res) + u64::from(x);
                 let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
                 let mut rng = Rng::new(settings.seed, stream);
                 let mut sum = Vec3::ZERO;
@@ -58,19 +80,22 @@ pub fn capture_cube<I: Intersector>(
                     let sample = integrator.radiance(&Ray::new(origin, dir), &mut rng, &mut stats);
                     sum += sample.radiance;
                 }
-                out.push((sum * inv_spp).to_array());
-                if settings.distance_channel {
+                row[x as usize] = (sum * inv_spp).to_array();
+                if let Some(d_row) = dist_row.as_deref_mut() {
                     let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
                     stats.closest += 1;
-                    let d = integrator
+                    d_row[x as usize] = integrator
                         .geometry
                         .intersect(&Ray::new(origin, dir), f32::MAX)
                         .map_or(f32::MAX, |h| h.t);
-                    distance[face].push(d);
                 }
             }
-        }
-    }
+            stats
+        })
+        .reduce(RayStats::default, |mut a, b| {
+            a.add(&b);
+            a
+        });
     let cube = CubeImage {
         resolution: res,
         faces,
