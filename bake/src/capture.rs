@@ -6,6 +6,7 @@ use glam::Vec3;
 use oslf_format::CubeImage;
 use rayon::prelude::*;
 
+use crate::bake::chunk_cubes;
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::{Intersector, Ray};
 use crate::sampling::{hash_u64, Rng};
@@ -42,16 +43,18 @@ pub fn capture_cube<I: Intersector>(
     let texels = (res as usize) * (res as usize);
     let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
     let mut distance: [Vec<f32>; 6] = Default::default();
-    for face in 0..6 {
-        faces[face] = vec![[0.0; 3]; texels];
+    for (f, d) in faces.iter_mut().zip(distance.iter_mut()) {
+        *f = vec![[0.0; 3]; texels];
         if settings.distance_channel {
-            distance[face] = vec![0.0; texels];
+            *d = vec![0.0; texels];
         }
     }
-    // Rows in parallel (nested in the bake's parallel cubes): a large cube keeps every thread
-    // busy on its own, so the bake can hold few cubes in flight. Each texel has its own random
-    // stream, so the result does not depend on the split.
-    let mut rows: Vec<(usize, u32, &mut [[f32; 3]], Option<&mut [f32]>)> = Vec::new();
+    // Rows in parallel when the bake captures fewer cubes at once than there are threads
+    // (large faces, see [`chunk_cubes`]): a large cube then keeps every thread busy on its own.
+    // Each texel has its own random stream, so the result does not depend on the split.
+    let parallel = chunk_cubes(res, settings.distance_channel) < rayon::current_num_threads();
+    type Row<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
+    let mut rows: Vec<Row> = Vec::new();
     for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
         let dist_rows: Vec<Option<&mut [f32]>> = if settings.distance_channel {
             dist.chunks_mut(res as usize).map(Some).collect()
@@ -62,40 +65,47 @@ pub fn capture_cube<I: Intersector>(
             rows.push((face, y as u32, row, d));
         }
     }
-    let stats = rows
-        .into_par_iter()
-        .map(|(face, y, row, mut dist_row)| {
-            let mut stats = RayStats::default();
-            for x in 0..res {
-                let texel = u64::from(y) * u64::from(res) + u64::from(x);
-                let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
-                let mut rng = Rng::new(settings.seed, stream);
-                let mut sum = Vec3::ZERO;
-                for j in 0..k * k {
-                    let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
-                    let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
-                    let s = (x as f32 + sx) / res as f32;
-                    let t = (y as f32 + sy) / res as f32;
-                    let dir = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
-                    let sample = integrator.radiance(&Ray::new(origin, dir), &mut rng, &mut stats);
-                    sum += sample.radiance;
-                }
-                row[x as usize] = (sum * inv_spp).to_array();
-                if let Some(d_row) = dist_row.as_deref_mut() {
-                    let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
-                    stats.closest += 1;
-                    d_row[x as usize] = integrator
-                        .geometry
-                        .intersect(&Ray::new(origin, dir), f32::MAX)
-                        .map_or(f32::MAX, |h| h.t);
-                }
+    let trace_row = |(face, y, row, mut dist_row): Row| {
+        let mut stats = RayStats::default();
+        for x in 0..res {
+            let texel = u64::from(y) * u64::from(res) + u64::from(x);
+            let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
+            let mut rng = Rng::new(settings.seed, stream);
+            let mut sum = Vec3::ZERO;
+            for j in 0..k * k {
+                let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
+                let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
+                let s = (x as f32 + sx) / res as f32;
+                let t = (y as f32 + sy) / res as f32;
+                let dir = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
+                let sample = integrator.radiance(&Ray::new(origin, dir), &mut rng, &mut stats);
+                sum += sample.radiance;
             }
-            stats
-        })
-        .reduce(RayStats::default, |mut a, b| {
-            a.add(&b);
-            a
-        });
+            row[x as usize] = (sum * inv_spp).to_array();
+            if let Some(d_row) = dist_row.as_deref_mut() {
+                let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
+                stats.closest += 1;
+                d_row[x as usize] = integrator
+                    .geometry
+                    .intersect(&Ray::new(origin, dir), f32::MAX)
+                    .map_or(f32::MAX, |h| h.t);
+            }
+        }
+        stats
+    };
+    let sum = |mut a: RayStats, b: RayStats| {
+        a.add(&b);
+        a
+    };
+    let stats = if parallel {
+        rows.into_par_iter()
+            .map(trace_row)
+            .reduce(RayStats::default, sum)
+    } else {
+        rows.into_iter()
+            .map(trace_row)
+            .fold(RayStats::default(), sum)
+    };
     let cube = CubeImage {
         resolution: res,
         faces,
