@@ -523,10 +523,12 @@ const FLAT_PATCH: &str = "1
 1,1,0
 ";
 
-/// The flat patch with 4 sample points, all within φ_samplemap = 89° of every texel's normal
+/// The flat patch with 16 sample points, all within φ_samplemap = 89° of every texel's normal
 /// and visible from it (nothing else lies above the patch), so every texel of the 4096² map
-/// finds four and the map is built once; a point light and a red box beside the patch make
-/// the four cube maps differ, so a wrong sample-map texel changes the image.
+/// finds its four nearest and the map is built once; the texels' sets of four differ across
+/// the patch, and a point light and a red box beside it make the cube maps differ, so a wrong
+/// sample-map texel changes the image (with only 4 points every texel held the same set, and
+/// the test passed with the shader reading the texel at half its coordinates).
 const MAP_4096_SCENE: &str = r#"
 [camera]
 position = [0.9, -0.5, 1.2]
@@ -551,7 +553,7 @@ material = { color = [0.5, 0.5, 0.5] }
 
 [bake]
 epsilon = 0.1
-sample_count = 4
+sample_count = 16
 phi_samplemap = 89.0
 cube_resolution = 8
 sample_map_resolution = 4096
@@ -585,15 +587,18 @@ fn sample_maps_of_4096_squared_bake_store_and_render() {
     assert_eq!(map.resolution(), 4096);
     let raw = map.as_u16().unwrap();
     assert_eq!(raw.len(), 4096 * 4096 * 4);
-    // Every texel holds the four points, nearest first: the orders differ across the patch.
+    // Every texel holds four points; the sets differ across the patch.
     let points = store.sample_points().len();
-    assert_eq!(points, 4);
-    let mut orders = std::collections::HashSet::new();
+    assert_eq!(points, 16);
+    let mut sets = std::collections::HashSet::new();
     for t in raw.chunks_exact(4) {
         assert!(t.iter().all(|&i| usize::from(i) < points), "{t:?}");
-        orders.insert([t[0], t[1], t[2], t[3]]);
+        let mut set = [t[0], t[1], t[2], t[3]];
+        set.sort_unstable();
+        sets.insert(set);
     }
-    assert!(orders.len() >= 4, "{} orders", orders.len());
+    println!("{} distinct sets of four", sets.len());
+    assert!(sets.len() >= 8, "{} sets", sets.len());
     assert_eq!(map.get(4095, 4095).map(|t| t.len()), Some(4));
 
     let mut cubes = StoreCubes::decode(&store).unwrap();
