@@ -160,6 +160,8 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
             break;
         }
         report.points_added += added;
+        // Free the old maps first: at 4096² one patch's map is 256 MiB.
+        maps.indices = Vec::new();
         (maps, map_stats) = build_maps(&points);
         rays += map_stats.rays;
         min_distance *= 0.5;
