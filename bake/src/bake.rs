@@ -19,8 +19,20 @@ use crate::scene::Scene;
 /// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε.
 pub const TESSELLATION_ERROR: f32 = 1.0 / 50.0;
 
-/// Cubes captured in parallel before they are appended in order.
+/// Most cubes captured in parallel before they are appended in order.
 const CHUNK: usize = 32;
+
+/// Most bytes of captured (f32) cube maps in flight in one chunk: with large faces the chunk
+/// shrinks (to one cube from 1024² up: 6 × 1024² × 12 bytes = 72 MiB), and the capture runs its
+/// rows in parallel instead. At 2048² one cube is 288 MiB as f32; 32 of them would be 9 GiB.
+const CHUNK_BYTES: u64 = 64 << 20;
+
+/// Cubes per chunk for faces of `resolution`² (1..=[`CHUNK`]).
+pub fn chunk_cubes(resolution: u32, distance_channel: bool) -> usize {
+    let texel_bytes = 12 + if distance_channel { 4 } else { 0 };
+    let cube_bytes = 6 * u64::from(resolution).pow(2) * texel_bytes;
+    (CHUNK_BYTES / cube_bytes.max(1)).clamp(1, CHUNK as u64) as usize
+}
 
 /// How to run a bake.
 #[derive(Clone, Debug)]
@@ -156,6 +168,8 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
             break;
         }
         report.points_added += added;
+        // Free the old maps first: at 4096² one patch's map is 256 MiB.
+        maps.indices = Vec::new();
         (maps, map_stats) = build_maps(&points);
         rays += map_stats.rays;
         min_distance *= 0.5;
@@ -208,9 +222,10 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
             .saturating_add(limit)
             .min(writer.total_cubes())
     });
+    let chunk = chunk_cubes(capture.resolution, capture.distance_channel);
     while writer.next_cube() < stop_at {
         let first = writer.next_cube() as usize;
-        let end = (first + CHUNK).min(stop_at as usize);
+        let end = (first + chunk).min(stop_at as usize);
         let encoded: Vec<_> = (first..end)
             .into_par_iter()
             .map(|i| {

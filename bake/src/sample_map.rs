@@ -144,40 +144,40 @@ pub fn build(
     let index = PointIndex::new(points);
     let cos_phi = phi_samplemap_deg.to_radians().cos();
     let res = resolution as usize;
-    let rows: Vec<(Vec<[u32; 4]>, u64)> = (0..patches.len() * res)
-        .into_par_iter()
-        .map(|row| {
+    // Written in place, row by row in parallel: at 4096² the map is 256 MiB of u32 indices,
+    // and per-row vectors gathered afterwards would hold it twice.
+    let mut indices = vec![[INVALID_INDEX; 4]; patches.len() * res * res];
+    let rays: u64 = indices
+        .par_chunks_mut(res.max(1))
+        .enumerate()
+        .map(|(row, texels)| {
             let patch = patches[row / res];
             let y = row % res;
             let v = (y as f32 + 0.5) / res as f32;
             let mut rays = 0;
-            let texels = (0..res)
-                .map(|x| {
-                    let u = (x as f32 + 0.5) / res as f32;
-                    let p = patch.eval(u, v);
-                    let n = patch.normal(u, v);
-                    let lift = epsilon * VISIBILITY_LIFT;
-                    let (ids, r) = texel_indices(&index, geometry, p, n, cos_phi, lift);
-                    rays += r;
-                    ids
-                })
-                .collect();
-            (texels, rays)
+            for (x, out) in texels.iter_mut().enumerate() {
+                let u = (x as f32 + 0.5) / res as f32;
+                let p = patch.eval(u, v);
+                let n = patch.normal(u, v);
+                let lift = epsilon * VISIBILITY_LIFT;
+                let (ids, r) = texel_indices(&index, geometry, p, n, cos_phi, lift);
+                rays += r;
+                *out = ids;
+            }
+            rays
         })
-        .collect();
-    let mut stats = SampleMapStats::default();
-    let mut indices = Vec::with_capacity(patches.len() * res * res);
-    for (texels, rays) in rows {
-        stats.rays += rays;
-        for t in texels {
-            stats.texels += 1;
-            if t[3] == INVALID_INDEX {
-                stats.short += 1;
-            }
-            if t[0] == INVALID_INDEX {
-                stats.empty += 1;
-            }
-            indices.push(t);
+        .sum();
+    let mut stats = SampleMapStats {
+        rays,
+        ..Default::default()
+    };
+    for t in &indices {
+        stats.texels += 1;
+        if t[3] == INVALID_INDEX {
+            stats.short += 1;
+        }
+        if t[0] == INVALID_INDEX {
+            stats.empty += 1;
         }
     }
     (

@@ -406,25 +406,35 @@ impl Renderer {
             ..Default::default()
         });
 
-        // The cube-map pool: as many arrays as the slots need (unused bindings get one
-        // slot), each at most `slots_per_texture` cubes.
+        // The cube-map pool: as many arrays as the slots need, each at most
+        // `slots_per_texture` cubes. Unused bindings get a one-texel array: the shader
+        // (specialized on POOLS) never reads them, and at 2048² a one-slot array would be
+        // 96 MiB.
         let format = texture_format(encoding);
         let mut pool = Vec::new();
         let mut pool_views = Vec::new();
         for t in 0..MAX_POOL_TEXTURES {
             let in_this = slots
                 .saturating_sub(t * slots_per_texture)
-                .min(slots_per_texture)
-                .max(1);
+                .min(slots_per_texture);
             let faces = in_this * 6;
             let per_layer = 1u32 << face_shift;
-            let tex = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("cube pool"),
-                size: wgpu::Extent3d {
+            let size = if in_this == 0 {
+                wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                }
+            } else {
+                wgpu::Extent3d {
                     width: res * faces.min(per_layer),
                     height: res,
                     depth_or_array_layers: faces.div_ceil(per_layer),
-                },
+                }
+            };
+            let tex = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("cube pool"),
+                size,
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
