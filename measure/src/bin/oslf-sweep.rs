@@ -21,9 +21,10 @@ use oslf_runtime::{Mode, Order, ShadingParams};
 /// Bake variants of a scene and render them with variants of the runtime settings, one setting
 /// changed at a time from the defaults; judge every combination against the ray-traced ground
 /// truth (RMSE of L*) and time it (frame times interleaved over all configurations; bake CPU
-/// time). Writes sweep.csv, sweep.json, the sensitivity table (sensitivity.md) and the plot of
-/// error against frame time and against bake time, each with its Pareto front (tradeoff.png,
-/// tradeoff.svg), to the output directory.
+/// time). Writes sweep.csv, sweep.json, the sensitivity table (sensitivity.md) and the plot
+/// (tradeoff.png, tradeoff.svg): error against frame time for the runtime settings on the
+/// default bake, and against bake CPU time for the bake settings with the default runtime, each
+/// with its Pareto front.
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
@@ -176,20 +177,30 @@ fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     })?;
-    let error = |r: &SweepRow| r.judgement.metrics.rmse_lab[0];
-    let frame_front = pareto_front(
-        &rows
-            .iter()
-            .map(|r| (r.judgement.frame_ms, error(r)))
-            .collect::<Vec<_>>(),
-    );
-    let bake_front = pareto_front(
-        &rows
-            .iter()
-            .map(|r| (bake_cost(r), error(r)))
-            .collect::<Vec<_>>(),
-    );
+    // Frame time is what the runtime settings trade: their front is over the default bake's
+    // rows. Bake time is what the bake settings trade: over the default runtime settings' rows.
+    let frame_front = front_of(&rows, |r| r.bake_change.is_none(), |r| r.judgement.frame_ms);
+    let bake_front = front_of(&rows, |r| r.runtime_change.is_none(), bake_cost);
     write_outputs(&args, &params, &rows, &frame_front, &bake_front)
+}
+
+/// Pareto membership (error against `cost`) among the rows `member` selects; `None` for the
+/// rows it leaves out.
+fn front_of(
+    rows: &[SweepRow],
+    member: impl Fn(&SweepRow) -> bool,
+    cost: impl Fn(&SweepRow) -> f64,
+) -> Vec<Option<bool>> {
+    let members: Vec<usize> = (0..rows.len()).filter(|&i| member(&rows[i])).collect();
+    let points: Vec<(f64, f64)> = members
+        .iter()
+        .map(|&i| (cost(&rows[i]), rows[i].judgement.metrics.rmse_lab[0]))
+        .collect();
+    let mut out = vec![None; rows.len()];
+    for (&i, on) in members.iter().zip(pareto_front(&points)) {
+        out[i] = Some(on);
+    }
+    out
 }
 
 /// The bake's CPU seconds (all threads), or its wall seconds where CPU time is not known.
@@ -201,8 +212,8 @@ fn write_outputs(
     args: &Args,
     params: &ShadingParams,
     rows: &[SweepRow],
-    frame_front: &[bool],
-    bake_front: &[bool],
+    frame_front: &[Option<bool>],
+    bake_front: &[Option<bool>],
 ) -> anyhow::Result<()> {
     let mut all = Table::new(
         &format!(
@@ -250,20 +261,26 @@ fn write_outputs(
             format!("{:.4}", m.rmse_rgb[2]),
             m.psnr_db.map_or("–".into(), |p| format!("{p:.2}")),
             m.pixels.to_string(),
-            if *on { "yes".into() } else { "no".into() },
-            if *on_bake { "yes".into() } else { "no".into() },
+            yes_no(*on),
+            yes_no(*on_bake),
         ]);
     }
     let sensitivity = sensitivity_table(rows);
     print!("{}\n{}", all.to_text(), sensitivity.to_text());
-    for (name, front) in [("frame time", frame_front), ("bake CPU time", bake_front)] {
+    for (name, front) in [
+        ("frame time (runtime settings, default bake)", frame_front),
+        ("bake CPU time (bake settings, default runtime)", bake_front),
+    ] {
         let labels: Vec<String> = rows
             .iter()
             .zip(front)
-            .filter(|(_, f)| **f)
+            .filter(|(_, f)| **f == Some(true))
             .map(|(r, _)| r.label())
             .collect();
-        let default_on = rows.iter().zip(front).any(|(r, f)| r.is_default() && *f);
+        let default_on = rows
+            .iter()
+            .zip(front)
+            .any(|(r, f)| r.is_default() && *f == Some(true));
         println!(
             "\nPareto front of RMSE L* against {name}: {}\nthe defaults are {}on it",
             labels.join("; "),
@@ -289,33 +306,41 @@ fn write_outputs(
         &args.out.join("sweep.json"),
         &serde_json::to_string_pretty(&json)?,
     )?;
-    let panel = |front: &[bool], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
-        points: rows
-            .iter()
-            .zip(front)
-            .map(|(r, f)| PlotPoint {
-                label: r.label(),
-                time_ms: time(r),
-                error: r.judgement.metrics.rmse_lab[0],
-                on_front: *f,
-                is_default: r.is_default(),
-            })
-            .collect(),
-        text: PlotText {
-            caption: format!("{}: error against {what}", params.mode.name()),
-            x: x.into(),
-            y: "RMSE of L* against the ground truth".into(),
-        },
-    };
+    let panel =
+        |front: &[Option<bool>], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
+            points: rows
+                .iter()
+                .zip(front)
+                .filter_map(|(r, f)| {
+                    f.map(|on| PlotPoint {
+                        label: r.label(),
+                        time_ms: time(r),
+                        error: r.judgement.metrics.rmse_lab[0],
+                        on_front: on,
+                        is_default: r.is_default(),
+                    })
+                })
+                .collect(),
+            text: PlotText {
+                caption: format!("{}: {what}", params.mode.name()),
+                x: x.into(),
+                y: "RMSE of L* against the ground truth".into(),
+            },
+        };
     plot_tradeoff(
         &[
             panel(
                 frame_front,
                 &|r| r.judgement.frame_ms,
                 "frame time, ms",
-                "frame time",
+                "runtime settings, default bake",
             ),
-            panel(bake_front, &bake_cost, "bake, CPU seconds", "bake time"),
+            panel(
+                bake_front,
+                &bake_cost,
+                "bake, CPU seconds",
+                "bake settings, default runtime",
+            ),
         ],
         &args.out.join("tradeoff.png"),
         &args.out.join("tradeoff.svg"),
@@ -334,7 +359,13 @@ fn sensitivity_table(rows: &[SweepRow]) -> Table {
     let mut t = Table::new(
         "Sensitivity: one setting changed from the defaults",
         &[
-            "setting", "value", "RMSE L*", "Δ L*", "frame ms", "bake s", "store MB",
+            "setting",
+            "value",
+            "RMSE L*",
+            "Δ L*",
+            "frame ms",
+            "bake CPU-s",
+            "store MB",
         ],
     );
     let Some(base) = rows.iter().find(|r| r.is_default()) else {
@@ -362,6 +393,14 @@ fn sensitivity_table(rows: &[SweepRow]) -> Table {
         push(&change.key, &change.value, r);
     }
     t
+}
+
+fn yes_no(on: Option<bool>) -> String {
+    match on {
+        Some(true) => "yes".into(),
+        Some(false) => "no".into(),
+        None => "–".into(),
+    }
 }
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {
