@@ -262,9 +262,11 @@ pub struct Distribution1D {
     cdf: Vec<f32>,
     /// `∫₀¹ f = Σ fᵢ / n` (after the all-zero fallback).
     integral: f32,
-    /// Guide table (`n` cells) for [`Self::sample_continuous`]: `guide[g]` is a lower bound on
-    /// the number of `cdf` entries `<= u` for every `u` in cell `g = ⌊u·n⌋`, so the search
-    /// becomes a short forward scan with the same result as a binary search.
+    /// Guide table (`n + 1` entries) for [`Self::sample_continuous`]: `guide[g]` is a lower
+    /// bound on the number of `cdf` entries `<= u` for every `u` in cell `g = ⌊u·n⌋`, and
+    /// `guide[g + 1]` nearly an upper bound, so the search becomes a binary search over that range
+    /// (a concentrated density, a sun, puts hundreds of entries in one cell) with the same
+    /// result as one over all of `cdf`.
     guide: Vec<u32>,
 }
 
@@ -294,7 +296,10 @@ impl Distribution1D {
         cdf[n] = 1.0;
         // Every f32 `u` with ⌊u·n⌋ = g (f32 product) is ≥ g/n·(1 − 2⁻²³); the threshold sits
         // safely below that, so `guide[g]` never exceeds the true count.
-        let guide = (0..n)
+        // Entry n + 1 bounds the last cell from above. (The lower bound of cell g + 1 may
+        // undercount cell g's largest `u` by entries within 1e-6 of (g + 1)/n: the scan after
+        // the binary search adds those.)
+        let guide = (0..=n)
             .map(|g| {
                 let lo = g as f64 / n as f64 * (1.0 - 1e-6);
                 cdf.partition_point(|&c| f64::from(c) <= lo) as u32
@@ -338,10 +343,13 @@ impl Distribution1D {
             0.0
         };
         // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1. `count` is the number of
-        // cdf entries <= u (cdf is non-decreasing), found by scanning up from the guide's lower
-        // bound: the same value as `self.cdf.partition_point(|&c| c <= u)`.
+        // cdf entries <= u (cdf is non-decreasing), found by a binary search between the
+        // guide's bounds and a scan up from there (in case the upper bound undercounts): the
+        // same value as `self.cdf.partition_point(|&c| c <= u)`.
         let g = ((u * n as f32) as usize).min(n - 1);
-        let mut count = self.guide[g] as usize;
+        let lo = self.guide[g] as usize;
+        let hi = (self.guide[g + 1] as usize).clamp(lo, self.cdf.len());
+        let mut count = lo + self.cdf[lo..hi].partition_point(|&c| c <= u);
         while count < self.cdf.len() && self.cdf[count] <= u {
             count += 1;
         }
