@@ -63,6 +63,8 @@ pub struct TriangleScene {
     input_order: Vec<u32>,
     build_time: Duration,
     bounds: (Vec3, Vec3),
+    /// Whether the CPU has AVX2 (then traversal runs [`TriangleScene::intersect_avx2`]).
+    avx2: bool,
 }
 
 /// Traversal stack depth of obvhs's `traverse!` (its `TRAVERSAL_STACK_SIZE`).
@@ -169,6 +171,10 @@ impl TriangleScene {
             input_order,
             build_time,
             bounds,
+            #[cfg(target_arch = "x86_64")]
+            avx2: std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(not(target_arch = "x86_64"))]
+            avx2: false,
         })
     }
 
@@ -230,6 +236,44 @@ impl TriangleScene {
 
 impl Intersector for TriangleScene {
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is true only where the CPU has AVX2 (detected in `build`).
+            return unsafe { self.intersect_avx2(ray, t_max) };
+        }
+        self.intersect_impl::<false>(ray, t_max)
+    }
+
+    fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is true only where the CPU has AVX2 (detected in `build`).
+            return unsafe { self.occluded_avx2(ray, t_max) };
+        }
+        self.occluded_impl::<false>(ray, t_max)
+    }
+}
+
+impl TriangleScene {
+    /// [`Intersector::intersect`] compiled for AVX2: the node test takes all 8 children in
+    /// one 256-bit vector (the same operations per lane as the SSE test, so the same lanes).
+    /// Nothing else may differ: Rust never contracts `a * b + c` into a fused multiply–add.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn intersect_avx2(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        self.intersect_impl::<true>(ray, t_max)
+    }
+
+    /// [`Intersector::occluded`] compiled for AVX2 (see [`Self::intersect_avx2`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn occluded_avx2(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_impl::<true>(ray, t_max)
+    }
+
+    /// The closest hit; `AVX2`: use [`node_lanes_avx2`] (only in an AVX2 function).
+    #[inline(always)]
+    fn intersect_impl<const AVX2: bool>(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
         let pr = PreparedRay::new(ray, t_max)?;
         let mut t_best = t_max;
         let mut best: Option<(usize, TriHit)> = None;
@@ -239,7 +283,7 @@ impl Intersector for TriangleScene {
             self.bvh,
             node,
             state,
-            intersect_node(node, &pr, t_best, state.oct_inv4),
+            intersect_node::<AVX2>(node, &pr, t_best, state.oct_inv4),
             {
                 let slot = state.primitive_id as usize;
                 if let Some(h) =
@@ -253,7 +297,9 @@ impl Intersector for TriangleScene {
         best.map(|(slot, h)| self.surface_hit(slot, &h))
     }
 
-    fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+    /// Whether anything is hit; `AVX2` as in [`Self::intersect_impl`].
+    #[inline(always)]
+    fn occluded_impl<const AVX2: bool>(&self, ray: &Ray, t_max: f32) -> bool {
         let Some(pr) = PreparedRay::new(ray, t_max) else {
             return false;
         };
@@ -265,7 +311,7 @@ impl Intersector for TriangleScene {
                 self.bvh,
                 node,
                 state,
-                intersect_node(node, &pr, t_max, state.oct_inv4),
+                intersect_node::<AVX2>(node, &pr, t_max, state.oct_inv4),
                 {
                     let slot = state.primitive_id as usize;
                     if intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_max)
@@ -473,12 +519,27 @@ const SLAB_PAD: f32 = 1e-6;
 /// The CWBVH node test: which of the node's 8 children the ray enters within `[0, t_max]`.
 /// Same as obvhs's `CwBvhNode::intersect_ray_simd` except for the clip at 0 (not 1e-4), the
 /// exact reciprocal direction and the per-axis rounding pad.
+/// `AVX2`: take the lanes from [`node_lanes_avx2`]; only inside a function compiled with AVX2.
 #[inline(always)]
-fn intersect_node(node: &CwBvhNode, r: &PreparedRay, t_max: f32, oct_inv4: u32) -> u32 {
+fn intersect_node<const AVX2: bool>(
+    node: &CwBvhNode,
+    r: &PreparedRay,
+    t_max: f32,
+    oct_inv4: u32,
+) -> u32 {
     let extent = node.compute_extent();
     let adj_dir_inv = extent * r.inv_dir;
     let adj_origin = (Vec3A::from(node.p) - Vec3A::from(r.origin)) * r.inv_dir;
     let pad = (adj_origin.abs() + adj_dir_inv.abs() * 255.0) * SLAB_PAD;
+    #[cfg(target_arch = "x86_64")]
+    let mut lanes = if AVX2 {
+        // SAFETY: `AVX2` is true only in `intersect_avx2` / `occluded_avx2`, AVX2 functions
+        // called only where the CPU has AVX2.
+        unsafe { node_lanes_avx2(node, adj_dir_inv, adj_origin, pad, r, t_max) }
+    } else {
+        node_lanes(node, adj_dir_inv, adj_origin, pad, r, t_max)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
     let mut lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, r, t_max);
     if lanes == 0 {
         return 0;
@@ -561,6 +622,57 @@ fn node_lanes(
         let m1 = _mm_movemask_ps(_mm_cmple_ps(tmin1, tmax1)) as u32;
         m0 | (m1 << 4)
     }
+}
+
+/// [`node_lanes`] with AVX2: all 8 children in one vector. Every lane computes exactly what the
+/// SSE version computes for it (`q · a + o ∓ p` in that order, then the same min / max and
+/// ordered `<=`), so the lanes are the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn node_lanes_avx2(
+    node: &CwBvhNode,
+    adj_dir_inv: Vec3A,
+    adj_origin: Vec3A,
+    pad: Vec3A,
+    r: &PreparedRay,
+    t_max: f32,
+) -> u32 {
+    use std::arch::x86_64::*;
+    let base = (node as *const CwBvhNode).cast::<u8>();
+    // The 8 quantised planes at byte offset `$offset` of the node as 8 floats.
+    macro_rules! planes {
+        ($offset:expr) => {
+            // SAFETY: every offset is that of an `[u8; 8]` field of `CwBvhNode` (see
+            // `plane_offsets`), so the 8-byte unaligned load stays inside `*node`.
+            _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(unsafe {
+                _mm_loadl_epi64(base.add($offset).cast::<__m128i>())
+            }))
+        };
+    }
+    macro_rules! axis {
+        ($offsets:expr, $a:expr, $o:expr, $p:expr) => {{
+            let (a, o, p) = (_mm256_set1_ps($a), _mm256_set1_ps($o), _mm256_set1_ps($p));
+            let near = planes!($offsets[0]);
+            let far = planes!($offsets[1]);
+            (
+                _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(near, a), o), p),
+                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(far, a), o), p),
+            )
+        }};
+    }
+    let (x0, x1) = axis!(r.planes[0], adj_dir_inv.x, adj_origin.x, pad.x);
+    let (y0, y1) = axis!(r.planes[1], adj_dir_inv.y, adj_origin.y, pad.y);
+    let (z0, z1) = axis!(r.planes[2], adj_dir_inv.z, adj_origin.z, pad.z);
+    let tmin = _mm256_max_ps(
+        _mm256_max_ps(x0, y0),
+        _mm256_max_ps(z0, _mm256_setzero_ps()),
+    );
+    let tmax = _mm256_min_ps(
+        _mm256_min_ps(x1, y1),
+        _mm256_min_ps(z1, _mm256_set1_ps(t_max)),
+    );
+    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32
 }
 
 /// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (portable version).
