@@ -132,7 +132,11 @@ fn oslf_truth_writes_every_mode_and_checks_the_store() {
         "--store",
         dir.join("lid.oslf").to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     for m in ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"] {
         for ext in ["exr", "png"] {
             assert!(dir.join(format!("t-{m}.{ext}")).exists(), "t-{m}.{ext}");
@@ -143,7 +147,11 @@ fn oslf_truth_writes_every_mode_and_checks_the_store() {
     assert!(String::from_utf8_lossy(&e.stderr).contains("unknown mode \"shiny\""));
     // A store baked from a different scene file is refused.
     let other = dir.join("other.toml");
-    std::fs::write(&other, SCENE.replace("sample_count = 12", "sample_count = 13")).unwrap();
+    std::fs::write(
+        &other,
+        SCENE.replace("sample_count = 12", "sample_count = 13"),
+    )
+    .unwrap();
     let e = Command::new(env!("CARGO_BIN_EXE_oslf-truth"))
         .arg(&other)
         .args(["--store", dir.join("lid.oslf").to_str().unwrap(), "-q"])
