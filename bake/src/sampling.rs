@@ -258,8 +258,9 @@ impl Frame {
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
     func: Vec<f32>,
-    /// `n + 1` entries, `cdf[0] = 0`, `cdf[n] = 1`.
-    cdf: Vec<f32>,
+    /// `n + 1` entries `[cdf_i, pdf_i]`: `cdf_0 = 0`, `cdf_n = 1`, and `pdf_i = func[i] /
+    /// integral` (`pdf_n = 0`), side by side so that a sample reads one cache line for both.
+    cdf: Vec<[f32; 2]>,
     /// `∫₀¹ f = Σ fᵢ / n` (after the all-zero fallback).
     integral: f32,
     /// Guide table (`n + 1` entries) for [`Self::sample_continuous`]: `guide[g]` is a lower
@@ -294,6 +295,7 @@ impl Distribution1D {
             cdf.push((acc / sum) as f32);
         }
         cdf[n] = 1.0;
+        let integral = (sum / n as f64) as f32;
         // Every f32 `u` with ⌊u·n⌋ = g (f32 product) is ≥ g/n·(1 − 2⁻²³); the threshold sits
         // safely below that, so `guide[g]` never exceeds the true count.
         // Entry n + 1 bounds the last cell from above. (The lower bound of cell g + 1 may
@@ -305,10 +307,15 @@ impl Distribution1D {
                 cdf.partition_point(|&c| f64::from(c) <= lo) as u32
             })
             .collect();
+        let cdf = cdf
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| [c, f.get(i).map_or(0.0, |&v| v / integral)])
+            .collect();
         Distribution1D {
             func: f,
             cdf,
-            integral: (sum / n as f64) as f32,
+            integral,
             guide,
         }
     }
@@ -349,20 +356,21 @@ impl Distribution1D {
         let g = ((u * n as f32) as usize).min(n - 1);
         let lo = self.guide[g] as usize;
         let hi = (self.guide[g + 1] as usize).clamp(lo, self.cdf.len());
-        let mut count = lo + self.cdf[lo..hi].partition_point(|&c| c <= u);
-        while count < self.cdf.len() && self.cdf[count] <= u {
+        let mut count = lo + self.cdf[lo..hi].partition_point(|c| c[0] <= u);
+        while count < self.cdf.len() && self.cdf[count][0] <= u {
             count += 1;
         }
-        debug_assert_eq!(count, self.cdf.partition_point(|&c| c <= u));
+        debug_assert_eq!(count, self.cdf.partition_point(|c| c[0] <= u));
         let i = (count.max(1) - 1).min(n - 1);
-        let width = self.cdf[i + 1] - self.cdf[i];
+        let [c, pdf] = self.cdf[i];
+        let width = self.cdf[i + 1][0] - c;
         let du = if width > 0.0 {
-            ((u - self.cdf[i]) / width).clamp(0.0, ONE_MINUS_EPSILON)
+            ((u - c) / width).clamp(0.0, ONE_MINUS_EPSILON)
         } else {
             0.0
         };
         let x = ((i as f32 + du) / n as f32).min(ONE_MINUS_EPSILON);
-        (x, self.func[i] / self.integral, i)
+        (x, pdf, i)
     }
 
     /// Density at `x` (0 outside `[0, 1]`).
@@ -370,7 +378,7 @@ impl Distribution1D {
         if !(0.0..=1.0).contains(&x) {
             return 0.0;
         }
-        self.func[self.bin(x)] / self.integral
+        self.cdf[self.bin(x)][1]
     }
 
     /// Inverse of [`Self::sample_continuous`]: the `u` that maps to `x`.
@@ -382,7 +390,8 @@ impl Distribution1D {
         let n = self.func.len();
         let i = self.bin(x);
         let frac = (x * n as f32 - i as f32).clamp(0.0, 1.0);
-        let u = self.cdf[i] + frac * (self.cdf[i + 1] - self.cdf[i]);
+        let (c0, c1) = (self.cdf[i][0], self.cdf[i + 1][0]);
+        let u = c0 + frac * (c1 - c0);
         u.clamp(0.0, ONE_MINUS_EPSILON)
     }
 
