@@ -314,6 +314,16 @@ impl TriangleScene {
         let Some(pr) = PreparedRay::new(ray, t_max) else {
             return false;
         };
+        // The occluder of this thread's last occluded shadow ray first: neighbouring shadow
+        // rays are often blocked by the same triangle. (Any triangle hit answers the query, so
+        // the answer does not depend on this.)
+        let cached = LAST_OCCLUDER.get() as usize;
+        if cached < self.vertices.len()
+            && intersect_triangle(&self.vertices[cached], &self.planes[cached], &pr, t_max)
+                .is_some()
+        {
+            return true;
+        }
         let mut state = self.bvh.new_traversal(Vec3A::from(pr.dir));
         let mut node: &CwBvhNode;
         let mut hit = false;
@@ -328,6 +338,7 @@ impl TriangleScene {
                     if intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_max)
                         .is_some()
                     {
+                        LAST_OCCLUDER.set(state.primitive_id);
                         hit = true;
                         break 'outer;
                     }
@@ -336,6 +347,12 @@ impl TriangleScene {
         }
         hit
     }
+}
+
+thread_local! {
+    /// Slot of the triangle that occluded this thread's last occluded shadow ray (in whichever
+    /// scene; `u32::MAX` for none).
+    static LAST_OCCLUDER: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
 }
 
 /// Depth (levels of nodes) of a CWBVH.
