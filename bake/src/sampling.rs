@@ -343,34 +343,7 @@ impl Distribution1D {
     /// Maps `u ∈ [0,1)` to `(x ∈ [0,1), pdf(x), bin index)`. Bins of zero value are never
     /// returned.
     pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
-        let n = self.func.len();
-        let u = if u.is_finite() {
-            u.clamp(0.0, ONE_MINUS_EPSILON)
-        } else {
-            0.0
-        };
-        // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1. `count` is the number of
-        // cdf entries <= u (cdf is non-decreasing), found by a binary search between the
-        // guide's bounds and a scan up from there (in case the upper bound undercounts): the
-        // same value as `self.cdf.partition_point(|&c| c <= u)`.
-        let g = ((u * n as f32) as usize).min(n - 1);
-        let lo = self.guide[g] as usize;
-        let hi = (self.guide[g + 1] as usize).clamp(lo, self.cdf.len());
-        let mut count = lo + self.cdf[lo..hi].partition_point(|c| c[0] <= u);
-        while count < self.cdf.len() && self.cdf[count][0] <= u {
-            count += 1;
-        }
-        debug_assert_eq!(count, self.cdf.partition_point(|c| c[0] <= u));
-        let i = (count.max(1) - 1).min(n - 1);
-        let [c, pdf] = self.cdf[i];
-        let width = self.cdf[i + 1][0] - c;
-        let du = if width > 0.0 {
-            ((u - c) / width).clamp(0.0, ONE_MINUS_EPSILON)
-        } else {
-            0.0
-        };
-        let x = ((i as f32 + du) / n as f32).min(ONE_MINUS_EPSILON);
-        (x, pdf, i)
+        sample_tables(&self.cdf, &self.guide, u)
     }
 
     /// Density at `x` (0 outside `[0, 1]`).
@@ -401,12 +374,50 @@ impl Distribution1D {
     }
 }
 
+/// [`Distribution1D::sample_continuous`] on its tables (`n + 1` entries each, `n ≥ 1`).
+#[inline]
+fn sample_tables(cdf: &[[f32; 2]], guide: &[u32], u: f32) -> (f32, f32, usize) {
+    let n = cdf.len() - 1;
+    let u = if u.is_finite() {
+        u.clamp(0.0, ONE_MINUS_EPSILON)
+    } else {
+        0.0
+    };
+    // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1. `count` is the number of
+    // cdf entries <= u (cdf is non-decreasing), found by a binary search between the
+    // guide's bounds and a scan up from there (in case the upper bound undercounts): the
+    // same value as `cdf.partition_point(|&c| c <= u)`.
+    let g = ((u * n as f32) as usize).min(n - 1);
+    let lo = guide[g] as usize;
+    let hi = (guide[g + 1] as usize).clamp(lo, cdf.len());
+    let mut count = lo + cdf[lo..hi].partition_point(|c| c[0] <= u);
+    while count < cdf.len() && cdf[count][0] <= u {
+        count += 1;
+    }
+    debug_assert_eq!(count, cdf.partition_point(|c| c[0] <= u));
+    let i = (count.max(1) - 1).min(n - 1);
+    let [c, pdf] = cdf[i];
+    let width = cdf[i + 1][0] - c;
+    let du = if width > 0.0 {
+        ((u - c) / width).clamp(0.0, ONE_MINUS_EPSILON)
+    } else {
+        0.0
+    };
+    let x = ((i as f32 + du) / n as f32).min(ONE_MINUS_EPSILON);
+    (x, pdf, i)
+}
+
 /// A piecewise-constant density on `[0,1)²` over a `width × height` grid (row-major, row 0 at
 /// `y ∈ [0, 1/height)`): a marginal over rows and one conditional per row.
 #[derive(Clone, Debug)]
 pub struct Distribution2D {
     conditional: Vec<Distribution1D>,
     marginal: Distribution1D,
+    /// Every row's `cdf` table, row after row (`width + 1` entries each), and likewise the
+    /// guide tables: sampling a row reads these directly, not through the row's own vectors
+    /// (one dependent cache miss fewer).
+    conditional_cdf: Vec<[f32; 2]>,
+    conditional_guide: Vec<u32>,
 }
 
 impl Distribution2D {
@@ -440,6 +451,14 @@ impl Distribution2D {
             .collect();
         let marginal = Distribution1D::new(&row_integrals);
         Ok(Distribution2D {
+            conditional_cdf: conditional
+                .iter()
+                .flat_map(|d| d.cdf.iter().copied())
+                .collect(),
+            conditional_guide: conditional
+                .iter()
+                .flat_map(|d| d.guide.iter().copied())
+                .collect(),
             conditional,
             marginal,
         })
@@ -459,7 +478,13 @@ impl Distribution2D {
     /// the column).
     pub fn sample_continuous(&self, u: Vec2) -> (Vec2, f32) {
         let (y, pdf_y, row) = self.marginal.sample_continuous(u.y);
-        let (x, pdf_x, _) = self.conditional[row].sample_continuous(u.x);
+        let stride = self.width() + 1;
+        let rows = row * stride..(row + 1) * stride;
+        let (x, pdf_x, _) = sample_tables(
+            &self.conditional_cdf[rows.clone()],
+            &self.conditional_guide[rows],
+            u.x,
+        );
         (Vec2::new(x, y), pdf_x * pdf_y)
     }
 
@@ -469,7 +494,10 @@ impl Distribution2D {
             return 0.0;
         }
         let row = self.marginal.bin(p.y);
-        self.marginal.pdf(p.y) * self.conditional[row].pdf(p.x)
+        // `self.conditional[row].pdf(p.x)` from the flat table.
+        let width = self.width();
+        let column = ((p.x * width as f32) as usize).min(width - 1);
+        self.marginal.pdf(p.y) * self.conditional_cdf[row * (width + 1) + column][1]
     }
 
     /// Inverse of [`Self::sample_continuous`].
