@@ -905,7 +905,106 @@ fn node_lanes(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::Rng;
     use crate::shapes;
+
+    fn same_hit(a: Option<TriHit>, b: Option<TriHit>) -> bool {
+        match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                a.t.to_bits() == b.t.to_bits()
+                    && a.barycentric.map(f32::to_bits) == b.barycentric.map(f32::to_bits)
+            }
+            _ => false,
+        }
+    }
+
+    #[test]
+    fn simd_triangle_test_is_the_scalar_one() {
+        let mut rng = Rng::new(7, 1);
+        let mut p =
+            |s: f32| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s - s / 2.0;
+        let mut hits = 0;
+        for k in 0..20_000 {
+            // Random triangles, some with corners on a grid (rays through shared edges and
+            // corners), rays from random points towards a corner, an edge point or anywhere.
+            let grid = k % 3 == 0;
+            let corner = |p: &mut dyn FnMut(f32) -> Vec3| {
+                let v = p(4.0);
+                if grid {
+                    v.round()
+                } else {
+                    v
+                }
+            };
+            let v = [corner(&mut p), corner(&mut p), corner(&mut p)];
+            if (v[1] - v[0]).cross(v[2] - v[0]).length() == 0.0 {
+                continue;
+            }
+            let o = if k % 5 == 0 { v[0] } else { p(8.0) };
+            let target = match k % 4 {
+                0 => v[1],
+                1 => (v[1] + v[2]) * 0.5,
+                _ => p(4.0),
+            };
+            let Some(dir) = (target - o).try_normalize() else {
+                continue;
+            };
+            let Some(r) = PreparedRay::new(&Ray::new(o, dir), f32::MAX) else {
+                continue;
+            };
+            let c = Corners::new(&v);
+            let plane = triangle_plane(&v);
+            let simd = intersect_triangle(&c, &plane, &r, f32::MAX);
+            let scalar = intersect_triangle_scalar(&v, &plane, &r, f32::MAX);
+            assert!(
+                same_hit(simd, scalar),
+                "{v:?} {o} {dir}: {simd:?} {scalar:?}"
+            );
+            hits += usize::from(simd.is_some());
+        }
+        assert!(hits > 1000, "{hits}");
+    }
+
+    #[test]
+    fn avx2_traversal_is_the_sse_one() {
+        let mut instances = Vec::new();
+        for (k, r) in [1.0f32, 0.3, 2.5].into_iter().enumerate() {
+            let mut mesh = shapes::sphere(r, 24).unwrap();
+            for q in &mut mesh.positions {
+                *q += Vec3::new(k as f32 * 0.7, 0.2, -0.1 * k as f32);
+            }
+            instances.push(Instance {
+                mesh,
+                material: 0,
+                object: 0,
+            });
+        }
+        instances.push(Instance {
+            mesh: shapes::cuboid(Vec3::splat(6.0)).unwrap(),
+            material: 1,
+            object: 0,
+        });
+        let s = TriangleScene::build(instances).unwrap();
+        let mut rng = Rng::new(3, 4);
+        let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 8.0 - 4.0;
+        for _ in 0..20_000 {
+            let o = p();
+            let Some(dir) = p().try_normalize() else {
+                continue;
+            };
+            let ray = Ray::new(o, dir);
+            let t_max = 1.0 + o.length();
+            assert_eq!(
+                s.intersect(&ray, f32::MAX),
+                s.intersect_impl::<false>(&ray, f32::MAX)
+            );
+            assert_eq!(
+                s.occluded(&ray, t_max),
+                s.occluded_impl::<false>(&ray, t_max)
+            );
+        }
+    }
 
     #[test]
     fn single_triangle_scene() {
