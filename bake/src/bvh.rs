@@ -418,6 +418,7 @@ struct PreparedRay {
 impl PreparedRay {
     /// `None` for a ray that cannot hit anything (non-finite or zero direction, non-finite
     /// origin, `t_max` not positive or NaN).
+    #[inline(always)]
     fn new(ray: &Ray, t_max: f32) -> Option<Self> {
         let (o, d) = (ray.origin, ray.dir);
         if !o.is_finite() || !d.is_finite() || d == Vec3::ZERO || t_max.is_nan() || t_max <= 0.0 {
