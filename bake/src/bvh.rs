@@ -10,6 +10,13 @@
 //! - the node test is obvhs's SIMD slab test, changed to clip at `t = 0` instead of obvhs's
 //!   fixed `1e-4` (which would cull geometry closer than `1e-4` to the origin), to use exact
 //!   reciprocal directions, and to widen every slab by its own rounding error.
+//!
+//! Speed, without changing a result bit: where the CPU has AVX2 (detected at run time) the
+//! traversals are compiled for it and test a node's 8 children in one 256-bit vector, each
+//! lane by the same operations as the SSE test; the triangle test computes the three
+//! corners' sheared coordinates and edge functions in SSE vectors, lane by lane as the scalar
+//! test (`tests`); shadow rays first try the triangle that blocked the thread's last blocked
+//! shadow ray.
 
 use std::time::{Duration, Instant};
 
