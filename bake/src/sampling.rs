@@ -258,13 +258,16 @@ impl Frame {
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
     func: Vec<f32>,
-    /// `n + 1` entries, `cdf[0] = 0`, `cdf[n] = 1`.
-    cdf: Vec<f32>,
+    /// `n + 1` entries `[cdf_i, pdf_i]`: `cdf_0 = 0`, `cdf_n = 1`, and `pdf_i = func[i] /
+    /// integral` (`pdf_n = 0`), side by side so that a sample reads one cache line for both.
+    cdf: Vec<[f32; 2]>,
     /// `∫₀¹ f = Σ fᵢ / n` (after the all-zero fallback).
     integral: f32,
-    /// Guide table (`n` cells) for [`Self::sample_continuous`]: `guide[g]` is a lower bound on
-    /// the number of `cdf` entries `<= u` for every `u` in cell `g = ⌊u·n⌋`, so the search
-    /// becomes a short forward scan with the same result as a binary search.
+    /// Guide table (`n + 1` entries) for [`Self::sample_continuous`]: `guide[g]` is a lower
+    /// bound on the number of `cdf` entries `<= u` for every `u` in cell `g = ⌊u·n⌋`, and
+    /// `guide[g + 1]` nearly an upper bound, so the search becomes a binary search over that range
+    /// (a concentrated density, a sun, puts hundreds of entries in one cell) with the same
+    /// result as one over all of `cdf`.
     guide: Vec<u32>,
 }
 
@@ -292,18 +295,27 @@ impl Distribution1D {
             cdf.push((acc / sum) as f32);
         }
         cdf[n] = 1.0;
+        let integral = (sum / n as f64) as f32;
         // Every f32 `u` with ⌊u·n⌋ = g (f32 product) is ≥ g/n·(1 − 2⁻²³); the threshold sits
         // safely below that, so `guide[g]` never exceeds the true count.
-        let guide = (0..n)
+        // Entry n + 1 bounds the last cell from above. (The lower bound of cell g + 1 may
+        // undercount cell g's largest `u` by entries within 1e-6 of (g + 1)/n: the scan after
+        // the binary search adds those.)
+        let guide = (0..=n)
             .map(|g| {
                 let lo = g as f64 / n as f64 * (1.0 - 1e-6);
                 cdf.partition_point(|&c| f64::from(c) <= lo) as u32
             })
             .collect();
+        let cdf = cdf
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| [c, f.get(i).map_or(0.0, |&v| v / integral)])
+            .collect();
         Distribution1D {
             func: f,
             cdf,
-            integral: (sum / n as f64) as f32,
+            integral,
             guide,
         }
     }
@@ -331,30 +343,7 @@ impl Distribution1D {
     /// Maps `u ∈ [0,1)` to `(x ∈ [0,1), pdf(x), bin index)`. Bins of zero value are never
     /// returned.
     pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
-        let n = self.func.len();
-        let u = if u.is_finite() {
-            u.clamp(0.0, ONE_MINUS_EPSILON)
-        } else {
-            0.0
-        };
-        // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1. `count` is the number of
-        // cdf entries <= u (cdf is non-decreasing), found by scanning up from the guide's lower
-        // bound: the same value as `self.cdf.partition_point(|&c| c <= u)`.
-        let g = ((u * n as f32) as usize).min(n - 1);
-        let mut count = self.guide[g] as usize;
-        while count < self.cdf.len() && self.cdf[count] <= u {
-            count += 1;
-        }
-        debug_assert_eq!(count, self.cdf.partition_point(|&c| c <= u));
-        let i = (count.max(1) - 1).min(n - 1);
-        let width = self.cdf[i + 1] - self.cdf[i];
-        let du = if width > 0.0 {
-            ((u - self.cdf[i]) / width).clamp(0.0, ONE_MINUS_EPSILON)
-        } else {
-            0.0
-        };
-        let x = ((i as f32 + du) / n as f32).min(ONE_MINUS_EPSILON);
-        (x, self.func[i] / self.integral, i)
+        sample_tables(&self.cdf, &self.guide, u)
     }
 
     /// Density at `x` (0 outside `[0, 1]`).
@@ -362,7 +351,7 @@ impl Distribution1D {
         if !(0.0..=1.0).contains(&x) {
             return 0.0;
         }
-        self.func[self.bin(x)] / self.integral
+        self.cdf[self.bin(x)][1]
     }
 
     /// Inverse of [`Self::sample_continuous`]: the `u` that maps to `x`.
@@ -374,7 +363,8 @@ impl Distribution1D {
         let n = self.func.len();
         let i = self.bin(x);
         let frac = (x * n as f32 - i as f32).clamp(0.0, 1.0);
-        let u = self.cdf[i] + frac * (self.cdf[i + 1] - self.cdf[i]);
+        let (c0, c1) = (self.cdf[i][0], self.cdf[i + 1][0]);
+        let u = c0 + frac * (c1 - c0);
         u.clamp(0.0, ONE_MINUS_EPSILON)
     }
 
@@ -384,12 +374,50 @@ impl Distribution1D {
     }
 }
 
+/// [`Distribution1D::sample_continuous`] on its tables (`n + 1` entries each, `n ≥ 1`).
+#[inline]
+fn sample_tables(cdf: &[[f32; 2]], guide: &[u32], u: f32) -> (f32, f32, usize) {
+    let n = cdf.len() - 1;
+    let u = if u.is_finite() {
+        u.clamp(0.0, ONE_MINUS_EPSILON)
+    } else {
+        0.0
+    };
+    // Largest i with cdf[i] <= u; cdf[n] = 1 > u so i <= n - 1. `count` is the number of
+    // cdf entries <= u (cdf is non-decreasing), found by a binary search between the
+    // guide's bounds and a scan up from there (in case the upper bound undercounts): the
+    // same value as `cdf.partition_point(|&c| c <= u)`.
+    let g = ((u * n as f32) as usize).min(n - 1);
+    let lo = guide[g] as usize;
+    let hi = (guide[g + 1] as usize).clamp(lo, cdf.len());
+    let mut count = lo + cdf[lo..hi].partition_point(|c| c[0] <= u);
+    while count < cdf.len() && cdf[count][0] <= u {
+        count += 1;
+    }
+    debug_assert_eq!(count, cdf.partition_point(|c| c[0] <= u));
+    let i = (count.max(1) - 1).min(n - 1);
+    let [c, pdf] = cdf[i];
+    let width = cdf[i + 1][0] - c;
+    let du = if width > 0.0 {
+        ((u - c) / width).clamp(0.0, ONE_MINUS_EPSILON)
+    } else {
+        0.0
+    };
+    let x = ((i as f32 + du) / n as f32).min(ONE_MINUS_EPSILON);
+    (x, pdf, i)
+}
+
 /// A piecewise-constant density on `[0,1)²` over a `width × height` grid (row-major, row 0 at
 /// `y ∈ [0, 1/height)`): a marginal over rows and one conditional per row.
 #[derive(Clone, Debug)]
 pub struct Distribution2D {
     conditional: Vec<Distribution1D>,
     marginal: Distribution1D,
+    /// Every row's `cdf` table, row after row (`width + 1` entries each), and likewise the
+    /// guide tables: sampling a row reads these directly, not through the row's own vectors
+    /// (one dependent cache miss fewer).
+    conditional_cdf: Vec<[f32; 2]>,
+    conditional_guide: Vec<u32>,
 }
 
 impl Distribution2D {
@@ -423,6 +451,14 @@ impl Distribution2D {
             .collect();
         let marginal = Distribution1D::new(&row_integrals);
         Ok(Distribution2D {
+            conditional_cdf: conditional
+                .iter()
+                .flat_map(|d| d.cdf.iter().copied())
+                .collect(),
+            conditional_guide: conditional
+                .iter()
+                .flat_map(|d| d.guide.iter().copied())
+                .collect(),
             conditional,
             marginal,
         })
@@ -442,7 +478,13 @@ impl Distribution2D {
     /// the column).
     pub fn sample_continuous(&self, u: Vec2) -> (Vec2, f32) {
         let (y, pdf_y, row) = self.marginal.sample_continuous(u.y);
-        let (x, pdf_x, _) = self.conditional[row].sample_continuous(u.x);
+        let stride = self.width() + 1;
+        let rows = row * stride..(row + 1) * stride;
+        let (x, pdf_x, _) = sample_tables(
+            &self.conditional_cdf[rows.clone()],
+            &self.conditional_guide[rows],
+            u.x,
+        );
         (Vec2::new(x, y), pdf_x * pdf_y)
     }
 
@@ -452,7 +494,10 @@ impl Distribution2D {
             return 0.0;
         }
         let row = self.marginal.bin(p.y);
-        self.marginal.pdf(p.y) * self.conditional[row].pdf(p.x)
+        // `self.conditional[row].pdf(p.x)` from the flat table.
+        let width = self.width();
+        let column = ((p.x * width as f32) as usize).min(width - 1);
+        self.marginal.pdf(p.y) * self.conditional_cdf[row * (width + 1) + column][1]
     }
 
     /// Inverse of [`Self::sample_continuous`].
