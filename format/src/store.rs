@@ -162,7 +162,7 @@ impl Store {
         // Metadata.
         let meta_bytes = slice(bytes, h.meta);
         check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
-        let meta = decode_meta(meta_bytes, h.meta.offset)?;
+        let meta = decode_meta(meta_bytes, h.meta.offset, h.version)?;
         let disagree = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
             field,
             offset,
