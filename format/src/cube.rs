@@ -19,7 +19,7 @@
 //! the face is chosen in the order x, y, z.
 
 use crate::encoding::{encode_distances, encode_texels, quantize_rgb9e5_bytes, Encoding};
-use crate::filter::{filter_face, Filter};
+use crate::filter::{filter_face_quantized, Filter};
 use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
 
 /// Number of faces of a cube map.
@@ -307,11 +307,12 @@ pub fn encode_cube_with_filter(
             }
             encode_distances(d, dist_out)?;
         }
-        filter_face(
+        filter_face_quantized(
             filter,
             enc,
             res,
             params.distance_channel,
+            params.mantissa_bits,
             &raw,
             &mut filtered,
         )?;
