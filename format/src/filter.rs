@@ -1124,7 +1124,7 @@ mod tests {
                         let h = u32::from(filtered[i]);
                         for (plane, hi) in [(1, 6), (2, 5), (3, 7)] {
                             let z = u32::from(filtered[plane * t + i]) | (h >> hi & 1) << 8;
-                            let r = if z % 2 == 0 { z / 2 } else { 512 - (z + 1) / 2 };
+                            let r = unzigzag9(z);
                             assert_eq!(r % s, 0, "res {res} bits {bits} texel {i}");
                         }
                     }

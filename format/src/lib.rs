@@ -176,11 +176,17 @@
 //!   (an integer in 0..=511; the sum `x + 0.5` is rounded to binary32 first);
 //! * `pG = round(S_G · q)`;
 //! * for C in R, B: `pC = round(S_C · q)` if `S_G = 0`, else `pC = round(G · (S_C / S_G))`,
-//!   `G` this texel's green mantissa (as binary32).
+//!   `G` this texel's green mantissa (as binary32);
+//! * then each of `pG`, `pR`, `pB` is rounded to the store's *mantissa lattice*: with the
+//!   metadata's `mantissa_bits` k and `s = 2^(9 − k)`, `p ← min((p + ⌊s/2⌋) & ¬(s − 1), 512 − s)`
+//!   (integer arithmetic; the identity for k = 9, so version-1 stores and lossless ones are
+//!   unaffected). Decoders take k from the metadata. The transform stays lossless for every
+//!   input; texels quantized to k bits (see "Quantized RGB9E5") leave residuals that are
+//!   multiples of `s`.
 //!
 //! Every row after the first depends only on the row above, so decoders reconstruct a row in
 //! vector registers without a texel-to-texel dependency; filter 1's left neighbour chains
-//! the texels of a row.
+//! the texels of a row. Filter 1 ignores `mantissa_bits`.
 //!
 //! Measured on cube maps of the example scene (`cargo bench --bench store`; zstd level 3, 4
 //! samples per texel), bytes per texel none → predict → predict-rows: quick preset (489 cubes
@@ -207,8 +213,9 @@
 //! With `mantissa_bits` = k < 9, every RGB9E5 texel of every cube was quantized before the
 //! face filter: each channel's 9-bit mantissa `m` became `min(((m + s/2) >> (9 − k)) <<
 //! (9 − k), 512 − s)` with `s = 2^(9 − k)`, the shared exponent unchanged
-//! ([`encoding::quantize_rgb9e5`]). The faces are still plain RGB9E5 (readers need not know
-//! k; it records the precision): every mantissa is a multiple of `s`, 0 stays 0, and the
+//! ([`encoding::quantize_rgb9e5`]). The unfiltered faces are still plain RGB9E5 (filter 2's
+//! decoder needs k, see "Face filters"; the texels need nothing): every mantissa is a
+//! multiple of `s`, 0 stays 0, and the
 //! per-channel error is below `2^−k · 2^(e − 15)` (`2^−k` of the exponent's scale, on top of
 //! the RGB9E5 rounding). The distance plane is never quantized.
 //!
