@@ -9,6 +9,9 @@
 //! once and cached in `target/bench-data/`; each encoding is re-encoded from it, so all see
 //! the same radiance.
 //!
+//! RGB9E5 is also measured with fewer mantissa bits (`mantissa_bits` 8..1, sizes only); with
+//! `OSLF_BENCH_BITS=k` the RGB9E5 store whose decompression is timed keeps k bits.
+//!
 //! `OSLF_BENCH_STORE=path.oslf [OSLF_BENCH_CUBES=N] cargo bench --bench store`: the cube maps
 //! of an existing store instead (its first N cubes), e.g. the thesis preset's 128² cube maps
 //! from `oslf-bake examples/gazebo.toml --preset thesis`. Re-encoding an RGB9E5 store to RGB9E5
@@ -52,14 +55,24 @@ fn reference_store() -> PathBuf {
     path
 }
 
-/// Re-encodes every cube of `source` with `encoding` into a new store.
-/// Returns the store's path, its compressed cube bytes, the texel count and the compressed
-/// cube bytes without a face filter (`Filter::None`, for comparison).
-fn reencode(source: &Store, encoding: Encoding, cubes: u32) -> (PathBuf, u64, u64, u64, u64) {
+/// Re-encodes every cube of `source` with `encoding` (keeping `bits` RGB9E5 mantissa bits)
+/// into a new store. Returns the store's path, its compressed cube bytes, the texel count and
+/// the compressed cube bytes without a face filter (`Filter::None`) and with filter 1, for
+/// comparison.
+fn reencode(
+    source: &Store,
+    encoding: Encoding,
+    bits: u32,
+    cubes: u32,
+) -> (PathBuf, u64, u64, u64, u64) {
     // A name of its own: the RGBA32F copy must not replace the reference it is read from.
-    let path = data_dir().join(format!("gazebo-bench-{}-reencoded.oslf", encoding.name()));
+    let path = data_dir().join(format!(
+        "gazebo-bench-{}-{bits}-reencoded.oslf",
+        encoding.name()
+    ));
     let mut meta = source.meta().clone();
     meta.bake.encoding = encoding;
+    meta.bake.mantissa_bits = bits;
     let points = source.sample_points().to_vec();
     let res = meta.bake.sample_map_resolution;
     let mut indices = Vec::new();
@@ -152,11 +165,42 @@ fn store_benchmarks(c: &mut Criterion) {
         bake.bounces,
         bake.encoding.name()
     );
+    let bits = std::env::var("OSLF_BENCH_BITS")
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+        .map_or(9, |b| b.clamp(1, 9));
+    // Quantized RGB9E5, sizes only (encoded, not written).
+    let mut sizes = Vec::new();
+    for k in (1..=8).rev() {
+        let mut params = reference.meta().bake.clone();
+        params.encoding = Encoding::Rgb9e5;
+        params.mantissa_bits = k;
+        let (mut compressed, mut texels) = (0u64, 0u64);
+        for c in 0..cubes {
+            let cube = reference.read_cube(c).expect("read cube");
+            let (_, stats) = encode_cube(&cube, &params, c).expect("encode");
+            compressed += stats.compressed_bytes;
+            texels += 6 * (cube.resolution as u64).pow(2);
+        }
+        sizes.push(format!("{k} bits {:.3}", compressed as f64 / texels as f64));
+    }
+    println!(
+        "rgb9e5   zstd level {}, bytes per texel with fewer mantissa bits (filter {}): {}",
+        reference.meta().bake.zstd_level,
+        Filter::default(),
+        sizes.join(", ")
+    );
     let mut group = c.benchmark_group("read_face_raw");
     for encoding in [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f] {
-        let (path, compressed, texels, unfiltered, predict) = reencode(&reference, encoding, cubes);
+        let k = if encoding == Encoding::Rgb9e5 {
+            bits
+        } else {
+            9
+        };
+        let (path, compressed, texels, unfiltered, predict) =
+            reencode(&reference, encoding, k, cubes);
         println!(
-            "{:8} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} with predict, {:.3} unfiltered; {:.2} MB of cube data; raw {} bytes per texel)",
+            "{:8} mantissa_bits {k} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} with predict, {:.3} unfiltered; {:.2} MB of cube data; raw {} bytes per texel)",
             encoding.name(),
             reference.meta().bake.zstd_level,
             compressed as f64 / texels as f64,

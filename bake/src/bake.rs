@@ -342,6 +342,7 @@ pub fn store_meta(scene: &Scene) -> StoreMeta {
             distance_channel: s.distance_channel,
             zstd_level: s.zstd_level,
             scene_hash: scene.hash,
+            mantissa_bits: s.mantissa_bits,
         },
         camera: scene.camera.as_ref().map(|c| CameraInfo {
             position: c.position.to_array(),

@@ -73,6 +73,10 @@ pub struct BakeSettings {
     pub seed: u64,
     pub encoding: oslf_format::Encoding,
     pub zstd_level: i32,
+    /// RGB9E5 mantissa bits kept per channel, 1..=9 (9, the default, is lossless; fewer
+    /// quantize the cube maps below their Monte Carlo noise so that zstd compresses them
+    /// further: `oslf_format::encoding::quantize_rgb9e5`). Below 9 only with `rgb9e5`.
+    pub mantissa_bits: u32,
     /// Store the first-hit distance of each cube-map texel (the thesis's RGBZ idea, §6.3).
     pub distance_channel: bool,
     /// Capture the environment-map baseline: one extra cube at the object's centre.
@@ -439,6 +443,7 @@ struct RawBake {
     seed: Option<u64>,
     encoding: Option<EncodingName>,
     zstd_level: Option<Spanned<i32>>,
+    mantissa_bits: Option<Spanned<i64>>,
     distance_channel: Option<bool>,
     env_cube: Option<bool>,
 }
@@ -461,6 +466,7 @@ impl RawBake {
             seed,
             encoding,
             zstd_level,
+            mantissa_bits,
             distance_channel,
             env_cube
         );
@@ -917,6 +923,27 @@ impl Ctx<'_> {
             Some(z) => *z.get_ref(),
             None => 3,
         };
+        let encoding = merged
+            .encoding
+            .map_or(oslf_format::Encoding::Rgb9e5, |e| e.0);
+        let mantissa_bits = match &merged.mantissa_bits {
+            Some(m) => {
+                let bits = u32::try_from(*m.get_ref()).unwrap_or(0);
+                oslf_format::meta::check_mantissa_bits(encoding, bits).map_err(|_| {
+                    let problem = if (1..=9).contains(m.get_ref()) {
+                        format!(
+                            "mantissa_bits = {} needs encoding = \"rgb9e5\" (the encoding is {encoding}, which keeps every bit)",
+                            m.get_ref()
+                        )
+                    } else {
+                        format!("mantissa_bits {} must be in 1..=9", m.get_ref())
+                    };
+                    self.error_at(m.span(), problem)
+                })?;
+                bits
+            }
+            None => oslf_format::encoding::RGB9E5_FULL_MANTISSA_BITS,
+        };
         let epsilon_span = merged.epsilon.as_ref().map(Spanned::span);
         let settings = BakeSettings {
             epsilon: merged.epsilon.as_ref().map_or(0.1, |e| e.get_ref().0),
@@ -927,10 +954,9 @@ impl Ctx<'_> {
             samples_per_texel: spp,
             bounces,
             seed: merged.seed.unwrap_or(0),
-            encoding: merged
-                .encoding
-                .map_or(oslf_format::Encoding::Rgb9e5, |e| e.0),
+            encoding,
             zstd_level,
+            mantissa_bits,
             distance_channel: merged.distance_channel.unwrap_or(false),
             env_cube: merged.env_cube.unwrap_or(true),
         };

@@ -152,3 +152,45 @@ fn directional_lights_are_lights() {
     let text = text.replace("[0.0, 0.0, 2.0]", "[0.0, 0.0, 0.0]");
     assert_located(&text, 13, 13, "zero vector");
 }
+
+#[test]
+fn mantissa_bits_is_checked_and_located() {
+    assert_eq!(parse(GOOD).unwrap().bake.mantissa_bits, 9);
+    let text = GOOD.replace("sample_count = 10", "sample_count = 10\nmantissa_bits = 5");
+    assert_eq!(parse(&text).unwrap().bake.mantissa_bits, 5);
+    for bad in ["0", "10", "-3", "4294967301"] {
+        let text = GOOD.replace(
+            "sample_count = 10",
+            &format!("sample_count = 10\nmantissa_bits = {bad}"),
+        );
+        assert_located(&text, 11, 17, "must be in 1..=9");
+    }
+    let text = GOOD.replace(
+        "sample_count = 10",
+        "sample_count = 10\nencoding = \"rgba16f\"\nmantissa_bits = 6",
+    );
+    assert_located(&text, 12, 17, "needs encoding = \"rgb9e5\"");
+    // 9 is fine with any encoding.
+    let text = GOOD.replace(
+        "sample_count = 10",
+        "sample_count = 10\nencoding = \"rgba32f\"\nmantissa_bits = 9",
+    );
+    assert_eq!(parse(&text).unwrap().bake.mantissa_bits, 9);
+    // A preset may set it; its error points into the preset.
+    let text = format!("{GOOD}\n[presets.small]\nmantissa_bits = 12\n");
+    match Scene::from_str(&text, Path::new("t.toml"), Some("small")) {
+        Err(BakeError::Parse {
+            line,
+            column,
+            message,
+            ..
+        }) => {
+            assert_eq!((line, column), (13, 17), "{message}");
+            assert!(message.contains("1..=9"), "{message}");
+        }
+        other => panic!("{:?}", other.map(|s| s.bake.mantissa_bits)),
+    }
+    let text = format!("{GOOD}\n[presets.small]\nmantissa_bits = 6\n");
+    let scene = Scene::from_str(&text, Path::new("t.toml"), Some("small")).unwrap();
+    assert_eq!(scene.bake.mantissa_bits, 6);
+}

@@ -18,8 +18,8 @@
 //! `s = (x + 0.5) / n`, `t = (y + 0.5) / n`. When two components tie for the largest magnitude
 //! the face is chosen in the order x, y, z.
 
-use crate::encoding::{encode_distances, encode_texels, Encoding};
-use crate::filter::{filter_face, Filter};
+use crate::encoding::{encode_distances, encode_texels, quantize_rgb9e5_bytes, Encoding};
+use crate::filter::{filter_face_quantized, Filter};
 use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
 
 /// Number of faces of a cube map.
@@ -155,6 +155,7 @@ pub struct EncodedCube {
     pub(crate) filter: Filter,
     pub(crate) resolution: u32,
     pub(crate) distance_channel: bool,
+    pub(crate) mantissa_bits: u32,
     pub(crate) raw_size: u64,
     pub(crate) frames: [Vec<u8>; FACES],
     pub(crate) checksums: [u64; FACES],
@@ -188,7 +189,9 @@ impl EncodedCube {
 /// Checks the cube's shape against `params` (resolution, distance channel), rejects NaN,
 /// infinite or negative radiance ([`Error::InvalidRadiance`]) and distances
 /// ([`Error::InvalidDistance`]), clamps values above the encoding's largest finite value and
-/// counts them in [`EncodeStats::clamped_texels`].
+/// counts them in [`EncodeStats::clamped_texels`]. RGB9E5 texels keep
+/// [`BakeParams::mantissa_bits`] mantissa bits ([`crate::encoding::quantize_rgb9e5`]) before
+/// the face filter and zstd.
 ///
 /// Faces are filtered with [`Filter::default`] ([`Filter::PredictRows`]), the filter
 /// [`crate::StoreWriter::create`] records; see [`encode_cube_with_filter`].
@@ -239,8 +242,14 @@ pub fn encode_cube_with_filter(
             ),
         });
     }
-    let texels = (res as usize) * (res as usize); // res <= 16384: no overflow
     let enc = params.encoding;
+    crate::meta::check_mantissa_bits(enc, params.mantissa_bits).map_err(|detail| {
+        Error::InvalidBakeParams {
+            cube: cube_index,
+            detail,
+        }
+    })?;
+    let texels = (res as usize) * (res as usize); // res <= 16384: no overflow
     let color_bytes = texels * enc.bytes_per_texel();
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
@@ -273,6 +282,9 @@ pub fn encode_cube_with_filter(
             },
             other => other,
         })?;
+        if enc == Encoding::Rgb9e5 {
+            quantize_rgb9e5_bytes(color, params.mantissa_bits);
+        }
         if let Some(dist) = &cube.distance {
             let d = &dist[face];
             if d.len() != texels {
@@ -295,11 +307,12 @@ pub fn encode_cube_with_filter(
             }
             encode_distances(d, dist_out)?;
         }
-        filter_face(
+        filter_face_quantized(
             filter,
             enc,
             res,
             params.distance_channel,
+            params.mantissa_bits,
             &raw,
             &mut filtered,
         )?;
@@ -322,6 +335,7 @@ pub fn encode_cube_with_filter(
             filter,
             resolution: res,
             distance_channel: params.distance_channel,
+            mantissa_bits: params.mantissa_bits,
             raw_size,
             frames,
             checksums,

@@ -159,6 +159,48 @@ pub fn decode_rgb9e5(v: u32) -> [f32; 3] {
     ]
 }
 
+/// Lossless RGB9E5: all 9 mantissa bits kept ([`quantize_rgb9e5`] is then the identity).
+pub const RGB9E5_FULL_MANTISSA_BITS: u32 = 9;
+
+/// Keeps `bits` (1..=9) of an RGB9E5 texel's 9 mantissa bits: each channel's mantissa `m` is
+/// rounded to the nearest multiple of `step = 2^(9 − bits)` (ties up), and a result above 511
+/// is lowered to the largest multiple `512 − step`; the shared exponent is unchanged. So the
+/// value never leaves the original exponent's range, 0 stays 0, `bits = 9` is the identity,
+/// and quantizing twice equals quantizing once.
+///
+/// Error bound per channel: `|m' − m| ≤ step / 2` (`≤ step − 1` for the clamped top values),
+/// so below `2^−bits · 2^(e − 15)`, i.e. `2^−bits` of the exponent's scale. The largest
+/// channel of a texel above the smallest exponent has `m ≥ 256`, so its relative error is
+/// below `2^(1 − bits)`.
+///
+/// `bits` outside 1..=9 is taken as the nearest of them.
+pub fn quantize_rgb9e5(word: u32, bits: u32) -> u32 {
+    let bits = bits.clamp(1, RGB9E5_FULL_MANTISSA_BITS);
+    if bits == RGB9E5_FULL_MANTISSA_BITS {
+        return word;
+    }
+    let shift = RGB9E5_FULL_MANTISSA_BITS - bits;
+    let step = 1u32 << shift;
+    let top = 512 - step;
+    let q = |m: u32| (((m + step / 2) >> shift) << shift).min(top);
+    let r = q(word & 0x1ff);
+    let g = q((word >> 9) & 0x1ff);
+    let b = q((word >> 18) & 0x1ff);
+    r | (g << 9) | (b << 18) | (word & (0x1f << 27))
+}
+
+/// [`quantize_rgb9e5`] applied in place to every texel of an encoded RGB9E5 byte slice
+/// (little-endian `u32` per texel; a trailing partial texel is left alone).
+pub fn quantize_rgb9e5_bytes(bytes: &mut [u8], bits: u32) {
+    if bits >= RGB9E5_FULL_MANTISSA_BITS {
+        return;
+    }
+    for t in bytes.chunks_exact_mut(4) {
+        let w = u32::from_le_bytes([t[0], t[1], t[2], t[3]]);
+        t.copy_from_slice(&quantize_rgb9e5(w, bits).to_le_bytes());
+    }
+}
+
 /// Encodes linear RGB as RGBA16F bit patterns (A = 1); channels clamped to `[0, MAX_F16]`.
 pub fn encode_rgba16f(rgb: [f32; 3]) -> [u16; 4] {
     let c = |v: f32| {
@@ -310,6 +352,92 @@ mod tests {
         // 1.0 = 256 * 2^(16 - 15 - 9): exponent 16, red mantissa 256.
         assert_eq!(encode_rgb9e5([1.0, 0.0, 0.0]), 256 | (16 << 27));
         assert_eq!(decode_rgb9e5(u32::MAX), [MAX_RGB9E5; 3]);
+    }
+
+    /// Decoded error of one channel against the exponent's scale `2^(e − 15)`.
+    fn scaled_errors(word: u32, bits: u32) -> [f64; 3] {
+        let q = quantize_rgb9e5(word, bits);
+        let scale = 2f64.powi((word >> 27) as i32 - 15);
+        let a = decode_rgb9e5(word);
+        let b = decode_rgb9e5(q);
+        std::array::from_fn(|c| (f64::from(a[c]) - f64::from(b[c])).abs() / scale)
+    }
+
+    #[test]
+    fn quantize_bounds_identity_and_idempotence() {
+        // Log-spaced HDR values 1e-20..6.5e4 in several colour ratios, plus 0 and the maximum.
+        let mut words = vec![0u32, encode_rgb9e5([MAX_RGB9E5; 3]), u32::MAX, 0x1ff];
+        let ratios = [
+            [1.0, 1.0, 1.0],
+            [1.0, 0.5, 0.25],
+            [1.0, 1e-3, 0.0],
+            [0.2, 1.0, 0.7],
+        ];
+        for i in 0..=4000 {
+            let v = 10f64.powf(-20.0 + 24.8129 * f64::from(i) / 4000.0) as f32;
+            for r in ratios {
+                words.push(encode_rgb9e5([v * r[0], v * r[1], v * r[2]]));
+            }
+        }
+        // Every mantissa value at one exponent.
+        for m in 0..512u32 {
+            words.push(m | (m << 9) | ((511 - m) << 18) | (20 << 27));
+        }
+        for bits in 1..=9 {
+            let bound = 2f64.powi(-(bits as i32));
+            let mut worst = 0f64;
+            for &w in &words {
+                let q = quantize_rgb9e5(w, bits);
+                assert_eq!(q >> 27, w >> 27, "exponent changed: {w:#x} bits {bits}");
+                assert_eq!(quantize_rgb9e5(q, bits), q, "not idempotent: {w:#x}");
+                let step = 1u32 << (9 - bits);
+                for c in 0..3 {
+                    let m = (q >> (9 * c)) & 0x1ff;
+                    assert_eq!(m % step, 0, "mantissa {m} not a multiple of {step}");
+                    if (w >> (9 * c)) & 0x1ff == 0 {
+                        assert_eq!(m, 0, "0 must stay 0");
+                    }
+                }
+                let e = scaled_errors(w, bits);
+                for err in e {
+                    assert!(err < bound, "{w:#x} bits {bits}: error {err} ≥ {bound}");
+                    worst = worst.max(err);
+                }
+                let a = decode_rgb9e5(w);
+                let b = decode_rgb9e5(q);
+                for c in 0..3 {
+                    assert!(b[c] <= MAX_RGB9E5 && b[c].is_finite());
+                    // Rounding to nearest: at most half a step, except where clamped at 511.
+                    if a[c] <= b[c] || (w >> (9 * c)) & 0x1ff < 512 - step / 2 {
+                        assert!(e[c] <= bound / 2.0 + 1e-12, "{w:#x} bits {bits} c {c}");
+                    }
+                }
+            }
+            if bits < 9 {
+                assert!(
+                    worst > bound / 4.0,
+                    "bits {bits}: the bound is not approached"
+                );
+            } else {
+                assert_eq!(worst, 0.0);
+            }
+        }
+        for &w in &words {
+            assert_eq!(quantize_rgb9e5(w, 9), w);
+        }
+        assert_eq!(quantize_rgb9e5(0, 1), 0);
+        // 511 with 1 bit: rounds to 512, lowered to 256 (the exponent is kept).
+        assert_eq!(quantize_rgb9e5(511 | (3 << 27), 1), 256 | (3 << 27));
+        assert_eq!(quantize_rgb9e5(383 | (3 << 27), 2), 384 | (3 << 27));
+        assert_eq!(quantize_rgb9e5(127 | (3 << 27), 1), 3 << 27);
+        let mut bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        quantize_rgb9e5_bytes(&mut bytes, 5);
+        for (w, t) in words.iter().zip(bytes.chunks_exact(4)) {
+            assert_eq!(
+                u32::from_le_bytes([t[0], t[1], t[2], t[3]]),
+                quantize_rgb9e5(*w, 5)
+            );
+        }
     }
 
     #[test]

@@ -23,9 +23,13 @@ pub enum Error {
     BadMagic { found: [u8; 8], expected: [u8; 8] },
     /// A format version this reader does not understand.
     #[error(
-        "unsupported OSLF store version {found} (this reader understands version {supported})"
+        "unsupported OSLF store version {found} (this reader understands versions {oldest} to {newest})"
     )]
-    UnsupportedVersion { found: u32, supported: u32 },
+    UnsupportedVersion {
+        found: u32,
+        oldest: u32,
+        newest: u32,
+    },
     /// The file ends before a structure it must contain.
     #[error(
         "truncated store: {section} needs bytes {offset}..{end} but the file has {file_size} bytes"
@@ -183,6 +187,10 @@ pub enum Error {
     /// A cube appended out of order.
     #[error("cube {got} appended, but the next cube must be {expected}")]
     CubeOutOfOrder { expected: u32, got: u32 },
+    /// Bake parameters that cannot encode a cube (e.g. `mantissa_bits` outside 1..=9, or
+    /// below 9 with an encoding other than RGB9E5).
+    #[error("cannot encode cube {cube}: {detail}")]
+    InvalidBakeParams { cube: u32, detail: String },
     /// An encoded cube produced with parameters that differ from the store's.
     #[error("cube {cube} was encoded with different parameters: {detail}")]
     CubeParamsMismatch { cube: u32, detail: String },

@@ -4,7 +4,7 @@ use crate::bytes::{align8, le_u32, le_u64};
 use crate::encoding::Encoding;
 use crate::filter::Filter;
 use crate::sample_map::IndexWidth;
-use crate::{Error, MAGIC, VERSION};
+use crate::{Error, MAGIC, MIN_VERSION, VERSION};
 use xxhash_rust::xxh3::xxh3_64;
 
 /// Bytes of the header.
@@ -136,10 +136,11 @@ impl Header {
             });
         }
         let version = le_u32(b, 8);
-        if version != VERSION {
+        if !(MIN_VERSION..=VERSION).contains(&version) {
             return Err(Error::UnsupportedVersion {
                 found: version,
-                supported: VERSION,
+                oldest: MIN_VERSION,
+                newest: VERSION,
             });
         }
         let stored = le_u64(b, HEADER_CHECKSUM_OFFSET);

@@ -26,7 +26,7 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (1) |
+//! | 8      | `u32`     | version = [`VERSION`] (2); readers also accept [`MIN_VERSION`] (1), see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
 //! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
@@ -60,6 +60,7 @@
 //! |------:|---------|
 //! | 4, 4  | `u32` object_count, `u32` patch_count (equal to the header's) |
 //! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag, `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
+//! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Version 2 only: absent in version 1, whose stores read as 9 |
 //! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
 //! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count |
 //! | 192 × patch_count | patches, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
@@ -175,18 +176,27 @@
 //!   (an integer in 0..=511; the sum `x + 0.5` is rounded to binary32 first);
 //! * `pG = round(S_G · q)`;
 //! * for C in R, B: `pC = round(S_C · q)` if `S_G = 0`, else `pC = round(G · (S_C / S_G))`,
-//!   `G` this texel's green mantissa (as binary32).
+//!   `G` this texel's green mantissa (as binary32);
+//! * then each of `pG`, `pR`, `pB` is rounded to the store's *mantissa lattice*: with the
+//!   metadata's `mantissa_bits` k and `s = 2^(9 − k)`, `p ← min((p + ⌊s/2⌋) & ¬(s − 1), 512 − s)`
+//!   (integer arithmetic; the identity for k = 9, so version-1 stores and lossless ones are
+//!   unaffected). Decoders take k from the metadata. The transform stays lossless for every
+//!   input; texels quantized to k bits (see "Quantized RGB9E5") leave residuals that are
+//!   multiples of `s`.
 //!
 //! Every row after the first depends only on the row above, so decoders reconstruct a row in
 //! vector registers without a texel-to-texel dependency; filter 1's left neighbour chains
-//! the texels of a row.
+//! the texels of a row. Filter 1 ignores `mantissa_bits`.
 //!
 //! Measured on cube maps of the example scene (`cargo bench --bench store`; zstd level 3, 4
 //! samples per texel), bytes per texel none → predict → predict-rows: quick preset (489 cubes
 //! of 32²) RGB9E5 3.490 → 3.432 → 3.443, RGBA16F 5.706 → 4.658 → 4.658, RGBA32F 10.039 →
 //! 9.207 → 9.207; thesis preset (`OSLF_BENCH_STORE=thesis.oslf OSLF_BENCH_CUBES=300`, the first
 //! 300 of its 1240 cubes of 128²) RGB9E5 3.411 → 3.155 → 3.142. The cube maps are dominated by
-//! Monte Carlo noise, which no lossless filter removes (README.md, "Measured").
+//! Monte Carlo noise, which no lossless filter removes (README.md, "Measured"). With
+//! `mantissa_bits` k < 9 (lossy, "Quantized RGB9E5") filter 2 gives, RGB9E5, k = 8 … 1: quick
+//! 3.149, 2.837, 2.489, 2.189, 1.886, 1.530, 1.153, 1.079; 128² (295 cubes of a thesis-like
+//! bake) 2.834, 2.548, 2.225, 1.926, 1.628, 1.290, 0.962, 0.935.
 //!
 //! ## Encodings and measured accuracy
 //!
@@ -200,6 +210,25 @@
 //! |----------|-------------------------------|------------------|--------------------|
 //! | RGB9E5   | 1.935e-3 / 7.04e-4 (bound 2⁻⁹ = 1.953e-3) | 1.940e-3 (bound 2⁻⁹) | 1.0 / 5.6e-2 (channels far below the largest share its exponent and lose precision, down to 0) |
 //! | RGBA16F  | 4.84e-4 / 1.76e-4 | 4.84e-4 | 4.88e-4 / 1.76e-4 for channels ≥ 6.1e-5 (bound 2⁻¹¹ = 4.883e-4; below, absolute error ≤ 2⁻²⁵) |
+//!
+//! ## Quantized RGB9E5
+//!
+//! With `mantissa_bits` = k < 9, every RGB9E5 texel of every cube was quantized before the
+//! face filter: each channel's 9-bit mantissa `m` became `min(((m + s/2) >> (9 − k)) <<
+//! (9 − k), 512 − s)` with `s = 2^(9 − k)`, the shared exponent unchanged
+//! ([`encoding::quantize_rgb9e5`]). The unfiltered faces are still plain RGB9E5 (filter 2's
+//! decoder needs k, see "Face filters"; the texels need nothing): every mantissa is a
+//! multiple of `s`, 0 stays 0, and the
+//! per-channel error is below `2^−k · 2^(e − 15)` (`2^−k` of the exponent's scale, on top of
+//! the RGB9E5 rounding). The distance plane is never quantized.
+//!
+//! ## Versions
+//!
+//! Version 2 added `mantissa_bits` to the metadata (4 bytes after the scene hash). Readers
+//! accept versions [`MIN_VERSION`] (1) to [`VERSION`] (2) and refuse others
+//! ([`Error::UnsupportedVersion`]); a version-1 metadata section has no `mantissa_bits` and
+//! reads as 9. Every other byte of the layout is the same in both versions. Writers write
+//! version 2; [`StoreWriter::resume`] continues only partial files of the version it writes.
 //!
 //! ## Limits and host requirements
 //!
@@ -241,8 +270,11 @@ pub use writer::{StoreSummary, StoreWriter};
 
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
-/// The format version this crate writes and reads.
-pub const VERSION: u32 = 1;
+/// The format version this crate writes (and the newest it reads).
+pub const VERSION: u32 = 2;
+/// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
+/// metadata, read as 9).
+pub const MIN_VERSION: u32 = 1;
 /// Largest cube-map face resolution a store may declare.
 pub const MAX_CUBE_RESOLUTION: u32 = 16384;
 /// Largest sample-map resolution a store may declare.

@@ -2,8 +2,8 @@
 //! layout of the metadata section.
 
 use crate::bytes::{ByteReader, ByteWriter};
-use crate::encoding::Encoding;
-use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTION};
+use crate::encoding::{Encoding, RGB9E5_FULL_MANTISSA_BITS};
+use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTION, VERSION};
 
 /// One sample point: where a cube map was captured. 40 bytes, `#[repr(C)]`, stored as is.
 #[repr(C)]
@@ -78,6 +78,10 @@ pub struct BakeParams {
     pub zstd_level: i32,
     /// Hash of the scene description (opaque to this crate).
     pub scene_hash: [u8; 32],
+    /// RGB9E5 mantissa bits kept per channel, 1..=9 ([`crate::encoding::quantize_rgb9e5`],
+    /// applied by [`crate::encode_cube`]); 9 (lossless) for the other encodings and for
+    /// stores of format version 1, which do not record it.
+    pub mantissa_bits: u32,
 }
 
 impl Default for BakeParams {
@@ -94,6 +98,7 @@ impl Default for BakeParams {
             distance_channel: false,
             zstd_level: 3,
             scene_hash: [0; 32],
+            mantissa_bits: RGB9E5_FULL_MANTISSA_BITS,
         }
     }
 }
@@ -115,9 +120,26 @@ const OBJECT_MIN_BYTES: usize = 4 + 64 + 12 + 8;
 /// Bytes of one patch record.
 const PATCH_BYTES: usize = 16 * 3 * 4;
 
-/// Serialises metadata (no validation: [`decode_meta`] validates, and the writer checks its
-/// input by decoding what it encoded).
-pub(crate) fn encode_meta(meta: &StoreMeta) -> Vec<u8> {
+/// Checks `mantissa_bits` against the encoding: 1..=9 for RGB9E5, exactly 9 otherwise.
+pub fn check_mantissa_bits(encoding: Encoding, bits: u32) -> Result<(), String> {
+    if !(1..=RGB9E5_FULL_MANTISSA_BITS).contains(&bits) {
+        return Err(format!(
+            "mantissa_bits {bits} must be in 1..={RGB9E5_FULL_MANTISSA_BITS}"
+        ));
+    }
+    if bits != RGB9E5_FULL_MANTISSA_BITS && encoding != Encoding::Rgb9e5 {
+        return Err(format!(
+            "mantissa_bits {bits} needs the rgb9e5 encoding (the encoding is {encoding}; other encodings keep all bits, 9)"
+        ));
+    }
+    Ok(())
+}
+
+/// Serialises metadata in the layout of format version `version` ([`VERSION`] = 2 records
+/// `mantissa_bits` after the scene hash; version 1 does not, so it can only express 9). No
+/// validation: [`decode_meta`] validates, and the writer checks its input by decoding what it
+/// encoded.
+pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u32(meta.objects.len() as u32);
     w.u32(meta.patches.len() as u32);
@@ -134,6 +156,9 @@ pub(crate) fn encode_meta(meta: &StoreMeta) -> Vec<u8> {
     w.i32(b.zstd_level);
     w.u32(u32::from(meta.has_env_cube));
     w.bytes(&b.scene_hash);
+    if version >= 2 {
+        w.u32(b.mantissa_bits);
+    }
     match &meta.camera {
         Some(c) => {
             w.u32(1);
@@ -173,9 +198,10 @@ fn bad(offset: u64, detail: impl Into<String>) -> Error {
     }
 }
 
-/// Parses and validates the metadata section; `base` is its byte offset in the file (for
-/// error messages).
-pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
+/// Parses and validates the metadata section of a store of format `version` (1 or 2); `base`
+/// is its byte offset in the file (for error messages).
+pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<StoreMeta, Error> {
+    debug_assert!((1..=VERSION).contains(&version));
     let mut r = ByteReader::new(bytes, base, "metadata");
     let object_count = r.u32()? as usize;
     let patch_count = r.u32()? as usize;
@@ -227,6 +253,14 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
     let has_env_cube = r.bool("has_env_cube")?;
     let mut scene_hash = [0u8; 32];
     scene_hash.copy_from_slice(r.take(32)?);
+    let mantissa_bits = if version >= 2 {
+        let at = r.offset();
+        let bits = r.u32()?;
+        check_mantissa_bits(encoding, bits).map_err(|detail| bad(at, detail))?;
+        bits
+    } else {
+        RGB9E5_FULL_MANTISSA_BITS
+    };
     let bake = BakeParams {
         epsilon,
         phi_samplemap_deg,
@@ -239,6 +273,7 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
         distance_channel,
         zstd_level,
         scene_hash,
+        mantissa_bits,
     };
 
     let at = r.offset();

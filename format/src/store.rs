@@ -7,7 +7,7 @@ use crate::bytes::align8;
 use crate::cube::{face_raw_size, CubeImage, FACES};
 use crate::encoding::{decode_distances, decode_texels};
 use crate::error::io_at;
-use crate::filter::{unfilter_face, Filter};
+use crate::filter::{unfilter_face_quantized, Filter};
 use crate::header::{Header, Section, HEADER_BYTES};
 use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
 use crate::sample_map::{validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL};
@@ -162,7 +162,7 @@ impl Store {
         // Metadata.
         let meta_bytes = slice(bytes, h.meta);
         check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
-        let meta = decode_meta(meta_bytes, h.meta.offset)?;
+        let meta = decode_meta(meta_bytes, h.meta.offset, h.version)?;
         let disagree = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
             field,
             offset,
@@ -458,11 +458,12 @@ impl Store {
                 )));
             }
             if h.filter != Filter::None {
-                unfilter_face(
+                unfilter_face_quantized(
                     h.filter,
                     h.encoding,
                     h.cube_resolution,
                     h.has_distance(),
+                    self.meta.bake.mantissa_bits,
                     &state.scratch,
                     out,
                 )?;

@@ -56,6 +56,8 @@ pub struct StoreWriter {
     partial: PathBuf,
     file: BufWriter<File>,
     header: Header,
+    /// RGB9E5 mantissa bits of the store (the metadata's); appended cubes must match.
+    mantissa_bits: u32,
     /// The TOC entries so far (192 bytes per cube).
     toc: Vec<u8>,
     pos: u64,
@@ -94,10 +96,10 @@ impl Prefix {
         maps: &SampleMaps,
         filter: Filter,
     ) -> Result<Self, Error> {
-        let meta_bytes = encode_meta(meta);
+        let meta_bytes = encode_meta(meta, VERSION);
         // Validate by decoding what was encoded (same checks as the reader).
         let meta_offset = HEADER_BYTES as u64;
-        let decoded = decode_meta(&meta_bytes, meta_offset)?;
+        let decoded = decode_meta(&meta_bytes, meta_offset, VERSION)?;
         if decoded != *meta {
             return Err(Error::InvalidMetadata {
                 offset: meta_offset,
@@ -228,6 +230,7 @@ impl StoreWriter {
             file: w,
             pos: prefix.header.payload.offset,
             header: prefix.header,
+            mantissa_bits: meta.bake.mantissa_bits,
             toc: Vec::new(),
             next: 0,
             total: prefix.total,
@@ -287,6 +290,12 @@ impl StoreWriter {
         normalise(&mut want);
         if got != want {
             let at = got.iter().zip(&want).position(|(a, b)| a != b).unwrap_or(0);
+            if (8..12).contains(&at) {
+                return Err(mismatch(format!(
+                    "the partial file is format version {}, this writer writes version {VERSION}",
+                    u32::from_le_bytes([got[8], got[9], got[10], got[11]])
+                )));
+            }
             if (FILTER_OFFSET..FILTER_OFFSET + 4).contains(&at) {
                 return Err(mismatch(format!(
                     "the partial file uses face filter id {}, this writer filter {} (id {})",
@@ -314,8 +323,18 @@ impl StoreWriter {
             let got = buf.get(start..start + bytes.len()).unwrap_or(&[]);
             if got != bytes {
                 let at = got.iter().zip(bytes).position(|(a, b)| a != b).unwrap_or(0);
-                let detail = match name {
-                    "sample points" => format!(
+                // The same header (version included) means the same metadata layout.
+                let partial_bits = (name == "metadata")
+                    .then(|| decode_meta(got, s.offset, VERSION).ok())
+                    .flatten()
+                    .map(|m| m.bake.mantissa_bits)
+                    .filter(|b| *b != meta.bake.mantissa_bits);
+                let detail = match (name, partial_bits) {
+                    ("metadata", Some(bits)) => format!(
+                        "metadata differ: the partial file was baked with mantissa_bits {bits}, this bake has {}",
+                        meta.bake.mantissa_bits
+                    ),
+                    ("sample points", _) => format!(
                         "sample points differ (point {}, byte {})",
                         at / SAMPLE_POINT_BYTES,
                         s.offset + at as u64
@@ -410,6 +429,7 @@ impl StoreWriter {
             partial,
             file: BufWriter::with_capacity(1 << 20, file),
             header: prefix.header,
+            mantissa_bits: meta.bake.mantissa_bits,
             toc,
             pos,
             next,
@@ -467,19 +487,22 @@ impl StoreWriter {
             || cube.filter != h.filter
             || cube.resolution != h.cube_resolution
             || cube.distance_channel != h.has_distance()
+            || cube.mantissa_bits != self.mantissa_bits
         {
             return Err(Error::CubeParamsMismatch {
                 cube: index,
                 detail: format!(
-                    "cube: {} filter {} {}² distance={}, store: {} filter {} {}² distance={}",
+                    "cube: {} filter {} {}² distance={} mantissa_bits={}, store: {} filter {} {}² distance={} mantissa_bits={}",
                     cube.encoding,
                     cube.filter,
                     cube.resolution,
                     cube.distance_channel,
+                    cube.mantissa_bits,
                     h.encoding,
                     h.filter,
                     h.cube_resolution,
-                    h.has_distance()
+                    h.has_distance(),
+                    self.mantissa_bits
                 ),
             });
         }

@@ -18,13 +18,17 @@ fn info_verify_and_exports() {
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("rgb9e5") && text.contains("bytes/texel"),
+        text.contains("rgb9e5")
+            && text.contains("bytes/texel")
+            && text.contains("mantissa bits    9"),
         "{text}"
     );
     let out = bin().args(["info", "--json"]).arg(&path).output().unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["cubes"], 6);
+    assert_eq!(v["mantissa_bits"], 9);
+    assert_eq!(v["version"], 2);
     assert_eq!(v["env_cube_index"], 5);
     let out = bin().arg("verify").arg(&path).output().unwrap();
     assert!(out.status.success());

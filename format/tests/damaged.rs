@@ -18,6 +18,7 @@ fn good() -> Vec<u8> {
         distance: true,
         env: true,
         seed: 11,
+        mantissa_bits: 9,
     })
 }
 
@@ -141,15 +142,28 @@ fn wrong_magic_and_version() {
     let mut b = good();
     b[0] ^= 0x20;
     assert!(matches!(open(&b), Err(Error::BadMagic { .. })));
+    for v in [0, 3, u32::MAX] {
+        let mut b = good();
+        put_u32(&mut b, 8, v);
+        assert!(matches!(
+            open(&b),
+            Err(Error::UnsupportedVersion {
+                found,
+                oldest: 1,
+                newest: 2
+            }) if found == v
+        ));
+    }
+    // A version-2 file labelled version 1 (header resealed) is read with the version-1
+    // metadata layout, which is then 4 bytes too long: a typed error, not a misreading.
     let mut b = good();
-    put_u32(&mut b, 8, 2);
-    assert!(matches!(
-        open(&b),
-        Err(Error::UnsupportedVersion {
-            found: 2,
-            supported: 1
-        })
-    ));
+    put_u32(&mut b, 8, 1);
+    reseal(&mut b);
+    assert!(
+        matches!(open(&b), Err(Error::InvalidMetadata { .. })),
+        "{:?}",
+        open(&b).err()
+    );
 }
 
 #[test]
@@ -545,6 +559,34 @@ fn crafted_metadata_sample_points_maps_and_toc() {
     let last = h.toc.size as usize - 8 - 32;
     let e = crafted(&|c| put_u64(c, toc + last + 8, 1 << 50));
     assert!(matches!(e, Error::InvalidToc { face: 5, .. }), "{e}");
+}
+
+#[test]
+fn crafted_mantissa_bits_are_rejected() {
+    // Metadata byte 88 (after the counts and 80 bytes of bake parameters) holds
+    // mantissa_bits in version 2. `good()` is RGBA16F, so only 9 is valid.
+    let at = HEADER_BYTES + 8 + 80;
+    assert_eq!(
+        u32::from_le_bytes(good()[at..at + 4].try_into().unwrap()),
+        9
+    );
+    for (bits, says) in [
+        (0, "1..=9"),
+        (10, "1..=9"),
+        (u32::MAX, "1..=9"),
+        (5, "rgb9e5"),
+    ] {
+        let mut b = good();
+        put_u32(&mut b, at, bits);
+        reseal_all(&mut b);
+        match open(&b) {
+            Err(Error::InvalidMetadata { offset, detail }) => {
+                assert_eq!(offset, at as u64);
+                assert!(detail.contains(says), "{detail}");
+            }
+            other => panic!("bits {bits}: {:?}", other.err()),
+        }
+    }
 }
 
 #[test]

@@ -46,7 +46,7 @@ fn check_store(store: &Store, f: &Fixture, spec: Spec) {
         for face in 0..6 {
             for (w, g) in want.faces[face].iter().zip(&got.faces[face]) {
                 assert!(
-                    close(spec.encoding, *w, *g),
+                    close_bits(spec.encoding, spec.mantissa_bits, *w, *g),
                     "{:?} cube {i} face {face}: {w:?} -> {g:?}",
                     spec.encoding
                 );
@@ -97,8 +97,10 @@ proptest! {
         distance in any::<bool>(),
         env in any::<bool>(),
         seed in any::<u64>(),
+        bits in 1u32..=9,
     ) {
-        round_trip(Spec { encoding, cube_res, map_res, points, patches, distance, env, seed });
+        let mantissa_bits = if encoding == Encoding::Rgb9e5 { bits } else { 9 };
+        round_trip(Spec { encoding, cube_res, map_res, points, patches, distance, env, seed, mantissa_bits });
     }
 }
 
@@ -114,6 +116,7 @@ fn larger_resolution_round_trips() {
             distance: true,
             env: true,
             seed: 7,
+            mantissa_bits: 9,
         });
     }
 }
@@ -139,6 +142,7 @@ fn u32_indices_above_65535_points() {
             distance: false,
             env: points == 65536,
             seed: 3,
+            mantissa_bits: 9,
         };
         let mut f = fixture(spec);
         // Make sure large indices actually occur.
@@ -242,4 +246,104 @@ fn a_cube_with_another_filter_is_refused() {
         StoreWriter::resume(&path, &f.meta, &f.points, &f.maps),
         Err(Error::ResumeMismatch { .. })
     ));
+}
+
+#[test]
+fn quantized_stores_hold_exactly_the_quantized_texels() {
+    for bits in 1..=9 {
+        let spec = Spec {
+            cube_res: 16,
+            distance: true,
+            mantissa_bits: bits,
+            ..Spec::default()
+        };
+        round_trip(spec);
+        let f = fixture(spec);
+        let (_dir, path) = temp_store("q.oslf");
+        write(&path, &f);
+        let store = Store::open(&path).unwrap();
+        assert_eq!(store.meta().bake.mantissa_bits, bits);
+        let n = 16 * 16;
+        let mut raw = vec![0u8; store.face_raw_size()];
+        let step = 1u32 << (9 - bits);
+        for (c, cube) in f.cubes.iter().enumerate() {
+            for face in 0..6 {
+                store.read_face_raw(c as u32, face, &mut raw).unwrap();
+                for (t, rgb) in cube.faces[face].iter().enumerate() {
+                    let got = u32::from_le_bytes(raw[4 * t..4 * t + 4].try_into().unwrap());
+                    let full = encoding::encode_rgb9e5(*rgb);
+                    assert_eq!(got, encoding::quantize_rgb9e5(full, bits));
+                    assert_eq!(got >> 27, full >> 27);
+                    for ch in 0..3 {
+                        assert_eq!((got >> (9 * ch)) & 0x1ff & (step - 1), 0);
+                    }
+                }
+                // The distance plane is never quantized.
+                let d = &raw[4 * n..];
+                let want: Vec<u8> = cube.distance.as_ref().unwrap()[face]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect();
+                assert_eq!(d, want.as_slice());
+            }
+        }
+    }
+}
+
+#[test]
+fn mantissa_bits_are_checked() {
+    let f = fixture(Spec::default());
+    for (encoding, bits) in [
+        (Encoding::Rgb9e5, 0),
+        (Encoding::Rgb9e5, 10),
+        (Encoding::Rgba16f, 8),
+        (Encoding::Rgba32f, 5),
+    ] {
+        let mut meta = f.meta.clone();
+        meta.bake.encoding = encoding;
+        meta.bake.mantissa_bits = bits;
+        let (_dir, path) = temp_store("bad-bits.oslf");
+        let e = StoreWriter::create(&path, &meta, &f.points, &f.maps)
+            .err()
+            .unwrap();
+        assert!(
+            matches!(&e, Error::InvalidMetadata { detail, .. } if detail.contains("mantissa_bits")),
+            "{e}"
+        );
+        let e = encode_cube(&f.cubes[0], &meta.bake, 0).err().unwrap();
+        assert!(matches!(e, Error::InvalidBakeParams { .. }), "{e}");
+    }
+}
+
+/// A store written by the version-1 writer (commit 791094d, before `mantissa_bits`; the
+/// fixture of `Spec { distance: true, seed: 2, ..Spec::default() }`) still opens: its
+/// metadata reads with `mantissa_bits` 9 and its texels are those of a lossless bake.
+#[test]
+fn a_version_1_store_still_opens() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v1-rgb9e5.oslf");
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().version, 1);
+    assert_eq!(store.meta().bake.mantissa_bits, 9);
+    let spec = Spec {
+        distance: true,
+        seed: 2,
+        ..Spec::default()
+    };
+    check_store(&store, &fixture(spec), spec);
+    // The same inputs written today: version 2, and the same cube payload bytes.
+    let f = fixture(spec);
+    let (_dir, new) = temp_store("v2.oslf");
+    write(&new, &f);
+    let v2 = Store::open(&new).unwrap();
+    assert_eq!(v2.header().version, VERSION);
+    assert_eq!(v2.meta(), store.meta());
+    let mut a = vec![0u8; store.face_raw_size()];
+    let mut b = a.clone();
+    for c in 0..store.cube_count() {
+        for face in 0..6 {
+            store.read_face_raw(c, face, &mut a).unwrap();
+            v2.read_face_raw(c, face, &mut b).unwrap();
+            assert_eq!(a, b);
+        }
+    }
 }

@@ -16,6 +16,7 @@ fn spec() -> Spec {
         distance: true,
         env: true,
         seed: 5,
+        mantissa_bits: 9,
     }
 }
 
@@ -166,6 +167,51 @@ fn resume_with_different_inputs_is_a_mismatch() {
             .unwrap()
             .next_cube(),
         2
+    );
+}
+
+#[test]
+fn resume_with_other_mantissa_bits_or_version_is_a_mismatch() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("bits.oslf");
+    start(&path, &f, 3);
+    let mut meta = f.meta.clone();
+    meta.bake.mantissa_bits = 5;
+    let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("mantissa_bits 9, this bake has 5")),
+        "{e}"
+    );
+    // A cube quantized differently is refused by append.
+    let mut w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+    let (cube, _) = encode_cube(&f.cubes[3], &meta.bake, 3).unwrap();
+    let e = w.append(cube).err().unwrap();
+    assert!(
+        matches!(&e, Error::CubeParamsMismatch { detail, .. } if detail.contains("mantissa_bits=5")),
+        "{e}"
+    );
+    // A partial file of format version 1 (here: a complete version-1 store, whose finish()
+    // was interrupted as far as resume can tell) is not continued with version-2 records.
+    let spec1 = Spec {
+        distance: true,
+        seed: 2,
+        ..Spec::default()
+    };
+    let f1 = fixture(spec1);
+    let (_dir1, path1) = temp_store("v1.oslf");
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v1-rgb9e5.oslf"),
+        partial_path(&path1),
+    )
+    .unwrap();
+    let e = StoreWriter::resume(&path1, &f1.meta, &f1.points, &f1.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("format version 1")),
+        "{e}"
     );
 }
 

@@ -21,13 +21,14 @@ use crate::error::{MeasureError, Result};
 use crate::judge::{judge, time_interleaved, Judgement, TimedJob};
 
 /// Bake settings the sweep can vary.
-pub const BAKE_KEYS: [&str; 6] = [
+pub const BAKE_KEYS: [&str; 7] = [
     "epsilon",
     "sample_count",
     "cube_resolution",
     "phi_samplemap",
     "samples_per_texel",
     "sample_map_resolution",
+    "mantissa_bits",
 ];
 
 /// Runtime settings the sweep can vary. `blend` takes `distance`, `angle`, `avg`, `rN`
@@ -83,6 +84,7 @@ fn default_settings() -> BakeSettings {
         seed: 0,
         encoding: oslf_format::Encoding::Rgb9e5,
         zstd_level: 3,
+        mantissa_bits: 9,
         distance_channel: false,
         env_cube: true,
     }
@@ -140,6 +142,13 @@ pub fn apply_bake(s: &mut BakeSettings, c: &Change) -> Result<()> {
             let v: u32 = parse(c)?;
             check(c, (1..=16384).contains(&v), "[1, 16384]")?;
             s.sample_map_resolution = v;
+        }
+        "mantissa_bits" => {
+            let v: u32 = parse(c)?;
+            check(c, (1..=9).contains(&v), "[1, 9]")?;
+            oslf_format::meta::check_mantissa_bits(s.encoding, v)
+                .map_err(|e| MeasureError::Invalid(format!("--vary {}: {e}", c.key)))?;
+            s.mantissa_bits = v;
         }
         k => return Err(MeasureError::Invalid(format!("{k} is not a bake setting"))),
     }
@@ -473,9 +482,20 @@ mod tests {
             "blend=nq",
             "m=0",
             "phi_shader=200",
+            "mantissa_bits=0",
+            "mantissa_bits=10",
+            "mantissa_bits=5.5",
         ] {
             assert!(parse_vary(bad).is_err(), "{bad}");
         }
+        let c = parse_vary("mantissa_bits=4,5,6,7").unwrap();
+        let mut s = default_settings();
+        apply_bake(&mut s, &c[1]).unwrap();
+        assert_eq!(s.mantissa_bits, 5);
+        // Only RGB9E5 can be quantized.
+        let mut s = default_settings();
+        s.encoding = oslf_format::Encoding::Rgba16f;
+        assert!(apply_bake(&mut s, &c[0]).is_err());
         let mut p = ShadingParams::default();
         apply_runtime(
             &mut p,

@@ -85,14 +85,15 @@ fn bad_inputs_give_clear_errors_and_a_failing_exit() {
 
     let store = common::store_path();
     let mut bytes = std::fs::read(&store).unwrap();
-    bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
-    let other = dir.join("version2.oslf");
+    // A version this reader does not know (it reads 1 and 2).
+    bytes[8..12].copy_from_slice(&99u32.to_le_bytes());
+    let other = dir.join("version99.oslf");
     std::fs::write(&other, bytes).unwrap();
     let out = render(&[other.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        err.contains("version2.oslf") && err.contains("version"),
+        err.contains("version99.oslf") && err.contains("version"),
         "{err}"
     );
 

@@ -136,6 +136,7 @@ fn info(path: &Path, json: bool) -> Result<()> {
             "version": h.version,
             "flags": h.flags,
             "encoding": b.encoding.name(),
+            "mantissa_bits": b.mantissa_bits,
             "face_filter": h.filter.name(),
             "encoded_bytes_per_texel": b.encoding.bytes_per_texel(),
             "distance_channel": b.distance_channel,
@@ -180,6 +181,18 @@ fn info(path: &Path, json: bool) -> Result<()> {
             " + f32 distance"
         } else {
             ""
+        }
+    );
+    println!(
+        "mantissa bits    {}{}",
+        b.mantissa_bits,
+        if b.mantissa_bits < 9 {
+            format!(
+                " of 9 (quantized: per-channel error < 2^-{} of the exponent's scale)",
+                b.mantissa_bits
+            )
+        } else {
+            " (lossless RGB9E5 / full precision)".to_string()
         }
     );
     println!(

@@ -47,6 +47,8 @@ pub struct Spec {
     pub distance: bool,
     pub env: bool,
     pub seed: u64,
+    /// RGB9E5 mantissa bits (9 = lossless; must be 9 for other encodings).
+    pub mantissa_bits: u32,
 }
 
 impl Default for Spec {
@@ -60,6 +62,7 @@ impl Default for Spec {
             distance: false,
             env: true,
             seed: 1,
+            mantissa_bits: 9,
         }
     }
 }
@@ -109,6 +112,7 @@ pub fn fixture(spec: Spec) -> Fixture {
             distance_channel: spec.distance,
             zstd_level: 3,
             scene_hash: std::array::from_fn(|i| i as u8 ^ spec.seed as u8),
+            mantissa_bits: spec.mantissa_bits,
         },
         camera: spec.seed.is_multiple_of(2).then_some(CameraInfo {
             position: [0.0, 1.0, 5.0],
@@ -212,13 +216,22 @@ pub fn store_bytes(spec: Spec) -> Vec<u8> {
 /// Relative error tolerance per encoding for a channel, relative to the texel's largest
 /// channel (shared-exponent formats lose small channels) — see the crate docs.
 pub fn close(enc: Encoding, want: [f32; 3], got: [f32; 3]) -> bool {
+    close_bits(enc, 9, want, got)
+}
+
+/// [`close`] for a store keeping `bits` RGB9E5 mantissa bits: rounding to RGB9E5 (half a
+/// mantissa step) plus quantization (`2^(9 − bits) − 1` steps at most, with clamping at the
+/// top), where one step is at most `max / 256` (the largest channel's mantissa is ≥ 256 above
+/// the smallest exponent) plus `2^−24` (the step of the smallest exponent).
+pub fn close_bits(enc: Encoding, bits: u32, want: [f32; 3], got: [f32; 3]) -> bool {
     let max = want.iter().fold(0f32, |a, b| a.max(*b));
+    let steps = f64::from(1u32 << (9 - bits.clamp(1, 9))) - 0.5;
     want.iter().zip(got).all(|(w, g)| {
         let err = (w - g).abs();
         match enc {
             Encoding::Rgba32f => err == 0.0,
             Encoding::Rgba16f => err <= w.abs() * 4.9e-4 + 6.0e-8,
-            Encoding::Rgb9e5 => err <= max * 1.96e-3 + 3.0e-8,
+            Encoding::Rgb9e5 => f64::from(err) <= steps * (f64::from(max) / 256.0 * 1.004 + 6.0e-8),
         }
     })
 }
