@@ -210,7 +210,10 @@ fn sweep_writes_rows_front_and_plot() {
                 f[f.len() - back]
             })
             .collect();
-        assert!(column.iter().all(|c| ["yes", "no", "–"].contains(c)), "{csv}");
+        assert!(
+            column.iter().all(|c| ["yes", "no", "–"].contains(c)),
+            "{csv}"
+        );
         assert!(column.contains(&"yes"), "{csv}");
     }
     assert!(stdout.contains("Sensitivity") && stdout.contains("Pareto front"));
