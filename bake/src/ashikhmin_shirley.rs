@@ -137,6 +137,23 @@ impl AsLobe {
         let h = (v + l).try_normalize()?;
         Some(self.invert_half(h))
     }
+
+    /// The directional albedo ∫ ρ_s(v, l) ⟨n,l⟩ dl by a midpoint rule over `n_theta × n_phi`
+    /// cells of (θ, φ): a deterministic reference for the sampler (the cells must resolve the
+    /// lobe, about 1/√n wide).
+    pub fn albedo_quadrature(&self, v: DVec3, n_theta: usize, n_phi: usize) -> f64 {
+        let (dt, dp) = (0.5 * PI / n_theta as f64, 2.0 * PI / n_phi as f64);
+        let mut sum = 0.0;
+        for i in 0..n_theta {
+            let t = (i as f64 + 0.5) * dt;
+            for j in 0..n_phi {
+                let p = (j as f64 + 0.5) * dp;
+                let l = DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+                sum += self.eval(v, l) * l.z * t.sin() * dt * dp;
+            }
+        }
+        sum
+    }
 }
 
 #[cfg(test)]
@@ -146,21 +163,6 @@ mod tests {
     fn dir(theta_deg: f64, phi_deg: f64) -> DVec3 {
         let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
         DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
-    }
-
-    /// ∫ ρ_s(v, l) ⟨n,l⟩ dl by a midpoint rule in (θ, φ) fine enough for the lobe.
-    fn albedo_quadrature(lobe: &AsLobe, v: DVec3, n_theta: usize, n_phi: usize) -> f64 {
-        let (dt, dp) = (0.5 * PI / n_theta as f64, 2.0 * PI / n_phi as f64);
-        let mut sum = 0.0;
-        for i in 0..n_theta {
-            let t = (i as f64 + 0.5) * dt;
-            for j in 0..n_phi {
-                let p = (j as f64 + 0.5) * dp;
-                let l = DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
-                sum += lobe.eval(v, l) * l.z * t.sin() * dt * dp;
-            }
-        }
-        sum
     }
 
     /// Stratified Monte Carlo estimate of the same integral through the sampler and its pdf.
@@ -220,7 +222,7 @@ mod tests {
                 (3000, 6000),
             ),
         ] {
-            let q = albedo_quadrature(&lobe, v, grid.0, grid.1);
+            let q = lobe.albedo_quadrature(v, grid.0, grid.1);
             let mc = albedo_monte_carlo(&lobe, v, 400);
             assert!(q > 0.05 && q < 1.2, "{lobe:?}: albedo {q}");
             assert!(

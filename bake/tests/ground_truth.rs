@@ -1,8 +1,7 @@
 //! The ground-truth renderer against closed forms: a flat patch under a uniform environment
 //! reflects the environment exactly (mirror), leaves albedo × L (diffuse), and reflects
-//! L × the Ashikhmin–Shirley directional albedo, integrated here by quadrature (glossy).
+//! L × the Ashikhmin–Shirley directional albedo, by quadrature (glossy, `AsLobe::albedo_quadrature`).
 
-use std::f64::consts::PI;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -154,7 +153,7 @@ fn the_glossy_term_is_the_lobe_albedo_times_the_sky() {
                 let b = n.cross(t);
                 let view = -ray.dir;
                 let v = DVec3::new(view.dot(t).into(), view.dot(b).into(), view.dot(n).into());
-                let albedo = quadrature(&lobe, v);
+                let albedo = lobe.albedo_quadrature(v, 600, 1200);
                 let p = image.pixels[(y * s.width + x) as usize];
                 for k in 0..3 {
                     let expected = albedo * f64::from(ENV[k]);
@@ -169,22 +168,6 @@ fn the_glossy_term_is_the_lobe_albedo_times_the_sky() {
         }
         assert!(checked > 20);
     }
-}
-
-/// ∫ ρ_s(v, l) ⟨n, l⟩ dl over the hemisphere, midpoint rule.
-fn quadrature(lobe: &AsLobe, v: DVec3) -> f64 {
-    let (nt, np) = (600, 1200);
-    let (dt, dp) = (0.5 * PI / nt as f64, 2.0 * PI / np as f64);
-    let mut sum = 0.0;
-    for i in 0..nt {
-        let t = (i as f64 + 0.5) * dt;
-        for j in 0..np {
-            let p = (j as f64 + 0.5) * dp;
-            let l = DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
-            sum += lobe.eval(v, l) * l.z * t.sin() * dt * dp;
-        }
-    }
-    sum
 }
 
 #[test]
