@@ -193,14 +193,15 @@ impl EncodedCube {
 /// [`BakeParams::mantissa_bits`] mantissa bits ([`crate::encoding::quantize_rgb9e5`]) before
 /// the face filter and zstd.
 ///
-/// Faces are filtered with [`Filter::default`] ([`Filter::PredictRows`]), the filter
+/// Faces are filtered with [`Filter::for_store`] of `params`' encoding and mantissa bits, the filter
 /// [`crate::StoreWriter::create`] records; see [`encode_cube_with_filter`].
 pub fn encode_cube(
     cube: &CubeImage,
     params: &BakeParams,
     cube_index: u32,
 ) -> Result<(EncodedCube, EncodeStats), Error> {
-    encode_cube_with_filter(cube, params, cube_index, Filter::default())
+    let filter = Filter::for_store(params.encoding, params.mantissa_bits);
+    encode_cube_with_filter(cube, params, cube_index, filter)
 }
 
 /// [`encode_cube`] with an explicit face filter (for stores created with
@@ -253,7 +254,19 @@ pub fn encode_cube_with_filter(
     let color_bytes = texels * enc.bytes_per_texel();
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
-    let mut filtered = vec![0u8; raw_size as usize];
+    let filtered_size = crate::filter::filtered_face_size(
+        filter,
+        enc,
+        res,
+        params.distance_channel,
+        params.mantissa_bits,
+    )
+    .ok_or(Error::Limit {
+        what: "cube resolution",
+        value: u64::from(res),
+        max: u64::from(crate::MAX_CUBE_RESOLUTION),
+    })?;
+    let mut filtered = vec![0u8; filtered_size];
     let mut compressor =
         zstd::bulk::Compressor::new(params.zstd_level).map_err(|e| Error::Compress {
             cube: cube_index,

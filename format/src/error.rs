@@ -162,6 +162,10 @@ pub enum Error {
     /// A texel given to [`crate::encoding::encode_texels`] that is NaN, infinite or negative.
     #[error("texel {index}: radiance {value:?} is not finite and non-negative")]
     InvalidTexel { index: usize, value: [f32; 3] },
+    /// An RGB9E5 texel given to filter 3 whose mantissas are not all on the store's mantissa
+    /// lattice (multiples of `2^(9 − mantissa_bits)`).
+    #[error("texel {texel}: RGB9E5 mantissas are not quantized to {mantissa_bits} bits, as filter 3 (predict-packed) requires")]
+    Unquantized { texel: usize, mantissa_bits: u32 },
     /// A cube image whose shape does not match the bake parameters.
     #[error("cube {cube}: {detail}")]
     CubeShape { cube: u32, detail: String },

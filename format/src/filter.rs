@@ -18,15 +18,25 @@ pub enum Filter {
     /// their left and upper neighbours.
     Predict,
     /// Id 2: as [`Filter::Predict`], but RGB9E5 texels are predicted from the row above only
-    /// (binary32 arithmetic), so a row decodes without a texel-to-texel dependency (the
-    /// default for new stores).
+    /// (binary32 arithmetic), so a row decodes without a texel-to-texel dependency. What
+    /// writers use for lossless stores ([`Filter::for_store`]).
     #[default]
     PredictRows,
+    /// Id 3: filter 2's predictions, but each RGB9E5 texel's exponent and three residuals
+    /// (in units of the store's mantissa lattice) packed into `⌈(5 + 3k) / 8⌉` byte planes
+    /// for `k` mantissa bits: fewer bytes for zstd to decode. What writers use for RGB9E5
+    /// stores that keep fewer than 9 mantissa bits ([`Filter::for_store`]).
+    PredictPacked,
 }
 
 impl Filter {
     /// All filters, in id order.
-    pub const ALL: [Filter; 3] = [Filter::None, Filter::Predict, Filter::PredictRows];
+    pub const ALL: [Filter; 4] = [
+        Filter::None,
+        Filter::Predict,
+        Filter::PredictRows,
+        Filter::PredictPacked,
+    ];
 
     /// The on-disk id: 0, 1 or 2.
     pub fn id(self) -> u32 {
@@ -34,6 +44,7 @@ impl Filter {
             Filter::None => 0,
             Filter::Predict => 1,
             Filter::PredictRows => 2,
+            Filter::PredictPacked => 3,
         }
     }
 
@@ -43,16 +54,30 @@ impl Filter {
             0 => Some(Filter::None),
             1 => Some(Filter::Predict),
             2 => Some(Filter::PredictRows),
+            3 => Some(Filter::PredictPacked),
             _ => None,
         }
     }
 
-    /// `"none"`, `"predict"` or `"predict-rows"`.
+    /// The filter writers use for a store of `encoding` keeping `mantissa_bits` RGB9E5 mantissa
+    /// bits: [`Filter::PredictPacked`] for RGB9E5 with fewer than 9 bits (smaller and faster
+    /// to read than filter 2 there), [`Filter::PredictRows`] otherwise (filter 3's packing
+    /// gives larger lossless faces: README.md, "Store").
+    pub fn for_store(encoding: Encoding, mantissa_bits: u32) -> Self {
+        if encoding == Encoding::Rgb9e5 && mantissa_bits < 9 {
+            Filter::PredictPacked
+        } else {
+            Filter::PredictRows
+        }
+    }
+
+    /// `"none"`, `"predict"`, `"predict-rows"` or `"predict-packed"`.
     pub fn name(self) -> &'static str {
         match self {
             Filter::None => "none",
             Filter::Predict => "predict",
             Filter::PredictRows => "predict-rows",
+            Filter::PredictPacked => "predict-packed",
         }
     }
 }
@@ -74,32 +99,63 @@ static RECIP: [u32; 1023] = {
     t
 };
 
-fn check_sizes(
+/// Size in bytes of one face after `filter`, i.e. what its zstd frame decompresses to: the
+/// raw face size ([`crate::Store::face_raw_size`]), except filter 3 on RGB9E5, whose texel
+/// part is `n² × ⌈(5 + 3k) / 8⌉` bytes for `k = mantissa_bits` (the distance plane, if any,
+/// keeps `n² × 4`). `None` if the size overflows `usize`.
+pub fn filtered_face_size(
+    filter: Filter,
     encoding: Encoding,
     resolution: u32,
     distance: bool,
-    a: usize,
-    b: usize,
-) -> Result<(usize, usize), Error> {
+    mantissa_bits: u32,
+) -> Option<usize> {
+    let texels = (resolution as usize).checked_mul(resolution as usize)?;
+    let color = match (filter, encoding) {
+        (Filter::PredictPacked, Encoding::Rgb9e5) => packed_planes(mantissa_bits),
+        _ => encoding.bytes_per_texel(),
+    };
+    texels.checked_mul(color + if distance { 4 } else { 0 })
+}
+
+/// Checks the lengths of a filter's input `raw` (the raw face) and output `filtered`;
+/// returns the texel count and the lengths of their texel parts.
+#[allow(clippy::too_many_arguments)]
+fn check_sizes(
+    filter: Filter,
+    encoding: Encoding,
+    resolution: u32,
+    distance: bool,
+    mantissa_bits: u32,
+    raw: usize,
+    filtered: usize,
+) -> Result<(usize, usize, usize), Error> {
+    let overflow = || Error::Limit {
+        what: "face texels",
+        value: u64::from(resolution),
+        max: u64::from(crate::MAX_CUBE_RESOLUTION),
+    };
     let texels = (resolution as usize)
         .checked_mul(resolution as usize)
-        .ok_or(Error::Limit {
-            what: "face texels",
-            value: u64::from(resolution),
-            max: u64::from(crate::MAX_CUBE_RESOLUTION),
-        })?;
-    let per = encoding.bytes_per_texel() + if distance { 4 } else { 0 };
-    let expected = texels.checked_mul(per);
-    for (what, len) in [("filter input", a), ("filter output", b)] {
-        if expected != Some(len) {
+        .ok_or_else(overflow)?;
+    let raw_size =
+        filtered_face_size(Filter::None, encoding, resolution, distance, 9).ok_or_else(overflow)?;
+    let filtered_size = filtered_face_size(filter, encoding, resolution, distance, mantissa_bits)
+        .ok_or_else(overflow)?;
+    for (what, len, expected) in [
+        ("raw face", raw, raw_size),
+        ("filtered face", filtered, filtered_size),
+    ] {
+        if len != expected {
             return Err(Error::BufferSize {
                 what,
-                expected: expected.unwrap_or(usize::MAX) as u64,
+                expected: expected as u64,
                 actual: len as u64,
             });
         }
     }
-    Ok((texels, texels * encoding.bytes_per_texel()))
+    let dist = if distance { texels * 4 } else { 0 };
+    Ok((texels, raw_size - dist, filtered_size - dist))
 }
 
 /// The mantissa lattice of a store keeping `k` RGB9E5 mantissa bits: filter 2 rounds its
@@ -150,10 +206,15 @@ pub fn filter_face(
     filter_face_quantized(filter, encoding, resolution, distance, 9, raw, out)
 }
 
-/// [`filter_face`] for a store keeping `mantissa_bits` (1..=9) RGB9E5 mantissa bits: filter 2
-/// rounds its RGB9E5 predictions to the store's mantissa lattice (crate docs, "Face
-/// filters"). Lossless for every input whatever `mantissa_bits` is; compact when the texels
-/// were quantized to those bits. Other filters and encodings ignore `mantissa_bits`.
+/// [`filter_face`] for a store keeping `mantissa_bits` (1..=9) RGB9E5 mantissa bits. `out`
+/// is [`filtered_face_size`] bytes (the raw size except for filter 3).
+///
+/// Filter 2 rounds its RGB9E5 predictions to the store's mantissa lattice (crate docs, "Face
+/// filters"): lossless for every input whatever `mantissa_bits` is, compact when the texels
+/// were quantized to those bits. Filter 3 stores residuals in lattice steps, so its RGB9E5
+/// input must be quantized ([`crate::encoding::quantize_rgb9e5`]): a mantissa off the
+/// lattice is an [`Error::Unquantized`]. Other filters and
+/// encodings ignore `mantissa_bits`.
 pub fn filter_face_quantized(
     filter: Filter,
     encoding: Encoding,
@@ -163,27 +224,55 @@ pub fn filter_face_quantized(
     raw: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
-    let (t, color) = check_sizes(encoding, resolution, distance, raw.len(), out.len())?;
+    let (t, rc_len, oc_len) = check_sizes(
+        filter,
+        encoding,
+        resolution,
+        distance,
+        mantissa_bits,
+        raw.len(),
+        out.len(),
+    )?;
     let n = resolution as usize;
-    match filter {
-        Filter::None => out.copy_from_slice(raw),
-        Filter::Predict | Filter::PredictRows => {
-            let (rc, rd) = raw.split_at(color);
-            let (oc, od) = out.split_at_mut(color);
-            match encoding {
-                Encoding::Rgb9e5 if filter == Filter::PredictRows => {
-                    rows_forward(n, t, rc, oc, Lattice::new(mantissa_bits))
-                }
-                Encoding::Rgb9e5 => rgb9e5_forward(n, t, rc, oc),
-                Encoding::Rgba16f => ints_forward::<2>(n, t, rc, oc),
-                Encoding::Rgba32f => ints_forward::<4>(n, t, rc, oc),
-            }
-            if distance {
-                distance_forward(n, t, rd, od);
-            }
+    if filter == Filter::None {
+        out.copy_from_slice(raw);
+        return Ok(());
+    }
+    let (rc, rd) = raw.split_at(rc_len);
+    let (oc, od) = out.split_at_mut(oc_len);
+    match (filter, encoding) {
+        (Filter::PredictPacked, Encoding::Rgb9e5) => {
+            check_quantized(rc, mantissa_bits)?;
+            packed_forward(n, t, rc, oc, Packed::new(mantissa_bits))
         }
+        (Filter::PredictRows, Encoding::Rgb9e5) => {
+            rows_forward::<_, 4>(n, t, rc, oc, Planes9(Lattice::new(mantissa_bits)))
+        }
+        (_, Encoding::Rgb9e5) => rgb9e5_forward(n, t, rc, oc),
+        (_, Encoding::Rgba16f) => ints_forward::<2>(n, t, rc, oc),
+        (_, Encoding::Rgba32f) => ints_forward::<4>(n, t, rc, oc),
+    }
+    if distance {
+        distance_forward(n, t, rd, od);
     }
     Ok(())
+}
+
+/// [`Error::Unquantized`] for the first RGB9E5 texel in `raw` whose mantissas are not all
+/// multiples of `2^(9 − mantissa_bits)`.
+fn check_quantized(raw: &[u8], mantissa_bits: u32) -> Result<(), Error> {
+    let step = 1u32 << (9 - mantissa_bits.clamp(1, 9));
+    let low = (step - 1) * (1 | 1 << 9 | 1 << 18);
+    match raw
+        .chunks_exact(4)
+        .position(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) & low != 0)
+    {
+        None => Ok(()),
+        Some(texel) => Err(Error::Unquantized {
+            texel,
+            mantissa_bits,
+        }),
+    }
 }
 
 /// Undoes [`filter_face`]: `filtered` (exactly the face raw size) into `out` (same size).
@@ -199,7 +288,8 @@ pub fn unfilter_face(
     unfilter_face_quantized(filter, encoding, resolution, distance, 9, filtered, out)
 }
 
-/// Undoes [`filter_face_quantized`] with the same `mantissa_bits`. Never fails on content.
+/// Undoes [`filter_face_quantized`] with the same `mantissa_bits`: `filtered`
+/// ([`filtered_face_size`] bytes) into `out` (the raw face size). Never fails on content.
 pub fn unfilter_face_quantized(
     filter: Filter,
     encoding: Encoding,
@@ -209,25 +299,35 @@ pub fn unfilter_face_quantized(
     filtered: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
-    let (t, color) = check_sizes(encoding, resolution, distance, filtered.len(), out.len())?;
+    let (t, oc_len, fc_len) = check_sizes(
+        filter,
+        encoding,
+        resolution,
+        distance,
+        mantissa_bits,
+        out.len(),
+        filtered.len(),
+    )?;
     let n = resolution as usize;
-    match filter {
-        Filter::None => out.copy_from_slice(filtered),
-        Filter::Predict | Filter::PredictRows => {
-            let (fc, fd) = filtered.split_at(color);
-            let (oc, od) = out.split_at_mut(color);
-            match encoding {
-                Encoding::Rgb9e5 if filter == Filter::PredictRows => {
-                    rows_inverse(n, t, fc, oc, Lattice::new(mantissa_bits))
-                }
-                Encoding::Rgb9e5 => rgb9e5_inverse(n, t, fc, oc),
-                Encoding::Rgba16f => ints_inverse::<2>(n, t, fc, oc),
-                Encoding::Rgba32f => ints_inverse::<4>(n, t, fc, oc),
-            }
-            if distance {
-                distance_inverse(n, t, fd, od);
-            }
+    if filter == Filter::None {
+        out.copy_from_slice(filtered);
+        return Ok(());
+    }
+    let (fc, fd) = filtered.split_at(fc_len);
+    let (oc, od) = out.split_at_mut(oc_len);
+    match (filter, encoding) {
+        (Filter::PredictPacked, Encoding::Rgb9e5) => {
+            packed_inverse(n, t, fc, oc, Packed::new(mantissa_bits))
         }
+        (Filter::PredictRows, Encoding::Rgb9e5) => {
+            rows_inverse::<_, 4>(n, t, fc, oc, Planes9(Lattice::new(mantissa_bits)))
+        }
+        (_, Encoding::Rgb9e5) => rgb9e5_inverse(n, t, fc, oc),
+        (_, Encoding::Rgba16f) => ints_inverse::<2>(n, t, fc, oc),
+        (_, Encoding::Rgba32f) => ints_inverse::<4>(n, t, fc, oc),
+    }
+    if distance {
+        distance_inverse(n, t, fd, od);
     }
     Ok(())
 }
@@ -537,19 +637,132 @@ impl RowValues {
     }
 }
 
-/// Residual plane bytes of one texel from its exponent and the zig-zagged residuals.
-#[inline(always)]
-fn pack_residuals(e: u32, zr: u32, zg: u32, zb: u32) -> [u8; 4] {
-    [
-        (e | (zr >> 8) << 5 | (zg >> 8) << 6 | (zb >> 8) << 7) as u8,
-        zg as u8,
-        zr as u8,
-        zb as u8,
-    ]
+/// How filters 2 and 3 store a texel's exponent and residuals: the residual code of a
+/// mantissa against its prediction, and the bytes the codes are written as. Both predict
+/// alike (the same [`Lattice`]-rounded binary32 predictions); only the residuals differ.
+trait RowCodec: Copy {
+    /// The mantissa lattice predictions are rounded to.
+    fn lattice(self) -> Lattice;
+    /// The residual code of mantissa `m` against prediction `p`.
+    fn residual(self, m: u32, p: u32) -> u32;
+    /// The mantissa with prediction `p` and residual code `z` (any value: never fails).
+    fn apply(self, p: u32, z: u32) -> u32;
+    /// A texel's bytes (the first [`RowCodec::PLANES`] are used), one per plane.
+    fn pack(self, e: u32, zg: u32, zr: u32, zb: u32) -> [u8; 4];
+    /// `(e, zg, zr, zb)` from a texel's bytes (unused bytes 0).
+    fn unpack(self, bytes: [u8; 4]) -> (u32, u32, u32, u32);
 }
 
-/// Neighbour sums `(S_G, S_R, S_B)` of a texel in row 0 of filter 2: its left neighbour as
-/// all three taps, or zeros for texel 0.
+/// Filter 2: four byte planes, `zigzag9` residuals of the whole 9-bit difference.
+#[derive(Clone, Copy, Debug)]
+struct Planes9(Lattice);
+
+impl RowCodec for Planes9 {
+    #[inline(always)]
+    fn lattice(self) -> Lattice {
+        self.0
+    }
+    #[inline(always)]
+    fn residual(self, m: u32, p: u32) -> u32 {
+        zigzag9(m.wrapping_sub(p))
+    }
+    #[inline(always)]
+    fn apply(self, p: u32, z: u32) -> u32 {
+        (p + unzigzag9(z)) & 511
+    }
+    #[inline(always)]
+    fn pack(self, e: u32, zg: u32, zr: u32, zb: u32) -> [u8; 4] {
+        [
+            (e | (zr >> 8) << 5 | (zg >> 8) << 6 | (zb >> 8) << 7) as u8,
+            zg as u8,
+            zr as u8,
+            zb as u8,
+        ]
+    }
+    #[inline(always)]
+    fn unpack(self, [h, zg, zr, zb]: [u8; 4]) -> (u32, u32, u32, u32) {
+        let h = u32::from(h);
+        (
+            h & 31,
+            u32::from(zg) | (h >> 6 & 1) << 8,
+            u32::from(zr) | (h >> 5 & 1) << 8,
+            u32::from(zb) | (h >> 7) << 8,
+        )
+    }
+}
+
+/// Filter 3: residuals in units of the lattice step `2^(9 − k)`, zig-zagged in `k` bits, and
+/// packed with the exponent into one `(5 + 3k)`-bit code per texel: `e | zG << 5 | zR << (5
+/// + k) | zB << (5 + 2k)`, stored as `⌈(5 + 3k) / 8⌉` byte planes (least significant first).
+#[derive(Clone, Copy, Debug)]
+struct Packed {
+    lat: Lattice,
+    /// `k`.
+    bits: u32,
+    /// `9 − k`.
+    shift: u32,
+    /// `2^k − 1`.
+    mask: u32,
+}
+
+impl Packed {
+    fn new(mantissa_bits: u32) -> Self {
+        let bits = mantissa_bits.clamp(1, 9);
+        Packed {
+            lat: Lattice::new(bits),
+            bits,
+            shift: 9 - bits,
+            mask: (1 << bits) - 1,
+        }
+    }
+}
+
+/// Byte planes of filter 3's texel code with `mantissa_bits` (1..=9) bits: `⌈(5 + 3k) / 8⌉`.
+pub fn packed_planes(mantissa_bits: u32) -> usize {
+    (5 + 3 * mantissa_bits.clamp(1, 9) as usize).div_ceil(8)
+}
+
+impl RowCodec for Packed {
+    #[inline(always)]
+    fn lattice(self) -> Lattice {
+        self.lat
+    }
+    #[inline(always)]
+    fn residual(self, m: u32, p: u32) -> u32 {
+        // zigzag in k bits of q = the difference in lattice steps (mod 2^k).
+        let q = (m.wrapping_sub(p) & 511) >> self.shift;
+        let half = 1 << (self.bits - 1);
+        if q < half {
+            q << 1
+        } else {
+            (((self.mask + 1) - q) << 1) - 1
+        }
+    }
+    #[inline(always)]
+    fn apply(self, p: u32, z: u32) -> u32 {
+        let q = ((z & self.mask) >> 1 ^ (z & 1).wrapping_neg()) & self.mask;
+        (p + (q << self.shift)) & 511
+    }
+    #[inline(always)]
+    fn pack(self, e: u32, zg: u32, zr: u32, zb: u32) -> [u8; 4] {
+        let k = self.bits;
+        (e | zg << 5 | zr << (5 + k) | zb << (5 + 2 * k)).to_le_bytes()
+    }
+    #[inline(always)]
+    fn unpack(self, bytes: [u8; 4]) -> (u32, u32, u32, u32) {
+        let (k, m) = (self.bits, self.mask);
+        let c = u32::from_le_bytes(bytes);
+        (
+            c & 31,
+            (c >> 5) & m,
+            (c >> (5 + k)) & m,
+            (c >> (5 + 2 * k)) & m,
+        )
+    }
+}
+
+/// Neighbour sums `(S_G, S_R, S_B)` of a texel in row 0 of filters 2 and 3: its left
+/// neighbour as all three taps, or zeros for texel 0.
 #[inline(always)]
 fn first_row_sums(left: Option<u32>) -> (f32, f32, f32) {
     match left {
@@ -566,29 +779,46 @@ fn first_row_sums(left: Option<u32>) -> (f32, f32, f32) {
     }
 }
 
-/// Residual plane bytes `[plane 0, G, R, B]` of texel `v` with neighbour sums `sums`.
+/// The bytes of texel `v` with neighbour sums `sums`.
 #[inline(always)]
-fn rows_encode_texel(v: u32, (sg, sr, sb): (f32, f32, f32), lat: Lattice) -> [u8; 4] {
+fn rows_encode_texel<C: RowCodec>(v: u32, (sg, sr, sb): (f32, f32, f32), codec: C) -> [u8; 4] {
+    let lat = codec.lattice();
     let (e, m) = fields(v);
-    let zg = zigzag9(m[1].wrapping_sub(rows_predict_g(sg, e, lat)));
-    let zr = zigzag9(m[0].wrapping_sub(rows_predict_rb(sr, sg, e, m[1], lat)));
-    let zb = zigzag9(m[2].wrapping_sub(rows_predict_rb(sb, sg, e, m[1], lat)));
-    pack_residuals(e, zr, zg, zb)
+    let zg = codec.residual(m[1], rows_predict_g(sg, e, lat));
+    let zr = codec.residual(m[0], rows_predict_rb(sr, sg, e, m[1], lat));
+    let zb = codec.residual(m[2], rows_predict_rb(sb, sg, e, m[1], lat));
+    codec.pack(e, zg, zr, zb)
 }
 
-/// Texel from its residual plane bytes `[h, zg, zr, zb]` and neighbour sums `sums`.
+/// Texel from its bytes and neighbour sums `sums`.
 #[inline(always)]
-fn rows_decode_texel([h, zg, zr, zb]: [u8; 4], (sg, sr, sb): (f32, f32, f32), lat: Lattice) -> u32 {
-    let h = u32::from(h);
-    let e = h & 31;
-    let g = (rows_predict_g(sg, e, lat) + unzigzag9(u32::from(zg) | (h >> 6 & 1) << 8)) & 511;
-    let r =
-        (rows_predict_rb(sr, sg, e, g, lat) + unzigzag9(u32::from(zr) | (h >> 5 & 1) << 8)) & 511;
-    let b = (rows_predict_rb(sb, sg, e, g, lat) + unzigzag9(u32::from(zb) | (h >> 7) << 8)) & 511;
+fn rows_decode_texel<C: RowCodec>(bytes: [u8; 4], (sg, sr, sb): (f32, f32, f32), codec: C) -> u32 {
+    let lat = codec.lattice();
+    let (e, zg, zr, zb) = codec.unpack(bytes);
+    let g = codec.apply(rows_predict_g(sg, e, lat), zg);
+    let r = codec.apply(rows_predict_rb(sr, sg, e, g, lat), zr);
+    let b = codec.apply(rows_predict_rb(sb, sg, e, g, lat), zb);
     r | g << 9 | b << 18 | e << 27
 }
 
-fn rows_forward(n: usize, t: usize, raw: &[u8], out: &mut [u8], lat: Lattice) {
+/// The bytes of texel `x` in `P` planes (the rest 0).
+#[inline(always)]
+fn bytes_at<const P: usize>(planes: &[&[u8]; P], x: usize) -> [u8; 4] {
+    let mut b = [0u8; 4];
+    for (o, p) in b.iter_mut().zip(planes) {
+        *o = p[x];
+    }
+    b
+}
+
+/// Filters 2 and 3 forward: `out` holds `P` planes of `t` bytes.
+fn rows_forward<C: RowCodec, const P: usize>(
+    n: usize,
+    t: usize,
+    raw: &[u8],
+    out: &mut [u8],
+    codec: C,
+) {
     if n == 0 {
         return;
     }
@@ -596,21 +826,17 @@ fn rows_forward(n: usize, t: usize, raw: &[u8], out: &mut [u8], lat: Lattice) {
         .chunks_exact(4)
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
-    let (p0, rest) = out.split_at_mut(t);
-    let (pg, rest) = rest.split_at_mut(t);
-    let (pr, pb) = rest.split_at_mut(t);
-    let mut planes = [p0, pg, pr, pb];
+    let mut planes: Vec<&mut [u8]> = out.chunks_exact_mut(t).take(P).collect();
+    let mut put = |i: usize, bytes: [u8; 4]| {
+        for (p, byte) in planes.iter_mut().zip(bytes) {
+            p[i] = byte;
+        }
+    };
     let mut left = None;
     for (x, &v) in tex[..n].iter().enumerate() {
-        for (p, byte) in planes
-            .iter_mut()
-            .zip(rows_encode_texel(v, first_row_sums(left), lat))
-        {
-            p[x] = byte;
-        }
+        put(x, rows_encode_texel(v, first_row_sums(left), codec));
         left = Some(v);
     }
-    let [p0, pg, pr, pb] = planes;
     let mut above = RowValues::new(n);
     for y in 1..n {
         above.fill(&tex[(y - 1) * n..y * n]);
@@ -619,28 +845,23 @@ fn rows_forward(n: usize, t: usize, raw: &[u8], out: &mut [u8], lat: Lattice) {
             let sg = tap_sum(above.g[x], above.g[x + 1], above.g[x + 2]);
             let sr = tap_sum(above.r[x], above.r[x + 1], above.r[x + 2]);
             let sb = tap_sum(above.b[x], above.b[x + 1], above.b[x + 2]);
-            let [b0, bg, br, bb] = rows_encode_texel(v, (sg, sr, sb), lat);
-            let i = y * n + x;
-            p0[i] = b0;
-            pg[i] = bg;
-            pr[i] = br;
-            pb[i] = bb;
+            put(y * n + x, rows_encode_texel(v, (sg, sr, sb), codec));
         }
     }
 }
 
-/// Decodes one row (y >= 1) of filter 2: `planes` the row's four residual planes, `above` the
+/// Decodes one row (y >= 1) of filters 2 and 3: `planes` the row's bytes, `above` the
 /// previous row's values; writes the texels to `row` and their values to `cur` (unpadded).
 #[inline(always)]
-fn decode_row(
-    planes: [&[u8]; 4],
+fn decode_row<C: RowCodec, const P: usize>(
+    planes: [&[u8]; P],
     above: &RowValues,
     cur: &mut RowValues,
     row: &mut [u32],
-    lat: Lattice,
+    codec: C,
 ) {
     let n = row.len();
-    let [h0, hg, hr, hb] = planes.map(|p| &p[..n]);
+    let planes = planes.map(|p| &p[..n]);
     let (ag, ar, ab) = (&above.g[..n + 2], &above.r[..n + 2], &above.b[..n + 2]);
     let (cg, cr, cb) = (
         &mut cur.g[1..n + 1],
@@ -648,23 +869,16 @@ fn decode_row(
         &mut cur.b[1..n + 1],
     );
     for x in 0..n {
-        let h = u32::from(h0[x]);
-        let e = h & 31;
         let sg = tap_sum(ag[x], ag[x + 1], ag[x + 2]);
         let sr = tap_sum(ar[x], ar[x + 1], ar[x + 2]);
         let sb = tap_sum(ab[x], ab[x + 1], ab[x + 2]);
-        let g =
-            (rows_predict_g(sg, e, lat) + unzigzag9(u32::from(hg[x]) | (h >> 6 & 1) << 8)) & 511;
-        let r = (rows_predict_rb(sr, sg, e, g, lat)
-            + unzigzag9(u32::from(hr[x]) | (h >> 5 & 1) << 8))
-            & 511;
-        let b = (rows_predict_rb(sb, sg, e, g, lat) + unzigzag9(u32::from(hb[x]) | (h >> 7) << 8))
-            & 511;
-        row[x] = r | g << 9 | b << 18 | e << 27;
+        let v = rows_decode_texel(bytes_at(&planes, x), (sg, sr, sb), codec);
+        row[x] = v;
+        let (e, m) = (v >> 27, [v & 511, (v >> 9) & 511, (v >> 18) & 511]);
         let scale = pow2(e as i32);
-        cg[x] = g as i32 as f32 * scale;
-        cr[x] = r as i32 as f32 * scale;
-        cb[x] = b as i32 as f32 * scale;
+        cg[x] = m[1] as i32 as f32 * scale;
+        cr[x] = m[0] as i32 as f32 * scale;
+        cb[x] = m[2] as i32 as f32 * scale;
     }
 }
 
@@ -675,31 +889,31 @@ fn decode_row(
 /// The processor must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn decode_row_avx2(
-    planes: [&[u8]; 4],
+unsafe fn decode_row_avx2<C: RowCodec, const P: usize>(
+    planes: [&[u8]; P],
     above: &RowValues,
     cur: &mut RowValues,
     row: &mut [u32],
-    lat: Lattice,
+    codec: C,
 ) {
-    decode_row(planes, above, cur, row, lat)
+    decode_row(planes, above, cur, row, codec)
 }
 
 /// [`decode_row`] with the widest vectors the processor has.
-fn decode_row_dispatch(
-    planes: [&[u8]; 4],
+fn decode_row_dispatch<C: RowCodec, const P: usize>(
+    planes: [&[u8]; P],
     above: &RowValues,
     cur: &mut RowValues,
     row: &mut [u32],
-    lat: Lattice,
+    codec: C,
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 support was just detected.
-        unsafe { decode_row_avx2(planes, above, cur, row, lat) };
+        unsafe { decode_row_avx2(planes, above, cur, row, codec) };
         return;
     }
-    decode_row(planes, above, cur, row, lat)
+    decode_row(planes, above, cur, row, codec)
 }
 
 /// Reusable buffers of [`rows_inverse`]: the previous and current row's values, one row of
@@ -718,14 +932,21 @@ thread_local! {
     });
 }
 
-fn rows_inverse(n: usize, t: usize, filtered: &[u8], out: &mut [u8], lat: Lattice) {
+/// Filters 2 and 3 inverse: `filtered` holds `P` planes of `t` bytes.
+fn rows_inverse<C: RowCodec, const P: usize>(
+    n: usize,
+    t: usize,
+    filtered: &[u8],
+    out: &mut [u8],
+    codec: C,
+) {
     if n == 0 {
         return;
     }
     ROWS_SCRATCH.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut scratch) => rows_inverse_with(n, t, filtered, out, &mut scratch, lat),
+        Ok(mut scratch) => rows_inverse_with::<C, P>(n, t, filtered, out, &mut scratch, codec),
         // Only reachable through re-entrance, which this module never does; stay correct.
-        Err(_) => rows_inverse_with(
+        Err(_) => rows_inverse_with::<C, P>(
             n,
             t,
             filtered,
@@ -735,29 +956,30 @@ fn rows_inverse(n: usize, t: usize, filtered: &[u8], out: &mut [u8], lat: Lattic
                 cur: RowValues::new(n),
                 row: Vec::new(),
             },
-            lat,
+            codec,
         ),
     })
 }
 
-fn rows_inverse_with(
+fn rows_inverse_with<C: RowCodec, const P: usize>(
     n: usize,
     t: usize,
     filtered: &[u8],
     out: &mut [u8],
     s: &mut RowsScratch,
-    lat: Lattice,
+    codec: C,
 ) {
     for v in [&mut s.above, &mut s.cur] {
         v.resize(n);
     }
     s.row.resize(n, 0);
-    let (p0, rest) = filtered.split_at(t);
-    let (pg, rest) = rest.split_at(t);
-    let (pr, pb) = rest.split_at(t);
+    let mut planes: [&[u8]; P] = [&[]; P];
+    for (p, chunk) in planes.iter_mut().zip(filtered.chunks_exact(t)) {
+        *p = chunk;
+    }
     let mut left = None;
     for (x, v) in s.row.iter_mut().enumerate() {
-        *v = rows_decode_texel([p0[x], pg[x], pr[x], pb[x]], first_row_sums(left), lat);
+        *v = rows_decode_texel(bytes_at(&planes, x), first_row_sums(left), codec);
         left = Some(*v);
     }
     let mut out_rows = out.chunks_exact_mut(4 * n);
@@ -769,18 +991,33 @@ fn rows_inverse_with(
     s.above.fill(&s.row);
     for (y, o) in (1..n).zip(out_rows) {
         let span = y * n..(y + 1) * n;
-        let planes = [
-            &p0[span.clone()],
-            &pg[span.clone()],
-            &pr[span.clone()],
-            &pb[span],
-        ];
-        decode_row_dispatch(planes, &s.above, &mut s.cur, &mut s.row, lat);
+        let row_planes = planes.map(|p| &p[span.clone()]);
+        decode_row_dispatch(row_planes, &s.above, &mut s.cur, &mut s.row, codec);
         for (o, v) in o.chunks_exact_mut(4).zip(s.row.iter()) {
             o.copy_from_slice(&v.to_le_bytes());
         }
         s.cur.pad(n);
         std::mem::swap(&mut s.above, &mut s.cur);
+    }
+}
+
+/// Filter 3 forward with `P = packed_planes(k)` planes.
+fn packed_forward(n: usize, t: usize, raw: &[u8], out: &mut [u8], codec: Packed) {
+    match packed_planes(codec.bits) {
+        1 => rows_forward::<Packed, 1>(n, t, raw, out, codec),
+        2 => rows_forward::<Packed, 2>(n, t, raw, out, codec),
+        3 => rows_forward::<Packed, 3>(n, t, raw, out, codec),
+        _ => rows_forward::<Packed, 4>(n, t, raw, out, codec),
+    }
+}
+
+/// Filter 3 inverse with `P = packed_planes(k)` planes.
+fn packed_inverse(n: usize, t: usize, filtered: &[u8], out: &mut [u8], codec: Packed) {
+    match packed_planes(codec.bits) {
+        1 => rows_inverse::<Packed, 1>(n, t, filtered, out, codec),
+        2 => rows_inverse::<Packed, 2>(n, t, filtered, out, codec),
+        3 => rows_inverse::<Packed, 3>(n, t, filtered, out, codec),
+        _ => rows_inverse::<Packed, 4>(n, t, filtered, out, codec),
     }
 }
 
@@ -994,6 +1231,32 @@ mod tests {
                             // Lossless with any mantissa lattice, on texels that are not
                             // on it as well.
                             for bits in [1, 4, 5, 8] {
+                                let packed = f == Filter::PredictPacked && enc == Encoding::Rgb9e5;
+                                // Filter 3 takes texels on the lattice only: others are an
+                                // error, and the rest of the round trip runs on the texels
+                                // quantized to `bits`.
+                                let raw = if packed {
+                                    let q = lattice_floor(&raw, (res * res) as usize, bits);
+                                    let size = filtered_face_size(f, enc, res, distance, bits);
+                                    let mut out = vec![0u8; size.unwrap()];
+                                    let r = filter_face_quantized(
+                                        f, enc, res, distance, bits, &raw, &mut out,
+                                    );
+                                    if q != raw {
+                                        assert!(
+                                            matches!(r, Err(Error::Unquantized { .. })),
+                                            "{r:?}"
+                                        );
+                                    }
+                                    q
+                                } else {
+                                    raw.clone()
+                                };
+                                let mut filtered =
+                                    vec![
+                                        0u8;
+                                        filtered_face_size(f, enc, res, distance, bits).unwrap()
+                                    ];
                                 let q = |a: &[u8], o: &mut [u8], inv: bool| {
                                     let g = if inv {
                                         unfilter_face_quantized
@@ -1017,19 +1280,84 @@ mod tests {
     /// filters"), independently of the row code.
     fn predict_rows_reference(n: usize, tex: &[u32], bits: u32) -> Vec<u8> {
         let t = n * n;
+        let mut out = vec![0u8; 4 * t];
+        for (i, (&v, [pr, pg, pb])) in tex
+            .iter()
+            .zip(rows_predictions_reference(n, tex, bits))
+            .enumerate()
+        {
+            let e = v >> 27;
+            let (r, g, b) = (v & 511, (v >> 9) & 511, (v >> 18) & 511);
+            let z = |c: u32, p: u32| zigzag9(c.wrapping_sub(p));
+            let (zr, zg, zb) = (z(r, pr), z(g, pg), z(b, pb));
+            out[i] = (e | (zr >> 8) << 5 | (zg >> 8) << 6 | (zb >> 8) << 7) as u8;
+            out[t + i] = zg as u8;
+            out[2 * t + i] = zr as u8;
+            out[3 * t + i] = zb as u8;
+        }
+        out
+    }
+
+    /// `raw` with the mantissas of its first `t` RGB9E5 texels rounded down to multiples of
+    /// `2^(9 − bits)`.
+    fn lattice_floor(raw: &[u8], t: usize, bits: u32) -> Vec<u8> {
+        let s = (1u32 << (9 - bits)) - 1;
+        let mut q = raw.to_vec();
+        for c in q[..4 * t].chunks_exact_mut(4) {
+            let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+            c.copy_from_slice(&(v & !(s | s << 9 | s << 18)).to_le_bytes());
+        }
+        q
+    }
+
+    /// Filter 3's planes from the spec, on the predictions of [`rows_predictions_reference`].
+    fn predict_packed_reference(n: usize, tex: &[u32], bits: u32) -> Vec<u8> {
+        let t = n * n;
+        let planes = (5 + 3 * bits as usize).div_ceil(8);
+        let s = 1u32 << (9 - bits);
+        let zk = |c: u32, p: u32| {
+            let q = (c + 512 - p) % 512 / s;
+            if q < 1 << (bits - 1) {
+                2 * q
+            } else {
+                2 * ((1 << bits) - q) - 1
+            }
+        };
+        let mut out = vec![0u8; planes * t];
+        for (i, (&v, [pr, pg, pb])) in tex
+            .iter()
+            .zip(rows_predictions_reference(n, tex, bits))
+            .enumerate()
+        {
+            let e = v >> 27;
+            let (r, g, b) = (v & 511, (v >> 9) & 511, (v >> 18) & 511);
+            let code = u64::from(e)
+                | u64::from(zk(g, pg)) << 5
+                | u64::from(zk(r, pr)) << (5 + bits)
+                | u64::from(zk(b, pb)) << (5 + 2 * bits);
+            for j in 0..planes {
+                out[j * t + i] = (code >> (8 * j)) as u8;
+            }
+        }
+        out
+    }
+
+    /// Filter 2's (and 3's) predictions `[pR, pG, pB]` of every texel, texel by texel from
+    /// the spec in lib.rs ("Face filters").
+    fn rows_predictions_reference(n: usize, tex: &[u32], bits: u32) -> Vec<[u32; 3]> {
         let value = |v: u32, shift: u32| ((v >> shift) & 511) as f32 * 2f32.powi((v >> 27) as i32);
         // Round to nearest, then to the lattice of multiples of s = 2^(9 - bits), at most
         // 512 - s.
         let s = 1u32 << (9 - bits);
         let lattice = |p: u32| ((p + s / 2) / s * s).min(512 - s);
         let round = |x: f32| lattice((x + 0.5).clamp(0.0, 511.0).trunc() as u32);
-        let mut out = vec![0u8; 4 * t];
+        let mut out = vec![[0u32; 3]; n * n];
         for y in 0..n {
             for x in 0..n {
                 let i = y * n + x;
                 let v = tex[i];
                 let e = v >> 27;
-                let (r, g, b) = (v & 511, (v >> 9) & 511, (v >> 18) & 511);
+                let g = (v >> 9) & 511;
                 let taps = match (x, y) {
                     (0, 0) => None,
                     (_, 0) => Some([i - 1; 3]),
@@ -1054,15 +1382,72 @@ mod tests {
                         round(g as f32 * (sc / sg))
                     }
                 };
-                let z = |c: u32, p: u32| zigzag9(c.wrapping_sub(p));
-                let (zr, zg, zb) = (z(r, pc(sr)), z(g, pg), z(b, pc(sb)));
-                out[i] = (e | (zr >> 8) << 5 | (zg >> 8) << 6 | (zb >> 8) << 7) as u8;
-                out[t + i] = zg as u8;
-                out[2 * t + i] = zr as u8;
-                out[3 * t + i] = zb as u8;
+                out[i] = [pc(sr), pg, pc(sb)];
             }
         }
         out
+    }
+
+    #[test]
+    fn predict_packed_matches_the_spec() {
+        let mut rng = Rng(0x5eed_0f9a_cced);
+        for res in [1usize, 2, 3, 7, 16, 33] {
+            for bits in 1..=9u32 {
+                for kind in 0..3 {
+                    let t = res * res;
+                    let tex: Vec<u32> = (0..t)
+                        .map(|i| match kind {
+                            // any bit pattern, on the lattice
+                            0 => rng.next() as u32,
+                            // a smooth HDR gradient with a few exponents, quantized
+                            1 => crate::encoding::quantize_rgb9e5(
+                                crate::encoding::encode_rgb9e5([
+                                    0.01 + i as f32 * 0.37,
+                                    0.02 + i as f32 * 0.5,
+                                    0.005 + (i % 5) as f32,
+                                ]),
+                                bits,
+                            ),
+                            // zeros and extremes
+                            _ => [0u32, u32::MAX, 1 << 27, 511][(rng.next() % 4) as usize],
+                        })
+                        .collect();
+                    let raw: Vec<u8> = tex.iter().flat_map(|v| v.to_le_bytes()).collect();
+                    let raw = lattice_floor(&raw, t, bits);
+                    let tex: Vec<u32> = raw
+                        .chunks_exact(4)
+                        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                        .collect();
+                    let n = res as u32;
+                    let size =
+                        filtered_face_size(Filter::PredictPacked, Encoding::Rgb9e5, n, false, bits);
+                    assert_eq!(size, Some(t * packed_planes(bits)));
+                    let mut filtered = vec![0u8; t * packed_planes(bits)];
+                    let f = Filter::PredictPacked;
+                    filter_face_quantized(f, Encoding::Rgb9e5, n, false, bits, &raw, &mut filtered)
+                        .unwrap();
+                    let want = predict_packed_reference(res, &tex, bits);
+                    assert_eq!(filtered, want, "res {res} kind {kind} bits {bits}");
+                    let mut back = vec![0u8; raw.len()];
+                    unfilter_face_quantized(
+                        f,
+                        Encoding::Rgb9e5,
+                        n,
+                        false,
+                        bits,
+                        &filtered,
+                        &mut back,
+                    )
+                    .unwrap();
+                    assert_eq!(back, raw, "res {res} kind {kind} bits {bits}");
+                    // Any bytes decode to texels on the lattice.
+                    let junk: Vec<u8> = (0..filtered.len()).map(|_| rng.next() as u8).collect();
+                    unfilter_face_quantized(f, Encoding::Rgb9e5, n, false, bits, &junk, &mut back)
+                        .unwrap();
+                    assert_eq!(lattice_floor(&back, t, bits), back, "res {res} bits {bits}");
+                }
+            }
+        }
     }
 
     #[test]
@@ -1195,7 +1580,7 @@ mod tests {
             ),
             Err(Error::BufferSize { .. })
         ));
-        assert!(Filter::from_id(3).is_none());
+        assert!(Filter::from_id(4).is_none());
         for f in Filter::ALL {
             assert_eq!(Filter::from_id(f.id()), Some(f));
         }

@@ -45,7 +45,7 @@
 //! | 152    | `u64`     | checksum of the metadata section |
 //! | 160    | `u64`     | checksum of the sample points section |
 //! | 168    | `u64`     | checksum of the sample maps section |
-//! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows (see "Face filters"; writers use 2); other ids are refused ([`Error::UnknownFilter`]) |
+//! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows, 3 predict-packed (see "Face filters"; writers use 3 for RGB9E5 with `mantissa_bits` < 9, else 2); other ids are refused ([`Error::UnknownFilter`]) |
 //! | 180    | 68 bytes  | reserved, zero |
 //! | 248    | `u64`     | checksum of header bytes 0..248 |
 //!
@@ -96,12 +96,14 @@
 //! | …     | the six zstd frames, back to back, faces in layer order +X, −X, +Y, −Y, +Z, −Z |
 //! | 0–7   | zero padding to a multiple of 8 |
 //!
-//! Each face is one independent zstd frame that decompresses to exactly the *raw size*
-//! `n² × bytes_per_texel (+ n² × 4 with the distance channel)`. The *raw face* is the `n²`
+//! Each face is one independent zstd frame that decompresses to exactly the *filtered size*:
+//! the *raw size* `n² × bytes_per_texel (+ n² × 4 with the distance channel)`, except with
+//! filter 3 on RGB9E5, where it is `n² × ⌈(5 + 3k) / 8⌉ (+ n² × 4)` for the metadata's
+//! `mantissa_bits` k. The *raw face* is the `n²`
 //! encoded texels (row 0 first, column 0 first; see [`cube`] for the orientation), then, with
 //! the distance channel, `n²` `f32` distances to the first hit (`f32::MAX` where the ray
-//! escaped). With filter 0 the frame holds the raw face itself; with filter 1 or 2 it holds the raw
-//! face transformed as "Face filters" describes (same size), and readers undo the filter. The records make
+//! escaped). With filter 0 the frame holds the raw face itself; with filter 1, 2 or 3 it holds the
+//! raw face transformed as "Face filters" describes, and readers undo the filter. The records make
 //! a partial file recoverable without its table of contents ([`StoreWriter::resume`]). Cube
 //! `sample_count`, if the environment flag is set, is an environment map captured at the
 //! object's centre.
@@ -115,8 +117,8 @@
 //! after the 8-aligned end of the previous cube (the payload start for cube 0); each further
 //! face starts where the previous one ends; all frames lie inside the payload, which ends at
 //! the 8-aligned end of the last cube. Frames are checked against their checksum on every read
-//! and must decompress to exactly their raw size (decompression writes into a buffer of the
-//! declared size, so a frame can never expand further).
+//! and must decompress to exactly their filtered size (decompression writes into a buffer of
+//! that size, so a frame can never expand further).
 //!
 //! ## Face filters
 //!
@@ -187,6 +189,24 @@
 //! Every row after the first depends only on the row above, so decoders reconstruct a row in
 //! vector registers without a texel-to-texel dependency; filter 1's left neighbour chains
 //! the texels of a row. Filter 1 ignores `mantissa_bits`.
+//!
+//! **Filter 3 (predict-packed)** is filter 2 except for the RGB9E5 texel part, which it
+//! stores in fewer bytes when the store keeps `k = mantissa_bits` < 9 bits (writers use it
+//! only then; it is defined for every k in 1..=9). Its input texels must lie on the mantissa
+//! lattice (every mantissa a multiple of `s = 2^(9 − k)`; writers quantize first and refuse
+//! others with [`Error::Unquantized`]), and every decoded texel does. With the predictions
+//! `pG`, `pR`, `pB` of filter 2 (lattice-rounded, so multiples of `s` too):
+//!
+//! * `q_C = ((C − pC) mod 512) / s`, a `k`-bit number of lattice steps, for C in R, G, B;
+//! * `zk(q) = 2q` if `q < 2^(k−1)`, else `2(2^k − q) − 1` (zig-zag in `k` bits);
+//! * the texel's *code* is the `(5 + 3k)`-bit number `e | zk(q_G) << 5 | zk(q_R) << (5 + k) |
+//!   zk(q_B) << (5 + 2k)`;
+//! * output: `P = ⌈(5 + 3k) / 8⌉` byte planes of `t` bytes, plane `j` byte `i` = bits `8j ..
+//!   8j + 7` of texel `i`'s code (P = 1, 2, 2, 3, 3, 3, 4, 4, 4 for k = 1 … 9).
+//!
+//! Decoding: take `e` and the three `zk` fields from the code (bits above `5 + 3k` ignored),
+//! `q = (z >> 1) XOR −(z AND 1)` in `k` bits, then `C = (pC + q · s) mod 512`, green first as
+//! in filter 2. The distance plane follows the texel planes, transformed as in filter 1.
 //!
 //! Measured on cube maps of the example scene (`cargo bench --bench store`; zstd level 3, 4
 //! samples per texel), bytes per texel none → predict → predict-rows: quick preset (489 cubes

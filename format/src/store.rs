@@ -441,13 +441,24 @@ impl Store {
             let Some(dctx) = state.dctx.as_mut() else {
                 return Err(fail("no zstd decompression context".into()));
             };
+            let filtered_size = crate::filter::filtered_face_size(
+                h.filter,
+                h.encoding,
+                h.cube_resolution,
+                h.has_distance(),
+                self.meta.bake.mantissa_bits,
+            )
+            .ok_or_else(|| fail("filtered face size overflows".into()))?;
             let target: &mut [u8] = match h.filter {
                 Filter::None => out,
-                Filter::Predict | Filter::PredictRows => {
-                    state.scratch.resize(out.len(), 0);
+                Filter::Predict | Filter::PredictRows | Filter::PredictPacked => {
+                    state.scratch.resize(filtered_size, 0);
                     &mut state.scratch
                 }
             };
+            // The frame must decompress to exactly the filtered size: a frame that would
+            // produce more fails inside zstd (the buffer bounds it), one that produces less is
+            // caught here.
             let n = dctx
                 .decompress_to_buffer(frame, target)
                 .map_err(|err| fail(err.to_string()))?;

@@ -189,19 +189,21 @@ impl StoreWriter {
     /// sample-map index `< points.len()`), writes `<path>.partial` (replacing any old one)
     /// up to the cube payload and syncs it.
     ///
-    /// The store records [`Filter::default`], the filter [`crate::encode_cube`] uses.
+    /// The store records [`Filter::for_store`] of its encoding and mantissa bits, the filter
+    /// [`crate::encode_cube`] uses.
     pub fn create(
         path: &Path,
         meta: &StoreMeta,
         points: &[SamplePoint],
         maps: &SampleMaps,
     ) -> Result<Self, Error> {
-        Self::create_with_filter(path, meta, points, maps, Filter::default())
+        let filter = Filter::for_store(meta.bake.encoding, meta.bake.mantissa_bits);
+        Self::create_with_filter(path, meta, points, maps, filter)
     }
 
     /// [`StoreWriter::create`] recording face filter `filter`: every appended cube must be
     /// encoded with it ([`crate::cube::encode_cube_with_filter`]). [`StoreWriter::resume`]
-    /// continues only partial files that use the default filter.
+    /// continues only partial files that use [`Filter::for_store`].
     pub fn create_with_filter(
         path: &Path,
         meta: &StoreMeta,
@@ -253,7 +255,8 @@ impl StoreWriter {
         maps: &SampleMaps,
     ) -> Result<Self, Error> {
         let partial = partial_path(path);
-        let prefix = Prefix::build(meta, points, maps, Filter::default())?;
+        let filter = Filter::for_store(meta.bake.encoding, meta.bake.mantissa_bits);
+        let prefix = Prefix::build(meta, points, maps, filter)?;
         let mut file = match OpenOptions::new().read(true).write(true).open(&partial) {
             Ok(f) => f,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -298,15 +301,17 @@ impl StoreWriter {
             }
             if (FILTER_OFFSET..FILTER_OFFSET + 4).contains(&at) {
                 return Err(mismatch(format!(
-                    "the partial file uses face filter id {}, this writer filter {} (id {})",
+                    "the partial file uses face filter id {}, this bake filter {} (id {}), the filter of {} with mantissa_bits {} (different mantissa_bits?)",
                     u32::from_le_bytes([
                         got[FILTER_OFFSET],
                         got[FILTER_OFFSET + 1],
                         got[FILTER_OFFSET + 2],
                         got[FILTER_OFFSET + 3]
                     ]),
-                    Filter::default(),
-                    Filter::default().id()
+                    filter,
+                    filter.id(),
+                    meta.bake.encoding,
+                    meta.bake.mantissa_bits
                 )));
             }
             return Err(mismatch(format!(

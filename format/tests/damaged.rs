@@ -718,7 +718,7 @@ thread_local! {
 
 #[test]
 fn unknown_filter_id_is_a_typed_error() {
-    for id in [3u32, 7, u32::MAX] {
+    for id in [4u32, 7, u32::MAX] {
         let mut b = good();
         put_u32(&mut b, 176, id);
         reseal(&mut b);
@@ -763,4 +763,45 @@ fn hostile_filtered_frames_decode_without_panicking() {
         }
         assert!(store.verify().is_ok());
     }
+}
+
+#[test]
+fn filter_swapped_on_a_quantized_store_is_a_typed_error() {
+    // A 3-bit RGB9E5 store is written with filter 3, whose frames decompress to 2 bytes per
+    // texel; read as filter 2 they are short of the 4 bytes per texel it expects.
+    let b = store_bytes(Spec {
+        encoding: Encoding::Rgb9e5,
+        mantissa_bits: 3,
+        distance: true,
+        ..Spec::default()
+    });
+    let store = open(&b).unwrap();
+    assert_eq!(store.header().filter, Filter::PredictPacked);
+    let mut raw = vec![0u8; store.face_raw_size()];
+    store.read_face_raw(0, 0, &mut raw).unwrap();
+    let mut c = b.clone();
+    put_u32(&mut c, 176, Filter::PredictRows.id());
+    reseal(&mut c);
+    let store = open(&c).unwrap();
+    let e = store.read_face_raw(0, 0, &mut raw).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::Decompress {
+                cube: 0,
+                face: 0,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // The other way round, a lossless store's frames (4 bytes per texel) read as filter 3 with
+    // 9 bits (also 4 bytes per texel) decode to some texels without an error or a panic.
+    let b = store_bytes(Spec::default());
+    let mut c = b.clone();
+    put_u32(&mut c, 176, Filter::PredictPacked.id());
+    reseal(&mut c);
+    let store = open(&c).unwrap();
+    let mut raw = vec![0u8; store.face_raw_size()];
+    store.read_face_raw(0, 0, &mut raw).unwrap();
 }

@@ -181,7 +181,7 @@ fn resume_with_other_mantissa_bits_or_version_is_a_mismatch() {
         .err()
         .unwrap();
     assert!(
-        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("mantissa_bits 9, this bake has 5")),
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("face filter id 2, this bake filter predict-packed (id 3), the filter of rgb9e5 with mantissa_bits 5")),
         "{e}"
     );
     // A cube quantized differently is refused by append.

@@ -1,0 +1,204 @@
+//! Splits `Store::read_face_raw` into its stages (checksum, zstd, unfilter) on one thread and
+//! times each over every face of a store: `cargo run --release -p oslf-format --example
+//! read_profile -- STORE.oslf [ROUNDS]`. Throughputs are raw (decoded) bytes per second.
+
+use std::time::Instant;
+
+use oslf_format::filter::unfilter_face_quantized;
+use oslf_format::Store;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let store = Store::open(args.get(1).expect("STORE").as_ref()).expect("open store");
+    let rounds: usize = args.get(2).map_or(5, |r| r.parse().expect("ROUNDS"));
+    let h = store.header().clone();
+    let raw = store.face_raw_size();
+    let bytes = std::fs::read(args.get(1).unwrap()).unwrap();
+    let mut filter = h.filter;
+    let mut bits = store.meta().bake.mantissa_bits;
+    let mut frames: Vec<&[u8]> = Vec::new();
+    let mut owned: Vec<Vec<u8>> = Vec::new();
+    if let Some(b) = std::env::var("BITS")
+        .ok()
+        .map(|b| b.parse::<u32>().unwrap())
+    {
+        let mut params = store.meta().bake.clone();
+        params.mantissa_bits = b;
+        bits = b;
+        if let Ok(id) = std::env::var("FILTER") {
+            filter = oslf_format::Filter::from_id(id.parse().unwrap()).unwrap();
+        }
+        let level = std::env::var("LEVEL").map_or(params.zstd_level, |l| l.parse().unwrap());
+        params.zstd_level = level;
+        for c in 0..store.cube_count() {
+            let cube = store.read_cube(c).unwrap();
+            let (enc, _) = oslf_format::encode_cube_with_filter(&cube, &params, c, filter).unwrap();
+            owned.extend(enc.frames().iter().cloned());
+        }
+        frames = owned.iter().map(|f| f.as_slice()).collect();
+    } else {
+        for c in 0..store.cube_count() {
+            for f in 0..6 {
+                let e = store.face_entry(c, f).unwrap();
+                frames.push(&bytes[e.offset as usize..(e.offset + e.compressed_size) as usize]);
+            }
+        }
+    }
+    let total_raw = (raw * frames.len()) as f64;
+    let fsize = oslf_format::filter::filtered_face_size(
+        filter,
+        h.encoding,
+        h.cube_resolution,
+        h.has_distance(),
+        bits,
+    )
+    .unwrap();
+    let compressed: usize = frames.iter().map(|f| f.len()).sum();
+    println!(
+        "{} faces of {} bytes raw, {:.3} bytes per raw byte compressed, filter {}, bits {}",
+        frames.len(),
+        raw,
+        compressed as f64 / total_raw,
+        filter,
+        bits
+    );
+    if std::env::var_os("SWEEP").is_some() {
+        sweep(&frames, raw);
+        return;
+    }
+    let mut dctx = zstd::bulk::Decompressor::new().unwrap();
+    let mut scratch = vec![0u8; fsize * frames.len()];
+    let mut out = vec![0u8; raw];
+    let (mut t_hash, mut t_zstd, mut t_unf, mut t_all) = (0.0, 0.0, 0.0, 0.0);
+    let mut sink = 0u64;
+    for _ in 0..rounds {
+        let t = Instant::now();
+        for f in &frames {
+            sink ^= xxhash_rust::xxh3::xxh3_64(f);
+        }
+        t_hash += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        for (f, s) in frames.iter().zip(scratch.chunks_mut(fsize)) {
+            dctx.decompress_to_buffer(f, s).unwrap();
+        }
+        t_zstd += t.elapsed().as_secs_f64();
+        if let Some(path) = std::env::var_os("DUMP") {
+            std::fs::write(path, &scratch).unwrap();
+        }
+        let t = Instant::now();
+        for s in scratch.chunks(fsize) {
+            unfilter_face_quantized(
+                filter,
+                h.encoding,
+                h.cube_resolution,
+                h.has_distance(),
+                bits,
+                s,
+                &mut out,
+            )
+            .unwrap();
+            sink ^= u64::from(out[7]);
+        }
+        t_unf += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        for f in &frames {
+            sink ^= xxhash_rust::xxh3::xxh3_64(f);
+            dctx.decompress_to_buffer(f, &mut scratch[..fsize]).unwrap();
+            unfilter_face_quantized(
+                filter,
+                h.encoding,
+                h.cube_resolution,
+                h.has_distance(),
+                bits,
+                &scratch[..fsize],
+                &mut out,
+            )
+            .unwrap();
+        }
+        t_all += t.elapsed().as_secs_f64();
+    }
+    let gb = |t: f64| total_raw * rounds as f64 / t / 1e9;
+    println!(
+        "GB/s of raw bytes: checksum {:.2}, zstd {:.3}, unfilter {:.3}, all three per face {:.3} (sum of stages {:.3}) [{sink}]",
+        gb(t_hash),
+        gb(t_zstd),
+        gb(t_unf),
+        gb(t_all),
+        gb(t_hash + t_zstd + t_unf)
+    );
+}
+
+/// Re-compresses every face with other zstd parameters and reports size and decompression
+/// speed (zstd alone) for each.
+#[allow(dead_code)]
+pub fn sweep(frames: &[&[u8]], raw: usize) {
+    use zstd::zstd_safe::{CParameter, Strategy};
+    let mut dctx = zstd::bulk::Decompressor::new().unwrap();
+    let mut filtered = vec![0u8; raw * frames.len()];
+    for (f, s) in frames.iter().zip(filtered.chunks_mut(raw)) {
+        dctx.decompress_to_buffer(f, s).unwrap();
+    }
+    let configs: Vec<(String, Vec<CParameter>)> = vec![
+        ("level 3".into(), vec![CParameter::CompressionLevel(3)]),
+        ("level 1".into(), vec![CParameter::CompressionLevel(1)]),
+        ("level 9".into(), vec![CParameter::CompressionLevel(9)]),
+        ("level 19".into(), vec![CParameter::CompressionLevel(19)]),
+        (
+            "l3 minmatch 5".into(),
+            vec![CParameter::CompressionLevel(3), CParameter::MinMatch(5)],
+        ),
+        (
+            "l3 minmatch 7".into(),
+            vec![CParameter::CompressionLevel(3), CParameter::MinMatch(7)],
+        ),
+        (
+            "l9 minmatch 7".into(),
+            vec![CParameter::CompressionLevel(9), CParameter::MinMatch(7)],
+        ),
+        (
+            "l19 minmatch 7".into(),
+            vec![CParameter::CompressionLevel(19), CParameter::MinMatch(7)],
+        ),
+        (
+            "fast tl 7".into(),
+            vec![
+                CParameter::CompressionLevel(1),
+                CParameter::MinMatch(7),
+                CParameter::Strategy(Strategy::ZSTD_fast),
+            ],
+        ),
+        (
+            "btultra2 mm7".into(),
+            vec![
+                CParameter::CompressionLevel(19),
+                CParameter::MinMatch(7),
+                CParameter::Strategy(Strategy::ZSTD_btultra2),
+            ],
+        ),
+    ];
+    for (name, params) in configs {
+        let mut c = zstd::bulk::Compressor::new(3).unwrap();
+        for p in params {
+            c.set_parameter(p).unwrap();
+        }
+        let comp: Vec<Vec<u8>> = filtered
+            .chunks(raw)
+            .map(|s| c.compress(s).unwrap())
+            .collect();
+        let size: usize = comp.iter().map(|c| c.len()).sum();
+        let mut out = vec![0u8; raw];
+        let rounds = 3;
+        let t = std::time::Instant::now();
+        for _ in 0..rounds {
+            for c in &comp {
+                dctx.decompress_to_buffer(c, &mut out).unwrap();
+            }
+        }
+        let s = t.elapsed().as_secs_f64();
+        println!(
+            "{name:>16}: {:.4} bytes per raw byte, zstd {:.3} GB/s",
+            size as f64 / filtered.len() as f64,
+            (filtered.len() * rounds) as f64 / s / 1e9
+        );
+    }
+}
