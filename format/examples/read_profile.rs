@@ -117,6 +117,30 @@ fn main() {
         }
         t_all += t.elapsed().as_secs_f64();
     }
+    if let Some(reps) = std::env::var("UNFILTER_ONLY")
+        .ok()
+        .map(|r| r.parse::<usize>().unwrap())
+    {
+        let t = Instant::now();
+        for _ in 0..reps {
+            for s in scratch.chunks(fsize) {
+                unfilter_face_quantized(
+                    filter,
+                    h.encoding,
+                    h.cube_resolution,
+                    h.has_distance(),
+                    bits,
+                    s,
+                    &mut out,
+                )
+                .unwrap();
+            }
+        }
+        println!(
+            "unfilter only: {:.3} GB/s",
+            total_raw * reps as f64 / t.elapsed().as_secs_f64() / 1e9
+        );
+    }
     let gb = |t: f64| total_raw * rounds as f64 / t / 1e9;
     println!(
         "GB/s of raw bytes: checksum {:.2}, zstd {:.3}, unfilter {:.3}, all three per face {:.3} (sum of stages {:.3}) [{sink}]",

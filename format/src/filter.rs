@@ -868,17 +868,52 @@ fn decode_row<C: RowCodec, const P: usize>(
         &mut cur.r[1..n + 1],
         &mut cur.b[1..n + 1],
     );
-    for x in 0..n {
+    // Blocks of LANES texels through fixed-size arrays, which the compiler turns into
+    // straight-line vector code (no aliasing checks between the row buffers), then the rest
+    // texel by texel.
+    const LANES: usize = 8;
+    let blocks = n / LANES;
+    for k in 0..blocks {
+        let x0 = k * LANES;
+        let fixed = |c: &[f32]| -> [f32; LANES + 2] {
+            c[x0..x0 + LANES + 2].try_into().unwrap_or([0.0; LANES + 2])
+        };
+        let (tg, tr, tb) = (fixed(ag), fixed(ar), fixed(ab));
+        let bytes: [[u8; LANES]; P] =
+            planes.map(|p| p[x0..x0 + LANES].try_into().unwrap_or([0; LANES]));
+        let mut v = [0u32; LANES];
+        for i in 0..LANES {
+            let sg = tap_sum(tg[i], tg[i + 1], tg[i + 2]);
+            let sr = tap_sum(tr[i], tr[i + 1], tr[i + 2]);
+            let sb = tap_sum(tb[i], tb[i + 1], tb[i + 2]);
+            let mut t = [0u8; 4];
+            for (o, p) in t.iter_mut().zip(&bytes) {
+                *o = p[i];
+            }
+            v[i] = rows_decode_texel(t, (sg, sr, sb), codec);
+        }
+        let (mut g, mut r, mut b) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
+        for i in 0..LANES {
+            let scale = pow2((v[i] >> 27) as i32);
+            g[i] = ((v[i] >> 9) & 511) as i32 as f32 * scale;
+            r[i] = (v[i] & 511) as i32 as f32 * scale;
+            b[i] = ((v[i] >> 18) & 511) as i32 as f32 * scale;
+        }
+        row[x0..x0 + LANES].copy_from_slice(&v);
+        cg[x0..x0 + LANES].copy_from_slice(&g);
+        cr[x0..x0 + LANES].copy_from_slice(&r);
+        cb[x0..x0 + LANES].copy_from_slice(&b);
+    }
+    for x in blocks * LANES..n {
         let sg = tap_sum(ag[x], ag[x + 1], ag[x + 2]);
         let sr = tap_sum(ar[x], ar[x + 1], ar[x + 2]);
         let sb = tap_sum(ab[x], ab[x + 1], ab[x + 2]);
         let v = rows_decode_texel(bytes_at(&planes, x), (sg, sr, sb), codec);
         row[x] = v;
-        let (e, m) = (v >> 27, [v & 511, (v >> 9) & 511, (v >> 18) & 511]);
-        let scale = pow2(e as i32);
-        cg[x] = m[1] as i32 as f32 * scale;
-        cr[x] = m[0] as i32 as f32 * scale;
-        cb[x] = m[2] as i32 as f32 * scale;
+        let scale = pow2((v >> 27) as i32);
+        cg[x] = ((v >> 9) & 511) as i32 as f32 * scale;
+        cr[x] = (v & 511) as i32 as f32 * scale;
+        cb[x] = ((v >> 18) & 511) as i32 as f32 * scale;
     }
 }
 
