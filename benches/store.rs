@@ -2,15 +2,17 @@
 //! at the default zstd level, and decompression throughput of one core (`read_face_raw`:
 //! checksum, zstd and unfilter).
 //!
-//! Cubes are stored with the default face filter ([`Filter::PredictRows`]); the sizes with
-//! filter 1 (`predict`) and unfiltered are printed beside it.
+//! Cubes are stored with the face filter writers use ([`Filter::for_store`]: `predict-rows`,
+//! or `predict-packed` for RGB9E5 with fewer mantissa bits); the sizes with filter 1
+//! (`predict`) and unfiltered are printed beside it.
 //!
 //! `cargo bench --bench store`: the quick preset (32² cube maps), baked losslessly (RGBA32F)
 //! once and cached in `target/bench-data/`; each encoding is re-encoded from it, so all see
 //! the same radiance.
 //!
-//! RGB9E5 is also measured with fewer mantissa bits (`mantissa_bits` 8..1, sizes only); with
-//! `OSLF_BENCH_BITS=k` the RGB9E5 store whose decompression is timed keeps k bits.
+//! RGB9E5 is also measured with fewer mantissa bits (`mantissa_bits` 8..1, sizes with filters
+//! 3 and 2), and a second RGB9E5 store keeping 3 bits is timed beside the lossless one
+//! (`rgb9e5-3bits`); `OSLF_BENCH_BITS=k` times k bits instead of 3.
 //!
 //! `OSLF_BENCH_STORE=path.oslf [OSLF_BENCH_CUBES=N] cargo bench --bench store`: the cube maps
 //! of an existing store instead (its first N cubes), e.g. the thesis preset's 128² cube maps
@@ -168,43 +170,55 @@ fn store_benchmarks(c: &mut Criterion) {
     let bits = std::env::var("OSLF_BENCH_BITS")
         .ok()
         .and_then(|v| v.parse::<u32>().ok())
-        .map_or(9, |b| b.clamp(1, 9));
+        .map_or(3, |b| b.clamp(1, 9));
     // Quantized RGB9E5, sizes only (encoded, not written).
     let mut sizes = Vec::new();
     for k in (1..=8).rev() {
         let mut params = reference.meta().bake.clone();
         params.encoding = Encoding::Rgb9e5;
         params.mantissa_bits = k;
-        let (mut compressed, mut texels) = (0u64, 0u64);
+        let (mut packed, mut rows, mut texels) = (0u64, 0u64, 0u64);
         for c in 0..cubes {
             let cube = reference.read_cube(c).expect("read cube");
             let (_, stats) = encode_cube(&cube, &params, c).expect("encode");
-            compressed += stats.compressed_bytes;
+            packed += stats.compressed_bytes;
+            let (_, stats) = encode_cube_with_filter(&cube, &params, c, Filter::PredictRows)
+                .expect("encode");
+            rows += stats.compressed_bytes;
             texels += 6 * (cube.resolution as u64).pow(2);
         }
-        sizes.push(format!("{k} bits {:.3}", compressed as f64 / texels as f64));
+        sizes.push(format!(
+            "{k} bits {:.3} ({:.3})",
+            packed as f64 / texels as f64,
+            rows as f64 / texels as f64
+        ));
     }
     println!(
-        "rgb9e5   zstd level {}, bytes per texel with fewer mantissa bits (filter {}): {}",
+        "rgb9e5   zstd level {}, bytes per texel with fewer mantissa bits, filter {} ({}): {}",
         reference.meta().bake.zstd_level,
-        Filter::default(),
+        Filter::PredictPacked,
+        Filter::PredictRows,
         sizes.join(", ")
     );
     let mut group = c.benchmark_group("read_face_raw");
-    for encoding in [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f] {
-        let k = if encoding == Encoding::Rgb9e5 {
-            bits
+    for (encoding, k) in [
+        (Encoding::Rgb9e5, 9),
+        (Encoding::Rgb9e5, bits),
+        (Encoding::Rgba16f, 9),
+        (Encoding::Rgba32f, 9),
+    ] {
+        let name = if k < 9 {
+            format!("{}-{k}bits", encoding.name())
         } else {
-            9
+            encoding.name().to_string()
         };
         let (path, compressed, texels, unfiltered, predict) =
             reencode(&reference, encoding, k, cubes);
         println!(
-            "{:8} mantissa_bits {k} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} with predict, {:.3} unfiltered; {:.2} MB of cube data; raw {} bytes per texel)",
-            encoding.name(),
+            "{name:8} mantissa_bits {k} zstd level {}: {:.3} bytes per texel with filter {} ({:.3} with predict, {:.3} unfiltered; {:.2} MB of cube data; raw {} bytes per texel)",
             reference.meta().bake.zstd_level,
             compressed as f64 / texels as f64,
-            Filter::default(),
+            Filter::for_store(encoding, k),
             predict as f64 / texels as f64,
             unfiltered as f64 / texels as f64,
             compressed as f64 / 1e6,
@@ -236,13 +250,12 @@ fn store_benchmarks(c: &mut Criterion) {
             (wall, cpu)
         };
         println!(
-            "{:8} read_face_raw: {:.3} GB/s of wall time, {} GB/s of this thread's CPU time",
-            encoding.name(),
+            "{name:8} read_face_raw: {:.3} GB/s of wall time, {} GB/s of this thread's CPU time",
             wall,
             cpu.map_or("(unknown)".to_string(), |c| format!("{c:.3}"))
         );
         group.throughput(Throughput::Bytes((face * faces) as u64));
-        group.bench_function(encoding.name(), |b| {
+        group.bench_function(name.as_str(), |b| {
             b.iter(|| {
                 for cube in 0..store.cube_count() {
                     for f in 0..6 {

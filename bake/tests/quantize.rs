@@ -56,6 +56,9 @@ fn five_bits_is_the_nine_bit_bake_quantized() {
     let q = bake_with(5, &dir);
     assert_eq!(full.meta().bake.mantissa_bits, 9);
     assert_eq!(q.meta().bake.mantissa_bits, 5);
+    // Quantized stores are written with filter 3, lossless ones with filter 2.
+    assert_eq!(q.header().filter, oslf_format::Filter::PredictPacked);
+    assert_eq!(full.header().filter, oslf_format::Filter::PredictRows);
     let mut meta = q.meta().clone();
     meta.bake.mantissa_bits = 9;
     assert_eq!(&meta, full.meta(), "only mantissa_bits differs");

@@ -54,6 +54,10 @@ fn main() {
     )
     .unwrap();
     let compressed: usize = frames.iter().map(|f| f.len()).sum();
+    if std::env::var_os("SWEEP").is_some() {
+        sweep(&frames, fsize);
+        return;
+    }
     println!(
         "{} faces of {} bytes raw, {:.3} bytes per raw byte compressed, filter {}, bits {}",
         frames.len(),
@@ -62,10 +66,6 @@ fn main() {
         filter,
         bits
     );
-    if std::env::var_os("SWEEP").is_some() {
-        sweep(&frames, raw);
-        return;
-    }
     let mut dctx = zstd::bulk::Decompressor::new().unwrap();
     let mut scratch = vec![0u8; fsize * frames.len()];
     let mut out = vec![0u8; raw];
