@@ -240,8 +240,20 @@ impl<I: Intersector> Integrator<'_, I> {
             }
             // f · cos / pdf = albedo for cosine-weighted sampling.
             throughput *= albedo;
-            stats.closest += 1;
             let next_ray = Ray::new(origin, wi);
+            if !gather_next {
+                // The last vertex: only whether the BSDF sample escapes matters (a surface
+                // hit adds nothing and ends the path), so an any-hit query answers it. It is
+                // counted as what it is, an any-hit ray; the result is the same bit for bit.
+                stats.shadow += 1;
+                if !self.geometry.occluded(&next_ray, f32::MAX) {
+                    let le = self.environment.eval(wi);
+                    let w = power_heuristic(pdf_bsdf, self.environment.environment_pdf(wi));
+                    radiance += throughput * le * w;
+                }
+                break;
+            }
+            stats.closest += 1;
             let Some(next) = self.geometry.intersect(&next_ray, f32::MAX) else {
                 if env_active {
                     let le = self.environment.eval(wi);
@@ -250,9 +262,6 @@ impl<I: Intersector> Integrator<'_, I> {
                 }
                 break;
             };
-            if !gather_next {
-                break;
-            }
             bounce += 1;
             if bounce >= RUSSIAN_ROULETTE_START {
                 let q = throughput.max_element().min(0.95);
