@@ -137,7 +137,22 @@ impl<I: Intersector> Integrator<'_, I> {
     /// The first segment starts exactly at `ray.origin`. Every ray traced is counted in `stats`.
     pub fn radiance(&self, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
         stats.closest += 1;
-        let Some(first) = self.geometry.intersect(ray, f32::MAX) else {
+        let first = self.geometry.intersect(ray, f32::MAX);
+        self.radiance_from(ray, first.as_ref(), rng, stats)
+    }
+
+    /// [`Integrator::radiance`] for a primary ray whose closest hit (`None`: it escaped),
+    /// `self.geometry.intersect(ray, f32::MAX)`, the caller has already traced and counted (a
+    /// cube-map capture traces a tile's primary rays as one packet). The same result, with
+    /// the same random numbers drawn.
+    pub fn radiance_from(
+        &self,
+        ray: &Ray,
+        first: Option<&SurfaceHit>,
+        rng: &mut Rng,
+        stats: &mut RayStats,
+    ) -> Sample {
+        let Some(first) = first else {
             let mut l = self.environment.eval(ray.dir);
             for light in self.lights {
                 l += light.disc_radiance(ray.dir);
@@ -148,7 +163,7 @@ impl<I: Intersector> Integrator<'_, I> {
             };
         };
         Sample {
-            radiance: self.radiance_leaving(&first, ray.dir, rng, stats),
+            radiance: self.radiance_leaving(first, ray.dir, rng, stats),
             distance: first.t,
         }
     }
