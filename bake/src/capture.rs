@@ -55,9 +55,14 @@ pub fn capture_cube<I: Intersector>(
     }
     // Bands of rows in parallel when the bake captures fewer cubes at once than there are
     // threads (large faces, see [`chunk_cubes`]): a large cube then keeps every thread busy on
-    // its own. Each texel has its own random stream, so the result does not depend on the
-    // split.
-    let parallel = chunk_cubes(res, settings.distance_channel) < rayon::current_num_threads();
+    // its own; and whenever this runs on a worker of a pool of several threads (the bake's
+    // cubes in parallel): then a thread that has finished its cubes of a chunk steals bands of
+    // the cubes still running instead of waiting for them at the end of the chunk. Each texel
+    // has its own random stream, so the result does not depend on the split.
+    let threads = rayon::current_num_threads();
+    let parallel = threads > 1
+        && (rayon::current_thread_index().is_some()
+            || chunk_cubes(res, settings.distance_channel) < threads);
     let band = TILE * res as usize;
     type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
     let mut bands: Vec<Band> = Vec::new();
