@@ -17,6 +17,16 @@
 //! corners' sheared coordinates and edge functions in SSE vectors, lane by lane as the scalar
 //! test (`tests`); shadow rays first try the triangle that blocked the thread's last blocked
 //! shadow ray.
+//!
+//! Packets ([`TriangleScene::intersect_packet`]): the primary rays of a cube-map tile leave
+//! one point in nearly one direction, so they enter nearly the same nodes and triangles. A
+//! packet traverses the BVH once for up to [`PACKET`] rays: each node is loaded and its
+//! quantised child planes converted once, then slab-tested against every ray still in it
+//! (each ray against its own closest `t`, lane by lane the single-ray test); a child is
+//! visited with the rays that enter it, a leaf's triangles are tested against exactly those
+//! rays. Every ray gets the closest hit the single-ray traversal gives it (the same triangle
+//! test, so the same bits; only among triangles hit at bit-identical `t` may a different one
+//! be reported, the tie being broken by visiting order in both).
 
 use std::time::{Duration, Instant};
 
@@ -265,7 +275,23 @@ impl Intersector for TriangleScene {
         }
         self.occluded_impl::<false>(ray, t_max)
     }
+
+    fn intersect_packet(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<SurfaceHit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+            #[cfg(target_arch = "x86_64")]
+            if self.avx2 {
+                // SAFETY: `avx2` is true only where the CPU has these features (`build`).
+                unsafe { self.intersect_packet_avx2(rays, t_max, hits) };
+                continue;
+            }
+            self.intersect_packet_impl::<false>(rays, t_max, hits);
+        }
+    }
 }
+
+/// Most rays traversed together by [`TriangleScene::intersect_packet`] (bits of a `u32` mask).
+pub const PACKET: usize = 16;
 
 impl TriangleScene {
     /// [`Intersector::intersect`] compiled for AVX2: the node test takes all 8 children in
@@ -282,6 +308,115 @@ impl TriangleScene {
     #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1,bmi2")]
     fn occluded_avx2(&self, ray: &Ray, t_max: f32) -> bool {
         self.occluded_impl::<true>(ray, t_max)
+    }
+
+    /// [`Intersector::intersect_packet`] for at most [`PACKET`] rays, compiled for AVX2 (see
+    /// [`Self::intersect_avx2`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1,bmi2")]
+    fn intersect_packet_avx2(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<SurfaceHit>]) {
+        self.intersect_packet_impl::<true>(rays, t_max, hits)
+    }
+
+    /// The closest hits of at most [`PACKET`] rays, traversing the BVH once for all of them
+    /// (see the module documentation); `AVX2` as in [`Self::intersect_impl`].
+    #[inline(always)]
+    fn intersect_packet_impl<const AVX2: bool>(
+        &self,
+        rays: &[Ray],
+        t_max: f32,
+        hits: &mut [Option<SurfaceHit>],
+    ) {
+        let n = rays.len().min(PACKET).min(hits.len());
+        // Rays that cannot hit anything (and the slots past `n`) hold a placeholder that no
+        // mask bit selects.
+        let placeholder =
+            PreparedRay::new(&Ray::new(Vec3::ZERO, Vec3::Z), 1.0).expect("a valid placeholder ray");
+        let mut active = 0u32;
+        let prs: [PreparedRay; PACKET] = std::array::from_fn(|i| {
+            match rays
+                .get(i)
+                .filter(|_| i < n)
+                .and_then(|r| PreparedRay::new(r, t_max))
+            {
+                Some(pr) => {
+                    active |= 1 << i;
+                    pr
+                }
+                None => placeholder,
+            }
+        });
+        if active == 0 {
+            hits[..n].fill(None);
+            return;
+        }
+        let mut t_best = [t_max; PACKET];
+        let mut best: [Option<(usize, TriHit)>; PACKET] = [None; PACKET];
+        // Children in the octant order of the first ray (obvhs's single-ray order: the slot
+        // `k ^ octant` k-th), so the nearer children of most rays come first.
+        let d = prs[active.trailing_zeros() as usize].dir;
+        let octant =
+            (usize::from(d.x < 0.0) << 2) | (usize::from(d.y < 0.0) << 1) | usize::from(d.z < 0.0);
+        // Each visit pops one entry and pushes at most 8, and the depth is at most
+        // MAX_BVH_DEPTH (`build`), so 8 entries per level suffice.
+        let mut stack = [(0u32, 0u32); 8 * MAX_BVH_DEPTH];
+        stack[0] = (0, active);
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            let (index, mask) = stack[depth];
+            let node = &self.bvh.nodes[index as usize];
+            let mut child_rays = [0u32; 8];
+            #[cfg(target_arch = "x86_64")]
+            if AVX2 {
+                // SAFETY: `AVX2` is true only in `intersect_packet_avx2`, an AVX2 function
+                // called only where the CPU has AVX2.
+                unsafe { packet_node_avx2(node, &prs, mask, &t_best, &mut child_rays) };
+            } else {
+                packet_node(node, &prs, mask, &t_best, &mut child_rays);
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            packet_node(node, &prs, mask, &t_best, &mut child_rays);
+            // Leaves first (their hits shorten the rays before the inner children's tests).
+            for k in 0..8 {
+                let slot = k ^ octant;
+                let rays_in = child_rays[slot];
+                if rays_in == 0 || node.imask & (1 << slot) != 0 {
+                    continue;
+                }
+                // A leaf's meta: first triangle's offset in the low 5 bits, the count in
+                // unary in the top 3 (an empty slot: 0, no triangles).
+                let meta = node.child_meta[slot];
+                let first = node.primitive_base_idx as usize + usize::from(meta & 0x1f);
+                for slot in first..first + (meta >> 5).count_ones() as usize {
+                    let (corners, plane) = (&self.vertices[slot], &self.planes[slot]);
+                    let mut m = rays_in;
+                    while m != 0 {
+                        let r = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        if let Some(h) = intersect_triangle(corners, plane, &prs[r], t_best[r]) {
+                            t_best[r] = h.t;
+                            best[r] = Some((slot, h));
+                        }
+                    }
+                }
+            }
+            // Inner children, the first in octant order on top of the stack. Child nodes are
+            // stored in slot order from `child_base_idx`.
+            for k in (0..8).rev() {
+                let slot = k ^ octant;
+                let rays_in = child_rays[slot];
+                if rays_in == 0 || node.imask & (1 << slot) == 0 {
+                    continue;
+                }
+                let before = u32::from(node.imask) & ((1u32 << slot) - 1);
+                stack[depth] = (node.child_base_idx + before.count_ones(), rays_in);
+                depth += 1;
+            }
+        }
+        for (hit, best) in hits[..n].iter_mut().zip(best) {
+            *hit = best.map(|(slot, h)| self.surface_hit(slot, &h));
+        }
     }
 
     /// The closest hit; `AVX2`: use [`node_lanes_avx2`] (only in an AVX2 function).
@@ -401,6 +536,7 @@ impl Corners {
 }
 
 /// Per-ray constants of the watertight test and the node test.
+#[derive(Clone, Copy)]
 struct PreparedRay {
     origin: Vec3,
     dir: Vec3,
@@ -420,6 +556,9 @@ struct PreparedRay {
         allow(dead_code)
     )]
     planes: [[usize; 2]; 3],
+    /// The same choice as indices into `min x, max x, min y, max y, min z, max z`.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    plane_index: [[usize; 2]; 3],
 }
 
 impl PreparedRay {
@@ -472,6 +611,11 @@ impl PreparedRay {
             inv_dir: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
             self_tolerance: SELF_TOLERANCE * o.abs().max_element(),
             planes: plane_offsets(d),
+            plane_index: {
+                let neg = |c: f32| usize::from(c < 0.0);
+                let (nx, ny, nz) = (neg(d.x), neg(d.y), neg(d.z));
+                [[nx, 1 - nx], [2 + ny, 3 - ny], [4 + nz, 5 - nz]]
+            },
         })
     }
 }
@@ -739,6 +883,107 @@ fn plane_offsets(d: Vec3) -> [[usize; 2]; 3] {
         pick(d.y < 0.0, CHILD_MIN_Y, CHILD_MAX_Y),
         pick(d.z < 0.0, CHILD_MIN_Z, CHILD_MAX_Z),
     ]
+}
+
+/// The node test's per-ray constants, as in [`intersect_node`]: the reciprocal direction and
+/// the origin in the node's quantised frame, and the rounding pad of each slab.
+#[inline(always)]
+fn node_frame(node: &CwBvhNode, r: &PreparedRay) -> (Vec3A, Vec3A, Vec3A) {
+    let extent = node.compute_extent();
+    let adj_dir_inv = extent * r.inv_dir;
+    let adj_origin = (Vec3A::from(node.p) - Vec3A::from(r.origin)) * r.inv_dir;
+    let pad = (adj_origin.abs() + adj_dir_inv.abs() * 255.0) * SLAB_PAD;
+    (adj_dir_inv, adj_origin, pad)
+}
+
+/// A packet's node test (no AVX2): bit `r` of `child_rays[c]` set if ray `r` of `mask`
+/// enters child `c` within `[0, t_best[r]]`, by [`node_lanes`] per ray.
+#[cfg_attr(target_arch = "x86_64", inline)]
+fn packet_node(
+    node: &CwBvhNode,
+    prs: &[PreparedRay; PACKET],
+    mask: u32,
+    t_best: &[f32; PACKET],
+    child_rays: &mut [u32; 8],
+) {
+    let mut m = mask;
+    while m != 0 {
+        let r = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let (adj_dir_inv, adj_origin, pad) = node_frame(node, &prs[r]);
+        let mut lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, &prs[r], t_best[r]);
+        while lanes != 0 {
+            let c = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            child_rays[c] |= 1 << r;
+        }
+    }
+}
+
+/// [`packet_node`] with AVX2: the node's 48 quantised planes are converted to floats once,
+/// then each ray tests all 8 children in one vector, lane by lane the operations of
+/// [`node_hits_avx2`] (so the same entered children).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn packet_node_avx2(
+    node: &CwBvhNode,
+    prs: &[PreparedRay; PACKET],
+    mask: u32,
+    t_best: &[f32; PACKET],
+    child_rays: &mut [u32; 8],
+) {
+    use std::arch::x86_64::*;
+    let base = (node as *const CwBvhNode).cast::<u8>();
+    // Plane vectors indexed as `PreparedRay::planes` orders them: min x, max x, min y, ….
+    let offsets = [
+        CHILD_MIN_X,
+        CHILD_MAX_X,
+        CHILD_MIN_Y,
+        CHILD_MAX_Y,
+        CHILD_MIN_Z,
+        CHILD_MAX_Z,
+    ];
+    // SAFETY: every offset is that of an `[u8; 8]` field of `CwBvhNode`, so each 8-byte
+    // unaligned load stays inside `*node`.
+    let planes = offsets.map(|offset| {
+        _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(unsafe {
+            _mm_loadl_epi64(base.add(offset).cast::<__m128i>())
+        }))
+    });
+    let mut m = mask;
+    while m != 0 {
+        let r = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let ray = &prs[r];
+        let (a, o, p) = node_frame(node, ray);
+        let axis = |axis: usize, a: f32, o: f32, p: f32| {
+            let (a, o, p) = (_mm256_set1_ps(a), _mm256_set1_ps(o), _mm256_set1_ps(p));
+            let near = planes[ray.plane_index[axis][0]];
+            let far = planes[ray.plane_index[axis][1]];
+            (
+                _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(near, a), o), p),
+                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(far, a), o), p),
+            )
+        };
+        let (x0, x1) = axis(0, a.x, o.x, p.x);
+        let (y0, y1) = axis(1, a.y, o.y, p.y);
+        let (z0, z1) = axis(2, a.z, o.z, p.z);
+        let tmin = _mm256_max_ps(
+            _mm256_max_ps(x0, y0),
+            _mm256_max_ps(z0, _mm256_setzero_ps()),
+        );
+        let tmax = _mm256_min_ps(
+            _mm256_min_ps(x1, y1),
+            _mm256_min_ps(z1, _mm256_set1_ps(t_best[r])),
+        );
+        let mut lanes = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
+        while lanes != 0 {
+            let c = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            child_rays[c] |= 1 << r;
+        }
+    }
 }
 
 /// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (SSE version).
@@ -1012,6 +1257,161 @@ mod tests {
                 s.occluded_impl::<false>(&ray, t_max)
             );
         }
+    }
+
+    /// Spheres of several sizes inside a box: nested, overlapping and far geometry.
+    fn test_scene() -> TriangleScene {
+        let mut instances = Vec::new();
+        for (k, r) in [1.0f32, 0.3, 2.5].into_iter().enumerate() {
+            let mut mesh = shapes::sphere(r, 24).unwrap();
+            for q in &mut mesh.positions {
+                *q += Vec3::new(k as f32 * 0.7, 0.2, -0.1 * k as f32);
+            }
+            instances.push(Instance {
+                mesh,
+                material: 0,
+                object: 0,
+            });
+        }
+        instances.push(Instance {
+            mesh: shapes::cuboid(Vec3::splat(6.0)).unwrap(),
+            material: 1,
+            object: 0,
+        });
+        TriangleScene::build(instances).unwrap()
+    }
+
+    /// Checks `intersect_packet` (AVX2 where the CPU has it, and the SSE / portable packet
+    /// test) against `intersect`, ray by ray: the same hit, or a hit at the bit-identical `t`
+    /// (a tie between triangles, which either traversal may break either way). Returns the
+    /// number of hits.
+    fn check_packet(s: &TriangleScene, rays: &[Ray], t_max: f32) -> usize {
+        let single: Vec<Option<SurfaceHit>> = rays.iter().map(|r| s.intersect(r, t_max)).collect();
+        let mut dispatched = vec![None; rays.len()];
+        s.intersect_packet(rays, t_max, &mut dispatched);
+        let mut portable = vec![None; rays.len()];
+        for (r, h) in rays.chunks(PACKET).zip(portable.chunks_mut(PACKET)) {
+            s.intersect_packet_impl::<false>(r, t_max, h);
+        }
+        for packet in [&dispatched, &portable] {
+            for ((ray, a), b) in rays.iter().zip(&single).zip(packet) {
+                match (a, b) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) => assert!(
+                        a == b || a.t.to_bits() == b.t.to_bits(),
+                        "{ray:?} t_max {t_max}: {a:?} vs {b:?}"
+                    ),
+                    _ => panic!("{ray:?} t_max {t_max}: {a:?} vs {b:?}"),
+                }
+            }
+        }
+        single.iter().flatten().count()
+    }
+
+    #[test]
+    fn packet_traversal_is_the_single_ray_one() {
+        let s = test_scene();
+        let mut rng = Rng::new(5, 9);
+        let mut u = || rng.next_f32();
+        let mut hits = 0;
+        let mut rays_total = 0;
+        for k in 0..3000 {
+            // Coherent packets (one origin, directions within a small cone, as a cube-map
+            // tile's primary rays), incoherent ones (any origin, any direction, mixed octants),
+            // and packets of every length from 1 to 2 × PACKET + 1.
+            let n = 1 + k % (2 * PACKET + 1);
+            let coherent = k % 2 == 0;
+            let o = Vec3::new(u(), u(), u()) * 8.0 - 4.0;
+            let axis = Vec3::new(u(), u(), u()) * 2.0 - 1.0;
+            let rays: Vec<Ray> = (0..n)
+                .map(|_| {
+                    let jitter = Vec3::new(u(), u(), u()) * 2.0 - 1.0;
+                    let (origin, dir) = if coherent {
+                        (o, axis + jitter * 0.05)
+                    } else {
+                        (Vec3::new(u(), u(), u()) * 8.0 - 4.0, jitter)
+                    };
+                    Ray::new(origin, dir.try_normalize().unwrap_or(Vec3::X))
+                })
+                .collect();
+            let t_max = match k % 4 {
+                0 => f32::MAX,
+                1 => f32::INFINITY,
+                2 => 0.5 + u() * 4.0,
+                _ => 1e-3,
+            };
+            hits += check_packet(&s, &rays, t_max);
+            rays_total += n;
+        }
+        assert!(hits > rays_total / 4, "{hits} of {rays_total}");
+    }
+
+    #[test]
+    fn packet_traversal_edge_cases() {
+        let s = test_scene();
+        let box_scene = TriangleScene::build(vec![Instance {
+            mesh: shapes::cuboid(Vec3::ONE).unwrap(),
+            material: 0,
+            object: 0,
+        }])
+        .unwrap();
+        let o = Vec3::new(0.0, 0.0, 5.0);
+        // Bad rays (zero, NaN or infinite direction or origin) among good ones: they miss,
+        // the others are unaffected.
+        let mixed = [
+            Ray::new(o, -Vec3::Z),
+            Ray::new(o, Vec3::ZERO),
+            Ray::new(o, Vec3::NAN),
+            Ray::new(Vec3::INFINITY, -Vec3::Z),
+            Ray::new(o, Vec3::new(0.0, f32::INFINITY, -1.0)),
+            Ray::new(o, Vec3::new(0.1, 0.0, -1.0).normalize()),
+        ];
+        for scene in [&s, &box_scene] {
+            assert_eq!(check_packet(scene, &mixed, 10.0), 2);
+            // Only bad rays, and bad t_max: nothing hit.
+            assert_eq!(check_packet(scene, &mixed[1..5], 10.0), 0);
+            assert_eq!(check_packet(scene, &mixed, f32::NAN), 0);
+            assert_eq!(check_packet(scene, &mixed, -1.0), 0);
+            assert_eq!(check_packet(scene, &mixed, 0.0), 0);
+            assert_eq!(check_packet(scene, &[], 10.0), 0);
+        }
+        // t_max just below and above the hit at t = 4.5 (the box's top face at z = 0.5).
+        let down = [Ray::new(o, -Vec3::Z); 3];
+        assert_eq!(check_packet(&box_scene, &down, 4.5), 0);
+        assert_eq!(check_packet(&box_scene, &down, 4.5001), 3);
+        // Rays that miss everything (pointing away), axis-parallel rays and rays with zero
+        // components, through the box's edges and corners (grazing, and ties between the two
+        // triangles of a face), in one packet.
+        let mut rays = vec![Ray::new(o, Vec3::Z), Ray::new(o, Vec3::X)];
+        for x in [-0.5f32, -0.25, 0.0, 0.5] {
+            for y in [-0.5f32, 0.0, 0.5, 0.500_001] {
+                rays.push(Ray::new(Vec3::new(x, y, 5.0), -Vec3::Z));
+                rays.push(Ray::new(Vec3::new(5.0, x, y), -Vec3::X));
+                // Grazing: along a face, in its plane.
+                rays.push(Ray::new(Vec3::new(x, -5.0, 0.5), Vec3::Y));
+            }
+        }
+        let hits = check_packet(&box_scene, &rays, f32::MAX);
+        assert!(hits > 16, "{hits}");
+        // Origins on the surface (as sample points and path vertices): rays leaving it do
+        // not re-hit it (and escape), rays into it see the far side.
+        let on_surface: Vec<Ray> = (0..PACKET)
+            .map(|i| {
+                let p = Vec3::new(-0.4 + 0.05 * i as f32, 0.1, 0.5);
+                let dir = if i % 2 == 0 { Vec3::Z } else { -Vec3::Z };
+                Ray::new(p, Vec3::new(0.01 * i as f32, 0.0, dir.z).normalize())
+            })
+            .collect();
+        assert_eq!(check_packet(&box_scene, &on_surface, f32::MAX), PACKET / 2);
+        // A capture's tile: one origin just above a sphere, a degenerate tile (all rays the
+        // same direction), and rays from inside the box in all six axis directions.
+        let above = Vec3::new(0.0, 1.2 + 1e-4, 0.0);
+        let same = vec![Ray::new(above, -Vec3::Y); PACKET];
+        assert_eq!(check_packet(&s, &same, f32::MAX), PACKET);
+        let axes: Vec<Ray> = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z]
+            .map(|d| Ray::new(Vec3::ZERO, d))
+            .to_vec();
+        assert_eq!(check_packet(&box_scene, &axes, f32::MAX), 6);
     }
 
     #[test]

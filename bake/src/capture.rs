@@ -20,6 +20,10 @@ pub fn strata_per_side(samples_per_texel: u32) -> u32 {
     k
 }
 
+/// Texels per side of the tiles whose primary rays are traced as one packet (TILE² rays, at
+/// most [`crate::bvh::PACKET`] in one BVH traversal).
+const TILE: usize = 4;
+
 /// What one capture needs besides the integrator.
 #[derive(Clone, Copy, Debug)]
 pub struct CaptureSettings {
@@ -49,46 +53,87 @@ pub fn capture_cube<I: Intersector>(
             *d = vec![0.0; texels];
         }
     }
-    // Rows in parallel when the bake captures fewer cubes at once than there are threads
-    // (large faces, see [`chunk_cubes`]): a large cube then keeps every thread busy on its own.
-    // Each texel has its own random stream, so the result does not depend on the split.
-    let parallel = chunk_cubes(res, settings.distance_channel) < rayon::current_num_threads();
-    type Row<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
-    let mut rows: Vec<Row> = Vec::new();
+    // Bands of rows in parallel when the bake captures fewer cubes at once than there are
+    // threads (large faces, see [`chunk_cubes`]): a large cube then keeps every thread busy on
+    // its own; and whenever this runs on a worker of a pool of several threads (the bake's
+    // cubes in parallel): then a thread that has finished its cubes of a chunk steals bands of
+    // the cubes still running instead of waiting for them at the end of the chunk. Each texel
+    // has its own random stream, so the result does not depend on the split.
+    let threads = rayon::current_num_threads();
+    let parallel = threads > 1
+        && (rayon::current_thread_index().is_some()
+            || chunk_cubes(res, settings.distance_channel) < threads);
+    let band = TILE * res as usize;
+    type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
+    let mut bands: Vec<Band> = Vec::new();
     for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
-        let dist_rows: Vec<Option<&mut [f32]>> = if settings.distance_channel {
-            dist.chunks_mut(res as usize).map(Some).collect()
+        let dist_bands: Vec<Option<&mut [f32]>> = if settings.distance_channel {
+            dist.chunks_mut(band).map(Some).collect()
         } else {
-            (0..res).map(|_| None).collect()
+            out.chunks(band).map(|_| None).collect()
         };
-        for (y, (row, d)) in out.chunks_mut(res as usize).zip(dist_rows).enumerate() {
-            rows.push((face, y as u32, row, d));
+        for (b, (rows, d)) in out.chunks_mut(band).zip(dist_bands).enumerate() {
+            bands.push((face, (b * TILE) as u32, rows, d));
         }
     }
-    let trace_row = |(face, y, row, mut dist_row): Row| {
+    // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
+    // traced as one packet (the texels' directions differ by at most a tile), then each path
+    // goes on alone. Texel by texel the random numbers are drawn in the order of a texel-by-
+    // texel capture (stratum j's jitter, then path j's numbers), so the result is the same.
+    let trace_band = |(face, y0, out, mut dist_out): Band| {
         let mut stats = RayStats::default();
-        for x in 0..res {
-            let texel = u64::from(y) * u64::from(res) + u64::from(x);
-            let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
-            let mut rng = Rng::new(settings.seed, stream);
-            let mut sum = Vec3::ZERO;
+        let rows = out.len() / res as usize;
+        for x0 in (0..res).step_by(TILE) {
+            let cols = (res - x0).min(TILE as u32);
+            // Tile texels row by row: (x, y, index into `out`).
+            let texels: Vec<(u32, u32, usize)> = (0..rows as u32)
+                .flat_map(|dy| (0..cols).map(move |dx| (dx, dy)))
+                .map(|(dx, dy)| {
+                    let (x, y) = (x0 + dx, y0 + dy);
+                    (x, y, (dy * res + x) as usize)
+                })
+                .collect();
+            let mut rngs: Vec<Rng> = texels
+                .iter()
+                .map(|&(x, y, _)| {
+                    let texel = u64::from(y) * u64::from(res) + u64::from(x);
+                    let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
+                    Rng::new(settings.seed, stream)
+                })
+                .collect();
+            let mut sums = vec![Vec3::ZERO; texels.len()];
+            let mut rays = vec![Ray::new(origin, Vec3::X); texels.len()];
+            let mut hits = vec![None; texels.len()];
             for j in 0..k * k {
-                let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
-                let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
-                let s = (x as f32 + sx) / res as f32;
-                let t = (y as f32 + sy) / res as f32;
-                let dir = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
-                let sample = integrator.radiance(&Ray::new(origin, dir), &mut rng, &mut stats);
-                sum += sample.radiance;
-            }
-            row[x as usize] = (sum * inv_spp).to_array();
-            if let Some(d_row) = dist_row.as_deref_mut() {
-                let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
-                stats.closest += 1;
-                d_row[x as usize] = integrator
+                for ((&(x, y, _), rng), ray) in texels.iter().zip(&mut rngs).zip(&mut rays) {
+                    let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
+                    let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
+                    let s = (x as f32 + sx) / res as f32;
+                    let t = (y as f32 + sy) / res as f32;
+                    let dir = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
+                    *ray = Ray::new(origin, dir);
+                }
+                stats.closest += rays.len() as u64;
+                integrator
                     .geometry
-                    .intersect(&Ray::new(origin, dir), f32::MAX)
-                    .map_or(f32::MAX, |h| h.t);
+                    .intersect_packet(&rays, f32::MAX, &mut hits);
+                for (((ray, hit), rng), sum) in rays.iter().zip(&hits).zip(&mut rngs).zip(&mut sums)
+                {
+                    *sum += integrator
+                        .radiance_from(ray, hit.as_ref(), rng, &mut stats)
+                        .radiance;
+                }
+            }
+            for (&(x, y, i), sum) in texels.iter().zip(&sums) {
+                out[i] = (*sum * inv_spp).to_array();
+                if let Some(d_out) = dist_out.as_deref_mut() {
+                    let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
+                    stats.closest += 1;
+                    d_out[i] = integrator
+                        .geometry
+                        .intersect(&Ray::new(origin, dir), f32::MAX)
+                        .map_or(f32::MAX, |h| h.t);
+                }
             }
         }
         stats
@@ -98,12 +143,14 @@ pub fn capture_cube<I: Intersector>(
         a
     };
     let stats = if parallel {
-        rows.into_par_iter()
-            .map(trace_row)
+        bands
+            .into_par_iter()
+            .map(trace_band)
             .reduce(RayStats::default, sum)
     } else {
-        rows.into_iter()
-            .map(trace_row)
+        bands
+            .into_iter()
+            .map(trace_band)
             .fold(RayStats::default(), sum)
     };
     let cube = CubeImage {
@@ -112,4 +159,149 @@ pub fn capture_cube<I: Intersector>(
         distance: settings.distance_channel.then_some(distance),
     };
     (cube, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{Instance, TriangleScene};
+    use crate::environment::Environment;
+    use crate::light::Light;
+    use crate::material::Material;
+    use crate::ray::SurfaceHit;
+    use crate::shapes;
+
+    /// The scene's single-ray queries only (the trait's default `intersect_packet`).
+    struct SingleRays<'a>(&'a TriangleScene);
+
+    impl Intersector for SingleRays<'_> {
+        fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+            self.0.intersect(ray, t_max)
+        }
+        fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+            self.0.occluded(ray, t_max)
+        }
+    }
+
+    /// The capture texel by texel, sample by sample, as before tiles and packets.
+    fn reference<I: Intersector>(
+        integrator: &Integrator<I>,
+        origin: Vec3,
+        cube_index: u32,
+        settings: &CaptureSettings,
+    ) -> Vec<[f32; 3]> {
+        let (res, k) = (
+            settings.resolution,
+            strata_per_side(settings.samples_per_texel),
+        );
+        let mut out = Vec::new();
+        let mut stats = RayStats::default();
+        for face in 0..6 {
+            for y in 0..res {
+                for x in 0..res {
+                    let texel = u64::from(y) * u64::from(res) + u64::from(x);
+                    let stream = hash_u64(&[settings.seed, cube_index as u64, face as u64, texel]);
+                    let mut rng = Rng::new(settings.seed, stream);
+                    let mut sum = Vec3::ZERO;
+                    for j in 0..k * k {
+                        let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
+                        let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
+                        let s = (x as f32 + sx) / res as f32;
+                        let t = (y as f32 + sy) / res as f32;
+                        let dir =
+                            Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
+                        let ray = Ray::new(origin, dir);
+                        sum += integrator.radiance(&ray, &mut rng, &mut stats).radiance;
+                    }
+                    out.push((sum * (1.0 / (k * k) as f32)).to_array());
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn tiled_packet_capture_is_the_texel_by_texel_one() {
+        let mut instances = vec![Instance {
+            mesh: shapes::sphere(1.0, 32).unwrap(),
+            material: 0,
+            object: 0,
+        }];
+        let mut ground = shapes::cuboid(Vec3::new(8.0, 8.0, 0.2)).unwrap();
+        for p in &mut ground.positions {
+            p.z -= 1.1;
+        }
+        instances.push(Instance {
+            mesh: ground,
+            material: 1,
+            object: crate::ray::ENVIRONMENT_OBJECT,
+        });
+        let scene = TriangleScene::build(instances).unwrap();
+        let materials = [
+            Material::lambertian(Vec3::new(0.2, 0.6, 0.3)),
+            Material::lambertian(Vec3::splat(0.5)),
+        ];
+        let lights = [Light::Sun {
+            direction: Vec3::new(0.3, -0.4, 0.8).normalize(),
+            irradiance: Vec3::splat(3.0),
+            angular_radius: 0.01,
+        }];
+        let environment = Environment::Constant(Vec3::new(0.3, 0.4, 0.6));
+        for (resolution, samples_per_texel) in [(8, 4), (10, 1), (5, 9)] {
+            let settings = CaptureSettings {
+                resolution,
+                samples_per_texel,
+                distance_channel: true,
+                seed: 17,
+            };
+            let packets = Integrator {
+                geometry: &scene,
+                materials: &materials,
+                lights: &lights,
+                environment: &environment,
+                max_bounces: 1,
+            };
+            let single = SingleRays(&scene);
+            let singles = Integrator {
+                geometry: &single,
+                materials: &materials,
+                lights: &lights,
+                environment: &environment,
+                max_bounces: 1,
+            };
+            // Just above the sphere (a sample point) and away from everything.
+            for (i, origin) in [Vec3::new(0.3, 0.2, 0.96), Vec3::new(2.0, -3.0, 2.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let (cube, stats) = capture_cube(&packets, origin, i as u32, &settings);
+                let (cube_single, stats_single) =
+                    capture_cube(&singles, origin, i as u32, &settings);
+                assert_eq!(stats, stats_single);
+                let bits = |c: &CubeImage| {
+                    c.faces
+                        .iter()
+                        .flatten()
+                        .flat_map(|t| t.map(f32::to_bits))
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&cube), bits(&cube_single));
+                assert_eq!(cube.distance, cube_single.distance);
+                let texels: Vec<[f32; 3]> = cube.faces.iter().flatten().copied().collect();
+                let expected = reference(&singles, origin, i as u32, &settings);
+                assert_eq!(
+                    texels
+                        .iter()
+                        .map(|t| t.map(f32::to_bits))
+                        .collect::<Vec<_>>(),
+                    expected
+                        .iter()
+                        .map(|t| t.map(f32::to_bits))
+                        .collect::<Vec<_>>(),
+                    "{resolution}² at {origin}"
+                );
+                assert!(texels.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
+            }
+        }
+    }
 }

@@ -137,7 +137,22 @@ impl<I: Intersector> Integrator<'_, I> {
     /// The first segment starts exactly at `ray.origin`. Every ray traced is counted in `stats`.
     pub fn radiance(&self, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
         stats.closest += 1;
-        let Some(first) = self.geometry.intersect(ray, f32::MAX) else {
+        let first = self.geometry.intersect(ray, f32::MAX);
+        self.radiance_from(ray, first.as_ref(), rng, stats)
+    }
+
+    /// [`Integrator::radiance`] for a primary ray whose closest hit (`None`: it escaped),
+    /// `self.geometry.intersect(ray, f32::MAX)`, the caller has already traced and counted (a
+    /// cube-map capture traces a tile's primary rays as one packet). The same result, with
+    /// the same random numbers drawn.
+    pub fn radiance_from(
+        &self,
+        ray: &Ray,
+        first: Option<&SurfaceHit>,
+        rng: &mut Rng,
+        stats: &mut RayStats,
+    ) -> Sample {
+        let Some(first) = first else {
             let mut l = self.environment.eval(ray.dir);
             for light in self.lights {
                 l += light.disc_radiance(ray.dir);
@@ -148,7 +163,7 @@ impl<I: Intersector> Integrator<'_, I> {
             };
         };
         Sample {
-            radiance: self.radiance_leaving(&first, ray.dir, rng, stats),
+            radiance: self.radiance_leaving(first, ray.dir, rng, stats),
             distance: first.t,
         }
     }
@@ -240,8 +255,20 @@ impl<I: Intersector> Integrator<'_, I> {
             }
             // f · cos / pdf = albedo for cosine-weighted sampling.
             throughput *= albedo;
-            stats.closest += 1;
             let next_ray = Ray::new(origin, wi);
+            if !gather_next {
+                // The last vertex: only whether the BSDF sample escapes matters (a surface
+                // hit adds nothing and ends the path), so an any-hit query answers it. It is
+                // counted as what it is, an any-hit ray; the result is the same bit for bit.
+                stats.shadow += 1;
+                if !self.geometry.occluded(&next_ray, f32::MAX) {
+                    let le = self.environment.eval(wi);
+                    let w = power_heuristic(pdf_bsdf, self.environment.environment_pdf(wi));
+                    radiance += throughput * le * w;
+                }
+                break;
+            }
+            stats.closest += 1;
             let Some(next) = self.geometry.intersect(&next_ray, f32::MAX) else {
                 if env_active {
                     let le = self.environment.eval(wi);
@@ -250,9 +277,6 @@ impl<I: Intersector> Integrator<'_, I> {
                 }
                 break;
             };
-            if !gather_next {
-                break;
-            }
             bounce += 1;
             if bounce >= RUSSIAN_ROULETTE_START {
                 let q = throughput.max_element().min(0.95);

@@ -54,6 +54,15 @@ pub trait Intersector: Sync {
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit>;
     /// Whether any surface is hit with `t` in `(0, t_max)`.
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool;
+    /// [`Intersector::intersect`] of every ray of `rays` into the same slot of `hits` (of the
+    /// same length). Intersectors that can trace coherent rays together (packets, see
+    /// [`crate::bvh`]) override this; the answers are those of `intersect`.
+    fn intersect_packet(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<SurfaceHit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (ray, hit) in rays.iter().zip(hits) {
+            *hit = self.intersect(ray, t_max);
+        }
+    }
 }
 
 /// A scene with no surfaces: every ray escapes. (The environment-map baseline of a scene whose
