@@ -182,8 +182,8 @@ fn store_benchmarks(c: &mut Criterion) {
             let cube = reference.read_cube(c).expect("read cube");
             let (_, stats) = encode_cube(&cube, &params, c).expect("encode");
             packed += stats.compressed_bytes;
-            let (_, stats) = encode_cube_with_filter(&cube, &params, c, Filter::PredictRows)
-                .expect("encode");
+            let (_, stats) =
+                encode_cube_with_filter(&cube, &params, c, Filter::PredictRows).expect("encode");
             rows += stats.compressed_bytes;
             texels += 6 * (cube.resolution as u64).pow(2);
         }
