@@ -180,7 +180,8 @@ fn store_benchmarks(c: &mut Criterion) {
         let (mut packed, mut rows, mut texels) = (0u64, 0u64, 0u64);
         for c in 0..cubes {
             let cube = reference.read_cube(c).expect("read cube");
-            let (_, stats) = encode_cube(&cube, &params, c).expect("encode");
+            let (_, stats) =
+                encode_cube_with_filter(&cube, &params, c, Filter::PredictPacked).expect("encode");
             packed += stats.compressed_bytes;
             let (_, stats) =
                 encode_cube_with_filter(&cube, &params, c, Filter::PredictRows).expect("encode");

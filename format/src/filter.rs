@@ -25,7 +25,7 @@ pub enum Filter {
     /// Id 3: filter 2's predictions, but each RGB9E5 texel's exponent and three residuals
     /// (in units of the store's mantissa lattice) packed into `⌈(5 + 3k) / 8⌉` byte planes
     /// for `k` mantissa bits: fewer bytes for zstd to decode. What writers use for RGB9E5
-    /// stores that keep fewer than 9 mantissa bits ([`Filter::for_store`]).
+    /// stores that keep at most 6 mantissa bits ([`Filter::for_store`]).
     PredictPacked,
 }
 
@@ -60,11 +60,12 @@ impl Filter {
     }
 
     /// The filter writers use for a store of `encoding` keeping `mantissa_bits` RGB9E5 mantissa
-    /// bits: [`Filter::PredictPacked`] for RGB9E5 with fewer than 9 bits (smaller and faster
-    /// to read than filter 2 there), [`Filter::PredictRows`] otherwise (filter 3's packing
-    /// gives larger lossless faces: README.md, "Store").
+    /// bits: [`Filter::PredictPacked`] for RGB9E5 with at most 6 bits, where it is smaller
+    /// and faster to read than filter 2, [`Filter::PredictRows`] otherwise (with 7 to 9 bits
+    /// filter 3's code splits residuals across bytes and compresses worse: README.md,
+    /// "Store").
     pub fn for_store(encoding: Encoding, mantissa_bits: u32) -> Self {
-        if encoding == Encoding::Rgb9e5 && mantissa_bits < 9 {
+        if encoding == Encoding::Rgb9e5 && mantissa_bits <= 6 {
             Filter::PredictPacked
         } else {
             Filter::PredictRows

@@ -45,7 +45,7 @@
 //! | 152    | `u64`     | checksum of the metadata section |
 //! | 160    | `u64`     | checksum of the sample points section |
 //! | 168    | `u64`     | checksum of the sample maps section |
-//! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows, 3 predict-packed (see "Face filters"; writers use 3 for RGB9E5 with `mantissa_bits` < 9, else 2); other ids are refused ([`Error::UnknownFilter`]) |
+//! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows, 3 predict-packed (see "Face filters"; writers use 3 for RGB9E5 with `mantissa_bits` ≤ 6, else 2); other ids are refused ([`Error::UnknownFilter`]) |
 //! | 180    | 68 bytes  | reserved, zero |
 //! | 248    | `u64`     | checksum of header bytes 0..248 |
 //!
@@ -191,7 +191,7 @@
 //! the texels of a row. Filter 1 ignores `mantissa_bits`.
 //!
 //! **Filter 3 (predict-packed)** is filter 2 except for the RGB9E5 texel part, which it
-//! stores in fewer bytes when the store keeps `k = mantissa_bits` < 9 bits (writers use it
+//! stores in fewer bytes when the store keeps `k = mantissa_bits` ≤ 6 bits (writers use it
 //! only then; it is defined for every k in 1..=9). Its input texels must lie on the mantissa
 //! lattice (every mantissa a multiple of `s = 2^(9 − k)`; writers quantize first and refuse
 //! others with [`Error::Unquantized`]), and every decoded texel does. With the predictions
