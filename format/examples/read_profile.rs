@@ -1,6 +1,13 @@
 //! Splits `Store::read_face_raw` into its stages (checksum, zstd, unfilter) on one thread and
 //! times each over every face of a store: `cargo run --release -p oslf-format --example
 //! read_profile -- STORE.oslf [ROUNDS]`. Throughputs are raw (decoded) bytes per second.
+//!
+//! Environment variables:
+//! - `BITS=k`: first re-encode every cube keeping k RGB9E5 mantissa bits, with the filter
+//!   writers use (`Filter::for_store`) or `FILTER=id`, at the store's zstd level or `LEVEL=l`;
+//! - `UNFILTER_ONLY=n`: also time n more passes of the unfilter alone (for a profiler);
+//! - `SWEEP=1`: instead, compare a few zstd parameter sets (size, decompression speed);
+//! - `DUMP=path`: write the decompressed (filtered) faces to `path`.
 
 use std::time::Instant;
 
@@ -25,6 +32,7 @@ fn main() {
         let mut params = store.meta().bake.clone();
         params.mantissa_bits = b;
         bits = b;
+        filter = oslf_format::Filter::for_store(params.encoding, b);
         if let Ok(id) = std::env::var("FILTER") {
             filter = oslf_format::Filter::from_id(id.parse().unwrap()).unwrap();
         }
@@ -156,7 +164,7 @@ fn main() {
 /// speed (zstd alone) for each.
 #[allow(dead_code)]
 pub fn sweep(frames: &[&[u8]], raw: usize) {
-    use zstd::zstd_safe::{CParameter, Strategy};
+    use zstd::zstd_safe::CParameter;
     let mut dctx = zstd::bulk::Decompressor::new().unwrap();
     let mut filtered = vec![0u8; raw * frames.len()];
     for (f, s) in frames.iter().zip(filtered.chunks_mut(raw)) {
@@ -164,21 +172,36 @@ pub fn sweep(frames: &[&[u8]], raw: usize) {
     }
     let configs: Vec<(String, Vec<CParameter>)> = vec![
         ("level 3".into(), vec![CParameter::CompressionLevel(3)]),
-        ("l3 minmatch 6".into(), vec![CParameter::CompressionLevel(3), CParameter::MinMatch(6)]),
-        ("l3 minmatch 7".into(), vec![CParameter::CompressionLevel(3), CParameter::MinMatch(7)]),
+        (
+            "l3 minmatch 6".into(),
+            vec![CParameter::CompressionLevel(3), CParameter::MinMatch(6)],
+        ),
+        (
+            "l3 minmatch 7".into(),
+            vec![CParameter::CompressionLevel(3), CParameter::MinMatch(7)],
+        ),
         ("level 6".into(), vec![CParameter::CompressionLevel(6)]),
-        ("l6 minmatch 7".into(), vec![CParameter::CompressionLevel(6), CParameter::MinMatch(7)]),
+        (
+            "l6 minmatch 7".into(),
+            vec![CParameter::CompressionLevel(6), CParameter::MinMatch(7)],
+        ),
     ];
 
     let mut compressed = Vec::new();
     for (name, params) in &configs {
         let mut c = zstd::bulk::Compressor::new(3).unwrap();
         for p in params {
-            c.set_parameter(p.clone()).unwrap();
+            c.set_parameter(*p).unwrap();
         }
-        let comp: Vec<Vec<u8>> = filtered.chunks(raw).map(|s| c.compress(s).unwrap()).collect();
+        let comp: Vec<Vec<u8>> = filtered
+            .chunks(raw)
+            .map(|s| c.compress(s).unwrap())
+            .collect();
         let size: usize = comp.iter().map(|c| c.len()).sum();
-        println!("{name:>16}: {:.4} bytes per filtered byte", size as f64 / filtered.len() as f64);
+        println!(
+            "{name:>16}: {:.4} bytes per filtered byte",
+            size as f64 / filtered.len() as f64
+        );
         compressed.push(comp);
     }
     let mut out = vec![0u8; raw];
@@ -193,6 +216,9 @@ pub fn sweep(frames: &[&[u8]], raw: usize) {
         }
     }
     for ((name, _), s) in configs.iter().zip(secs) {
-        println!("{name:>16}: zstd {:.3} GB/s of filtered bytes", (filtered.len() * 5) as f64 / s / 1e9);
+        println!(
+            "{name:>16}: zstd {:.3} GB/s of filtered bytes",
+            (filtered.len() * 5) as f64 / s / 1e9
+        );
     }
 }
