@@ -70,6 +70,22 @@ fn resume_recovers_complete_cubes_and_is_byte_identical() {
 }
 
 #[test]
+fn a_quantized_store_resumes_byte_identical_with_filter_3() {
+    let f = fixture(Spec {
+        mantissa_bits: 3,
+        ..spec()
+    });
+    let want = reference(&f);
+    let (_dir, path) = temp_store("q.oslf");
+    start(&path, &f, 4);
+    complete(&path, &f);
+    assert_eq!(std::fs::read(&path).unwrap(), want);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().filter, Filter::PredictPacked);
+    store.verify().unwrap();
+}
+
+#[test]
 fn resume_truncates_a_torn_record() {
     let f = fixture(spec());
     let want = reference(&f);
