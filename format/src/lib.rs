@@ -214,9 +214,11 @@
 //! 9.207 → 9.207; thesis preset (`OSLF_BENCH_STORE=thesis.oslf OSLF_BENCH_CUBES=300`, the first
 //! 300 of its 1240 cubes of 128²) RGB9E5 3.411 → 3.155 → 3.142. The cube maps are dominated by
 //! Monte Carlo noise, which no lossless filter removes (README.md, "Measured"). With
-//! `mantissa_bits` k < 9 (lossy, "Quantized RGB9E5") filter 2 gives, RGB9E5, k = 8 … 1: quick
-//! 3.149, 2.837, 2.489, 2.189, 1.886, 1.530, 1.153, 1.079; 128² (295 cubes of a thesis-like
-//! bake) 2.834, 2.548, 2.225, 1.926, 1.628, 1.290, 0.962, 0.935.
+//! `mantissa_bits` k < 9 (lossy, "Quantized RGB9E5"), RGB9E5 bytes per texel for k = 8 … 1,
+//! filter 3 (filter 2): quick 3.350 (3.149), 2.873 (2.837), 2.438 (2.489), 2.119 (2.189), 1.677
+//! (1.886), 1.334 (1.530), 1.030 (1.153), 0.573 (1.079); 128² (198 cubes of a thesis-like bake,
+//! 3.121 lossless) 3.028 (2.818), 2.559 (2.531), 2.192 (2.209), 1.858 (1.912), 1.436 (1.616),
+//! 1.135 (1.282), 0.827 (0.955), 0.489 (0.936). Hence writers use filter 3 for k ≤ 6.
 //!
 //! ## Encodings and measured accuracy
 //!
