@@ -214,8 +214,7 @@ pub fn filter_face(
 /// filters"): lossless for every input whatever `mantissa_bits` is, compact when the texels
 /// were quantized to those bits. Filter 3 stores residuals in lattice steps, so its RGB9E5
 /// input must be quantized ([`crate::encoding::quantize_rgb9e5`]): a mantissa off the
-/// lattice is an [`Error::Unquantized`]. Other filters and
-/// encodings ignore `mantissa_bits`.
+/// lattice is an [`Error::Unquantized`]. Other filters and encodings ignore `mantissa_bits`.
 pub fn filter_face_quantized(
     filter: Filter,
     encoding: Encoding,
@@ -648,7 +647,8 @@ trait RowCodec: Copy {
     fn residual(self, m: u32, p: u32) -> u32;
     /// The mantissa with prediction `p` and residual code `z` (any value: never fails).
     fn apply(self, p: u32, z: u32) -> u32;
-    /// A texel's bytes (the first [`RowCodec::PLANES`] are used), one per plane.
+    /// A texel's bytes, one per plane (the filter's first `P` are stored: 4 for filter 2,
+    /// [`packed_planes`] for filter 3).
     fn pack(self, e: u32, zg: u32, zr: u32, zb: u32) -> [u8; 4];
     /// `(e, zg, zr, zb)` from a texel's bytes (unused bytes 0).
     fn unpack(self, bytes: [u8; 4]) -> (u32, u32, u32, u32);
