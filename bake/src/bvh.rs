@@ -16,7 +16,7 @@
 //! lane by the same operations as the SSE test; the triangle test computes the three
 //! corners' sheared coordinates and edge functions in SSE vectors, lane by lane as the scalar
 //! test (`tests`); shadow rays first try the triangle that blocked the thread's last blocked
-//! shadow ray.
+//! shadow ray of the same stream ([`Intersector::occluded_in_stream`]).
 //!
 //! Packets ([`TriangleScene::intersect_packet`]): the primary rays of a cube-map tile leave
 //! one point in nearly one direction, so they enter nearly the same nodes and triangles. A
@@ -40,7 +40,7 @@ use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 
 use crate::mesh::Mesh;
-use crate::ray::{Intersector, Ray, SurfaceHit};
+use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
 use crate::{BakeError, Result};
 
 /// A world-space mesh with the material and OSLF object its triangles belong to.
@@ -268,12 +268,17 @@ impl Intersector for TriangleScene {
     }
 
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_in_stream(ray, t_max, 0)
+    }
+
+    fn occluded_in_stream(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
+        let stream = stream.min(OCCLUSION_STREAMS - 1);
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is true only where the CPU has these features (`build`).
-            return unsafe { self.occluded_avx2(ray, t_max) };
+            return unsafe { self.occluded_avx2(ray, t_max, stream) };
         }
-        self.occluded_impl::<false>(ray, t_max)
+        self.occluded_impl::<false>(ray, t_max, stream)
     }
 
     fn intersect_packet(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<SurfaceHit>]) {
@@ -306,8 +311,8 @@ impl TriangleScene {
     /// [`Intersector::occluded`] compiled for AVX2 (see [`Self::intersect_avx2`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1,bmi2")]
-    fn occluded_avx2(&self, ray: &Ray, t_max: f32) -> bool {
-        self.occluded_impl::<true>(ray, t_max)
+    fn occluded_avx2(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
+        self.occluded_impl::<true>(ray, t_max, stream)
     }
 
     /// [`Intersector::intersect_packet`] for at most [`PACKET`] rays, compiled for AVX2 (see
@@ -450,16 +455,17 @@ impl TriangleScene {
         best.map(|(slot, h)| self.surface_hit(slot, &h))
     }
 
-    /// Whether anything is hit; `AVX2` as in [`Self::intersect_impl`].
+    /// Whether anything is hit; `AVX2` as in [`Self::intersect_impl`]; `stream` below
+    /// [`OCCLUSION_STREAMS`] (see [`Intersector::occluded_in_stream`]).
     #[inline(always)]
-    fn occluded_impl<const AVX2: bool>(&self, ray: &Ray, t_max: f32) -> bool {
+    fn occluded_impl<const AVX2: bool>(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
         let Some(pr) = PreparedRay::new(ray, t_max) else {
             return false;
         };
-        // The occluder of this thread's last occluded shadow ray first: neighbouring shadow
-        // rays are often blocked by the same triangle. (Any triangle hit answers the query, so
-        // the answer does not depend on this.)
-        let cached = LAST_OCCLUDER.get() as usize;
+        // The occluder of this thread's last occluded shadow ray of the same stream first:
+        // neighbouring shadow rays are often blocked by the same triangle. (Any triangle hit
+        // answers the query, so the answer does not depend on this.)
+        let cached = LAST_OCCLUDER.with(|l| l[stream].get()) as usize;
         if cached < self.vertices.len()
             && intersect_triangle(&self.vertices[cached], &self.planes[cached], &pr, t_max)
                 .is_some()
@@ -480,7 +486,7 @@ impl TriangleScene {
                     if intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_max)
                         .is_some()
                     {
-                        LAST_OCCLUDER.set(state.primitive_id);
+                        LAST_OCCLUDER.with(|l| l[stream].set(state.primitive_id));
                         hit = true;
                         break 'outer;
                     }
@@ -492,9 +498,10 @@ impl TriangleScene {
 }
 
 thread_local! {
-    /// Slot of the triangle that occluded this thread's last occluded shadow ray (in whichever
-    /// scene; `u32::MAX` for none).
-    static LAST_OCCLUDER: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
+    /// Per shadow-ray stream: the slot of the triangle that occluded this thread's last
+    /// occluded shadow ray of that stream (in whichever scene; `u32::MAX` for none).
+    static LAST_OCCLUDER: [std::cell::Cell<u32>; OCCLUSION_STREAMS] =
+        const { [const { std::cell::Cell::new(u32::MAX) }; OCCLUSION_STREAMS] };
 }
 
 /// Depth (levels of nodes) of a CWBVH.
@@ -1254,7 +1261,7 @@ mod tests {
             );
             assert_eq!(
                 s.occluded(&ray, t_max),
-                s.occluded_impl::<false>(&ray, t_max)
+                s.occluded_impl::<false>(&ray, t_max, 0)
             );
         }
     }
@@ -1306,6 +1313,36 @@ mod tests {
             }
         }
         single.iter().flatten().count()
+    }
+
+    #[test]
+    fn occlusion_streams_do_not_change_answers() {
+        // Shadow rays of one stream after another (so each stream's cached occluder is a
+        // triangle that blocked an unrelated ray) answer exactly as the brute-force test.
+        let s = test_scene();
+        let mut rng = Rng::new(11, 3);
+        let mut u = || rng.next_f32();
+        let mut blocked = 0;
+        for k in 0..20_000 {
+            let origin = Vec3::new(u() * 5.0 - 2.5, u() * 5.0 - 2.5, u() * 5.0 - 2.5);
+            let dir = crate::sampling::sample_uniform_sphere(glam::Vec2::new(u(), u()));
+            let ray = Ray::new(origin, dir);
+            let t_max = if k % 3 == 0 { f32::MAX } else { u() * 4.0 };
+            let expected = s.intersect_brute_force(&ray, t_max).is_some();
+            let stream = k % (OCCLUSION_STREAMS + 2);
+            assert_eq!(
+                s.occluded_in_stream(&ray, t_max, stream),
+                expected,
+                "{ray:?}"
+            );
+            assert_eq!(
+                s.occluded_impl::<false>(&ray, t_max, stream % OCCLUSION_STREAMS),
+                expected
+            );
+            assert_eq!(s.occluded(&ray, t_max), expected);
+            blocked += usize::from(expected);
+        }
+        assert!((2_000..18_000).contains(&blocked), "{blocked}");
     }
 
     #[test]
