@@ -15,8 +15,8 @@
 //! traversals are compiled for it and test a node's 8 children in one 256-bit vector, each
 //! lane by the same operations as the SSE test; the triangle test computes the three
 //! corners' sheared coordinates and edge functions in SSE vectors, lane by lane as the scalar
-//! test (`tests`); shadow rays first try the triangle that blocked the thread's last blocked
-//! shadow ray of the same stream ([`Intersector::occluded_in_stream`]).
+//! test (`tests`); shadow rays first try the triangles that blocked the thread's last two
+//! blocked shadow rays of the same stream ([`Intersector::occluded_in_stream`]).
 //!
 //! Packets ([`TriangleScene::intersect_packet`]): the primary rays of a cube-map tile leave
 //! one point in nearly one direction, so they enter nearly the same nodes and triangles. A
@@ -462,15 +462,17 @@ impl TriangleScene {
         let Some(pr) = PreparedRay::new(ray, t_max) else {
             return false;
         };
-        // The occluder of this thread's last occluded shadow ray of the same stream first:
-        // neighbouring shadow rays are often blocked by the same triangle. (Any triangle hit
-        // answers the query, so the answer does not depend on this.)
-        let cached = LAST_OCCLUDER.with(|l| l[stream].get()) as usize;
-        if cached < self.vertices.len()
-            && intersect_triangle(&self.vertices[cached], &self.planes[cached], &pr, t_max)
-                .is_some()
-        {
-            return true;
+        // The occluders of this thread's last two occluded shadow rays of the same stream
+        // first: neighbouring shadow rays are often blocked by the same triangle. (Any
+        // triangle hit answers the query, so the answer does not depend on this.)
+        let recent = LAST_OCCLUDER.with(|l| l[stream].get());
+        for cached in recent.map(|c| c as usize) {
+            if cached < self.vertices.len()
+                && intersect_triangle(&self.vertices[cached], &self.planes[cached], &pr, t_max)
+                    .is_some()
+            {
+                return true;
+            }
         }
         let mut state = self.bvh.new_traversal(Vec3A::from(pr.dir));
         let mut node: &CwBvhNode;
@@ -486,7 +488,7 @@ impl TriangleScene {
                     if intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_max)
                         .is_some()
                     {
-                        LAST_OCCLUDER.with(|l| l[stream].set(state.primitive_id));
+                        LAST_OCCLUDER.with(|l| l[stream].set([state.primitive_id, recent[0]]));
                         hit = true;
                         break 'outer;
                     }
@@ -498,10 +500,11 @@ impl TriangleScene {
 }
 
 thread_local! {
-    /// Per shadow-ray stream: the slot of the triangle that occluded this thread's last
-    /// occluded shadow ray of that stream (in whichever scene; `u32::MAX` for none).
-    static LAST_OCCLUDER: [std::cell::Cell<u32>; OCCLUSION_STREAMS] =
-        const { [const { std::cell::Cell::new(u32::MAX) }; OCCLUSION_STREAMS] };
+    /// Per shadow-ray stream: the slots of the triangles that occluded this thread's last two
+    /// occluded shadow rays of that stream, the latest first (in whichever scene; `u32::MAX`
+    /// for none).
+    static LAST_OCCLUDER: [std::cell::Cell<[u32; 2]>; OCCLUSION_STREAMS] =
+        const { [const { std::cell::Cell::new([u32::MAX; 2]) }; OCCLUSION_STREAMS] };
 }
 
 /// Depth (levels of nodes) of a CWBVH.
