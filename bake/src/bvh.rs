@@ -15,8 +15,8 @@
 //! traversals are compiled for it and test a node's 8 children in one 256-bit vector, each
 //! lane by the same operations as the SSE test; the triangle test computes the three
 //! corners' sheared coordinates and edge functions in SSE vectors, lane by lane as the scalar
-//! test (`tests`); shadow rays first try the triangle that blocked the thread's last blocked
-//! shadow ray.
+//! test (`tests`); shadow rays first try the triangles that blocked the thread's last two
+//! blocked shadow rays of the same stream ([`Intersector::occluded_in_stream`]).
 //!
 //! Packets ([`TriangleScene::intersect_packet`]): the primary rays of a cube-map tile leave
 //! one point in nearly one direction, so they enter nearly the same nodes and triangles. A
@@ -26,7 +26,10 @@
 //! visited with the rays that enter it, a leaf's triangles are tested against exactly those
 //! rays. Every ray gets the closest hit the single-ray traversal gives it (the same triangle
 //! test, so the same bits; only among triangles hit at bit-identical `t` may a different one
-//! be reported, the tie being broken by visiting order in both).
+//! be reported, the tie being broken by visiting order in both). Each ray of a packet first
+//! tries the triangle the same ray of the thread's previous packet hit and, where it hits it,
+//! culls nodes beyond that distance from the start; triangles are still accepted as without
+//! it, so the hits are exactly those without it.
 
 use std::time::{Duration, Instant};
 
@@ -40,7 +43,7 @@ use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 
 use crate::mesh::Mesh;
-use crate::ray::{Intersector, Ray, SurfaceHit};
+use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
 use crate::{BakeError, Result};
 
 /// A world-space mesh with the material and OSLF object its triangles belong to.
@@ -268,12 +271,17 @@ impl Intersector for TriangleScene {
     }
 
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_in_stream(ray, t_max, 0)
+    }
+
+    fn occluded_in_stream(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
+        let stream = stream.min(OCCLUSION_STREAMS - 1);
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is true only where the CPU has these features (`build`).
-            return unsafe { self.occluded_avx2(ray, t_max) };
+            return unsafe { self.occluded_avx2(ray, t_max, stream) };
         }
-        self.occluded_impl::<false>(ray, t_max)
+        self.occluded_impl::<false>(ray, t_max, stream)
     }
 
     fn intersect_packet(&self, rays: &[Ray], t_max: f32, hits: &mut [Option<SurfaceHit>]) {
@@ -289,6 +297,10 @@ impl Intersector for TriangleScene {
         }
     }
 }
+
+/// The node-culling bound of a packet's ray relative to the `t` at which its seed triangle
+/// is hit (see [`TriangleScene::intersect_packet`]): far above the rounding of `t`.
+const SEED_CULL_MARGIN: f32 = 1.0 + 1.0 / 65536.0;
 
 /// Most rays traversed together by [`TriangleScene::intersect_packet`] (bits of a `u32` mask).
 pub const PACKET: usize = 16;
@@ -306,8 +318,8 @@ impl TriangleScene {
     /// [`Intersector::occluded`] compiled for AVX2 (see [`Self::intersect_avx2`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,popcnt,lzcnt,bmi1,bmi2")]
-    fn occluded_avx2(&self, ray: &Ray, t_max: f32) -> bool {
-        self.occluded_impl::<true>(ray, t_max)
+    fn occluded_avx2(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
+        self.occluded_impl::<true>(ray, t_max, stream)
     }
 
     /// [`Intersector::intersect_packet`] for at most [`PACKET`] rays, compiled for AVX2 (see
@@ -352,6 +364,30 @@ impl TriangleScene {
         }
         let mut t_best = [t_max; PACKET];
         let mut best: [Option<(usize, TriHit)>; PACKET] = [None; PACKET];
+        // Nodes are culled at `t_cull[r]`, at most `t_best[r]`: each ray first tries the
+        // triangle that the same ray of this thread's last packet hit (a cube-map tile's next
+        // packet samples the same texels, so it is often hit again) and, if it is hit at `t`,
+        // skips every node entered only beyond `t` (1 + 2⁻¹⁶), as it would once that
+        // triangle were found. Triangles are still accepted against `t_best` alone, which
+        // starts at `t_max` as in the single-ray traversal: that a triangle beyond the bound
+        // is never tested only drops candidates that a closer hit replaces anyway, so the
+        // hits are the same, ties between triangles at bit-identical `t` included
+        // (`tests::packet_seeds_do_not_change_hits`).
+        let mut t_cull = [t_max; PACKET];
+        let seeds = LAST_PACKET_HITS.with(|l| l.get());
+        let mut m = active;
+        while m != 0 {
+            let r = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let slot = seeds[r] as usize;
+            if slot < self.vertices.len() {
+                if let Some(h) =
+                    intersect_triangle(&self.vertices[slot], &self.planes[slot], &prs[r], t_max)
+                {
+                    t_cull[r] = (h.t * SEED_CULL_MARGIN).min(t_max);
+                }
+            }
+        }
         // Children in the octant order of the first ray (obvhs's single-ray order: the slot
         // `k ^ octant` k-th), so the nearer children of most rays come first.
         let d = prs[active.trailing_zeros() as usize].dir;
@@ -371,12 +407,12 @@ impl TriangleScene {
             if AVX2 {
                 // SAFETY: `AVX2` is true only in `intersect_packet_avx2`, an AVX2 function
                 // called only where the CPU has AVX2.
-                unsafe { packet_node_avx2(node, &prs, mask, &t_best, &mut child_rays) };
+                unsafe { packet_node_avx2(node, &prs, mask, &t_cull, &mut child_rays) };
             } else {
-                packet_node(node, &prs, mask, &t_best, &mut child_rays);
+                packet_node(node, &prs, mask, &t_cull, &mut child_rays);
             }
             #[cfg(not(target_arch = "x86_64"))]
-            packet_node(node, &prs, mask, &t_best, &mut child_rays);
+            packet_node(node, &prs, mask, &t_cull, &mut child_rays);
             // Leaves first (their hits shorten the rays before the inner children's tests).
             for k in 0..8 {
                 let slot = k ^ octant;
@@ -396,6 +432,7 @@ impl TriangleScene {
                         m &= m - 1;
                         if let Some(h) = intersect_triangle(corners, plane, &prs[r], t_best[r]) {
                             t_best[r] = h.t;
+                            t_cull[r] = t_cull[r].min(h.t);
                             best[r] = Some((slot, h));
                         }
                     }
@@ -414,6 +451,13 @@ impl TriangleScene {
                 depth += 1;
             }
         }
+        let mut seeds = seeds;
+        for (seed, best) in seeds.iter_mut().zip(&best) {
+            if let Some((slot, _)) = best {
+                *seed = *slot as u32;
+            }
+        }
+        LAST_PACKET_HITS.with(|l| l.set(seeds));
         for (hit, best) in hits[..n].iter_mut().zip(best) {
             *hit = best.map(|(slot, h)| self.surface_hit(slot, &h));
         }
@@ -450,21 +494,24 @@ impl TriangleScene {
         best.map(|(slot, h)| self.surface_hit(slot, &h))
     }
 
-    /// Whether anything is hit; `AVX2` as in [`Self::intersect_impl`].
+    /// Whether anything is hit; `AVX2` as in [`Self::intersect_impl`]; `stream` below
+    /// [`OCCLUSION_STREAMS`] (see [`Intersector::occluded_in_stream`]).
     #[inline(always)]
-    fn occluded_impl<const AVX2: bool>(&self, ray: &Ray, t_max: f32) -> bool {
+    fn occluded_impl<const AVX2: bool>(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
         let Some(pr) = PreparedRay::new(ray, t_max) else {
             return false;
         };
-        // The occluder of this thread's last occluded shadow ray first: neighbouring shadow
-        // rays are often blocked by the same triangle. (Any triangle hit answers the query, so
-        // the answer does not depend on this.)
-        let cached = LAST_OCCLUDER.get() as usize;
-        if cached < self.vertices.len()
-            && intersect_triangle(&self.vertices[cached], &self.planes[cached], &pr, t_max)
-                .is_some()
-        {
-            return true;
+        // The occluders of this thread's last two occluded shadow rays of the same stream
+        // first: neighbouring shadow rays are often blocked by the same triangle. (Any
+        // triangle hit answers the query, so the answer does not depend on this.)
+        let recent = LAST_OCCLUDER.with(|l| l[stream].get());
+        for cached in recent.map(|c| c as usize) {
+            if cached < self.vertices.len()
+                && intersect_triangle(&self.vertices[cached], &self.planes[cached], &pr, t_max)
+                    .is_some()
+            {
+                return true;
+            }
         }
         let mut state = self.bvh.new_traversal(Vec3A::from(pr.dir));
         let mut node: &CwBvhNode;
@@ -480,7 +527,7 @@ impl TriangleScene {
                     if intersect_triangle(&self.vertices[slot], &self.planes[slot], &pr, t_max)
                         .is_some()
                     {
-                        LAST_OCCLUDER.set(state.primitive_id);
+                        LAST_OCCLUDER.with(|l| l[stream].set([state.primitive_id, recent[0]]));
                         hit = true;
                         break 'outer;
                     }
@@ -492,9 +539,15 @@ impl TriangleScene {
 }
 
 thread_local! {
-    /// Slot of the triangle that occluded this thread's last occluded shadow ray (in whichever
-    /// scene; `u32::MAX` for none).
-    static LAST_OCCLUDER: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
+    /// Per ray of this thread's last packet: the slot of the triangle it hit (in whichever
+    /// scene; `u32::MAX` for none yet).
+    static LAST_PACKET_HITS: std::cell::Cell<[u32; PACKET]> =
+        const { std::cell::Cell::new([u32::MAX; PACKET]) };
+    /// Per shadow-ray stream: the slots of the triangles that occluded this thread's last two
+    /// occluded shadow rays of that stream, the latest first (in whichever scene; `u32::MAX`
+    /// for none).
+    static LAST_OCCLUDER: [std::cell::Cell<[u32; 2]>; OCCLUSION_STREAMS] =
+        const { [const { std::cell::Cell::new([u32::MAX; 2]) }; OCCLUSION_STREAMS] };
 }
 
 /// Depth (levels of nodes) of a CWBVH.
@@ -1254,7 +1307,7 @@ mod tests {
             );
             assert_eq!(
                 s.occluded(&ray, t_max),
-                s.occluded_impl::<false>(&ray, t_max)
+                s.occluded_impl::<false>(&ray, t_max, 0)
             );
         }
     }
@@ -1309,6 +1362,36 @@ mod tests {
     }
 
     #[test]
+    fn occlusion_streams_do_not_change_answers() {
+        // Shadow rays of one stream after another (so each stream's cached occluder is a
+        // triangle that blocked an unrelated ray) answer exactly as the brute-force test.
+        let s = test_scene();
+        let mut rng = Rng::new(11, 3);
+        let mut u = || rng.next_f32();
+        let mut blocked = 0;
+        for k in 0..20_000 {
+            let origin = Vec3::new(u() * 5.0 - 2.5, u() * 5.0 - 2.5, u() * 5.0 - 2.5);
+            let dir = crate::sampling::sample_uniform_sphere(glam::Vec2::new(u(), u()));
+            let ray = Ray::new(origin, dir);
+            let t_max = if k % 3 == 0 { f32::MAX } else { u() * 4.0 };
+            let expected = s.intersect_brute_force(&ray, t_max).is_some();
+            let stream = k % (OCCLUSION_STREAMS + 2);
+            assert_eq!(
+                s.occluded_in_stream(&ray, t_max, stream),
+                expected,
+                "{ray:?}"
+            );
+            assert_eq!(
+                s.occluded_impl::<false>(&ray, t_max, stream % OCCLUSION_STREAMS),
+                expected
+            );
+            assert_eq!(s.occluded(&ray, t_max), expected);
+            blocked += usize::from(expected);
+        }
+        assert!((2_000..18_000).contains(&blocked), "{blocked}");
+    }
+
+    #[test]
     fn packet_traversal_is_the_single_ray_one() {
         let s = test_scene();
         let mut rng = Rng::new(5, 9);
@@ -1344,6 +1427,101 @@ mod tests {
             rays_total += n;
         }
         assert!(hits > rays_total / 4, "{hits} of {rays_total}");
+    }
+
+    #[test]
+    fn packet_seeds_do_not_change_hits() {
+        // The same packets without seeds and with seeds of every kind (the hits of a
+        // neighbouring packet, of the packet itself, a triangle each ray misses, a slot past
+        // the end) give exactly the same hits, also where a ray meets two triangles at the
+        // same `t`: the diagonals and edges of a box's faces, and the coplanar triangles of
+        // the floor under the spheres.
+        let mut instances = vec![Instance {
+            mesh: shapes::cuboid(Vec3::ONE).unwrap(),
+            material: 0,
+            object: 0,
+        }];
+        let mut floor = shapes::cuboid(Vec3::new(8.0, 8.0, 0.2)).unwrap();
+        for q in &mut floor.positions {
+            q.z -= 2.0;
+        }
+        instances.push(Instance {
+            mesh: floor,
+            material: 1,
+            object: 0,
+        });
+        for (k, r) in [0.3f32, 0.2].into_iter().enumerate() {
+            let mut mesh = shapes::sphere(r, 16).unwrap();
+            for q in &mut mesh.positions {
+                *q += Vec3::new(1.2 - 2.4 * k as f32, 0.5, -1.2);
+            }
+            instances.push(Instance {
+                mesh,
+                material: 0,
+                object: 0,
+            });
+        }
+        let scene = TriangleScene::build(instances).unwrap();
+        let set_seeds = |seeds: [u32; PACKET]| LAST_PACKET_HITS.with(|l| l.set(seeds));
+        let slots = |hits: &[Option<SurfaceHit>]| {
+            let mut seeds = [u32::MAX; PACKET];
+            for (seed, h) in seeds.iter_mut().zip(hits) {
+                if let Some(h) = h {
+                    *seed = scene.input_order[h.triangle as usize];
+                }
+            }
+            seeds
+        };
+        let mut rng = Rng::new(21, 4);
+        let mut u = || rng.next_f32();
+        let mut previous = [u32::MAX; PACKET];
+        let mut hits_total = 0;
+        for k in 0..2000 {
+            let o = match k % 3 {
+                0 => Vec3::new(0.0, 0.0, 3.0),
+                1 => Vec3::new(u() * 4.0 - 2.0, u() * 4.0 - 2.0, 2.5),
+                _ => Vec3::new(0.05, -0.03, 0.6),
+            };
+            let rays: Vec<Ray> = (0..PACKET)
+                .map(|i| {
+                    // Towards points on the box's top diagonal, its edges, and anywhere.
+                    let target = match (k + i) % 4 {
+                        0 => {
+                            let a = u() - 0.5;
+                            Vec3::new(a, a, 0.5)
+                        }
+                        1 => Vec3::new(0.5, u() - 0.5, 0.5),
+                        2 => Vec3::new(u() * 6.0 - 3.0, u() * 6.0 - 3.0, -1.9),
+                        _ => Vec3::new(u() * 2.0 - 1.0, u() * 2.0 - 1.0, -1.0),
+                    };
+                    Ray::new(o, (target - o).normalize())
+                })
+                .collect();
+            let t_max = if k % 5 == 0 { 3.0 } else { f32::MAX };
+            let mut plain = vec![None; PACKET];
+            set_seeds([u32::MAX; PACKET]);
+            scene.intersect_packet(&rays, t_max, &mut plain);
+            let own = slots(&plain);
+            let mut shifted = own;
+            shifted.rotate_left(1);
+            let wrong = [(k as u32 * 7) % scene.vertices.len() as u32; PACKET];
+            let past_end = [scene.vertices.len() as u32 + 3; PACKET];
+            for seeds in [previous, own, shifted, wrong, past_end] {
+                for avx2 in [true, false] {
+                    set_seeds(seeds);
+                    let mut seeded = vec![None; PACKET];
+                    if avx2 {
+                        scene.intersect_packet(&rays, t_max, &mut seeded);
+                    } else {
+                        scene.intersect_packet_impl::<false>(&rays, t_max, &mut seeded);
+                    }
+                    assert_eq!(seeded, plain, "packet {k}, seeds {seeds:?}");
+                }
+            }
+            previous = own;
+            hits_total += plain.iter().flatten().count();
+        }
+        assert!(hits_total > 20_000, "{hits_total}");
     }
 
     #[test]

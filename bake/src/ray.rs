@@ -48,12 +48,24 @@ pub struct SurfaceHit {
     pub extent: f32,
 }
 
+/// Number of shadow-ray streams of [`Intersector::occluded_in_stream`]; stream 0 is the
+/// general one (what [`Intersector::occluded`] uses).
+pub const OCCLUSION_STREAMS: usize = 32;
+
 /// Anything the integrator can trace rays against.
 pub trait Intersector: Sync {
     /// Closest hit with `t` in `(0, t_max)`.
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit>;
     /// Whether any surface is hit with `t` in `(0, t_max)`.
     fn occluded(&self, ray: &Ray, t_max: f32) -> bool;
+    /// [`Intersector::occluded`] for a shadow ray of `stream` (below
+    /// [`OCCLUSION_STREAMS`]): the caller's label for a series of similar shadow rays (those
+    /// towards one light from one path depth, say), which an intersector may use to guess
+    /// where to look first. The answer is that of `occluded`, whatever the stream.
+    fn occluded_in_stream(&self, ray: &Ray, t_max: f32, stream: usize) -> bool {
+        let _ = stream;
+        self.occluded(ray, t_max)
+    }
     /// [`Intersector::intersect`] of every ray of `rays` into the same slot of `hits` (of the
     /// same length). Intersectors that can trace coherent rays together (packets, see
     /// [`crate::bvh`]) override this; the answers are those of `intersect`.
