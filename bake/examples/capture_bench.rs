@@ -31,19 +31,8 @@ fn main() -> anyhow::Result<()> {
         scene.instances(true, settings.epsilon * oslf_bake::bake::TESSELLATION_ERROR),
     )?;
     let placement = oslf_bake::sample_points::place(&scene.objects, settings, &geometry)?;
-    let capture = CaptureSettings {
-        resolution: settings.cube_resolution,
-        samples_per_texel: settings.samples_per_texel,
-        distance_channel: settings.distance_channel,
-        seed: settings.seed,
-    };
-    let integrator = Integrator {
-        geometry: &geometry,
-        materials: &scene.materials,
-        lights: &scene.lights,
-        environment: &scene.environment,
-        max_bounces: settings.bounces,
-    };
+    let capture = CaptureSettings::from_bake(settings);
+    let integrator = Integrator::for_scene(&scene, &geometry);
     let mut hash = 0xcbf2_9ce4_8422_2325u64;
     let mut rays = RayStats::default();
     let wall = Instant::now();

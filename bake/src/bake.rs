@@ -188,19 +188,8 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     report.cubes_resumed = writer.next_cube();
     report.cubes = writer.total_cubes();
 
-    let capture = CaptureSettings {
-        resolution: settings.cube_resolution,
-        samples_per_texel: settings.samples_per_texel,
-        distance_channel: settings.distance_channel,
-        seed: settings.seed,
-    };
-    let integrator = Integrator {
-        geometry: &geometry,
-        materials: &scene.materials,
-        lights: &scene.lights,
-        environment: &scene.environment,
-        max_bounces: settings.bounces,
-    };
+    let capture = CaptureSettings::from_bake(settings);
+    let integrator = Integrator::for_scene(scene, &geometry);
     // The environment-map baseline sees the scene without the OSLF objects.
     let env_geometry = if meta.has_env_cube && !scene.shapes.is_empty() {
         Some(TriangleScene::build(scene.instances(false, 0.0))?)
@@ -239,20 +228,11 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
                     // The one cube past the sample points: the environment-map baseline.
                     None => match &env_geometry {
                         Some(geometry) => {
-                            let env = Integrator {
-                                geometry,
-                                ..integrator
-                            };
+                            let env = integrator.with_geometry(geometry);
                             capture_cube(&env, centre, i as u32, &capture)
                         }
                         None => {
-                            let env = Integrator {
-                                geometry: &EmptyScene,
-                                materials: integrator.materials,
-                                lights: integrator.lights,
-                                environment: integrator.environment,
-                                max_bounces: integrator.max_bounces,
-                            };
+                            let env = integrator.with_geometry(&EmptyScene);
                             capture_cube(&env, centre, i as u32, &capture)
                         }
                     },

@@ -1274,24 +1274,7 @@ mod tests {
 
     #[test]
     fn avx2_traversal_is_the_sse_one() {
-        let mut instances = Vec::new();
-        for (k, r) in [1.0f32, 0.3, 2.5].into_iter().enumerate() {
-            let mut mesh = shapes::sphere(r, 24).unwrap();
-            for q in &mut mesh.positions {
-                *q += Vec3::new(k as f32 * 0.7, 0.2, -0.1 * k as f32);
-            }
-            instances.push(Instance {
-                mesh,
-                material: 0,
-                object: 0,
-            });
-        }
-        instances.push(Instance {
-            mesh: shapes::cuboid(Vec3::splat(6.0)).unwrap(),
-            material: 1,
-            object: 0,
-        });
-        let s = TriangleScene::build(instances).unwrap();
+        let s = test_scene();
         let mut rng = Rng::new(3, 4);
         let mut p = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 8.0 - 4.0;
         for _ in 0..20_000 {

@@ -33,6 +33,18 @@ pub struct CaptureSettings {
     pub seed: u64,
 }
 
+impl CaptureSettings {
+    /// The capture a bake with `settings` does.
+    pub fn from_bake(settings: &crate::scene::BakeSettings) -> Self {
+        CaptureSettings {
+            resolution: settings.cube_resolution,
+            samples_per_texel: settings.samples_per_texel,
+            distance_channel: settings.distance_channel,
+            seed: settings.seed,
+        }
+    }
+}
+
 /// Captures the cube map seen from `origin`. `cube_index` selects the random streams, so a
 /// cube's texels are the same whichever thread renders them.
 pub fn capture_cube<I: Intersector>(

@@ -149,13 +149,7 @@ impl<'s> GroundTruth<'s> {
     }
 
     fn integrator(&self) -> Integrator<'_, TriangleScene> {
-        Integrator {
-            geometry: &self.geometry,
-            materials: &self.scene.materials,
-            lights: &self.scene.lights,
-            environment: &self.scene.environment,
-            max_bounces: self.scene.bake.bounces,
-        }
+        Integrator::for_scene(self.scene, &self.geometry)
     }
 
     /// Renders one term. Rows run in parallel; the result does not depend on the thread count.

@@ -132,6 +132,31 @@ fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
     }
 }
 
+impl<'a, I: Intersector> Integrator<'a, I> {
+    /// The integrator of `scene` (its materials, lights, environment and bounces) over
+    /// `geometry`.
+    pub fn for_scene(scene: &'a crate::scene::Scene, geometry: &'a I) -> Self {
+        Integrator {
+            geometry,
+            materials: &scene.materials,
+            lights: &scene.lights,
+            environment: &scene.environment,
+            max_bounces: scene.bake.bounces,
+        }
+    }
+
+    /// The same integrator over other geometry.
+    pub fn with_geometry<J: Intersector>(&self, geometry: &'a J) -> Integrator<'a, J> {
+        Integrator {
+            geometry,
+            materials: self.materials,
+            lights: self.lights,
+            environment: self.environment,
+            max_bounces: self.max_bounces,
+        }
+    }
+}
+
 impl<I: Intersector> Integrator<'_, I> {
     /// Radiance arriving at `ray.origin` from direction `-ray.dir` (`ray.dir` unit length).
     /// The first segment starts exactly at `ray.origin`. Every ray traced is counted in `stats`.

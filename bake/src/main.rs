@@ -111,13 +111,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         let t = Instant::now();
         let geometry =
             TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))?;
-        let integrator = Integrator {
-            geometry: &geometry,
-            materials: &scene.materials,
-            lights: &scene.lights,
-            environment: &scene.environment,
-            max_bounces: scene.bake.bounces,
-        };
+        let integrator = Integrator::for_scene(&scene, &geometry);
         let (w, h) = (655, 460); // the thesis's image size (§6.1)
         let (pixels, _) = camera::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
         image_file::write_png(&png, w, h, &pixels, 1.0)?;

@@ -79,13 +79,7 @@ fn geometry(scene: &Scene) -> TriangleScene {
 }
 
 fn integrator<'a>(scene: &'a Scene, geometry: &'a TriangleScene) -> Integrator<'a, TriangleScene> {
-    Integrator {
-        geometry,
-        materials: &scene.materials,
-        lights: &scene.lights,
-        environment: &scene.environment,
-        max_bounces: scene.bake.bounces,
-    }
+    Integrator::for_scene(scene, geometry)
 }
 
 /// What [`compare_with_unit_scene`] measured.

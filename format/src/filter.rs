@@ -1334,6 +1334,25 @@ mod tests {
         out
     }
 
+    /// Texel `i` of a face of `kind` for the spec tests: 0 any bit pattern, 1 a smooth HDR
+    /// gradient with a few exponents, 2 that gradient quantized to `bits`, 3 zeros and
+    /// extremes.
+    fn spec_texel(kind: usize, i: usize, bits: u32, rng: &mut Rng) -> u32 {
+        let gradient = || {
+            crate::encoding::encode_rgb9e5([
+                0.01 + i as f32 * 0.37,
+                0.02 + i as f32 * 0.5,
+                0.005 + (i % 5) as f32,
+            ])
+        };
+        match kind {
+            0 => rng.next() as u32,
+            1 => gradient(),
+            2 => crate::encoding::quantize_rgb9e5(gradient(), bits),
+            _ => [0u32, u32::MAX, 1 << 27, 511][(rng.next() % 4) as usize],
+        }
+    }
+
     /// `raw` with the mantissas of its first `t` RGB9E5 texels rounded down to multiples of
     /// `2^(9 − bits)`.
     fn lattice_floor(raw: &[u8], t: usize, bits: u32) -> Vec<u8> {
@@ -1431,22 +1450,10 @@ mod tests {
             for bits in 1..=9u32 {
                 for kind in 0..3 {
                     let t = res * res;
+                    // Any bit pattern, the quantized gradient, zeros and extremes (all put on
+                    // the lattice below).
                     let tex: Vec<u32> = (0..t)
-                        .map(|i| match kind {
-                            // any bit pattern, on the lattice
-                            0 => rng.next() as u32,
-                            // a smooth HDR gradient with a few exponents, quantized
-                            1 => crate::encoding::quantize_rgb9e5(
-                                crate::encoding::encode_rgb9e5([
-                                    0.01 + i as f32 * 0.37,
-                                    0.02 + i as f32 * 0.5,
-                                    0.005 + (i % 5) as f32,
-                                ]),
-                                bits,
-                            ),
-                            // zeros and extremes
-                            _ => [0u32, u32::MAX, 1 << 27, 511][(rng.next() % 4) as usize],
-                        })
+                        .map(|i| spec_texel([0, 2, 3][kind], i, bits, &mut rng))
                         .collect();
                     let raw: Vec<u8> = tex.iter().flat_map(|v| v.to_le_bytes()).collect();
                     let raw = lattice_floor(&raw, t, bits);
@@ -1496,27 +1503,7 @@ mod tests {
         {
             {
                 let tex: Vec<u32> = (0..res * res)
-                    .map(|i| match kind {
-                        // any bit pattern
-                        0 => rng.next() as u32,
-                        // smooth HDR gradient with a few exponents
-                        1 => crate::encoding::encode_rgb9e5([
-                            0.01 + i as f32 * 0.37,
-                            0.02 + i as f32 * 0.5,
-                            0.005 + (i % 5) as f32,
-                        ]),
-                        // the gradient quantized to `bits`
-                        2 => crate::encoding::quantize_rgb9e5(
-                            crate::encoding::encode_rgb9e5([
-                                0.01 + i as f32 * 0.37,
-                                0.02 + i as f32 * 0.5,
-                                0.005 + (i % 5) as f32,
-                            ]),
-                            bits,
-                        ),
-                        // zeros and extremes
-                        _ => [0u32, u32::MAX, 1 << 27, 511][(rng.next() % 4) as usize],
-                    })
+                    .map(|i| spec_texel(kind, i, bits, &mut rng))
                     .collect();
                 let raw: Vec<u8> = tex.iter().flat_map(|v| v.to_le_bytes()).collect();
                 let mut filtered = vec![0u8; raw.len()];
