@@ -26,24 +26,56 @@ impl Gpu {
     /// rasterizer such as lavapipe), requesting the adapter's own limits: wgpu's defaults
     /// allow only 256 texture array layers.
     ///
+    /// Vulkan, Metal and DX12 are tried first; the GL backend only when none of them has an
+    /// adapter, so a machine with a Vulkan driver never probes EGL (whose platform probing
+    /// prints stray errors). `WGPU_BACKEND` overrides the choice.
+    ///
     /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
     pub fn headless() -> Result<Self> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: None,
-            apply_limit_buckets: false,
-        }))
-        .map_err(|e| RuntimeError::NoAdapter(e.to_string()))?;
-        Self::on_adapter(&adapter)
+        let from_env = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        let order = if std::env::var_os("WGPU_BACKEND").is_some() {
+            vec![from_env.backends]
+        } else {
+            vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL]
+        };
+        let mut last = String::from("no backend enabled");
+        for backends in order {
+            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+            desc.backends = backends;
+            let instance = wgpu::Instance::new(desc);
+            match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            })) {
+                Ok(adapter) => return Self::on_adapter(&adapter),
+                Err(e) => last = format!("{backends:?}: {e}"),
+            }
+        }
+        Err(RuntimeError::NoAdapter(last))
     }
 
     /// Creates a device on `adapter` with the adapter's limits.
     pub fn on_adapter(adapter: &wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
         let adapter_name = format!("{} ({}, {:?})", info.name, info.driver, info.backend);
+        // The G-buffer and the output are Rgba32Float render targets (renderer.rs); GL adapters
+        // such as llvmpipe over EGL cannot render to them, so stop here with the fix.
+        let float_target = wgpu::TextureFormat::Rgba32Float;
+        let usages = adapter
+            .get_texture_format_features(float_target)
+            .allowed_usages;
+        if !usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) {
+            return Err(RuntimeError::Device {
+                adapter: adapter_name,
+                message: format!(
+                    "it cannot render to {float_target:?} textures, which the G-buffer needs; \
+                     install a Vulkan driver (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`) \
+                     or use a GPU with Vulkan, Metal or DX12"
+                ),
+            });
+        }
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("oslf"),

@@ -177,3 +177,39 @@ fn compare_reports_cielab_and_rgb_errors_between_renders() {
         "{err}"
     );
 }
+
+/// Forced onto the GL backend (llvmpipe over EGL here), the render either works or stops with
+/// an error that names the adapter, the missing capability and the fix; never a bare wgpu
+/// validation message.
+#[test]
+fn gl_backend_renders_or_names_the_missing_capability_and_the_fix() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap().join("cli-gl");
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join("frame.exr");
+    let out = Command::new(env!("CARGO_BIN_EXE_oslf-render"))
+        .env("WGPU_BACKEND", "gl")
+        .args([
+            store.to_str().unwrap(),
+            "-o",
+            exr.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "24",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        assert!(exr.exists(), "exit 0 without an image; stderr: {stderr}");
+    } else {
+        assert!(
+            stderr.contains("Rgba32Float")
+                && stderr.contains("mesa-vulkan-drivers")
+                && stderr.contains("Gl"),
+            "the GL failure must name the adapter, the capability and the fix: {stderr}"
+        );
+        assert!(!stderr.contains("Validation Error"), "{stderr}");
+    }
+}
