@@ -32,11 +32,9 @@ impl Gpu {
     ///
     /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
     pub fn headless() -> Result<Self> {
-        let from_env = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        let order = if std::env::var_os("WGPU_BACKEND").is_some() {
-            vec![from_env.backends]
-        } else {
-            vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL]
+        let order = match wgpu::Backends::from_env() {
+            Some(backends) => vec![backends],
+            None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL],
         };
         let mut last = String::from("no backend enabled");
         for backends in order {
