@@ -22,9 +22,9 @@
 use std::path::{Path, PathBuf};
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use oslf::bake::bake::{bake, BakeOptions};
-use oslf::bake::scene::Scene;
-use oslf::format::{
+use oslf_bake::bake::{bake, BakeOptions};
+use oslf_bake::scene::Scene;
+use oslf_format::{
     encode_cube, encode_cube_with_filter, Encoding, Filter, SampleMaps, Store, StoreWriter,
 };
 
@@ -107,7 +107,7 @@ fn reencode(
             .iter()
             .map(|texel| {
                 // The texel's points that remain, nearest first, then invalid entries.
-                let mut kept = [oslf::format::INVALID_INDEX; 4];
+                let mut kept = [oslf_format::INVALID_INDEX; 4];
                 for (slot, &i) in kept.iter_mut().zip(texel.iter().filter(|&&i| i < cubes)) {
                     *slot = i;
                 }

@@ -3,12 +3,12 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Mat4, Vec3};
-use oslf::bake::bake::{bake, BakeOptions};
-use oslf::bake::bezier::BezierPatch;
-use oslf::bake::bvh::TriangleScene;
-use oslf::bake::ray::Ray;
-use oslf::bake::scene::Scene;
-use oslf::format::{Store, INVALID_INDEX};
+use oslf_bake::bake::{bake, BakeOptions};
+use oslf_bake::bezier::BezierPatch;
+use oslf_bake::bvh::TriangleScene;
+use oslf_bake::ray::Ray;
+use oslf_bake::scene::Scene;
+use oslf_format::{Store, INVALID_INDEX};
 
 /// A small but complete scene: the teapot's lid and body on a table, a wall, a point light and
 /// a uniform sky, baked at toy resolutions.
@@ -106,9 +106,9 @@ fn an_interrupted_bake_resumes_to_the_same_store() {
         !sliced.exists(),
         "an unfinished bake must not appear under the final name"
     );
-    assert!(oslf::bake::bake::partial_path(&sliced).exists());
+    assert!(oslf_bake::bake::partial_path(&sliced).exists());
     bake_with_threads(&scene, &sliced, 2, None, true);
-    assert!(!oslf::bake::bake::partial_path(&sliced).exists());
+    assert!(!oslf_bake::bake::partial_path(&sliced).exists());
     assert_eq!(
         std::fs::read(whole).unwrap(),
         std::fs::read(sliced).unwrap()
@@ -152,7 +152,7 @@ fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
                 order.sort_by(|&a, &b| dist(a).total_cmp(&dist(b)).then(a.cmp(&b)));
                 let expected: Vec<u32> = order
                     .into_iter()
-                    .take(oslf::bake::sample_map::MAX_CANDIDATES)
+                    .take(oslf_bake::sample_map::MAX_CANDIDATES)
                     .filter(|&i| {
                         let s = Vec3::from_array(points[i].position);
                         let d = (s - t).normalize();
@@ -237,7 +237,7 @@ fn the_distance_channel_sees_the_surface_epsilon_below() {
         let cube = store.read_cube(i as u32).unwrap();
         let distance = cube.distance.as_ref().expect("distance channel");
         let down = -Vec3::from_array(s.normal);
-        let (face, fs, ft) = oslf::format::cube::direction_to_face_st(down.to_array());
+        let (face, fs, ft) = oslf_format::cube::direction_to_face_st(down.to_array());
         let x = ((fs * res as f32) as u32).min(res - 1);
         let y = ((ft * res as f32) as u32).min(res - 1);
         let d = distance[face][(y * res + x) as usize];

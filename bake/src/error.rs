@@ -44,3 +44,24 @@ pub enum BakeError {
 
 /// Shorthand used across the crate.
 pub type Result<T> = std::result::Result<T, BakeError>;
+
+/// Patch-file and geometry errors keep their kind: a located parse error stays
+/// [`BakeError::Parse`], an unusable mesh or camera [`BakeError::Invalid`].
+impl From<oslf_geometry::GeometryError> for BakeError {
+    fn from(e: oslf_geometry::GeometryError) -> Self {
+        match e {
+            oslf_geometry::GeometryError::Parse {
+                path,
+                line,
+                column,
+                message,
+            } => BakeError::Parse {
+                path,
+                line,
+                column,
+                message,
+            },
+            oslf_geometry::GeometryError::Invalid(message) => BakeError::Invalid(message),
+        }
+    }
+}

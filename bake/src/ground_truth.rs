@@ -42,7 +42,7 @@ use crate::ashikhmin_shirley::AsLobe;
 use crate::bake::{progress_bar, TESSELLATION_ERROR};
 use crate::bezier::BezierPatch;
 use crate::bvh::{Instance, TriangleScene};
-use crate::camera::Camera;
+use crate::camera::{primary_ray, Camera};
 use crate::integrator::{offset_origin, Integrator, RayStats};
 use crate::ray::{Intersector, Ray, SurfaceHit};
 use crate::sampling::{hash_u64, stratified_2d, Frame, Rng};
@@ -218,9 +218,7 @@ impl<'s> GroundTruth<'s> {
         width: u32,
         height: u32,
     ) -> Option<(Ray, SurfaceHit)> {
-        let ray = self
-            .camera
-            .ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
+        let ray = primary_ray(&self.camera, x as f32 + 0.5, y as f32 + 0.5, width, height);
         self.object.intersect(&ray, f32::MAX).map(|hit| (ray, hit))
     }
 

@@ -11,10 +11,10 @@
 //!
 //! | role | modules |
 //! | --- | --- |
-//! | geometry | [`bezier`] (patches, Eq. 3.1–3.4, robust normals, tessellation), [`mesh`], [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
-//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (pinhole renders), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
+//! | geometry | [`bezier`] and [`mesh`] (re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
+//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (the shared pinhole [`camera::Camera`], path-traced renders through it), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
 //! | the bake | [`scene`] (TOML scene files with located errors), [`sample_points`], [`sample_map`], [`capture`], [`bake`] (the pipeline, resumable, deterministic), [`image_file`] (EXR and tone-mapped PNG output) |
-//! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf-truth` command) |
+//! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf truth` command) |
 //!
 //! Conventions: Z is up; radiance is linear RGB in `f32`; cube maps use the wgpu/Vulkan face
 //! order and orientation of `oslf_format::cube`. Every random number comes from a stream keyed
@@ -24,9 +24,8 @@ pub mod error;
 pub mod ray;
 
 // geometry
-pub mod bezier;
+pub use oslf_geometry::{bezier, mesh};
 pub mod bvh;
-pub mod mesh;
 pub mod obj;
 pub mod shapes;
 

@@ -275,7 +275,7 @@ fn tessellation_winding_matches_normals() {
 // ---------------------------------------------------------------- patch file parser
 
 fn parse_err(text: &str) -> (usize, usize, String) {
-    match parse_patch_file(text, Path::new("test.patch")) {
+    match parse_patch_file(text, Path::new("test.patch")).map_err(BakeError::from) {
         Err(BakeError::Parse {
             path,
             line,

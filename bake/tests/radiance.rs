@@ -976,13 +976,13 @@ fn camera_rays() {
         vfov_deg: 90.0,
     };
     assert!(cam.validate().is_ok());
-    let centre = cam.ray(50.0, 25.0, 100, 50);
+    let centre = oslf_bake::camera::primary_ray(&cam, 50.0, 25.0, 100, 50);
     assert!((centre.dir - Vec3::Y).length() < 1e-6);
     assert_eq!(centre.origin, cam.position);
     // Top edge centre: 45° up. Right edge centre: atan(2) to the right (aspect 2).
-    let top = cam.ray(50.0, 0.0, 100, 50);
+    let top = oslf_bake::camera::primary_ray(&cam, 50.0, 0.0, 100, 50);
     assert!((top.dir - Vec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-6);
-    let right = cam.ray(100.0, 25.0, 100, 50);
+    let right = oslf_bake::camera::primary_ray(&cam, 100.0, 25.0, 100, 50);
     assert!((right.dir - Vec3::new(2.0, 1.0, 0.0).normalize()).length() < 1e-6);
     // Degenerate cameras are reported but still produce unit rays.
     let bad = Camera {
@@ -991,7 +991,7 @@ fn camera_rays() {
         ..cam
     };
     assert!(bad.validate().is_err());
-    assert!((bad.ray(1.0, 1.0, 0, 0).dir.length() - 1.0).abs() < 1e-5);
+    assert!((oslf_bake::camera::primary_ray(&bad, 1.0, 1.0, 0, 0).dir.length() - 1.0).abs() < 1e-5);
 }
 
 fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {

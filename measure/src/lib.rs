@@ -14,10 +14,10 @@
 //! | [`plot`] | the error-against-time plot with its front (PNG and SVG) |
 //! | [`sweep`] | bake variants of a scene, judge every variant with every runtime setting |
 //!
-//! Commands: `oslf-tables` reproduces the thesis's Tables 6.1 and 6.2 and a new
-//! Ashikhmin–Shirley table on a scene; `oslf-sweep` runs the speed/accuracy sweep and the
+//! Commands: `oslf tables` reproduces the thesis's Tables 6.1 and 6.2 and a new
+//! Ashikhmin–Shirley table on a scene; `oslf sweep` runs the speed/accuracy sweep and the
 //! sensitivity analysis (thesis §8.1.1) and draws the plot. The cache-statistics tool is the
-//! runtime's `oslf-cache-stats`.
+//! `oslf cache-stats`.
 
 pub mod error;
 pub mod judge;

@@ -548,3 +548,39 @@ impl CubeCache {
         );
     }
 }
+
+// Budgets given in megabytes (the `--cache-mb` and `--ram-mb` flags of `oslf render`).
+
+/// Bytes of one cube map's texels in the GPU pool (six faces, the store's encoding).
+pub fn cube_bytes(store: &Store) -> u64 {
+    let res = u64::from(store.cube_resolution());
+    6 * res * res * store.header().encoding.bytes_per_texel() as u64
+}
+
+/// The GPU slots `--cache-mb MB` buys: whole cube maps of [`cube_bytes`], at least one.
+pub fn slots_for_megabytes(store: &Store, mb: f64) -> crate::Result<u32> {
+    if !(mb.is_finite() && mb > 0.0) {
+        return Err(crate::RuntimeError::Parameter(
+            "--cache-mb must be a positive number".into(),
+        ));
+    }
+    let cube_bytes = cube_bytes(store);
+    let slots = (mb * 1e6 / cube_bytes as f64).floor();
+    if slots < 1.0 {
+        return Err(crate::RuntimeError::Parameter(format!(
+            "--cache-mb {mb} holds no cube map ({:.3} MB each)",
+            cube_bytes as f64 / 1e6
+        )));
+    }
+    Ok(slots.min(f64::from(u32::MAX)) as u32)
+}
+
+/// The RAM level's byte budget for `--ram-mb MB`.
+pub fn ram_bytes(mb: f64) -> crate::Result<u64> {
+    if !(mb.is_finite() && mb >= 0.0) {
+        return Err(crate::RuntimeError::Parameter(
+            "--ram-mb must be a non-negative number".into(),
+        ));
+    }
+    Ok((mb * 1e6) as u64)
+}

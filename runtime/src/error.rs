@@ -39,9 +39,6 @@ pub enum RuntimeError {
     /// A parameter outside its documented range (names the parameter).
     #[error("invalid parameter: {0}")]
     Parameter(String),
-    /// Writing an output image failed.
-    #[error(transparent)]
-    Image(#[from] oslf_bake::BakeError),
 }
 
 /// `Result` with [`RuntimeError`].

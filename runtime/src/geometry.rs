@@ -2,7 +2,7 @@
 //! its patch id and patch parameters (u, v), so the shader can find its sample-map texel.
 
 use glam::{DAffine3, DMat4, DVec3, Vec3};
-use oslf_bake::bezier::BezierPatch;
+use oslf_geometry::BezierPatch;
 use oslf_format::Store;
 
 /// One vertex as `GVertex` in gbuffer.wgsl: position and patch id + 1 (exact as `f32` below

@@ -27,13 +27,15 @@
 //!   by the parity tests against the GPU.
 //!
 //! * **Metrics** ([`metrics`]): RMSE in CIELAB and linear RGB and PSNR over a mask (§6.1), and
-//!   the `oslf-compare` command.
+//!   what `oslf compare` prints.
 //! * **Cache replay** ([`replay`]): camera paths (a still view, an orbit), the replay of a path
 //!   with a fresh renderer, and its cache counters summed per phase (cold start, steady state,
-//!   whole path) into rows, table and CSV: the `oslf-cache-stats` command (thesis Tables
+//!   whole path) into rows, table and CSV: what `oslf cache-stats` prints (thesis Tables
 //!   6.3–6.7).
-//! * **Command line** ([`cli`]): the shading and camera flags and cache budgets shared by the
-//!   commands.
+//!
+//! The crate depends on `oslf-format` (the store), `oslf-geometry` (patches and the camera it
+//! shares with the bake), wgpu and a few small crates; never on the bake, and it has no command
+//! line of its own: the `oslf` binary (the workspace's root crate) drives it.
 //!
 //! Cube maps are bound as 2D texture arrays (six layers per slot) and filtered bilinearly
 //! inside a face by the shader itself, so that the CPU reference can reproduce the filtering
@@ -50,7 +52,6 @@
 //! ```
 
 pub mod cache;
-pub mod cli;
 mod error;
 pub mod geometry;
 pub mod gpu;
@@ -64,4 +65,5 @@ pub use cache::{CacheConfig, CacheStats, CubeCache, Granularity};
 pub use error::{Result, RuntimeError};
 pub use gpu::Gpu;
 pub use params::{Blend, Mode, Order, ShadingParams, Source};
+pub use oslf_geometry::Camera;
 pub use renderer::{Frame, RenderOptions, Renderer};

@@ -10,7 +10,7 @@ use std::f32::consts::PI;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::Vec3;
-use oslf_bake::bezier::BezierPatch;
+use oslf_geometry::BezierPatch;
 use oslf_format::{SampleMapView, INVALID_INDEX};
 
 use crate::params::ShadeUniform;

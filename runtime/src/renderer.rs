@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Mat4, Vec3};
-use oslf_bake::camera::Camera;
+use oslf_geometry::Camera;
 use oslf_format::{Encoding, IndexWidth, Store};
 use wgpu::util::DeviceExt;
 

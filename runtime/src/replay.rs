@@ -1,7 +1,7 @@
 //! Cache replay (thesis §6.6, Tables 6.3–6.7): renders a store along a camera path — a still
 //! view, or an orbit around the object — and sums the cache's per-frame counters
 //! ([`CacheStats`]) into rows per phase of the path: the cold start, the steady state, the
-//! whole path. `oslf-cache-stats` runs this for lists of modes, blends, granularities and
+//! whole path. `oslf cache-stats` runs this for lists of modes, blends, granularities and
 //! cache sizes, with a fresh [`Renderer`] (a cold cache) for every row group.
 //!
 //! **Units.** A *request* is one unit that a frame's shading needs, counted once per frame
@@ -32,7 +32,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use glam::{Quat, Vec3};
-use oslf_bake::camera::Camera;
+use oslf_geometry::Camera;
 use serde::{Deserialize, Serialize};
 
 use crate::cache::{CacheStats, Granularity};
@@ -274,7 +274,7 @@ impl CacheSize {
             Self::Percent(p) => {
                 Some(((p / 100.0 * f64::from(store.cube_count())).ceil() as u32).max(1))
             }
-            Self::Megabytes(mb) => Some(crate::cli::slots_for_megabytes(store, mb)?),
+            Self::Megabytes(mb) => Some(crate::cache::slots_for_megabytes(store, mb)?),
             Self::All => None,
         })
     }

@@ -1,11 +1,9 @@
-//! `oslf-truth`: ray-traced ground truth for the runtime's modes (see
+//! `oslf truth`: ray-traced ground truth for the runtime's modes (see
 //! `oslf_bake::ground_truth`).
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
 use anyhow::{bail, Context};
-use clap::Parser;
 use glam::Vec3;
 use oslf_bake::ashikhmin_shirley::AsLobe;
 use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
@@ -15,9 +13,8 @@ use oslf_bake::scene::Scene;
 /// Render the ground truth a runtime image is judged against: the scene's camera, one ray per
 /// pixel centre onto the OSLF object alone, shaded with the bake's path tracer in the scene the
 /// store was baked from. Writes OpenEXR (linear RGB, alpha = object mask) and a PNG beside it.
-#[derive(Parser, Debug)]
-#[command(version, about)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// The scene file the store was baked from.
     scene: PathBuf,
     /// The preset the store was baked with (it may change `bounces`).
@@ -61,19 +58,9 @@ struct Args {
     quiet: bool,
 }
 
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
 const MODES: [&str; 5] = ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"];
 
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
         if n == 0 {

@@ -1,16 +1,15 @@
-//! `oslf-cache-stats`: replays renders of a store (a still view and an orbit) for lists of
+//! `oslf cache-stats`: replays renders of a store (a still view and an orbit) for lists of
 //! modes, blends, cache granularities and GPU cache sizes, and reports the cache's requests,
 //! hits, misses, miss rate, loads, evictions, bytes decoded and times per phase, as an aligned
 //! table (thesis Tables 6.3–6.7) and as CSV and JSON. See `oslf_runtime::replay`.
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use clap::Parser;
 use oslf_format::Store;
-use oslf_runtime::cli::{self, CameraArgs, ShadingArgs};
+use super::args::{CameraArgs, ShadingArgs};
+use oslf_runtime::cache;
 use oslf_runtime::replay::{self, CacheSize, CameraPath, PathKind, Row, RowKey};
 use oslf_runtime::{Blend, CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer};
 
@@ -48,10 +47,10 @@ use oslf_runtime::{Blend, CacheConfig, Gpu, Granularity, Mode, RenderOptions, Re
 /// again); decode ms = wall time decoding, summed over the phase; frame ms = mean wall time of
 /// a frame, all passes, to GPU completion. Before each path one frame looking away from the
 /// object compiles the mode's pipeline; it is not counted.
-#[derive(Parser, Debug)]
-#[command(version, about, allow_negative_numbers = true)]
-struct Args {
-    /// The store (written by oslf-bake).
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// The store (written by `oslf bake`).
     store: PathBuf,
     /// Modes, comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy.
     #[arg(long, value_delimiter = ',', default_value = "recon,mirror,glossy")]
@@ -109,16 +108,6 @@ struct Args {
     quiet: bool,
 }
 
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
 /// One renderer's worth of work, with what it cost to set up.
 #[derive(serde::Serialize)]
 struct ReplayInfo {
@@ -134,7 +123,7 @@ struct ReplayInfo {
     setup_ms: f64,
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     if args.modes.is_empty() || args.blends.is_empty() || args.granularity.is_empty() {
         bail!("--modes, --blend and --granularity each need at least one value");
     }
@@ -147,7 +136,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     if args.width == 0 || args.height == 0 {
         bail!("--width and --height must be at least 1");
     }
-    let ram_bytes = cli::ram_bytes(args.ram_mb)?;
+    let ram_bytes = cache::ram_bytes(args.ram_mb)?;
     let open = |path: &Path| {
         Store::open(path).with_context(|| format!("cannot open store {}", path.display()))
     };
@@ -200,7 +189,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         probe.store().sample_points().len(),
         probe.store().cube_count(),
         probe.store().cube_resolution(),
-        cli::cube_bytes(probe.store()),
+        cache::cube_bytes(probe.store()),
     );
     drop(probe);
     let mut paths = Vec::new();

@@ -1,16 +1,14 @@
-//! Command-line pieces shared by the runtime's commands (`oslf-render`, `oslf-cache-stats`):
-//! the shading and camera flags (clap argument groups), their value parsers, and cache budgets
-//! given in megabytes.
+//! Flags shared by the runtime's commands (`oslf render`, `oslf view`, `oslf cache-stats`):
+//! the shading and camera flags (clap argument groups) and their value parsers.
 
 use std::path::Path;
 
 use clap::Args;
 use glam::Vec3;
-use oslf_bake::camera::Camera;
+use oslf_runtime::Camera;
 use oslf_format::Store;
 
-use crate::error::{Result, RuntimeError};
-use crate::params::{Blend, Mode, Order, ShadingParams, Source};
+use oslf_runtime::{Blend, Mode, Order, Result, RuntimeError, ShadingParams, Source};
 
 /// The shading flags besides mode and blend (which each command takes its own way).
 #[derive(Args, Clone, Debug)]
@@ -136,38 +134,4 @@ pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
         _ => Err(format!("{s:?} is not three finite numbers x,y,z")),
     }
-}
-
-/// Bytes of one cube map's texels in the GPU pool (six faces, the store's encoding).
-pub fn cube_bytes(store: &Store) -> u64 {
-    let res = u64::from(store.cube_resolution());
-    6 * res * res * store.header().encoding.bytes_per_texel() as u64
-}
-
-/// The GPU slots `--cache-mb MB` buys: whole cube maps of [`cube_bytes`], at least one.
-pub fn slots_for_megabytes(store: &Store, mb: f64) -> Result<u32> {
-    if !(mb.is_finite() && mb > 0.0) {
-        return Err(RuntimeError::Parameter(
-            "--cache-mb must be a positive number".into(),
-        ));
-    }
-    let cube_bytes = cube_bytes(store);
-    let slots = (mb * 1e6 / cube_bytes as f64).floor();
-    if slots < 1.0 {
-        return Err(RuntimeError::Parameter(format!(
-            "--cache-mb {mb} holds no cube map ({:.3} MB each)",
-            cube_bytes as f64 / 1e6
-        )));
-    }
-    Ok(slots.min(f64::from(u32::MAX)) as u32)
-}
-
-/// The RAM level's byte budget for `--ram-mb MB`.
-pub fn ram_bytes(mb: f64) -> Result<u64> {
-    if !(mb.is_finite() && mb >= 0.0) {
-        return Err(RuntimeError::Parameter(
-            "--ram-mb must be a non-negative number".into(),
-        ));
-    }
-    Ok((mb * 1e6) as u64)
 }

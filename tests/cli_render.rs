@@ -1,11 +1,12 @@
-//! `oslf-render` end to end: outputs, statistics, and errors that say what and where.
+//! `oslf render` end to end: outputs, statistics, and errors that say what and where.
 
 mod common;
 
-use std::process::Command;
+use common::{oslf, runtime_fixture};
+
 
 fn render(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_oslf-render"))
+    oslf("render")
         .args(args)
         .output()
         .unwrap()
@@ -13,7 +14,7 @@ fn render(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn renders_exr_and_png_and_prints_cache_statistics() {
-    let store = common::store_path();
+    let store = runtime_fixture::store_path();
     let dir = store.parent().unwrap().join("cli");
     std::fs::create_dir_all(&dir).unwrap();
     let exr = dir.join("frame.exr");
@@ -83,7 +84,7 @@ fn bad_inputs_give_clear_errors_and_a_failing_exit() {
     assert!(!out.status.success());
     assert!(err.contains("foreign.oslf"), "{err}");
 
-    let store = common::store_path();
+    let store = runtime_fixture::store_path();
     let mut bytes = std::fs::read(&store).unwrap();
     // A version this reader does not know (it reads 1 and 2).
     bytes[8..12].copy_from_slice(&99u32.to_le_bytes());
@@ -118,7 +119,7 @@ fn bad_inputs_give_clear_errors_and_a_failing_exit() {
 
 #[test]
 fn compare_reports_cielab_and_rgb_errors_between_renders() {
-    let store = common::store_path();
+    let store = runtime_fixture::store_path();
     let dir = store.parent().unwrap().join("compare");
     std::fs::create_dir_all(&dir).unwrap();
     let exr = |name: &str| dir.join(name).to_str().unwrap().to_string();
@@ -145,7 +146,7 @@ fn compare_reports_cielab_and_rgb_errors_between_renders() {
         );
     }
     let compare = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_oslf-compare"))
+        oslf("compare")
             .args(args)
             .output()
             .unwrap()
@@ -183,11 +184,11 @@ fn compare_reports_cielab_and_rgb_errors_between_renders() {
 /// validation message.
 #[test]
 fn gl_backend_renders_or_names_the_missing_capability_and_the_fix() {
-    let store = common::store_path();
+    let store = runtime_fixture::store_path();
     let dir = store.parent().unwrap().join("cli-gl");
     std::fs::create_dir_all(&dir).unwrap();
     let exr = dir.join("frame.exr");
-    let out = Command::new(env!("CARGO_BIN_EXE_oslf-render"))
+    let out = oslf("render")
         .env("WGPU_BACKEND", "gl")
         .args([
             store.to_str().unwrap(),

@@ -1,6 +1,9 @@
-//! The `oslf-bake` command: a small bake end to end, and bad input.
+//! The `oslf bake` command: a small bake end to end, and bad input.
 
-use std::process::Command;
+mod common;
+
+use common::oslf;
+
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("oslf-bake-cli-{}-{name}", std::process::id()));
@@ -35,7 +38,7 @@ fn bakes_a_store_with_summary_preview_and_json_report() {
     let dir = temp_dir("ok");
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, SCENE).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+    let out = oslf("bake")
         .arg(&scene)
         .arg("-o")
         .arg(dir.join("lid.oslf"))
@@ -78,7 +81,7 @@ fn a_bad_scene_fails_with_a_located_message() {
         SCENE.replace("sample_count = 12", "sample_count = -3"),
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+    let out = oslf("bake")
         .arg(&scene)
         .arg("-o")
         .arg(dir.join("bad.oslf"))
@@ -95,7 +98,7 @@ fn a_bad_scene_fails_with_a_located_message() {
 
 #[test]
 fn a_missing_scene_file_is_named() {
-    let out = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+    let out = oslf("bake")
         .arg("/nonexistent/scene.toml")
         .output()
         .unwrap();
@@ -109,7 +112,7 @@ fn oslf_truth_writes_every_mode_and_checks_the_store() {
     let dir = temp_dir("truth");
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, SCENE).unwrap();
-    let bake = Command::new(env!("CARGO_BIN_EXE_oslf-bake"))
+    let bake = oslf("bake")
         .arg(&scene)
         .arg("-o")
         .arg(dir.join("lid.oslf"))
@@ -118,7 +121,7 @@ fn oslf_truth_writes_every_mode_and_checks_the_store() {
         .unwrap();
     assert!(bake.status.success());
     let truth = |extra: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_oslf-truth"))
+        oslf("truth")
             .arg(&scene)
             .args(["--width", "40", "--height", "30", "--spp", "2", "-q", "-o"])
             .arg(dir.join("t"))
@@ -152,7 +155,7 @@ fn oslf_truth_writes_every_mode_and_checks_the_store() {
         SCENE.replace("sample_count = 12", "sample_count = 13"),
     )
     .unwrap();
-    let e = Command::new(env!("CARGO_BIN_EXE_oslf-truth"))
+    let e = oslf("truth")
         .arg(&other)
         .args(["--store", dir.join("lid.oslf").to_str().unwrap(), "-q"])
         .output()

@@ -1,12 +1,10 @@
-//! `oslf-tables`: the thesis's Tables 6.1 and 6.2 and a new Ashikhmin–Shirley table, on a
+//! `oslf tables`: the thesis's Tables 6.1 and 6.2 and a new Ashikhmin–Shirley table, on a
 //! user's scene, against ray-traced ground truth, with the frame time of each method measured in
 //! the same run.
 
 use std::path::PathBuf;
-use std::process::ExitCode;
 
 use anyhow::{bail, Context};
-use clap::Parser;
 use oslf_bake::ground_truth::{GroundTruth, TruthImage, TruthSettings};
 use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
@@ -24,9 +22,8 @@ use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, Order, Renderer, ShadingParams
 /// of warm frames in the same run, interleaved over every method so that the load of a shared
 /// machine falls on all alike. Writes tables.md, tables.csv, tables.json and the ground
 /// truth images to the output directory.
-#[derive(Parser, Debug)]
-#[command(version, about)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// The scene the stores were baked from.
     scene: PathBuf,
     /// Stores to compare (baked from SCENE), e.g. two cube-map resolutions. Repeatable.
@@ -62,16 +59,6 @@ struct Args {
     out: PathBuf,
     #[arg(short, long)]
     quiet: bool,
-}
-
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
 }
 
 /// One measured cell, for CSV and JSON.
@@ -171,7 +158,7 @@ fn ms(j: Option<&Judgement>) -> String {
     j.map_or("–".into(), |j| format!("{:.1}", j.frame_ms))
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let Some(camera) = scene.camera else {
         bail!(

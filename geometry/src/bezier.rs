@@ -12,7 +12,7 @@ use std::path::Path;
 use glam::{Affine3A, DVec3, Vec2, Vec3};
 
 use crate::mesh::Mesh;
-use crate::{BakeError, Result};
+use crate::{GeometryError, Result};
 
 /// The thesis's 28 teapot patches (rim, body, handle, spout, lid) without the 4 bottom patches.
 pub const TEAPOT_BODY_PATCHES: Range<usize> = 0..28;
@@ -293,7 +293,7 @@ fn finish(n: DVec3) -> Vec3 {
 /// 17–20 spout, 21–28 lid, 29–32 bottom (zero-based 0..12, 12..16, 16..20, 20..28, 28..32).
 pub fn newell_teapot() -> Vec<BezierPatch> {
     const TEXT: &str = include_str!("../data/newell-teapot.txt");
-    match parse_patch_file(TEXT, Path::new("bake/data/newell-teapot.txt")) {
+    match parse_patch_file(TEXT, Path::new("geometry/data/newell-teapot.txt")) {
         Ok(p) => p,
         // The data is compiled in and covered by tests; this cannot happen.
         Err(e) => unreachable!("built-in teapot data is invalid: {e}"),
@@ -316,13 +316,13 @@ struct Line<'a> {
 
 /// Parses a Bézier patch file.
 ///
-/// Format (see `bake/data/newell-teapot.txt`): `#` starts a comment; blank lines are ignored;
+/// Format (see `geometry/data/newell-teapot.txt`): `#` starts a comment; blank lines are ignored;
 /// fields are separated by commas and/or whitespace. Line 1: the patch count. Then one line of
 /// 16 one-based control-point indices per patch (row-major 4×4, `CP_ij` at `4i + j`). Then the
-/// point count, then one `x, y, z` line per point. Errors are [`BakeError::Parse`] naming
+/// point count, then one `x, y, z` line per point. Errors are [`GeometryError::Parse`] naming
 /// `path`, the line and the column.
 pub fn parse_patch_file(text: &str, path: &Path) -> Result<Vec<BezierPatch>> {
-    let err = |line: usize, column: usize, message: String| BakeError::Parse {
+    let err = |line: usize, column: usize, message: String| GeometryError::Parse {
         path: path.to_path_buf(),
         line,
         column,

@@ -3,7 +3,7 @@
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
-use crate::{BakeError, Result};
+use crate::{GeometryError, Result};
 
 /// An indexed triangle mesh with one normal and one uv per vertex.
 ///
@@ -97,14 +97,14 @@ impl Mesh {
     pub fn validate(&self) -> Result<()> {
         let n = self.positions.len();
         if self.normals.len() != n || self.uvs.len() != n {
-            return Err(BakeError::Invalid(format!(
+            return Err(GeometryError::Invalid(format!(
                 "mesh has {n} positions but {} normals and {} uvs",
                 self.normals.len(),
                 self.uvs.len()
             )));
         }
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
-            return Err(BakeError::Invalid(format!(
+            return Err(GeometryError::Invalid(format!(
                 "mesh vertex {i} has a non-finite position {}",
                 self.positions[i]
             )));
@@ -114,13 +114,13 @@ impl Mesh {
             .iter()
             .position(|v| !v.is_finite() || v.length_squared() == 0.0)
         {
-            return Err(BakeError::Invalid(format!(
+            return Err(GeometryError::Invalid(format!(
                 "mesh vertex {i} has an unusable normal {}",
                 self.normals[i]
             )));
         }
         if let Some(i) = self.uvs.iter().position(|v| !v.is_finite()) {
-            return Err(BakeError::Invalid(format!(
+            return Err(GeometryError::Invalid(format!(
                 "mesh vertex {i} has a non-finite uv {}",
                 self.uvs[i]
             )));
@@ -131,7 +131,7 @@ impl Mesh {
             .enumerate()
             .find(|(_, t)| t.iter().any(|&v| v as usize >= n))
         {
-            return Err(BakeError::Invalid(format!(
+            return Err(GeometryError::Invalid(format!(
                 "mesh triangle {i} has index {t:?} out of range (mesh has {n} vertices)"
             )));
         }

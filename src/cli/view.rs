@@ -1,4 +1,4 @@
-//! An interactive OSLF viewer: `cargo run --release --example viewer -- STORE`.
+//! `oslf view STORE`: an interactive viewer.
 //!
 //! Drag with the left mouse button to orbit, scroll to zoom. Keys:
 //!
@@ -24,8 +24,8 @@ use std::time::Instant;
 
 use anyhow::{anyhow, Context};
 use glam::Vec3;
-use oslf::bake::camera::Camera;
-use oslf::runtime::{
+use oslf_runtime::Camera;
+use oslf_runtime::{
     Blend, CacheConfig, Frame, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams, Source,
 };
 use winit::application::ApplicationHandler;
@@ -102,11 +102,15 @@ struct App {
     error: Option<anyhow::Error>,
 }
 
-fn main() -> anyhow::Result<()> {
-    let store = std::env::args_os()
-        .nth(1)
-        .map(PathBuf::from)
-        .ok_or_else(|| anyhow!("usage: cargo run --release --example viewer -- STORE"))?;
+/// Open a window on a store.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The store (written by `oslf bake`).
+    store: PathBuf,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let store = args.store;
     let event_loop = EventLoop::new().context("cannot open a window (no display?)")?;
     let mut app = App {
         store,
@@ -128,7 +132,7 @@ fn main() -> anyhow::Result<()> {
 
 impl App {
     fn init(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
-        let store = oslf::format::Store::open(&self.store)
+        let store = oslf_format::Store::open(&self.store)
             .with_context(|| format!("cannot open store {}", self.store.display()))?;
         let window = Arc::new(
             event_loop.create_window(
@@ -159,7 +163,7 @@ impl App {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("viewer_blit.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("viewer_blit.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(include_str!("view_blit.wgsl").into()),
         });
         let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("blit"),

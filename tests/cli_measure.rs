@@ -1,9 +1,12 @@
 //! The measurement commands end to end on a toy scene (lavapipe in CI; GPU tests fail, never
-//! skip, without an adapter): `oslf-tables` and `oslf-sweep` run, their CSV, JSON and Markdown
+//! skip, without an adapter): `oslf tables` and `oslf sweep` run, their CSV, JSON and Markdown
 //! agree, and bad input is a clear error.
 
+mod common;
+
+use common::oslf;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 
 use oslf_bake::bake::{bake, BakeOptions};
@@ -87,8 +90,8 @@ fn fixture() -> &'static Fixture {
     })
 }
 
-fn run(bin: &str, args: &[&str]) -> (bool, String, String) {
-    let o = Command::new(bin).args(args).output().unwrap();
+fn run(sub: &str, args: &[&str]) -> (bool, String, String) {
+    let o = oslf(sub).args(args).output().unwrap();
     (
         o.status.success(),
         String::from_utf8_lossy(&o.stdout).into_owned(),
@@ -105,7 +108,7 @@ fn tables_reproduce_the_thesis_layout_with_consistent_outputs() {
     let f = fixture();
     let out = f.dir.join("tables");
     let (ok, stdout, stderr) = run(
-        env!("CARGO_BIN_EXE_oslf-tables"),
+        "tables",
         &[
             s(&f.scene),
             "--store",
@@ -193,7 +196,7 @@ fn sweep_writes_rows_front_and_plot() {
         s(&out),
         "-q",
     ];
-    let (ok, stdout, stderr) = run(env!("CARGO_BIN_EXE_oslf-sweep"), &args);
+    let (ok, stdout, stderr) = run("sweep", &args);
     assert!(ok, "{stderr}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
@@ -223,7 +226,7 @@ fn sweep_writes_rows_front_and_plot() {
         .unwrap()
         .contains("Pareto front"));
     // A second run reuses the stores (same settings) and gives the same errors.
-    let (ok, _, stderr) = run(env!("CARGO_BIN_EXE_oslf-sweep"), &args);
+    let (ok, _, stderr) = run("sweep", &args);
     assert!(ok, "{stderr}");
     let csv2 = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     // RMSE L*, counted from the end (labels may hold quoted commas): nine columns follow it.
@@ -242,8 +245,8 @@ fn sweep_writes_rows_front_and_plot() {
 #[test]
 fn bad_input_is_a_clear_error() {
     let f = fixture();
-    let tables = env!("CARGO_BIN_EXE_oslf-tables");
-    let sweep = env!("CARGO_BIN_EXE_oslf-sweep");
+    let tables = "tables";
+    let sweep = "sweep";
     // A store from another scene.
     let other = f.dir.join("other.toml");
     std::fs::write(&other, SCENE.replace("seed = 3", "seed = 4")).unwrap();

@@ -1,12 +1,12 @@
-//! The `oslf-store` binary: info, verify, exports, and clear errors.
+//! `oslf store`: info, verify, exports, and clear errors.
 
 mod common;
 
-use common::*;
-use std::process::Command;
+use common::oslf;
+use common::store_fixture::*;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_oslf-store"))
+fn bin() -> std::process::Command {
+    oslf("store")
 }
 
 #[test]

@@ -1,25 +1,20 @@
-//! `oslf-store`: inspect, verify and export OSLF stores.
+//! `oslf store`: inspect, verify and export OSLF stores.
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Subcommand, ValueEnum};
 use oslf_format::cube::{FACES, FACE_NAMES};
 use oslf_format::{Store, INVALID_INDEX};
 
-#[derive(Parser)]
-#[command(
-    name = "oslf-store",
-    version,
-    about = "Inspect, verify and export OSLF stores"
-)]
-struct Cli {
+/// Inspect, verify and export OSLF stores.
+#[derive(clap::Args, Debug)]
+pub struct Args {
     #[command(subcommand)]
     command: Command,
 }
 
-#[derive(Subcommand)]
+#[derive(Subcommand, Debug)]
 enum Command {
     /// Print a summary: header, counts, resolutions, bake parameters, sizes.
     Info {
@@ -55,7 +50,7 @@ enum Command {
     },
 }
 
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, Debug, ValueEnum)]
 enum Layout {
     /// One 4x3 horizontal-cross image (+Y above, -X +Z +X -Z across, -Y below).
     Cross,
@@ -63,21 +58,11 @@ enum Layout {
     Faces,
 }
 
-fn main() -> ExitCode {
-    match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
 fn open(path: &Path) -> Result<Store> {
     Store::open(path).with_context(|| format!("cannot open {}", path.display()))
 }
 
-fn run(cli: Cli) -> Result<()> {
+pub fn run(cli: Args) -> Result<()> {
     match cli.command {
         Command::Info { store, json } => info(&store, json),
         Command::Verify { store } => {

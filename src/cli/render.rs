@@ -1,16 +1,15 @@
-//! `oslf-render`: renders an OSLF store headless to OpenEXR (linear f32, object mask in alpha)
+//! `oslf render`: renders an OSLF store headless to OpenEXR (linear f32, object mask in alpha)
 //! and a tone-mapped PNG, and prints the cache statistics.
 
 use std::path::PathBuf;
-use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::Parser;
 use glam::Vec3;
 use oslf_bake::image_file;
 use oslf_format::Store;
-use oslf_runtime::cli::{self, CameraArgs, ShadingArgs};
+use super::args::{CameraArgs, ShadingArgs};
+use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
     Blend, CacheConfig, CacheStats, Gpu, Granularity, Mode, RenderOptions, Renderer,
@@ -19,10 +18,10 @@ use oslf_runtime::{
 /// Render an offset surface light field with wgpu: surface reconstruction, mirror reflections
 /// with every blend of thesis chapter 4, Monte Carlo Ashikhmin–Shirley (chapter 5), or the
 /// environment-map baseline, streaming cube maps through an LRU cache.
-#[derive(Parser, Debug)]
-#[command(version, about, allow_negative_numbers = true)]
-struct Args {
-    /// The store (written by oslf-bake).
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// The store (written by `oslf bake`).
     store: PathBuf,
     /// Output OpenEXR (linear f32 RGBA, alpha = object mask); a PNG is written beside it.
     #[arg(short, long, default_value = "render.exr")]
@@ -67,25 +66,15 @@ struct Args {
     stats_json: Option<PathBuf>,
 }
 
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let store = Store::open(&args.store)
         .with_context(|| format!("cannot open store {}", args.store.display()))?;
     let params = args.shading.params(args.mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
-    let ram_bytes = cli::ram_bytes(args.ram_mb)?;
+    let ram_bytes = cache::ram_bytes(args.ram_mb)?;
     let gpu_slots = match (args.cache_slots, args.cache_mb) {
         (Some(s), _) => Some(s),
-        (None, Some(mb)) => Some(cli::slots_for_megabytes(&store, mb)?),
+        (None, Some(mb)) => Some(cache::slots_for_megabytes(&store, mb)?),
         (None, None) => None,
     };
     let config = CacheConfig {

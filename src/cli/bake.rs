@@ -1,11 +1,9 @@
-//! `oslf-bake`: bakes a scene file into an OSLF store.
+//! `oslf bake`: bakes a scene file into an OSLF store.
 
 use std::path::PathBuf;
-use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use clap::Parser;
 use oslf_bake::bake::{bake, BakeOptions, BakeReport, TESSELLATION_ERROR};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::camera;
@@ -15,9 +13,8 @@ use oslf_bake::scene::Scene;
 
 /// Bake an offset surface light field: sample points ε above the object's Bézier patches, a
 /// ray-traced HDR cube map at each, and per-patch sample maps, all written to one store.
-#[derive(Parser, Debug)]
-#[command(version, about)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// The scene file (TOML; see README.md "Scene files").
     scene: PathBuf,
     /// The store to write [default: the scene's name with .oslf, in the current directory].
@@ -51,17 +48,7 @@ struct Args {
     quiet: bool,
 }
 
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
         if n == 0 {

@@ -1,11 +1,9 @@
-//! `oslf-sweep`: the speed/accuracy sweep and the sensitivity analysis (see
+//! `oslf sweep`: the speed/accuracy sweep and the sensitivity analysis (see
 //! `oslf_measure::sweep`).
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
 use anyhow::{bail, Context};
-use clap::Parser;
 use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
 use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
@@ -25,9 +23,8 @@ use oslf_runtime::{Mode, Order, ShadingParams};
 /// (tradeoff.png, tradeoff.svg): error against frame time for the runtime settings on the
 /// default bake, and against bake CPU time for the bake settings with the default runtime, each
 /// with its Pareto front.
-#[derive(Parser, Debug)]
-#[command(version, about)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// The scene file; its settings (with --preset) are the defaults.
     scene: PathBuf,
     #[arg(short, long)]
@@ -87,17 +84,7 @@ const DEFAULT_VARY: [&str; 6] = [
     "blend=distance,angle,avg,r4,envmap",
 ];
 
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let Some(camera) = scene.camera else {
         bail!(

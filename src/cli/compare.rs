@@ -1,18 +1,15 @@
-//! `oslf-compare`: RMSE in CIELAB and linear RGB, and PSNR, between two OpenEXR images over a
+//! `oslf compare`: RMSE in CIELAB and linear RGB, and PSNR, between two OpenEXR images over a
 //! mask (thesis §6.1). See `oslf_runtime::metrics` for the exact conversion.
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
 use anyhow::{bail, Context};
-use clap::Parser;
 use oslf_runtime::metrics::{compare, Metrics};
 
 /// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,
 /// the thesis's scale), RMSE of linear R, G, B, and PSNR, over the reference's object mask.
-#[derive(Parser, Debug)]
-#[command(version, about)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// The reference image (OpenEXR; linear RGB, alpha = object mask).
     reference: PathBuf,
     /// The image to judge (OpenEXR, same size).
@@ -45,17 +42,7 @@ fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
     Ok((size.width(), size.height(), pixels))
 }
 
-fn main() -> ExitCode {
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let (w, h, a) = read_exr(&args.reference)?;
     let (w2, h2, b) = read_exr(&args.test)?;
     if (w, h) != (w2, h2) {
