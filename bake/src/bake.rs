@@ -27,7 +27,7 @@ const CHUNK: usize = 32;
 /// rows in parallel instead. At 2048² one cube is 288 MiB as f32; 32 of them would be 9 GiB.
 const CHUNK_BYTES: u64 = 64 << 20;
 
-/// Cubes per chunk for faces of `resolution`² (1..=[`CHUNK`]).
+/// Cubes per chunk for faces of `resolution`² (1 to `CHUNK` = 32).
 pub fn chunk_cubes(resolution: u32, distance_channel: bool) -> usize {
     let texel_bytes = 12 + if distance_channel { 4 } else { 0 };
     let cube_bytes = 6 * u64::from(resolution).pow(2) * texel_bytes;

@@ -40,7 +40,7 @@ pub struct Section {
 }
 
 impl Section {
-    /// One past the last byte (saturating; callers check with [`Section::checked_end`]).
+    /// One past the last byte (saturating; callers check with `checked_end`).
     pub fn end(&self) -> u64 {
         self.offset.saturating_add(self.size)
     }

@@ -32,6 +32,7 @@ impl Gpu {
     ///
     /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
     pub fn headless() -> Result<Self> {
+        quiet_device_select_layer();
         let order = match wgpu::Backends::from_env() {
             Some(backends) => vec![backends],
             None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL],
@@ -133,5 +134,27 @@ impl Gpu {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RuntimeError::Gpu(e.to_string()))?;
         Ok(())
+    }
+}
+
+/// Keeps Mesa's Vulkan device-selection layer from printing
+/// `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` (twice) on a machine with
+/// no display server.
+///
+/// `VK_LAYER_MESA_device_select` is an *implicit* layer (loaded into every Vulkan instance by
+/// the loader): to order GPUs by the one the desktop uses, it connects to Wayland, and
+/// libwayland-client prints that line when `XDG_RUNTIME_DIR` is missing. Without
+/// `XDG_RUNTIME_DIR` and without `DISPLAY` there is no desktop to ask, so the layer can only
+/// print; its documented switch `NODEVICE_SELECT=1` turns it off. The adapter is then chosen by
+/// wgpu's power preference as everywhere else. A user's own `NODEVICE_SELECT` is kept.
+fn quiet_device_select_layer() {
+    let runtime_dir_ok = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(|d| std::path::Path::new(&d).is_dir())
+        .unwrap_or(false);
+    let display = std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty());
+    if !runtime_dir_ok && !display && std::env::var_os("NODEVICE_SELECT").is_none() {
+        // Set before the first Vulkan instance exists, so the loader reads it when it loads
+        // the layer; nothing else in this process reads the variable.
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }

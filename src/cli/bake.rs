@@ -34,7 +34,7 @@ pub struct Args {
     #[arg(short = 'j', long)]
     threads: Option<usize>,
     /// Also render the scene camera with the bake's path tracer to this PNG (and an EXR beside
-    /// it) [default: <output>.preview.png; "none" to skip].
+    /// it) [default: `<output>.preview.png`; "none" to skip].
     #[arg(long)]
     preview: Option<PathBuf>,
     /// Samples per pixel of the preview.
