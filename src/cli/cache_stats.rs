@@ -6,12 +6,14 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::args::{CameraArgs, ShadingArgs};
 use anyhow::{bail, Context};
 use oslf_format::Store;
-use super::args::{CameraArgs, ShadingArgs};
 use oslf_runtime::cache;
 use oslf_runtime::replay::{self, CacheSize, CameraPath, PathKind, Row, RowKey};
-use oslf_runtime::{Blend, CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer};
+use oslf_runtime::{
+    Blend, CacheConfig, Camera, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams,
+};
 
 /// Replay renders of an OSLF store through the LRU cube-map cache and report its statistics,
 /// per mode, blend, granularity and cache size, for a still view and an orbiting camera (the
@@ -123,23 +125,20 @@ struct ReplayInfo {
     setup_ms: f64,
 }
 
+/// The store's size figures the report prints.
+struct StoreInfo {
+    points: usize,
+    cubes: u32,
+    resolution: u32,
+    cube_bytes: u64,
+}
+
+/// Every (mode, blend) to replay, with its parameters: recon does not blend.
+type Shading = (Mode, Option<Blend>, ShadingParams);
+
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.modes.is_empty() || args.blends.is_empty() || args.granularity.is_empty() {
-        bail!("--modes, --blend and --granularity each need at least one value");
-    }
-    if args.paths.is_empty() {
-        bail!("--paths needs at least one of still, orbit");
-    }
-    replay::check_frames(args.still_frames, "--still-frames")?;
-    replay::check_frames(args.frames, "--frames")?;
-    replay::check_degrees(args.orbit_degrees)?;
-    if args.width == 0 || args.height == 0 {
-        bail!("--width and --height must be at least 1");
-    }
+    check_args(&args)?;
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
-    let open = |path: &Path| {
-        Store::open(path).with_context(|| format!("cannot open store {}", path.display()))
-    };
     let store = open(&args.store)?;
     args.shading.check_store(&store, &args.store)?;
     let sizes: Vec<CacheSize> = if args.cache_mb.is_empty() {
@@ -157,18 +156,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .iter()
         .map(|s| Ok((s.label(), s.gpu_slots(&store)?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    // Every (mode, blend) to run: recon does not blend.
-    let mut shadings = Vec::new();
-    for &mode in &args.modes {
-        if mode == Mode::Recon {
-            shadings.push((mode, None, args.shading.params(mode, args.blends[0])?));
-        } else {
-            for &blend in &args.blends {
-                shadings.push((mode, Some(blend), args.shading.params(mode, blend)?));
-            }
-        }
-    }
-    shadings.dedup_by_key(|s| (s.0, s.1));
+    let shadings = shadings(&args)?;
 
     let gpu = Gpu::headless()?;
     let (device, queue, adapter) = (
@@ -185,23 +173,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // The paths, from the store's camera (a renderer knows the default view).
     let probe = Renderer::new(gpu, store, config(Granularity::Cube, Some(1)))?;
     let start = args.camera.apply(probe.default_view())?;
-    let store_info = (
-        probe.store().sample_points().len(),
-        probe.store().cube_count(),
-        probe.store().cube_resolution(),
-        cache::cube_bytes(probe.store()),
-    );
+    let info = StoreInfo {
+        points: probe.store().sample_points().len(),
+        cubes: probe.store().cube_count(),
+        resolution: probe.store().cube_resolution(),
+        cube_bytes: cache::cube_bytes(probe.store()),
+    };
     drop(probe);
-    let mut paths = Vec::new();
-    for &kind in &args.paths {
-        if paths.iter().any(|p: &CameraPath| p.kind == kind) {
-            continue;
-        }
-        paths.push(match kind {
-            PathKind::Still => CameraPath::still(start, args.still_frames)?,
-            PathKind::Orbit => CameraPath::orbit(start, args.frames, args.orbit_degrees)?,
-        });
-    }
+    let paths = camera_paths(&args, start)?;
     let options = RenderOptions {
         width: args.width,
         height: args.height,
@@ -214,7 +193,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut rows: Vec<Row> = Vec::new();
     let mut infos = Vec::new();
     let run_start = Instant::now();
-    let mut done = 0;
     for (mode, blend, params) in &shadings {
         for &granularity in &args.granularity {
             for (label, gpu_slots) in &budgets {
@@ -239,18 +217,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                         eprintln!("warning: {e} (that sample point fell back)");
                     }
                     let new_rows = replay::rows(&key, path, &result);
-                    done += 1;
                     if !args.quiet {
-                        let all = new_rows.last();
                         eprintln!(
-                            "[{done}/{total}] {} {} {} {} {}: {} frames, {:.1}% misses, {:.2} s",
+                            "[{}/{total}] {} {} {} {} {}: {} frames, {:.1}% misses, {:.2} s",
+                            infos.len() + 1,
                             mode.name(),
                             blend.map_or("-", Blend::name),
                             key.granularity_name(),
                             label,
                             path.kind.name(),
                             result.frames.len(),
-                            all.map_or(0.0, |r| 100.0 * r.miss_rate),
+                            new_rows.last().map_or(0.0, |r| 100.0 * r.miss_rate),
                             t.elapsed().as_secs_f64()
                         );
                     }
@@ -270,72 +247,164 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     let elapsed = run_start.elapsed().as_secs_f64();
-
-    let (points, cubes, res, cube_bytes) = store_info;
-    println!("adapter  {adapter}");
-    println!(
-        "store    {}: {points} sample points, {cubes} cube maps of 6×{res}² ({:.4} MB each)",
-        args.store.display(),
-        cube_bytes as f64 / 1e6
-    );
-    println!(
-        "frames   {}×{}, misses {}; RAM level {} MB",
-        args.width,
-        args.height,
-        if args.streaming {
-            "streamed (the viewer's way: fall back, decode in the background)"
-        } else {
-            "resolved (loaded, then shaded again)"
-        },
-        args.ram_mb
-    );
-    for p in &paths {
-        match p.kind {
-            PathKind::Still => println!(
-                "still    {} frames of one view; steady: {}",
-                p.cameras.len(),
-                p.steady_note
-            ),
-            PathKind::Orbit => println!(
-                "orbit    {} frames over {}° ({:.2}° apart); steady: {}",
-                p.cameras.len(),
-                args.orbit_degrees,
-                f64::from(args.orbit_degrees) / p.cameras.len() as f64,
-                p.steady_note
-            ),
-        }
-    }
-    println!(
-        "units    requests, hits, misses, loads and over: cubes (unit cube) or faces (unit face)"
-    );
-    println!();
-    print!("{}", replay::format_table(&rows));
-    println!();
-    println!(
-        "{} renderers in {elapsed:.1} s (each: setup {:.0}–{:.0} ms, pipeline compile {:.0}–{:.0} ms, not counted above)",
-        infos.len(),
-        infos.iter().map(|i| i.renderer_ms).fold(f64::INFINITY, f64::min),
-        infos.iter().map(|i| i.renderer_ms).fold(0.0, f64::max),
-        infos.iter().map(|i| i.setup_ms).fold(f64::INFINITY, f64::min),
-        infos.iter().map(|i| i.setup_ms).fold(0.0, f64::max),
-    );
-
+    let report = Report {
+        args: &args,
+        adapter: &adapter,
+        info: &info,
+        paths: &paths,
+        rows: &rows,
+        infos: &infos,
+        ram_bytes,
+        seconds: elapsed,
+    };
+    report.print();
     if let Some(path) = &args.csv {
         std::fs::write(path, replay::to_csv(&rows))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(path) = &args.json {
-        let json = serde_json::json!({
+        std::fs::write(path, serde_json::to_string_pretty(&report.json())?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn open(path: &Path) -> anyhow::Result<Store> {
+    Store::open(path).with_context(|| format!("cannot open store {}", path.display()))
+}
+
+/// Rejects empty lists and out-of-range counts before any GPU work.
+fn check_args(args: &Args) -> anyhow::Result<()> {
+    if args.modes.is_empty() || args.blends.is_empty() || args.granularity.is_empty() {
+        bail!("--modes, --blend and --granularity each need at least one value");
+    }
+    if args.paths.is_empty() {
+        bail!("--paths needs at least one of still, orbit");
+    }
+    replay::check_frames(args.still_frames, "--still-frames")?;
+    replay::check_frames(args.frames, "--frames")?;
+    replay::check_degrees(args.orbit_degrees)?;
+    if args.width == 0 || args.height == 0 {
+        bail!("--width and --height must be at least 1");
+    }
+    Ok(())
+}
+
+/// Every (mode, blend) of `--modes` × `--blend`, validated; recon once, as it does not blend.
+fn shadings(args: &Args) -> anyhow::Result<Vec<Shading>> {
+    let mut shadings = Vec::new();
+    for &mode in &args.modes {
+        if mode == Mode::Recon {
+            shadings.push((mode, None, args.shading.params(mode, args.blends[0])?));
+        } else {
+            for &blend in &args.blends {
+                shadings.push((mode, Some(blend), args.shading.params(mode, blend)?));
+            }
+        }
+    }
+    shadings.dedup_by_key(|s| (s.0, s.1));
+    Ok(shadings)
+}
+
+/// The camera paths of `--paths`, each once, from `start`.
+fn camera_paths(args: &Args, start: Camera) -> anyhow::Result<Vec<CameraPath>> {
+    let mut paths = Vec::new();
+    for &kind in &args.paths {
+        if paths.iter().any(|p: &CameraPath| p.kind == kind) {
+            continue;
+        }
+        paths.push(match kind {
+            PathKind::Still => CameraPath::still(start, args.still_frames)?,
+            PathKind::Orbit => CameraPath::orbit(start, args.frames, args.orbit_degrees)?,
+        });
+    }
+    Ok(paths)
+}
+
+/// Everything the run measured, for the printed report and the JSON file.
+struct Report<'a> {
+    args: &'a Args,
+    adapter: &'a str,
+    info: &'a StoreInfo,
+    paths: &'a [CameraPath],
+    rows: &'a [Row],
+    infos: &'a [ReplayInfo],
+    ram_bytes: u64,
+    seconds: f64,
+}
+
+impl Report<'_> {
+    /// The settings, the table, and what setting up the renderers cost.
+    fn print(&self) {
+        let (args, info) = (self.args, self.info);
+        println!("adapter  {}", self.adapter);
+        println!(
+            "store    {}: {} sample points, {} cube maps of 6×{}² ({:.4} MB each)",
+            args.store.display(),
+            info.points,
+            info.cubes,
+            info.resolution,
+            info.cube_bytes as f64 / 1e6
+        );
+        println!(
+            "frames   {}×{}, misses {}; RAM level {} MB",
+            args.width,
+            args.height,
+            if args.streaming {
+                "streamed (the viewer's way: fall back, decode in the background)"
+            } else {
+                "resolved (loaded, then shaded again)"
+            },
+            args.ram_mb
+        );
+        for p in self.paths {
+            match p.kind {
+                PathKind::Still => println!(
+                    "still    {} frames of one view; steady: {}",
+                    p.cameras.len(),
+                    p.steady_note
+                ),
+                PathKind::Orbit => println!(
+                    "orbit    {} frames over {}° ({:.2}° apart); steady: {}",
+                    p.cameras.len(),
+                    args.orbit_degrees,
+                    f64::from(args.orbit_degrees) / p.cameras.len() as f64,
+                    p.steady_note
+                ),
+            }
+        }
+        println!(
+            "units    requests, hits, misses, loads and over: cubes (unit cube) or faces (unit face)"
+        );
+        println!();
+        print!("{}", replay::format_table(self.rows));
+        println!();
+        let infos = self.infos;
+        println!(
+            "{} renderers in {:.1} s (each: setup {:.0}–{:.0} ms, pipeline compile {:.0}–{:.0} ms, not counted above)",
+            infos.len(),
+            self.seconds,
+            infos.iter().map(|i| i.renderer_ms).fold(f64::INFINITY, f64::min),
+            infos.iter().map(|i| i.renderer_ms).fold(0.0, f64::max),
+            infos.iter().map(|i| i.setup_ms).fold(f64::INFINITY, f64::min),
+            infos.iter().map(|i| i.setup_ms).fold(0.0, f64::max),
+        );
+    }
+
+    /// The rows with every setting that produced them.
+    fn json(&self) -> serde_json::Value {
+        let (args, info) = (self.args, self.info);
+        serde_json::json!({
             "store": args.store,
-            "adapter": adapter,
-            "sample_points": points,
-            "cube_maps": cubes,
-            "cube_resolution": res,
-            "cube_bytes": cube_bytes,
+            "adapter": self.adapter,
+            "sample_points": info.points,
+            "cube_maps": info.cubes,
+            "cube_resolution": info.resolution,
+            "cube_bytes": info.cube_bytes,
             "width": args.width,
             "height": args.height,
             "streaming": args.streaming,
-            "ram_bytes": ram_bytes,
+            "ram_bytes": self.ram_bytes,
             "shading": {
                 "blend_n": args.shading.blend_n,
                 "envmap": args.shading.envmap,
@@ -348,7 +417,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "nv": args.shading.nv,
                 "seed": args.shading.seed,
             },
-            "paths": paths.iter().map(|p| serde_json::json!({
+            "paths": self.paths.iter().map(|p| serde_json::json!({
                 "path": p.kind.name(),
                 "frames": p.cameras.len(),
                 "degrees": match p.kind {
@@ -358,12 +427,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "steady_from_frame": p.steady_from + 1,
                 "steady": p.steady_note,
             })).collect::<Vec<_>>(),
-            "replays": infos,
-            "seconds": elapsed,
-            "rows": rows,
-        });
-        std::fs::write(path, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+            "replays": self.infos,
+            "seconds": self.seconds,
+            "rows": self.rows,
+        })
     }
-    Ok(())
 }

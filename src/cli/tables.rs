@@ -158,6 +158,26 @@ fn ms(j: Option<&Judgement>) -> String {
     j.map_or("–".into(), |j| format!("{:.1}", j.frame_ms))
 }
 
+/// The glossy table's methods: (integration order, source, label).
+const GLOSSY_METHODS: [(Order, Source, &str); 3] = [
+    (Order::PerPoint, Source::Oslf, "per point"),
+    (Order::PerDirection, Source::Oslf, "per direction"),
+    (Order::PerPoint, Source::EnvMap, "EnvMap"),
+];
+
+/// The record name of one glossy measurement.
+fn as_name(nu: f32, nv: f32, m: u32, label: &str) -> String {
+    format!("AS {nu}:{nv} M={m} {label}")
+}
+
+/// The shading every table starts from: no diffuse term, so errors are the specular term's.
+fn base_params() -> ShadingParams {
+    ShadingParams {
+        rd: 0.0,
+        ..ShadingParams::default()
+    }
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let Some(camera) = scene.camera else {
@@ -166,38 +186,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.scene.display()
         );
     };
-    let mut stores = Vec::new();
-    for path in &args.stores {
-        let store =
-            Store::open(path).with_context(|| format!("cannot open store {}", path.display()))?;
-        let b = &store.meta().bake;
-        if b.scene_hash != scene.hash || b.bounces != scene.bake.bounces {
-            bail!(
-                "{} was not baked from {} with these settings (scene hash or bounces differ; pass the store's --preset)",
-                path.display(),
-                args.scene.display()
-            );
-        }
-        if store.env_cube_index().is_none() {
-            bail!(
-                "{} has no environment cube (bake with env_cube = true)",
-                path.display()
-            );
-        }
-        stores.push((path.clone(), store));
-    }
-    stores.sort_by_key(|(_, s)| s.cube_resolution());
-    let lobes: Vec<(f32, f32)> = args
-        .lobes
-        .iter()
-        .map(|l| {
-            let (a, b) = l.split_once(':').unwrap_or((l, l));
-            match (a.trim().parse::<f32>(), b.trim().parse::<f32>()) {
-                (Ok(a), Ok(b)) => Ok((a, b)),
-                _ => bail!("--lobes {l:?}: expected NU:NV"),
-            }
-        })
-        .collect::<anyhow::Result<_>>()?;
+    let stores = open_stores(&args, &scene)?;
+    let lobes = parse_lobes(&args.lobes)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
@@ -210,16 +200,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed: 1,
         progress: !args.quiet,
     };
-    let base = ShadingParams {
-        rd: 0.0,
-        ..ShadingParams::default()
-    };
     let truth_of = |mode: Mode, nu: f32, nv: f32, name: &str| -> anyhow::Result<TruthImage> {
         let p = ShadingParams {
             mode,
             nu,
             nv,
-            ..base
+            ..base_params()
         };
         let t = render_truth(&gt, &p, &settings)?;
         let path = args.out.join(format!("truth-{name}.exr"));
@@ -251,61 +237,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .collect();
 
     // Table 6.1 and 6.2: every store.
-    let mut mirror_methods: Vec<(String, ShadingParams)> = vec![(
-        "EnvMap".into(),
-        ShadingParams {
-            mode: Mode::Mirror,
-            source: Source::EnvMap,
-            ..base
-        },
-    )];
-    for (name, blend) in [
-        ("closest distance (4.3)", Blend::Distance),
-        ("closest angle (4.4)", Blend::Angle),
-        ("B^avg (4.9)", Blend::Average),
-    ] {
-        let p = ShadingParams {
-            mode: Mode::Mirror,
-            blend,
-            ..base
-        };
-        mirror_methods.push((name.into(), p));
-    }
-    for (name, blend) in [("B^r", Blend::Reflection), ("B^n", Blend::Normal)] {
-        for n in [1.0, 4.0, 8.0, 16.0] {
-            let p = ShadingParams {
-                mode: Mode::Mirror,
-                blend,
-                blend_n: n,
-                ..base
-            };
-            mirror_methods.push((format!("{name} N={n}"), p));
-        }
-    }
+    let mirror = mirror_methods();
     for r in 0..n_stores {
         let recon = ShadingParams {
             mode: Mode::Recon,
-            ..base
+            ..base_params()
         };
         bench.measure("6.1", r, "recon", recon, &recon_truth)?;
-        for (name, p) in &mirror_methods {
+        for (name, p) in &mirror {
             bench.measure("6.2", r, name, *p, &mirror_truth)?;
         }
     }
 
     // The Ashikhmin–Shirley table: the finest store.
-    let glossy_methods = [
-        (Order::PerPoint, Source::Oslf, "per point"),
-        (Order::PerDirection, Source::Oslf, "per direction"),
-        (Order::PerPoint, Source::EnvMap, "EnvMap"),
-    ];
-    let as_name = |nu: f32, nv: f32, m: u32, label: &str| format!("AS {nu}:{nv} M={m} {label}");
     let finest = n_stores - 1;
     if !args.no_glossy {
         for &(nu, nv) in &lobes {
             let truth = truth_of(Mode::Glossy, nu, nv, &format!("glossy-{nu}-{nv}"))?;
             for &m in &args.glossy_m {
-                for (order, source, label) in glossy_methods {
+                for (order, source, label) in GLOSSY_METHODS {
                     let p = ShadingParams {
                         mode: Mode::Glossy,
                         nu,
@@ -313,7 +263,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                         m,
                         order,
                         source,
-                        ..base
+                        ..base_params()
                     };
                     bench.measure("AS", finest, &as_name(nu, nv, m, label), p, &truth)?;
                 }
@@ -329,8 +279,96 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     bench.time()?;
 
-    // The tables.
-    let mut t61 = Table::new(
+    let mut tables = vec![
+        table_6_1(&bench, &resolutions, &points),
+        table_6_2(&bench, &resolutions, &mirror),
+    ];
+    if !args.no_glossy {
+        tables.push(glossy_table(
+            &bench,
+            finest,
+            resolutions[finest],
+            &lobes,
+            &args.glossy_m,
+        ));
+    }
+    write_outputs(&args, &tables, &bench.records)
+}
+
+/// Opens the stores, checks each was baked from `scene` and has an environment cube, and sorts
+/// them by cube-map resolution.
+fn open_stores(args: &Args, scene: &Scene) -> anyhow::Result<Vec<(PathBuf, Store)>> {
+    let mut stores = Vec::new();
+    for path in &args.stores {
+        let store =
+            Store::open(path).with_context(|| format!("cannot open store {}", path.display()))?;
+        let b = &store.meta().bake;
+        if b.scene_hash != scene.hash || b.bounces != scene.bake.bounces {
+            bail!(
+                "{} was not baked from {} with these settings (scene hash or bounces differ; pass the store's --preset)",
+                path.display(),
+                args.scene.display()
+            );
+        }
+        if store.env_cube_index().is_none() {
+            bail!(
+                "{} has no environment cube (bake with env_cube = true)",
+                path.display()
+            );
+        }
+        stores.push((path.clone(), store));
+    }
+    stores.sort_by_key(|(_, s)| s.cube_resolution());
+    Ok(stores)
+}
+
+/// `--lobes`: `NU:NV` pairs, or one number for an isotropic lobe.
+fn parse_lobes(lobes: &[String]) -> anyhow::Result<Vec<(f32, f32)>> {
+    lobes
+        .iter()
+        .map(|l| {
+            let (a, b) = l.split_once(':').unwrap_or((l, l));
+            match (a.trim().parse::<f32>(), b.trim().parse::<f32>()) {
+                (Ok(a), Ok(b)) => Ok((a, b)),
+                _ => bail!("--lobes {l:?}: expected NU:NV"),
+            }
+        })
+        .collect()
+}
+
+/// Table 6.2's rows: the environment map, then every blend of §4 (B^r and B^n at N = 1, 4, 8,
+/// 16).
+fn mirror_methods() -> Vec<(String, ShadingParams)> {
+    let mirror = |blend: Blend, blend_n: f32, source: Source| ShadingParams {
+        mode: Mode::Mirror,
+        blend,
+        blend_n,
+        source,
+        ..base_params()
+    };
+    let default_n = base_params().blend_n;
+    let mut methods = vec![(
+        "EnvMap".to_string(),
+        mirror(Blend::Normal, default_n, Source::EnvMap),
+    )];
+    for (name, blend) in [
+        ("closest distance (4.3)", Blend::Distance),
+        ("closest angle (4.4)", Blend::Angle),
+        ("B^avg (4.9)", Blend::Average),
+    ] {
+        methods.push((name.into(), mirror(blend, default_n, Source::Oslf)));
+    }
+    for (name, blend) in [("B^r", Blend::Reflection), ("B^n", Blend::Normal)] {
+        for n in [1.0, 4.0, 8.0, 16.0] {
+            methods.push((format!("{name} N={n}"), mirror(blend, n, Source::Oslf)));
+        }
+    }
+    methods
+}
+
+/// Table 6.1: reconstruction error per store.
+fn table_6_1(bench: &Bench, resolutions: &[u32], points: &[usize]) -> Table {
+    let mut t = Table::new(
         "Table 6.1: reconstruction error (RMSE against the ground truth; L*, a*, b* ÷ 100)",
         &[
             "cube maps",
@@ -344,37 +382,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "frame ms",
         ],
     );
-    for r in 0..n_stores {
+    for (r, (res, n)) in resolutions.iter().zip(points).enumerate() {
         let j = bench.find("6.1", r, "recon");
         let (lab, rgb) = j.map_or(([f64::NAN; 3], [f64::NAN; 3]), |j| {
             (j.metrics.rmse_lab_normalized, j.metrics.rmse_rgb)
         });
-        t61.push(vec![
-            format!("{}²", resolutions[r]),
-            points[r].to_string(),
-            format!("{:.4}", lab[0]),
-            format!("{:.4}", lab[1]),
-            format!("{:.4}", lab[2]),
-            format!("{:.4}", rgb[0]),
-            format!("{:.4}", rgb[1]),
-            format!("{:.4}", rgb[2]),
-            ms(j),
-        ]);
+        let mut row = vec![format!("{res}²"), n.to_string()];
+        row.extend(lab.iter().chain(&rgb).map(|v| format!("{v:.4}")));
+        row.push(ms(j));
+        t.push(row);
     }
+    t
+}
+
+/// Table 6.2: mirror-reflection error, its ratio to the environment map, frame time; a column
+/// group per store.
+fn table_6_2(bench: &Bench, resolutions: &[u32], methods: &[(String, ShadingParams)]) -> Table {
     let mut headers = vec!["method".to_string()];
-    for res in &resolutions {
+    for res in resolutions {
         headers.push(format!("L* {res}²"));
         headers.push(format!("÷ EnvMap {res}²"));
         headers.push(format!("ms {res}²"));
     }
     let header_refs: Vec<&str> = headers.iter().map(String::as_str).collect();
-    let mut t62 = Table::new(
+    let mut t = Table::new(
         "Table 6.2: mirror-reflection error (RMSE of L* ÷ 100 against the ground truth), ratio to the environment map, frame time",
         &header_refs,
     );
-    for (name, _) in &mirror_methods {
+    for (name, _) in methods {
         let mut row = vec![name.clone()];
-        for r in 0..n_stores {
+        for r in 0..resolutions.len() {
             let j = bench.find("6.2", r, name);
             let env = bench.find("6.2", r, "EnvMap");
             row.push(l100(j));
@@ -383,40 +420,47 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }));
             row.push(ms(j));
         }
-        t62.push(row);
+        t.push(row);
     }
-    let mut tas = Table::new(
+    t
+}
+
+/// The Ashikhmin–Shirley table on the finest store: a row per lobe and M.
+fn glossy_table(
+    bench: &Bench,
+    finest: usize,
+    resolution: u32,
+    lobes: &[(f32, f32)],
+    sample_counts: &[u32],
+) -> Table {
+    let mut t = Table::new(
         &format!(
-            "Ashikhmin–Shirley (R_s = 1, R_d = 0, blend B^n N=4, {}² cube maps): RMSE of L* ÷ 100 against the ground truth, frame time",
-            resolutions[finest]
+            "Ashikhmin–Shirley (R_s = 1, R_d = 0, blend B^n N=4, {resolution}² cube maps): RMSE of L* ÷ 100 against the ground truth, frame time",
         ),
         &[
             "n_u", "n_v", "M", "per point L*", "ms", "per direction L*", "ms", "EnvMap L*", "ms",
         ],
     );
-    for &(nu, nv) in &lobes {
-        for &m in &args.glossy_m {
+    for &(nu, nv) in lobes {
+        for &m in sample_counts {
             let mut row = vec![nu.to_string(), nv.to_string(), m.to_string()];
-            for (_, _, label) in glossy_methods {
+            for (_, _, label) in GLOSSY_METHODS {
                 let j = bench.find("AS", finest, &as_name(nu, nv, m, label));
                 row.push(l100(j));
                 row.push(ms(j));
             }
-            tas.push(row);
+            t.push(row);
         }
     }
+    t
+}
 
-    let mut text = format!("{}\n{}\n", t61.to_text(), t62.to_text());
-    let mut md = format!("{}\n{}\n", t61.to_markdown(), t62.to_markdown());
-    if !args.no_glossy {
-        text += &tas.to_text();
-        md += &format!("\n{}", tas.to_markdown());
-    }
-    print!("{text}");
+/// One CSV line per record.
+fn records_csv(records: &[Record]) -> String {
     let mut csv = String::from(
         "table,store,cube_resolution,method,mode,blend,n_u,n_v,m,order,pixels,rmse_l,rmse_a,rmse_b,rmse_r,rmse_g,rmse_b_rgb,psnr_db,frame_ms,cold_ms\n",
     );
-    for r in &bench.records {
+    for r in records {
         let m = &r.judgement.metrics;
         csv += &format!(
             "{},{},{},{},{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6},{},{:.3},{:.3}\n",
@@ -446,16 +490,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             r.judgement.cold_ms,
         );
     }
+    csv
+}
+
+/// Prints the tables and writes tables.md, tables.csv and tables.json.
+fn write_outputs(args: &Args, tables: &[Table], records: &[Record]) -> anyhow::Result<()> {
+    let text: Vec<String> = tables.iter().map(Table::to_text).collect();
+    let md: Vec<String> = tables.iter().map(Table::to_markdown).collect();
+    println!("{}", text.join("\n"));
     let write = |name: &str, s: &str| -> anyhow::Result<()> {
         let p = args.out.join(name);
         std::fs::write(&p, s).with_context(|| format!("cannot write {}", p.display()))
     };
-    write("tables.md", &md)?;
-    write("tables.csv", &csv)?;
-    write(
-        "tables.json",
-        &serde_json::to_string_pretty(&bench.records)?,
-    )?;
+    write("tables.md", &format!("{}\n", md.join("\n")))?;
+    write("tables.csv", &records_csv(records))?;
+    write("tables.json", &serde_json::to_string_pretty(records)?)?;
     println!(
         "wrote {}/tables.md, tables.csv, tables.json",
         args.out.display()
