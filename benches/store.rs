@@ -16,7 +16,7 @@
 //!
 //! `OSLF_BENCH_STORE=path.oslf [OSLF_BENCH_CUBES=N] cargo bench --bench store`: the cube maps
 //! of an existing store instead (its first N cubes), e.g. the thesis preset's 128² cube maps
-//! from `oslf-bake examples/gazebo.toml --preset thesis`. Re-encoding an RGB9E5 store to RGB9E5
+//! from `oslf bake examples/gazebo.toml --preset thesis`. Re-encoding an RGB9E5 store to RGB9E5
 //! is exact; its RGBA16F/RGBA32F figures are then of RGB9E5-quantised radiance.
 
 use std::path::{Path, PathBuf};

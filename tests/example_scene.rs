@@ -1,4 +1,4 @@
-//! `examples/gazebo.toml`: every preset the README names loads, and `thesis-compact` is the
+//! `examples/gazebo.toml`: every preset docs/scene-format.md names loads, and `thesis-compact` is the
 //! thesis preset with 3 RGB9E5 mantissa bits.
 
 use std::path::Path;

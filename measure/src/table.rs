@@ -1,4 +1,4 @@
-//! Tables of results as aligned text (the terminal), Markdown (the README) and CSV.
+//! Tables of results as aligned text (the terminal), Markdown (docs/measurements.md) and CSV.
 
 use std::fmt::Write as _;
 

@@ -1,6 +1,6 @@
 // Viewer: draws the renderer's linear Rgba32Float image to the window, tone mapped (exposure,
 // the ACES fit of Narkowicz 2015 as in oslf_bake::image_file, then sRGB unless the surface
-// format encodes it). Bindings in the order of `viewer.rs`'s blit layout.
+// format encodes it). Bindings in the order of `view.rs`'s blit layout.
 
 struct Blit {
     exposure: f32,
