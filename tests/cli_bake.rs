@@ -4,7 +4,6 @@ mod common;
 
 use common::oslf;
 
-
 fn temp_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("oslf-bake-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -165,4 +164,155 @@ fn oslf_truth_writes_every_mode_and_checks_the_store() {
     let e = truth(&["--nu=-1", "--modes", "glossy"]);
     assert!(!e.status.success());
     assert!(String::from_utf8_lossy(&e.stderr).contains("n_u"));
+}
+
+/// `oslf bake SCENE -o OUT ARGS...` in `dir`, with no preview and no progress bar.
+fn bake_in(dir: &std::path::Path, scene_text: &str, args: &[&str]) -> std::process::Output {
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, scene_text).unwrap();
+    oslf("bake")
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("lid.oslf"))
+        .args(["-q", "--preview", "none"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// A partial file whose fixed sections were never completely written (the bake was killed
+/// while creating it) holds no cube maps: `--resume` says so in one line and starts over.
+#[test]
+fn resume_of_a_partial_killed_during_create_starts_over() {
+    let dir = temp_dir("torn");
+    let partial = dir.join("lid.oslf.partial");
+    for keep in [0u64, 100, 300] {
+        let out = bake_in(&dir, SCENE, &["--max-cubes", "1"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let len = std::fs::metadata(&partial).unwrap().len();
+        assert!(keep < len);
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&partial)
+            .unwrap()
+            .set_len(keep)
+            .unwrap();
+        let out = bake_in(&dir, SCENE, &["--resume"]);
+        let err = stderr(&out);
+        assert!(out.status.success(), "{err}");
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 1, "{err}");
+        assert!(
+            lines[0].starts_with(&format!(
+                "{} was never completely created (it has {keep} bytes, less than ",
+                partial.display()
+            )) && lines[0]
+                .ends_with("): it holds no finished cube maps, so the bake starts from scratch"),
+            "{err}"
+        );
+        assert!(!partial.exists());
+        let out = oslf("store verify")
+            .arg(dir.join("lid.oslf"))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        std::fs::remove_file(dir.join("lid.oslf")).unwrap();
+    }
+}
+
+/// A partial file with finished cube maps from other settings is kept, and `--resume` names
+/// each setting that differs, both values, and what to do.
+#[test]
+fn resume_with_other_settings_names_each_setting() {
+    let dir = temp_dir("settings");
+    let text = format!(
+        "{SCENE}\n[presets.seed9]\nseed = 9\n\n[presets.res4]\ncube_resolution = 4\nseed = 9\n"
+    );
+    let out = bake_in(&dir, &text, &["--max-cubes", "2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let partial = dir.join("lid.oslf.partial");
+    let before = std::fs::read(&partial).unwrap();
+    let hint = "; bake without --resume to start over, or pass the settings it was started with";
+    for (preset, differences) in [
+        ("seed9", "seed 0 (this bake: 9)"),
+        (
+            "res4",
+            "seed 0 (this bake: 9), cube_resolution 2 (this bake: 4)",
+        ),
+    ] {
+        let out = bake_in(&dir, &text, &["--resume", "-p", preset]);
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        assert_eq!(
+            err.trim_end(),
+            format!(
+                "error: cannot resume {}: it was started with different settings: {differences}{hint}",
+                partial.display()
+            )
+        );
+        assert_eq!(
+            std::fs::read(&partial).unwrap(),
+            before,
+            "the partial file is kept"
+        );
+    }
+    // The settings it was started with continue it.
+    let out = bake_in(&dir, &text, &["--resume"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("(2 recovered from the interrupted bake)")
+    );
+}
+
+/// Outputs that cannot be created fail at once, naming the path, before any slow work: no
+/// store is written (and no sample maps computed) when only the report or preview is bad.
+#[test]
+fn unwritable_outputs_fail_before_the_bake() {
+    let dir = temp_dir("unwritable");
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let run = |args: &[&str]| {
+        let out = oslf("bake")
+            .arg(&scene)
+            .args(["-q"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        stderr(&out)
+    };
+    let err = run(&["-o", "/nonexistent/dir/x.oslf"]);
+    assert_eq!(
+        err.trim_end(),
+        "error: cannot write the store /nonexistent/dir/x.oslf: the directory /nonexistent/dir does not exist"
+    );
+    let out = dir.join("lid.oslf");
+    let o = out.to_str().unwrap();
+    let err = run(&["-o", o, "--report-json", "/nonexistent/r.json"]);
+    assert_eq!(
+        err.trim_end(),
+        "error: cannot write the --report-json file /nonexistent/r.json: the directory /nonexistent does not exist"
+    );
+    let err = run(&["-o", o, "--preview", "/nonexistent/p/preview.png"]);
+    assert_eq!(
+        err.trim_end(),
+        "error: cannot write the preview /nonexistent/p/preview.png: the directory /nonexistent/p does not exist"
+    );
+    let d = dir.to_str().unwrap();
+    let err = run(&["-o", d]);
+    assert_eq!(
+        err.trim_end(),
+        format!("error: cannot write the store {d}: it is a directory")
+    );
+    assert!(!out.exists());
+    assert!(!dir.join("lid.oslf.partial").exists());
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "only the scene, no probe files"
+    );
 }

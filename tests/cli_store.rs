@@ -28,7 +28,7 @@ fn info_verify_and_exports() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["cubes"], 6);
     assert_eq!(v["mantissa_bits"], 9);
-    assert_eq!(v["version"], 2);
+    assert_eq!(v["version"], oslf_format::VERSION);
     assert_eq!(v["env_cube_index"], 5);
     let out = bin().arg("verify").arg(&path).output().unwrap();
     assert!(out.status.success());
@@ -106,4 +106,62 @@ fn info_verify_and_exports() {
         .unwrap();
     assert!(!out.status.success());
     assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}
+
+/// `oslf store verify` checks every padding byte and what the faces decode to: a non-zero
+/// padding byte, or a face filter id changed with the header checksum recomputed, fails with
+/// the byte offset.
+#[test]
+fn verify_checks_padding_and_the_decoded_faces() {
+    let f = fixture(Spec::default());
+    let (dir, path) = temp_store("pad.oslf");
+    write(&path, &f);
+    let out = bin().arg("verify").arg(&path).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("padding bytes checked; the decoded faces match their checksum"),
+        "{text}"
+    );
+    let good = std::fs::read(&path).unwrap();
+    let h = oslf_format::header::Header::parse(&good).unwrap();
+    let verify = |bytes: &[u8]| {
+        let bad = dir.path().join("bad.oslf");
+        std::fs::write(&bad, bytes).unwrap();
+        let out = bin().arg("verify").arg(&bad).output().unwrap();
+        assert!(!out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let at = h.meta.end();
+    assert!(!at.is_multiple_of(8), "the fixture pads its metadata");
+    let mut bytes = good.clone();
+    bytes[at as usize] = 1;
+    let err = verify(&bytes);
+    assert!(
+        err.contains(&format!(
+            "padding byte at byte offset {at} (after the metadata section) is 0x01; padding must be zero"
+        )),
+        "{err}"
+    );
+    let mut bytes = good.clone();
+    bytes[176..180].copy_from_slice(&oslf_format::Filter::None.id().to_le_bytes());
+    let sum = xxhash_rust::xxh3::xxh3_64(&bytes[..248]);
+    bytes[248..256].copy_from_slice(&sum.to_le_bytes());
+    let err = verify(&bytes);
+    assert!(
+        err.contains(
+            "the decoded cube faces do not match their checksum at header byte offset 180"
+        ),
+        "{err}"
+    );
+    // A version-2 store has no such checksum, and says so.
+    let v2 = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("format/tests/data/v2-rgb9e5-5bits.oslf");
+    let out = bin().arg("verify").arg(&v2).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("format version 2 records no checksum of the decoded faces"),
+        "{text}"
+    );
 }

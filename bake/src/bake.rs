@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::bvh::TriangleScene;
 use crate::capture::{capture_cube, strata_per_side, CaptureSettings};
-use crate::error::Result;
+use crate::error::{BakeError, Result};
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::EmptyScene;
 use crate::sample_map::{self, SampleMapStats};
@@ -66,6 +66,9 @@ pub struct BakeReport {
     pub cubes: u32,
     /// Cubes recovered from an interrupted bake instead of being traced again.
     pub cubes_resumed: u32,
+    /// Whether `resume` found a partial file that was never completely created and started
+    /// over (a line on stderr says so).
+    pub restarted: bool,
     pub cube_resolution: u32,
     pub samples_per_texel: u32,
     pub rays_closest: u64,
@@ -109,6 +112,8 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
             .zip(bake_cpu_start)
             .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9)
     };
+    // Fail now, not after the sample maps, if the store cannot be written.
+    check_store_writable(&options.output)?;
     let settings = &scene.bake;
     let mut report = BakeReport {
         output: options.output.clone(),
@@ -181,7 +186,18 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
 
     let meta = store_meta(scene);
     let mut writer = if options.resume && partial_path(&options.output).exists() {
-        StoreWriter::resume(&options.output, &meta, &points, &maps)?
+        match StoreWriter::resume(&options.output, &meta, &points, &maps) {
+            // create() was interrupted: there are no finished cube maps to keep.
+            Err(oslf_format::Error::PartialNeverCreated { path, detail }) => {
+                eprintln!(
+                    "{} was never completely created ({detail}): it holds no finished cube maps, so the bake starts from scratch",
+                    path.display()
+                );
+                report.restarted = true;
+                StoreWriter::create(&options.output, &meta, &points, &maps)?
+            }
+            result => result?,
+        }
     } else {
         StoreWriter::create(&options.output, &meta, &points, &maps)?
     };
@@ -281,6 +297,73 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     report.total_seconds = start.elapsed().as_secs_f64();
     report.cpu_seconds = cpu_since_start();
     Ok(report)
+}
+
+/// Checks, without changing any file, that `path` can be written: its directory exists and
+/// accepts a new file (a probe file is created there and removed at once), or, if `path`
+/// exists, it is a file that opens for writing. `what` names the file in the error
+/// ([`BakeError::Unwritable`]). Run it for every output before slow work.
+pub fn check_writable(path: &Path, what: &'static str) -> Result<()> {
+    check_file_writable(path, path, what)
+}
+
+/// [`check_writable`] for the store `output`, which is written through `<output>.partial`
+/// and renamed: the partial file must be writable. [`bake`] runs it first.
+pub fn check_store_writable(output: &Path) -> Result<()> {
+    check_file_writable(output, &partial_path(output), "the store")
+}
+
+/// [`check_writable`] for `file`, naming `named` in the error (the store is written through
+/// its partial file).
+fn check_file_writable(named: &Path, file: &Path, what: &'static str) -> Result<()> {
+    let fail = |detail: String| BakeError::Unwritable {
+        what,
+        path: named.to_path_buf(),
+        detail,
+    };
+    let dir = match file.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => return Err(fail(format!("{} is not a directory", dir.display()))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(fail(format!(
+                "the directory {} does not exist",
+                dir.display()
+            )))
+        }
+        Err(e) => return Err(fail(format!("{}: {e}", dir.display()))),
+    }
+    if named.is_dir() {
+        return Err(fail("it is a directory".into()));
+    }
+    if file.exists() {
+        // Opening for writing without truncating changes nothing.
+        return match std::fs::OpenOptions::new().write(true).open(file) {
+            Ok(_) => Ok(()),
+            Err(e) => Err(fail(format!("{}: {e}", file.display()))),
+        };
+    }
+    let mut name = std::ffi::OsString::from(".");
+    name.push(file.file_name().unwrap_or_default());
+    name.push(format!(".{}.probe", std::process::id()));
+    let probe = dir.join(name);
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(fail(format!(
+            "cannot create a file in {}: {e}",
+            dir.display()
+        ))),
+    }
 }
 
 /// Where the writer keeps an unfinished store.

@@ -37,6 +37,13 @@ pub enum BakeError {
     /// A scene that parsed but cannot be baked (no OSLF object, no sample points, ...).
     #[error("{0}")]
     Invalid(String),
+    /// An output file that cannot be created (checked before the bake starts).
+    #[error("cannot write {what} {path}: {detail}")]
+    Unwritable {
+        what: &'static str,
+        path: PathBuf,
+        detail: String,
+    },
     /// The store could not be written or resumed.
     #[error(transparent)]
     Format(#[from] oslf_format::Error),

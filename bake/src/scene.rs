@@ -202,7 +202,7 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
-    camera: Option<RawCamera>,
+    camera: Option<Spanned<RawCamera>>,
     environment: Option<Spanned<RawEnvironment>>,
     #[serde(default)]
     point_light: Vec<RawPointLight>,
@@ -232,18 +232,11 @@ struct RawScene {
 #[serde(deny_unknown_fields)]
 struct RawCamera {
     position: Point,
-    target: Point,
-    #[serde(default = "z_up")]
-    up: Direction,
-    #[serde(default = "default_vfov")]
-    vfov: Angle,
-}
-
-fn z_up() -> Direction {
-    Direction(Vec3::Z)
-}
-fn default_vfov() -> Angle {
-    Angle(40.0)
+    target: Spanned<Point>,
+    /// Default +Z.
+    up: Option<Spanned<Direction>>,
+    /// Default 40°.
+    vfov: Option<Spanned<Angle>>,
 }
 
 #[derive(Deserialize)]
@@ -633,24 +626,65 @@ impl Ctx<'_> {
         }
     }
 
+    /// The `[camera]`, checked as the renderers need it: errors point at the key at fault
+    /// (or at the table when the key was left at its default).
+    fn camera(&self, raw: Spanned<RawCamera>) -> Result<Camera> {
+        let table = raw.span();
+        let c = raw.into_inner();
+        let vec = |v: Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
+        let camera = Camera {
+            position: c.position.0,
+            target: c.target.get_ref().0,
+            up: c.up.as_ref().map_or(Vec3::Z, |u| u.get_ref().0).normalize(),
+            vfov_deg: c.vfov.as_ref().map_or(40.0, |v| v.get_ref().0),
+        };
+        let Some(forward) = (camera.target - camera.position).try_normalize() else {
+            return Err(self.error_at(
+                c.target.span(),
+                format!(
+                    "the camera's target {} coincides with its position",
+                    vec(camera.target)
+                ),
+            ));
+        };
+        if forward.cross(camera.up).length_squared() < 1e-12 {
+            let (span, up) = match &c.up {
+                Some(u) => (u.span(), format!("up {}", vec(u.get_ref().0))),
+                None => (table.clone(), "up (default [0, 0, 1])".to_string()),
+            };
+            return Err(self.error_at(
+                span,
+                format!(
+                    "the camera's {up} is parallel to its view direction {} (from position to target), so the image has no defined vertical: choose an up that is not",
+                    vec(forward)
+                ),
+            ));
+        }
+        if !(camera.vfov_deg > 0.0 && camera.vfov_deg < 180.0) {
+            let span = c.vfov.as_ref().map_or(table.clone(), |v| v.span());
+            return Err(self.error_at(
+                span,
+                format!(
+                    "the camera's vfov {} must be within (0, 180) degrees",
+                    camera.vfov_deg
+                ),
+            ));
+        }
+        // Whatever else the renderers refuse.
+        camera
+            .validate()
+            .map_err(|e| self.locate(table, e.into()))?;
+        Ok(camera)
+    }
+
     fn build(&self, raw: RawScene, preset: Option<&str>) -> Result<Scene> {
         let hash = sha256(self.text.as_bytes());
         let (bake, epsilon_span) = self.bake_settings(&raw, preset)?;
 
-        let camera = raw.camera.map(|c| Camera {
-            position: c.position.0,
-            target: c.target.0,
-            up: c.up.0.normalize(),
-            vfov_deg: c.vfov.0,
-        });
-        if let Some(c) = &camera {
-            if (c.target - c.position).length_squared() < 1e-12 || c.vfov_deg <= 0.0 {
-                return Err(BakeError::Invalid(format!(
-                    "{}: the camera's target must differ from its position and vfov must be > 0",
-                    self.path.display()
-                )));
-            }
-        }
+        let camera = match raw.camera {
+            Some(c) => Some(self.camera(c)?),
+            None => None,
+        };
 
         let mut lights: Vec<Light> = raw
             .point_light

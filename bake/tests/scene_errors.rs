@@ -194,3 +194,55 @@ fn mantissa_bits_is_checked_and_located() {
     let scene = Scene::from_str(&text, Path::new("t.toml"), Some("small")).unwrap();
     assert_eq!(scene.bake.mantissa_bits, 6);
 }
+
+/// A camera whose `up` is parallel to its view direction has no image vertical: the scene is
+/// refused when read, at the `up` key (or at `[camera]` when `up` is left at +Z), not after
+/// the bake when a render fails.
+#[test]
+fn camera_up_parallel_to_the_view_direction() {
+    let text = format!(
+        "[camera]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, 2.0]\n{GOOD}"
+    );
+    assert_located(
+        &text,
+        4,
+        6,
+        "the camera's up [0, 0, 2] is parallel to its view direction [0, 0, -1] (from position to target), so the image has no defined vertical: choose an up that is not",
+    );
+    // Pointing the other way is just as parallel.
+    let text = text.replace("up = [0.0, 0.0, 2.0]", "up = [0.0, 0.0, -1.0]");
+    assert_located(&text, 4, 6, "the camera's up [0, 0, -1] is parallel");
+    // The default up (+Z) with a camera looking straight down.
+    let text = format!("[camera]\nposition = [1.0, 2.0, 5.0]\ntarget = [1.0, 2.0, 0.0]\n{GOOD}");
+    assert_located(
+        &text,
+        1,
+        1,
+        "the camera's up (default [0, 0, 1]) is parallel to its view direction [0, 0, -1]",
+    );
+    // Any other up is fine.
+    let text = format!(
+        "[camera]\nposition = [1.0, 2.0, 5.0]\ntarget = [1.0, 2.0, 0.0]\nup = [0.0, 1.0, 0.0]\n{GOOD}"
+    );
+    parse(&text).unwrap().camera.unwrap().validate().unwrap();
+}
+
+#[test]
+fn camera_target_at_its_position_and_bad_vfov() {
+    let text = format!("[camera]\nposition = [1.0, 2.0, 5.0]\ntarget = [1.0, 2.0, 5.0]\n{GOOD}");
+    assert_located(
+        &text,
+        3,
+        10,
+        "the camera's target [1, 2, 5] coincides with its position",
+    );
+    let text = format!(
+        "[camera]\nposition = [1.0, 2.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nvfov = 180.0\n{GOOD}"
+    );
+    assert_located(
+        &text,
+        4,
+        8,
+        "the camera's vfov 180 must be within (0, 180) degrees",
+    );
+}

@@ -159,6 +159,8 @@ pub struct EncodedCube {
     pub(crate) raw_size: u64,
     pub(crate) frames: [Vec<u8>; FACES],
     pub(crate) checksums: [u64; FACES],
+    /// xxh3-64 of each raw (unfiltered) face: what the store's decoded-faces checksum covers.
+    pub(crate) raw_checksums: [u64; FACES],
 }
 
 impl EncodedCube {
@@ -276,6 +278,7 @@ pub fn encode_cube_with_filter(
     let mut stats = EncodeStats::default();
     let mut frames: [Vec<u8>; FACES] = Default::default();
     let mut checksums = [0u64; FACES];
+    let mut raw_checksums = [0u64; FACES];
     for face in 0..FACES {
         let rgb = &cube.faces[face];
         if rgb.len() != texels {
@@ -320,6 +323,7 @@ pub fn encode_cube_with_filter(
             }
             encode_distances(d, dist_out)?;
         }
+        raw_checksums[face] = xxhash_rust::xxh3::xxh3_64(&raw);
         filter_face_quantized(
             filter,
             enc,
@@ -352,6 +356,7 @@ pub fn encode_cube_with_filter(
             raw_size,
             frames,
             checksums,
+            raw_checksums,
         },
         stats,
     ))

@@ -204,15 +204,36 @@ pub enum Error {
     /// The file is a partial store that `finish()` never completed.
     #[error("the store was never finished (the COMPLETE flag is clear); resume the bake")]
     NotFinished,
-    /// `resume()` found a partial file that was started with different inputs.
+    /// `resume()` found a partial file it cannot continue: started with different settings
+    /// (`what` names each, with both values), damaged, or not a partial store of a version it
+    /// continues. `what` ends with what to do.
     #[error("cannot resume {path}: {what}")]
     ResumeMismatch { path: PathBuf, what: String },
+    /// `resume()` found a partial file whose fixed sections (header, metadata, sample points,
+    /// sample maps) were never completely written: `create()` was interrupted, so it holds no
+    /// finished cube maps and the store must be created again.
+    #[error("{path} was never completely created ({detail}), so it holds no finished cube maps")]
+    PartialNeverCreated { path: PathBuf, detail: String },
     /// `resume()` found no partial file.
     #[error("no partial store to resume at {0}")]
     NoPartial(PathBuf),
+    /// A padding byte that is not zero (between sections, or after a cube record's frames).
+    #[error(
+        "padding byte at byte offset {offset} ({region}) is {value:#04x}; padding must be zero"
+    )]
+    NonZeroPadding {
+        region: String,
+        offset: u64,
+        value: u8,
+    },
+    /// The faces decode (decompressed and unfiltered) to other bytes than the writer encoded:
+    /// the checksum of the decoded faces (header bytes 180..188, format version 3) does not
+    /// match.
+    #[error("the decoded cube faces do not match their checksum at header byte offset 180 (stored {stored:#018x}, computed {computed:#018x}): the frames decode to other texels than were written, e.g. the face filter id at byte 176 or the metadata's mantissa_bits was changed")]
+    DecodedChecksum { stored: u64, computed: u64 },
     /// A face filter id this reader does not know (header bytes 176..180).
     #[error(
-        "unknown face filter id {id} at byte offset {offset} (this reader knows 0 none, 1 predict, 2 predict-rows)"
+        "unknown face filter id {id} at byte offset {offset} (this reader knows 0 none, 1 predict, 2 predict-rows, 3 predict-packed)"
     )]
     UnknownFilter { id: u32, offset: u64 },
     /// An unknown encoding name.

@@ -14,8 +14,13 @@ pub const HEADER_CHECKSUM_OFFSET: usize = 248;
 
 /// Byte offset of the face filter id (`u32`).
 pub const FILTER_OFFSET: usize = 176;
-/// First reserved (zero) byte.
-const RESERVED_START: usize = 180;
+/// Byte offset of the checksum of the decoded faces (`u64`, format version 3 and later;
+/// reserved zero bytes in versions 1 and 2).
+pub const DECODED_CHECKSUM_OFFSET: usize = 180;
+/// First reserved (zero) byte of a version-1 or version-2 header.
+const RESERVED_START_V1: usize = 180;
+/// First reserved (zero) byte of a header of version 3 and later.
+const RESERVED_START: usize = 188;
 
 /// Flag bit: every face carries an `f32` distance plane.
 pub const FLAG_DISTANCE: u32 = 1;
@@ -31,6 +36,9 @@ pub(crate) const FINISH_FIELDS: std::ops::Range<usize> = 120..152;
 pub(crate) const SECTION_CHECKSUMS: std::ops::Range<usize> = 152..176;
 /// Byte range of the flags field.
 pub(crate) const FLAGS_FIELD: std::ops::Range<usize> = 12..16;
+/// Byte range of the decoded-faces checksum, which `finish()` also patches.
+pub(crate) const DECODED_CHECKSUM_FIELD: std::ops::Range<usize> =
+    DECODED_CHECKSUM_OFFSET..DECODED_CHECKSUM_OFFSET + 8;
 
 /// A section's position: byte offset and size.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -73,6 +81,9 @@ pub struct Header {
     pub meta_checksum: u64,
     pub points_checksum: u64,
     pub maps_checksum: u64,
+    /// Checksum of the decoded faces (bytes 180..188; see the crate docs): set by `finish()`,
+    /// 0 in a partial file and in stores of format versions 1 and 2, which do not record it.
+    pub decoded_checksum: u64,
 }
 
 impl Header {
@@ -111,12 +122,17 @@ impl Header {
         put(160, &self.points_checksum.to_le_bytes());
         put(168, &self.maps_checksum.to_le_bytes());
         put(FILTER_OFFSET, &self.filter.id().to_le_bytes());
+        put(
+            DECODED_CHECKSUM_OFFSET,
+            &self.decoded_checksum.to_le_bytes(),
+        );
         let sum = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
         b[HEADER_CHECKSUM_OFFSET..].copy_from_slice(&sum.to_le_bytes());
         b
     }
 
-    /// Parses and checks the header: magic, version, checksum, flags, tags, reserved bytes.
+    /// Parses and checks the header: magic, version, checksum, flags, tags, reserved bytes
+    /// (180..248 in versions 1 and 2, 188..248 from version 3).
     /// Section positions are checked against the file by [`Header::check_layout`].
     pub fn parse(bytes: &[u8]) -> Result<Header, Error> {
         let Some(b) = bytes.get(..HEADER_BYTES) else {
@@ -179,13 +195,18 @@ impl Header {
             id: filter_id,
             offset: FILTER_OFFSET as u64,
         })?;
-        if let Some(i) = b[RESERVED_START..HEADER_CHECKSUM_OFFSET]
+        let (reserved, decoded_checksum) = if version >= 3 {
+            (RESERVED_START, le_u64(b, DECODED_CHECKSUM_OFFSET))
+        } else {
+            (RESERVED_START_V1, 0)
+        };
+        if let Some(i) = b[reserved..HEADER_CHECKSUM_OFFSET]
             .iter()
             .position(|v| *v != 0)
         {
             return Err(invalid(
                 "reserved",
-                (RESERVED_START + i) as u64,
+                (reserved + i) as u64,
                 "reserved bytes must be zero".into(),
             ));
         }
@@ -214,6 +235,7 @@ impl Header {
             meta_checksum: le_u64(b, 152),
             points_checksum: le_u64(b, 160),
             maps_checksum: le_u64(b, 168),
+            decoded_checksum,
         })
     }
 

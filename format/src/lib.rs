@@ -26,7 +26,7 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (2); readers also accept [`MIN_VERSION`] (1), see "Versions" |
+//! | 8      | `u32`     | version = [`VERSION`] (3); readers also accept [`MIN_VERSION`] (1) and 2, see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
 //! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
@@ -46,10 +46,12 @@
 //! | 160    | `u64`     | checksum of the sample points section |
 //! | 168    | `u64`     | checksum of the sample maps section |
 //! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows, 3 predict-packed (see "Face filters"; writers use 3 for RGB9E5 with `mantissa_bits` ≤ 6, else 2); other ids are refused ([`Error::UnknownFilter`]) |
-//! | 180    | 68 bytes  | reserved, zero |
+//! | 180    | `u64`     | checksum of the decoded faces (version 3; see "Checksum of the decoded faces"): written by `finish()`, zero in a partial file. Versions 1 and 2: reserved, zero |
+//! | 188    | 60 bytes  | reserved, zero |
 //! | 248    | `u64`     | checksum of header bytes 0..248 |
 //!
-//! A reader checks, in order: magic, version, header checksum, flags, tags, filter, reserved bytes;
+//! A reader checks, in order: magic, version, header checksum, flags, tags, filter, reserved bytes
+//! (180..248 in versions 1 and 2, 188..248 from version 3);
 //! refuses files without the COMPLETE flag ([`Error::NotFinished`]); then the section layout
 //! against the real file size; then each section's checksum before parsing it. The header's
 //! encoding, resolutions, flags and counts must agree with the metadata.
@@ -60,7 +62,7 @@
 //! |------:|---------|
 //! | 4, 4  | `u32` object_count, `u32` patch_count (equal to the header's) |
 //! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag, `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
-//! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Version 2 only: absent in version 1, whose stores read as 9 |
+//! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Versions 2 and 3: absent in version 1, whose stores read as 9 |
 //! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
 //! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count |
 //! | 192 × patch_count | patches, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
@@ -244,13 +246,34 @@
 //! per-channel error is below `2^−k · 2^(e − 15)` (`2^−k` of the exponent's scale, on top of
 //! the RGB9E5 rounding). The distance plane is never quantized.
 //!
+//! ## Checksum of the decoded faces
+//!
+//! The frame checksums cover the compressed bytes, which decode differently under another
+//! face filter id or `mantissa_bits`. Header bytes 180..188 (version 3) hold the xxh3-64 of
+//! the concatenation of the xxh3-64 checksums (`u64`, 8 bytes each) of every *raw face* (the
+//! decompressed, unfiltered face: encoded texels, then the distance plane), cube-major, faces
+//! in layer order: `cube_count × 6 × 8` bytes hashed, nothing for a store without cubes.
+//! [`Store::verify`] decodes every face and checks it ([`Error::DecodedChecksum`]); opening a
+//! store does not.
+//!
+//! ## Padding
+//!
+//! The padding regions are the 0–7 bytes after the metadata, the sample points and the sample
+//! maps (up to the next section's 8-aligned start) and the 0–7 bytes after the last frame of
+//! each cube record (up to the next record, or the table of contents after the last one). All
+//! are zero; [`Store::verify`] checks every one and names the first non-zero byte's offset
+//! ([`Error::NonZeroPadding`]). The header's reserved bytes are checked on open.
+//!
 //! ## Versions
 //!
-//! Version 2 added `mantissa_bits` to the metadata (4 bytes after the scene hash). Readers
-//! accept versions [`MIN_VERSION`] (1) to [`VERSION`] (2) and refuse others
+//! Version 2 added `mantissa_bits` to the metadata (4 bytes after the scene hash); version 3
+//! the checksum of the decoded faces (header bytes 180..188, reserved zero before). Readers
+//! accept versions [`MIN_VERSION`] (1) to [`VERSION`] (3) and refuse others
 //! ([`Error::UnsupportedVersion`]); a version-1 metadata section has no `mantissa_bits` and
-//! reads as 9. Every other byte of the layout is the same in both versions. Writers write
-//! version 2; [`StoreWriter::resume`] continues only partial files of the version it writes.
+//! reads as 9; versions 1 and 2 have no checksum of the decoded faces, so [`Store::verify`]
+//! checks their frames but not what they decode to. Every other byte of the layout is the
+//! same in all versions. Writers write version 3; [`StoreWriter::resume`] continues partial
+//! files of versions 2 and 3 (finishing them as version 3).
 //!
 //! ## Limits and host requirements
 //!
@@ -265,8 +288,9 @@
 //! [`StoreWriter`] writes `<path>.partial` beside the target, appends cube records as they
 //! come ([`encode_cube`] is pure, so encode in parallel), syncs every 64 cubes or 64 MiB, and
 //! `finish()` writes the table of contents, patches the header (flags, payload size, TOC
-//! position, file size — bytes 12..16 and 120..152), syncs, renames over the target and syncs
-//! the directory: a crash leaves either no store or a complete one under the final name.
+//! position, file size, checksum of the decoded faces — bytes 12..16, 120..152 and 180..188),
+//! syncs, renames over the target and syncs the directory: a crash leaves either no store or a
+//! complete one under the final name.
 
 pub(crate) mod bytes;
 pub mod cube;
@@ -293,7 +317,7 @@ pub use writer::{StoreSummary, StoreWriter};
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
 /// metadata, read as 9).
 pub const MIN_VERSION: u32 = 1;

@@ -135,8 +135,8 @@ pub fn check_mantissa_bits(encoding: Encoding, bits: u32) -> Result<(), String> 
     Ok(())
 }
 
-/// Serialises metadata in the layout of format version `version` ([`VERSION`] = 2 records
-/// `mantissa_bits` after the scene hash; version 1 does not, so it can only express 9). No
+/// Serialises metadata in the layout of format version `version` (versions 2 and later
+/// record `mantissa_bits` after the scene hash; version 1 does not, so it can only express 9). No
 /// validation: [`decode_meta`] validates, and the writer checks its input by decoding what it
 /// encoded.
 pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
@@ -198,7 +198,7 @@ fn bad(offset: u64, detail: impl Into<String>) -> Error {
     }
 }
 
-/// Parses and validates the metadata section of a store of format `version` (1 or 2); `base`
+/// Parses and validates the metadata section of a store of format `version` (1 to 3); `base`
 /// is its byte offset in the file (for error messages).
 pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<StoreMeta, Error> {
     debug_assert!((1..=VERSION).contains(&version));

@@ -13,7 +13,7 @@ use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_P
 use crate::sample_map::{validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL};
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES, TOC_ENTRY_BYTES};
 use crate::Error;
-use xxhash_rust::xxh3::xxh3_64;
+use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
 /// The bytes of a store: a read-only memory map, or an 8-byte-aligned owned copy.
 enum Backing {
@@ -58,6 +58,11 @@ pub struct VerifyReport {
     pub compressed_bytes: u64,
     /// Raw bytes decompressed.
     pub raw_bytes: u64,
+    /// Padding bytes checked to be zero (between sections and after each cube record).
+    pub padding_bytes: u64,
+    /// Whether the decoded faces were checked against the store's checksum of them (format
+    /// version 3 and later; older stores do not record it).
+    pub decoded_checksum: bool,
 }
 
 /// An open store. `Send + Sync`: share it between threads.
@@ -539,10 +544,24 @@ impl Store {
         Ok(image)
     }
 
-    /// Checks every cube record header against the table of contents, every frame checksum,
-    /// and that every frame decompresses to exactly its raw size.
+    /// Checks what [`Store::open`] does not, byte by byte: every padding region is zero (after
+    /// the metadata, sample points and sample maps, and after each cube record's frames;
+    /// [`Error::NonZeroPadding`] names the byte offset), every cube record header agrees with
+    /// the table of contents, every frame matches its checksum and decompresses to exactly
+    /// its filtered size, and (format version 3 and later) the decoded faces match the
+    /// header's checksum of them ([`Error::DecodedChecksum`]), which catches a changed face
+    /// filter id or `mantissa_bits`.
     pub fn verify(&self) -> Result<VerifyReport, Error> {
         let mut report = VerifyReport::default();
+        let h = &self.header;
+        for (region, s) in [
+            ("after the metadata section", h.meta),
+            ("after the sample points section", h.points),
+            ("after the sample maps section", h.maps),
+        ] {
+            report.padding_bytes += self.check_padding(s.end(), region)?;
+        }
+        let mut decoded = Xxh3::new();
         let mut buf = vec![0u8; self.face_raw_size];
         for cube in 0..self.cube_count() {
             let first = self.face_entry(cube, 0)?;
@@ -572,13 +591,45 @@ impl Store {
                     )));
                 }
                 self.read_face_raw(cube, face, &mut buf)?;
+                decoded.update(&xxh3_64(&buf).to_le_bytes());
                 report.faces += 1;
                 report.compressed_bytes += e.compressed_size;
                 report.raw_bytes += e.raw_size;
             }
+            let last = self.face_entry(cube, FACES - 1)?;
+            let end = last.offset.saturating_add(last.compressed_size);
+            report.padding_bytes +=
+                self.check_padding(end, &format!("after the frames of cube {cube}"))?;
             report.cubes += 1;
         }
+        if h.version >= 3 {
+            let computed = decoded.digest();
+            if computed != h.decoded_checksum {
+                return Err(Error::DecodedChecksum {
+                    stored: h.decoded_checksum,
+                    computed,
+                });
+            }
+            report.decoded_checksum = true;
+        }
         Ok(report)
+    }
+
+    /// Checks that the padding from `end` to the next multiple of 8 is zero; returns its length.
+    fn check_padding(&self, end: u64, region: &str) -> Result<u64, Error> {
+        let pad = Section {
+            offset: end,
+            size: align8(end).unwrap_or(end) - end,
+        };
+        let bytes = slice(self.bytes(), pad);
+        match bytes.iter().position(|v| *v != 0) {
+            Some(i) => Err(Error::NonZeroPadding {
+                region: region.to_string(),
+                offset: end + i as u64,
+                value: bytes.get(i).copied().unwrap_or(0),
+            }),
+            None => Ok(pad.size),
+        }
     }
 }
 

@@ -16,8 +16,8 @@ use crate::bytes::align8;
 use crate::cube::{face_raw_size, EncodedCube, FACES};
 use crate::error::io_at;
 use crate::header::{
-    Header, Section, FILTER_OFFSET, FINISH_FIELDS, FLAGS_FIELD, FLAG_COMPLETE, FLAG_DISTANCE,
-    FLAG_ENV_CUBE, HEADER_BYTES, SECTION_CHECKSUMS,
+    Header, Section, DECODED_CHECKSUM_FIELD, FINISH_FIELDS, FLAGS_FIELD, FLAG_COMPLETE,
+    FLAG_DISTANCE, FLAG_ENV_CUBE, HEADER_BYTES, SECTION_CHECKSUMS,
 };
 use crate::meta::{
     decode_meta, encode_meta, encode_points, validate_points, SamplePoint, StoreMeta,
@@ -25,7 +25,7 @@ use crate::meta::{
 };
 use crate::sample_map::{encode_maps, SampleMaps};
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES};
-use crate::{Error, Filter, VERSION};
+use crate::{Error, Filter, MAGIC, VERSION};
 use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
 /// Sync the partial file at least every this many cubes.
@@ -64,6 +64,8 @@ pub struct StoreWriter {
     next: u32,
     total: u32,
     cube_bytes: u64,
+    /// Hash of the raw faces' checksums so far: the header's decoded-faces checksum.
+    decoded: Xxh3,
     unsynced_cubes: u32,
     unsynced_bytes: u64,
     /// Set after an I/O error: the file's state is unknown, so nothing more is written.
@@ -160,6 +162,7 @@ impl Prefix {
             meta_checksum: xxh3_64(&meta_bytes),
             points_checksum: xxh3_64(&point_bytes),
             maps_checksum: xxh3_64(&map_bytes),
+            decoded_checksum: 0,
         };
         Ok(Prefix {
             header,
@@ -239,15 +242,24 @@ impl StoreWriter {
             cube_bytes: 0,
             unsynced_cubes: 0,
             unsynced_bytes: 0,
+            decoded: Xxh3::new(),
             failed: false,
         })
     }
 
     /// Reopens `<path>.partial` after an interruption: checks that its header, metadata,
     /// sample points and maps are exactly what [`StoreWriter::create`] would write for these
-    /// inputs ([`Error::ResumeMismatch`] naming what differs), keeps every complete cube record
-    /// whose record and frame checksums are valid, truncates the rest and continues.
-    /// [`Error::NoPartial`] if there is no partial file.
+    /// inputs, keeps every complete cube record whose record and frame checksums are valid
+    /// (and whose frames decode), truncates the rest and continues.
+    ///
+    /// Errors: [`Error::NoPartial`] if there is no partial file;
+    /// [`Error::PartialNeverCreated`] if `create()` was interrupted before its fixed sections
+    /// were all written (the file is shorter than them, or its header is all zero): it holds
+    /// no finished cube maps, so create the store again; [`Error::ResumeMismatch`] if it was
+    /// started with different settings (naming each bake parameter, count or object that
+    /// differs, the partial's value and this bake's), is damaged, or is not a partial store of
+    /// format version 2 or [`VERSION`] (version 2 partial files are continued as version 3:
+    /// the layouts differ only in the header's decoded-faces checksum, which `finish()` writes).
     pub fn resume(
         path: &Path,
         meta: &StoreMeta,
@@ -269,133 +281,180 @@ impl StoreWriter {
             path: partial.clone(),
             what,
         };
-        let payload_offset = prefix.header.payload.offset;
-        if file_len < payload_offset {
-            return Err(mismatch(format!(
-                "the partial file has {file_len} bytes, less than the {payload_offset} bytes of its fixed sections (killed during create?)"
+        let damaged = |what: String| Error::ResumeMismatch {
+            path: partial.clone(),
+            what: format!("{what}; bake without --resume to start over"),
+        };
+        let never_created = |detail: String| Error::PartialNeverCreated {
+            path: partial.clone(),
+            detail,
+        };
+        if file_len < HEADER_BYTES as u64 {
+            return Err(never_created(format!(
+                "it has {file_len} bytes, less than its {HEADER_BYTES}-byte header"
             )));
         }
         let mut rd = std::io::BufReader::with_capacity(1 << 20, &mut file);
-        let read_err = io_at(&partial, "read");
         let mut got = [0u8; HEADER_BYTES];
-        rd.read_exact(&mut got).map_err(read_err)?;
+        rd.read_exact(&mut got).map_err(io_at(&partial, "read"))?;
+        if got.iter().all(|b| *b == 0) {
+            return Err(never_created("its header is all zero bytes".into()));
+        }
+        let old = parse_partial_header(&got).map_err(damaged)?;
+        // create() writes the fixed sections front to back, then syncs, before any cube.
+        let fixed_end = old.payload.offset;
+        if file_len < fixed_end {
+            return Err(never_created(format!(
+                "it has {file_len} bytes, less than the {fixed_end} bytes of its header, metadata, sample points and sample maps"
+            )));
+        }
+
+        // Decode the partial's metadata and compare the settings field by field.
+        let mut old_meta_bytes = vec![0u8; usize::try_from(old.meta.size).unwrap_or(0)];
+        rd.read_exact(&mut old_meta_bytes)
+            .map_err(io_at(&partial, "read"))?;
+        let computed = xxh3_64(&old_meta_bytes);
+        if computed != old.meta_checksum {
+            return Err(damaged(format!(
+                "its metadata section (byte offset {}) is damaged: checksum {computed:#018x}, its header says {:#018x}",
+                old.meta.offset, old.meta_checksum
+            )));
+        }
+        let old_meta = decode_meta(&old_meta_bytes, old.meta.offset, old.version)
+            .map_err(|e| damaged(format!("its metadata section is damaged: {e}")))?;
+        let differences = setting_differences(&old, &old_meta, &prefix.header, meta);
+        if !differences.is_empty() {
+            return Err(mismatch(format!(
+                "it was started with different settings: {}; bake without --resume to start over, or pass the settings it was started with",
+                differences.join(", ")
+            )));
+        }
         // finish() may have patched the header before a crash: compare without those fields.
-        // The section checksums are left out too: the sections themselves are compared next,
-        // which says precisely what differs.
+        // The section checksums are left out too: the sections themselves are compared next.
+        // A version-2 partial file is continued as the current version.
         let mut want = prefix.header.to_bytes();
+        got[8..12].copy_from_slice(&VERSION.to_le_bytes());
         let normalise = |b: &mut [u8; HEADER_BYTES]| {
             b[FINISH_FIELDS].fill(0);
             b[SECTION_CHECKSUMS].fill(0);
+            b[DECODED_CHECKSUM_FIELD].fill(0);
             b[FLAGS_FIELD.start] &= !(FLAG_COMPLETE as u8);
             b[248..].fill(0);
         };
         normalise(&mut got);
         normalise(&mut want);
+        let same_settings = "although every setting is the same (written by another version of oslf?); bake without --resume to start over";
         if got != want {
             let at = got.iter().zip(&want).position(|(a, b)| a != b).unwrap_or(0);
-            if (8..12).contains(&at) {
-                return Err(mismatch(format!(
-                    "the partial file is format version {}, this writer writes version {VERSION}",
-                    u32::from_le_bytes([got[8], got[9], got[10], got[11]])
-                )));
-            }
-            if (FILTER_OFFSET..FILTER_OFFSET + 4).contains(&at) {
-                return Err(mismatch(format!(
-                    "the partial file uses face filter id {}, this bake filter {} (id {}), the filter of {} with mantissa_bits {} (different mantissa_bits?)",
-                    u32::from_le_bytes([
-                        got[FILTER_OFFSET],
-                        got[FILTER_OFFSET + 1],
-                        got[FILTER_OFFSET + 2],
-                        got[FILTER_OFFSET + 3]
-                    ]),
-                    filter,
-                    filter.id(),
-                    meta.bake.encoding,
-                    meta.bake.mantissa_bits
-                )));
-            }
             return Err(mismatch(format!(
-                "header differs at byte {at} (encoding, resolutions, counts or section sizes changed)"
+                "its header differs from this bake's at byte {at} {same_settings}"
             )));
         }
-        let mut pos = HEADER_BYTES as u64;
+        if old_meta_bytes != prefix.meta {
+            return Err(mismatch(format!(
+                "its metadata bytes differ from this bake's {same_settings}"
+            )));
+        }
+        drop(old_meta_bytes);
+        let mut pos = prefix.header.meta.end();
         let mut buf = Vec::new();
-        for (name, s, bytes) in prefix.sections() {
-            let len = s.end() - pos + zero_pad(s.end()) as u64;
+        // The metadata was compared above; then the sample points and maps.
+        for (name, s, bytes) in prefix.sections().into_iter().skip(1) {
+            // The padding before this section, then the section.
+            let len = s.end() - pos;
             buf.resize(len as usize, 0);
             rd.read_exact(&mut buf).map_err(io_at(&partial, "read"))?;
             let start = (s.offset - pos) as usize;
             let got = buf.get(start..start + bytes.len()).unwrap_or(&[]);
             if got != bytes {
                 let at = got.iter().zip(bytes).position(|(a, b)| a != b).unwrap_or(0);
-                // The same header (version included) means the same metadata layout.
-                let partial_bits = (name == "metadata")
-                    .then(|| decode_meta(got, s.offset, VERSION).ok())
-                    .flatten()
-                    .map(|m| m.bake.mantissa_bits)
-                    .filter(|b| *b != meta.bake.mantissa_bits);
-                let detail = match (name, partial_bits) {
-                    ("metadata", Some(bits)) => format!(
-                        "metadata differ: the partial file was baked with mantissa_bits {bits}, this bake has {}",
-                        meta.bake.mantissa_bits
-                    ),
-                    ("sample points", _) => format!(
-                        "sample points differ (point {}, byte {})",
-                        at / SAMPLE_POINT_BYTES,
-                        s.offset + at as u64
-                    ),
-                    _ => format!("{name} differ at byte {}", s.offset + at as u64),
+                let which = match name {
+                    "sample points" => format!("point {}", at / SAMPLE_POINT_BYTES),
+                    _ => {
+                        let per_patch = (bytes.len() / meta.patches.len().max(1)).max(1);
+                        format!("patch {}", at / per_patch)
+                    }
                 };
-                return Err(mismatch(detail));
+                return Err(mismatch(format!(
+                    "its {name} differ from this bake's ({which}, byte offset {}) {same_settings}",
+                    s.offset + at as u64
+                )));
             }
-            pos = s.end() + zero_pad(s.end()) as u64;
+            pos = s.end();
         }
+        // The padding before the payload.
+        let pad = zero_pad(pos);
+        let mut padding = [0u8; 8];
+        rd.read_exact(&mut padding[..pad])
+            .map_err(io_at(&partial, "read"))?;
+        pos += pad as u64;
+        debug_assert_eq!(pos, prefix.header.payload.offset);
 
-        // Recover complete cube records.
-        let raw = face_raw_size(
-            prefix.header.encoding,
-            prefix.header.cube_resolution,
-            prefix.header.has_distance(),
-        )?;
-        let bound = zstd::zstd_safe::compress_bound(usize::try_from(raw).unwrap_or(usize::MAX));
+        // Recover complete cube records: valid record headers and frame checksums, frames that
+        // decode to their raw size (the decoded-faces checksum is rebuilt from them).
+        let h = &prefix.header;
+        let raw = face_raw_size(h.encoding, h.cube_resolution, h.has_distance())?;
+        let raw_len = usize::try_from(raw).unwrap_or(usize::MAX);
+        let bound = zstd::zstd_safe::compress_bound(raw_len);
+        let filtered_len = crate::filter::filtered_face_size(
+            h.filter,
+            h.encoding,
+            h.cube_resolution,
+            h.has_distance(),
+            meta.bake.mantissa_bits,
+        )
+        .unwrap_or(usize::MAX);
+        let mut dctx = zstd::bulk::Decompressor::new()
+            .map_err(|e| Error::io(partial.display().to_string(), e))?;
+        let mut frame = Vec::new();
+        let mut filtered = Vec::new();
+        let mut raw_face = Vec::new();
+        let mut decoded = Xxh3::new();
         let mut toc = Vec::new();
         let mut next = 0u32;
         let mut cube_bytes = 0u64;
-        let mut chunk = vec![0u8; 1 << 16];
         'records: while next < prefix.total {
             let mut rec = [0u8; RECORD_HEADER_BYTES];
             if pos + RECORD_HEADER_BYTES as u64 > file_len || rd.read_exact(&mut rec).is_err() {
                 break;
             }
-            let Ok(h) = RecordHeader::parse(&rec) else {
+            let Ok(r) = RecordHeader::parse(&rec) else {
                 break;
             };
-            if h.cube != next {
+            if r.cube != next {
                 break;
             }
             let mut off = pos + RECORD_HEADER_BYTES as u64;
             let mut entries = [FaceEntry::default(); FACES];
-            for (face, (c, r, sum)) in h.faces.iter().enumerate() {
+            let mut raw_sums = [0u64; FACES];
+            for (face, (c, r, sum)) in r.faces.iter().enumerate() {
                 let end = off.checked_add(*c);
                 if *r != raw || *c == 0 || *c > bound as u64 || end.is_none_or(|e| e > file_len) {
                     break 'records;
                 }
-                let mut hasher = Xxh3::new();
-                let mut left = *c;
-                while left > 0 {
-                    let n = left.min(chunk.len() as u64) as usize;
-                    let Some(part) = chunk.get_mut(..n) else {
-                        break 'records;
-                    };
-                    if rd.read_exact(part).is_err() {
-                        break 'records;
-                    }
-                    hasher.update(part);
-                    left -= n as u64;
-                }
-                if hasher.digest() != *sum {
+                frame.resize(*c as usize, 0);
+                if rd.read_exact(&mut frame).is_err() || xxh3_64(&frame) != *sum {
                     break 'records;
                 }
+                filtered.resize(filtered_len, 0);
+                raw_face.resize(raw_len, 0);
+                let decodes = dctx
+                    .decompress_to_buffer(&frame, &mut filtered)
+                    .is_ok_and(|n| n == filtered_len)
+                    && crate::filter::unfilter_face_quantized(
+                        h.filter,
+                        h.encoding,
+                        h.cube_resolution,
+                        h.has_distance(),
+                        meta.bake.mantissa_bits,
+                        &filtered,
+                        &mut raw_face,
+                    )
+                    .is_ok();
+                if !decodes {
+                    break 'records;
+                }
+                raw_sums[face] = xxh3_64(&raw_face);
                 entries[face] = FaceEntry {
                     offset: off,
                     compressed_size: *c,
@@ -405,13 +464,15 @@ impl StoreWriter {
                 off += *c;
             }
             let pad = zero_pad(off);
-            let mut padding = [0u8; 8];
             if off + pad as u64 > file_len || rd.read_exact(&mut padding[..pad]).is_err() {
                 break;
             }
             for e in entries {
                 toc.extend_from_slice(&e.to_bytes());
                 cube_bytes += e.compressed_size;
+            }
+            for s in raw_sums {
+                decoded.update(&s.to_le_bytes());
             }
             pos = off + pad as u64;
             next += 1;
@@ -440,6 +501,7 @@ impl StoreWriter {
             next,
             total: prefix.total,
             cube_bytes,
+            decoded,
             unsynced_cubes: 0,
             unsynced_bytes: 0,
             failed: false,
@@ -547,6 +609,9 @@ impl StoreWriter {
         self.pos += written;
         self.toc.extend_from_slice(&entries);
         self.cube_bytes += cube.compressed_bytes();
+        for sum in cube.raw_checksums {
+            self.decoded.update(&sum.to_le_bytes());
+        }
         self.next += 1;
         self.unsynced_cubes += 1;
         self.unsynced_bytes += written;
@@ -594,6 +659,7 @@ impl StoreWriter {
             size: toc_size,
         };
         self.header.file_size = file_size;
+        self.header.decoded_checksum = self.decoded.digest();
         self.header.flags |= FLAG_COMPLETE;
         let partial = self.partial.clone();
         let header_bytes = self.header.to_bytes();
@@ -632,4 +698,181 @@ impl StoreWriter {
 
 fn raw_of(h: &Header) -> u64 {
     face_raw_size(h.encoding, h.cube_resolution, h.has_distance()).unwrap_or(0)
+}
+
+/// Parses the header of a partial file for [`StoreWriter::resume`]: an OSLF header of a
+/// resumable version (2 or [`VERSION`]) whose fixed sections lie in the order and at the
+/// places `create()` puts them. The error says what is wrong with it.
+fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
+    if bytes[..8] != MAGIC {
+        return Err(format!(
+            "it is not an OSLF store (its first bytes are {:02x?}, not \"OSLFSTOR\")",
+            &bytes[..8]
+        ));
+    }
+    let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+    if !(2..=VERSION).contains(&version) {
+        return Err(format!(
+            "it is format version {version}, and this writer continues only versions 2 to {VERSION}"
+        ));
+    }
+    let h = Header::parse(bytes).map_err(|e| format!("its header is damaged: {e}"))?;
+    let after = |s: Section| align8(s.end());
+    let in_order = h.meta.offset == HEADER_BYTES as u64
+        && Some(h.points.offset) == after(h.meta)
+        && Some(h.maps.offset) == after(h.points)
+        && Some(h.payload.offset) == after(h.maps);
+    if !in_order {
+        return Err(
+            "its header is damaged: the sections are not where the writer puts them".into(),
+        );
+    }
+    Ok(h)
+}
+
+/// What differs between the settings a partial file was started with (`old`) and those of
+/// the bake that wants to continue it (`new`): one `"name old (this bake: new)"` per bake
+/// parameter, count, camera, object or patch. Empty if they agree.
+fn setting_differences(
+    old_header: &Header,
+    old: &StoreMeta,
+    new_header: &Header,
+    new: &StoreMeta,
+) -> Vec<String> {
+    let mut d = Vec::new();
+    let mut diff = |name: &str, a: String, b: String| {
+        if a != b {
+            d.push(format!("{name} {a} (this bake: {b})"));
+        }
+    };
+    let hex = |h: &[u8; 32]| -> String {
+        let s: String = h.iter().take(8).map(|v| format!("{v:02x}")).collect();
+        format!("{s}…")
+    };
+    let (a, b) = (&old.bake, &new.bake);
+    diff(
+        "scene hash (the scene file's text)",
+        hex(&a.scene_hash),
+        hex(&b.scene_hash),
+    );
+    diff("seed", a.seed.to_string(), b.seed.to_string());
+    diff(
+        "cube_resolution",
+        a.cube_resolution.to_string(),
+        b.cube_resolution.to_string(),
+    );
+    diff(
+        "sample count",
+        old_header.sample_count.to_string(),
+        new_header.sample_count.to_string(),
+    );
+    diff(
+        "sample_map_resolution",
+        a.sample_map_resolution.to_string(),
+        b.sample_map_resolution.to_string(),
+    );
+    diff(
+        "samples_per_texel",
+        a.samples_per_texel.to_string(),
+        b.samples_per_texel.to_string(),
+    );
+    diff("bounces", a.bounces.to_string(), b.bounces.to_string());
+    diff("epsilon", a.epsilon.to_string(), b.epsilon.to_string());
+    diff(
+        "phi_samplemap",
+        format!("{}°", a.phi_samplemap_deg),
+        format!("{}°", b.phi_samplemap_deg),
+    );
+    diff("encoding", a.encoding.to_string(), b.encoding.to_string());
+    diff(
+        "mantissa_bits",
+        a.mantissa_bits.to_string(),
+        b.mantissa_bits.to_string(),
+    );
+    diff(
+        "face filter",
+        old_header.filter.to_string(),
+        new_header.filter.to_string(),
+    );
+    diff(
+        "distance_channel",
+        a.distance_channel.to_string(),
+        b.distance_channel.to_string(),
+    );
+    diff(
+        "zstd_level",
+        a.zstd_level.to_string(),
+        b.zstd_level.to_string(),
+    );
+    diff(
+        "env_cube",
+        old.has_env_cube.to_string(),
+        new.has_env_cube.to_string(),
+    );
+    let camera = |c: &Option<crate::CameraInfo>| match c {
+        Some(c) => format!(
+            "position {:?}, target {:?}, up {:?}, vfov {}°",
+            c.position, c.target, c.up, c.vfov_deg
+        ),
+        None => "none".into(),
+    };
+    diff("camera", camera(&old.camera), camera(&new.camera));
+    if old.objects.len() != new.objects.len() {
+        diff(
+            "object count",
+            old.objects.len().to_string(),
+            new.objects.len().to_string(),
+        );
+    } else if let Some((i, (x, y))) = old
+        .objects
+        .iter()
+        .zip(&new.objects)
+        .enumerate()
+        .find(|(_, (x, y))| x != y)
+    {
+        let name = format!("object {i} ({:?})", y.name);
+        diff(
+            &format!("{name} name"),
+            format!("{:?}", x.name),
+            format!("{:?}", y.name),
+        );
+        diff(
+            &format!("{name} transform"),
+            format!("{:?}", x.transform),
+            format!("{:?}", y.transform),
+        );
+        diff(
+            &format!("{name} colour"),
+            format!("{:?}", x.base_color),
+            format!("{:?}", y.base_color),
+        );
+        diff(
+            &format!("{name} patches"),
+            format!(
+                "{}..{}",
+                x.first_patch,
+                u64::from(x.first_patch) + u64::from(x.patch_count)
+            ),
+            format!(
+                "{}..{}",
+                y.first_patch,
+                u64::from(y.first_patch) + u64::from(y.patch_count)
+            ),
+        );
+    }
+    if old.patches.len() != new.patches.len() {
+        diff(
+            "patch count",
+            old.patches.len().to_string(),
+            new.patches.len().to_string(),
+        );
+    } else if let Some(i) = old
+        .patches
+        .iter()
+        .zip(&new.patches)
+        .position(|(x, y)| x != y)
+    {
+        d.push(format!("the control points of patch {i}"));
+    }
+    d
 }

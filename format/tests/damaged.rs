@@ -142,7 +142,7 @@ fn wrong_magic_and_version() {
     let mut b = good();
     b[0] ^= 0x20;
     assert!(matches!(open(&b), Err(Error::BadMagic { .. })));
-    for v in [0, 3, u32::MAX] {
+    for v in [0, 4, u32::MAX] {
         let mut b = good();
         put_u32(&mut b, 8, v);
         assert!(matches!(
@@ -150,14 +150,34 @@ fn wrong_magic_and_version() {
             Err(Error::UnsupportedVersion {
                 found,
                 oldest: 1,
-                newest: 2
+                newest: 3
             }) if found == v
         ));
     }
-    // A version-2 file labelled version 1 (header resealed) is read with the version-1
-    // metadata layout, which is then 4 bytes too long: a typed error, not a misreading.
+    // A version-3 file labelled version 1 or 2 (header resealed): its checksum of the decoded
+    // faces lies in bytes that are reserved there.
+    for v in [1, 2] {
+        let mut b = good();
+        put_u32(&mut b, 8, v);
+        reseal(&mut b);
+        assert!(
+            matches!(
+                open(&b),
+                Err(Error::InvalidHeader {
+                    field: "reserved",
+                    offset: 180,
+                    ..
+                })
+            ),
+            "{:?}",
+            open(&b).err()
+        );
+    }
+    // With those bytes cleared, it is read with the version-1 metadata layout, which is then 4
+    // bytes too long: a typed error, not a misreading.
     let mut b = good();
     put_u32(&mut b, 8, 1);
+    b[180..188].fill(0);
     reseal(&mut b);
     assert!(
         matches!(open(&b), Err(Error::InvalidMetadata { .. })),
@@ -804,4 +824,147 @@ fn filter_swapped_on_a_quantized_store_is_a_typed_error() {
     let store = open(&c).unwrap();
     let mut raw = vec![0u8; store.face_raw_size()];
     store.read_face_raw(0, 0, &mut raw).unwrap();
+}
+
+#[test]
+fn the_good_file_verifies_its_padding_and_decoded_faces() {
+    let b = good();
+    let r = open(&b).unwrap().verify().unwrap();
+    assert!(r.decoded_checksum);
+    assert!(r.padding_bytes > 0, "{r:?}");
+    assert_ne!(header(&b).decoded_checksum, 0);
+}
+
+/// Every padding region (after the metadata, sample points and maps; after each cube
+/// record's frames) must be zero: verify names the first non-zero byte.
+#[test]
+fn non_zero_padding_fails_verify_naming_the_offset() {
+    let b = good();
+    let h = header(&b);
+    let s = open(&b).unwrap();
+    let mut regions = vec![];
+    for (end, next, what) in [
+        (
+            h.meta.end(),
+            h.points.offset,
+            "after the metadata section".to_string(),
+        ),
+        (
+            h.points.end(),
+            h.maps.offset,
+            "after the sample points section".into(),
+        ),
+        (
+            h.maps.end(),
+            h.payload.offset,
+            "after the sample maps section".into(),
+        ),
+    ] {
+        regions.push((end, next, what));
+    }
+    for cube in 0..s.cube_count() {
+        let last = s.face_entry(cube, 5).unwrap();
+        let end = last.offset + last.compressed_size;
+        regions.push((
+            end,
+            end.next_multiple_of(8),
+            format!("after the frames of cube {cube}"),
+        ));
+    }
+    let mut tested = 0;
+    for (start, end, what) in regions {
+        for at in start..end {
+            let mut c = b.clone();
+            c[at as usize] = 0x5a;
+            // Padding is outside every checksum: the store opens, and verify catches it.
+            let store = open(&c).unwrap();
+            match store.verify() {
+                Err(Error::NonZeroPadding {
+                    region,
+                    offset,
+                    value: 0x5a,
+                }) => {
+                    assert_eq!((region.as_str(), offset), (what.as_str(), at));
+                    assert_eq!(
+                        store.verify().unwrap_err().to_string(),
+                        format!(
+                            "padding byte at byte offset {at} ({what}) is 0x5a; padding must be zero"
+                        )
+                    );
+                }
+                other => panic!("{what} @ {at}: {other:?}"),
+            }
+            tested += 1;
+        }
+    }
+    assert!(
+        tested >= 4,
+        "the fixture has padding after the metadata and some cubes"
+    );
+    assert!(
+        !h.meta.end().is_multiple_of(8),
+        "the fixture pads its metadata"
+    );
+}
+
+/// The frame checksums cover the compressed bytes; a changed face filter id (header resealed)
+/// or a changed mantissa_bits (metadata resealed) decodes the same frames to other texels,
+/// which verify catches with the checksum of the decoded faces.
+#[test]
+fn a_changed_filter_id_or_mantissa_bits_fails_verify() {
+    // Filters 0, 1 and 2 decompress to the same size. On RGBA16F filters 1 and 2 are the
+    // same transform (they differ only on RGB9E5 texels), so 2 → 1 decodes the same bytes.
+    let rgba16f = good();
+    let rgb9e5 = store_bytes(Spec::default());
+    for (b, other) in [
+        (&rgba16f, Filter::None),
+        (&rgb9e5, Filter::None),
+        (&rgb9e5, Filter::Predict),
+    ] {
+        assert_eq!(header(b).filter, Filter::PredictRows);
+        let mut c = b.clone();
+        put_u32(&mut c, 176, other.id());
+        reseal(&mut c);
+        let store = open(&c).unwrap();
+        let mut raw = vec![0u8; store.face_raw_size()];
+        store.read_face_raw(0, 0, &mut raw).unwrap();
+        let e = store.verify().unwrap_err();
+        assert!(
+            matches!(e, Error::DecodedChecksum { stored, computed }
+                if stored == header(b).decoded_checksum && computed != stored),
+            "{other}: {e}"
+        );
+        assert!(e.to_string().contains("header byte offset 180"), "{e}");
+        assert!(e.to_string().contains("face filter id at byte 176"), "{e}");
+    }
+    let mut c = rgba16f.clone();
+    put_u32(&mut c, 176, Filter::Predict.id());
+    reseal(&mut c);
+    open(&c).unwrap().verify().unwrap();
+    // RGB9E5 with 5 mantissa bits, filter 3: 6 bits pack into as many bytes (3 planes).
+    let b = store_bytes(Spec {
+        mantissa_bits: 5,
+        distance: true,
+        ..Spec::default()
+    });
+    let h = header(&b);
+    assert_eq!(h.filter, Filter::PredictPacked);
+    open(&b).unwrap().verify().unwrap();
+    let at = HEADER_BYTES + 8 + 80;
+    let mut c = b.clone();
+    put_u32(&mut c, at, 6);
+    reseal_all(&mut c);
+    assert_eq!(open(&c).unwrap().meta().bake.mantissa_bits, 6);
+    assert!(matches!(
+        open(&c).unwrap().verify(),
+        Err(Error::DecodedChecksum { .. })
+    ));
+    // Changing the decoded checksum itself is caught the same way.
+    let mut c = b.clone();
+    c[180] ^= 1;
+    reseal(&mut c);
+    assert!(matches!(
+        open(&c).unwrap().verify(),
+        Err(Error::DecodedChecksum { .. })
+    ));
 }

@@ -347,3 +347,46 @@ fn a_version_1_store_still_opens() {
         }
     }
 }
+
+/// A store written by the version-2 writer (before the checksum of the decoded faces; the
+/// fixture of `Spec { distance: true, seed: 3, mantissa_bits: 5, ..Spec::default() }`, filter
+/// 3) still opens and verifies, without the decoded-faces check it does not record, and holds
+/// the texels a version-3 store of the same inputs holds.
+#[test]
+fn a_version_2_store_still_opens_and_verifies() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v2-rgb9e5-5bits.oslf");
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().version, 2);
+    assert_eq!(store.header().decoded_checksum, 0);
+    assert_eq!(store.header().filter, Filter::PredictPacked);
+    let r = store.verify().unwrap();
+    assert!(!r.decoded_checksum);
+    assert_eq!(r.cubes, 6);
+    let spec = Spec {
+        distance: true,
+        seed: 3,
+        mantissa_bits: 5,
+        ..Spec::default()
+    };
+    let f = fixture(spec);
+    check_store(&store, &f, spec);
+    let (_dir, new) = temp_store("v3.oslf");
+    write(&new, &f);
+    let v3 = Store::open(&new).unwrap();
+    assert_eq!(v3.header().version, VERSION);
+    assert!(v3.verify().unwrap().decoded_checksum);
+    assert_eq!(v3.meta(), store.meta());
+    let mut a = vec![0u8; store.face_raw_size()];
+    let mut b = a.clone();
+    for c in 0..store.cube_count() {
+        for face in 0..6 {
+            store.read_face_raw(c, face, &mut a).unwrap();
+            v3.read_face_raw(c, face, &mut b).unwrap();
+            assert_eq!(a, b);
+        }
+    }
+    // Its bytes differ from the version-3 store only in the header.
+    let (old, now) = (std::fs::read(&path).unwrap(), std::fs::read(&new).unwrap());
+    assert_eq!(old[256..], now[256..]);
+}

@@ -26,6 +26,12 @@ fn reference(f: &Fixture) -> Vec<u8> {
     std::fs::read(&path).unwrap()
 }
 
+/// The first 8 bytes of a scene hash in hex, as resume's messages show it.
+fn hex8(h: &[u8; 32]) -> String {
+    let s: String = h[..8].iter().map(|v| format!("{v:02x}")).collect();
+    format!("{s}…")
+}
+
 fn encoded(f: &Fixture, i: usize) -> EncodedCube {
     encode_cube(&f.cubes[i], &f.meta.bake, i as u32).unwrap().0
 }
@@ -146,8 +152,13 @@ fn resume_with_different_inputs_is_a_mismatch() {
     let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
         .err()
         .unwrap();
+    // Each refusal names the setting, its value in the partial file and in this bake, and
+    // what to do.
+    let hint = "bake without --resume to start over, or pass the settings it was started with";
     assert!(
-        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("metadata")),
+        matches!(&e, Error::ResumeMismatch { what, .. }
+            if what.contains("started with different settings: seed 5 (this bake: 6); ")
+                && what.ends_with(hint)),
         "{e}"
     );
     let mut meta = f.meta.clone();
@@ -156,7 +167,54 @@ fn resume_with_different_inputs_is_a_mismatch() {
         .err()
         .unwrap();
     assert!(
-        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("header")),
+        matches!(&e, Error::ResumeMismatch { what, .. }
+            if what.contains("settings: encoding rgb9e5 (this bake: rgba16f); ")
+                && what.ends_with(hint)),
+        "{e}"
+    );
+    // Several settings at once, each named.
+    let mut meta = f.meta.clone();
+    meta.bake.cube_resolution = 16;
+    meta.bake.epsilon = 0.25;
+    meta.bake.scene_hash[0] ^= 0xff;
+    let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
+        .err()
+        .unwrap();
+    let want = format!(
+        "scene hash (the scene file's text) {} (this bake: {}), cube_resolution 8 (this bake: 16), epsilon 0.05 (this bake: 0.25); ",
+        hex8(&f.meta.bake.scene_hash),
+        hex8(&meta.bake.scene_hash)
+    );
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains(&want)),
+        "{e}\nwant {want}"
+    );
+    // A different number of sample points (e.g. another sample_count), a camera, an object.
+    let mut points = f.points.clone();
+    points.push(points[0]);
+    let e = StoreWriter::resume(&path, &f.meta, &points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("sample count 9 (this bake: 10)")),
+        "{e}"
+    );
+    let mut meta = f.meta.clone();
+    assert!(meta.camera.is_none());
+    meta.camera = Some(CameraInfo {
+        position: [0.0, 1.0, 5.0],
+        target: [0.0, 0.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        vfov_deg: 30.0,
+    });
+    meta.objects[1].base_color = [1.0, 0.0, 0.0];
+    let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. }
+            if what.contains("camera none (this bake: position [0.0, 1.0, 5.0], target [0.0, 0.0, 0.0], up [0.0, 1.0, 0.0], vfov 30°), ")
+                && what.contains("object 1 (\"lid\") colour [0.1, 0.2, 0.3] (this bake: [1.0, 0.0, 0.0])")),
         "{e}"
     );
     let mut points = f.points.clone();
@@ -197,7 +255,7 @@ fn resume_with_other_mantissa_bits_or_version_is_a_mismatch() {
         .err()
         .unwrap();
     assert!(
-        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("face filter id 2, this bake filter predict-packed (id 3), the filter of rgb9e5 with mantissa_bits 5")),
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("mantissa_bits 9 (this bake: 5), face filter predict-rows (this bake: predict-packed)")),
         "{e}"
     );
     // A cube quantized differently is refused by append.
@@ -384,4 +442,122 @@ fn encode_cube_rejects_bad_radiance_and_counts_clamps() {
         encode_cube(&c, &f.meta.bake, 0),
         Err(Error::CubeShape { .. })
     ));
+}
+
+/// A partial file whose `create()` was killed before the header, metadata, sample points and
+/// sample maps were all written holds no cube maps: resume says so with its own error (the
+/// bake then starts over), whatever settings it was started with.
+#[test]
+fn a_partial_killed_during_create_is_never_created_not_a_mismatch() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("torn.oslf");
+    start(&path, &f, 0);
+    let partial = partial_path(&path);
+    let full = std::fs::read(&partial).unwrap();
+    let fixed = full.len();
+    let mut other = f.meta.clone();
+    other.bake.seed += 1;
+    for cut in [0, 1, 100, 255, 256, 300, fixed - 1] {
+        std::fs::write(&partial, &full[..cut]).unwrap();
+        for meta in [&f.meta, &other] {
+            match StoreWriter::resume(&path, meta, &f.points, &f.maps) {
+                Err(Error::PartialNeverCreated { path: p, detail }) => {
+                    assert_eq!(p, partial);
+                    let want = if cut < 256 {
+                        format!("it has {cut} bytes, less than its 256-byte header")
+                    } else {
+                        format!("it has {cut} bytes, less than the {fixed} bytes of its header, metadata, sample points and sample maps")
+                    };
+                    assert_eq!(detail, want);
+                }
+                other => panic!("cut {cut}: {:?}", other.err()),
+            }
+        }
+    }
+    let e = Error::PartialNeverCreated {
+        path: partial.clone(),
+        detail: "it has 0 bytes, less than its 256-byte header".into(),
+    };
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{} was never completely created (it has 0 bytes, less than its 256-byte header), so it holds no finished cube maps",
+            partial.display()
+        )
+    );
+    // Full length but the header never reached the disk (zeros).
+    let mut zeroed = full.clone();
+    zeroed[..256].fill(0);
+    std::fs::write(&partial, &zeroed).unwrap();
+    assert!(matches!(
+        StoreWriter::resume(&path, &f.meta, &f.points, &f.maps),
+        Err(Error::PartialNeverCreated { detail, .. }) if detail == "its header is all zero bytes"
+    ));
+    // Complete fixed sections and no cube: resumes from cube 0.
+    std::fs::write(&partial, &full).unwrap();
+    let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+    assert_eq!(w.next_cube(), 0);
+}
+
+/// A partial file that is not a store, or whose header or metadata is damaged, is refused with
+/// what is wrong and what to do (it may hold finished cubes, so it is not silently replaced).
+#[test]
+fn a_damaged_partial_is_refused_with_a_reason() {
+    let f = fixture(spec());
+    let (_dir, path) = temp_store("dmg.oslf");
+    start(&path, &f, 2);
+    let partial = partial_path(&path);
+    let good = std::fs::read(&partial).unwrap();
+    let refused = |bytes: &[u8]| -> String {
+        std::fs::write(&partial, bytes).unwrap();
+        match StoreWriter::resume(&path, &f.meta, &f.points, &f.maps) {
+            Err(Error::ResumeMismatch { what, .. }) => {
+                assert!(
+                    what.ends_with("; bake without --resume to start over"),
+                    "{what}"
+                );
+                what
+            }
+            other => panic!("{:?}", other.err()),
+        }
+    };
+    let mut b = good.clone();
+    b[..8].copy_from_slice(b"NOTOSLF!");
+    assert!(refused(&b).starts_with("it is not an OSLF store"));
+    let mut b = good.clone();
+    b[8..12].copy_from_slice(&7u32.to_le_bytes());
+    assert!(refused(&b)
+        .starts_with("it is format version 7, and this writer continues only versions 2 to 3"));
+    let mut b = good.clone();
+    b[30] ^= 1;
+    assert!(refused(&b).starts_with("its header is damaged: header checksum mismatch"));
+    let mut b = good.clone();
+    b[300] ^= 1;
+    assert!(refused(&b).starts_with("its metadata section (byte offset 256) is damaged"));
+}
+
+/// A partial file written by the version-2 writer (the same layout, without the checksum of
+/// the decoded faces) is continued and finished as version 3, byte-identical to a fresh bake.
+#[test]
+fn a_version_2_partial_is_finished_as_version_3() {
+    let f = fixture(spec());
+    let want = reference(&f);
+    let (_dir, path) = temp_store("v2.oslf");
+    start(&path, &f, 4);
+    let partial = partial_path(&path);
+    let mut b = std::fs::read(&partial).unwrap();
+    assert_eq!(
+        b[180..188],
+        [0; 8],
+        "a partial file has no decoded checksum yet"
+    );
+    b[8..12].copy_from_slice(&2u32.to_le_bytes());
+    let sum = xxhash_rust::xxh3::xxh3_64(&b[..248]);
+    b[248..256].copy_from_slice(&sum.to_le_bytes());
+    std::fs::write(&partial, &b).unwrap();
+    complete(&path, &f);
+    assert_eq!(std::fs::read(&path).unwrap(), want);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().version, VERSION);
+    assert!(store.verify().unwrap().decoded_checksum);
 }

@@ -4,7 +4,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use oslf_bake::bake::{bake, BakeOptions, BakeReport, TESSELLATION_ERROR};
+use oslf_bake::bake::{
+    bake, check_store_writable, check_writable, BakeOptions, BakeReport, TESSELLATION_ERROR,
+};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::camera;
 use oslf_bake::image_file;
@@ -66,6 +68,20 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         let stem = args.scene.file_stem().unwrap_or_default();
         PathBuf::from(stem).with_extension("oslf")
     });
+    let preview = match &args.preview {
+        Some(p) if p.as_os_str() == "none" => None,
+        Some(p) => Some(p.clone()),
+        None => Some(PathBuf::from(format!("{}.preview.png", output.display()))),
+    };
+    // Every output must be writable before the slow work starts.
+    check_store_writable(&output)?;
+    if let Some(path) = &args.report_json {
+        check_writable(path, "the --report-json file")?;
+    }
+    if let (Some(png), Some(_)) = (&preview, &scene.camera) {
+        check_writable(png, "the preview")?;
+        check_writable(&png.with_extension("exr"), "the preview")?;
+    }
     let options = BakeOptions {
         output: output.clone(),
         resume: args.resume,
@@ -85,11 +101,6 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         std::fs::write(path, json).with_context(|| format!("cannot write {}", path.display()))?;
     }
 
-    let preview = match &args.preview {
-        Some(p) if p.as_os_str() == "none" => None,
-        Some(p) => Some(p.clone()),
-        None => Some(PathBuf::from(format!("{}.preview.png", output.display()))),
-    };
     if let Some(png) = preview {
         let Some(cam) = &scene.camera else {
             eprintln!("no preview: the scene has no [camera]");

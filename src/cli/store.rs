@@ -23,7 +23,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Check every checksum and decompress every face (non-zero exit on failure).
+    /// Check every checksum, that every padding byte is zero, and decode every face, checking
+    /// the decoded texels against the store's checksum of them (non-zero exit on failure).
     Verify { store: PathBuf },
     /// Export one cube as OpenEXR (f32 RGB).
     ExportCube {
@@ -71,12 +72,21 @@ pub fn run(cli: Args) -> Result<()> {
                 .verify()
                 .with_context(|| format!("{} failed verification", store.display()))?;
             println!(
-                "{}: OK — {} cubes, {} faces, {} compressed bytes, {} raw bytes checked",
+                "{}: OK — {} cubes, {} faces, {} compressed bytes, {} raw bytes, {} padding bytes checked; {}",
                 store.display(),
                 r.cubes,
                 r.faces,
                 r.compressed_bytes,
-                r.raw_bytes
+                r.raw_bytes,
+                r.padding_bytes,
+                if r.decoded_checksum {
+                    "the decoded faces match their checksum".to_string()
+                } else {
+                    format!(
+                        "format version {} records no checksum of the decoded faces",
+                        s.header().version
+                    )
+                }
             );
             Ok(())
         }
