@@ -1,6 +1,6 @@
 //! Scene files: the TOML text a user writes, parsed and validated into a [`Scene`].
 //!
-//! The format is documented in README.md ("Scene files"); every key there is honoured by the
+//! The format is documented in docs/scene-format.md; every key there is honoured by the
 //! bake, and every unknown key is an error. Errors name the file, line and column.
 //!
 //! Conventions: Z is up; lengths are in scene units; angles in degrees; colours are linear RGB.

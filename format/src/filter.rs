@@ -62,8 +62,8 @@ impl Filter {
     /// The filter writers use for a store of `encoding` keeping `mantissa_bits` RGB9E5 mantissa
     /// bits: [`Filter::PredictPacked`] for RGB9E5 with at most 6 bits, where it is smaller
     /// and faster to read than filter 2, [`Filter::PredictRows`] otherwise (with 7 to 9 bits
-    /// filter 3's code splits residuals across bytes and compresses worse: README.md,
-    /// "Store").
+    /// filter 3's code splits residuals across bytes and compresses worse: docs/measurements.md,
+    /// "Quantized RGB9E5").
     pub fn for_store(encoding: Encoding, mantissa_bits: u32) -> Self {
         if encoding == Encoding::Rgb9e5 && mantissa_bits <= 6 {
             Filter::PredictPacked

@@ -215,7 +215,7 @@
 //! of 32²) RGB9E5 3.490 → 3.432 → 3.443, RGBA16F 5.706 → 4.658 → 4.658, RGBA32F 10.039 →
 //! 9.207 → 9.207; thesis preset (`OSLF_BENCH_STORE=thesis.oslf OSLF_BENCH_CUBES=300`, the first
 //! 300 of its 1240 cubes of 128²) RGB9E5 3.411 → 3.155 → 3.142. The cube maps are dominated by
-//! Monte Carlo noise, which no lossless filter removes (README.md, "Measured"). With
+//! Monte Carlo noise, which no lossless filter removes (docs/measurements.md, "Store sizes and read speed"). With
 //! `mantissa_bits` k < 9 (lossy, "Quantized RGB9E5"), RGB9E5 bytes per texel for k = 8 … 1,
 //! filter 3 (filter 2): quick 3.350 (3.149), 2.873 (2.837), 2.438 (2.489), 2.119 (2.189), 1.677
 //! (1.886), 1.334 (1.530), 1.030 (1.153), 0.573 (1.079); 128² (198 cubes of a thesis-like bake,

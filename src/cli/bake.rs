@@ -17,7 +17,7 @@ use oslf_bake::scene::Scene;
 /// ray-traced HDR cube map at each, and per-patch sample maps, all written to one store.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The scene file (TOML; see README.md "Scene files").
+    /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
     /// The store to write [default: the scene's name with .oslf, in the current directory].
     #[arg(short, long)]
