@@ -4,12 +4,8 @@ mod common;
 
 use common::{oslf, runtime_fixture};
 
-
 fn render(args: &[&str]) -> std::process::Output {
-    oslf("render")
-        .args(args)
-        .output()
-        .unwrap()
+    oslf("render").args(args).output().unwrap()
 }
 
 #[test]
@@ -67,6 +63,155 @@ fn renders_exr_and_png_and_prints_cache_statistics() {
     assert!(stats["frame"]["requests"].as_u64().unwrap() > 0);
 }
 
+/// The pixels of the RGBA OpenEXR at `path`, row-major.
+fn read_exr(path: &std::path::Path) -> (usize, Vec<[f32; 4]>) {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a]
+        },
+    )
+    .unwrap();
+    image.layer_data.channel_data.pixels
+}
+
+/// Renders the test store at 64×48 into `name`.exr with `extra` flags.
+fn render_background(
+    name: &str,
+    store: &std::path::Path,
+    extra: &[&str],
+) -> (std::process::Output, std::path::PathBuf) {
+    let dir = runtime_fixture::store_path()
+        .parent()
+        .unwrap()
+        .join("cli-background");
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join(format!("{name}.exr"));
+    let mut args = vec![
+        store.to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+    ];
+    args.extend_from_slice(extra);
+    (render(&args), exr)
+}
+
+/// The PNG beside `exr` as 8-bit RGB.
+fn read_png(exr: &std::path::Path) -> Vec<[u8; 3]> {
+    let png = image::open(exr.with_extension("png")).unwrap().to_rgb8();
+    png.pixels().map(|p| p.0).collect()
+}
+
+#[test]
+fn the_background_is_the_environment_cube_by_default_black_or_a_colour_on_request() {
+    let store = runtime_fixture::store_path();
+    let ok = |out: &std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    };
+
+    let (out, exr) = render_background("default", &store, &[]);
+    ok(&out);
+    let (w, env) = read_exr(&exr);
+    assert_eq!((w, env.len()), (64, 64 * 48));
+    assert!(env.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    assert!(
+        env.iter().all(|p| p[3] == 0.0 || p[3] == 1.0),
+        "alpha is the mask"
+    );
+    let background: Vec<usize> = (0..env.len()).filter(|&i| env[i][3] == 0.0).collect();
+    assert!(
+        background.len() > 64 * 48 / 10,
+        "{} background pixels",
+        background.len()
+    );
+    let lit = background
+        .iter()
+        .filter(|&&i| env[i][0] + env[i][1] + env[i][2] > 0.0)
+        .count();
+    assert!(
+        lit * 100 >= background.len() * 99,
+        "{lit} of {} background pixels show the environment",
+        background.len()
+    );
+    let png = read_png(&exr);
+    assert!(
+        background.iter().any(|&i| png[i] != [0, 0, 0]),
+        "the PNG shows the background"
+    );
+
+    let (out, exr) = render_background("none", &store, &["--background", "none"]);
+    ok(&out);
+    let (_, none) = read_exr(&exr);
+    let png = read_png(&exr);
+    for (i, (a, b)) in env.iter().zip(&none).enumerate() {
+        assert_eq!(
+            a[3], b[3],
+            "the object mask does not depend on the background"
+        );
+        if b[3] == 0.0 {
+            assert_eq!(*b, [0.0; 4]);
+            assert_eq!(png[i], [0, 0, 0]);
+        } else {
+            assert_eq!(a, b, "object pixels do not depend on the background");
+        }
+    }
+
+    let (out, exr) = render_background("colour", &store, &["--background", "0.25,0.5,2"]);
+    ok(&out);
+    let (_, colour) = read_exr(&exr);
+    for p in colour.iter().filter(|p| p[3] == 0.0) {
+        assert_eq!(*p, [0.25, 0.5, 2.0, 0.0]);
+    }
+
+    for (value, says) in [
+        ("1,2", "three finite"),
+        ("1,-2,3", "negative"),
+        ("sky", "none, env, or a linear colour R,G,B"),
+    ] {
+        let (out, _) = render_background("bad", &store, &["--background", value]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "--background {value}");
+        assert!(
+            err.contains("--background") && err.contains(value) && err.contains(says),
+            "--background {value}: {err}"
+        );
+    }
+}
+
+#[test]
+fn a_store_without_an_environment_cube_gets_a_black_background_and_a_note() {
+    let store = runtime_fixture::store_path_without_env_cube();
+    let (out, exr) = render_background("no-env", &store, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let note = format!(
+        "note: {} has no environment cube; background is black (bake with env_cube = true)",
+        store.display()
+    );
+    assert_eq!(err.lines().filter(|l| *l == note).count(), 1, "{err}");
+    let (_, px) = read_exr(&exr);
+    assert!(px.iter().any(|p| p[3] == 0.0));
+    assert!(px.iter().filter(|p| p[3] == 0.0).all(|p| *p == [0.0; 4]));
+
+    let (out, _) = render_background("no-env-explicit", &store, &["--background", "env"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("no environment cube") && err.contains("teapot.oslf"),
+        "{err}"
+    );
+    assert!(!err.contains("note:"), "{err}");
+}
+
 #[test]
 fn bad_inputs_give_clear_errors_and_a_failing_exit() {
     let dir = std::env::temp_dir().join(format!("oslf-render-cli-{}", std::process::id()));
@@ -86,7 +231,7 @@ fn bad_inputs_give_clear_errors_and_a_failing_exit() {
 
     let store = runtime_fixture::store_path();
     let mut bytes = std::fs::read(&store).unwrap();
-    // A version this reader does not know (it reads 1 and 2).
+    // A version this reader does not know.
     bytes[8..12].copy_from_slice(&99u32.to_le_bytes());
     let other = dir.join("version99.oslf");
     std::fs::write(&other, bytes).unwrap();
@@ -145,12 +290,7 @@ fn compare_reports_cielab_and_rgb_errors_between_renders() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    let compare = |args: &[&str]| {
-        oslf("compare")
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let compare = |args: &[&str]| oslf("compare").args(args).output().unwrap();
     let json = exr("m.json");
     let out = compare(&[&exr("a.exr"), &exr("b.exr"), "--json", &json]);
     assert!(

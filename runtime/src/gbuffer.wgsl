@@ -1,7 +1,7 @@
 // G-buffer pass: rasterizes the tessellated Bézier patches (geometry.rs) and writes, per pixel,
 // the world position with the patch id, and the octahedral-encoded shading normal with the
 // patch parameters (u, v). shade.wgsl reads these. Bindings in the order of
-// `Renderer::gbuffer_layout` (renderer.rs).
+// `GBufferPipeline::bind_group_layout` (pipelines.rs).
 
 struct Params {
     view_proj: mat4x4<f32>,

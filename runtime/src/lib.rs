@@ -19,11 +19,15 @@
 //!     ∂x/∂u so anisotropy follows the surface;
 //!   - the environment-map baseline: one cube at the object's centre, by direction alone.
 //!     See [`params`].
+//!
+//!   Pixels off the object keep alpha 0 and show the [`Background`] of
+//!   [`RenderOptions::background`]: transparent black by default, the environment cube along
+//!   each pixel's camera ray, or a constant colour.
 //! * **Cache** ([`cache`]): decoded faces in RAM under a byte budget and a pool of GPU cube
 //!   slots under a slot budget, both LRU, fed each frame by a feedback buffer in which the
 //!   shader marks every face it needs. Whole-cube or per-face loading. Documented fallback
 //!   when a needed face is not resident; statistics per frame and cumulative ([`CacheStats`]).
-//! * **CPU reference** ([`reference`]): the same shading in Rust, function for function, used
+//! * **CPU reference** ([`reference`](mod@reference)): the same shading in Rust, function for function, used
 //!   by the parity tests against the GPU.
 //!
 //! * **Metrics** ([`metrics`]): RMSE in CIELAB and linear RGB and PSNR over a mask (§6.1), and
@@ -51,12 +55,15 @@
 //! println!("{} hits, {} misses", frame.stats.hits, frame.stats.misses);
 //! ```
 
+mod buffers;
 pub mod cache;
 mod error;
 pub mod geometry;
 pub mod gpu;
 pub mod metrics;
 pub mod params;
+mod pipelines;
+mod pool;
 pub mod reference;
 pub mod renderer;
 pub mod replay;
@@ -64,6 +71,6 @@ pub mod replay;
 pub use cache::{CacheConfig, CacheStats, CubeCache, Granularity};
 pub use error::{Result, RuntimeError};
 pub use gpu::Gpu;
-pub use params::{Blend, Mode, Order, ShadingParams, Source};
 pub use oslf_geometry::Camera;
+pub use params::{Background, Blend, Mode, Order, ShadingParams, Source};
 pub use renderer::{Frame, RenderOptions, Renderer};

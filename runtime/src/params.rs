@@ -228,7 +228,69 @@ impl ShadingParams {
     }
 }
 
-/// The shader's uniform block (`Params` in shade.wgsl and gbuffer.wgsl), 160 bytes.
+/// What the pixels the object does not cover show. Their alpha stays 0 whatever is chosen:
+/// alpha is the object mask, which the metrics use.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Background {
+    /// Transparent black, `[0, 0, 0, 0]`: the embedder composes its own scene (the default).
+    #[default]
+    None,
+    /// The store's environment cube (the environment-map baseline's cube, pinned resident by
+    /// the cache), looked up along each pixel's camera ray with the same bilinear filtering.
+    /// The store must have one ([`Background::validate`]).
+    Env,
+    /// A constant linear RGB colour (finite, non-negative).
+    Color([f32; 3]),
+}
+
+impl Background {
+    /// The shader's tag: 0 none, 1 environment cube, 2 colour.
+    pub fn tag(self) -> u32 {
+        match self {
+            Background::None => 0,
+            Background::Env => 1,
+            Background::Color(_) => 2,
+        }
+    }
+
+    /// Errors when the colour is negative or not finite, or when [`Background::Env`] is asked
+    /// for and the store has no environment cube (`has_env_cube` false).
+    pub fn validate(&self, has_env_cube: bool) -> Result<()> {
+        match self {
+            Background::None => Ok(()),
+            Background::Env if has_env_cube => Ok(()),
+            Background::Env => Err(RuntimeError::Parameter(
+                "background env: the store has no environment cube (bake with env_cube = true)"
+                    .into(),
+            )),
+            Background::Color(c) if c.iter().all(|v| v.is_finite() && *v >= 0.0) => Ok(()),
+            Background::Color(c) => Err(RuntimeError::Parameter(format!(
+                "background colour {c:?} must be three finite, non-negative linear RGB values"
+            ))),
+        }
+    }
+}
+
+/// A camera ray's frame as the shader rebuilds it (`camera_ray` in shade.wgsl): the basis of
+/// [`oslf_geometry::Camera::basis`] and tan(vfov/2) clamped as
+/// [`oslf_geometry::Camera::direction`] clamps it.
+fn ray_frame(camera: &oslf_geometry::Camera) -> ([f32; 4], [f32; 4], [f32; 4]) {
+    let (right, up, forward) = camera.basis();
+    let vfov = if camera.vfov_deg.is_finite() {
+        camera.vfov_deg.clamp(1e-3, 179.0)
+    } else {
+        60.0
+    };
+    let tan_half = (0.5 * vfov.to_radians()).tan();
+    (
+        right.extend(tan_half).to_array(),
+        up.extend(0.0).to_array(),
+        forward.extend(0.0).to_array(),
+    )
+}
+
+/// The shader's uniform block (`Params` in shade.wgsl; gbuffer.wgsl declares its first two
+/// members), 240 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadeUniform {
@@ -253,6 +315,19 @@ pub struct ShadeUniform {
     pub index16: u32,
     pub cube_res: u32,
     pub slots_per_texture: u32,
+    /// The camera's right vector; `w` = tan(vfov/2). With `cam_up` and `cam_forward`, the ray
+    /// through each background pixel ([`Background::Env`]).
+    pub cam_right: [f32; 4],
+    /// The camera's up vector (`w` unused).
+    pub cam_up: [f32; 4],
+    /// The camera's viewing direction (`w` unused).
+    pub cam_forward: [f32; 4],
+    /// The colour of [`Background::Color`] (`w` unused).
+    pub bg_color: [f32; 4],
+    /// [`Background::tag`].
+    pub background: u32,
+    /// Padding to the block's 16-byte alignment.
+    pub pad: [u32; 3],
 }
 
 /// What the uniform needs from the store and the cache besides the parameters.
@@ -268,17 +343,24 @@ pub struct StoreConstants {
 }
 
 impl ShadeUniform {
-    /// Packs parameters, camera and store constants for the shader.
+    /// Packs parameters, camera (in the coordinates the shader works in), image size, store
+    /// constants and background for the shader.
     pub fn new(
         p: &ShadingParams,
         view_proj: glam::Mat4,
-        camera_pos: glam::Vec3,
+        camera: &oslf_geometry::Camera,
         size: [u32; 2],
         k: &StoreConstants,
+        background: Background,
     ) -> Self {
+        let (cam_right, cam_up, cam_forward) = ray_frame(camera);
+        let bg_color = match background {
+            Background::Color([r, g, b]) => [r, g, b, 0.0],
+            Background::None | Background::Env => [0.0; 4],
+        };
         Self {
             view_proj: view_proj.to_cols_array_2d(),
-            camera_pos: camera_pos.extend(1.0).to_array(),
+            camera_pos: camera.position.extend(1.0).to_array(),
             size,
             terms: p.mode.terms(),
             blend: p.blend.tag(),
@@ -304,6 +386,12 @@ impl ShadeUniform {
             index16: u32::from(k.index16),
             cube_res: k.cube_res,
             slots_per_texture: k.slots_per_texture,
+            cam_right,
+            cam_up,
+            cam_forward,
+            bg_color,
+            background: background.tag(),
+            pad: [0; 3],
         }
     }
 }
@@ -313,8 +401,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn uniform_is_160_bytes_as_in_the_shader() {
-        assert_eq!(std::mem::size_of::<ShadeUniform>(), 160);
+    fn uniform_is_240_bytes_as_in_the_shader() {
+        assert_eq!(std::mem::size_of::<ShadeUniform>(), 240);
+    }
+
+    #[test]
+    fn backgrounds_are_checked() {
+        assert!(Background::None.validate(false).is_ok());
+        assert!(Background::Env.validate(true).is_ok());
+        let e = Background::Env.validate(false).unwrap_err();
+        assert!(matches!(e, RuntimeError::Parameter(_)), "{e:?}");
+        assert!(e.to_string().contains("no environment cube"), "{e}");
+        assert!(Background::Color([0.0, 0.5, 2.0]).validate(false).is_ok());
+        for bad in [
+            [-0.1, 0.0, 0.0],
+            [0.0, f32::NAN, 0.0],
+            [0.0, 0.0, f32::INFINITY],
+        ] {
+            let e = Background::Color(bad).validate(true).unwrap_err();
+            assert!(e.to_string().contains("background colour"), "{e}");
+        }
     }
 
     #[test]

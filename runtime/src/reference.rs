@@ -10,8 +10,8 @@ use std::f32::consts::PI;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::Vec3;
-use oslf_geometry::BezierPatch;
 use oslf_format::{SampleMapView, INVALID_INDEX};
+use oslf_geometry::BezierPatch;
 
 use crate::params::ShadeUniform;
 
@@ -133,11 +133,17 @@ fn finite3(c: Vec3) -> Vec3 {
 // shade.wgsl.
 #[allow(clippy::needless_range_loop)]
 impl<C: CubeTexels> Shader<'_, C> {
+    /// Radiance of `cube` towards `dir`, marking the face as needed (as `lookup`/`fetch`).
     fn lookup(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
         let (face, s, t) = face_st(dir);
         if let Some(f) = self.feedback.get(cube as usize) {
             f.fetch_or(1 << face, Ordering::Relaxed);
         }
+        self.read_tap(cube, face, s, t)
+    }
+
+    /// `lookup` without the feedback mark (as `read_tap`): bilinear within the face.
+    fn read_tap(&self, cube: u32, face: usize, s: f32, t: f32) -> Option<Vec3> {
         let n = self.uniform.cube_res;
         let nf = n as f32;
         let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
@@ -468,12 +474,49 @@ impl<C: CubeTexels> Shader<'_, C> {
         self.integrate(c, u.env_cube, 4, pixel, n, t, b, v, nv).0
     }
 
-    /// Shades pixel `(px, py)` with G-buffer texel `g`; `[0; 4]` for background, else the
-    /// colour with alpha 1 (as `shade` in shade.wgsl).
+    /// The unit direction of the camera ray through the centre of pixel `(px, py)`, as
+    /// [`oslf_geometry::Camera::direction`] computes it (as `camera_ray`).
+    pub fn camera_ray(&self, px: u32, py: u32) -> Vec3 {
+        let u = &self.uniform;
+        let (w, h) = (u.size[0] as f32, u.size[1] as f32);
+        let aspect = w / h;
+        let tan_half = u.cam_right[3];
+        let sx = (2.0 * (px as f32 + 0.5) / w - 1.0) * aspect * tan_half;
+        let sy = (1.0 - 2.0 * (py as f32 + 0.5) / h) * tan_half;
+        let forward = Vec3::from_slice(&u.cam_forward[..3]);
+        let d = forward
+            + Vec3::from_slice(&u.cam_right[..3]) * sx
+            + Vec3::from_slice(&u.cam_up[..3]) * sy;
+        let l2 = d.dot(d);
+        if l2 > 0.0 && l2 <= 3.0e38 {
+            return d / l2.sqrt();
+        }
+        forward
+    }
+
+    /// What background pixel `(px, py)` shows, alpha 0 (as `background`): the environment
+    /// cube is read without a feedback mark, as it is pinned resident.
+    fn background(&self, px: u32, py: u32) -> [f32; 4] {
+        let u = &self.uniform;
+        let c = match u.background {
+            0 => return [0.0; 4],
+            1 if u.env_cube == INVALID_INDEX => Vec3::ZERO,
+            1 => {
+                let (face, s, t) = face_st(self.camera_ray(px, py));
+                self.read_tap(u.env_cube, face, s, t).unwrap_or(Vec3::ZERO)
+            }
+            _ => Vec3::from_slice(&u.bg_color[..3]),
+        };
+        let c = finite3(c);
+        [c.x, c.y, c.z, 0.0]
+    }
+
+    /// Shades pixel `(px, py)` with G-buffer texel `g`: the background with alpha 0 off the
+    /// object, else the colour with alpha 1 (as `shade` in shade.wgsl).
     pub fn shade(&self, px: u32, py: u32, g: &GTexel) -> [f32; 4] {
         let u = &self.uniform;
         if g.position_patch[3] < 0.5 {
-            return [0.0; 4];
+            return self.background(px, py);
         }
         let patch = (g.position_patch[3] - 0.5) as u32;
         let x = Vec3::new(
@@ -590,6 +633,124 @@ mod tests {
                 assert!((t.length() - 1.0).abs() < 1e-5, "{n} {du} {t}");
                 assert!(t.dot(n).abs() < 1e-5, "{n} {du} {t}");
             }
+        }
+    }
+
+    /// No cube is ever available.
+    struct NoCubes;
+
+    impl CubeTexels for NoCubes {
+        fn texel(&self, _: u32, _: usize, _: u32, _: u32) -> Option<Vec3> {
+            None
+        }
+        fn resident(&self, _: u32) -> bool {
+            false
+        }
+    }
+
+    #[test]
+    fn camera_rays_are_the_cameras_directions_through_pixel_centres() {
+        use crate::params::{Background, ShadeUniform, ShadingParams, StoreConstants};
+        use oslf_geometry::Camera;
+        let k = StoreConstants {
+            sample_count: 0,
+            env_cube: u32::MAX,
+            map_res: 1,
+            index16: true,
+            cube_res: 1,
+            slots_per_texture: 1,
+        };
+        for (camera, (w, h)) in [
+            (
+                Camera {
+                    position: Vec3::new(5.5, -6.5, 4.5),
+                    target: Vec3::new(0.0, 0.0, 1.0),
+                    up: Vec3::Z,
+                    vfov_deg: 36.0,
+                },
+                (96, 72),
+            ),
+            (
+                Camera {
+                    position: Vec3::new(0.0, 0.0, 3.0),
+                    target: Vec3::ZERO,
+                    up: Vec3::Y,
+                    vfov_deg: 150.0,
+                },
+                (7, 300),
+            ),
+        ] {
+            let uniform = ShadeUniform::new(
+                &ShadingParams::default(),
+                glam::Mat4::IDENTITY,
+                &camera,
+                [w, h],
+                &k,
+                Background::Env,
+            );
+            let shader = Shader {
+                uniform,
+                samples: &[],
+                patches: &[],
+                colors: &[],
+                maps: &[],
+                cubes: &NoCubes,
+                feedback: &[],
+            };
+            for (i, j) in [
+                (0, 0),
+                (w - 1, 0),
+                (w / 2, h / 2),
+                (0, h - 1),
+                (w - 1, h - 1),
+            ] {
+                let want = camera.direction(i as f32 + 0.5, j as f32 + 0.5, w, h);
+                let got = shader.camera_ray(i, j);
+                assert!((got - want).length() < 1e-6, "{i},{j}: {got} vs {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
+        use crate::params::{Background, ShadeUniform, ShadingParams, StoreConstants};
+        let k = StoreConstants {
+            sample_count: 0,
+            env_cube: 0,
+            map_res: 1,
+            index16: true,
+            cube_res: 1,
+            slots_per_texture: 1,
+        };
+        let camera = oslf_geometry::Camera {
+            position: Vec3::new(0.0, -3.0, 0.0),
+            target: Vec3::ZERO,
+            up: Vec3::Z,
+            vfov_deg: 40.0,
+        };
+        for (bg, want) in [
+            (Background::None, [0.0; 4]),
+            (Background::Color([0.5, 1.0, 3.0]), [0.5, 1.0, 3.0, 0.0]),
+            // Not resident: black, never a stale or non-finite value.
+            (Background::Env, [0.0; 4]),
+        ] {
+            let shader = Shader {
+                uniform: ShadeUniform::new(
+                    &ShadingParams::default(),
+                    glam::Mat4::IDENTITY,
+                    &camera,
+                    [4, 3],
+                    &k,
+                    bg,
+                ),
+                samples: &[],
+                patches: &[],
+                colors: &[],
+                maps: &[],
+                cubes: &NoCubes,
+                feedback: &[],
+            };
+            assert_eq!(shader.shade(1, 2, &GTexel::default()), want, "{bg:?}");
         }
     }
 

@@ -2,7 +2,7 @@
 //
 // Every function here has a twin in `reference.rs` (the CPU reference) with the same operation
 // order; the parity tests compare the two. Bindings are declared in the order of
-// `Renderer::shade_layout` (renderer.rs).
+// `ShadePipelines::bind_group_layout` (pipelines.rs).
 
 struct Params {
     view_proj: mat4x4<f32>,
@@ -31,6 +31,18 @@ struct Params {
     index16: u32,
     cube_res: u32,
     slots_per_texture: u32,
+    // The camera's basis for the rays through background pixels (oslf_geometry::Camera::
+    // direction); cam_right.w = tan(vfov/2).
+    cam_right: vec4<f32>,
+    cam_up: vec4<f32>,
+    cam_forward: vec4<f32>,
+    // Linear RGB of the colour background.
+    bg_color: vec4<f32>,
+    // 0 none (transparent black), 1 the environment cube, 2 bg_color (RenderOptions::background)
+    background: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 };
 
 // The mode's switches are pipeline-overridable constants (set from the same values as the
@@ -42,9 +54,11 @@ override BLEND: u32 = 4u;
 override SOURCE: u32 = 0u;
 override ORDER: u32 = 0u;
 override POOLS: u32 = 4u;
-// 2^FACE_SHIFT faces lie side by side in each pool layer (renderer.rs).
+// 2^FACE_SHIFT faces lie side by side in each pool layer (pool.rs).
 override FACE_SHIFT: u32 = 0u;
 override DIFFUSE: bool = false;
+// The uniform's `background`: what pixels off the object show.
+override BACKGROUND: u32 = 0u;
 
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
@@ -159,6 +173,11 @@ fn tap(dir: vec3<f32>) -> Tap {
 // must not be used).
 fn fetch(cube: u32, t: Tap) -> vec4<f32> {
     atomicOr(&feedback[cube], 1u << t.face);
+    return read_tap(cube, t);
+}
+
+// `fetch` without the feedback mark.
+fn read_tap(cube: u32, t: Tap) -> vec4<f32> {
     let entry = slots[cube];
     if ((entry & (1u << t.face)) == 0u) {
         return vec4<f32>(0.0);
@@ -556,6 +575,41 @@ fn finite3(c: vec3<f32>) -> vec3<f32> {
     return o;
 }
 
+// ---- background ----
+
+// The unit direction of the camera ray through the centre of pixel `px`, as
+// oslf_geometry::Camera::direction computes it; the viewing direction where that degenerates.
+fn camera_ray(px: vec2<u32>) -> vec3<f32> {
+    let w = f32(P.size.x);
+    let h = f32(P.size.y);
+    let aspect = w / h;
+    let tan_half = P.cam_right.w;
+    let sx = (2.0 * (f32(px.x) + 0.5) / w - 1.0) * aspect * tan_half;
+    let sy = (1.0 - 2.0 * (f32(px.y) + 0.5) / h) * tan_half;
+    let d = P.cam_forward.xyz + P.cam_right.xyz * sx + P.cam_up.xyz * sy;
+    let l2 = dot(d, d);
+    if (l2 > 0.0 && l2 <= 3.0e38) {
+        return d * inverseSqrt(l2);
+    }
+    return P.cam_forward.xyz;
+}
+
+// What background pixel `px` shows, alpha 0. The environment cube is pinned resident, so it is
+// read without a feedback mark: the cache statistics stay those of the object.
+fn background(px: vec2<u32>) -> vec4<f32> {
+    if (BACKGROUND == 0u) {
+        return vec4<f32>(0.0);
+    }
+    var c = P.bg_color.rgb;
+    if (BACKGROUND == 1u) {
+        c = vec3<f32>(0.0);
+        if (P.env_cube != INVALID) {
+            c = read_tap(P.env_cube, tap(camera_ray(px))).rgb;
+        }
+    }
+    return vec4<f32>(finite3(c), 0.0);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= P.size.x || gid.y >= P.size.y) { return; }
@@ -563,7 +617,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let g0 = textureLoad(gb_position, px, 0);
     let g1 = textureLoad(gb_normal, px, 0);
     if (g0.w < 0.5) {
-        textureStore(out_image, px, vec4<f32>(0.0));
+        textureStore(out_image, px, background(gid.xy));
         return;
     }
     let pid = u32(g0.w - 0.5);

@@ -1,14 +1,14 @@
 //! Flags shared by the runtime's commands (`oslf render`, `oslf view`, `oslf cache-stats`):
-//! the shading and camera flags (clap argument groups) and their value parsers.
+//! the shading, camera and background flags (clap argument groups) and their value parsers.
 
 use std::path::Path;
 
 use clap::Args;
 use glam::Vec3;
-use oslf_runtime::Camera;
 use oslf_format::Store;
+use oslf_runtime::Camera;
 
-use oslf_runtime::{Blend, Mode, Order, Result, RuntimeError, ShadingParams, Source};
+use oslf_runtime::{Background, Blend, Mode, Order, Result, RuntimeError, ShadingParams, Source};
 
 /// The shading flags besides mode and blend (which each command takes its own way).
 #[derive(Args, Clone, Debug)]
@@ -115,6 +115,62 @@ impl CameraArgs {
     }
 }
 
+/// The background flag of the commands that show an image.
+#[derive(Args, Clone, Debug)]
+pub struct BackgroundArgs {
+    /// What pixels off the object show (their alpha stays 0): none (black), env (the store's
+    /// environment cube along each pixel's ray) or a linear colour R,G,B [default: env; none,
+    /// with a note, for a store without an environment cube].
+    #[arg(long, value_name = "VALUE", value_parser = parse_background)]
+    pub background: Option<Background>,
+}
+
+impl BackgroundArgs {
+    /// The background for `store` (at `path`). Without the flag: the environment cube, or
+    /// none, with a note on stderr, when the store has no environment cube. Errors when
+    /// `--background env` is asked for and the store has none.
+    pub fn resolve(&self, store: &Store, path: &Path) -> Result<Background> {
+        let has_env = store.env_cube_index().is_some();
+        match self.background {
+            Some(Background::Env) if !has_env => Err(RuntimeError::Parameter(format!(
+                "--background env: {} has no environment cube (bake with env_cube = true)",
+                path.display()
+            ))),
+            Some(b) => Ok(b),
+            None if has_env => Ok(Background::Env),
+            None => {
+                eprintln!(
+                    "note: {} has no environment cube; background is black (bake with \
+                     env_cube = true)",
+                    path.display()
+                );
+                Ok(Background::None)
+            }
+        }
+    }
+}
+
+/// `none`, `env`, or a linear colour `R,G,B` of three finite, non-negative numbers.
+pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
+    match s.trim() {
+        "none" => Ok(Background::None),
+        "env" => Ok(Background::Env),
+        _ => {
+            let bad = |why: String| {
+                format!(
+                    "{s:?} is not a background: none, env, or a linear colour R,G,B of three \
+                     finite, non-negative numbers ({why})"
+                )
+            };
+            let c = parse_vec3(s).map_err(bad)?;
+            if c.min_element() < 0.0 {
+                return Err(bad("a component is negative".into()));
+            }
+            Ok(Background::Color(c.to_array()))
+        }
+    }
+}
+
 /// `per-point` or `per-direction`.
 pub fn parse_order(s: &str) -> std::result::Result<Order, String> {
     match s {
@@ -133,5 +189,33 @@ pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     match v.as_slice() {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
         _ => Err(format!("{s:?} is not three finite numbers x,y,z")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backgrounds_parse_and_bad_ones_say_why() {
+        assert_eq!(parse_background("none"), Ok(Background::None));
+        assert_eq!(parse_background("env"), Ok(Background::Env));
+        assert_eq!(
+            parse_background("0.5, 1,2e1"),
+            Ok(Background::Color([0.5, 1.0, 20.0]))
+        );
+        for (bad, says) in [
+            ("1,2", "three finite"),
+            ("1,-2,3", "negative"),
+            ("1,inf,3", "three finite"),
+            ("1,NaN,3", "three finite"),
+            ("sky", "\"sky\""),
+        ] {
+            let e = parse_background(bad).unwrap_err();
+            assert!(
+                e.contains("none, env, or a linear colour") && e.contains(says),
+                "{bad}: {e}"
+            );
+        }
     }
 }

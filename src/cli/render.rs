@@ -1,5 +1,7 @@
 //! `oslf render`: renders an OSLF store headless to OpenEXR (linear f32, object mask in alpha)
-//! and a tone-mapped PNG, and prints the cache statistics.
+//! and a tone-mapped PNG, and prints the cache statistics. Pixels off the object show the
+//! `--background` (the store's environment cube by default) in both images; in the EXR their
+//! alpha stays 0.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -8,12 +10,13 @@ use anyhow::Context;
 use glam::Vec3;
 use oslf_bake::image_file;
 use oslf_format::Store;
-use super::args::{CameraArgs, ShadingArgs};
 use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
     Blend, CacheConfig, CacheStats, Gpu, Granularity, Mode, RenderOptions, Renderer,
 };
+
+use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
 
 /// Render an offset surface light field with wgpu: surface reconstruction, mirror reflections
 /// with every blend of thesis chapter 4, Monte Carlo Ashikhmin–Shirley (chapter 5), or the
@@ -23,7 +26,8 @@ use oslf_runtime::{
 pub struct Args {
     /// The store (written by `oslf bake`).
     store: PathBuf,
-    /// Output OpenEXR (linear f32 RGBA, alpha = object mask); a PNG is written beside it.
+    /// Output OpenEXR (linear f32 RGBA, alpha = object mask); a PNG of the RGB, background
+    /// included, is written beside it.
     #[arg(short, long, default_value = "render.exr")]
     output: PathBuf,
     /// recon | mirror | recon-mirror | glossy | recon-glossy.
@@ -42,6 +46,8 @@ pub struct Args {
     height: u32,
     #[command(flatten)]
     camera: CameraArgs,
+    #[command(flatten)]
+    background: BackgroundArgs,
     /// GPU cache budget in cube-map slots [default: every cube, as far as the device allows].
     #[arg(long, conflicts_with = "cache_mb")]
     cache_slots: Option<u32>,
@@ -71,6 +77,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot open store {}", args.store.display()))?;
     let params = args.shading.params(args.mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
+    let background = args.background.resolve(&store, &args.store)?;
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
     let gpu_slots = match (args.cache_slots, args.cache_mb) {
         (Some(s), _) => Some(s),
@@ -92,6 +99,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let options = RenderOptions {
         width: args.width,
         height: args.height,
+        background,
         ..Default::default()
     };
     let t = Instant::now();

@@ -7,12 +7,16 @@
 //! | 1 … 5 | mode: recon, mirror, recon + mirror, glossy, recon + glossy |
 //! | B | next blend: distance, angle, avg, r, n |
 //! | E | OSLF ↔ environment-map baseline |
+//! | G | next background: env, none (and the `--background` colour, if one was given) |
 //! | O | integration order: per point ↔ per direction |
 //! | Up / Down | blend power N × 2 / ÷ 2 |
 //! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
 //! | ] / [ | M × 2 / ÷ 2 |
 //! | + / - | exposure × 1.25 / ÷ 1.25 |
 //! | Esc | quit |
+//!
+//! `--background` sets what pixels off the object show at start, as for `oslf render` (the
+//! store's environment cube by default).
 //!
 //! The window title shows the mode, its parameters, the frame time and the cache statistics of
 //! the last frame; a line per second goes to stdout. Frames stream: a cube map that is not
@@ -26,13 +30,16 @@ use anyhow::{anyhow, Context};
 use glam::Vec3;
 use oslf_runtime::Camera;
 use oslf_runtime::{
-    Blend, CacheConfig, Frame, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams, Source,
+    Background, Blend, CacheConfig, Frame, Gpu, Mode, Order, RenderOptions, Renderer,
+    ShadingParams, Source,
 };
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
+
+use super::args::BackgroundArgs;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -94,6 +101,11 @@ struct App {
     store: PathBuf,
     state: Option<State>,
     params: ShadingParams,
+    background_flag: BackgroundArgs,
+    /// The backgrounds key G cycles through; the first is the one shown at start.
+    backgrounds: Vec<Background>,
+    /// The index of the current background in `backgrounds`.
+    background: usize,
     orbit: Option<Orbit>,
     exposure: f32,
     dragging: bool,
@@ -107,6 +119,8 @@ struct App {
 pub struct Args {
     /// The store (written by `oslf bake`).
     store: PathBuf,
+    #[command(flatten)]
+    background: BackgroundArgs,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -116,6 +130,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         store,
         state: None,
         params: ShadingParams::default(),
+        background_flag: args.background,
+        backgrounds: vec![Background::None],
+        background: 0,
         orbit: None,
         exposure: 1.0,
         dragging: false,
@@ -134,6 +151,11 @@ impl App {
     fn init(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         let store = oslf_format::Store::open(&self.store)
             .with_context(|| format!("cannot open store {}", self.store.display()))?;
+        self.backgrounds = background_cycle(
+            self.background_flag.resolve(&store, &self.store)?,
+            store.env_cube_index().is_some(),
+        );
+        self.background = 0;
         let window = Arc::new(
             event_loop.create_window(
                 Window::default_attributes()
@@ -248,6 +270,7 @@ impl App {
             resolve_misses: false,
             max_passes: 1,
             read_pixels: false,
+            background: self.backgrounds[self.background],
         };
         let frame: Frame = s.renderer.render(&orbit.camera(), &self.params, &opts)?;
         let texture = match s.surface.get_current_texture() {
@@ -316,7 +339,7 @@ impl App {
         let p = &self.params;
         let st = &frame.stats;
         let title = format!(
-            "oslf — {} {}{} N={} n_u={} n_v={} M={} {:?} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
+            "oslf — {} {}{} N={} n_u={} n_v={} M={} {:?} background {} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
             p.mode.name(),
             p.blend.name(),
             if p.source == Source::EnvMap { " envmap" } else { "" },
@@ -325,6 +348,7 @@ impl App {
             p.nv,
             p.m,
             p.order,
+            background_name(opts.background),
             st.requests,
             st.misses,
             100.0 * st.miss_rate,
@@ -361,6 +385,7 @@ impl App {
                         Source::EnvMap => Source::Oslf,
                     }
                 }
+                "g" => self.background = (self.background + 1) % self.backgrounds.len(),
                 "o" => {
                     p.order = match p.order {
                         Order::PerPoint => Order::PerDirection,
@@ -380,6 +405,27 @@ impl App {
             _ => {}
         }
         true
+    }
+}
+
+/// The backgrounds key G cycles through, `first` first: then the environment cube (when the
+/// store has one), then none.
+fn background_cycle(first: Background, has_env: bool) -> Vec<Background> {
+    let mut cycle = vec![first];
+    for b in [Background::Env, Background::None] {
+        if (b != Background::Env || has_env) && !cycle.contains(&b) {
+            cycle.push(b);
+        }
+    }
+    cycle
+}
+
+/// The background as the title shows it.
+fn background_name(b: Background) -> String {
+    match b {
+        Background::None => "none".into(),
+        Background::Env => "env".into(),
+        Background::Color([r, g, b]) => format!("{r},{g},{b}"),
     }
 }
 

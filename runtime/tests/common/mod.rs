@@ -52,24 +52,40 @@ seed = 3
 /// The path of the baked test store (baked on first use).
 pub fn store_path() -> PathBuf {
     static PATH: OnceLock<PathBuf> = OnceLock::new();
+    PATH.get_or_init(|| bake_scene(SCENE, "oslf-runtime-tests"))
+        .clone()
+}
+
+/// The path of [`SCENE`] baked without the environment cube (baked on first use).
+pub fn store_path_without_env_cube() -> PathBuf {
+    static PATH: OnceLock<PathBuf> = OnceLock::new();
+    // SCENE ends in its [bake] table.
     PATH.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("oslf-runtime-tests-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let scene_path = dir.join("scene.toml");
-        std::fs::write(&scene_path, SCENE).unwrap();
-        let scene = Scene::load(&scene_path, None).unwrap();
-        let output = dir.join("teapot.oslf");
-        let options = BakeOptions {
-            output: output.clone(),
-            resume: false,
-            progress: false,
-            cube_limit: None,
-        };
-        bake(&scene, &options).unwrap();
-        output
+        bake_scene(
+            &format!("{SCENE}env_cube = false\n"),
+            "oslf-runtime-tests-no-env",
+        )
     })
     .clone()
+}
+
+/// Bakes `scene` into a fresh directory `name`-PID under the temporary directory.
+fn bake_scene(scene: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("scene.toml");
+    std::fs::write(&scene_path, scene).unwrap();
+    let scene = Scene::load(&scene_path, None).unwrap();
+    let output = dir.join("teapot.oslf");
+    let options = BakeOptions {
+        output: output.clone(),
+        resume: false,
+        progress: false,
+        cube_limit: None,
+    };
+    bake(&scene, &options).unwrap();
+    output
 }
 
 pub fn open_store() -> oslf_format::Store {

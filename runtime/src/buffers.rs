@@ -1,0 +1,189 @@
+//! The renderer's GPU buffers and its sample-map texture: what is uploaded once when a store
+//! is opened (sample points, patches, the tessellated mesh, the sample maps) and what the
+//! frames write and read (the uniform, the cube-slot table, the feedback masks).
+
+use glam::Vec3;
+use oslf_format::{IndexWidth, Store};
+use wgpu::util::DeviceExt;
+
+use crate::error::{Result, RuntimeError};
+use crate::geometry::ObjectMesh;
+use crate::gpu::Gpu;
+use crate::params::ShadeUniform;
+
+/// The buffers of a store on the GPU. Storage buffers may not be empty: those that could be
+/// are padded with one element.
+pub(crate) struct StoreBuffers {
+    /// The [`ShadeUniform`] (`P` in both shaders).
+    pub uniform: wgpu::Buffer,
+    /// The mesh's vertices (gbuffer.wgsl's `vertices`).
+    pub vertices: wgpu::Buffer,
+    /// The mesh's triangle indices (u32).
+    pub indices: wgpu::Buffer,
+    /// Indices in `indices`.
+    pub index_count: u32,
+    /// Sample-point positions, object-relative, w = 1 (shade.wgsl's `samples`).
+    pub samples: wgpu::Buffer,
+    /// Per patch its 16 control points and its base colour (shade.wgsl's `patches`).
+    pub patches: wgpu::Buffer,
+    /// The cache's indirection table, one entry per cube (shade.wgsl's `slots`).
+    pub slots: wgpu::Buffer,
+    /// One mask of needed faces per cube, written by the shader (shade.wgsl's `feedback`).
+    pub feedback: wgpu::Buffer,
+    /// Where `feedback` is copied to be read on the CPU.
+    pub feedback_readback: wgpu::Buffer,
+}
+
+impl StoreBuffers {
+    /// Uploads `store`'s sample points and `mesh` (whose origin the sample points are made
+    /// relative to) and creates the per-frame buffers for `cube_count` cubes.
+    pub fn new(device: &wgpu::Device, store: &Store, mesh: &ObjectMesh, cube_count: u32) -> Self {
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let mut positions: Vec<[f32; 4]> = store
+            .sample_points()
+            .iter()
+            .map(|s| {
+                (Vec3::from_array(s.position) - mesh.origin)
+                    .extend(1.0)
+                    .to_array()
+            })
+            .collect();
+        if positions.is_empty() {
+            positions.push([0.0; 4]);
+        }
+        let samples = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("sample points"),
+            contents: bytemuck::cast_slice(&positions),
+            usage: storage,
+        });
+        let mut patch_data: Vec<[f32; 4]> = Vec::with_capacity(mesh.patches.len() * 17);
+        for (p, c) in mesh.patches.iter().zip(&mesh.colors) {
+            patch_data.extend(p.cp.iter().map(|v| v.extend(0.0).to_array()));
+            patch_data.push(c.extend(1.0).to_array());
+        }
+        let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("patches"),
+            contents: bytemuck::cast_slice(&patch_data),
+            usage: storage,
+        });
+        let table_len = (cube_count.max(1) as u64) * 4;
+        let slots = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("cube slots"),
+            size: table_len,
+            usage: storage,
+            mapped_at_creation: false,
+        });
+        let feedback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("feedback"),
+            size: table_len,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let feedback_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("feedback readback"),
+            size: table_len,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: std::mem::size_of::<ShadeUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("vertices"),
+            contents: bytemuck::cast_slice(&mesh.vertices),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("indices"),
+            contents: bytemuck::cast_slice(&mesh.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        Self {
+            uniform,
+            vertices,
+            indices,
+            index_count: mesh.indices.len() as u32,
+            samples,
+            patches,
+            slots,
+            feedback,
+            feedback_readback,
+        }
+    }
+}
+
+/// Uploads `store`'s sample maps as stored (zero-copy): one integer array layer per patch,
+/// `Rgba16Uint` or `Rgba32Uint` by the store's index width. Returns the `D2Array` view
+/// (shade.wgsl's `sample_maps`).
+///
+/// Errors with [`RuntimeError::Store`] when a sample map cannot be read.
+pub(crate) fn upload_sample_maps(gpu: &Gpu, store: &Store) -> Result<wgpu::TextureView> {
+    let map_res = store.header().sample_map_resolution;
+    let patch_count = store.meta().patches.len() as u32;
+    let index16 = store.index_width() == IndexWidth::U16;
+    let map_format = if index16 {
+        wgpu::TextureFormat::Rgba16Uint
+    } else {
+        wgpu::TextureFormat::Rgba32Uint
+    };
+    let map_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("sample maps"),
+        size: wgpu::Extent3d {
+            width: map_res,
+            height: map_res,
+            depth_or_array_layers: patch_count,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: map_format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let texel = if index16 { 8 } else { 16 };
+    for patch in 0..patch_count {
+        let view = store
+            .sample_map(patch)
+            .map_err(|source| RuntimeError::Store {
+                path: "sample maps".into(),
+                source,
+            })?;
+        let bytes: &[u8] = match (view.as_u16(), view.as_u32()) {
+            (Some(d), _) => bytemuck::cast_slice(d),
+            (_, Some(d)) => bytemuck::cast_slice(d),
+            _ => unreachable!("a sample map is either u16 or u32"),
+        };
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &map_texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: patch,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(map_res * texel),
+                rows_per_image: Some(map_res),
+            },
+            wgpu::Extent3d {
+                width: map_res,
+                height: map_res,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    Ok(map_texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    }))
+}

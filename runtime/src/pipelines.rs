@@ -1,0 +1,387 @@
+//! The frame's two pipelines and their bind groups: the G-buffer pass over the tessellated
+//! patches ([`GBufferPipeline`], gbuffer.wgsl) and the shading compute pass
+//! ([`ShadePipelines`], shade.wgsl), specialized per mode through shade.wgsl's override
+//! constants. Bind-group layout entries are listed in the order of the WGSL bindings.
+
+use std::collections::HashMap;
+
+use crate::params::ShadeUniform;
+
+/// The G-buffer's colour targets: position and patch id; octahedral normal and (u, v).
+pub(crate) const GBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The G-buffer pass's depth buffer.
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The shaded image (`out_image` in shade.wgsl).
+pub(crate) const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// shade.wgsl's `@workgroup_size` on each side.
+pub(crate) const WORKGROUP: u32 = 8;
+
+/// A read-only or read-write storage buffer at `binding`.
+fn storage_entry(
+    binding: u32,
+    read_only: bool,
+    stages: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: stages,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A texture the compute stage loads from, at `binding`.
+fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    dim: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: dim,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// The uniform block `Params` at binding 0.
+fn uniform_entry(stages: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: stages,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The G-buffer pass: its render pipeline and its one bind group (uniform, vertices).
+pub(crate) struct GBufferPipeline {
+    /// Rasterizes the patches' triangles into the two G-buffer targets and depth.
+    pub pipeline: wgpu::RenderPipeline,
+    /// gbuffer.wgsl's group 0.
+    pub group: wgpu::BindGroup,
+}
+
+impl GBufferPipeline {
+    /// Creates the pipeline and binds `uniform` (the [`ShadeUniform`] buffer) and `vertices`.
+    pub fn new(device: &wgpu::Device, uniform: &wgpu::Buffer, vertices: &wgpu::Buffer) -> Self {
+        let layout = Self::bind_group_layout(device);
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: vertices.as_entire_binding(),
+                },
+            ],
+        });
+        let pipeline = Self::render_pipeline(device, &layout);
+        Self { pipeline, group }
+    }
+
+    /// gbuffer.wgsl's bindings: the uniform, the vertices.
+    fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer"),
+            entries: &[
+                uniform_entry(wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT),
+                storage_entry(1, true, wgpu::ShaderStages::VERTEX),
+            ],
+        })
+    }
+
+    /// Triangle lists without culling, depth test `Less`, two [`GBUFFER_FORMAT`] targets.
+    fn render_pipeline(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+    ) -> wgpu::RenderPipeline {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("gbuffer.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("gbuffer.wgsl").into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer"),
+            bind_group_layouts: &[Some(layout)],
+            immediate_size: 0,
+        });
+        let target = Some(wgpu::ColorTargetState {
+            format: GBUFFER_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[target.clone(), target],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+}
+
+/// The override constants of shade.wgsl that change from frame to frame (the rest, POOLS and
+/// FACE_SHIFT, are fixed per renderer): one compute pipeline per distinct key.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub(crate) struct ShadeKey {
+    /// TERMS: the uniform's `terms`.
+    pub terms: u32,
+    /// BLEND: the uniform's `blend`.
+    pub blend: u32,
+    /// SOURCE: the uniform's `source`.
+    pub source: u32,
+    /// ORDER: the uniform's `order`.
+    pub order: u32,
+    /// DIFFUSE: R_d > 0.
+    pub diffuse: bool,
+    /// BACKGROUND: the uniform's `background`.
+    pub background: u32,
+}
+
+impl ShadeKey {
+    /// The key a frame with uniform `u` needs.
+    pub fn of(u: &ShadeUniform) -> Self {
+        Self {
+            terms: u.terms,
+            blend: u.blend,
+            source: u.source,
+            order: u.order,
+            diffuse: u.rd > 0.0,
+            background: u.background,
+        }
+    }
+
+    /// The override constants by name.
+    fn constants(&self, pools: u32, face_shift: u32) -> Vec<(&'static str, f64)> {
+        vec![
+            ("TERMS", f64::from(self.terms)),
+            ("BLEND", f64::from(self.blend)),
+            ("SOURCE", f64::from(self.source)),
+            ("ORDER", f64::from(self.order)),
+            ("POOLS", f64::from(pools)),
+            ("FACE_SHIFT", f64::from(face_shift)),
+            ("DIFFUSE", f64::from(u32::from(self.diffuse))),
+            ("BACKGROUND", f64::from(self.background)),
+        ]
+    }
+}
+
+/// What the shading pass binds, named as in shade.wgsl.
+pub(crate) struct ShadeBindings<'a> {
+    /// `P`: the [`ShadeUniform`].
+    pub uniform: &'a wgpu::Buffer,
+    /// `gb_position`.
+    pub gb_position: &'a wgpu::TextureView,
+    /// `gb_normal`.
+    pub gb_normal: &'a wgpu::TextureView,
+    /// `sample_maps`.
+    pub sample_maps: &'a wgpu::TextureView,
+    /// `samples`.
+    pub samples: &'a wgpu::Buffer,
+    /// `patches`.
+    pub patches: &'a wgpu::Buffer,
+    /// `slots`: the cache's indirection table.
+    pub slots: &'a wgpu::Buffer,
+    /// `feedback`.
+    pub feedback: &'a wgpu::Buffer,
+    /// `pool0` … `pool3`.
+    pub pool: &'a [wgpu::TextureView],
+    /// `out_image`.
+    pub output: &'a wgpu::TextureView,
+}
+
+/// Binding of `pool0`; the pool arrays follow it.
+const POOL_BINDING: u32 = 8;
+/// Binding of `out_image`.
+const OUTPUT_BINDING: u32 = 12;
+
+/// The shading pass: its bind-group layout, shader module, and the compute pipelines built so
+/// far, one per [`ShadeKey`].
+pub(crate) struct ShadePipelines {
+    layout: wgpu::BindGroupLayout,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// POOLS: pool textures in use.
+    pools: u32,
+    /// FACE_SHIFT: 2^face_shift faces side by side in each pool layer.
+    face_shift: u32,
+    pipelines: HashMap<ShadeKey, wgpu::ComputePipeline>,
+}
+
+impl ShadePipelines {
+    /// Compiles shade.wgsl for a pool of `pools` arrays with 2^`face_shift` faces per layer;
+    /// pipelines are built on first use ([`ShadePipelines::prepare`]).
+    pub fn new(device: &wgpu::Device, pools: u32, face_shift: u32) -> Self {
+        let layout = Self::bind_group_layout(device);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shade.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shade.wgsl").into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shade"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        Self {
+            layout,
+            module,
+            pipeline_layout,
+            pools,
+            face_shift,
+            pipelines: HashMap::new(),
+        }
+    }
+
+    /// shade.wgsl's bindings, in its order.
+    fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let d2 = wgpu::TextureViewDimension::D2;
+        let d2a = wgpu::TextureViewDimension::D2Array;
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let mut entries = vec![
+            uniform_entry(cs),
+            texture_entry(1, float, d2),
+            texture_entry(2, float, d2),
+            texture_entry(3, wgpu::TextureSampleType::Uint, d2a),
+            storage_entry(4, true, cs),
+            storage_entry(5, true, cs),
+            storage_entry(6, true, cs),
+            storage_entry(7, false, cs),
+        ];
+        for b in POOL_BINDING..OUTPUT_BINDING {
+            entries.push(texture_entry(b, float, d2a));
+        }
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: OUTPUT_BINDING,
+            visibility: cs,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: OUTPUT_FORMAT,
+                view_dimension: d2,
+            },
+            count: None,
+        });
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade"),
+            entries: &entries,
+        })
+    }
+
+    /// The bind group of `b`, in the order of [`ShadePipelines::bind_group_layout`].
+    pub fn bind_group(&self, device: &wgpu::Device, b: &ShadeBindings) -> wgpu::BindGroup {
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: b.uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(b.gb_position),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(b.gb_normal),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(b.sample_maps),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: b.samples.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: b.patches.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 6,
+                resource: b.slots.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 7,
+                resource: b.feedback.as_entire_binding(),
+            },
+        ];
+        for (i, v) in b.pool.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: POOL_BINDING + i as u32,
+                resource: wgpu::BindingResource::TextureView(v),
+            });
+        }
+        entries.push(wgpu::BindGroupEntry {
+            binding: OUTPUT_BINDING,
+            resource: wgpu::BindingResource::TextureView(b.output),
+        });
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shade"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Builds the pipeline for `key` unless it exists.
+    pub fn prepare(&mut self, device: &wgpu::Device, key: ShadeKey) {
+        if self.pipelines.contains_key(&key) {
+            return;
+        }
+        let constants = key.constants(self.pools, self.face_shift);
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("shade"),
+            layout: Some(&self.pipeline_layout),
+            module: &self.module,
+            entry_point: Some("shade"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                zero_initialize_workgroup_memory: true,
+            },
+            cache: None,
+        });
+        self.pipelines.insert(key, pipeline);
+    }
+
+    /// The pipeline for `key`, once [`ShadePipelines::prepare`]d.
+    pub fn get(&self, key: &ShadeKey) -> Option<&wgpu::ComputePipeline> {
+        self.pipelines.get(key)
+    }
+}

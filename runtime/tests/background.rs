@@ -1,0 +1,211 @@
+//! Backgrounds (`RenderOptions::background`): off the object a frame shows transparent black,
+//! the environment cube along each pixel's camera ray, or a colour, always with alpha 0, the
+//! same on the GPU as in the CPU reference; and a typed error for the environment cube of a
+//! store that has none.
+
+mod common;
+
+use common::{all_finite, compare, open_store, store_path_without_env_cube};
+use oslf_runtime::reference::StoreCubes;
+use oslf_runtime::{
+    Background, CacheConfig, Frame, Gpu, Mode, RenderOptions, Renderer, RuntimeError, ShadingParams,
+};
+
+const W: u32 = 96;
+const H: u32 = 72;
+const COLOR: [f32; 3] = [0.25, 0.5, 2.0];
+
+fn options(background: Background) -> RenderOptions {
+    RenderOptions {
+        width: W,
+        height: H,
+        background,
+        ..Default::default()
+    }
+}
+
+/// The background pixels (alpha 0) of an image.
+fn background(img: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    img.iter().copied().filter(|p| p[3] == 0.0).collect()
+}
+
+/// Compares two images over the pixels where both have alpha 0. Returns (background pixels,
+/// share of them within `tol` relative (of max(1, |cpu|)), mean absolute difference).
+fn compare_background(gpu: &[[f32; 4]], cpu: &[[f32; 4]], tol: f32) -> (usize, f64, f64) {
+    let (gpu, cpu) = (background(gpu), background(cpu));
+    assert_eq!(gpu.len(), cpu.len(), "background masks differ");
+    let (mut ok, mut sum) = (0usize, 0f64);
+    for (g, c) in gpu.iter().zip(&cpu) {
+        let mut good = true;
+        for k in 0..3 {
+            let d = (g[k] - c[k]).abs();
+            sum += f64::from(d);
+            good &= d <= tol * c[k].abs().max(1.0);
+        }
+        ok += usize::from(good);
+    }
+    let n = cpu.len();
+    (n, ok as f64 / n.max(1) as f64, sum / (3 * n.max(1)) as f64)
+}
+
+/// Renders `params` with `bg` on the GPU and on the CPU from the same G-buffer; asserts that
+/// object and background agree and that no pixel is non-finite. Returns the GPU frame.
+fn check(
+    r: &mut Renderer,
+    cubes: &StoreCubes,
+    params: ShadingParams,
+    bg: Background,
+    label: &str,
+) -> Frame {
+    let camera = r.default_view();
+    let frame = r.render(&camera, &params, &options(bg)).unwrap();
+    let (cpu, _) = r.reference_image(&camera, &params, cubes).unwrap();
+    assert!(all_finite(&frame.pixels), "{label}: non-finite GPU pixel");
+    assert!(all_finite(&cpu), "{label}: non-finite CPU pixel");
+    assert!(
+        frame.pixels.iter().all(|p| p[3] == 0.0 || p[3] == 1.0),
+        "{label}: alpha is not a mask"
+    );
+    let (n, share, mae) = compare(&frame.pixels, &cpu, 2e-3);
+    assert!(n > (W * H / 10) as usize, "{label}: the object covers {n}");
+    assert!(
+        share >= 0.995 && mae < 2e-3,
+        "{label}: object {share} {mae}"
+    );
+    let (n, share, mae) = compare_background(&frame.pixels, &cpu, 2e-3);
+    println!(
+        "{label}: {n} background pixels, {:.4}% within 2e-3, mean |gpu-cpu| {mae:.2e}",
+        share * 100.0
+    );
+    assert!(n > (W * H / 10) as usize, "{label}: {n} background pixels");
+    assert!(
+        share >= 0.995,
+        "{label}: only {:.3}% of background pixels agree",
+        share * 100.0
+    );
+    assert!(mae < 2e-3, "{label}: mean background difference {mae}");
+    frame
+}
+
+#[test]
+fn env_and_colour_backgrounds_match_the_cpu_reference() {
+    let store = open_store();
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let base = ShadingParams::default();
+    for params in [
+        base,
+        ShadingParams {
+            mode: Mode::Glossy,
+            m: 4,
+            ..base
+        },
+    ] {
+        let mode = params.mode.name();
+        let env = check(
+            &mut r,
+            &cubes,
+            params,
+            Background::Env,
+            &format!("{mode} env"),
+        );
+        let sky = background(&env.pixels);
+        let lit = sky.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
+        assert!(
+            lit * 100 >= sky.len() * 99,
+            "{mode}: {lit} of {} environment background pixels are non-black",
+            sky.len()
+        );
+        let colour = check(
+            &mut r,
+            &cubes,
+            params,
+            Background::Color(COLOR),
+            &format!("{mode} colour"),
+        );
+        for p in background(&colour.pixels) {
+            assert_eq!(p, [COLOR[0], COLOR[1], COLOR[2], 0.0], "{mode}");
+        }
+        let none = check(
+            &mut r,
+            &cubes,
+            params,
+            Background::None,
+            &format!("{mode} none"),
+        );
+        for p in background(&none.pixels) {
+            assert_eq!(p, [0.0; 4], "{mode}");
+        }
+    }
+}
+
+#[test]
+fn the_background_changes_neither_the_object_nor_the_mask_nor_the_cache_counters() {
+    let mut r = Renderer::new(
+        Gpu::headless().unwrap(),
+        open_store(),
+        CacheConfig::default(),
+    )
+    .unwrap();
+    let camera = r.default_view();
+    let params = ShadingParams::default();
+    let frames: Vec<Frame> = [
+        Background::None,
+        Background::Env,
+        Background::Color(COLOR),
+        Background::None,
+    ]
+    .into_iter()
+    .map(|bg| r.render(&camera, &params, &options(bg)).unwrap())
+    .collect();
+    let none = &frames[0];
+    assert!(
+        none.pixels.iter().any(|p| p[3] == 0.0),
+        "the view shows some background"
+    );
+    for f in &frames[1..] {
+        for (a, b) in none.pixels.iter().zip(&f.pixels) {
+            assert_eq!(a[3], b[3], "the object mask changed");
+            if a[3] == 1.0 {
+                assert_eq!(a, b, "an object pixel changed");
+            }
+        }
+        assert_eq!(f.stats.requests, frames[3].stats.requests);
+        assert_eq!(f.stats.misses, 0);
+    }
+    let env = background(&frames[1].pixels);
+    assert!(env.iter().all(|p| p[3] == 0.0));
+    assert!(
+        env.iter().any(|p| p[0] + p[1] + p[2] > 0.0),
+        "the environment background is black"
+    );
+}
+
+#[test]
+fn an_env_background_without_an_environment_cube_is_a_parameter_error() {
+    let store = oslf_format::Store::open(&store_path_without_env_cube()).unwrap();
+    assert_eq!(store.env_cube_index(), None);
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let params = ShadingParams::default();
+    match r.render(&camera, &params, &options(Background::Env)) {
+        Err(RuntimeError::Parameter(m)) => assert!(m.contains("no environment cube"), "{m}"),
+        other => panic!("expected a parameter error, got {other:?}"),
+    }
+    let colour = r
+        .render(&camera, &params, &options(Background::Color(COLOR)))
+        .unwrap();
+    let bg = background(&colour.pixels);
+    assert!(!bg.is_empty());
+    assert!(bg.iter().all(|p| *p == [COLOR[0], COLOR[1], COLOR[2], 0.0]));
+    for bad in [
+        [-1.0, 0.0, 0.0],
+        [f32::NAN, 0.0, 0.0],
+        [0.0, f32::INFINITY, 0.0],
+    ] {
+        let e = r
+            .render(&camera, &params, &options(Background::Color(bad)))
+            .unwrap_err();
+        assert!(matches!(e, RuntimeError::Parameter(_)), "{e:?}");
+    }
+}
