@@ -12,7 +12,9 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams};
+use oslf_runtime::{
+    Background, Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams,
+};
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args_os().skip(1).map(PathBuf::from);
@@ -31,9 +33,15 @@ fn main() -> anyhow::Result<()> {
         blend: Blend::Normal,
         ..ShadingParams::default()
     };
+    // The object in its scene: the store's environment cube behind it, where the store has one.
+    let background = match renderer.store().env_cube_index() {
+        Some(_) => Background::Env,
+        None => Background::None,
+    };
     let options = RenderOptions {
         width: 640,
         height: 480,
+        background,
         ..RenderOptions::default()
     };
     let frame = renderer.render(&camera, &params, &options)?;
