@@ -67,6 +67,9 @@ impl Term {
     }
 }
 
+/// The random-stream tag of [`GroundTruth::render_background`] (after the terms' 1, 2, 3).
+const BACKGROUND_TAG: u64 = 4;
+
 /// Image size and sampling of a ground-truth render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TruthSettings {
@@ -205,6 +208,71 @@ impl<'s> GroundTruth<'s> {
             height: h,
             pixels,
             base_color,
+            rays,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The scene behind the object: for every pixel whose centre does not see the object, the
+    /// radiance along `spp` camera rays jittered in strata of the pixel (paths through the whole
+    /// scene, the object included, as the bake's preview); `[0; 4]` on the object. Alpha is 0
+    /// everywhere, so adding it to a term's image keeps that image's object mask.
+    ///
+    /// What `oslf truth --background scene` puts behind the object: the true scene seen from the
+    /// camera, where `oslf render --background env` shows the environment cube captured at the
+    /// object's centre.
+    pub fn render_background(&self, settings: &TruthSettings) -> Result<TruthImage> {
+        let (w, h) = (settings.width, settings.height);
+        if w == 0 || h == 0 {
+            return Err(BakeError::Invalid(format!(
+                "ground-truth image size {w}x{h} must be at least 1x1"
+            )));
+        }
+        let start = Instant::now();
+        let bar = progress_bar(settings.progress, u64::from(h), "rows");
+        let integrator = self.integrator();
+        let spp = settings.spp.max(1);
+        let rows: Vec<(Vec<[f32; 4]>, RayStats)> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                let mut stats = RayStats::default();
+                let mut row = Vec::with_capacity(w as usize);
+                for x in 0..w {
+                    stats.closest += 1;
+                    if self.primary_hit(x, y, w, h).is_some() {
+                        row.push([0.0; 4]);
+                        continue;
+                    }
+                    let mut rng = Rng::new(
+                        settings.seed,
+                        hash_u64(&[settings.seed, BACKGROUND_TAG, u64::from(x), u64::from(y)]),
+                    );
+                    let mut sum = Vec3::ZERO;
+                    for s in 0..spp {
+                        let j = stratified_2d(s, spp, &mut rng);
+                        let ray = primary_ray(&self.camera, x as f32 + j.x, y as f32 + j.y, w, h);
+                        sum += integrator.radiance(&ray, &mut rng, &mut stats).radiance;
+                    }
+                    let c = sum / spp as f32;
+                    let c = if c.is_finite() { c } else { Vec3::ZERO };
+                    row.push([c.x, c.y, c.z, 0.0]);
+                }
+                bar.inc(1);
+                (row, stats)
+            })
+            .collect();
+        bar.finish_and_clear();
+        let mut pixels = Vec::with_capacity(w as usize * h as usize);
+        let mut rays = RayStats::default();
+        for (row, stats) in rows {
+            pixels.extend(row);
+            rays.add(&stats);
+        }
+        Ok(TruthImage {
+            width: w,
+            height: h,
+            base_color: vec![Vec3::ZERO; pixels.len()],
+            pixels,
             rays,
             seconds: start.elapsed().as_secs_f64(),
         })

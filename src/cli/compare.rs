@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
+use glam::Vec3;
+use oslf_bake::image_file;
 use oslf_runtime::metrics::{compare, Metrics};
 
 /// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,
@@ -26,6 +28,33 @@ pub struct Args {
     /// Also append the result as one CSV row (header written when the file is new).
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Also write a PNG with the test image on the left and the reference on the right,
+    /// tone mapped alike (whole images: background pixels too).
+    #[arg(long, value_name = "PNG")]
+    side_by_side: Option<PathBuf>,
+    /// Exposure of --side-by-side.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+}
+
+/// Pixels between the two halves of `--side-by-side`.
+const GAP: usize = 8;
+
+/// `test | gap | reference`, one image of `2 w + GAP` by `h` linear RGB pixels.
+fn side_by_side(test: &[[f32; 4]], reference: &[[f32; 4]], w: usize, h: usize) -> Vec<Vec3> {
+    let mut out = Vec::with_capacity((2 * w + GAP) * h);
+    for y in 0..h {
+        let row = |img: &[[f32; 4]]| {
+            img[y * w..(y + 1) * w]
+                .iter()
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect::<Vec<_>>()
+        };
+        out.extend(row(test));
+        out.extend(std::iter::repeat_n(Vec3::ONE, GAP));
+        out.extend(row(reference));
+    }
+    out
 }
 
 fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
@@ -86,6 +115,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         m.rmse_rgb[0], m.rmse_rgb[1], m.rmse_rgb[2]
     );
     println!("PSNR        {psnr} dB (white {})", m.white);
+    if let Some(path) = &args.side_by_side {
+        let pixels = side_by_side(&b, &a, w, h);
+        image_file::write_png(path, (2 * w + GAP) as u32, h as u32, &pixels, args.exposure)?;
+        println!(
+            "side by side {} (left {}, right {})",
+            path.display(),
+            args.test.display(),
+            args.reference.display()
+        );
+    }
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&m)?)
             .with_context(|| format!("cannot write {}", path.display()))?;

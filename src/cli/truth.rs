@@ -50,12 +50,24 @@ pub struct Args {
     /// Exposure of the PNG previews.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
+    /// What pixels off the object show: `none` (black, the default) or `scene` (the scene
+    /// behind the object, path traced from the camera with --spp paths per pixel). Alpha stays
+    /// the object mask either way, so `oslf compare` is unaffected.
+    #[arg(long, value_enum, default_value_t = TruthBackground::None)]
+    background: TruthBackground,
     /// Worker threads [default: all cores]; the images are identical for any count.
     #[arg(short = 'j', long)]
     threads: Option<usize>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// `--background`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TruthBackground {
+    None,
+    Scene,
 }
 
 const MODES: [&str; 5] = ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"];
@@ -140,6 +152,10 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
     } else {
         None
     };
+    let background = match args.background {
+        TruthBackground::None => None,
+        TruthBackground::Scene => Some(timed("background", || truth.render_background(&settings))?),
+    };
     for m in &modes {
         let image = match *m {
             "recon" => recon.clone(),
@@ -157,7 +173,16 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
                 .transpose()?,
             _ => None,
         };
-        let Some(image) = image else { continue };
+        let Some(mut image) = image else { continue };
+        if let Some(bg) = &background {
+            // Off the object (alpha 0) the term images are black and the background holds the
+            // scene; on the object the background is zero.
+            for (p, b) in image.pixels.iter_mut().zip(&bg.pixels) {
+                if p[3] == 0.0 {
+                    *p = *b;
+                }
+            }
+        }
         let exr = output_path(&args.output, m, "exr");
         write(&exr, &image, args.exposure)?;
         println!("{m:<13} {}", exr.display());

@@ -1,0 +1,109 @@
+//! `oslf truth --background scene` and `oslf compare --side-by-side`: the scene behind the
+//! object changes no object pixel and no metric, and the pair is written as one PNG.
+
+mod common;
+
+use common::oslf;
+
+const SCENE: &str = r#"
+[camera]
+position = [6.0, -6.0, 4.0]
+target = [0.0, 0.0, 1.0]
+
+[environment.sky]
+sun_direction = [0.6, -0.4, 0.7]
+sun_irradiance = [5.0, 5.0, 5.0]
+
+[[object]]
+patches = "newell-teapot"
+select = [20, 28]
+material = { color = [0.1, 0.4, 0.1] }
+
+[[box]]
+size = [8.0, 6.0, 0.2]
+transform = { translate = [0.0, 0.0, -0.1] }
+material = { color = [0.5, 0.4, 0.3] }
+
+[bake]
+sample_count = 12
+cube_resolution = 2
+sample_map_resolution = 4
+samples_per_texel = 1
+"#;
+
+fn read_exr(path: &std::path::Path) -> Vec<[f32; 4]> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a]
+        },
+    )
+    .unwrap();
+    image.layer_data.channel_data.pixels.1
+}
+
+#[test]
+fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() {
+    let dir = std::env::temp_dir().join(format!("oslf-truth-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let truth = |background: &str, prefix: &str| {
+        let out = oslf("truth")
+            .arg(&scene)
+            .args(["-m", "mirror", "--spp", "2", "--width", "40", "--height", "30", "-q"])
+            .args(["--background", background, "-o"])
+            .arg(dir.join(prefix))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        read_exr(&dir.join(format!("{prefix}-mirror.exr")))
+    };
+    let plain = truth("none", "plain");
+    let behind = truth("scene", "behind");
+    let object = plain.iter().filter(|p| p[3] == 1.0).count();
+    assert!(object > 20 && object < plain.len() - 20, "{object} object pixels");
+    for (a, b) in plain.iter().zip(&behind) {
+        assert!(b.iter().all(|c| c.is_finite()));
+        assert_eq!(a[3], b[3], "the object mask is kept");
+        if a[3] == 1.0 {
+            assert_eq!(a, b, "object pixels are the term's");
+        } else {
+            assert_eq!(a, &[0.0; 4]);
+        }
+    }
+    let lit = behind
+        .iter()
+        .filter(|p| p[3] == 0.0 && p[0] + p[1] + p[2] > 0.0)
+        .count();
+    assert_eq!(lit, plain.len() - object, "every background pixel sees the sky or the box");
+
+    // The metrics ignore the background; the side-by-side PNG holds both whole images.
+    let png = dir.join("pair.png");
+    let out = oslf("compare")
+        .arg(dir.join("plain-mirror.exr"))
+        .arg(dir.join("behind-mirror.exr"))
+        .arg("--side-by-side")
+        .arg(&png)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("RMSE L*a*b* 0.0000 0.0000 0.0000"), "{stdout}");
+    let pair = image::open(&png).unwrap();
+    assert_eq!((pair.width(), pair.height()), (2 * 40 + 8, 30));
+    let rgb = pair.to_rgb8();
+    // Left: the test image (scene behind) is lit in its corner; right: the reference is black.
+    assert_ne!(rgb.get_pixel(0, 0).0, [0, 0, 0]);
+    assert_eq!(rgb.get_pixel(40 + 8, 0).0, [0, 0, 0]);
+
+    let bad = oslf("truth")
+        .arg(&scene)
+        .args(["--background", "env"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("possible values: none, scene"));
+}
