@@ -50,12 +50,19 @@ fn main() -> anyhow::Result<()> {
         .pixels
         .iter()
         .flat_map(|p| {
-            let srgb = |c: f32| (255.0 * (c.max(0.0) / (1.0 + c.max(0.0))).powf(1.0 / 2.2)).round() as u8;
+            let srgb =
+                |c: f32| (255.0 * (c.max(0.0) / (1.0 + c.max(0.0))).powf(1.0 / 2.2)).round() as u8;
             [srgb(p[0]), srgb(p[1]), srgb(p[2]), 255]
         })
         .collect();
-    image::save_buffer(&png, &bytes, frame.width, frame.height, image::ColorType::Rgba8)
-        .with_context(|| format!("cannot write {}", png.display()))?;
+    image::save_buffer(
+        &png,
+        &bytes,
+        frame.width,
+        frame.height,
+        image::ColorType::Rgba8,
+    )
+    .with_context(|| format!("cannot write {}", png.display()))?;
     println!(
         "{}: {}x{}, {} cube-map requests, {} misses",
         png.display(),

@@ -991,7 +991,14 @@ fn camera_rays() {
         ..cam
     };
     assert!(bad.validate().is_err());
-    assert!((oslf_bake::camera::primary_ray(&bad, 1.0, 1.0, 0, 0).dir.length() - 1.0).abs() < 1e-5);
+    assert!(
+        (oslf_bake::camera::primary_ray(&bad, 1.0, 1.0, 0, 0)
+            .dir
+            .length()
+            - 1.0)
+            .abs()
+            < 1e-5
+    );
 }
 
 fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
