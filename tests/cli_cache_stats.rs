@@ -8,10 +8,7 @@ use common::{oslf, runtime_fixture};
 use oslf_runtime::replay::Row;
 
 fn cache_stats(args: &[&str]) -> std::process::Output {
-    oslf("cache-stats")
-        .args(args)
-        .output()
-        .unwrap()
+    oslf("cache-stats").args(args).output().unwrap()
 }
 
 #[test]

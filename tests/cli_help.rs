@@ -34,13 +34,19 @@ fn stdout_of(sub: &str, args: &[&str]) -> String {
 fn every_subcommand_is_listed_and_has_help() {
     let top = stdout_of("", &["--help"]);
     for sub in SUBCOMMANDS {
-        assert!(top.contains(&format!("  {sub} ")), "{sub} missing from:\n{top}");
+        assert!(
+            top.contains(&format!("  {sub} ")),
+            "{sub} missing from:\n{top}"
+        );
         let help = stdout_of(sub, &["--help"]);
         assert!(help.contains(&format!("Usage: oslf {sub}")), "{help}");
     }
     let store = stdout_of("store", &["--help"]);
     for sub in STORE_SUBCOMMANDS {
-        assert!(store.contains(&format!("  {sub} ")), "{sub} missing from:\n{store}");
+        assert!(
+            store.contains(&format!("  {sub} ")),
+            "{sub} missing from:\n{store}"
+        );
         stdout_of(&format!("store {sub}"), &["--help"]);
     }
     assert!(stdout_of("", &["--version"]).starts_with("oslf "));
@@ -63,7 +69,10 @@ fn a_wrong_subcommand_or_shell_is_a_clear_error() {
     let out = oslf("bak").output().unwrap();
     assert!(!out.status.success());
     let e = String::from_utf8_lossy(&out.stderr);
-    assert!(e.contains("unrecognized subcommand 'bak'") && e.contains("bake"), "{e}");
+    assert!(
+        e.contains("unrecognized subcommand 'bak'") && e.contains("bake"),
+        "{e}"
+    );
     let out = oslf("completions tcsh").output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("tcsh"));

@@ -53,18 +53,27 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
     let truth = |background: &str, prefix: &str| {
         let out = oslf("truth")
             .arg(&scene)
-            .args(["-m", "mirror", "--spp", "2", "--width", "40", "--height", "30", "-q"])
+            .args([
+                "-m", "mirror", "--spp", "2", "--width", "40", "--height", "30", "-q",
+            ])
             .args(["--background", background, "-o"])
             .arg(dir.join(prefix))
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         read_exr(&dir.join(format!("{prefix}-mirror.exr")))
     };
     let plain = truth("none", "plain");
     let behind = truth("scene", "behind");
     let object = plain.iter().filter(|p| p[3] == 1.0).count();
-    assert!(object > 20 && object < plain.len() - 20, "{object} object pixels");
+    assert!(
+        object > 20 && object < plain.len() - 20,
+        "{object} object pixels"
+    );
     for (a, b) in plain.iter().zip(&behind) {
         assert!(b.iter().all(|c| c.is_finite()));
         assert_eq!(a[3], b[3], "the object mask is kept");
@@ -78,7 +87,11 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
         .iter()
         .filter(|p| p[3] == 0.0 && p[0] + p[1] + p[2] > 0.0)
         .count();
-    assert_eq!(lit, plain.len() - object, "every background pixel sees the sky or the box");
+    assert_eq!(
+        lit,
+        plain.len() - object,
+        "every background pixel sees the sky or the box"
+    );
 
     // The metrics ignore the background; the side-by-side PNG holds both whole images.
     let png = dir.join("pair.png");
@@ -90,8 +103,15 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(stdout.contains("RMSE L*a*b* 0.0000 0.0000 0.0000"), "{stdout}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("RMSE L*a*b* 0.0000 0.0000 0.0000"),
+        "{stdout}"
+    );
     let pair = image::open(&png).unwrap();
     assert_eq!((pair.width(), pair.height()), (2 * 40 + 8, 30));
     let rgb = pair.to_rgb8();

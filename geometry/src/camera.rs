@@ -20,7 +20,9 @@ impl Camera {
     /// direction, or the field of view is outside `(0°, 180°)`.
     pub fn validate(&self) -> Result<()> {
         if !(self.position.is_finite() && self.target.is_finite() && self.up.is_finite()) {
-            return Err(GeometryError::Invalid("camera vectors must be finite".into()));
+            return Err(GeometryError::Invalid(
+                "camera vectors must be finite".into(),
+            ));
         }
         let forward = (self.target - self.position)
             .try_normalize()

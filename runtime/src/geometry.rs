@@ -2,8 +2,8 @@
 //! its patch id and patch parameters (u, v), so the shader can find its sample-map texel.
 
 use glam::{DAffine3, DMat4, DVec3, Vec3};
-use oslf_geometry::BezierPatch;
 use oslf_format::Store;
+use oslf_geometry::BezierPatch;
 
 /// One vertex as `GVertex` in gbuffer.wgsl: position and patch id + 1 (exact as `f32` below
 /// 2²⁴), the unit normal and u, then v.

@@ -4,7 +4,6 @@
 
 mod common;
 
-
 use oslf_runtime::replay::{self, CameraPath, Phase, Row, RowKey};
 use oslf_runtime::{CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams};
 
