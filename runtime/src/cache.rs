@@ -203,8 +203,24 @@ pub struct CubeCache {
     arrivals_rx: Receiver<Arrival>,
     /// Counters since the cache was made (the renderer adds each frame's).
     pub cumulative: CacheStats,
-    /// Decode errors met so far (cube and message), for reports.
-    pub errors: Vec<String>,
+    /// Decode errors met so far, for reports.
+    pub errors: Vec<DecodeFailure>,
+}
+
+/// A face that could not be decoded from the store (checksum, damaged frame). Its cube is never
+/// made resident; the shader falls back as for any face that is not resident.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DecodeFailure {
+    pub cube: u32,
+    pub face: u8,
+    /// The store's error, with its byte offset.
+    pub message: String,
+}
+
+impl std::fmt::Display for DecodeFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "cube {} face {}: {}", self.cube, self.face, self.message)
+    }
 }
 
 const FREE: u32 = u32::MAX;
@@ -493,7 +509,11 @@ impl CubeCache {
             Err(e) => {
                 stats.decode_errors += 1;
                 self.failed[cube as usize] = true;
-                self.errors.push(format!("cube {cube} face {face}: {e}"));
+                self.errors.push(DecodeFailure {
+                    cube,
+                    face,
+                    message: e.to_string(),
+                });
                 None
             }
         }

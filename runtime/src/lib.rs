@@ -68,7 +68,7 @@ pub mod reference;
 pub mod renderer;
 pub mod replay;
 
-pub use cache::{CacheConfig, CacheStats, CubeCache, Granularity};
+pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
 pub use error::{Result, RuntimeError};
 pub use gpu::Gpu;
 pub use oslf_geometry::Camera;

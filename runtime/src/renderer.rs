@@ -75,6 +75,12 @@ pub struct Frame {
     pub stats: CacheStats,
     /// Shading passes run.
     pub passes: u32,
+    /// Needed units (cubes or faces, as [`CacheStats`] counts them) that the final shading
+    /// pass did not have resident, so their sample points fell back (see [`crate::cache`]):
+    /// a budget too small for the frame's working set, faces that failed to decode
+    /// ([`crate::CubeCache::errors`]), or, when streaming, loads that arrive next frame. 0 means
+    /// the image is exactly what the store holds.
+    pub fallbacks: u64,
 }
 
 /// The textures of one image size and the shading bind group that binds them.
@@ -404,6 +410,7 @@ impl Renderer {
             .write_buffer(&self.buffers.uniform, 0, bytemuck::bytes_of(&u));
         let mut stats: Option<CacheStats> = None;
         let mut passes = 0;
+        let mut fallbacks;
         let max_passes = opts.max_passes.max(1);
         loop {
             passes += 1;
@@ -415,6 +422,8 @@ impl Renderer {
             self.write_slots();
             frame_stats.cache_seconds = readback + start.elapsed().as_secs_f64();
             let missed = frame_stats.misses > 0 && !uploads.is_empty();
+            // This pass shaded without what it missed; the last pass's count is the image's.
+            fallbacks = frame_stats.misses;
             match &mut stats {
                 None => stats = Some(frame_stats),
                 Some(s) => s.add_loading(&frame_stats),
@@ -438,6 +447,7 @@ impl Renderer {
             pixels,
             stats,
             passes,
+            fallbacks,
         })
     }
 

@@ -185,9 +185,9 @@ fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
     assert!(total_errors > 0, "cube 3 was never needed");
     let errors = &r.cache().errors;
     assert!(
-        errors
-            .iter()
-            .any(|e| e.contains("cube 3") && e.contains("checksum")),
+        errors.iter().any(|e| e.cube == 3
+            && e.to_string().contains("cube 3")
+            && e.message.contains("checksum")),
         "{errors:?}"
     );
     assert_eq!(

@@ -126,26 +126,26 @@ pub struct BackgroundArgs {
 }
 
 impl BackgroundArgs {
-    /// The background for `store` (at `path`). Without the flag: the environment cube, or
-    /// none, with a note on stderr, when the store has no environment cube. Errors when
-    /// `--background env` is asked for and the store has none.
-    pub fn resolve(&self, store: &Store, path: &Path) -> Result<Background> {
+    /// The background for `store` (at `path`), and a note when it is not what the default
+    /// promises. Without the flag: the environment cube, or none with the note "... has no
+    /// environment cube ..." when the store has none. Errors when `--background env` is asked
+    /// for and the store has none.
+    pub fn resolve(&self, store: &Store, path: &Path) -> Result<(Background, Option<String>)> {
         let has_env = store.env_cube_index().is_some();
         match self.background {
             Some(Background::Env) if !has_env => Err(RuntimeError::Parameter(format!(
                 "--background env: {} has no environment cube (bake with env_cube = true)",
                 path.display()
             ))),
-            Some(b) => Ok(b),
-            None if has_env => Ok(Background::Env),
-            None => {
-                eprintln!(
-                    "note: {} has no environment cube; background is black (bake with \
-                     env_cube = true)",
+            Some(b) => Ok((b, None)),
+            None if has_env => Ok((Background::Env, None)),
+            None => Ok((
+                Background::None,
+                Some(format!(
+                    "{} has no environment cube; background is black (bake with env_cube = true)",
                     path.display()
-                );
-                Ok(Background::None)
-            }
+                )),
+            )),
         }
     }
 }

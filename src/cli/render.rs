@@ -6,14 +6,14 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Context;
+use anyhow::{bail, Context};
 use glam::Vec3;
 use oslf_bake::image_file;
 use oslf_format::Store;
 use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
-    Blend, CacheConfig, CacheStats, Gpu, Granularity, Mode, RenderOptions, Renderer,
+    Blend, CacheConfig, CacheStats, Frame, Gpu, Granularity, Mode, RenderOptions, Renderer,
 };
 
 use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
@@ -67,6 +67,11 @@ pub struct Args {
     /// PNG exposure multiplier.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
+    /// Fail (exit 1, no image written) when the image would be degraded: any sample point
+    /// that fell back (a cube map that failed to decode, a budget too small for the frame's
+    /// working set), or a default background the store cannot give.
+    #[arg(long)]
+    strict: bool,
     /// Write the frame's and the cumulative cache statistics as JSON to this file.
     #[arg(long)]
     stats_json: Option<PathBuf>,
@@ -77,7 +82,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot open store {}", args.store.display()))?;
     let params = args.shading.params(args.mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
-    let background = args.background.resolve(&store, &args.store)?;
+    let (background, note) = args.background.resolve(&store, &args.store)?;
+    if let Some(note) = &note {
+        if args.strict {
+            bail!("{note} (--strict)");
+        }
+        eprintln!("note: {note}");
+    }
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
     let gpu_slots = match (args.cache_slots, args.cache_mb) {
         (Some(s), _) => Some(s),
@@ -105,6 +116,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let frame = renderer.render(&camera, &params, &options)?;
     let render_seconds = t.elapsed().as_secs_f64();
+    let degraded = fallback_report(&renderer, &frame);
+    if args.strict && !degraded.is_empty() {
+        bail!(
+            "the image would be degraded (--strict; nothing written):\n  {}",
+            degraded.join("\n  ")
+        );
+    }
     let mut pixels = frame.pixels.clone();
     if args.cpu {
         let t = Instant::now();
@@ -138,8 +156,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         setup
     );
     print_stats("frame", &frame.stats);
-    for e in &renderer.cache().errors {
-        eprintln!("warning: {e} (that sample point fell back)");
+    for line in &degraded {
+        eprintln!("warning: {line}");
     }
     if let Some(path) = &args.stats_json {
         let json = serde_json::json!({
@@ -153,6 +171,61 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     Ok(())
+}
+
+/// What the frame fell back on, and why, one line each; empty when the image is exact.
+fn fallback_report(renderer: &Renderer, frame: &Frame) -> Vec<String> {
+    let store = renderer.store();
+    let env = store.env_cube_index();
+    let mut lines: Vec<String> = renderer
+        .cache()
+        .errors
+        .iter()
+        .map(|e| {
+            if Some(e.cube) == env {
+                format!(
+                    "the environment cube (cube {}) face {} cannot be decoded: {}; the \
+                     background, the environment-map baseline and every reflection that falls \
+                     back to it show black there",
+                    e.cube, e.face, e.message
+                )
+            } else {
+                format!(
+                    "cube {} (sample point {}) face {} cannot be decoded: {}; that sample point \
+                     is left out of its blends",
+                    e.cube, e.cube, e.face, e.message
+                )
+            }
+        })
+        .collect();
+    if frame.fallbacks > 0 {
+        let unit = match renderer.cache().granularity() {
+            Granularity::Cube => "cube maps",
+            Granularity::Face => "faces",
+        };
+        let why = if frame.stats.unresolved > 0 {
+            format!(
+                "the GPU budget of {} cube-map slots cannot hold the frame's working set of {} \
+                 {unit}; raise --cache-slots or --cache-mb",
+                renderer.cache().slots(),
+                frame.stats.requests
+            )
+        } else if !renderer.cache().errors.is_empty() {
+            "they failed to decode (above)".to_string()
+        } else {
+            format!(
+                "they were still loading after {} shading passes",
+                frame.passes
+            )
+        };
+        lines.push(format!(
+            "{} needed {unit} were not resident in the final shading pass, so their sample \
+             points fell back (left out of the blends; the environment cube where none was \
+             left): {why}",
+            frame.fallbacks
+        ));
+    }
+    lines
 }
 
 fn print_stats(label: &str, s: &CacheStats) {

@@ -151,10 +151,11 @@ impl App {
     fn init(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         let store = oslf_format::Store::open(&self.store)
             .with_context(|| format!("cannot open store {}", self.store.display()))?;
-        self.backgrounds = background_cycle(
-            self.background_flag.resolve(&store, &self.store)?,
-            store.env_cube_index().is_some(),
-        );
+        let (background, note) = self.background_flag.resolve(&store, &self.store)?;
+        if let Some(note) = note {
+            eprintln!("note: {note}");
+        }
+        self.backgrounds = background_cycle(background, store.env_cube_index().is_some());
         self.background = 0;
         let window = Arc::new(
             event_loop.create_window(

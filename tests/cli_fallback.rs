@@ -1,0 +1,85 @@
+//! `oslf render` says exactly what fell back and why, and `--strict` turns any fallback into a
+//! failure that writes nothing: a budget too small for the frame, a damaged environment cube.
+
+mod common;
+
+use common::{oslf, runtime_fixture};
+
+fn render(store: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> (bool, String) {
+    let run = oslf("render")
+        .arg(store)
+        .arg("-o")
+        .arg(out)
+        .args(["--width", "64", "--height", "48"])
+        .args(extra)
+        .output()
+        .unwrap();
+    (
+        run.status.success(),
+        String::from_utf8_lossy(&run.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_budget_too_small_for_the_frame_is_reported_and_strict_fails() {
+    let store = runtime_fixture::store_path();
+    let dir = store.parent().unwrap().join("fallback-budget");
+    std::fs::create_dir_all(&dir).unwrap();
+
+    // The whole working set fits: an exact image, no warning, also under --strict.
+    let exact = dir.join("exact.exr");
+    let (ok, e) = render(&store, &exact, &["--strict"]);
+    assert!(ok && !e.contains("warning"), "{e}");
+    assert!(exact.exists());
+
+    // One slot (the pinned environment cube's) cannot hold the frame's cube maps.
+    let small = dir.join("small.exr");
+    let (ok, e) = render(&store, &small, &["--cache-slots", "1"]);
+    assert!(ok, "{e}");
+    assert!(
+        e.contains("warning:")
+            && e.contains("fell back")
+            && e.contains("cannot hold the frame's working set")
+            && e.contains("--cache-slots"),
+        "{e}"
+    );
+    assert!(small.exists());
+
+    let strict = dir.join("strict.exr");
+    let (ok, e) = render(&store, &strict, &["--cache-slots", "1", "--strict"]);
+    assert!(!ok, "--strict must fail");
+    assert!(e.contains("degraded") && e.contains("--strict"), "{e}");
+    assert!(!strict.exists() && !strict.with_extension("png").exists());
+}
+
+#[test]
+fn a_damaged_environment_cube_is_named_and_strict_fails() {
+    let path = runtime_fixture::store_path();
+    let store = oslf_format::Store::open(&path).unwrap();
+    let env = store
+        .env_cube_index()
+        .expect("the fixture has an environment cube");
+    let mut bytes = std::fs::read(&path).unwrap();
+    for face in 0..6 {
+        let e = store.face_entry(env, face).unwrap();
+        bytes[e.offset as usize + (e.compressed_size as usize) / 2] ^= 0x5a;
+    }
+    let dir = path.parent().unwrap().join("fallback-env");
+    std::fs::create_dir_all(&dir).unwrap();
+    let damaged = dir.join("damaged-env.oslf");
+    std::fs::write(&damaged, &bytes).unwrap();
+
+    let (ok, e) = render(&damaged, &dir.join("lenient.exr"), &[]);
+    assert!(ok, "{e}");
+    assert!(
+        e.contains(&format!("the environment cube (cube {env})"))
+            && e.contains("cannot be decoded"),
+        "{e}"
+    );
+    assert!(!e.contains("(that sample point fell back)"), "{e}");
+
+    let strict = dir.join("strict.exr");
+    let (ok, e) = render(&damaged, &strict, &["--strict"]);
+    assert!(!ok && e.contains("the environment cube"), "{e}");
+    assert!(!strict.exists());
+}
