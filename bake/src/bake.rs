@@ -4,7 +4,10 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use glam::{Mat4, Vec3};
-use oslf_format::{BakeParams, CameraInfo, ObjectInfo, Patch, SamplePoint, StoreMeta, StoreWriter};
+use oslf_format::{
+    BakeParams, CameraInfo, EncodedCube, ObjectInfo, Patch, SampleMaps, SamplePoint, ShardSpec,
+    ShardWriter, StoreMeta, StoreWriter,
+};
 use rayon::prelude::*;
 
 use crate::bvh::TriangleScene;
@@ -48,6 +51,87 @@ pub struct BakeOptions {
     pub cube_limit: Option<u32>,
 }
 
+/// Where the cubes go: the store, or one shard of it.
+enum Sink {
+    Store(Box<StoreWriter>),
+    Shard(Box<ShardWriter>),
+}
+
+impl Sink {
+    /// Opens the store or shard at `options.output`, resuming its partial file if asked.
+    fn open(
+        options: &BakeOptions,
+        shard: Option<ShardSpec>,
+        meta: &StoreMeta,
+        points: &[SamplePoint],
+        maps: &SampleMaps,
+        restarted: &mut bool,
+    ) -> Result<Sink> {
+        let out = &options.output;
+        let create = || -> Result<Sink> {
+            Ok(match shard {
+                Some(spec) => Sink::Shard(Box::new(ShardWriter::create(
+                    out, spec, meta, points, maps,
+                )?)),
+                None => Sink::Store(Box::new(StoreWriter::create(out, meta, points, maps)?)),
+            })
+        };
+        if !(options.resume && partial_path(out).exists()) {
+            return create();
+        }
+        let resumed = match shard {
+            Some(spec) => {
+                ShardWriter::resume(out, spec, meta, points, maps).map(|w| Sink::Shard(Box::new(w)))
+            }
+            None => StoreWriter::resume(out, meta, points, maps).map(|w| Sink::Store(Box::new(w))),
+        };
+        match resumed {
+            // create() was interrupted: there are no finished cube maps to keep.
+            Err(oslf_format::Error::PartialNeverCreated { path, detail }) => {
+                eprintln!(
+                    "{} was never completely created ({detail}): it holds no finished cube maps, so the bake starts from scratch",
+                    path.display()
+                );
+                *restarted = true;
+                create()
+            }
+            result => Ok(result?),
+        }
+    }
+
+    /// Cubes already in (the first ones of [`Sink::cube`]'s order).
+    fn done(&self) -> u32 {
+        match self {
+            Sink::Store(w) => w.next_cube(),
+            Sink::Shard(w) => w.appended(),
+        }
+    }
+
+    /// Cubes the finished store or shard holds.
+    fn total(&self) -> u32 {
+        match self {
+            Sink::Store(w) => w.total_cubes(),
+            Sink::Shard(w) => w.shard_cubes(),
+        }
+    }
+
+    /// The store's index of the `k`-th cube this sink takes.
+    fn cube(&self, k: u32) -> u32 {
+        match self {
+            Sink::Store(_) => k,
+            Sink::Shard(w) => w.spec().cube(k),
+        }
+    }
+
+    fn append(&mut self, cube: EncodedCube) -> Result<()> {
+        match self {
+            Sink::Store(w) => w.append(cube)?,
+            Sink::Shard(w) => w.append(cube)?,
+        }
+        Ok(())
+    }
+}
+
 /// What a bake did, for the summary and for tools (`--report-json`).
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct BakeReport {
@@ -63,7 +147,12 @@ pub struct BakeReport {
     /// Points added where sample-map texels found fewer than four (§6.3).
     pub points_added: usize,
     pub sample_maps: SampleMapStats,
+    /// Cubes of this store (or, for a shard, of this shard).
     pub cubes: u32,
+    /// `I/N` when this bake was shard `I` of `N`; `cubes` then counts the shard's cubes.
+    pub shard: Option<String>,
+    /// Cubes in the merged store (equal to `cubes` unless this is a shard).
+    pub store_cubes: u32,
     /// Cubes recovered from an interrupted bake instead of being traced again.
     pub cubes_resumed: u32,
     /// Whether `resume` found a partial file that was never completely created and started
@@ -105,6 +194,18 @@ fn process_cpu_ns() -> Option<u64> {
 
 /// Bakes `scene` into the store at `options.output`.
 pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
+    bake_shard(scene, options, None)
+}
+
+/// Bakes shard `shard` of `scene`'s store into a shard file at `options.output`: the sample
+/// points and maps as [`bake`] computes them, and the cubes `i` with `i % count == index`
+/// ([`oslf_format::shard`]); `oslf store merge` joins the shards into the store [`bake`]
+/// writes. `None`: the whole store, as [`bake`]. `resume` and `cube_limit` work as there.
+pub fn bake_shard(
+    scene: &Scene,
+    options: &BakeOptions,
+    shard: Option<ShardSpec>,
+) -> Result<BakeReport> {
     let start = Instant::now();
     let bake_cpu_start = process_cpu_ns();
     let cpu_since_start = || {
@@ -185,24 +286,14 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     report.sample_map_seconds = t.elapsed().as_secs_f64();
 
     let meta = store_meta(scene);
-    let mut writer = if options.resume && partial_path(&options.output).exists() {
-        match StoreWriter::resume(&options.output, &meta, &points, &maps) {
-            // create() was interrupted: there are no finished cube maps to keep.
-            Err(oslf_format::Error::PartialNeverCreated { path, detail }) => {
-                eprintln!(
-                    "{} was never completely created ({detail}): it holds no finished cube maps, so the bake starts from scratch",
-                    path.display()
-                );
-                report.restarted = true;
-                StoreWriter::create(&options.output, &meta, &points, &maps)?
-            }
-            result => result?,
-        }
-    } else {
-        StoreWriter::create(&options.output, &meta, &points, &maps)?
+    report.shard = shard.map(|s| s.to_string());
+    let mut writer = Sink::open(options, shard, &meta, &points, &maps, &mut report.restarted)?;
+    report.cubes_resumed = writer.done();
+    report.cubes = writer.total();
+    report.store_cubes = match &writer {
+        Sink::Store(w) => w.total_cubes(),
+        Sink::Shard(w) => w.store_cubes(),
     };
-    report.cubes_resumed = writer.next_cube();
-    report.cubes = writer.total_cubes();
 
     let capture = CaptureSettings::from_bake(settings);
     let integrator = Integrator::for_scene(scene, &geometry);
@@ -214,26 +305,25 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     };
     let centre = object_centre(scene);
 
-    let bar = progress_bar(options.progress, writer.total_cubes() as u64, "cube maps");
-    bar.set_position(writer.next_cube() as u64);
+    let bar = progress_bar(options.progress, writer.total() as u64, "cube maps");
+    bar.set_position(writer.done() as u64);
     let t = Instant::now();
     let cpu_start = process_cpu_ns();
     let mut rays = RayStats::default();
     let mut bytes = 0u64;
     let mut texels = 0u64;
-    let stop_at = options.cube_limit.map_or(writer.total_cubes(), |limit| {
-        writer
-            .next_cube()
-            .saturating_add(limit)
-            .min(writer.total_cubes())
+    let stop_at = options.cube_limit.map_or(writer.total(), |limit| {
+        writer.done().saturating_add(limit).min(writer.total())
     });
     let chunk = chunk_cubes(capture.resolution, capture.distance_channel);
-    while writer.next_cube() < stop_at {
-        let first = writer.next_cube() as usize;
+    while writer.done() < stop_at {
+        let first = writer.done() as usize;
         let end = (first + chunk).min(stop_at as usize);
+        let sink = &writer;
         let encoded: Vec<_> = (first..end)
             .into_par_iter()
-            .map(|i| {
+            .map(|k| {
+                let i = sink.cube(k as u32) as usize;
                 let (cube, stats) = match points.get(i) {
                     Some(p) => capture_cube(
                         &integrator,
@@ -277,18 +367,32 @@ pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
 
-    if writer.next_cube() < writer.total_cubes() {
+    if writer.done() < writer.total() {
         // Stopped by `cube_limit`: the partial file keeps every appended cube for `resume`.
         drop(writer);
         report.total_seconds = start.elapsed().as_secs_f64();
         report.cpu_seconds = cpu_since_start();
         return Ok(report);
     }
-    let summary = writer.finish()?;
+    let res = u64::from(capture.resolution);
+    let (file_size, cube_bytes, all_texels) = match writer {
+        Sink::Store(w) => {
+            let s = w.finish()?;
+            (s.file_size, s.cube_bytes, s.texels)
+        }
+        Sink::Shard(w) => {
+            let s = w.finish()?;
+            (
+                s.file_size,
+                s.cube_bytes,
+                u64::from(s.cubes) * 6 * res * res,
+            )
+        }
+    };
     report.finished = true;
-    report.store_bytes = summary.file_size;
-    report.bytes_per_texel = if summary.texels > 0 {
-        summary.cube_bytes as f64 / summary.texels as f64
+    report.store_bytes = file_size;
+    report.bytes_per_texel = if all_texels > 0 {
+        cube_bytes as f64 / all_texels as f64
     } else if texels > 0 {
         bytes as f64 / texels as f64
     } else {

@@ -239,6 +239,24 @@ pub enum Error {
     /// An unknown encoding name.
     #[error("unknown encoding {0:?} (expected rgb9e5, rgba16f or rgba32f)")]
     UnknownEncoding(String),
+    /// A shard argument that is not `I/N` with `N ≥ 1` and `I < N`.
+    #[error("invalid shard {0:?}: expected I/N with N at least 1 and I in 0..N (e.g. 0/4)")]
+    InvalidShardSpec(String),
+    /// A shard file that cannot be used: not a shard, damaged, unfinished or truncated
+    /// (`detail` says which, with the byte offset where one applies).
+    #[error("shard file {path}: {detail}")]
+    InvalidShard { path: PathBuf, detail: String },
+    /// Shard files that do not make one store together: missing or repeated shard indices,
+    /// different shard counts, or different scenes or settings (`0` names them).
+    #[error("cannot merge the shards: {0}")]
+    ShardSet(String),
+    /// A cube appended to a shard that does not hold it, or not in the shard's cube order.
+    #[error("cube {got} appended to shard {shard}, but its next cube is {expected}")]
+    ShardCubeOrder {
+        shard: String,
+        expected: String,
+        got: u32,
+    },
     /// A value past a documented limit.
     #[error("{what} is {value}, above the limit {max}")]
     Limit {

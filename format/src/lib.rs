@@ -275,6 +275,13 @@
 //! same in all versions. Writers write version 3; [`StoreWriter::resume`] continues partial
 //! files of versions 2 and 3 (finishing them as version 3).
 //!
+//! ## Shards
+//!
+//! A bake split over machines writes *shard files*, each holding a share of the cubes plus
+//! everything before the cube payload; [`shard::merge`] joins them into the store a single
+//! bake writes, byte for byte. Their layout is specified in [`shard`]; a store never
+//! contains shard data.
+//!
 //! ## Limits and host requirements
 //!
 //! Cube resolution ≤ [`MAX_CUBE_RESOLUTION`] (16384), sample-map resolution ≤
@@ -300,6 +307,7 @@ pub mod filter;
 pub mod header;
 pub mod meta;
 pub mod sample_map;
+pub mod shard;
 pub mod store;
 pub mod toc;
 pub mod writer;
@@ -310,6 +318,7 @@ pub use error::Error;
 pub use filter::Filter;
 pub use meta::{BakeParams, CameraInfo, ObjectInfo, Patch, SamplePoint, StoreMeta};
 pub use sample_map::{IndexWidth, SampleMapView, SampleMaps, INVALID_INDEX};
+pub use shard::{ShardSpec, ShardSummary, ShardWriter};
 pub use store::{Store, VerifyReport};
 pub use toc::FaceEntry;
 pub use writer::{StoreSummary, StoreWriter};

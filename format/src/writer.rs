@@ -83,16 +83,16 @@ pub fn partial_path(path: &Path) -> PathBuf {
 }
 
 /// Everything before the cube payload, as `create()` writes it.
-struct Prefix {
-    header: Header,
-    meta: Vec<u8>,
-    points: Vec<u8>,
-    maps: Vec<u8>,
-    total: u32,
+pub(crate) struct Prefix {
+    pub(crate) header: Header,
+    pub(crate) meta: Vec<u8>,
+    pub(crate) points: Vec<u8>,
+    pub(crate) maps: Vec<u8>,
+    pub(crate) total: u32,
 }
 
 impl Prefix {
-    fn build(
+    pub(crate) fn build(
         meta: &StoreMeta,
         points: &[SamplePoint],
         maps: &SampleMaps,
@@ -173,6 +173,18 @@ impl Prefix {
         })
     }
 
+    /// The bytes `create()` writes before the first cube: header, sections and padding
+    /// (`header.payload.offset` bytes).
+    pub(crate) fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(usize::try_from(self.header.payload.offset).unwrap_or(0));
+        b.extend_from_slice(&self.header.to_bytes());
+        for (_, s, bytes) in self.sections() {
+            b.extend_from_slice(bytes);
+            b.extend_from_slice(&[0u8; 8][..zero_pad(s.end())]);
+        }
+        b
+    }
+
     /// The sections in file order with their names.
     fn sections(&self) -> [(&'static str, Section, &[u8]); 3] {
         [
@@ -183,7 +195,7 @@ impl Prefix {
     }
 }
 
-fn zero_pad(pos: u64) -> usize {
+pub(crate) fn zero_pad(pos: u64) -> usize {
     (align8(pos).unwrap_or(pos) - pos) as usize
 }
 
@@ -239,6 +251,45 @@ impl StoreWriter {
             toc: Vec::new(),
             next: 0,
             total: prefix.total,
+            cube_bytes: 0,
+            unsynced_cubes: 0,
+            unsynced_bytes: 0,
+            decoded: Xxh3::new(),
+            failed: false,
+        })
+    }
+
+    /// Starts a new store from the bytes `create()` would write before the first cube
+    /// (`prefix`, already validated by the caller, whose header is `header`): the merge of
+    /// shards ([`crate::shard::merge`]) copies them from a shard file.
+    pub(crate) fn create_from_prefix(
+        path: &Path,
+        prefix: &[u8],
+        header: Header,
+        mantissa_bits: u32,
+    ) -> Result<Self, Error> {
+        let total = u32::try_from(header.cube_count).map_err(|_| Error::Limit {
+            what: "cube count",
+            value: header.cube_count,
+            max: u64::from(u32::MAX) - 1,
+        })?;
+        let partial = partial_path(path);
+        let file = File::create(&partial).map_err(io_at(&partial, "create"))?;
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        w.write_all(prefix)
+            .and_then(|()| w.flush())
+            .and_then(|()| w.get_ref().sync_data())
+            .map_err(io_at(&partial, "write"))?;
+        Ok(StoreWriter {
+            path: path.to_path_buf(),
+            partial,
+            file: w,
+            pos: header.payload.offset,
+            header,
+            mantissa_bits,
+            toc: Vec::new(),
+            next: 0,
+            total,
             cube_bytes: 0,
             unsynced_cubes: 0,
             unsynced_bytes: 0,
@@ -322,7 +373,7 @@ impl StoreWriter {
         }
         let old_meta = decode_meta(&old_meta_bytes, old.meta.offset, old.version)
             .map_err(|e| damaged(format!("its metadata section is damaged: {e}")))?;
-        let differences = setting_differences(&old, &old_meta, &prefix.header, meta);
+        let differences = setting_differences(&old, &old_meta, &prefix.header, meta, "this bake");
         if !differences.is_empty() {
             return Err(mismatch(format!(
                 "it was started with different settings: {}; bake without --resume to start over, or pass the settings it was started with",
@@ -733,16 +784,17 @@ fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
 /// What differs between the settings a partial file was started with (`old`) and those of
 /// the bake that wants to continue it (`new`): one `"name old (this bake: new)"` per bake
 /// parameter, count, camera, object or patch. Empty if they agree.
-fn setting_differences(
+pub(crate) fn setting_differences(
     old_header: &Header,
     old: &StoreMeta,
     new_header: &Header,
     new: &StoreMeta,
+    new_label: &str,
 ) -> Vec<String> {
     let mut d = Vec::new();
     let mut diff = |name: &str, a: String, b: String| {
         if a != b {
-            d.push(format!("{name} {a} (this bake: {b})"));
+            d.push(format!("{name} {a} ({new_label}: {b})"));
         }
     };
     let hex = |h: &[u8; 32]| -> String {

@@ -5,13 +5,14 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use oslf_bake::bake::{
-    bake, check_store_writable, check_writable, BakeOptions, BakeReport, TESSELLATION_ERROR,
+    bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport, TESSELLATION_ERROR,
 };
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::camera;
 use oslf_bake::image_file;
 use oslf_bake::integrator::Integrator;
 use oslf_bake::scene::Scene;
+use oslf_format::ShardSpec;
 
 /// Bake an offset surface light field: sample points ε above the object's Bézier patches, a
 /// ray-traced HDR cube map at each, and per-patch sample maps, all written to one store.
@@ -19,9 +20,15 @@ use oslf_bake::scene::Scene;
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
-    /// The store to write [default: the scene's name with .oslf, in the current directory].
+    /// The store to write [default: the scene's name with .oslf, in the current directory;
+    /// with --shard I/N, the scene's name with .oslf.shard-I-of-N].
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Bake only shard I of N (0 ≤ I < N): the cube maps i with i % N == I, plus the sample
+    /// points and maps, into a shard file; `oslf store merge` joins all N shards into the
+    /// store a single bake writes, byte for byte. --resume and --max-cubes work per shard.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    shard: Option<ShardSpec>,
     /// Apply the scene's `[presets.NAME]` over its `[bake]` settings.
     #[arg(short, long)]
     preset: Option<String>,
@@ -36,7 +43,7 @@ pub struct Args {
     #[arg(short = 'j', long)]
     threads: Option<usize>,
     /// Also render the scene camera with the bake's path tracer to this PNG (and an EXR beside
-    /// it) [default: `<output>.preview.png`; "none" to skip].
+    /// it) [default: `<output>.preview.png`, none with --shard; "none" to skip].
     #[arg(long)]
     preview: Option<PathBuf>,
     /// Samples per pixel of the preview.
@@ -48,6 +55,10 @@ pub struct Args {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+}
+
+fn parse_shard(s: &str) -> Result<ShardSpec, String> {
+    s.parse().map_err(|e: oslf_format::Error| e.to_string())
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -66,11 +77,22 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default();
-        PathBuf::from(stem).with_extension("oslf")
+        let store = PathBuf::from(stem).with_extension("oslf");
+        match args.shard {
+            Some(s) => PathBuf::from(format!(
+                "{}.shard-{}-of-{}",
+                store.display(),
+                s.index(),
+                s.count()
+            )),
+            None => store,
+        }
     });
     let preview = match &args.preview {
         Some(p) if p.as_os_str() == "none" => None,
         Some(p) => Some(p.clone()),
+        // Every shard would render the same preview.
+        None if args.shard.is_some() => None,
         None => Some(PathBuf::from(format!("{}.preview.png", output.display()))),
     };
     // Every output must be writable before the slow work starts.
@@ -88,7 +110,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         progress: !args.quiet,
         cube_limit: args.max_cubes,
     };
-    let report = bake(&scene, &options)?;
+    let report = bake_shard(&scene, &options, args.shard)?;
     print_summary(&report);
     if !report.finished {
         println!(
@@ -128,7 +150,16 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
 
 fn print_summary(r: &BakeReport) {
     let m = &r.sample_maps;
-    println!("store          {}", r.output.display());
+    match &r.shard {
+        Some(s) => println!(
+            "shard          {} ({}: {} of the store's {} cube maps; join the shards with `oslf store merge`)",
+            s,
+            r.output.display(),
+            r.cubes,
+            r.store_cubes
+        ),
+        None => println!("store          {}", r.output.display()),
+    }
     println!(
         "sample points  {}: {} placed, {} closer than ε to a surface, {} inside geometry, {} added where texels had fewer than four",
         r.sample_points,

@@ -26,6 +26,16 @@ enum Command {
     /// Check every checksum, that every padding byte is zero, and decode every face, checking
     /// the decoded texels against the store's checksum of them (non-zero exit on failure).
     Verify { store: PathBuf },
+    /// Join the shard files of `oslf bake --shard I/N` (all N of them, any order) into the
+    /// store a single bake writes, byte for byte. Checks that they come from the same scene,
+    /// settings and seed and that every shard index is there exactly once; writes
+    /// OUTPUT.partial, syncs it and renames it to OUTPUT.
+    Merge {
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Export one cube as OpenEXR (f32 RGB).
     ExportCube {
         store: PathBuf,
@@ -87,6 +97,19 @@ pub fn run(cli: Args) -> Result<()> {
                         s.header().version
                     )
                 }
+            );
+            Ok(())
+        }
+        Command::Merge { shards, output } => {
+            let s = oslf_format::shard::merge(&shards, &output)
+                .with_context(|| format!("cannot merge into {}", output.display()))?;
+            println!(
+                "{}: {} shards merged — {} cubes, {} sample points, {} bytes",
+                output.display(),
+                shards.len(),
+                s.cubes,
+                s.sample_points,
+                s.file_size
             );
             Ok(())
         }
