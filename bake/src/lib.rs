@@ -44,6 +44,7 @@ pub mod bake;
 pub mod capture;
 pub mod ground_truth;
 pub mod image_file;
+pub mod preflight;
 pub mod sample_map;
 pub mod sample_points;
 pub mod scene;
