@@ -83,3 +83,25 @@ fn a_damaged_environment_cube_is_named_and_strict_fails() {
     assert!(!ok && e.contains("the environment cube"), "{e}");
     assert!(!strict.exists());
 }
+
+#[test]
+fn a_frame_larger_than_memory_is_refused_before_any_work() {
+    // 16384² (the largest texture lavapipe allows) needs about 35 GB: more than the CI
+    // machine's 24 GB, so the render must stop at once with the flags to change.
+    let store = runtime_fixture::store_path();
+    let out = store.with_file_name("huge.exr");
+    let run = oslf("render")
+        .arg(&store)
+        .arg("-o")
+        .arg(&out)
+        .args(["--width", "16384", "--height", "16384"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        e.contains("a 16384x16384 frame needs about") && e.contains("lower --width and --height"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}

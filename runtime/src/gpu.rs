@@ -18,6 +18,9 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     /// The adapter's name, driver and backend, for reports.
     pub adapter_name: String,
+    /// Whether the "GPU" is the CPU (lavapipe, llvmpipe, WARP): its textures then live in
+    /// system memory, which `oslf render` counts before it starts.
+    pub shares_system_memory: bool,
     errors: Arc<Mutex<Vec<String>>>,
 }
 
@@ -88,7 +91,9 @@ impl Gpu {
             adapter: adapter_name.clone(),
             message: e.to_string(),
         })?;
-        Ok(Self::from_device(device, queue, adapter_name))
+        let mut gpu = Self::from_device(device, queue, adapter_name);
+        gpu.shares_system_memory = info.device_type == wgpu::DeviceType::Cpu;
+        Ok(gpu)
     }
 
     /// Wraps a device and queue the application owns. Create it with the limits the store
@@ -105,6 +110,7 @@ impl Gpu {
             device,
             queue,
             adapter_name,
+            shares_system_memory: false,
             errors,
         }
     }

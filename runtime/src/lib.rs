@@ -73,4 +73,4 @@ pub use error::{Result, RuntimeError};
 pub use gpu::Gpu;
 pub use oslf_geometry::Camera;
 pub use params::{Background, Blend, Mode, Order, ShadingParams, Source};
-pub use renderer::{Frame, RenderOptions, Renderer};
+pub use renderer::{Frame, FrameBytes, RenderOptions, Renderer};

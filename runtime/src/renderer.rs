@@ -151,6 +151,34 @@ impl SizedTargets {
     }
 }
 
+/// What one frame of a given size needs besides the store and its cube-map pool.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameBytes {
+    /// The render targets on the GPU: two G-buffer textures, depth and the output.
+    pub gpu: u64,
+    /// With [`RenderOptions::read_pixels`]: the read-back buffer and [`Frame::pixels`].
+    pub readback: u64,
+}
+
+impl FrameBytes {
+    /// The bytes of a `width` × `height` frame, from the formats the renderer uses.
+    pub fn of(width: u32, height: u32) -> Self {
+        let pixels = u64::from(width) * u64::from(height);
+        let texel = |f: wgpu::TextureFormat| {
+            u64::from(
+                f.block_copy_size(None)
+                    .or(f.block_copy_size(Some(wgpu::TextureAspect::DepthOnly)))
+                    .unwrap_or(16),
+            )
+        };
+        let gpu = pixels * (2 * texel(GBUFFER_FORMAT) + texel(DEPTH_FORMAT) + texel(OUTPUT_FORMAT));
+        // The read-back buffer (rows padded to 256 bytes) and the pixel vector, both RGBA f32.
+        let row = u64::from(padded_row(width, texel(OUTPUT_FORMAT) as u32));
+        let readback = row * u64::from(height) + pixels * 16;
+        Self { gpu, readback }
+    }
+}
+
 /// Renders one store. See the crate docs for the frame's steps.
 pub struct Renderer {
     gpu: Gpu,

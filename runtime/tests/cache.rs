@@ -259,3 +259,14 @@ fn renders_on_a_device_the_application_owns() {
         mapped_at_creation: false,
     });
 }
+
+#[test]
+fn frame_bytes_count_every_target() {
+    use oslf_runtime::FrameBytes;
+    // Position and normal (RGBA f32), depth (f32), output (RGBA f32): 52 bytes a pixel; the
+    // read-back rows padded to 256 bytes, plus the pixel vector.
+    let f = FrameBytes::of(100, 10);
+    assert_eq!(f.gpu, 100 * 10 * 52);
+    assert_eq!(f.readback, 1792 * 10 + 100 * 10 * 16);
+    assert_eq!(FrameBytes::of(16384, 16384).gpu, 16384 * 16384 * 52);
+}

@@ -13,7 +13,8 @@ use oslf_format::Store;
 use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
-    Blend, CacheConfig, CacheStats, Frame, Gpu, Granularity, Mode, RenderOptions, Renderer,
+    Blend, CacheConfig, CacheStats, Frame, FrameBytes, Gpu, Granularity, Mode, RenderOptions,
+    Renderer,
 };
 
 use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
@@ -102,6 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         slots_per_texture: None,
     };
     let gpu = Gpu::headless()?;
+    check_frame_memory(&args, &store, &gpu)?;
     let adapter = gpu.adapter_name.clone();
     let t = Instant::now();
     let mut renderer = Renderer::new(gpu, store, config)?;
@@ -169,6 +171,60 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         });
         std::fs::write(path, serde_json::to_string_pretty(&json)?)
             .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Refuses, before any slow work, a frame whose images cannot fit in the memory available,
+/// naming what takes the room and the flags to change.
+fn check_frame_memory(args: &Args, store: &Store, gpu: &Gpu) -> anyhow::Result<()> {
+    let frame = FrameBytes::of(args.width, args.height);
+    let pixels = u64::from(args.width) * u64::from(args.height);
+    // This command's own copies: the pixels (RGBA f32), RGB for the PNG, the EXR writer's
+    // RGBA f32 and the PNG's 8-bit RGB.
+    let images = pixels * (16 + 12 + 16 + 3);
+    let cpu_reference = if args.cpu {
+        let res = u64::from(store.cube_resolution());
+        u64::from(store.cube_count()) * 6 * res * res * 12
+    } else {
+        0
+    };
+    let targets = if gpu.shares_system_memory {
+        frame.gpu
+    } else {
+        0
+    };
+    let needed = frame.readback + images + cpu_reference + targets;
+    let Some(available) = oslf_bake::preflight::available_memory() else {
+        return Ok(());
+    };
+    if needed > available {
+        let gb = |b: u64| b as f64 / 1e9;
+        bail!(
+            "a {}x{} frame needs about {:.1} GB of memory ({:.1} GB of images and read-back{}{}) \
+             but {:.1} GB are available; lower --width and --height",
+            args.width,
+            args.height,
+            gb(needed),
+            gb(frame.readback + images),
+            if targets > 0 {
+                format!(
+                    ", {:.1} GB of render targets on a GPU that uses system memory",
+                    gb(targets)
+                )
+            } else {
+                String::new()
+            },
+            if args.cpu {
+                format!(
+                    ", {:.1} GB of decoded cube maps for --cpu",
+                    gb(cpu_reference)
+                )
+            } else {
+                String::new()
+            },
+            gb(available)
+        );
     }
     Ok(())
 }
