@@ -316,3 +316,44 @@ fn unwritable_outputs_fail_before_the_bake() {
         "only the scene, no probe files"
     );
 }
+
+#[test]
+fn preflight_refuses_a_bake_too_slow_for_its_limit_before_any_work() {
+    let dir = temp_dir("preflight");
+    let scene = dir.join("slow.toml");
+    // 65 536 paths per texel of 200 cube maps of 128² on one thread: weeks by any estimate
+    // (the optimistic end is what is checked against the 12 h limit).
+    std::fs::write(
+        &scene,
+        SCENE
+            .replace("samples_per_texel = 1", "samples_per_texel = 65536")
+            .replace("cube_resolution = 2", "cube_resolution = 128")
+            .replace("sample_count = 12", "sample_count = 200"),
+    )
+    .unwrap();
+    let out = dir.join("slow.oslf");
+    let run = |extra: &[&str]| {
+        oslf("bake")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["-j", "1", "--preview", "none"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let r = run(&[]);
+    let e = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(
+        e.contains("estimate: peak memory")
+            && e.contains("the bake would take")
+            && e.contains("lower samples_per_texel")
+            && e.contains("--max-hours"),
+        "{e}"
+    );
+    assert!(!out.exists() && !dir.join("slow.oslf.partial").exists());
+    let r = run(&["--max-hours=-1"]);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--max-hours -1"));
+}

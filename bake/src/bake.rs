@@ -192,19 +192,24 @@ fn process_cpu_ns() -> Option<u64> {
     Some(total)
 }
 
-/// Bakes `scene` into the store at `options.output`.
+/// Bakes `scene` into the store at `options.output`, after the preflight against this
+/// machine's limits ([`crate::preflight::Limits::of_machine`]).
 pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
-    bake_shard(scene, options, None)
+    let limits = crate::preflight::Limits::of_machine(&options.output);
+    bake_shard(scene, options, None, &limits)
 }
 
 /// Bakes shard `shard` of `scene`'s store into a shard file at `options.output`: the sample
 /// points and maps as [`bake`] computes them, and the cubes `i` with `i % count == index`
 /// ([`oslf_format::shard`]); `oslf store merge` joins the shards into the store [`bake`]
 /// writes. `None`: the whole store, as [`bake`]. `resume` and `cube_limit` work as there.
+/// Before any slow work the bake's estimate ([`crate::preflight`], of this shard's share) is
+/// checked against `limits`.
 pub fn bake_shard(
     scene: &Scene,
     options: &BakeOptions,
     shard: Option<ShardSpec>,
+    limits: &crate::preflight::Limits,
 ) -> Result<BakeReport> {
     let start = Instant::now();
     let bake_cpu_start = process_cpu_ns();
@@ -215,6 +220,13 @@ pub fn bake_shard(
     };
     // Fail now, not after the sample maps, if the store cannot be written.
     check_store_writable(&options.output)?;
+    // Preflight: refuse what cannot fit this machine, naming the setting to change.
+    let estimate = crate::preflight::estimate(scene, rayon::current_num_threads());
+    let estimate = match shard {
+        Some(s) => estimate.for_shard(s.count()),
+        None => estimate,
+    };
+    crate::preflight::check(&estimate, limits)?;
     let settings = &scene.bake;
     let mut report = BakeReport {
         output: options.output.clone(),
@@ -344,6 +356,9 @@ pub fn bake_shard(
                     },
                 };
                 let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i as u32)?;
+                // Each cube as it finishes, not each chunk: one cube of a slow bake (many
+                // samples per texel, many lights) can take minutes.
+                bar.inc(1);
                 Ok((enc, enc_stats, stats))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -354,7 +369,6 @@ pub fn bake_shard(
             bytes += enc_stats.compressed_bytes;
             texels += 6 * (capture.resolution as u64).pow(2);
             writer.append(enc)?;
-            bar.inc(1);
         }
     }
     bar.finish_and_clear();

@@ -287,7 +287,7 @@ pub enum PreflightError {
         term: Term,
     },
     #[error(
-        "the bake would take {}–{} on {threads} threads ({}: {}), more than the limit of {}; {}",
+        "the bake would take {}–{} on {threads} threads ({}: {}), more than the limit of {} (`oslf bake --max-hours`); {}",
         duration(.seconds.0), duration(.seconds.1), .term.name, .term.detail, duration(*.limit), .term.remedy
     )]
     Time {
@@ -698,6 +698,43 @@ pub fn hard_limits(e: &Estimate) -> Result<(), PreflightError> {
         )));
     }
     Ok(())
+}
+
+impl Estimate {
+    /// The share of one shard of `count` (`oslf bake --shard I/N`): the cube maps, their store
+    /// bytes and their capture time divided by `count` (shards differ by at most one cube);
+    /// the sample points, sample maps, BVH and memory stay whole, as every shard computes them.
+    pub fn for_shard(mut self, count: u32) -> Self {
+        let n = u64::from(count.max(1));
+        let share = |b: u64| b.div_ceil(n);
+        self.cubes = share(self.cubes);
+        self.path_vertices = share(self.path_vertices);
+        self.capture_rays = share(self.capture_rays);
+        let mut store_delta = 0;
+        for t in self.store.iter_mut().filter(|t| t.name == "cube maps") {
+            let kept = share(t.bytes);
+            store_delta += t.bytes - kept;
+            t.bytes = kept;
+            t.detail = format!("{} (1/{n} of it in this shard)", t.detail);
+        }
+        self.store.sort_by_key(|t| std::cmp::Reverse(t.bytes));
+        self.store_bytes -= store_delta;
+        self.store_range = (
+            (self.store_bytes as f64 * STORE_RANGE.0) as u64,
+            (self.store_bytes as f64 * STORE_RANGE.1) as u64,
+        );
+        for t in self.time.iter_mut().filter(|t| t.name == "cube maps") {
+            t.seconds = (t.seconds.0 / n as f64, t.seconds.1 / n as f64);
+            t.detail = format!("{} (1/{n} of it in this shard)", t.detail);
+        }
+        self.time
+            .sort_by(|a, b| b.seconds.1.total_cmp(&a.seconds.1));
+        self.seconds = self
+            .time
+            .iter()
+            .fold((0.0, 0.0), |a, t| (a.0 + t.seconds.0, a.1 + t.seconds.1));
+        self
+    }
 }
 
 /// Checks `e` against [`hard_limits`] and `limits`: memory (the peak against the available

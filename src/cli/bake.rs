@@ -52,6 +52,10 @@ pub struct Args {
     /// Write the bake summary as JSON to this file.
     #[arg(long)]
     report_json: Option<PathBuf>,
+    /// Refuse a bake whose optimistic time estimate is longer than this many hours on this
+    /// machine's threads (0: no limit). Memory and disk are always checked.
+    #[arg(long, default_value_t = 12.0, value_name = "HOURS")]
+    max_hours: f64,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -104,13 +108,33 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         check_writable(png, "the preview")?;
         check_writable(&png.with_extension("exr"), "the preview")?;
     }
+    // What the bake will cost (the bake itself refuses what cannot fit, naming the setting).
+    if !args.quiet {
+        let estimate = oslf_bake::preflight::estimate(&scene, rayon::current_num_threads());
+        let estimate = match args.shard {
+            Some(s) => estimate.for_shard(s.count()),
+            None => estimate,
+        };
+        eprintln!("{estimate}");
+        for w in &estimate.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
     let options = BakeOptions {
         output: output.clone(),
         resume: args.resume,
         progress: !args.quiet,
         cube_limit: args.max_cubes,
     };
-    let report = bake_shard(&scene, &options, args.shard)?;
+    if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
+        bail!(
+            "--max-hours {} must be a number of hours ≥ 0",
+            args.max_hours
+        );
+    }
+    let mut limits = oslf_bake::preflight::Limits::of_machine(&output);
+    limits.max_seconds = (args.max_hours > 0.0).then_some(args.max_hours * 3600.0);
+    let report = bake_shard(&scene, &options, args.shard, &limits)?;
     print_summary(&report);
     if !report.finished {
         println!(
