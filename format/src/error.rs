@@ -15,6 +15,17 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// A store's file no longer holds bytes it held when it was opened: it was changed,
+    /// truncated or overwritten (e.g. `cp` over it) while open.
+    #[error(
+        "{path}: the file changed on disk while open (reading byte offset {offset}: {detail}); \
+         reopen it once it is complete (writers should replace stores by rename, as `oslf bake` does)"
+    )]
+    ChangedOnDisk {
+        path: std::path::PathBuf,
+        offset: u64,
+        detail: String,
+    },
     /// The zero-copy views need a little-endian host.
     #[error("OSLF stores can only be read on little-endian hosts")]
     BigEndianHost,

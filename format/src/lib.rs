@@ -3,8 +3,10 @@
 //! An OSLF store holds an *offset surface light field* (Jason Ang, 2003): HDR cube maps captured
 //! at sample points offset by ε above the Bézier patches of an object, plus per-patch *sample
 //! maps* giving, for each texel of a patch's (u, v) domain, the 4 nearest sample points. The
-//! bake writes it with [`StoreWriter`]; the runtime reads it with [`Store`], which memory-maps
-//! the file and validates every structural byte before trusting it.
+//! bake writes it with [`StoreWriter`]; the runtime reads it with [`Store`], which reads the
+//! fixed sections and the table of contents into memory, validates every structural byte before
+//! trusting it, and reads cube frames with positioned reads as they are needed (no memory map:
+//! a file overwritten while open gives an error naming the offset, never a SIGBUS).
 //!
 //! This documentation is the format specification: it is complete enough to write a reader in
 //! another language.

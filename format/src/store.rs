@@ -1,6 +1,7 @@
 //! Reading a store: [`Store`] validates everything structural on open, then serves zero-copy
 //! views of the sample points and maps and checked, decompressed cube faces.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use crate::bytes::align8;
@@ -15,22 +16,132 @@ use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES, T
 use crate::Error;
 use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
-/// The bytes of a store: a read-only memory map, or an 8-byte-aligned owned copy.
+/// 8-byte-aligned owned bytes (the zero-copy views of sample points and maps need the
+/// alignment).
+struct Aligned {
+    words: Vec<u64>,
+    len: usize,
+}
+
+impl Aligned {
+    fn new(len: usize) -> Self {
+        Self {
+            words: vec![0u64; len.div_ceil(8)],
+            len,
+        }
+    }
+
+    fn bytes(&self) -> &[u8] {
+        let all: &[u8] = bytemuck::cast_slice(&self.words);
+        all.get(..self.len).unwrap_or(all)
+    }
+
+    fn bytes_mut(&mut self) -> &mut [u8] {
+        let len = self.len;
+        let all: &mut [u8] = bytemuck::cast_slice_mut(&mut self.words);
+        &mut all[..len]
+    }
+}
+
+/// The bytes of a store.
 enum Backing {
-    Mapped(memmap2::Mmap),
-    Owned { words: Vec<u64>, len: usize },
+    /// The whole store in memory ([`Store::from_bytes`]).
+    Owned(Aligned),
+    /// A file ([`Store::open`]): its fixed sections (header, metadata, sample points, sample
+    /// maps: the bytes before the cube payload) and its table of contents are read into memory
+    /// when it is opened; cube frames are read with positioned reads when needed. Nothing is
+    /// memory-mapped, so a file changed or truncated while open (a `cp` over it) gives errors
+    /// that name the offset, never a SIGBUS.
+    File {
+        file: std::fs::File,
+        path: std::path::PathBuf,
+        len: u64,
+        prefix: Aligned,
+        toc_offset: u64,
+        toc: Vec<u8>,
+    },
 }
 
 impl Backing {
-    fn bytes(&self) -> &[u8] {
+    /// The bytes of `s`: borrowed where they are in memory, read from the file otherwise.
+    /// Out-of-range sections of an in-memory store give an empty slice (callers validated the
+    /// layout); a file that no longer holds them gives [`Error::ChangedOnDisk`].
+    fn read(&self, s: Section) -> Result<Cow<'_, [u8]>, Error> {
         match self {
-            Backing::Mapped(m) => m,
-            Backing::Owned { words, len } => {
-                let all: &[u8] = bytemuck::cast_slice(words);
-                all.get(..*len).unwrap_or(all)
+            Backing::Owned(a) => Ok(Cow::Borrowed(slice(a.bytes(), s))),
+            Backing::File {
+                file,
+                path,
+                len,
+                prefix,
+                toc_offset,
+                toc,
+            } => {
+                let end = s.offset.saturating_add(s.size);
+                if end <= prefix.len as u64 {
+                    return Ok(Cow::Borrowed(slice(prefix.bytes(), s)));
+                }
+                if s.offset >= *toc_offset && end <= toc_offset.saturating_add(toc.len() as u64) {
+                    let local = Section {
+                        offset: s.offset - toc_offset,
+                        size: s.size,
+                    };
+                    return Ok(Cow::Borrowed(slice(toc, local)));
+                }
+                if end > *len {
+                    return Ok(Cow::Borrowed(&[]));
+                }
+                let mut buf = vec![0u8; s.size as usize];
+                read_exact_at(file, &mut buf, s.offset).map_err(|e| Error::ChangedOnDisk {
+                    path: path.clone(),
+                    offset: s.offset,
+                    detail: e.to_string(),
+                })?;
+                Ok(Cow::Owned(buf))
             }
         }
     }
+
+    fn len(&self) -> u64 {
+        match self {
+            Backing::Owned(a) => a.len as u64,
+            Backing::File { len, .. } => *len,
+        }
+    }
+
+    /// The bytes from the start of the store that are in memory (at least the header, when
+    /// the store has one).
+    fn head(&self) -> &[u8] {
+        match self {
+            Backing::Owned(a) => a.bytes(),
+            Backing::File { prefix, .. } => prefix.bytes(),
+        }
+    }
+}
+
+/// `read_exact` at `offset` without moving a shared cursor (so reads from many threads need no
+/// lock).
+#[cfg(unix)]
+fn read_exact_at(file: &std::fs::File, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(file, buf, offset)
+}
+
+/// `read_exact` at `offset` without moving a shared cursor (so reads from many threads need no
+/// lock).
+#[cfg(windows)]
+fn read_exact_at(file: &std::fs::File, mut buf: &mut [u8], mut offset: u64) -> std::io::Result<()> {
+    while !buf.is_empty() {
+        match std::os::windows::fs::FileExt::seek_read(file, buf, offset) {
+            Ok(0) => return Err(std::io::ErrorKind::UnexpectedEof.into()),
+            Ok(n) => {
+                buf = &mut buf[n..];
+                offset += n as u64;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }
 
 /// Per-thread zstd decompression context and filter scratch buffer, reused between reads.
@@ -67,10 +178,13 @@ pub struct VerifyReport {
 
 /// An open store. `Send + Sync`: share it between threads.
 ///
-/// # Memory mapping
+/// # A file that changes while open
 ///
-/// [`Store::open`] maps the file read-only. The file must not be modified or truncated while
-/// the store is open (the writer never modifies a finished store; it replaces it by rename).
+/// [`Store::open`] keeps the fixed sections and the table of contents in memory and reads cube
+/// frames from the file when asked. A file modified, truncated or overwritten while open (the
+/// writer never does this: it replaces stores by rename) gives [`Error::ChangedOnDisk`] or a
+/// checksum error naming the offset; it is not memory-mapped, so it cannot take the process
+/// down with SIGBUS.
 pub struct Store {
     backing: Backing,
     header: Header,
@@ -116,8 +230,9 @@ fn check_little_endian() -> Result<(), Error> {
 }
 
 impl Store {
-    /// Opens and validates a store (memory-mapped). Little-endian hosts only
-    /// ([`Error::BigEndianHost`] otherwise).
+    /// Opens and validates a store. Its fixed sections and table of contents are read into
+    /// memory; cube frames are read from the file when needed (see [`Backing`]). Little-endian
+    /// hosts only ([`Error::BigEndianHost`] otherwise).
     pub fn open(path: &Path) -> Result<Self, Error> {
         check_little_endian()?;
         let file = std::fs::File::open(path).map_err(io_at(path, "open"))?;
@@ -130,34 +245,43 @@ impl Store {
                 file_size: len,
             });
         }
-        // SAFETY: the map is read-only and private to this `Store`; the documented contract
-        // is that a store file is not modified while open (the writer replaces stores by
-        // atomic rename, never in place). All contents are validated before use and every
-        // later access is bounds-checked, so even a concurrently modified file can give wrong
-        // data or errors, not out-of-bounds reads within this crate's code.
-        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io_at(path, "mmap"))?;
-        Self::parse(Backing::Mapped(map))
+        let mut head = [0u8; HEADER_BYTES];
+        read_exact_at(&file, &mut head, 0).map_err(io_at(path, "read"))?;
+        let header = Header::parse(&head)?;
+        if !header.is_complete() {
+            return Err(Error::NotFinished);
+        }
+        header.check_layout(len)?;
+        let read = |offset: u64, size: u64| -> Result<Vec<u8>, Error> {
+            let mut buf = vec![0u8; size as usize];
+            read_exact_at(&file, &mut buf, offset).map_err(io_at(path, "read"))?;
+            Ok(buf)
+        };
+        let mut prefix = Aligned::new(header.payload.offset as usize);
+        read_exact_at(&file, prefix.bytes_mut(), 0).map_err(io_at(path, "read"))?;
+        let toc = read(header.toc.offset, header.toc.size)?;
+        Self::parse(Backing::File {
+            path: path.to_path_buf(),
+            len,
+            prefix,
+            toc_offset: header.toc.offset,
+            toc,
+            file,
+        })
     }
 
     /// Validates a store held in memory (copied into an 8-byte-aligned buffer). Same checks
     /// as [`Store::open`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, Error> {
         check_little_endian()?;
-        let mut words = vec![0u64; bytes.len().div_ceil(8)];
-        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
-        if let Some(d) = dst.get_mut(..bytes.len()) {
-            d.copy_from_slice(bytes);
-        }
-        Self::parse(Backing::Owned {
-            words,
-            len: bytes.len(),
-        })
+        let mut owned = Aligned::new(bytes.len());
+        owned.bytes_mut().copy_from_slice(bytes);
+        Self::parse(Backing::Owned(owned))
     }
 
     fn parse(backing: Backing) -> Result<Self, Error> {
-        let bytes = backing.bytes();
-        let file_size = bytes.len() as u64;
-        let header = Header::parse(bytes)?;
+        let file_size = backing.len();
+        let header = Header::parse(backing.head())?;
         if !header.is_complete() {
             return Err(Error::NotFinished);
         }
@@ -165,7 +289,8 @@ impl Store {
         let h = &header;
 
         // Metadata.
-        let meta_bytes = slice(bytes, h.meta);
+        let meta_bytes = backing.read(h.meta)?;
+        let meta_bytes = &meta_bytes[..];
         check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
         let meta = decode_meta(meta_bytes, h.meta.offset, h.version)?;
         let disagree = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
@@ -237,7 +362,8 @@ impl Store {
             h.points.size,
             h.sample_count.checked_mul(SAMPLE_POINT_BYTES as u64),
         )?;
-        let point_bytes = slice(bytes, h.points);
+        let point_bytes = backing.read(h.points)?;
+        let point_bytes = &point_bytes[..];
         check_sum(
             "sample points",
             point_bytes,
@@ -259,7 +385,8 @@ impl Store {
             .and_then(|v| v.checked_mul(h.index_width.bytes() as u64))
             .and_then(|v| v.checked_mul(h.patch_count));
         expect_size("sample maps", h.maps.size, maps_size)?;
-        let map_bytes = slice(bytes, h.maps);
+        let map_bytes = backing.read(h.maps)?;
+        let map_bytes = &map_bytes[..];
         check_sum("sample maps", map_bytes, h.maps.offset, h.maps_checksum)?;
         let data = map_data(map_bytes, h.index_width, h.maps.offset)?;
         validate_section(data, h.sample_map_resolution, h.sample_count)?;
@@ -278,7 +405,8 @@ impl Store {
                 .checked_mul(TOC_CUBE_BYTES as u64)
                 .and_then(|v| v.checked_add(8)),
         )?;
-        let toc = slice(bytes, h.toc);
+        let toc = backing.read(h.toc)?;
+        let toc = &toc[..];
         let entries_len = toc.len().saturating_sub(8);
         let (entries, trailer) = toc.split_at(entries_len);
         let mut stored = [0u8; 8];
@@ -299,8 +427,13 @@ impl Store {
         })
     }
 
-    fn bytes(&self) -> &[u8] {
-        self.backing.bytes()
+    /// The bytes of `s` where they are always in memory (the fixed sections and the table of
+    /// contents); empty otherwise.
+    fn resident(&self, s: Section) -> &[u8] {
+        match self.backing.read(s) {
+            Ok(Cow::Borrowed(b)) => b,
+            _ => &[],
+        }
     }
 
     /// The parsed header.
@@ -315,7 +448,7 @@ impl Store {
 
     /// The sample points, zero-copy.
     pub fn sample_points(&self) -> &[SamplePoint] {
-        bytemuck::try_cast_slice(slice(self.bytes(), self.header.points)).unwrap_or(&[])
+        bytemuck::try_cast_slice(self.resident(self.header.points)).unwrap_or(&[])
     }
 
     /// Index width of the sample maps.
@@ -339,7 +472,7 @@ impl Store {
             offset: h.maps.offset + per_patch * u64::from(patch),
             size: per_patch,
         };
-        let data = map_data(slice(self.bytes(), section), h.index_width, section.offset)?;
+        let data = map_data(self.resident(section), h.index_width, section.offset)?;
         Ok(SampleMapView {
             resolution: h.sample_map_resolution,
             data,
@@ -369,7 +502,7 @@ impl Store {
         if face >= FACES {
             return Err(Error::FaceOutOfRange { face });
         }
-        let toc = slice(self.bytes(), self.header.toc);
+        let toc = self.resident(self.header.toc);
         Ok(FaceEntry::parse(
             toc,
             cube as usize * TOC_CUBE_BYTES + face * TOC_ENTRY_BYTES,
@@ -389,12 +522,12 @@ impl Store {
 
     /// Size of the store in bytes.
     pub fn file_size(&self) -> u64 {
-        self.bytes().len() as u64
+        self.backing.len()
     }
 
     /// Total compressed bytes of all cube faces.
     pub fn cube_bytes(&self) -> u64 {
-        let toc = slice(self.bytes(), self.header.toc);
+        let toc = self.resident(self.header.toc);
         (0..self.header.cube_count as usize * FACES)
             .map(|i| FaceEntry::parse(toc, i * TOC_ENTRY_BYTES).compressed_size)
             .sum()
@@ -412,13 +545,11 @@ impl Store {
                 actual: out.len() as u64,
             });
         }
-        let frame = slice(
-            self.bytes(),
-            Section {
-                offset: e.offset,
-                size: e.compressed_size,
-            },
-        );
+        let frame = self.backing.read(Section {
+            offset: e.offset,
+            size: e.compressed_size,
+        })?;
+        let frame = &frame[..];
         let computed = xxh3_64(frame);
         if computed != e.checksum {
             return Err(Error::FaceChecksum {
@@ -566,13 +697,11 @@ impl Store {
         for cube in 0..self.cube_count() {
             let first = self.face_entry(cube, 0)?;
             let rec_off = first.offset.saturating_sub(RECORD_HEADER_BYTES as u64);
-            let rec_bytes = slice(
-                self.bytes(),
-                Section {
-                    offset: rec_off,
-                    size: RECORD_HEADER_BYTES as u64,
-                },
-            );
+            let rec_bytes = self.backing.read(Section {
+                offset: rec_off,
+                size: RECORD_HEADER_BYTES as u64,
+            })?;
+            let rec_bytes = &rec_bytes[..];
             let bad = |detail: String| Error::InvalidCubeRecord {
                 cube,
                 offset: rec_off,
@@ -621,7 +750,7 @@ impl Store {
             offset: end,
             size: align8(end).unwrap_or(end) - end,
         };
-        let bytes = slice(self.bytes(), pad);
+        let bytes = self.backing.read(pad)?;
         match bytes.iter().position(|v| *v != 0) {
             Some(i) => Err(Error::NonZeroPadding {
                 region: region.to_string(),
