@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use crate::bake::{chunk_cubes, TESSELLATION_ERROR};
 use crate::capture::strata_per_side;
 use crate::error::BakeError;
-use crate::scene::{SampleDensity, Scene};
+use crate::scene::{BakeSettings, SampleDensity, Scene};
 
 // --- memory ----------------------------------------------------------------------------------
 
@@ -354,15 +354,46 @@ fn patch_area(p: &crate::bezier::BezierPatch) -> f64 {
     area
 }
 
-/// Estimates what baking `scene` costs on `threads` threads. Pure: reads no file.
-pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
-    let s = &scene.bake;
-    let threads = threads.max(1);
-    let th = threads as f64;
-    let patches: u64 = scene.objects.iter().map(|o| o.patches.len() as u64).sum();
+/// The quantities an estimate is computed from, derived from the scene and its settings.
+struct Counts {
+    /// The thread count the times are for (at least 1), and it as `f64`.
+    threads: usize,
+    th: f64,
+    /// Bézier patches over all OSLF objects.
+    patches: u64,
+    /// Sample points requested (`sample_count`, or the area over `sample_spacing`).
+    requested: u64,
+    /// Sample points: (fewest, typical, most).
+    points: (u64, u64, u64),
+    /// Cube maps, typical (points + the environment cube).
+    cubes: u64,
+    /// Triangles of the scene's BVH, and of the environment cube's second BVH.
+    triangles: u64,
+    env_triangles: u64,
+    /// `cube_resolution`, texels of a face and of a cube.
+    res: u64,
+    face_texels: u64,
+    cube_texels: u64,
+    /// `sample_map_resolution`, and texels over all patches.
+    smr: u64,
+    map_texels: u64,
+    /// Samples per texel as the capture takes them (a square).
+    spp: u64,
+    vertices_per_path: u64,
+    path_vertices: u64,
+    lights: u64,
+    rays_per_vertex: u64,
+    capture_rays: u64,
+    /// Bytes of one sample-map index in the store.
+    index_bytes: u64,
+    /// Bytes of one cube-map texel in the store, compressed.
+    stored_texel: f64,
+}
 
-    // Sample points.
-    let requested: u64 = match s.sample_count {
+/// Sample points the settings ask for: `sample_count`, or the patches' area over
+/// `sample_spacing`.
+fn requested_points(scene: &Scene) -> u64 {
+    match scene.bake.sample_count {
         SampleDensity::Count(n) => u64::from(n),
         SampleDensity::Spacing(h) => {
             let area: f64 = scene
@@ -373,15 +404,12 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
                 .sum();
             (area / (0.866_025_4 * f64::from(h) * f64::from(h))).ceil() as u64
         }
-    };
-    let points = (
-        requested,
-        (requested as f64 * POINTS_TYPICAL).ceil() as u64,
-        (requested as f64 * POINTS_MOST).ceil() as u64,
-    );
-    let env_cube = u64::from(s.env_cube);
-    let cubes = points.1 + env_cube;
+    }
+}
 
+/// Triangles of the scene's BVH, and of the environment cube's second BVH (0 without one).
+fn triangle_counts(scene: &Scene) -> (u64, u64) {
+    let s = &scene.bake;
     // Triangles (bake.rs: `scene.instances(true, epsilon × TESSELLATION_ERROR)`; scene.rs:
     // each patch at its `tessellation_level`, two triangles a quad).
     let shape_triangles: u64 = scene
@@ -400,23 +428,88 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
     // The environment cube's second BVH (bake.rs: built when the store has an environment cube
     // and the scene has shapes), alive during the capture.
     let env_triangles = if s.env_cube { shape_triangles } else { 0 };
+    (triangles, env_triangles)
+}
 
-    let res = u64::from(s.cube_resolution);
-    let face_texels = res * res;
-    let cube_texels = 6 * face_texels;
-    let smr = u64::from(s.sample_map_resolution);
-    let map_texels = patches * smr * smr;
-    let spp = u64::from(strata_per_side(s.samples_per_texel)).pow(2);
-    let vertices_per_path = u64::from(s.bounces) + 1;
-    let path_vertices = cubes
-        .saturating_mul(cube_texels)
-        .saturating_mul(spp)
-        .saturating_mul(vertices_per_path);
-    let lights = scene.lights.len() as u64;
-    let rays_per_vertex = 1 + lights + u64::from(!scene.environment.is_black());
-    let capture_rays = path_vertices.saturating_mul(rays_per_vertex);
+impl Counts {
+    /// Derives the counts of baking `scene` on `threads` threads.
+    fn of(scene: &Scene, threads: usize) -> Counts {
+        let s = &scene.bake;
+        let threads = threads.max(1);
+        let th = threads as f64;
+        let patches: u64 = scene.objects.iter().map(|o| o.patches.len() as u64).sum();
 
-    // --- memory, by stage ---
+        // Sample points.
+        let requested = requested_points(scene);
+        let points = (
+            requested,
+            (requested as f64 * POINTS_TYPICAL).ceil() as u64,
+            (requested as f64 * POINTS_MOST).ceil() as u64,
+        );
+        let env_cube = u64::from(s.env_cube);
+        let cubes = points.1 + env_cube;
+
+        let (triangles, env_triangles) = triangle_counts(scene);
+
+        let res = u64::from(s.cube_resolution);
+        let face_texels = res * res;
+        let cube_texels = 6 * face_texels;
+        let smr = u64::from(s.sample_map_resolution);
+        let map_texels = patches * smr * smr;
+        let spp = u64::from(strata_per_side(s.samples_per_texel)).pow(2);
+        let vertices_per_path = u64::from(s.bounces) + 1;
+        let path_vertices = cubes
+            .saturating_mul(cube_texels)
+            .saturating_mul(spp)
+            .saturating_mul(vertices_per_path);
+        let lights = scene.lights.len() as u64;
+        let rays_per_vertex = 1 + lights + u64::from(!scene.environment.is_black());
+        let capture_rays = path_vertices.saturating_mul(rays_per_vertex);
+
+        // The store stores indices as u16 when there are fewer than 65 535 points
+        // (oslf_format `IndexWidth::for_sample_count`), else u32; `Prefix::build` encodes the maps
+        // into a buffer of that size while the maps are held.
+        let index_bytes: u64 = if points.2 < 65_535 { 2 } else { 4 };
+        let stored_texel = compressed_texel_bytes(s.encoding, s.mantissa_bits)
+            + if s.distance_channel {
+                DISTANCE_COMPRESSED_BYTES
+            } else {
+                0.0
+            };
+        Counts {
+            threads,
+            th,
+            patches,
+            requested,
+            points,
+            cubes,
+            triangles,
+            env_triangles,
+            res,
+            face_texels,
+            cube_texels,
+            smr,
+            map_texels,
+            spp,
+            vertices_per_path,
+            path_vertices,
+            lights,
+            rays_per_vertex,
+            capture_rays,
+            index_bytes,
+            stored_texel,
+        }
+    }
+}
+
+/// The sum of the terms' bytes, saturating.
+fn total_bytes(terms: &[Term]) -> u64 {
+    terms.iter().fold(0u64, |a, t| a.saturating_add(t.bytes))
+}
+
+/// The memory term of the BVHs at their peak.
+fn bvh_term(s: &BakeSettings, c: &Counts) -> Term {
+    let (triangles, env_triangles) = (c.triangles, c.env_triangles);
     // The scene's BVH at its build peak, or once built plus the environment cube's BVH at its
     // build peak (built after the sample maps), whichever is larger.
     let bvh_bytes = (triangles.saturating_mul(BVH_BYTES_PER_TRIANGLE)).max(
@@ -424,7 +517,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
             .saturating_mul(BVH_RESIDENT_BYTES_PER_TRIANGLE)
             .saturating_add(env_triangles.saturating_mul(BVH_BYTES_PER_TRIANGLE)),
     );
-    let bvh = Term {
+    Term {
         name: "BVH",
         bytes: bvh_bytes,
         detail: format!(
@@ -437,7 +530,46 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
             s.epsilon
         ),
         remedy: "raise epsilon or use fewer segments in the environment shapes".into(),
-    };
+    }
+}
+
+/// The memory term of the cubes being captured and encoded at once.
+fn cubes_in_flight_term(s: &BakeSettings, c: &Counts) -> Term {
+    let res = c.res;
+    // bake.rs: `chunk_cubes` cubes are captured in parallel and all of them, encoded, are
+    // collected before they are appended; each holds its f32 faces until encoded
+    // (capture.rs), and each encoder a raw and a filtered face (oslf-format cube.rs).
+    let chunk = chunk_cubes(s.cube_resolution, s.distance_channel) as u64;
+    let texel_bytes = CUBE_TEXEL_BYTES
+        + if s.distance_channel {
+            DISTANCE_TEXEL_BYTES
+        } else {
+            0
+        };
+    let raw_texel = s.encoding.bytes_per_texel() as u64 + if s.distance_channel { 4 } else { 0 };
+    let encoders = chunk.min(c.threads as u64);
+    let in_flight = chunk
+        .saturating_mul(c.cube_texels)
+        .saturating_mul(texel_bytes)
+        .saturating_add(encoders.saturating_mul(2 * c.face_texels * raw_texel))
+        .saturating_add((chunk as f64 * c.cube_texels as f64 * c.stored_texel) as u64);
+    Term {
+        name: "cubes in flight",
+        bytes: in_flight,
+        detail: format!(
+            "cube_resolution = {res}: {chunk} × 6 × {res}² texels × {texel_bytes} B as f32{}, encoded",
+            if s.distance_channel { " with distance" } else { "" }
+        ),
+        remedy: "lower cube_resolution".into(),
+    }
+}
+
+/// The memory terms of the stage that peaks, largest first, the stage's name and its total.
+fn memory_terms(s: &BakeSettings, c: &Counts) -> (&'static str, Vec<Term>, u64) {
+    let (requested, points, lights) = (c.requested, c.points, c.lights);
+    let (smr, patches, map_texels, index_bytes) = (c.smr, c.patches, c.map_texels, c.index_bytes);
+    // --- memory, by stage ---
+    let bvh = bvh_term(s, c);
     let light_term = Term {
         name: "lights",
         bytes: lights * std::mem::size_of::<crate::light::Light>() as u64,
@@ -464,10 +596,6 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         detail: format!("up to {} points × {POINT_BYTES} B", points.2),
         remedy: "lower sample_count (or raise sample_spacing)".into(),
     };
-    // The store stores indices as u16 when there are fewer than 65 535 points
-    // (oslf_format `IndexWidth::for_sample_count`), else u32; `Prefix::build` encodes the maps
-    // into a buffer of that size while the maps are held.
-    let index_bytes: u64 = if points.2 < 65_535 { 2 } else { 4 };
     let maps = Term {
         name: "sample maps",
         bytes: map_texels.saturating_mul(MAP_TEXEL_BYTES + 4 * index_bytes),
@@ -482,38 +610,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         detail: format!("sample_map_resolution = {smr}² × {patches} patches × {MAP_TEXEL_BYTES} B"),
         ..maps.clone()
     };
-    // bake.rs: `chunk_cubes` cubes are captured in parallel and all of them, encoded, are
-    // collected before they are appended; each holds its f32 faces until encoded
-    // (capture.rs), and each encoder a raw and a filtered face (oslf-format cube.rs).
-    let chunk = chunk_cubes(s.cube_resolution, s.distance_channel) as u64;
-    let texel_bytes = CUBE_TEXEL_BYTES
-        + if s.distance_channel {
-            DISTANCE_TEXEL_BYTES
-        } else {
-            0
-        };
-    let raw_texel = s.encoding.bytes_per_texel() as u64 + if s.distance_channel { 4 } else { 0 };
-    let stored_texel = compressed_texel_bytes(s.encoding, s.mantissa_bits)
-        + if s.distance_channel {
-            DISTANCE_COMPRESSED_BYTES
-        } else {
-            0.0
-        };
-    let encoders = chunk.min(threads as u64);
-    let in_flight = chunk
-        .saturating_mul(cube_texels)
-        .saturating_mul(texel_bytes)
-        .saturating_add(encoders.saturating_mul(2 * face_texels * raw_texel))
-        .saturating_add((chunk as f64 * cube_texels as f64 * stored_texel) as u64);
-    let cubes_term = Term {
-        name: "cubes in flight",
-        bytes: in_flight,
-        detail: format!(
-            "cube_resolution = {res}: {chunk} × 6 × {res}² texels × {texel_bytes} B as f32{}, encoded",
-            if s.distance_channel { " with distance" } else { "" }
-        ),
-        remedy: "lower cube_resolution".into(),
-    };
+    let cubes_term = cubes_in_flight_term(s, c);
     let stages: [(&'static str, Vec<Term>); 3] = [
         (
             "placement",
@@ -534,23 +631,28 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
             vec![base, bvh, light_term, points_term, maps_held, cubes_term],
         ),
     ];
-    let total = |terms: &[Term]| terms.iter().fold(0u64, |a, t| a.saturating_add(t.bytes));
     let (peak_stage, mut memory) = stages
         .into_iter()
-        .max_by_key(|(_, terms)| total(terms))
+        .max_by_key(|(_, terms)| total_bytes(terms))
         .expect("three stages");
     memory.sort_by_key(|t| std::cmp::Reverse(t.bytes));
-    let peak_memory_bytes = total(&memory);
+    let peak_memory_bytes = total_bytes(&memory);
+    (peak_stage, memory, peak_memory_bytes)
+}
 
+/// The store's terms, largest first, its typical size and its range.
+fn store_terms(s: &BakeSettings, c: &Counts) -> (Vec<Term>, u64, (u64, u64)) {
+    let (smr, patches, points, cubes, res) = (c.smr, c.patches, c.points, c.cubes, c.res);
+    let (requested, stored_texel) = (c.requested, c.stored_texel);
     // --- store ---
     // oslf-format writer: header and metadata, points (40 B each), the maps uncompressed at
     // `index_bytes` per entry, then per cube its compressed faces and table entries.
     let store_maps = Term {
         name: "sample maps",
-        bytes: map_texels.saturating_mul(4 * index_bytes),
+        bytes: c.map_texels.saturating_mul(4 * c.index_bytes),
         detail: format!(
             "sample_map_resolution = {smr}² × {patches} patches × {} B",
-            4 * index_bytes
+            4 * c.index_bytes
         ),
         remedy: "lower sample_map_resolution".into(),
     };
@@ -560,7 +662,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         detail: format!("{} points × 40 B", points.1),
         remedy: "lower sample_count".into(),
     };
-    let per_cube = (cube_texels as f64 * stored_texel) as u64 + STORE_CUBE_OVERHEAD_BYTES;
+    let per_cube = (c.cube_texels as f64 * stored_texel) as u64 + STORE_CUBE_OVERHEAD_BYTES;
     let mantissa_hint = if s.encoding == oslf_format::Encoding::Rgb9e5 && s.mantissa_bits == 9 {
         ", or use mantissa_bits (e.g. 3)"
     } else if s.encoding != oslf_format::Encoding::Rgb9e5 {
@@ -579,19 +681,24 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
     };
     let mut store = vec![store_maps, store_points, store_cubes];
     store.sort_by_key(|t| std::cmp::Reverse(t.bytes));
-    let store_bytes = total(&store).saturating_add(STORE_FIXED_BYTES);
+    let store_bytes = total_bytes(&store).saturating_add(STORE_FIXED_BYTES);
     let store_range = (
         (store_bytes as f64 * STORE_RANGE.0) as u64,
         (store_bytes as f64 * STORE_RANGE.1) as u64,
     );
+    (store, store_bytes, store_range)
+}
 
-    // --- time ---
+/// The time term of the capture, naming the setting that costs the most.
+fn capture_time_term(scene: &Scene, c: &Counts) -> TimeTerm {
+    let (spp, vertices_per_path, rays_per_vertex) = (c.spp, c.vertices_per_path, c.rays_per_vertex);
+    let (cubes, res, lights, capture_rays, th) = (c.cubes, c.res, c.lights, c.capture_rays, c.th);
     // The capture: name the factor furthest above the quick preset's (300 points, 32², 4 spp,
     // 1 bounce, 1 light + sky).
     let factors = [
         (spp as f64 / 4.0, "lower samples_per_texel"),
-        (face_texels as f64 / 1024.0, "lower cube_resolution"),
-        (requested as f64 / 300.0, "lower sample_count"),
+        (c.face_texels as f64 / 1024.0, "lower cube_resolution"),
+        (c.requested as f64 / 300.0, "lower sample_count"),
         (vertices_per_path as f64 / 2.0, "lower bounces"),
         (rays_per_vertex as f64 / 3.0, "use fewer point lights"),
     ];
@@ -600,7 +707,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .map_or("", |f| f.1)
         .to_string();
-    let capture = TimeTerm {
+    TimeTerm {
         name: "cube maps",
         seconds: (
             capture_rays as f64 * 0.5 / (RAYS_PER_CORE_SECOND.1 * th),
@@ -608,13 +715,20 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         ),
         detail: format!(
             "{cubes} cubes × 6 × {res}² texels × samples_per_texel {spp} × {vertices_per_path} vertices (bounces = {}) × {rays_per_vertex} rays ({lights} lights{}) = {:.3e} rays",
-            s.bounces,
+            scene.bake.bounces,
             if scene.environment.is_black() { "" } else { " + environment" },
             capture_rays as f64
         ),
         remedy: capture_remedy,
-    };
-    let map_work = map_texels as f64;
+    }
+}
+
+/// The time terms, largest first, and the total (optimistic, pessimistic) seconds.
+fn time_terms(scene: &Scene, c: &Counts) -> (Vec<TimeTerm>, (f64, f64)) {
+    let (smr, patches, requested, th) = (c.smr, c.patches, c.requested, c.th);
+    // --- time ---
+    let capture = capture_time_term(scene, c);
+    let map_work = c.map_texels as f64;
     let sample_maps_time = TimeTerm {
         name: "sample maps",
         seconds: (
@@ -638,13 +752,14 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         ),
         remedy: "lower sample_count".into(),
     };
+    let bvh_triangles = c.triangles + c.env_triangles;
     let bvh_time = TimeTerm {
         name: "BVH",
         seconds: (
-            (triangles + env_triangles) as f64 * SECONDS_PER_TRIANGLE.0,
-            (triangles + env_triangles) as f64 * SECONDS_PER_TRIANGLE.1,
+            bvh_triangles as f64 * SECONDS_PER_TRIANGLE.0,
+            bvh_triangles as f64 * SECONDS_PER_TRIANGLE.1,
         ),
-        detail: format!("{} triangles", triangles + env_triangles),
+        detail: format!("{bvh_triangles} triangles"),
         remedy: "raise epsilon or simplify the environment meshes".into(),
     };
     let mut time = vec![capture, sample_maps_time, placement_time, bvh_time];
@@ -652,7 +767,12 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
     let seconds = time
         .iter()
         .fold((0.0, 0.0), |a, t| (a.0 + t.seconds.0, a.1 + t.seconds.1));
+    (time, seconds)
+}
 
+/// Settings that will work but may not be what was meant: textures larger than every GPU
+/// accepts.
+fn warnings(s: &BakeSettings) -> Vec<String> {
     // --- warnings ---
     let mut warnings = Vec::new();
     if s.cube_resolution > GPU_TEXTURE_LIMIT {
@@ -667,15 +787,24 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
             s.sample_map_resolution
         ));
     }
+    warnings
+}
 
+/// Estimates what baking `scene` costs on `threads` threads. Pure: reads no file.
+pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
+    let s = &scene.bake;
+    let c = Counts::of(scene, threads);
+    let (peak_stage, memory, peak_memory_bytes) = memory_terms(s, &c);
+    let (store, store_bytes, store_range) = store_terms(s, &c);
+    let (time, seconds) = time_terms(scene, &c);
     Estimate {
-        threads,
-        sample_points: points,
-        cubes,
-        triangles,
-        map_texels,
-        path_vertices,
-        capture_rays,
+        threads: c.threads,
+        sample_points: c.points,
+        cubes: c.cubes,
+        triangles: c.triangles,
+        map_texels: c.map_texels,
+        path_vertices: c.path_vertices,
+        capture_rays: c.capture_rays,
         peak_memory_bytes,
         memory,
         peak_stage,
@@ -684,7 +813,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         store,
         seconds,
         time,
-        warnings,
+        warnings: warnings(s),
     }
 }
 
