@@ -231,8 +231,8 @@ fn check_little_endian() -> Result<(), Error> {
 
 impl Store {
     /// Opens and validates a store. Its fixed sections and table of contents are read into
-    /// memory; cube frames are read from the file when needed (see [`Backing`]). Little-endian
-    /// hosts only ([`Error::BigEndianHost`] otherwise).
+    /// memory; cube frames are read from the file when needed (see [`Store`], "A file that
+    /// changes while open"). Little-endian hosts only ([`Error::BigEndianHost`] otherwise).
     pub fn open(path: &Path) -> Result<Self, Error> {
         check_little_endian()?;
         let file = std::fs::File::open(path).map_err(io_at(path, "open"))?;

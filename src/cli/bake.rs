@@ -43,7 +43,7 @@ pub struct Args {
     #[arg(short = 'j', long)]
     threads: Option<usize>,
     /// Also render the scene camera with the bake's path tracer to this PNG (and an EXR beside
-    /// it) [default: `<output>.preview.png`, none with --shard; "none" to skip].
+    /// it) (default: `<output>.preview.png`, none with --shard; "none" to skip).
     #[arg(long)]
     preview: Option<PathBuf>,
     /// Samples per pixel of the preview.
