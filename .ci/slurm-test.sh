@@ -5,7 +5,8 @@
 # the merge with deploy/slurm/submit.sh, waits for them, and compares the merged store byte
 # for byte with a local bake. Every daemon it started is stopped on exit, pass or fail.
 #
-#   .ci/slurm-test.sh            (from anywhere; uses target/release/oslf, building it if needed)
+#   .ci/slurm-test.sh            (from anywhere; uses $CARGO_TARGET_DIR or target/release/oslf,
+#                                 building it if needed)
 #
 # SLURM_TEST_TIMEOUT: seconds to wait for the jobs [default: 600].
 set -euo pipefail
@@ -21,8 +22,11 @@ if ! command -v slurmctld >/dev/null || ! command -v slurmd >/dev/null || ! comm
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends slurm-wlm munge >/dev/null
 fi
-oslf=$repo/target/release/oslf
-[ -x "$oslf" ] || cargo build --release --bin oslf
+# The binary `cargo test --workspace --release` built (CARGO_TARGET_DIR respected).
+target_dir=${CARGO_TARGET_DIR:-$repo/target}
+case $target_dir in /*) ;; *) target_dir=$repo/$target_dir ;; esac
+oslf=$target_dir/release/oslf
+[ -x "$oslf" ] || (cd "$repo" && cargo build --release --bin oslf)
 
 work=$(mktemp -d /tmp/oslf-slurm-test.XXXXXX)
 pids=()
