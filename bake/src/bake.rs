@@ -251,15 +251,21 @@ pub fn bake_shard(
     let t = Instant::now();
     let object_patches = global_patches(&scene.objects);
     let patches: Vec<_> = object_patches.iter().map(|&(_, p)| p).collect();
+    let map_rows = patches.len() as u64 * u64::from(settings.sample_map_resolution);
     let build_maps = |points: &[SamplePoint]| {
-        sample_map::build(
+        // One bar per build (refinement rebuilds the maps with the added points).
+        let bar = progress_bar(options.progress, map_rows, "sample-map rows");
+        let built = sample_map::build(
             &patches,
             points,
             &geometry,
             settings.sample_map_resolution,
             settings.phi_samplemap_deg,
             settings.epsilon,
-        )
+            &bar,
+        );
+        bar.finish_and_clear();
+        built
     };
     let mut points = points;
     let (mut maps, mut map_stats) = build_maps(&points);

@@ -132,7 +132,8 @@ pub fn short_texels(maps: &SampleMaps) -> Vec<(u32, u32, u32)> {
 }
 
 /// Builds every patch's sample map at `resolution`² texels (row-major, texel (x, y) centred on
-/// u = (x + ½)/res, v = (y + ½)/res).
+/// u = (x + ½)/res, v = (y + ½)/res). `progress` advances by one per texel row
+/// (`patches × resolution` rows in all).
 pub fn build(
     patches: &[&BezierPatch],
     points: &[SamplePoint],
@@ -140,6 +141,7 @@ pub fn build(
     resolution: u32,
     phi_samplemap_deg: f32,
     epsilon: f32,
+    progress: &indicatif::ProgressBar,
 ) -> (SampleMaps, SampleMapStats) {
     let index = PointIndex::new(points);
     let cos_phi = phi_samplemap_deg.to_radians().cos();
@@ -164,6 +166,7 @@ pub fn build(
                 rays += r;
                 *out = ids;
             }
+            progress.inc(1);
             rays
         })
         .sum();

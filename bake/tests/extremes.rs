@@ -115,7 +115,15 @@ fn compare_with_unit_scene(
         let placement = sample_points::place(&s.objects, &s.bake, g).unwrap();
         let patches = global_patches(&s.objects);
         let refs: Vec<_> = patches.iter().map(|&(_, p)| p).collect();
-        let (_, stats) = sample_map::build(&refs, &placement.points, g, 16, 85.0, s.bake.epsilon);
+        let (_, stats) = sample_map::build(
+            &refs,
+            &placement.points,
+            g,
+            16,
+            85.0,
+            s.bake.epsilon,
+            &indicatif::ProgressBar::hidden(),
+        );
         (placement, stats)
     };
     let (placement, stats) = place(&scene, &geo);
