@@ -594,8 +594,96 @@ fn camera_ray(px: vec2<u32>) -> vec3<f32> {
     return P.cam_forward.xyz;
 }
 
+// The point of `face`'s plane (major axis ±1) at face coordinates (s, t), which may lie
+// outside [0, 1]: the inverse of `face_st` (oslf_format::cube::face_st_to_direction, not
+// normalized).
+fn face_point(face: u32, s: f32, t: f32) -> vec3<f32> {
+    let sc = 2.0 * s - 1.0;
+    let tc = 2.0 * t - 1.0;
+    switch face {
+        case 0u: { return vec3<f32>(1.0, -tc, -sc); }
+        case 1u: { return vec3<f32>(-1.0, -tc, sc); }
+        case 2u: { return vec3<f32>(sc, 1.0, tc); }
+        case 3u: { return vec3<f32>(sc, -1.0, -tc); }
+        case 4u: { return vec3<f32>(sc, -tc, 1.0); }
+        default: { return vec3<f32>(-sc, -tc, -1.0); }
+    }
+}
+
+// Texel (x, y) of `face` of cube `cube`, where (x, y) may lie one texel off the face: then the
+// texel of the adjacent face that the direction through that texel centre, extended on
+// `face`'s plane, lands in (nearest texel). w = 1 when that face was resident, 0 when not
+// (then the colour is 0 and must not be used). No feedback mark.
+fn seam_texel(cube: u32, face: u32, x: i32, y: i32) -> vec4<f32> {
+    let n = i32(P.cube_res);
+    var f = face;
+    var c = vec2<i32>(x, y);
+    if (x < 0 || y < 0 || x >= n || y >= n) {
+        let nf = f32(n);
+        let fst = face_st(face_point(face, (f32(x) + 0.5) / nf, (f32(y) + 0.5) / nf));
+        f = u32(fst.x);
+        c = vec2<i32>(min(i32(fst.y * nf), n - 1), min(i32(fst.z * nf), n - 1));
+    }
+    let entry = slots[cube];
+    if ((entry & (1u << f)) == 0u) {
+        return vec4<f32>(0.0);
+    }
+    let slot = entry >> 6u;
+    var tex = 0u;
+    var local = slot;
+    if (POOLS > 1u) {
+        tex = slot / P.slots_per_texture;
+        local = slot % P.slots_per_texture;
+    }
+    let g = local * 6u + f;
+    let layer = i32(g >> FACE_SHIFT);
+    let x0 = (g & ((1u << FACE_SHIFT) - 1u)) * P.cube_res;
+    return vec4<f32>(load_texel(tex, layer, vec2<u32>(x0 + u32(c.x), u32(c.y))), 1.0);
+}
+
+// Radiance of cube `cube` towards `dir`, bilinear ACROSS face edges: the four texel centres
+// around the direction on its face, those off the face read from the adjacent face
+// (`seam_texel`), with the usual bilinear weights. At a corner of the cube, where three faces
+// meet, the texel off the face in both directions does not exist: it is the mean of the other
+// three. 0 when a face it reads is not resident. No feedback mark. For the background only:
+// `lookup` (reflections, reconstruction) clamps at face edges, and every published error figure
+// depends on that.
+fn seamless_read(cube: u32, dir: vec3<f32>) -> vec3<f32> {
+    let fst = face_st(dir);
+    let face = u32(fst.x);
+    let n = i32(P.cube_res);
+    let nf = f32(P.cube_res);
+    let fx = fst.y * nf - 0.5;
+    let fy = fst.z * nf - 0.5;
+    let x0 = i32(floor(fx));
+    let y0 = i32(floor(fy));
+    let wx = fx - floor(fx);
+    let wy = fy - floor(fy);
+    // The texel off the face in both directions, as k = column + 2 * row; 4 = none.
+    var corner = 4u;
+    if ((x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n)) {
+        corner = select(0u, 1u, x0 >= 0) + select(0u, 2u, y0 >= 0);
+    }
+    var t = array<vec4<f32>, 4>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    for (var k = 0u; k < 4u; k++) {
+        if (k != corner) {
+            t[k] = seam_texel(cube, face, x0 + i32(k & 1u), y0 + i32(k >> 1u));
+        }
+    }
+    if (corner < 4u) {
+        t[corner] = (t[0] + t[1] + t[2] + t[3]) * (1.0 / 3.0);
+    }
+    if (t[0].w * t[1].w * t[2].w * t[3].w == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let top = t[0].rgb + (t[1].rgb - t[0].rgb) * wx;
+    let bottom = t[2].rgb + (t[3].rgb - t[2].rgb) * wx;
+    return top + (bottom - top) * wy;
+}
+
 // What background pixel `px` shows, alpha 0. The environment cube is pinned resident, so it is
-// read without a feedback mark: the cache statistics stay those of the object.
+// read without a feedback mark: the cache statistics stay those of the object. It is filtered
+// across face edges (`seamless_read`), so the background shows no seams.
 fn background(px: vec2<u32>) -> vec4<f32> {
     if (BACKGROUND == 0u) {
         return vec4<f32>(0.0);
@@ -604,7 +692,7 @@ fn background(px: vec2<u32>) -> vec4<f32> {
     if (BACKGROUND == 1u) {
         c = vec3<f32>(0.0);
         if (P.env_cube != INVALID) {
-            c = read_tap(P.env_cube, tap(camera_ray(px))).rgb;
+            c = seamless_read(P.env_cube, camera_ray(px));
         }
     }
     return vec4<f32>(finite3(c), 0.0);

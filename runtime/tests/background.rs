@@ -6,9 +6,11 @@
 mod common;
 
 use common::{all_finite, compare, open_store, store_path_without_env_cube};
+use glam::Vec3;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
-    Background, CacheConfig, Frame, Gpu, Mode, RenderOptions, Renderer, RuntimeError, ShadingParams,
+    Background, CacheConfig, Camera, Frame, Gpu, Mode, RenderOptions, Renderer, RuntimeError,
+    ShadingParams,
 };
 
 const W: u32 = 96;
@@ -136,6 +138,69 @@ fn env_and_colour_backgrounds_match_the_cpu_reference() {
         for p in background(&none.pixels) {
             assert_eq!(p, [0.0; 4], "{mode}");
         }
+    }
+}
+
+/// Views whose backgrounds cross edges (vertical and horizontal in the image) and corners of
+/// the environment cube, where the background filters across faces: the GPU matches the CPU
+/// reference there too.
+#[test]
+fn env_backgrounds_across_face_edges_and_corners_match_the_cpu_reference() {
+    let store = open_store();
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let count = store.cube_count();
+    // One pool array, and the pool spread over four (faces of one cube in several arrays).
+    for (label, config) in [
+        ("one array", CacheConfig::default()),
+        (
+            "four arrays",
+            CacheConfig {
+                slots_per_texture: Some(count.div_ceil(4)),
+                ..Default::default()
+            },
+        ),
+    ] {
+        let mut r = Renderer::new(Gpu::headless().unwrap(), open_store(), config).unwrap();
+        views(&mut r, &cubes, label);
+    }
+}
+
+/// Renders the views of `env_backgrounds_across_face_edges_and_corners_match_the_cpu_reference`.
+fn views(r: &mut Renderer, cubes: &StoreCubes, label: &str) {
+    let params = ShadingParams::default();
+    // The default view's position, looking away from the object.
+    let position = r.default_view().position;
+    for (dir, up) in [
+        (Vec3::new(1.0, 1.0, 1.0), Vec3::Z),
+        (Vec3::new(-1.0, -1.0, 1.0), Vec3::Z),
+        (Vec3::new(1.0, -1.0, 0.1), Vec3::Z),
+        (Vec3::new(0.1, -1.0, 1.0), Vec3::X),
+        (Vec3::new(1.0, 0.05, 1.0), Vec3::Y),
+    ] {
+        let camera = Camera {
+            position,
+            target: position + dir,
+            up,
+            vfov_deg: 60.0,
+        };
+        let frame = r
+            .render(&camera, &params, &options(Background::Env))
+            .unwrap();
+        let (cpu, _) = r.reference_image(&camera, &params, cubes).unwrap();
+        assert!(
+            all_finite(&frame.pixels) && all_finite(&cpu),
+            "{label} {dir}"
+        );
+        let (n, share, mae) = compare_background(&frame.pixels, &cpu, 2e-3);
+        println!(
+            "{label} {dir}: {n} background pixels, {:.4}% within 2e-3, mean |gpu-cpu| {mae:.2e}",
+            share * 100.0
+        );
+        assert!(
+            n > (W * H / 2) as usize,
+            "{label} {dir}: {n} background pixels"
+        );
+        assert!(share >= 0.995 && mae < 2e-3, "{label} {dir}: {share} {mae}");
     }
 }
 
