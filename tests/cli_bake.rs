@@ -2,35 +2,11 @@
 
 mod common;
 
-use common::oslf;
+use common::{oslf, LID_SCENE as SCENE};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("oslf-bake-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("bake-cli", name)
 }
-
-const SCENE: &str = r#"
-[camera]
-position = [6.0, -6.0, 4.0]
-target = [0.0, 0.0, 1.0]
-
-[environment.sky]
-sun_direction = [0.6, -0.4, 0.7]
-sun_irradiance = [5.0, 5.0, 5.0]
-
-[[object]]
-patches = "newell-teapot"
-select = [20, 28]
-material = { color = [0.1, 0.4, 0.1] }
-
-[bake]
-sample_count = 12
-cube_resolution = 2
-sample_map_resolution = 4
-samples_per_texel = 1
-"#;
 
 #[test]
 fn bakes_a_store_with_summary_preview_and_json_report() {

@@ -8,35 +8,12 @@ use std::path::{Path, PathBuf};
 use common::oslf;
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oslf-shard-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("shard-cli", name)
 }
 
-/// The small scene of tests/cli_bake.rs, with the environment cube (the cube past the
-/// sample points): 24 sample points, 25 cubes.
-const SCENE: &str = r#"
-[camera]
-position = [6.0, -6.0, 4.0]
-target = [0.0, 0.0, 1.0]
-
-[environment.sky]
-sun_direction = [0.6, -0.4, 0.7]
-sun_irradiance = [5.0, 5.0, 5.0]
-
-[[object]]
-patches = "newell-teapot"
-select = [20, 28]
-material = { color = [0.1, 0.4, 0.1] }
-
-[bake]
-sample_count = 12
-cube_resolution = 2
-sample_map_resolution = 4
-samples_per_texel = 1
-env_cube = true
-"#;
+/// The small scene of tests/common (its environment cube is the cube past the sample points):
+/// 24 sample points, 25 cubes.
+const SCENE: &str = common::LID_SCENE;
 
 const CUBES: u32 = 25;
 

@@ -5,31 +5,14 @@ mod common;
 
 use common::oslf;
 
-const SCENE: &str = r#"
-[camera]
-position = [6.0, -6.0, 4.0]
-target = [0.0, 0.0, 1.0]
-
-[environment.sky]
-sun_direction = [0.6, -0.4, 0.7]
-sun_irradiance = [5.0, 5.0, 5.0]
-
-[[object]]
-patches = "newell-teapot"
-select = [20, 28]
-material = { color = [0.1, 0.4, 0.1] }
-
-[[box]]
-size = [8.0, 6.0, 0.2]
-transform = { translate = [0.0, 0.0, -0.1] }
-material = { color = [0.5, 0.4, 0.3] }
-
-[bake]
-sample_count = 12
-cube_resolution = 2
-sample_map_resolution = 4
-samples_per_texel = 1
-"#;
+/// The lid scene of tests/common on a box, so the background behind it holds geometry too.
+fn scene_text() -> String {
+    format!(
+        "{}\n[[box]]\nsize = [8.0, 6.0, 0.2]\ntransform = {{ translate = [0.0, 0.0, -0.1] }}\n\
+         material = {{ color = [0.5, 0.4, 0.3] }}\n",
+        common::LID_SCENE
+    )
+}
 
 fn read_exr(path: &std::path::Path) -> Vec<[f32; 4]> {
     let image = exr::prelude::read_first_rgba_layer_from_file(
@@ -45,11 +28,9 @@ fn read_exr(path: &std::path::Path) -> Vec<[f32; 4]> {
 
 #[test]
 fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() {
-    let dir = std::env::temp_dir().join(format!("oslf-truth-cli-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("truth-cli", "background");
     let scene = dir.join("lid.toml");
-    std::fs::write(&scene, SCENE).unwrap();
+    std::fs::write(&scene, scene_text()).unwrap();
     let truth = |background: &str, prefix: &str| {
         let out = oslf("truth")
             .arg(&scene)

@@ -53,9 +53,7 @@ use crate::header::{Header, Section, HEADER_BYTES};
 use crate::meta::{decode_meta, SamplePoint, StoreMeta};
 use crate::sample_map::SampleMaps;
 use crate::toc::{RecordHeader, RECORD_HEADER_BYTES};
-use crate::writer::{
-    partial_path, setting_differences, zero_pad, Prefix, SYNC_EVERY_BYTES, SYNC_EVERY_CUBES,
-};
+use crate::writer::{partial_path, setting_differences, sync_partial, zero_pad, Prefix, SyncBatch};
 use crate::{Error, Filter, StoreSummary, StoreWriter};
 
 /// The first 8 bytes of every shard file.
@@ -263,8 +261,7 @@ pub struct ShardWriter {
     next: u32,
     total: u32,
     cube_bytes: u64,
-    unsynced_cubes: u32,
-    unsynced_bytes: u64,
+    unsynced: SyncBatch,
     failed: bool,
 }
 
@@ -308,8 +305,7 @@ impl ShardWriter {
             next: 0,
             total: spec.cubes_of(prefix.total),
             cube_bytes: 0,
-            unsynced_cubes: 0,
-            unsynced_bytes: 0,
+            unsynced: SyncBatch::default(),
             failed: false,
         })
     }
@@ -422,8 +418,7 @@ impl ShardWriter {
             next,
             total,
             cube_bytes,
-            unsynced_cubes: 0,
-            unsynced_bytes: 0,
+            unsynced: SyncBatch::default(),
             failed: false,
         })
     }
@@ -494,19 +489,13 @@ impl ShardWriter {
         self.pos += len;
         self.cube_bytes += cube.compressed_bytes();
         self.next += 1;
-        self.unsynced_cubes += 1;
-        self.unsynced_bytes += len;
-        if self.unsynced_cubes >= SYNC_EVERY_CUBES || self.unsynced_bytes >= SYNC_EVERY_BYTES {
-            let r = self
-                .file
-                .flush()
-                .and_then(|()| self.file.get_ref().sync_data());
-            if let Err(e) = r {
-                self.failed = true;
-                return Err(io_at(&self.partial, "sync")(e));
-            }
-            self.unsynced_cubes = 0;
-            self.unsynced_bytes = 0;
+        if self.unsynced.add(len) {
+            sync_partial(
+                &mut self.file,
+                &self.partial,
+                &mut self.unsynced,
+                &mut self.failed,
+            )?;
         }
         Ok(())
     }

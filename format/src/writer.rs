@@ -33,6 +33,39 @@ pub const SYNC_EVERY_CUBES: u32 = 64;
 /// Sync the partial file at least every this many bytes.
 pub const SYNC_EVERY_BYTES: u64 = 64 << 20;
 
+/// What was appended to a partial file since it was last synced; both the store writer and
+/// the shard writer sync after [`SYNC_EVERY_CUBES`] cubes or [`SYNC_EVERY_BYTES`] bytes.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SyncBatch {
+    cubes: u32,
+    bytes: u64,
+}
+
+impl SyncBatch {
+    /// Counts one appended cube of `bytes`; true when the file is due a sync.
+    pub(crate) fn add(&mut self, bytes: u64) -> bool {
+        self.cubes += 1;
+        self.bytes += bytes;
+        self.cubes >= SYNC_EVERY_CUBES || self.bytes >= SYNC_EVERY_BYTES
+    }
+}
+
+/// Flushes and syncs a partial file; on failure the writer is marked `failed` (a later
+/// append must not write after a hole).
+pub(crate) fn sync_partial(
+    file: &mut BufWriter<File>,
+    partial: &Path,
+    batch: &mut SyncBatch,
+    failed: &mut bool,
+) -> Result<(), Error> {
+    if let Err(e) = file.flush().and_then(|()| file.get_ref().sync_data()) {
+        *failed = true;
+        return Err(io_at(partial, "sync")(e));
+    }
+    *batch = SyncBatch::default();
+    Ok(())
+}
+
 /// What [`StoreWriter::finish`] wrote.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StoreSummary {
@@ -66,8 +99,7 @@ pub struct StoreWriter {
     cube_bytes: u64,
     /// Hash of the raw faces' checksums so far: the header's decoded-faces checksum.
     decoded: Xxh3,
-    unsynced_cubes: u32,
-    unsynced_bytes: u64,
+    unsynced: SyncBatch,
     /// Set after an I/O error: the file's state is unknown, so nothing more is written.
     failed: bool,
 }
@@ -252,8 +284,7 @@ impl StoreWriter {
             next: 0,
             total: prefix.total,
             cube_bytes: 0,
-            unsynced_cubes: 0,
-            unsynced_bytes: 0,
+            unsynced: SyncBatch::default(),
             decoded: Xxh3::new(),
             failed: false,
         })
@@ -291,8 +322,7 @@ impl StoreWriter {
             next: 0,
             total,
             cube_bytes: 0,
-            unsynced_cubes: 0,
-            unsynced_bytes: 0,
+            unsynced: SyncBatch::default(),
             decoded: Xxh3::new(),
             failed: false,
         })
@@ -347,8 +377,7 @@ impl StoreWriter {
             total: prefix.total,
             cube_bytes: recovered.cube_bytes,
             decoded: recovered.decoded,
-            unsynced_cubes: 0,
-            unsynced_bytes: 0,
+            unsynced: SyncBatch::default(),
             failed: false,
         })
     }
@@ -458,9 +487,7 @@ impl StoreWriter {
             self.decoded.update(&sum.to_le_bytes());
         }
         self.next += 1;
-        self.unsynced_cubes += 1;
-        self.unsynced_bytes += written;
-        if self.unsynced_cubes >= SYNC_EVERY_CUBES || self.unsynced_bytes >= SYNC_EVERY_BYTES {
+        if self.unsynced.add(written) {
             self.sync()?;
         }
         Ok(())
@@ -469,17 +496,12 @@ impl StoreWriter {
     /// Flushes and syncs the partial file, so the cubes appended so far survive a kill.
     pub fn sync(&mut self) -> Result<(), Error> {
         self.check_usable()?;
-        let r = self
-            .file
-            .flush()
-            .and_then(|()| self.file.get_ref().sync_data());
-        if let Err(e) = r {
-            self.failed = true;
-            return Err(io_at(&self.partial, "sync")(e));
-        }
-        self.unsynced_cubes = 0;
-        self.unsynced_bytes = 0;
-        Ok(())
+        sync_partial(
+            &mut self.file,
+            &self.partial,
+            &mut self.unsynced,
+            &mut self.failed,
+        )
     }
 
     /// Writes the table of contents, patches the header, syncs, renames the partial file over

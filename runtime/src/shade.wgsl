@@ -624,21 +624,9 @@ fn seam_texel(cube: u32, face: u32, x: i32, y: i32) -> vec4<f32> {
         f = u32(fst.x);
         c = vec2<i32>(min(i32(fst.y * nf), n - 1), min(i32(fst.z * nf), n - 1));
     }
-    let entry = slots[cube];
-    if ((entry & (1u << f)) == 0u) {
-        return vec4<f32>(0.0);
-    }
-    let slot = entry >> 6u;
-    var tex = 0u;
-    var local = slot;
-    if (POOLS > 1u) {
-        tex = slot / P.slots_per_texture;
-        local = slot % P.slots_per_texture;
-    }
-    let g = local * 6u + f;
-    let layer = i32(g >> FACE_SHIFT);
-    let x0 = (g & ((1u << FACE_SHIFT) - 1u)) * P.cube_res;
-    return vec4<f32>(load_texel(tex, layer, vec2<u32>(x0 + u32(c.x), u32(c.y))), 1.0);
+    // One texel: a tap whose four corners are that texel (read_tap finds it in the pool).
+    let u = vec2<u32>(c);
+    return read_tap(cube, Tap(f, u.x, u.y, u.x, u.y, 0.0, 0.0));
 }
 
 // Radiance of cube `cube` towards `dir`, bilinear ACROSS face edges: the four texel centres

@@ -66,15 +66,7 @@ fn parse_shard(s: &str) -> Result<ShardSpec, String> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = args.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
-        }
-        pool = pool.num_threads(n);
-    }
-    let pool = pool.build().context("cannot start worker threads")?;
-    pool.install(|| run_in_pool(args))
+    super::args::in_pool(args.threads, || run_in_pool(args))
 }
 
 fn run_in_pool(args: Args) -> anyhow::Result<()> {

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use glam::Vec3;
 use oslf_bake::ashikhmin_shirley::AsLobe;
 use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
@@ -73,15 +73,7 @@ enum TruthBackground {
 const MODES: [&str; 5] = ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"];
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = args.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
-        }
-        pool = pool.num_threads(n);
-    }
-    let pool = pool.build().context("cannot start worker threads")?;
-    pool.install(|| render_all(&args))
+    super::args::in_pool(args.threads, || render_all(&args))
 }
 
 fn render_all(args: &Args) -> anyhow::Result<()> {
