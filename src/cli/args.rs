@@ -193,6 +193,23 @@ pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     }
 }
 
+/// Runs `f` in a worker pool of `threads` threads (`-j`; all cores when `None`). The results
+/// of the commands that take `-j` do not depend on it.
+pub fn in_pool<T: Send>(
+    threads: Option<usize>,
+    f: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> anyhow::Result<T> {
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 {
+            anyhow::bail!("--threads must be at least 1");
+        }
+        pool = pool.num_threads(n);
+    }
+    let pool = pool.build().context("cannot start worker threads")?;
+    pool.install(f)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,21 +236,4 @@ mod tests {
             );
         }
     }
-}
-
-/// Runs `f` in a worker pool of `threads` threads (`-j`; all cores when `None`). The results
-/// of the commands that take `-j` do not depend on it.
-pub fn in_pool<T: Send>(
-    threads: Option<usize>,
-    f: impl FnOnce() -> anyhow::Result<T> + Send,
-) -> anyhow::Result<T> {
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = threads {
-        if n == 0 {
-            anyhow::bail!("--threads must be at least 1");
-        }
-        pool = pool.num_threads(n);
-    }
-    let pool = pool.build().context("cannot start worker threads")?;
-    pool.install(f)
 }
