@@ -27,6 +27,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use oslf_format::Store;
+use crate::face::FaceLayout;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -174,7 +175,8 @@ pub struct Upload {
     pub cube: u32,
     pub face: usize,
     pub slot: u32,
-    /// The face's encoded texels (`res² × bytes per texel`).
+    /// The face's payload: its texels in the pool's encoding, their mip levels and the
+    /// distance plane, laid out as [`FaceLayout`] says.
     pub texels: Arc<[u8]>,
 }
 
@@ -197,7 +199,7 @@ pub struct CubeCache {
     ram_used: u64,
     ram_budget: u64,
     frame: u64,
-    face_texel_bytes: usize,
+    face: FaceLayout,
     in_flight: HashSet<(u32, u8)>,
     arrivals_tx: Sender<Arrival>,
     arrivals_rx: Receiver<Arrival>,
@@ -228,28 +230,25 @@ const FREE: u32 = u32::MAX;
 /// A face decoded in the background: cube, face, its texels or the error, seconds taken.
 type Arrival = (u32, u8, Result<Arc<[u8]>, oslf_format::Error>, f64);
 
-/// Decompresses one face and keeps its encoded texels (the distance plane is not uploaded).
+/// Decompresses one face and builds its payload (texels, mip levels, distance plane).
 fn decode_face(
     store: &Store,
     cube: u32,
     face: u8,
-    texel_bytes: usize,
+    layout: &FaceLayout,
 ) -> Result<Arc<[u8]>, oslf_format::Error> {
-    let mut raw = vec![0u8; store.face_raw_size()];
-    store.read_face_raw(cube, face as usize, &mut raw)?;
-    raw.truncate(texel_bytes);
-    Ok(Arc::from(raw))
+    Ok(Arc::from(layout.build(store, cube, face)?))
 }
 
 impl CubeCache {
-    /// An empty cache for `cube_count` cubes with `slots` GPU slots. `face_texel_bytes` is the
-    /// size of one face's encoded texels.
+    /// An empty cache for `cube_count` cubes with `slots` GPU slots, whose faces are built as
+    /// `face` lays them out.
     pub fn new(
         cube_count: u32,
         slots: u32,
         granularity: Granularity,
         ram_budget: u64,
-        face_texel_bytes: usize,
+        face: FaceLayout,
     ) -> Self {
         let (arrivals_tx, arrivals_rx) = channel();
         Self {
@@ -264,7 +263,7 @@ impl CubeCache {
             ram_used: 0,
             ram_budget,
             frame: 0,
-            face_texel_bytes,
+            face,
             in_flight: HashSet::new(),
             arrivals_tx,
             arrivals_rx,
@@ -416,7 +415,7 @@ impl CubeCache {
         }
 
         // RAM level first, then decode the rest in parallel.
-        let texel_bytes = self.face_texel_bytes;
+        let layout = self.face;
         let mut ready: Vec<(u32, u8, u32, Arc<[u8]>)> = Vec::new();
         let mut to_decode = Vec::new();
         for &(cube, face, slot) in &wanted_faces {
@@ -438,7 +437,7 @@ impl CubeCache {
                         cube,
                         face,
                         slot,
-                        decode_face(store, cube, face, texel_bytes),
+                        decode_face(store, cube, face, &layout),
                     )
                 })
                 .collect();
@@ -457,7 +456,7 @@ impl CubeCache {
                     let store = Arc::clone(store);
                     rayon::spawn(move || {
                         let start = Instant::now();
-                        let r = decode_face(&store, cube, face, texel_bytes);
+                        let r = decode_face(&store, cube, face, &layout);
                         let _ = tx.send((cube, face, r, start.elapsed().as_secs_f64()));
                     });
                 }
@@ -571,10 +570,10 @@ impl CubeCache {
 
 // Budgets given in megabytes (the `--cache-mb` and `--ram-mb` flags of `oslf render`).
 
-/// Bytes of one cube map's texels in the GPU pool (six faces, the store's encoding).
+/// Bytes of one cube map in the GPU pool: six faces of texels in the store's encoding with their
+/// mip levels, and the distance planes when the store has them ([`FaceLayout`]).
 pub fn cube_bytes(store: &Store) -> u64 {
-    let res = u64::from(store.cube_resolution());
-    6 * res * res * store.header().encoding.bytes_per_texel() as u64
+    6 * FaceLayout::new(store, store.header().encoding).payload_bytes() as u64
 }
 
 /// The GPU slots `--cache-mb MB` buys: whole cube maps of [`cube_bytes`], at least one.

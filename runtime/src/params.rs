@@ -113,6 +113,60 @@ pub enum Source {
     /// The baseline the thesis compares against: one cube map captured at the object's centre,
     /// indexed by direction alone.
     EnvMap,
+    /// The baseline engines use today: the same cube map, parallax-corrected against a proxy box
+    /// (Lagarde & Zanuttini 2012): the reflected ray is intersected with the box from the
+    /// shaded point and the cube looked up towards that hit from the cube's centre.
+    /// [`ShadingParams::proxy_box`] gives the box; by default it is fitted to the cube's own
+    /// distance channel (see `Renderer::proxy_box`).
+    Parallax,
+}
+
+impl Source {
+    /// Every source, in CLI order.
+    pub const ALL: [Source; 3] = [Source::Oslf, Source::EnvMap, Source::Parallax];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Source::Oslf => "oslf",
+            Source::EnvMap => "env",
+            Source::Parallax => "parallax",
+        }
+    }
+
+    /// The shader's tag.
+    fn tag(self) -> u32 {
+        match self {
+            Source::Oslf => 0,
+            Source::EnvMap => 1,
+            Source::Parallax => 2,
+        }
+    }
+}
+
+/// How the glossy term reads the cube maps for each Monte Carlo sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GlossyFilter {
+    /// Filtered importance sampling (Křivánek & Colbert 2008): each sample reads the mip level
+    /// whose texels subtend the sample's share of the lobe, 1 / (M p(l)) steradians, blended
+    /// between the two nearest levels. Converges with far fewer samples.
+    Mip,
+    /// One bilinear read at full resolution per sample, as the thesis did.
+    Point,
+}
+
+impl GlossyFilter {
+    /// Every filter, in CLI order.
+    pub const ALL: [GlossyFilter; 2] = [GlossyFilter::Mip, GlossyFilter::Point];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            GlossyFilter::Mip => "mip",
+            GlossyFilter::Point => "point",
+        }
+    }
 }
 
 /// The two Monte Carlo integration orders of §5.2.
@@ -148,6 +202,16 @@ macro_rules! from_str_by_name {
 }
 from_str_by_name!(Mode, "mode");
 from_str_by_name!(Blend, "blend");
+from_str_by_name!(Source, "source");
+from_str_by_name!(GlossyFilter, "glossy filter");
+
+/// Most steps of the linear search of a depth-corrected lookup (`depth_search` in shade.wgsl):
+/// about one per texel of the arc the ray sweeps in the sample point's cube, at most this many.
+pub const DEPTH_STEPS: u32 = 16;
+/// How far behind the surface a sample point sees the refined hit may lie, in texel angles times
+/// the distance, before the ray counts as passing behind an occluder's silhouette (a hit that
+/// sample point cannot see).
+pub const DEPTH_THICKNESS_TEXELS: f32 = 4.0;
 
 /// Everything a frame's shading depends on besides the camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -177,11 +241,22 @@ pub struct ShadingParams {
     pub nv: f32,
     /// Seed of the per-pixel random numbers.
     pub seed: u32,
+    /// Depth-corrected lookups (needs a store with a distance channel): each sample point's
+    /// reflection and glossy lookups go towards where the ray from the *shaded point* meets
+    /// the scene as that sample point's distances describe it, instead of along the ray's
+    /// direction from the sample point (§6.3, RGBZ; see shade.wgsl `depth_search`).
+    pub depth: bool,
+    /// How the glossy term reads the cube maps.
+    pub glossy_filter: GlossyFilter,
+    /// The proxy box of [`Source::Parallax`] in world space, `[min, max]`; `None` fits it to the
+    /// environment cube's distances.
+    pub proxy_box: Option<[[f32; 3]; 2]>,
 }
 
 impl Default for ShadingParams {
     /// The thesis's settings: reconstruction plus mirror reflection blended with B^n, N = 4;
-    /// φ_shader = 65°; Ashikhmin–Shirley R_s = 1, R_d = 0, n_u = n_v = 100, M = 16.
+    /// φ_shader = 65°; Ashikhmin–Shirley R_s = 1, R_d = 0, n_u = n_v = 100, M = 16. Beyond the
+    /// thesis: depth-corrected lookups and filtered importance sampling on.
     fn default() -> Self {
         Self {
             mode: Mode::ReconMirror,
@@ -196,6 +271,9 @@ impl Default for ShadingParams {
             nu: 100.0,
             nv: 100.0,
             seed: 0,
+            depth: true,
+            glossy_filter: GlossyFilter::Mip,
+            proxy_box: None,
         }
     }
 }
@@ -218,6 +296,14 @@ impl ShadingParams {
         check("R_d", self.rd, 0.0, 1.0)?;
         check("n_u", self.nu, 0.0, 1e7)?;
         check("n_v", self.nv, 0.0, 1e7)?;
+        if let Some([lo, hi]) = self.proxy_box {
+            let ok = (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] < hi[k]);
+            if !ok {
+                return Err(RuntimeError::Parameter(format!(
+                    "proxy box {lo:?}..{hi:?} must be finite with min < max on every axis"
+                )));
+            }
+        }
         if !(1..=65536).contains(&self.m) {
             return Err(RuntimeError::Parameter(format!(
                 "M = {} must be in [1, 65536]",
@@ -290,7 +376,7 @@ fn ray_frame(camera: &oslf_geometry::Camera) -> ([f32; 4], [f32; 4], [f32; 4]) {
 }
 
 /// The shader's uniform block (`Params` in shade.wgsl; gbuffer.wgsl declares its first two
-/// members), 240 bytes.
+/// members), 288 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadeUniform {
@@ -326,8 +412,18 @@ pub struct ShadeUniform {
     pub bg_color: [f32; 4],
     /// [`Background::tag`].
     pub background: u32,
-    /// Padding to the block's 16-byte alignment.
-    pub pad: [u32; 3],
+    /// Mip levels the glossy term filters over; 1 = point sampling.
+    pub mip_levels: u32,
+    /// Most linear-search steps of a depth-corrected lookup; 0 = plain lookups.
+    pub depth_steps: u32,
+    /// [`DEPTH_THICKNESS_TEXELS`] as a fraction of the distance.
+    pub depth_thickness: f32,
+    /// The environment cube's centre, in the shader's coordinates (`w` unused).
+    pub probe_pos: [f32; 4],
+    /// The parallax proxy box, in the shader's coordinates (`w` unused).
+    pub box_min: [f32; 4],
+    /// See `box_min`.
+    pub box_max: [f32; 4],
 }
 
 /// What the uniform needs from the store and the cache besides the parameters.
@@ -340,6 +436,15 @@ pub struct StoreConstants {
     pub index16: bool,
     pub cube_res: u32,
     pub slots_per_texture: u32,
+    /// Mip levels of the pool's faces.
+    pub mip_levels: u32,
+    /// Whether the pool has distance planes.
+    pub has_depth: bool,
+    /// World position of the shader's coordinate origin (the object's centre, where the
+    /// environment cube was captured).
+    pub origin: [f32; 3],
+    /// The proxy box fitted to the environment cube's distances (world space), if it has them.
+    pub fitted_box: Option<[[f32; 3]; 2]>,
 }
 
 impl ShadeUniform {
@@ -365,10 +470,7 @@ impl ShadeUniform {
             terms: p.mode.terms(),
             blend: p.blend.tag(),
             blend_n: p.blend_n,
-            source: match p.source {
-                Source::Oslf => 0,
-                Source::EnvMap => 1,
-            },
+            source: p.source.tag(),
             m: p.m,
             order: match p.order {
                 Order::PerPoint => 0,
@@ -391,8 +493,31 @@ impl ShadeUniform {
             cam_forward,
             bg_color,
             background: background.tag(),
-            pad: [0; 3],
+            mip_levels: if p.glossy_filter == GlossyFilter::Mip {
+                k.mip_levels
+            } else {
+                1
+            },
+            depth_steps: if p.depth && k.has_depth { DEPTH_STEPS } else { 0 },
+            depth_thickness: DEPTH_THICKNESS_TEXELS * std::f32::consts::FRAC_PI_2
+                / k.cube_res.max(1) as f32,
+            probe_pos: [0.0; 4],
+            box_min: [0.0; 4],
+            box_max: [0.0; 4],
         }
+        .with_proxy_box(p.proxy_box.or(k.fitted_box), k.origin)
+    }
+
+    /// Sets the proxy box (world space) in the shader's coordinates; none gives an empty box
+    /// (every lookup then keeps its direction).
+    fn with_proxy_box(mut self, b: Option<[[f32; 3]; 2]>, origin: [f32; 3]) -> Self {
+        if let Some([lo, hi]) = b {
+            for k in 0..3 {
+                self.box_min[k] = lo[k] - origin[k];
+                self.box_max[k] = hi[k] - origin[k];
+            }
+        }
+        self
     }
 }
 
@@ -401,8 +526,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn uniform_is_240_bytes_as_in_the_shader() {
-        assert_eq!(std::mem::size_of::<ShadeUniform>(), 240);
+    fn uniform_is_288_bytes_as_in_the_shader() {
+        assert_eq!(std::mem::size_of::<ShadeUniform>(), 288);
     }
 
     #[test]

@@ -176,6 +176,10 @@ pub(crate) struct ShadeKey {
     pub diffuse: bool,
     /// BACKGROUND: the uniform's `background`.
     pub background: u32,
+    /// DEPTH: depth-corrected lookups (the uniform's `depth_steps` > 0).
+    pub depth: bool,
+    /// FILTER: filtered importance sampling for the glossy term (the uniform's `mip_levels` > 1).
+    pub filter: bool,
 }
 
 impl ShadeKey {
@@ -188,6 +192,8 @@ impl ShadeKey {
             order: u.order,
             diffuse: u.rd > 0.0,
             background: u.background,
+            depth: u.depth_steps > 0,
+            filter: u.mip_levels > 1,
         }
     }
 
@@ -202,6 +208,8 @@ impl ShadeKey {
             ("FACE_SHIFT", f64::from(face_shift)),
             ("DIFFUSE", f64::from(u32::from(self.diffuse))),
             ("BACKGROUND", f64::from(self.background)),
+            ("DEPTH", f64::from(u32::from(self.depth))),
+            ("FILTER", f64::from(u32::from(self.filter))),
         ]
     }
 }
@@ -226,14 +234,18 @@ pub(crate) struct ShadeBindings<'a> {
     pub feedback: &'a wgpu::Buffer,
     /// `pool0` … `pool3`.
     pub pool: &'a [wgpu::TextureView],
+    /// `dpool0` … `dpool3`.
+    pub depth_pool: &'a [wgpu::TextureView],
     /// `out_image`.
     pub output: &'a wgpu::TextureView,
 }
 
 /// Binding of `pool0`; the pool arrays follow it.
 const POOL_BINDING: u32 = 8;
+/// Binding of `dpool0`; the distance arrays follow it.
+const DEPTH_POOL_BINDING: u32 = 12;
 /// Binding of `out_image`.
-const OUTPUT_BINDING: u32 = 12;
+const OUTPUT_BINDING: u32 = 16;
 
 /// The shading pass: its bind-group layout, shader module, and the compute pipelines built so
 /// far, one per [`ShadeKey`].
@@ -291,6 +303,7 @@ impl ShadePipelines {
         for b in POOL_BINDING..OUTPUT_BINDING {
             entries.push(texture_entry(b, float, d2a));
         }
+        debug_assert_eq!(DEPTH_POOL_BINDING - POOL_BINDING, 4);
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: OUTPUT_BINDING,
             visibility: cs,
@@ -346,6 +359,12 @@ impl ShadePipelines {
         for (i, v) in b.pool.iter().enumerate() {
             entries.push(wgpu::BindGroupEntry {
                 binding: POOL_BINDING + i as u32,
+                resource: wgpu::BindingResource::TextureView(v),
+            });
+        }
+        for (i, v) in b.depth_pool.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry {
+                binding: DEPTH_POOL_BINDING + i as u32,
                 resource: wgpu::BindingResource::TextureView(v),
             });
         }

@@ -1,14 +1,19 @@
 //! The GPU cube-map pool: how many cube slots the device and the cache budget allow and how they
 //! lie in up to [`MAX_POOL_TEXTURES`] 2D texture arrays ([`PoolLayout`]), the textures
 //! themselves, and the uploads of decoded faces into them ([`CubePool`]).
+//!
+//! Each array has the faces' mip chain ([`FaceLayout::levels`]; at level `l` a face is
+//! `res >> l` wide and lies at `x >> l`), and, for stores with a distance channel, a twin
+//! R16Float array of the same size holds the distance planes (level 0 only): shade.wgsl's
+//! `pool0` … `pool3` and `dpool0` … `dpool3`.
 
 use std::time::Instant;
 
-use oslf_format::header::Header;
 use oslf_format::Encoding;
 
 use crate::cache::{CacheConfig, Upload, MAX_POOL_TEXTURES};
 use crate::error::{Result, RuntimeError};
+use crate::face::FaceLayout;
 
 /// The GPU pool's default size when no slot budget is given: 1 GiB of cube-map texels.
 pub const DEFAULT_POOL_BYTES: u64 = 1 << 30;
@@ -24,20 +29,22 @@ pub(crate) struct PoolLayout {
     pub face_shift: u32,
     /// The side of a cube face in texels.
     pub cube_res: u32,
+    /// What one face holds: encoding, mip levels, distance plane.
+    pub face: FaceLayout,
 }
 
 impl PoolLayout {
-    /// Sizes the pool for a store of `cube_count` cubes described by `header`.
+    /// Sizes the pool for a store of `cube_count` cubes whose faces `face` describes.
     ///
     /// Errors with [`RuntimeError::Parameter`] for a zero slot count in `config`, and with
     /// [`RuntimeError::Limits`] when `config` asks for more than the device holds.
     pub fn plan(
         limits: &wgpu::Limits,
-        header: &Header,
+        face: FaceLayout,
         cube_count: u32,
         config: &CacheConfig,
     ) -> Result<Self> {
-        let res = header.cube_resolution;
+        let res = face.res;
         // Faces lie side by side in a layer, 2^face_shift per layer (as many as the widest 2D
         // texture takes): one array then holds far more cubes than its layer count allows,
         // and lavapipe, which runs every branch under a mask, reads one array instead of
@@ -83,8 +90,7 @@ impl PoolLayout {
             Some(s) => s,
             None => {
                 // Every cube, up to DEFAULT_POOL_BYTES of texels.
-                let cube_bytes =
-                    6 * u64::from(res).pow(2) * header.encoding.bytes_per_texel() as u64;
+                let cube_bytes = 6 * face.payload_bytes() as u64;
                 let by_memory =
                     (DEFAULT_POOL_BYTES / cube_bytes.max(1)).clamp(1, u64::from(u32::MAX));
                 cube_count.clamp(1, device_slots).min(by_memory as u32)
@@ -98,6 +104,7 @@ impl PoolLayout {
             slots_per_texture,
             face_shift,
             cube_res: res,
+            face,
         })
     }
 
@@ -140,54 +147,106 @@ impl PoolLayout {
     }
 }
 
-/// The texture format of a cube-map encoding.
-fn texture_format(e: Encoding) -> wgpu::TextureFormat {
-    match e {
-        Encoding::Rgb9e5 => wgpu::TextureFormat::Rgb9e5Ufloat,
-        Encoding::Rgba16f => wgpu::TextureFormat::Rgba16Float,
-        Encoding::Rgba32f => wgpu::TextureFormat::Rgba32Float,
+/// The encoding the pool holds the faces of a store of `store_encoding` in: the store's own,
+/// except BC6H, which is decoded on the CPU and re-encoded as RGB9E5 (`Rgb9e5Ufloat`) for now
+/// (`adapter_has_bc`, the adapter's `TEXTURE_COMPRESSION_BC` feature, is for the GPU-native
+/// BC6H upload still to come). The CPU reference must build its faces in the same encoding,
+/// so that it sees the values the GPU samples (BC6H → f32 → RGB9E5 → f32).
+pub fn upload_encoding(store_encoding: Encoding, adapter_has_bc: bool) -> Encoding {
+    // The GPU-native path will add `Encoding::Bc6h if adapter_has_bc => Encoding::Bc6h` once
+    // the pool has a `Bc6hRgbUfloat` payload layout (blocks; mips of at least 4² texels) and
+    // the renderer requests the BC feature.
+    let _ = adapter_has_bc;
+    match store_encoding {
+        Encoding::Bc6h => Encoding::Rgb9e5,
+        e => e,
     }
 }
 
-/// The pool's [`MAX_POOL_TEXTURES`] texture arrays, bound to shade.wgsl's `pool0` … `pool3`.
+/// The texture format of a cube-map encoding (a store encoding the pool does not hold, BC6H,
+/// maps to that of its [`upload_encoding`]).
+fn texture_format(e: Encoding) -> wgpu::TextureFormat {
+    match upload_encoding(e, false) {
+        Encoding::Rgb9e5 => wgpu::TextureFormat::Rgb9e5Ufloat,
+        Encoding::Rgba16f => wgpu::TextureFormat::Rgba16Float,
+        Encoding::Rgba32f => wgpu::TextureFormat::Rgba32Float,
+        Encoding::Bc6h => wgpu::TextureFormat::Bc6hRgbUfloat,
+    }
+}
+
+/// The pool's [`MAX_POOL_TEXTURES`] texture arrays, bound to shade.wgsl's `pool0` … `pool3`,
+/// and their distance twins `dpool0` … `dpool3`.
 pub(crate) struct CubePool {
     layout: PoolLayout,
-    bytes_per_texel: u32,
     textures: Vec<wgpu::Texture>,
     views: Vec<wgpu::TextureView>,
+    depth_textures: Vec<wgpu::Texture>,
+    depth_views: Vec<wgpu::TextureView>,
+}
+
+/// A 2D texture array of `size` and `levels` mip levels, and its array view.
+fn array_texture(
+    device: &wgpu::Device,
+    label: &str,
+    size: wgpu::Extent3d,
+    levels: u32,
+    format: wgpu::TextureFormat,
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let tex = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: levels,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let view = tex.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    (tex, view)
 }
 
 impl CubePool {
     /// Creates the arrays: as many as the slots need, each at most `slots_per_texture` cubes.
     /// Unused bindings get a one-texel array: the shader (specialized on POOLS) never reads
-    /// them, and at 2048² a one-slot array would be 96 MiB.
-    pub fn new(device: &wgpu::Device, layout: PoolLayout, encoding: Encoding) -> Self {
-        let format = texture_format(encoding);
-        let mut textures = Vec::new();
-        let mut views = Vec::new();
-        for t in 0..MAX_POOL_TEXTURES {
-            let tex = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("cube pool"),
-                size: layout.texture_size(t),
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
-            views.push(tex.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            }));
-            textures.push(tex);
-        }
-        Self {
+    /// them, and at 2048² a one-slot array would be 96 MiB. Without a distance channel every
+    /// distance array is such a placeholder (shade.wgsl's DEPTH is off).
+    pub fn new(device: &wgpu::Device, layout: PoolLayout) -> Self {
+        let face = layout.face;
+        let format = texture_format(face.encoding);
+        let one = wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        };
+        let mut pool = Self {
             layout,
-            bytes_per_texel: encoding.bytes_per_texel() as u32,
-            textures,
-            views,
+            textures: Vec::new(),
+            views: Vec::new(),
+            depth_textures: Vec::new(),
+            depth_views: Vec::new(),
+        };
+        for t in 0..MAX_POOL_TEXTURES {
+            let size = layout.texture_size(t);
+            let levels = if size == one { 1 } else { face.levels };
+            let (tex, view) = array_texture(device, "cube pool", size, levels, format);
+            pool.textures.push(tex);
+            pool.views.push(view);
+            let dsize = if face.depth { size } else { one };
+            let (tex, view) = array_texture(
+                device,
+                "cube distance pool",
+                dsize,
+                1,
+                wgpu::TextureFormat::R16Float,
+            );
+            pool.depth_textures.push(tex);
+            pool.depth_views.push(view);
         }
+        pool
     }
 
     /// One view per array, in binding order.
@@ -195,32 +254,77 @@ impl CubePool {
         &self.views
     }
 
-    /// Copies uploads into their slots; returns the seconds spent.
+    /// One view per distance array, in binding order.
+    pub fn depth_views(&self) -> &[wgpu::TextureView] {
+        &self.depth_views
+    }
+
+    /// Copies uploads (every mip level, and the distance plane) into their slots; returns the
+    /// seconds spent.
     pub fn upload(&self, queue: &wgpu::Queue, uploads: &[Upload]) -> f64 {
         let start = Instant::now();
-        let res = self.layout.cube_res;
+        let face = self.layout.face;
+        let bpt = face.encoding.bytes_per_texel() as u32;
         for u in uploads {
             let (tex, layer, x) = self.layout.place(u.slot, u.face as u32);
-            queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &self.textures[tex],
-                    mip_level: 0,
-                    origin: wgpu::Origin3d { x, y: 0, z: layer },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                &u.texels,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(res * self.bytes_per_texel),
-                    rows_per_image: Some(res),
-                },
-                wgpu::Extent3d {
-                    width: res,
-                    height: res,
-                    depth_or_array_layers: 1,
-                },
-            );
+            for l in 0..face.levels {
+                let at = face.level_offset(l);
+                let side = face.side(l);
+                write_region(
+                    queue,
+                    &self.textures[tex],
+                    l,
+                    (x >> l, layer),
+                    side,
+                    side * bpt,
+                    &u.texels[at..at + face.level_bytes(l)],
+                );
+            }
+            if face.depth {
+                let res = face.res;
+                write_region(
+                    queue,
+                    &self.depth_textures[tex],
+                    0,
+                    (x, layer),
+                    res,
+                    res * 2,
+                    &u.texels[face.depth_offset()..],
+                );
+            }
         }
         start.elapsed().as_secs_f64()
     }
+}
+
+/// Writes a `side`² region of `texture`'s mip `level` at `(x, 0, layer)` from `bytes`, rows of
+/// `row_bytes`.
+fn write_region(
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    level: u32,
+    (x, layer): (u32, u32),
+    side: u32,
+    row_bytes: u32,
+    bytes: &[u8],
+) {
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: level,
+            origin: wgpu::Origin3d { x, y: 0, z: layer },
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(row_bytes),
+            rows_per_image: Some(side),
+        },
+        wgpu::Extent3d {
+            width: side,
+            height: side,
+            depth_or_array_layers: 1,
+        },
+    );
 }

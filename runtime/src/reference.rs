@@ -13,13 +13,20 @@ use glam::Vec3;
 use oslf_format::{SampleMapView, INVALID_INDEX};
 use oslf_geometry::BezierPatch;
 
+use crate::face::{FaceLayout, FAR_DISTANCE};
 use crate::params::ShadeUniform;
+
+/// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
+const DEPTH_REFINE: u32 = 6;
 
 /// Where the reference reads cube-map texels.
 pub trait CubeTexels: Sync {
-    /// Texel `(x, y)` of `face` of cube `cube`, or `None` when that face is not available
-    /// (not resident, the GPU's fallback case).
-    fn texel(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<Vec3>;
+    /// Texel `(x, y)` of mip `level` of `face` of cube `cube`, or `None` when that face is not
+    /// available (not resident, the GPU's fallback case).
+    fn texel(&self, cube: u32, face: usize, level: u32, x: u32, y: u32) -> Option<Vec3>;
+    /// Distance texel `(x, y)` of `face` of cube `cube` (as the GPU's binary16 plane holds it),
+    /// or `None` when that face is not available or has no distance plane.
+    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32>;
     /// Whether any face of `cube` is available.
     fn resident(&self, cube: u32) -> bool;
 }
@@ -131,6 +138,8 @@ pub fn tangent_frame(n: Vec3, du: Vec3) -> Vec3 {
 struct AsSample {
     l: Vec3,
     weight: f32,
+    /// log2(M p(l)).
+    lpdf: f32,
 }
 
 fn fresnel(rs: f32, c: f32) -> f32 {
@@ -152,28 +161,149 @@ impl<C: CubeTexels> Shader<'_, C> {
     /// Radiance of `cube` towards `dir`, marking the face as needed (as `lookup`/`fetch`).
     fn lookup(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
         let (face, s, t) = face_st(dir);
+        self.mark(cube, face);
+        self.read_tap(cube, face, s, t, 0)
+    }
+
+    /// Marks `face` of `cube` as needed in the feedback.
+    fn mark(&self, cube: u32, face: usize) {
         if let Some(f) = self.feedback.get(cube as usize) {
             f.fetch_or(1 << face, Ordering::Relaxed);
         }
-        self.read_tap(cube, face, s, t)
     }
 
-    /// `lookup` without the feedback mark (as `read_tap`): bilinear within the face.
-    fn read_tap(&self, cube: u32, face: usize, s: f32, t: f32) -> Option<Vec3> {
-        let n = self.uniform.cube_res;
+    /// `lookup` on mip `level`, without the feedback mark (as `read_tap_level`): bilinear
+    /// within the face.
+    fn read_tap(&self, cube: u32, face: usize, s: f32, t: f32, level: u32) -> Option<Vec3> {
+        let n = (self.uniform.cube_res >> level).max(1);
         let nf = n as f32;
         let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
         let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
         let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
         let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
         let (wx, wy) = (fx - fx.floor(), fy - fy.floor());
-        let t00 = self.cubes.texel(cube, face, x0, y0)?;
-        let t10 = self.cubes.texel(cube, face, x1, y0)?;
-        let t01 = self.cubes.texel(cube, face, x0, y1)?;
-        let t11 = self.cubes.texel(cube, face, x1, y1)?;
+        let t00 = self.cubes.texel(cube, face, level, x0, y0)?;
+        let t10 = self.cubes.texel(cube, face, level, x1, y0)?;
+        let t01 = self.cubes.texel(cube, face, level, x0, y1)?;
+        let t11 = self.cubes.texel(cube, face, level, x1, y1)?;
         let top = t00 + (t10 - t00) * wx;
         let bottom = t01 + (t11 - t01) * wx;
         Some(top + (bottom - top) * wy)
+    }
+
+    /// Radiance of `cube` towards `dir` at fractional mip level `lod`, marking the face (as
+    /// `lookup_lod`).
+    fn lookup_lod(&self, cube: u32, dir: Vec3, lod: f32) -> Option<Vec3> {
+        if !(lod > 0.0) {
+            return self.lookup(cube, dir);
+        }
+        let top = self.uniform.mip_levels - 1;
+        let l = lod.min(top as f32);
+        let l0 = l.floor() as u32;
+        let f = l - l0 as f32;
+        let (face, s, t) = face_st(dir);
+        self.mark(cube, face);
+        let a = self.read_tap(cube, face, s, t, l0);
+        if !(f > 0.0) {
+            return a;
+        }
+        let b = self.read_tap(cube, face, s, t, (l0 + 1).min(top));
+        Some(a? + (b? - a?) * f)
+    }
+
+    /// The mip level of a sample towards `dir` with log2(M p) = `lpdf` (as `sample_lod`).
+    fn sample_lod(&self, dir: Vec3, lpdf: f32) -> f32 {
+        if self.uniform.mip_levels <= 1 {
+            return 0.0;
+        }
+        let (_, s, t) = face_st(dir);
+        let (sc, tc) = (2.0 * s - 1.0, 2.0 * t - 1.0);
+        let log_texel = 2.0 * (2.0 / self.uniform.cube_res as f32).log2()
+            - 1.5 * (1.0 + sc * sc + tc * tc).log2();
+        (0.5 * (-lpdf - log_texel) + 1.0).max(0.0)
+    }
+
+    /// Distance from sample point `cube` to the first hit towards `d` (nearest texel), marking
+    /// the face; sets `missing` when the face is not available (as `depth_toward`).
+    fn depth_toward(&self, cube: u32, d: Vec3, missing: &mut bool) -> f32 {
+        let (face, s, t) = face_st(d);
+        self.mark(cube, face);
+        let n = self.uniform.cube_res;
+        let x = ((s * n as f32) as u32).min(n - 1);
+        let y = ((t * n as f32) as u32).min(n - 1);
+        self.cubes.depth(cube, face, x, y).unwrap_or_else(|| {
+            *missing = true;
+            FAR_DISTANCE
+        })
+    }
+
+    /// The ray point at inverse distance `w` seen from `p`: its offset from `p` and
+    /// |q − p| − D_p (as `depth_probe`).
+    #[allow(clippy::too_many_arguments)]
+    fn depth_probe(
+        &self,
+        cube: u32,
+        p: Vec3,
+        x: Vec3,
+        r: Vec3,
+        w: f32,
+        missing: &mut bool,
+    ) -> (Vec3, f32) {
+        if !(w > 0.0) {
+            return (r, 1.0);
+        }
+        let d = x + r * (1.0 / w) - p;
+        (d, d.length() - self.depth_toward(cube, d, missing))
+    }
+
+    /// The depth-corrected lookup direction of sample point `cube` for the ray from `x` along
+    /// `r`, and its status: 1 hit, 0 none (plain), −1 hidden (as `depth_search`).
+    fn depth_search(&self, cube: u32, x: Vec3, r: Vec3) -> (Vec3, f32) {
+        let u = &self.uniform;
+        let p = self.samples[cube as usize];
+        let lo = (x - p).length();
+        if !(lo > 0.0) {
+            return (r, 0.0);
+        }
+        let mut missing = false;
+        let w0 = 1.0 / lo;
+        let a = self.depth_probe(cube, p, x, r, w0, &mut missing);
+        if missing {
+            return (r, 0.0);
+        }
+        if a.1 >= 0.0 {
+            return (r, -1.0);
+        }
+        let span = a.0.normalize().dot(r).clamp(-1.0, 1.0).acos();
+        let steps = ((span * u.cube_res as f32 / (0.5 * PI)).ceil() as u32).clamp(1, u.depth_steps);
+        let (mut wa, mut wb, mut b) = (w0, 0.0f32, (r, 1.0f32));
+        for k in 1..steps {
+            let w = w0 * (1.0 - k as f32 / steps as f32);
+            let q = self.depth_probe(cube, p, x, r, w, &mut missing);
+            if q.1 >= 0.0 {
+                wb = w;
+                b = q;
+                break;
+            }
+            wa = w;
+        }
+        for _ in 0..DEPTH_REFINE {
+            let wm = 0.5 * (wa + wb);
+            let q = self.depth_probe(cube, p, x, r, wm, &mut missing);
+            if q.1 >= 0.0 {
+                wb = wm;
+                b = q;
+            } else {
+                wa = wm;
+            }
+        }
+        if missing || !(wb > 0.0) {
+            return (r, 0.0);
+        }
+        if b.1 > u.depth_thickness * b.0.length() {
+            return (r, -1.0);
+        }
+        (b.0.normalize(), 1.0)
     }
 
     /// Texel `(x, y)` of `face` of `cube`, where `(x, y)` may lie one texel off the face: then
@@ -193,7 +323,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             f = f2;
             c = (((s * nf) as i32).min(n - 1), ((t * nf) as i32).min(n - 1));
         }
-        self.cubes.texel(cube, f, c.0 as u32, c.1 as u32)
+        self.cubes.texel(cube, f, 0, c.0 as u32, c.1 as u32)
     }
 
     /// Radiance of `cube` towards `dir`, bilinear *across* face edges: the four texel centres
@@ -308,25 +438,50 @@ impl<C: CubeTexels> Shader<'_, C> {
         w
     }
 
-    fn blend_lookup(&self, c: &Candidates, w: [f32; 4], dir: Vec3) -> Option<Vec3> {
-        let mut acc = Vec3::ZERO;
-        let mut wsum = 0.0;
+    /// Blended radiance towards `dir` for the ray from `x` at mip level `lod`, each candidate
+    /// depth-corrected when the uniform asks (as `blend_read`).
+    fn blend_read(&self, c: &Candidates, w: [f32; 4], x: Vec3, dir: Vec3, lod: f32) -> Option<Vec3> {
+        let (mut acc, mut wsum, mut hidden, mut hsum) = (Vec3::ZERO, 0.0, Vec3::ZERO, 0.0);
         for j in 0..4 {
             if w[j] > 0.0 {
-                if let Some(l) = self.lookup(c.idx[j], dir) {
-                    acc += l * w[j];
-                    wsum += w[j];
+                let (d, status) = if self.uniform.depth_steps > 0 {
+                    self.depth_search(c.idx[j], x, dir)
+                } else {
+                    (dir, 1.0)
+                };
+                if let Some(l) = self.lookup_lod(c.idx[j], d, lod) {
+                    if status >= 0.0 {
+                        acc += l * w[j];
+                        wsum += w[j];
+                    } else {
+                        hidden += l * w[j];
+                        hsum += w[j];
+                    }
                 }
             }
         }
-        (wsum > 0.0).then(|| acc / wsum)
+        if wsum > 0.0 {
+            return Some(acc / wsum);
+        }
+        (hsum > 0.0).then(|| hidden / hsum)
     }
 
-    fn env_lookup(&self, dir: Vec3) -> Vec3 {
+    /// The environment cube's lookup direction for the ray from `x` along `dir` (as `env_dir`).
+    fn env_dir(&self, x: Vec3, dir: Vec3) -> Vec3 {
+        let u = &self.uniform;
+        if u.source != 2 {
+            return dir;
+        }
+        let v = |a: [f32; 4]| Vec3::from_slice(&a[..3]);
+        crate::probe::parallax_dir(x, dir, v(u.probe_pos), v(u.box_min), v(u.box_max))
+    }
+
+    /// The environment cube for the ray from `x` along `dir` at `lod` (as `env_read`).
+    fn env_read(&self, x: Vec3, dir: Vec3, lod: f32) -> Vec3 {
         if self.uniform.env_cube == INVALID_INDEX {
             return Vec3::ZERO;
         }
-        self.lookup(self.uniform.env_cube, dir)
+        self.lookup_lod(self.uniform.env_cube, self.env_dir(x, dir), lod)
             .unwrap_or(Vec3::ZERO)
     }
 
@@ -369,13 +524,13 @@ impl<C: CubeTexels> Shader<'_, C> {
             .unwrap_or(Vec3::ZERO)
     }
 
-    fn mirror(&self, c: &Candidates, n: Vec3, r: Vec3) -> Vec3 {
-        if self.uniform.source == 1 || c.count == 0 {
-            return self.env_lookup(r);
+    fn mirror(&self, c: &Candidates, x: Vec3, n: Vec3, r: Vec3) -> Vec3 {
+        if self.uniform.source != 0 || c.count == 0 {
+            return self.env_read(x, r, 0.0);
         }
         let axis = if self.uniform.blend == 4 { n } else { r };
-        self.blend_lookup(c, self.blend_weights(c, axis), r)
-            .unwrap_or_else(|| self.env_lookup(r))
+        self.blend_read(c, self.blend_weights(c, axis), x, r, 0.0)
+            .unwrap_or_else(|| self.env_read(x, r, 0.0))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -410,13 +565,18 @@ impl<C: CubeTexels> Shader<'_, C> {
         let h = t * (sin_theta * cp) + b * (sin_theta * sp) + n * cos_theta;
         let vh = v.dot(h);
         let l = 2.0 * vh * h - v;
+        // Eq. 5.8 and 5.11 as in shade.wgsl.
+        let lpdf = (u.m as f32).log2() + 0.5 * ((u.nu + 1.0) * (u.nv + 1.0)).log2()
+            - (2.0 * PI).log2()
+            + e / (e + 1.0) * (1.0 - xi2).log2()
+            - (4.0 * vh.max(1e-30)).log2();
         let nl = n.dot(l);
         let weight = if vh > 0.0 && nl > 0.0 {
             fresnel(u.rs, vh) * nl / nv.max(nl)
         } else {
             0.0
         };
-        AsSample { l, weight }
+        AsSample { l, weight, lpdf }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -437,6 +597,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         let z = (1.0 - r2).max(0.0).sqrt();
         let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
         let nl = n.dot(l);
+        let lpdf = (u.m as f32).log2() + (nl.max(1e-30) / PI).log2();
         let fv = 1.0 - (1.0 - 0.5 * nv.max(0.0)).powf(5.0);
         let fl = 1.0 - (1.0 - 0.5 * nl.max(0.0)).powf(5.0);
         let weight = if nl > 0.0 {
@@ -444,7 +605,29 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
-        AsSample { l, weight }
+        AsSample { l, weight, lpdf }
+    }
+
+    /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
+    /// `cube` = INVALID, the blend), as `sample_radiance`. `None` when a face was not available.
+    fn sample_radiance(&self, c: &Candidates, cube: u32, wn: [f32; 4], x: Vec3, s: &AsSample) -> Option<Vec3> {
+        let u = &self.uniform;
+        let lod = self.sample_lod(s.l, s.lpdf);
+        if u.order == 1 && cube == INVALID_INDEX {
+            let w = if u.blend != 4 { self.blend_weights(c, s.l) } else { wn };
+            return Some(
+                self.blend_read(c, w, x, s.l, lod)
+                    .unwrap_or_else(|| self.env_read(x, s.l, lod)),
+            );
+        }
+        let d = if cube == u.env_cube {
+            self.env_dir(x, s.l)
+        } else if u.depth_steps > 0 {
+            self.depth_search(cube, x, s.l).0
+        } else {
+            s.l
+        };
+        self.lookup_lod(cube, d, lod)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -454,6 +637,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         cube: u32,
         j: u32,
         pixel: u32,
+        x: Vec3,
         n: Vec3,
         t: Vec3,
         b: Vec3,
@@ -486,41 +670,29 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if s.weight <= 0.0 {
                     continue;
                 }
-                let li = if cube != INVALID_INDEX {
-                    match self.lookup(cube, s.l) {
-                        Some(l) => l,
-                        None => {
-                            ok = false;
-                            Vec3::ZERO
-                        }
-                    }
-                } else {
-                    let w = if u.blend != 4 {
-                        self.blend_weights(c, s.l)
-                    } else {
-                        wn
-                    };
-                    self.blend_lookup(c, w, s.l)
-                        .unwrap_or_else(|| self.env_lookup(s.l))
-                };
+                let li = self.sample_radiance(c, cube, wn, x, &s).unwrap_or_else(|| {
+                    ok = false;
+                    Vec3::ZERO
+                });
                 acc += li * s.weight;
             }
         }
         (acc / u.m.max(1) as f32, ok)
     }
 
-    fn glossy(&self, c: &Candidates, pixel: u32, n: Vec3, t: Vec3, v: Vec3, r: Vec3) -> Vec3 {
+    #[allow(clippy::too_many_arguments)]
+    fn glossy(&self, c: &Candidates, pixel: u32, x: Vec3, n: Vec3, t: Vec3, v: Vec3, r: Vec3) -> Vec3 {
         let u = &self.uniform;
         let b = n.cross(t);
         let nv = n.dot(v);
-        if u.source == 1 || c.count == 0 {
+        if u.source != 0 || c.count == 0 {
             if u.env_cube == INVALID_INDEX {
                 return Vec3::ZERO;
             }
-            return self.integrate(c, u.env_cube, 4, pixel, n, t, b, v, nv).0;
+            return self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0;
         }
         if u.order == 1 {
-            return self.integrate(c, INVALID_INDEX, 4, pixel, n, t, b, v, nv).0;
+            return self.integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv).0;
         }
         let axis = if u.blend == 4 { n } else { r };
         let w = self.blend_weights(c, axis);
@@ -528,7 +700,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         let mut wsum = 0.0;
         for j in 0..4 {
             if w[j] > 0.0 {
-                let (est, ok) = self.integrate(c, c.idx[j], j as u32, pixel, n, t, b, v, nv);
+                let (est, ok) = self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv);
                 if ok {
                     acc += est * w[j];
                     wsum += w[j];
@@ -541,7 +713,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         if u.env_cube == INVALID_INDEX {
             return Vec3::ZERO;
         }
-        self.integrate(c, u.env_cube, 4, pixel, n, t, b, v, nv).0
+        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0
     }
 
     /// The unit direction of the camera ray through the centre of pixel `(px, py)`, as
@@ -602,14 +774,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
         let mut spec = Vec3::ZERO;
         if u.terms & 2 != 0 {
-            spec = self.mirror(&c, n, r);
+            spec = self.mirror(&c, x, n, r);
         } else if u.terms & 4 != 0 {
             let du = self
                 .patches
                 .get(patch as usize)
                 .map_or(Vec3::ZERO, |p| patch_du(p, pu, pv));
             let t = tangent_frame(n, du);
-            spec = self.glossy(&c, pixel, n, t, v, r);
+            spec = self.glossy(&c, pixel, x, n, t, v, r);
         }
         if u.terms & 8 != 0 {
             spec *= self
@@ -627,51 +799,83 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 }
 
-/// Every cube of a store, decoded to linear RGB: the reference's view of "everything
-/// resident".
+/// Every cube of a store as the GPU pool holds it, decoded to linear RGB: every mip level
+/// and the distance planes ([`FaceLayout`]). The reference's view of "everything resident".
 pub struct StoreCubes {
-    resolution: u32,
-    cubes: Vec<Vec<Vec3>>,
+    layout: FaceLayout,
+    /// Per cube, per level: six faces of `side(level)²` texels.
+    levels: Vec<Vec<Vec<Vec3>>>,
+    /// Per cube: six distance planes of `res²` (empty without a distance channel).
+    depth: Vec<Vec<f32>>,
     /// Optional residency masks (the GPU cache's indirection table): a face is available
     /// only where its bit is set.
     pub masks: Option<Vec<u32>>,
 }
 
 impl StoreCubes {
-    /// Decodes every cube of `store` (in parallel). Errors name the cube.
+    /// Decodes every cube of `store` (in parallel) as the renderer uploads them. Errors name
+    /// the cube.
     pub fn decode(store: &oslf_format::Store) -> crate::Result<Self> {
+        Self::decode_as(store, FaceLayout::new(store, store.header().encoding))
+    }
+
+    /// Decodes every cube of `store` built as `layout` says. Errors name the cube.
+    pub fn decode_as(store: &oslf_format::Store, layout: FaceLayout) -> crate::Result<Self> {
         use rayon::prelude::*;
-        let resolution = store.cube_resolution();
+        type Cube = (Vec<Vec<Vec3>>, Vec<f32>);
         let cubes = (0..store.cube_count())
             .into_par_iter()
-            .map(|cube| {
-                let image = store
-                    .read_cube(cube)
-                    .map_err(|source| crate::RuntimeError::Cube { cube, source })?;
-                Ok(image
-                    .faces
-                    .iter()
-                    .flat_map(|f| f.iter().map(|&t| Vec3::from_array(t)))
-                    .collect())
+            .map(|cube| -> crate::Result<Cube> {
+                let err = |source| crate::RuntimeError::Cube { cube, source };
+                let mut levels = vec![Vec::new(); layout.levels as usize];
+                let mut depth = Vec::new();
+                for face in 0..6u8 {
+                    let payload = layout.build(store, cube, face).map_err(err)?;
+                    for (l, level) in levels.iter_mut().enumerate() {
+                        let rgb = layout.decode_level(&payload, l as u32).map_err(err)?;
+                        level.extend(rgb.into_iter().map(Vec3::from_array));
+                    }
+                    depth.extend(layout.decode_depth(&payload));
+                }
+                Ok((levels, depth))
             })
-            .collect::<crate::Result<Vec<Vec<Vec3>>>>()?;
+            .collect::<crate::Result<Vec<Cube>>>()?;
+        let (levels, depth) = cubes.into_iter().unzip();
         Ok(Self {
-            resolution,
-            cubes,
+            layout,
+            levels,
+            depth,
             masks: None,
         })
+    }
+
+    fn available(&self, cube: u32, face: usize) -> bool {
+        match &self.masks {
+            Some(m) => m.get(cube as usize).copied().unwrap_or(0) & (1 << face) != 0,
+            None => true,
+        }
     }
 }
 
 impl CubeTexels for StoreCubes {
-    fn texel(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<Vec3> {
-        if let Some(m) = &self.masks {
-            if m.get(cube as usize).copied().unwrap_or(0) & (1 << face) == 0 {
-                return None;
-            }
+    fn texel(&self, cube: u32, face: usize, level: u32, x: u32, y: u32) -> Option<Vec3> {
+        if !self.available(cube, face) {
+            return None;
         }
-        let n = self.resolution as usize;
-        self.cubes
+        let n = self.layout.side(level) as usize;
+        self.levels
+            .get(cube as usize)?
+            .get(level as usize)?
+            .get(face * n * n + y as usize * n + x as usize)
+            .copied()
+    }
+
+    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+        if !self.available(cube, face) {
+            return None;
+        }
+        let n = self.layout.res as usize;
+        self.depth
             .get(cube as usize)?
             .get(face * n * n + y as usize * n + x as usize)
             .copied()
@@ -680,7 +884,7 @@ impl CubeTexels for StoreCubes {
     fn resident(&self, cube: u32) -> bool {
         match &self.masks {
             Some(m) => m.get(cube as usize).copied().unwrap_or(0) & 63 != 0,
-            None => (cube as usize) < self.cubes.len(),
+            None => (cube as usize) < self.levels.len(),
         }
     }
 }
@@ -710,7 +914,10 @@ mod tests {
     struct NoCubes;
 
     impl CubeTexels for NoCubes {
-        fn texel(&self, _: u32, _: usize, _: u32, _: u32) -> Option<Vec3> {
+        fn texel(&self, _: u32, _: usize, _: u32, _: u32, _: u32) -> Option<Vec3> {
+            None
+        }
+        fn depth(&self, _: u32, _: usize, _: u32, _: u32) -> Option<f32> {
             None
         }
         fn resident(&self, _: u32) -> bool {
@@ -729,6 +936,10 @@ mod tests {
             index16: true,
             cube_res: 1,
             slots_per_texture: 1,
+            mip_levels: 1,
+            has_depth: false,
+            origin: [0.0; 3],
+            fitted_box: None,
         };
         for (camera, (w, h)) in [
             (
@@ -791,6 +1002,10 @@ mod tests {
             index16: true,
             cube_res: 1,
             slots_per_texture: 1,
+            mip_levels: 1,
+            has_depth: false,
+            origin: [0.0; 3],
+            fitted_box: None,
         };
         let camera = oslf_geometry::Camera {
             position: Vec3::new(0.0, -3.0, 0.0),
@@ -846,7 +1061,10 @@ mod tests {
     struct SmoothCube(u32);
 
     impl CubeTexels for SmoothCube {
-        fn texel(&self, _: u32, face: usize, x: u32, y: u32) -> Option<Vec3> {
+        fn depth(&self, _: u32, _: usize, _: u32, _: u32) -> Option<f32> {
+            None
+        }
+        fn texel(&self, _: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
             assert!(face < 6 && x < self.0 && y < self.0, "{face} {x} {y}");
             let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.0));
             Some(Vec3::splat(0.5) + d * Vec3::new(0.4, 0.3, 0.2))
@@ -874,6 +1092,10 @@ mod tests {
                 index16: true,
                 cube_res: res,
                 slots_per_texture: 1,
+                mip_levels: 1,
+                has_depth: false,
+                origin: [0.0; 3],
+                fitted_box: None,
             };
             // Views across edges of every orientation, vertical and horizontal in the image,
             // and across a corner of the cube.

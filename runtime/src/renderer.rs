@@ -15,11 +15,12 @@ use crate::cache::{CacheConfig, CacheStats, CubeCache};
 use crate::error::{Result, RuntimeError};
 use crate::geometry::ObjectMesh;
 use crate::gpu::Gpu;
-use crate::params::{Background, ShadeUniform, ShadingParams, StoreConstants};
+use crate::params::{Background, ShadeUniform, ShadingParams, Source, StoreConstants};
 use crate::pipelines::{
     GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines, DEPTH_FORMAT, GBUFFER_FORMAT,
     OUTPUT_FORMAT, WORKGROUP,
 };
+use crate::face::FaceLayout;
 use crate::pool::{CubePool, PoolLayout};
 use crate::reference::GTexel;
 
@@ -229,14 +230,12 @@ fn check_textures_fit(limits: &wgpu::Limits, store: &Store) -> Result<()> {
 
 /// The cube cache for `store` with the pool's slots, the environment cube pinned.
 fn open_cache(store: &Store, layout: &PoolLayout, config: &CacheConfig) -> CubeCache {
-    let face_texel_bytes =
-        (layout.cube_res as usize).pow(2) * store.header().encoding.bytes_per_texel();
     let mut cache = CubeCache::new(
         store.cube_count(),
         layout.slots,
         config.granularity,
         config.ram_bytes,
-        face_texel_bytes,
+        layout.face,
     );
     if let Some(env_cube) = store.env_cube_index() {
         cache.pin(env_cube);
@@ -254,12 +253,13 @@ impl Renderer {
         let limits = gpu.limits();
         check_textures_fit(&limits, &store)?;
         let cube_count = store.cube_count();
-        let layout = PoolLayout::plan(&limits, store.header(), cube_count, &config)?;
+        let face = FaceLayout::new(&store, store.header().encoding);
+        let layout = PoolLayout::plan(&limits, face, cube_count, &config)?;
         let mesh = ObjectMesh::from_store(&store, store.meta().bake.epsilon / 20.0);
         let cache = open_cache(&store, &layout, &config);
         let buffers = StoreBuffers::new(&gpu.device, &store, &mesh, cube_count);
         let sample_maps = upload_sample_maps(&gpu, &store)?;
-        let pool = CubePool::new(&gpu.device, layout, store.header().encoding);
+        let pool = CubePool::new(&gpu.device, layout);
         let gbuffer = GBufferPipeline::new(&gpu.device, &buffers.uniform, &buffers.vertices);
         let shade = ShadePipelines::new(&gpu.device, layout.textures_in_use(), layout.face_shift);
         let constants = StoreConstants {
@@ -269,6 +269,10 @@ impl Renderer {
             index16: store.index_width() == oslf_format::IndexWidth::U16,
             cube_res: layout.cube_res,
             slots_per_texture: layout.slots_per_texture,
+            mip_levels: face.levels,
+            has_depth: face.depth,
+            origin: mesh.origin.to_array(),
+            fitted_box: crate::probe::fit_proxy_box(&store, mesh.origin)?,
         };
         let mut renderer = Self {
             gpu,
@@ -326,6 +330,12 @@ impl Renderer {
     /// The cache, to reset its statistics between measurements.
     pub fn cache_mut(&mut self) -> &mut CubeCache {
         &mut self.cache
+    }
+
+    /// The proxy box [`Source::Parallax`] uses with `params` (world space): the given one, else
+    /// the one fitted to the environment cube's distances ([`crate::probe::fit_proxy_box`]).
+    pub fn proxy_box(&self, params: &ShadingParams) -> Option<[[f32; 3]; 2]> {
+        params.proxy_box.or(self.constants.fitted_box)
     }
 
     /// The store constants the shader sees.
@@ -408,6 +418,7 @@ impl Renderer {
                     slots: &self.buffers.slots,
                     feedback: &self.buffers.feedback,
                     pool: self.pool.views(),
+                    depth_pool: self.pool.depth_views(),
                     output: out,
                 },
             )
@@ -426,6 +437,13 @@ impl Renderer {
         opts: &RenderOptions,
     ) -> Result<Frame> {
         params.validate()?;
+        if params.source == Source::Parallax && self.proxy_box(params).is_none() {
+            return Err(RuntimeError::Parameter(
+                "source parallax needs a proxy box: this store has no environment cube with a \
+                 distance channel to fit one to (give the box, e.g. --proxy-box)"
+                    .into(),
+            ));
+        }
         opts.background
             .validate(self.constants.env_cube != u32::MAX)?;
         self.ensure_targets(opts.width, opts.height)?;

@@ -14,7 +14,8 @@ struct Params {
     // 0 closest distance (4.3), 1 closest angle (4.4), 2 B^avg (4.9), 3 B^r (4.10), 4 B^n (4.11)
     blend: u32,
     blend_n: f32,
-    // 0 = the OSLF sample points, 1 = the environment-map baseline (one cube at the centre)
+    // 0 = the OSLF sample points, 1 = the environment-map baseline (one cube at the centre),
+    // 2 = that cube parallax-corrected against the proxy box
     source: u32,
     m: u32,
     // 0 = integrate per sample point, then blend; 1 = blend per direction, then integrate (§5.2)
@@ -40,9 +41,17 @@ struct Params {
     bg_color: vec4<f32>,
     // 0 none (transparent black), 1 the environment cube, 2 bg_color (RenderOptions::background)
     background: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    // Mip levels the glossy term filters over (1 = point sampling; FILTER).
+    mip_levels: u32,
+    // Most linear-search steps of a depth-corrected lookup (0 = off; DEPTH).
+    depth_steps: u32,
+    // How far behind the surface a refined hit may lie, as a fraction of its distance.
+    depth_thickness: f32,
+    // The environment cube's centre and the parallax proxy box (SOURCE 2), all in the shader's
+    // coordinates.
+    probe_pos: vec4<f32>,
+    box_min: vec4<f32>,
+    box_max: vec4<f32>,
 };
 
 // The mode's switches are pipeline-overridable constants (set from the same values as the
@@ -59,6 +68,10 @@ override FACE_SHIFT: u32 = 0u;
 override DIFFUSE: bool = false;
 // The uniform's `background`: what pixels off the object show.
 override BACKGROUND: u32 = 0u;
+// Depth-corrected lookups (the uniform's depth_steps > 0; the pool has distance planes).
+override DEPTH: bool = false;
+// Filtered importance sampling for the glossy term (the uniform's mip_levels > 1).
+override FILTER: bool = false;
 
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
@@ -77,10 +90,18 @@ struct PatchGpu {
 @group(0) @binding(9) var pool1: texture_2d_array<f32>;
 @group(0) @binding(10) var pool2: texture_2d_array<f32>;
 @group(0) @binding(11) var pool3: texture_2d_array<f32>;
-@group(0) @binding(12) var out_image: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(12) var dpool0: texture_2d_array<f32>;
+@group(0) @binding(13) var dpool1: texture_2d_array<f32>;
+@group(0) @binding(14) var dpool2: texture_2d_array<f32>;
+@group(0) @binding(15) var dpool3: texture_2d_array<f32>;
+@group(0) @binding(16) var out_image: texture_storage_2d<rgba32float, write>;
 
 const INVALID: u32 = 0xffffffffu;
 const PI: f32 = 3.14159265358979;
+// Distances at or above this mean "nothing this way" (face.rs FAR_DISTANCE, binary16's largest).
+const FAR: f32 = 65504.0;
+// Bisection steps that refine a depth-corrected hit (params.rs documents the search).
+const DEPTH_REFINE: u32 = 6u;
 
 // ---- random numbers: PCG hash (Jarzynski & Olano 2020), identical in reference.rs ----
 
@@ -125,18 +146,46 @@ fn face_st(d: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(f32(face), s, t);
 }
 
-// Texel `c` of array layer `layer` of pool texture `tex`.
-fn load_texel(tex: u32, layer: i32, c: vec2<u32>) -> vec3<f32> {
+// Texel `c` of mip `level` of array layer `layer` of pool texture `tex`.
+fn load_texel(tex: u32, layer: i32, c: vec2<u32>, level: u32) -> vec3<f32> {
     let p = vec2<i32>(c);
+    let l = i32(level);
     // POOLS (the number of pool textures in use) is a constant, so unused arrays drop out.
     if (POOLS == 1u || tex == 0u) {
-        return textureLoad(pool0, p, layer, 0).rgb;
+        return textureLoad(pool0, p, layer, l).rgb;
     } else if (POOLS == 2u || tex == 1u) {
-        return textureLoad(pool1, p, layer, 0).rgb;
+        return textureLoad(pool1, p, layer, l).rgb;
     } else if (POOLS == 3u || tex == 2u) {
-        return textureLoad(pool2, p, layer, 0).rgb;
+        return textureLoad(pool2, p, layer, l).rgb;
     }
-    return textureLoad(pool3, p, layer, 0).rgb;
+    return textureLoad(pool3, p, layer, l).rgb;
+}
+
+// Distance texel `c` of array layer `layer` of distance texture `tex`.
+fn load_depth(tex: u32, layer: i32, c: vec2<u32>) -> f32 {
+    let p = vec2<i32>(c);
+    if (POOLS == 1u || tex == 0u) {
+        return textureLoad(dpool0, p, layer, 0).r;
+    } else if (POOLS == 2u || tex == 1u) {
+        return textureLoad(dpool1, p, layer, 0).r;
+    } else if (POOLS == 3u || tex == 2u) {
+        return textureLoad(dpool2, p, layer, 0).r;
+    }
+    return textureLoad(dpool3, p, layer, 0).r;
+}
+
+// Pool texture, array layer and level-0 x offset of `face` of the slot in indirection entry
+// `entry` (pool.rs PoolLayout::place).
+fn place(entry: u32, face: u32) -> vec3<u32> {
+    let slot = entry >> 6u;
+    var tex = 0u;
+    var local = slot;
+    if (POOLS > 1u) {
+        tex = slot / P.slots_per_texture;
+        local = slot % P.slots_per_texture;
+    }
+    let g = local * 6u + face;
+    return vec3<u32>(tex, g >> FACE_SHIFT, (g & ((1u << FACE_SHIFT) - 1u)) * P.cube_res);
 }
 
 // Where a direction lands in a cube map: face, the four texels around it (clamped at the
@@ -152,10 +201,15 @@ struct Tap {
 };
 
 fn tap(dir: vec3<f32>) -> Tap {
+    return tap_level(dir, 0u);
+}
+
+// `tap` on mip `level`, whose faces are cube_res >> level wide.
+fn tap_level(dir: vec3<f32>, level: u32) -> Tap {
     let fst = face_st(dir);
     var t: Tap;
     t.face = u32(fst.x);
-    let n = P.cube_res;
+    let n = max(P.cube_res >> level, 1u);
     let nf = f32(n);
     let fx = clamp(fst.y * nf - 0.5, 0.0, nf - 1.0);
     let fy = clamp(fst.z * nf - 0.5, 0.0, nf - 1.0);
@@ -178,24 +232,23 @@ fn fetch(cube: u32, t: Tap) -> vec4<f32> {
 
 // `fetch` without the feedback mark.
 fn read_tap(cube: u32, t: Tap) -> vec4<f32> {
+    return read_tap_level(cube, t, 0u);
+}
+
+// `read_tap` on mip `level` (`t` from `tap_level` at that level).
+fn read_tap_level(cube: u32, t: Tap, level: u32) -> vec4<f32> {
     let entry = slots[cube];
     if ((entry & (1u << t.face)) == 0u) {
         return vec4<f32>(0.0);
     }
-    let slot = entry >> 6u;
-    var tex = 0u;
-    var local = slot;
-    if (POOLS > 1u) {
-        tex = slot / P.slots_per_texture;
-        local = slot % P.slots_per_texture;
-    }
-    let g = local * 6u + t.face;
-    let layer = i32(g >> FACE_SHIFT);
-    let x = (g & ((1u << FACE_SHIFT) - 1u)) * P.cube_res;
-    let t00 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y0));
-    let t10 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y0));
-    let t01 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y1));
-    let t11 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y1));
+    let at = place(entry, t.face);
+    let tex = at.x;
+    let layer = i32(at.y);
+    let x = at.z >> level;
+    let t00 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y0), level);
+    let t10 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y0), level);
+    let t01 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y1), level);
+    let t11 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y1), level);
     let top = t00 + (t10 - t00) * t.wx;
     let bottom = t01 + (t11 - t01) * t.wx;
     return vec4<f32>(top + (bottom - top) * t.wy, 1.0);
@@ -204,6 +257,133 @@ fn read_tap(cube: u32, t: Tap) -> vec4<f32> {
 // Radiance of cube `cube` towards `dir` (see `fetch`).
 fn lookup(cube: u32, dir: vec3<f32>) -> vec4<f32> {
     return fetch(cube, tap(dir));
+}
+
+// Radiance of cube `cube` towards `dir` at fractional mip level `lod` (filtered importance
+// sampling): bilinear on the two nearest levels, blended linearly. Marks the face.
+fn lookup_lod(cube: u32, dir: vec3<f32>, lod: f32) -> vec4<f32> {
+    if (!(lod > 0.0)) {
+        return lookup(cube, dir);
+    }
+    let top = P.mip_levels - 1u;
+    let l = min(lod, f32(top));
+    let l0 = u32(floor(l));
+    let f = l - f32(l0);
+    let t0 = tap_level(dir, l0);
+    atomicOr(&feedback[cube], 1u << t0.face);
+    let a = read_tap_level(cube, t0, l0);
+    if (!(f > 0.0)) {
+        return a;
+    }
+    let l1 = min(l0 + 1u, top);
+    let b = read_tap_level(cube, tap_level(dir, l1), l1);
+    return vec4<f32>(a.rgb + (b.rgb - a.rgb) * f, a.w * b.w);
+}
+
+// The mip level for a Monte Carlo sample towards `dir` with log2(M p(dir)) = `lpdf`
+// (Křivánek & Colbert 2008): ½ log2(Ω_s / Ω_p) + 1, where Ω_s = 1 / (M p) is the sample's share
+// of the sphere and Ω_p = (2/N)² / (1 + s² + t²)^{3/2} the solid angle of a level-0 texel at
+// face coordinates (s, t) ∈ [-1, 1]². 0 without FILTER.
+fn sample_lod(dir: vec3<f32>, lpdf: f32) -> f32 {
+    if (!FILTER) {
+        return 0.0;
+    }
+    let fst = face_st(dir);
+    let sc = 2.0 * fst.y - 1.0;
+    let tc = 2.0 * fst.z - 1.0;
+    let log_texel = 2.0 * log2(2.0 / f32(P.cube_res)) - 1.5 * log2(1.0 + sc * sc + tc * tc);
+    return max(0.5 * (-lpdf - log_texel) + 1.0, 0.0);
+}
+
+// ---- depth-corrected lookups (§6.3's RGBZ) ----
+
+// Set by `depth_toward` when a face it reads is not resident (the search then gives up).
+var<private> depth_missing: bool;
+
+// Distance from sample point `cube` to the first hit towards `d`: the nearest texel of its
+// distance plane. Marks the face as needed.
+fn depth_toward(cube: u32, d: vec3<f32>) -> f32 {
+    let fst = face_st(d);
+    let face = u32(fst.x);
+    atomicOr(&feedback[cube], 1u << face);
+    let entry = slots[cube];
+    if ((entry & (1u << face)) == 0u) {
+        depth_missing = true;
+        return FAR;
+    }
+    let at = place(entry, face);
+    let n = P.cube_res;
+    let x = min(u32(fst.y * f32(n)), n - 1u);
+    let y = min(u32(fst.z * f32(n)), n - 1u);
+    return load_depth(at.x, i32(at.y), vec2<u32>(at.z + x, y));
+}
+
+// The point of the ray from x along r at inverse distance w (w = 0: the point at infinity),
+// seen from sample point p: xyz = its offset from p, w = |q − p| − D_p(q − p), negative in
+// front of the surface p sees that way, positive behind it (1 at infinity).
+fn depth_probe(cube: u32, p: vec3<f32>, x: vec3<f32>, r: vec3<f32>, w: f32) -> vec4<f32> {
+    if (!(w > 0.0)) {
+        return vec4<f32>(r, 1.0);
+    }
+    let d = x + r * (1.0 / w) - p;
+    return vec4<f32>(d, length(d) - depth_toward(cube, d));
+}
+
+// Where sample point `cube` sees the ray from x along r meet the scene, traced against its
+// distance plane as distance impostors are (Szirmay-Kalos et al. 2005; linear search, then
+// refinement, as Umenhoffer et al. 2007, GPU Gems 3 ch. 17): the ray is walked in equal steps
+// of inverse distance from x, about one texel of the cube each (at most depth_steps); the first
+// step behind the surface brackets the hit and DEPTH_REFINE bisections narrow it.
+// xyz: the direction to look up; w: 1 hit; 0 no hit before infinity, or a face not resident
+// (xyz = r, the plain lookup); -1 the ray passed behind an occluder's silhouette, farther
+// behind the surface than depth_thickness allows (xyz = r; this point cannot see the hit).
+fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
+    let p = samples[cube].xyz;
+    let lo = length(x - p);
+    if (!(lo > 0.0)) {
+        return vec4<f32>(r, 0.0);
+    }
+    depth_missing = false;
+    let w0 = 1.0 / lo;
+    var a = depth_probe(cube, p, x, r, w0);
+    if (depth_missing) {
+        return vec4<f32>(r, 0.0);
+    }
+    if (a.w >= 0.0) {
+        return vec4<f32>(r, -1.0);
+    }
+    let span = acos(clamp(dot(normalize(a.xyz), r), -1.0, 1.0));
+    let steps = clamp(u32(ceil(span * f32(P.cube_res) / (0.5 * PI))), 1u, P.depth_steps);
+    var wa = w0;
+    var wb = 0.0;
+    var b = vec4<f32>(r, 1.0);
+    for (var k = 1u; k < steps; k++) {
+        let w = w0 * (1.0 - f32(k) / f32(steps));
+        let q = depth_probe(cube, p, x, r, w);
+        if (q.w >= 0.0) {
+            wb = w;
+            b = q;
+            break;
+        }
+        wa = w;
+    }
+    for (var i = 0u; i < DEPTH_REFINE; i++) {
+        let wm = 0.5 * (wa + wb);
+        let q = depth_probe(cube, p, x, r, wm);
+        if (q.w >= 0.0) {
+            wb = wm;
+            b = q;
+        } else {
+            wa = wm;
+        }
+    }
+    if (depth_missing || !(wb > 0.0)) {
+        return vec4<f32>(r, 0.0);
+    }
+    if (b.w > P.depth_thickness * length(b.xyz)) {
+        return vec4<f32>(r, -1.0);
+    }
+    return vec4<f32>(normalize(b.xyz), 1.0);
 }
 
 // ---- geometry ----
@@ -367,14 +547,74 @@ fn blend_fetch(w: vec4<f32>, t: Tap) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-fn blend_lookup(w: vec4<f32>, dir: vec3<f32>) -> vec4<f32> {
-    return blend_fetch(w, tap(dir));
+// Blended radiance towards `dir` for the ray from x, at mip level `lod`: each candidate looked
+// up where it sees the ray meet the scene (`depth_search`, with DEPTH) or along `dir`. While
+// any candidate sees the hit, those that cannot are left out; `.w` = 0 when no lookup was
+// resident.
+fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32> {
+    var acc = vec3<f32>(0.0);
+    var wsum = 0.0;
+    var hidden = vec3<f32>(0.0);
+    var hsum = 0.0;
+    for (var j = 0u; j < 4u; j++) {
+        if (w[j] > 0.0) {
+            var h = vec4<f32>(dir, 1.0);
+            if (DEPTH) {
+                h = depth_search(cand.idx[j], x, dir);
+            }
+            let l = lookup_lod(cand.idx[j], h.xyz, lod);
+            if (l.w > 0.0) {
+                if (h.w >= 0.0) {
+                    acc += l.rgb * w[j];
+                    wsum += w[j];
+                } else {
+                    hidden += l.rgb * w[j];
+                    hsum += w[j];
+                }
+            }
+        }
+    }
+    if (wsum > 0.0) {
+        return vec4<f32>(acc / wsum, 1.0);
+    }
+    if (hsum > 0.0) {
+        return vec4<f32>(hidden / hsum, 1.0);
+    }
+    return vec4<f32>(0.0);
 }
 
-// The environment-map baseline towards `dir`, or 0 when the store has none.
-fn env_lookup(dir: vec3<f32>) -> vec3<f32> {
+// The direction to look up the environment cube for the ray from x along `dir`: `dir` itself,
+// or for the parallax-corrected baseline (SOURCE 2) the direction from the cube's centre to
+// where the ray leaves the proxy box (Lagarde & Zanuttini 2012; probe.rs parallax_dir). `dir`
+// when x lies outside the box.
+fn env_dir(x: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    if (SOURCE != 2u) {
+        return dir;
+    }
+    let lo = P.box_min.xyz;
+    let hi = P.box_max.xyz;
+    if (!(all(x > lo) && all(x < hi))) {
+        return dir;
+    }
+    var t = 3.4e38;
+    for (var k = 0u; k < 3u; k++) {
+        if (dir[k] > 1e-12) {
+            t = min(t, (hi[k] - x[k]) / dir[k]);
+        } else if (dir[k] < -1e-12) {
+            t = min(t, (lo[k] - x[k]) / dir[k]);
+        }
+    }
+    if (!(t > 0.0 && t < 3.4e38)) {
+        return dir;
+    }
+    return x + dir * t - P.probe_pos.xyz;
+}
+
+// The environment cube for the ray from x along `dir` at mip level `lod`, or 0 when the store
+// has none.
+fn env_read(x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec3<f32> {
     if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
-    return lookup(P.env_cube, dir).rgb;
+    return lookup_lod(P.env_cube, env_dir(x, dir), lod).rgb;
 }
 
 // ---- surface reconstruction (3.11–3.12, §6.3) ----
@@ -406,15 +646,18 @@ fn recon(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 // ---- mirror reflection (chapter 4) ----
 
-fn mirror(n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
-    // Every cube is looked up towards r: one tap serves the candidates and the fallback.
+fn mirror(x: vec3<f32>, n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    // Without DEPTH every cube is looked up towards r: one tap serves the candidates and the
+    // fallback.
     let t = tap(r);
     var b = vec4<f32>(0.0);
     if (SOURCE == 0u && cand.count > 0u) {
         var axis = r;
         if (BLEND == 4u) { axis = n; }
         let w = blend_weights(axis);
-        if (BLEND <= 1u) {
+        if (DEPTH) {
+            b = blend_read(w, x, r, 0.0);
+        } else if (BLEND <= 1u) {
             // One candidate has weight 1: one lookup instead of four masked ones.
             var j = 0u;
             if (w.y > 0.0) { j = 1u; } else if (w.z > 0.0) { j = 2u; } else if (w.w > 0.0) { j = 3u; }
@@ -425,6 +668,7 @@ fn mirror(n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     }
     if (b.w > 0.0) { return b.rgb; }
     if (P.env_cube == INVALID) { return vec3<f32>(0.0); }
+    if (SOURCE == 2u) { return env_read(x, r, 0.0); }
     return fetch(P.env_cube, t).rgb;
 }
 
@@ -434,6 +678,9 @@ struct AsSample {
     l: vec3<f32>,
     // f_r ⟨n,l⟩ / p(l): the weight of L_i(l) in Eq. 5.12; 0 for samples below the surface.
     weight: f32,
+    // log2(M p(l)), p the solid-angle density l was drawn with: the sample's mip level
+    // (`sample_lod`).
+    lpdf: f32,
 };
 
 fn fresnel(rs: f32, c: f32) -> f32 {
@@ -464,6 +711,10 @@ fn sample_as(i: u32, xi1r: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f3
     let vh = dot(v, h);
     out.l = 2.0 * vh * h - v;
     out.weight = 0.0;
+    // p(h) = √((n_u+1)(n_v+1)) / 2π · ⟨n,h⟩^e (5.8), with ⟨n,h⟩^e = (1 − ξ2)^(e/(e+1)) from the
+    // inversion above (finite for any exponent); p(l) = p(h) / 4⟨v,h⟩ (5.11).
+    out.lpdf = log2(f32(P.m)) + 0.5 * log2((P.nu + 1.0) * (P.nv + 1.0)) - log2(2.0 * PI)
+        + e / (e + 1.0) * log2(1.0 - xi2) - log2(4.0 * max(vh, 1e-30));
     let nl = dot(n, out.l);
     if (vh > 0.0 && nl > 0.0) {
         out.weight = fresnel(P.rs, vh) * nl / max(nv, nl);
@@ -480,30 +731,41 @@ fn sample_diffuse(i: u32, r1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<
     let z = sqrt(max(0.0, 1.0 - r2));
     out.l = t * (rad * cos(phi)) + b * (rad * sin(phi)) + n * z;
     let nl = dot(n, out.l);
+    out.lpdf = log2(f32(P.m)) + log2(max(nl, 1e-30) / PI); // p(l) = ⟨n,l⟩ / π
     let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
     let fl = 1.0 - pow(1.0 - 0.5 * max(nl, 0.0), 5.0);
     out.weight = select(0.0, 28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv * fl, nl > 0.0); // Eq. 5.4 × π
     return out;
 }
 
-// The radiance of one sample direction: cube `cube`, or (per direction, cube = INVALID) the
-// blend of the candidates with the environment cube where none is resident. `.w` = 0 when a
-// cube's face was not resident.
-fn sample_radiance(cube: u32, wn: vec4<f32>, l: vec3<f32>) -> vec4<f32> {
+// The radiance of sample `s` for the shaded point x: cube `cube` (depth-corrected for a
+// sample point with DEPTH, parallax-corrected for the environment cube with SOURCE 2), or (per
+// direction, cube = INVALID) the blend of the candidates with the environment cube where none
+// is resident; filtered at the sample's mip level with FILTER. `.w` = 0 when a cube's face was
+// not resident.
+fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample) -> vec4<f32> {
+    let l = s.l;
+    let lod = sample_lod(l, s.lpdf);
     if (ORDER == 1u && cube == INVALID) {
         var w = wn;
         if (BLEND != 4u) { w = blend_weights(l); }
-        let b = blend_lookup(w, l);
+        let b = blend_read(w, x, l, lod);
         if (b.w > 0.0) { return b; }
-        return vec4<f32>(env_lookup(l), 1.0);
+        return vec4<f32>(env_read(x, l, lod), 1.0);
     }
-    return lookup(cube, l);
+    var d = l;
+    if (cube == P.env_cube) {
+        d = env_dir(x, l);
+    } else if (DEPTH) {
+        d = depth_search(cube, x, l).xyz;
+    }
+    return lookup_lod(cube, d, lod);
 }
 
 // Integrates over one source (Eq. 5.12): cube `cube` (per point), or the blend of the
 // candidates per direction (cube = INVALID). `.w` = 0 when a needed face was not resident.
 // The diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE).
-fn integrate(cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
+fn integrate(cube: u32, j: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var ok = 1.0;
     var wn = vec4<f32>(0.0);
@@ -511,14 +773,14 @@ fn integrate(cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<
     for (var i = 0u; i < P.m; i++) {
         let s = sample_as(i, rand(pixel, i, j, 0u), rand(pixel, i, j, 1u), n, t, b, v, nv);
         if (s.weight > 0.0) {
-            let l = sample_radiance(cube, wn, s.l);
+            let l = sample_radiance(cube, wn, x, s);
             if (l.w == 0.0) { ok = 0.0; }
             acc += l.rgb * s.weight;
         }
         if (DIFFUSE) {
             let d = sample_diffuse(i, rand(pixel, i, j, 2u), rand(pixel, i, j, 3u), n, t, b, nv);
             if (d.weight > 0.0) {
-                let l = sample_radiance(cube, wn, d.l);
+                let l = sample_radiance(cube, wn, x, d);
                 if (l.w == 0.0) { ok = 0.0; }
                 acc += l.rgb * d.weight;
             }
@@ -531,12 +793,12 @@ fn integrate(cube: u32, j: u32, pixel: u32, n: vec3<f32>, t: vec3<f32>, b: vec3<
 // (4.7); the environment cube (j = 4) when no candidate is usable. Per direction (order B):
 // one integration over the blend. One loop with one call site: lavapipe pays for every
 // inlined copy whether it runs or not.
-fn glossy(pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     let b = cross(n, t);
     let nv = dot(n, v);
-    let use_env = SOURCE == 1u || cand.count == 0u;
+    let use_env = SOURCE != 0u || cand.count == 0u;
     if (ORDER == 1u && !use_env) {
-        return integrate(INVALID, 4u, pixel, n, t, b, v, nv).rgb;
+        return integrate(INVALID, 4u, pixel, x, n, t, b, v, nv).rgb;
     }
     var axis = r;
     if (BLEND == 4u) { axis = n; }
@@ -544,7 +806,7 @@ fn glossy(pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) ->
     if (!use_env) { w = blend_weights(axis); }
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
-    let first = select(0u, 4u, ORDER == 1u || SOURCE == 1u);
+    let first = select(0u, 4u, ORDER == 1u || SOURCE != 0u);
     for (var j = first; j < 5u; j++) {
         var cube = INVALID;
         var wj = 0.0;
@@ -555,7 +817,7 @@ fn glossy(pixel: u32, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) ->
             wj = 1.0;
         }
         if (cube == INVALID) { continue; }
-        let est = integrate(cube, j, pixel, n, t, b, v, nv);
+        let est = integrate(cube, j, pixel, x, n, t, b, v, nv);
         if (est.w > 0.0 || j == 4u) {
             acc += est.rgb * wj;
             wsum += wj;
@@ -708,10 +970,10 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     var spec = vec3<f32>(0.0);
     if ((TERMS & 2u) != 0u) {
-        spec = mirror(n, r);
+        spec = mirror(x, n, r);
     } else if ((TERMS & 4u) != 0u) {
         let t = tangent_frame(n, patch_du(pid, u, v_param));
-        spec = glossy(pixel, n, t, v, r);
+        spec = glossy(pixel, x, n, t, v, r);
     }
     if ((TERMS & 8u) != 0u) {
         spec *= patches[pid].color.rgb;

@@ -6,7 +6,8 @@ mod common;
 use common::{all_finite, compare, mean, open_store};
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
-    Blend, CacheConfig, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams, Source,
+    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams,
+    Source,
 };
 
 const W: u32 = 96;
@@ -150,6 +151,111 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
         "recon + C_s glossy with diffuse term",
     );
     assert!(compare(&recon, &env, 1e-3).1 < 0.9);
+}
+
+/// Depth-corrected lookups, filtered importance sampling and the parallax-corrected baseline,
+/// each on and off, against the CPU reference; each switch must change the image.
+#[test]
+fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
+    let store = open_store();
+    assert!(store.header().has_distance(), "the test store bakes distances");
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let base = ShadingParams {
+        mode: Mode::Mirror,
+        ..Default::default()
+    };
+    let depth = check(&mut r, &cubes, base, "mirror, depth-corrected");
+    let plain = check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            depth: false,
+            ..base
+        },
+        "mirror, plain",
+    );
+    assert!(
+        compare(&depth, &plain, 1e-3).1 < 0.95,
+        "depth correction changes nothing"
+    );
+    for blend in [Blend::Distance, Blend::Angle, Blend::Average, Blend::Reflection] {
+        check(
+            &mut r,
+            &cubes,
+            ShadingParams { blend, ..base },
+            &format!("mirror {}, depth-corrected", blend.name()),
+        );
+    }
+    let env = check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            source: Source::EnvMap,
+            ..base
+        },
+        "mirror envmap",
+    );
+    let parallax = check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            source: Source::Parallax,
+            ..base
+        },
+        "mirror parallax (fitted box)",
+    );
+    assert!(
+        compare(&env, &parallax, 1e-3).1 < 0.9,
+        "parallax correction changes nothing"
+    );
+    let given = r.proxy_box(&base).expect("a fitted box");
+    let shifted = [given[0], given[1].map(|v| v + 1.0)];
+    check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            source: Source::Parallax,
+            proxy_box: Some(shifted),
+            ..base
+        },
+        "mirror parallax (given box)",
+    );
+    let glossy = |filter, order, depth, source| ShadingParams {
+        mode: Mode::Glossy,
+        glossy_filter: filter,
+        order,
+        depth,
+        source,
+        m: 8,
+        nu: 20.0,
+        nv: 20.0,
+        ..Default::default()
+    };
+    let mip = check(
+        &mut r,
+        &cubes,
+        glossy(GlossyFilter::Mip, Order::PerPoint, true, Source::Oslf),
+        "glossy mip depth",
+    );
+    let point = check(
+        &mut r,
+        &cubes,
+        glossy(GlossyFilter::Point, Order::PerPoint, true, Source::Oslf),
+        "glossy point depth",
+    );
+    assert!(
+        compare(&mip, &point, 1e-3).1 < 0.9,
+        "filtering changes nothing"
+    );
+    for (filter, order, depth, source, label) in [
+        (GlossyFilter::Mip, Order::PerDirection, true, Source::Oslf, "glossy mip per direction depth"),
+        (GlossyFilter::Point, Order::PerPoint, false, Source::Oslf, "glossy point plain"),
+        (GlossyFilter::Mip, Order::PerPoint, true, Source::EnvMap, "glossy mip envmap"),
+        (GlossyFilter::Mip, Order::PerPoint, true, Source::Parallax, "glossy mip parallax"),
+    ] {
+        check(&mut r, &cubes, glossy(filter, order, depth, source), label);
+    }
 }
 
 #[test]

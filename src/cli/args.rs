@@ -9,7 +9,9 @@ use glam::Vec3;
 use oslf_format::Store;
 use oslf_runtime::Camera;
 
-use oslf_runtime::{Background, Blend, Mode, Order, Result, RuntimeError, ShadingParams, Source};
+use oslf_runtime::{
+    Background, Blend, GlossyFilter, Mode, Order, Result, RuntimeError, ShadingParams, Source,
+};
 
 /// The shading flags besides mode and blend (which each command takes its own way).
 #[derive(Args, Clone, Debug)]
@@ -17,9 +19,25 @@ pub struct ShadingArgs {
     /// Lobe power N of the r and n blends (0 = avg).
     #[arg(short = 'N', long = "blend-n", default_value_t = 4.0)]
     pub blend_n: f32,
-    /// Use the environment-map baseline (one cube at the object's centre) instead of the OSLF.
-    #[arg(long)]
+    /// Where reflections come from: the OSLF's sample points, the environment-map baseline
+    /// (one cube at the object's centre, by direction alone), or that cube parallax-corrected
+    /// against a proxy box.
+    #[arg(long, default_value = "oslf", value_parser = parse_source)]
+    pub source: Source,
+    /// Shorthand for `--source env`.
+    #[arg(long, conflicts_with = "source")]
     pub envmap: bool,
+    /// Plain lookups along the reflected direction from each sample point, as the thesis did,
+    /// instead of depth-corrected ones (which need a store with a distance channel).
+    #[arg(long)]
+    pub no_depth: bool,
+    /// How glossy samples read the cube maps: mip (filtered importance sampling) or point.
+    #[arg(long, default_value = "mip", value_parser = parse_glossy_filter)]
+    pub glossy_filter: GlossyFilter,
+    /// The proxy box of `--source parallax`, world space: xmin,ymin,zmin,xmax,ymax,zmax
+    /// [default: fitted to the environment cube's distances].
+    #[arg(long, value_parser = parse_box)]
+    pub proxy_box: Option<[[f32; 3]; 2]>,
     /// φ_shader in degrees (§6.3).
     #[arg(long, default_value_t = 65.0)]
     pub phi_shader: f32,
@@ -53,11 +71,7 @@ impl ShadingArgs {
             mode,
             blend,
             blend_n: self.blend_n,
-            source: if self.envmap {
-                Source::EnvMap
-            } else {
-                Source::Oslf
-            },
+            source: self.source(),
             phi_shader_deg: self.phi_shader,
             m: self.m,
             order: self.order,
@@ -66,16 +80,39 @@ impl ShadingArgs {
             nu: self.nu,
             nv: self.nv,
             seed: self.seed,
+            depth: !self.no_depth,
+            glossy_filter: self.glossy_filter,
+            proxy_box: self.proxy_box,
         };
         params.validate()?;
         Ok(params)
     }
 
-    /// Errors when `--envmap` is asked for and `store` (at `path`) has no environment cube.
+    /// `--source`, or `env` with `--envmap`.
+    pub fn source(&self) -> Source {
+        if self.envmap {
+            Source::EnvMap
+        } else {
+            self.source
+        }
+    }
+
+    /// Errors when the source needs an environment cube and `store` (at `path`) has none, or
+    /// `--source parallax` has no proxy box to use.
     pub fn check_store(&self, store: &Store, path: &Path) -> Result<()> {
-        if self.envmap && store.env_cube_index().is_none() {
+        let source = self.source();
+        if source != Source::Oslf && store.env_cube_index().is_none() {
             return Err(RuntimeError::Parameter(format!(
-                "{} has no environment cube (bake with env_cube = true)",
+                "--source {}: {} has no environment cube (bake with env_cube = true)",
+                source.name(),
+                path.display()
+            )));
+        }
+        if source == Source::Parallax && self.proxy_box.is_none() && !store.header().has_distance()
+        {
+            return Err(RuntimeError::Parameter(format!(
+                "--source parallax: {} has no distance channel to fit the proxy box to; give \
+                 --proxy-box xmin,ymin,zmin,xmax,ymax,zmax",
                 path.display()
             )));
         }
@@ -178,6 +215,32 @@ pub fn parse_order(s: &str) -> std::result::Result<Order, String> {
         "per-point" => Ok(Order::PerPoint),
         "per-direction" => Ok(Order::PerDirection),
         _ => Err(format!("unknown order {s:?} (per-point or per-direction)")),
+    }
+}
+
+/// `oslf`, `env` or `parallax`.
+pub fn parse_source(s: &str) -> std::result::Result<Source, String> {
+    s.parse::<Source>().map_err(|e| e.to_string())
+}
+
+/// `mip` or `point`.
+pub fn parse_glossy_filter(s: &str) -> std::result::Result<GlossyFilter, String> {
+    s.parse::<GlossyFilter>().map_err(|e| e.to_string())
+}
+
+/// Six finite numbers `xmin,ymin,zmin,xmax,ymax,zmax` with min < max on each axis.
+pub fn parse_box(s: &str) -> std::result::Result<[[f32; 3]; 2], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v.as_slice() {
+        [a, b, c, d, e, f] if v.iter().all(|c| c.is_finite()) && a < d && b < e && c < f => {
+            Ok([[*a, *b, *c], [*d, *e, *f]])
+        }
+        _ => Err(format!(
+            "{s:?} is not a box xmin,ymin,zmin,xmax,ymax,zmax (six finite numbers, min < max)"
+        )),
     }
 }
 

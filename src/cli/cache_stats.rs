@@ -407,7 +407,9 @@ impl Report<'_> {
             "ram_bytes": self.ram_bytes,
             "shading": {
                 "blend_n": args.shading.blend_n,
-                "envmap": args.shading.envmap,
+                "source": args.shading.source().name(),
+                "depth": !args.shading.no_depth,
+                "glossy_filter": args.shading.glossy_filter.name(),
                 "phi_shader": args.shading.phi_shader,
                 "m": args.shading.m,
                 "order": args.shading.order,

@@ -6,7 +6,9 @@
 //! | --- | --- |
 //! | 1 … 5 | mode: recon, mirror, recon + mirror, glossy, recon + glossy |
 //! | B | next blend: distance, angle, avg, r, n |
-//! | E | OSLF ↔ environment-map baseline |
+//! | E | next source: OSLF, environment-map baseline, parallax-corrected baseline (when the store has a proxy box to fit) |
+//! | D | depth-corrected lookups on ↔ off |
+//! | F | glossy filter: mip ↔ point |
 //! | G | next background: env, none (and the `--background` colour, if one was given) |
 //! | O | integration order: per point ↔ per direction |
 //! | Up / Down | blend power N × 2 / ÷ 2 |
@@ -30,8 +32,8 @@ use anyhow::{anyhow, Context};
 use glam::Vec3;
 use oslf_runtime::Camera;
 use oslf_runtime::{
-    Background, Blend, CacheConfig, Frame, Gpu, Mode, Order, RenderOptions, Renderer,
-    ShadingParams, Source,
+    Background, Blend, CacheConfig, Frame, Gpu, GlossyFilter, Mode, Order, RenderOptions,
+    Renderer, ShadingParams, Source,
 };
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -343,7 +345,11 @@ impl App {
             "oslf — {} {}{} N={} n_u={} n_v={} M={} {:?} background {} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
             p.mode.name(),
             p.blend.name(),
-            if p.source == Source::EnvMap { " envmap" } else { "" },
+            match (p.source, p.depth) {
+                (Source::Oslf, true) => String::new(),
+                (Source::Oslf, false) => " plain".into(),
+                (s, _) => format!(" {}", s.name()),
+            },
             p.blend_n,
             p.nu,
             p.nv,
@@ -367,6 +373,10 @@ impl App {
     }
 
     fn key(&mut self, key: &Key) -> bool {
+        let parallax = self
+            .state
+            .as_ref()
+            .is_some_and(|s| s.renderer.proxy_box(&self.params).is_some());
         let p = &mut self.params;
         match key {
             Key::Named(NamedKey::Escape) => return false,
@@ -383,7 +393,15 @@ impl App {
                 "e" => {
                     p.source = match p.source {
                         Source::Oslf => Source::EnvMap,
-                        Source::EnvMap => Source::Oslf,
+                        Source::EnvMap if parallax => Source::Parallax,
+                        Source::EnvMap | Source::Parallax => Source::Oslf,
+                    }
+                }
+                "d" => p.depth = !p.depth,
+                "f" => {
+                    p.glossy_filter = match p.glossy_filter {
+                        GlossyFilter::Mip => GlossyFilter::Point,
+                        GlossyFilter::Point => GlossyFilter::Mip,
                     }
                 }
                 "g" => self.background = (self.background + 1) % self.backgrounds.len(),
