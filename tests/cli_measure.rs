@@ -142,19 +142,23 @@ fn tables_reproduce_the_thesis_layout_with_consistent_outputs() {
         .skip(1)
         .map(|l| l.split(',').collect())
         .collect();
-    // Per store: 1 recon + 12 mirror methods; AS: 2 lobes × 2 M × 3 methods on the finer store.
-    assert_eq!(rows.len(), 2 * 13 + 12, "{csv}");
+    // Per store: 1 recon + 2 baselines + 11 blends, plain and depth-corrected; AS: 2 lobes × 2 M
+    // × 6 methods on the finer store.
+    assert_eq!(rows.len(), 2 * 25 + 24, "{csv}");
+    for method in ["Parallax", "B^n N=4 depth"] {
+        assert_eq!(rows.iter().filter(|r| r[3] == method).count(), 2, "{method}");
+    }
     assert_eq!(rows.iter().filter(|r| r[0] == "6.1").count(), 2);
     assert_eq!(
         rows.iter().filter(|r| r[0] == "AS" && r[2] == "16").count(),
-        12
+        24
     );
     for r in &rows {
-        let l: f64 = r[11].parse().unwrap();
-        let ms: f64 = r[18].parse().unwrap();
+        let l: f64 = r[13].parse().unwrap();
+        let ms: f64 = r[20].parse().unwrap();
         assert!(l.is_finite() && l >= 0.0 && ms > 0.0, "{r:?}");
         assert!(
-            r[10].parse::<u64>().unwrap() > 100,
+            r[12].parse::<u64>().unwrap() > 100,
             "too few pixels compared: {r:?}"
         );
     }
@@ -167,7 +171,7 @@ fn tables_reproduce_the_thesis_layout_with_consistent_outputs() {
     let l0 = recs[0]["judgement"]["metrics"]["rmse_lab"][0]
         .as_f64()
         .unwrap();
-    assert!((l0 - rows[0][11].parse::<f64>().unwrap()).abs() < 1e-4);
+    assert!((l0 - rows[0][13].parse::<f64>().unwrap()).abs() < 1e-4);
     assert!(std::fs::read_to_string(out.join("tables.md"))
         .unwrap()
         .contains("| method |"));

@@ -165,3 +165,100 @@ fn verify_checks_padding_and_the_decoded_faces() {
         "{text}"
     );
 }
+
+/// `oslf store convert IN OUT --encoding bc6h` re-encodes the cube maps and keeps everything
+/// else; converting back to the input's encoding (RGBA16F, from BC6H's binary16 values) and
+/// to RGB9E5 works too, and a bad encoding is a clear error.
+#[test]
+fn convert_re_encodes_and_keeps_the_rest() {
+    use oslf_format::{Encoding, Store};
+    let spec = Spec {
+        encoding: Encoding::Rgba16f,
+        cube_res: 6,
+        distance: true,
+        ..Spec::default()
+    };
+    let f = fixture(spec);
+    let (dir, path) = temp_store("in.oslf");
+    write(&path, &f);
+    let bc = dir.path().join("bc6h.oslf");
+    let out = bin()
+        .arg("convert")
+        .arg(&path)
+        .arg(&bc)
+        .args(["--encoding", "bc6h", "-j", "2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("rgba16f → bc6h") && text.contains("RMSLE"),
+        "{text}"
+    );
+    let (a, b) = (Store::open(&path).unwrap(), Store::open(&bc).unwrap());
+    assert_eq!(b.header().encoding, Encoding::Bc6h);
+    assert_eq!(b.header().version, oslf_format::VERSION);
+    assert!(b.verify().unwrap().decoded_checksum);
+    let mut meta = a.meta().clone();
+    meta.bake.encoding = Encoding::Bc6h;
+    assert_eq!(b.meta(), &meta);
+    assert_eq!(a.sample_points(), b.sample_points());
+    assert_eq!(a.env_cube_index(), b.env_cube_index());
+    for p in 0..spec.patches as u32 {
+        let (ma, mb) = (a.sample_map(p).unwrap(), b.sample_map(p).unwrap());
+        for y in 0..spec.map_res {
+            for x in 0..spec.map_res {
+                assert_eq!(ma.get(x, y), mb.get(x, y));
+            }
+        }
+    }
+    for c in 0..a.cube_count() {
+        let (ca, cb) = (a.read_cube(c).unwrap(), b.read_cube(c).unwrap());
+        assert_eq!(ca.distance, cb.distance);
+        for face in 0..6 {
+            // Exactly what the BC6H encoder and decoder make of the input's texels.
+            let mut blocks = vec![0u8; Encoding::Bc6h.face_bytes(6).unwrap()];
+            oslf_format::bc6h::encode_face(&ca.faces[face], 6, &mut blocks).unwrap();
+            let mut want = vec![[0f32; 3]; 36];
+            oslf_format::bc6h::decode_face(&blocks, 6, &mut want, c, face).unwrap();
+            assert_eq!(cb.faces[face], want);
+        }
+    }
+    // BC6H → RGBA16F keeps BC6H's binary16 values exactly.
+    let back = dir.path().join("back.oslf");
+    let out = bin()
+        .arg("convert")
+        .arg(&bc)
+        .arg(&back)
+        .args(["--encoding", "rgba16f"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let r = Store::open(&back).unwrap();
+    assert_eq!(r.header().version, oslf_format::VERSION);
+    for c in 0..r.cube_count() {
+        assert_eq!(r.read_cube(c).unwrap().faces, b.read_cube(c).unwrap().faces);
+    }
+    // Clear errors.
+    let out = bin()
+        .arg("convert")
+        .arg(&path)
+        .arg(dir.path().join("x.oslf"))
+        .args(["--encoding", "bc7"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bc6h"));
+    let out = bin()
+        .arg("convert")
+        .arg(&path)
+        .arg(&path)
+        .args(["--encoding", "bc6h"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+}

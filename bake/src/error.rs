@@ -26,6 +26,14 @@ pub enum BakeError {
     /// An image (texture or environment map) that cannot be used.
     #[error("{path}: {message}")]
     Image { path: PathBuf, message: String },
+    /// A glTF file that cannot be read: `at` is the JSON path (`meshes[2].primitives[0].indices`),
+    /// the GLB chunk or `JSON`, and the message names the accessor where one is involved.
+    #[error("{path}: {at}: {message}")]
+    Gltf {
+        path: PathBuf,
+        at: String,
+        message: String,
+    },
     /// A pixel of an input image that is NaN, infinite or negative.
     #[error("{path}: pixel ({x}, {y}) is {value} (must be finite and non-negative)")]
     BadPixel {

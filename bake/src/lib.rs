@@ -11,8 +11,8 @@
 //!
 //! | role | modules |
 //! | --- | --- |
-//! | geometry | [`bezier`] and [`mesh`] (re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
-//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (the shared pinhole [`camera::Camera`], path-traced renders through it), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
+//! | geometry | [`bezier`] and [`mesh`] (re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`gltf`] (glTF 2.0 scenes: meshes, materials, lights, cameras), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
+//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (the shared pinhole [`camera::Camera`], path-traced renders through it), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
 //! | the bake | [`scene`] (TOML scene files with located errors), [`sample_points`], [`sample_map`], [`capture`], [`bake`] (the pipeline, resumable, deterministic), [`image_file`] (EXR and tone-mapped PNG output) |
 //! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf truth` command) |
 //!
@@ -26,6 +26,7 @@ pub mod ray;
 // geometry
 pub use oslf_geometry::{bezier, mesh};
 pub mod bvh;
+pub mod gltf;
 pub mod obj;
 pub mod shapes;
 

@@ -1,8 +1,9 @@
-//! Delta lights: point lights and the sun.
+//! Delta lights: point lights, spot lights and the sun.
 //!
-//! Both are treated as *delta* lights for shading: a surface point receives light from them
+//! All are treated as *delta* lights for shading: a surface point receives light from them
 //! only through next-event estimation (one shadow ray per light per shading point), irradiance
-//! `E = I cos θ / r²` for a point light and `E = E_sun cos θ` for the sun.
+//! `E = I cos θ / r²` for a point light, `E = I a(ψ) cos θ / r²` for a spot light (`a` its cone
+//! falloff, [`spot_falloff`]) and `E = E_sun cos θ` for the sun.
 //!
 //! The sun additionally has a visible disc (see [`Light::disc_radiance`]). The integrator adds
 //! the disc's radiance **only** to camera / primary rays (the first segment of a path, i.e. the
@@ -25,6 +26,20 @@ pub enum Light {
         position: Vec3,
         /// Radiant intensity per channel (W/sr).
         intensity: Vec3,
+    },
+    /// A point light limited to a cone (glTF's `KHR_lights_punctual` spot light): radiant
+    /// intensity `intensity · a(ψ)` at angle ψ from `direction`, `a` = [`spot_falloff`] (1
+    /// inside `inner_angle`, 0 outside `outer_angle`).
+    Spot {
+        position: Vec3,
+        /// Unit vector the light shines along (the cone's axis).
+        direction: Vec3,
+        /// Radiant intensity on the axis, per channel (W/sr).
+        intensity: Vec3,
+        /// Half-angle of the full-intensity cone, radians, in `[0, outer_angle]`.
+        inner_angle: f32,
+        /// Half-angle beyond which the light is dark, radians, in `(0, π/2]`.
+        outer_angle: f32,
     },
     /// A distant light with a visible disc.
     Sun {
@@ -70,6 +85,35 @@ impl Light {
                 if !position.is_finite() {
                     return Err(BakeError::Invalid(format!(
                         "point light position {position} is not finite"
+                    )));
+                }
+                non_negative(*intensity, "intensity")
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                inner_angle,
+                outer_angle,
+            } => {
+                if !position.is_finite() {
+                    return Err(BakeError::Invalid(format!(
+                        "spot light position {position} is not finite"
+                    )));
+                }
+                if !direction.is_finite() || direction.length_squared() < 1e-12 {
+                    return Err(BakeError::Invalid(format!(
+                        "spot light direction {direction} must be a finite non-zero vector"
+                    )));
+                }
+                if !(outer_angle.is_finite() && *outer_angle > 0.0 && *outer_angle <= 0.5 * PI) {
+                    return Err(BakeError::Invalid(format!(
+                        "spot light outer cone angle {outer_angle} must be in (0, π/2] radians"
+                    )));
+                }
+                if !(inner_angle.is_finite() && *inner_angle >= 0.0 && inner_angle <= outer_angle) {
+                    return Err(BakeError::Invalid(format!(
+                        "spot light inner cone angle {inner_angle} must be in [0, outer angle {outer_angle}] radians"
                     )));
                 }
                 non_negative(*intensity, "intensity")
@@ -121,6 +165,33 @@ impl Light {
                     irradiance: e,
                 })
             }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                inner_angle,
+                outer_angle,
+            } => {
+                let d = *position - p;
+                let r2 = d.length_squared();
+                if !(r2 > 0.0 && r2.is_finite()) {
+                    return None;
+                }
+                let r = r2.sqrt();
+                let dir = d / r;
+                let axis = direction.try_normalize()?;
+                // ψ is the angle between the axis and the direction from the light to `p`.
+                let a = spot_falloff(-dir.dot(axis), *inner_angle, *outer_angle);
+                let e = *intensity * (a / r2);
+                if !e.is_finite() || e == Vec3::ZERO {
+                    return None;
+                }
+                Some(LightSample {
+                    dir,
+                    distance: r,
+                    irradiance: e,
+                })
+            }
             Light::Sun {
                 direction,
                 irradiance,
@@ -139,7 +210,7 @@ impl Light {
         }
     }
 
-    /// Radiance of the sun's disc seen along `dir` (unit), zero for point lights and outside
+    /// Radiance of the sun's disc seen along `dir` (unit), zero for point and spot lights and outside
     /// the disc.
     ///
     /// The disc is uniform with radiance `L = E / (π sin²α)`, α the angular radius, so that
@@ -149,7 +220,7 @@ impl Light {
     /// module documentation.
     pub fn disc_radiance(&self, dir: Vec3) -> Vec3 {
         match self {
-            Light::Point { .. } => Vec3::ZERO,
+            Light::Point { .. } | Light::Spot { .. } => Vec3::ZERO,
             Light::Sun {
                 direction,
                 irradiance,
@@ -174,5 +245,117 @@ impl Light {
                 }
             }
         }
+    }
+}
+
+/// The angular falloff of a spot light, `a(ψ)` for `cos_psi` = cos ψ, ψ the angle from the
+/// cone's axis: the reference implementation of glTF's `KHR_lights_punctual`,
+///
+/// ```text
+/// t = clamp((cos ψ − cos outer) / max(0.001, cos inner − cos outer), 0, 1),   a = t²
+/// ```
+///
+/// a ramp linear in cos ψ (no smoothstep), squared: 1 inside the inner cone, 0 outside the
+/// outer cone.
+pub fn spot_falloff(cos_psi: f32, inner_angle: f32, outer_angle: f32) -> f32 {
+    let cos_outer = outer_angle.cos();
+    let cos_inner = inner_angle.cos();
+    let scale = 1.0 / (cos_inner - cos_outer).max(0.001);
+    let t = ((cos_psi - cos_outer) * scale).clamp(0.0, 1.0);
+    if t.is_finite() {
+        t * t
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spot() -> Light {
+        Light::Spot {
+            position: Vec3::new(0.0, 0.0, 2.0),
+            direction: Vec3::NEG_Z,
+            intensity: Vec3::new(8.0, 4.0, 2.0),
+            inner_angle: 20f32.to_radians(),
+            outer_angle: 40f32.to_radians(),
+        }
+    }
+
+    #[test]
+    fn spot_validates() {
+        assert!(spot().validate().is_ok());
+        let with = |inner: f32, outer: f32, dir: Vec3| Light::Spot {
+            position: Vec3::ZERO,
+            direction: dir,
+            intensity: Vec3::ONE,
+            inner_angle: inner,
+            outer_angle: outer,
+        };
+        assert!(with(0.0, 0.5 * PI, Vec3::Z).validate().is_ok());
+        assert!(with(0.3, 0.3, Vec3::Z).validate().is_ok());
+        assert!(with(0.4, 0.3, Vec3::Z).validate().is_err());
+        assert!(with(0.0, 0.0, Vec3::Z).validate().is_err());
+        assert!(with(0.0, 2.0, Vec3::Z).validate().is_err());
+        assert!(with(-0.1, 0.3, Vec3::Z).validate().is_err());
+        assert!(with(0.0, f32::NAN, Vec3::Z).validate().is_err());
+        assert!(with(0.0, 0.3, Vec3::ZERO).validate().is_err());
+        let mut bad = spot();
+        if let Light::Spot { intensity, .. } = &mut bad {
+            *intensity = Vec3::new(1.0, -1.0, 0.0);
+        }
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn spot_sample_li_follows_the_cone() {
+        let light = spot();
+        // On the axis, 2 below the light: I / r².
+        let s = light.sample_li(Vec3::ZERO).unwrap();
+        assert!((s.dir - Vec3::Z).length() < 1e-6);
+        assert!((s.distance - 2.0).abs() < 1e-6);
+        assert!((s.irradiance - Vec3::new(2.0, 1.0, 0.5)).length() < 1e-6);
+        // Inside the inner cone (ψ = 10°): full intensity, r = 2 / cos 10°.
+        let psi = 10f32.to_radians();
+        let p = Vec3::new(2.0 * psi.tan(), 0.0, 0.0);
+        let s = light.sample_li(p).unwrap();
+        let r2 = 4.0 + p.x * p.x;
+        assert!((s.irradiance.x - 8.0 / r2).abs() < 1e-5);
+        // Half-way in cos between the cones: (½)² = ¼ of the intensity.
+        let (ci, co) = (20f32.to_radians().cos(), 40f32.to_radians().cos());
+        let psi = (0.5 * (ci + co)).acos();
+        let p = Vec3::new(2.0 * psi.tan(), 0.0, 0.0);
+        let s = light.sample_li(p).unwrap();
+        let r2 = 4.0 + p.x * p.x;
+        assert!(
+            (s.irradiance.x - 0.25 * 8.0 / r2).abs() < 1e-4,
+            "{}",
+            s.irradiance
+        );
+        // Outside the outer cone and behind the light: nothing.
+        let psi = 41f32.to_radians();
+        assert!(light
+            .sample_li(Vec3::new(2.0 * psi.tan(), 0.0, 0.0))
+            .is_none());
+        assert!(light.sample_li(Vec3::new(0.0, 0.0, 3.0)).is_none());
+        // At the light itself: nothing, and never a visible disc.
+        assert!(light.sample_li(Vec3::new(0.0, 0.0, 2.0)).is_none());
+        assert_eq!(light.disc_radiance(Vec3::NEG_Z), Vec3::ZERO);
+    }
+
+    #[test]
+    fn spot_falloff_reference_values() {
+        let (i, o) = (0.2f32, 0.6f32);
+        assert_eq!(spot_falloff(1.0, i, o), 1.0);
+        assert_eq!(spot_falloff(i.cos(), i, o), 1.0);
+        assert!(spot_falloff(o.cos(), i, o).abs() < 1e-6);
+        assert_eq!(spot_falloff(0.0, i, o), 0.0);
+        let mid = 0.5 * (i.cos() + o.cos());
+        assert!((spot_falloff(mid, i, o) - 0.25).abs() < 1e-5);
+        // Equal angles: a hard edge, no NaN.
+        assert_eq!(spot_falloff(1.0, 0.3, 0.3), 1.0);
+        assert_eq!(spot_falloff(0.9, 0.3, 0.3), 0.0);
+        assert_eq!(spot_falloff(f32::NAN, 0.3, 0.5), 0.0);
     }
 }

@@ -82,7 +82,9 @@ pub const STORE_CUBE_OVERHEAD_BYTES: u64 = 6 * 32 + 160 + 6 * 16;
 /// the mean of the 32² and 128² gazebo bakes of docs/measurements.md, "Store sizes and read
 /// speed" (lossless table: RGB9E5 3.443 and 3.121 of 4 raw bytes; RGBA16F 4.658 and 3.985 of
 /// 8; RGBA32F 9.207 of 16 — the 32² column, the only one baked from unquantised radiance;
-/// quantized RGB9E5 table for `mantissa_bits` < 9). A cube map of a simpler scene compresses
+/// quantized RGB9E5 table for `mantissa_bits` < 9; BC6H 0.973 and 0.920 of 1 raw byte, the
+/// quick preset's 32² cubes and a 128² bake of the same scene converted from RGBA32F, filter
+/// none: `oslf_format::bc6h`). A cube map of a simpler scene compresses
 /// better; one of noisier radiance (fewer samples per texel) a little worse.
 pub fn compressed_texel_bytes(encoding: oslf_format::Encoding, mantissa_bits: u32) -> f64 {
     use oslf_format::Encoding;
@@ -94,6 +96,7 @@ pub fn compressed_texel_bytes(encoding: oslf_format::Encoding, mantissa_bits: u3
         }
         Encoding::Rgba16f => 4.32,
         Encoding::Rgba32f => 9.21,
+        Encoding::Bc6h => 0.95,
     }
 }
 
@@ -546,7 +549,14 @@ fn cubes_in_flight_term(s: &BakeSettings, c: &Counts) -> Term {
         } else {
             0
         };
-    let raw_texel = s.encoding.bytes_per_texel() as u64 + if s.distance_channel { 4 } else { 0 };
+    // BC6H's encoder also stages each face as padded RGBA binary16 (8 B per texel).
+    let staging = if s.encoding.is_block_compressed() {
+        8
+    } else {
+        0
+    };
+    let raw_texel =
+        s.encoding.bytes_per_texel() as u64 + staging + if s.distance_channel { 4 } else { 0 };
     let encoders = chunk.min(c.threads as u64);
     let in_flight = chunk
         .saturating_mul(c.cube_texels)
@@ -665,8 +675,8 @@ fn store_terms(s: &BakeSettings, c: &Counts) -> (Vec<Term>, u64, (u64, u64)) {
     let per_cube = (c.cube_texels as f64 * stored_texel) as u64 + STORE_CUBE_OVERHEAD_BYTES;
     let mantissa_hint = if s.encoding == oslf_format::Encoding::Rgb9e5 && s.mantissa_bits == 9 {
         ", or use mantissa_bits (e.g. 3)"
-    } else if s.encoding != oslf_format::Encoding::Rgb9e5 {
-        ", or use encoding = \"rgb9e5\""
+    } else if s.encoding != oslf_format::Encoding::Rgb9e5 && !s.encoding.is_block_compressed() {
+        ", or use encoding = \"rgb9e5\" or \"bc6h\""
     } else {
         ""
     };

@@ -5,6 +5,9 @@
 //!
 //! Conventions: Z is up; lengths are in scene units; angles in degrees; colours are linear RGB.
 //! Relative paths resolve against the directory of the scene file.
+//!
+//! `[[gltf]]` tables include glTF 2.0 files ([`crate::gltf`]) as environment geometry, lights
+//! and cameras; unsupported glTF features become [`Scene::warnings`].
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -21,6 +24,7 @@ use crate::bvh::Instance;
 use crate::camera::Camera;
 use crate::environment::{Environment, LatLongMap, Sky};
 use crate::error::{BakeError, Result};
+use crate::gltf::GltfCamera;
 use crate::light::Light;
 use crate::material::Material;
 use crate::mesh::Mesh;
@@ -108,11 +112,48 @@ pub struct Scene {
     pub bake: BakeSettings,
     /// Name of the preset applied, if any.
     pub preset: Option<String>,
+    /// What the scene asks for that the bake cannot do and ignores (unsupported glTF
+    /// features, each naming the file and the node, mesh or material). Tools print them.
+    pub warnings: Vec<String>,
 }
+
+/// Whether `path` names a glTF file (`.gltf` or `.glb`, any case) rather than a TOML scene.
+pub fn is_gltf_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// The uniform environment radiance of a scene made from a glTF file alone
+/// ([`Scene::from_gltf`]).
+pub const GLTF_SCENE_ENVIRONMENT: f32 = 1.0;
 
 impl Scene {
     /// Reads and validates a scene file, applying the named preset (from its `[presets.NAME]`).
+    ///
+    /// A `.gltf` / `.glb` path is read with [`Scene::from_gltf`] (so that its own errors and
+    /// warnings come first) and then refused: its meshes would have to be the OSLF object, and
+    /// mesh OSLF objects are not supported yet.
     pub fn load(path: &Path, preset: Option<&str>) -> Result<Scene> {
+        if is_gltf_path(path) {
+            let scene = Scene::from_gltf(path)?;
+            let warned = if scene.warnings.is_empty() {
+                String::new()
+            } else {
+                format!(" (its warnings: {})", scene.warnings.join("; "))
+            };
+            return Err(BakeError::Invalid(format!(
+                "{}: a glTF file cannot be the scene yet: its meshes would have to be the OSLF \
+                 object, and mesh OSLF objects are not supported yet (an OSLF object is made of \
+                 Bézier patches). Include the file from a TOML scene instead, with \
+                 [[gltf]] path = {:?} and an [[object]] of patches (docs/scene-format.md, \
+                 \"glTF scenes\"){warned}",
+                path.display(),
+                path.file_name()
+                    .map(|n| n.to_string_lossy())
+                    .unwrap_or_default()
+            )));
+        }
         let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
             path: path.to_path_buf(),
             source,
@@ -148,6 +189,60 @@ impl Scene {
         })?;
         let ctx = Ctx { text, path };
         ctx.build(raw, preset)
+    }
+
+    /// A scene made from a glTF file alone, with defaults for the rest, and no OSLF object
+    /// (so it cannot be baked; [`Scene::load`] refuses it, and it is meant for path-traced
+    /// views such as [`crate::camera::render`]):
+    /// - the file rotated from glTF's Y-up to the scene's Z-up (`rotate = [90, 0, 0]`), its
+    ///   lights converted with [`crate::gltf::WATTS_PER_LUMEN`];
+    /// - the camera: the file's first perspective camera, else one framing the bounds of its
+    ///   meshes from the front right, above (40° vertical field of view);
+    /// - the environment: uniform, radiance [`GLTF_SCENE_ENVIRONMENT`] (white);
+    /// - the bake settings: the `[bake]` defaults.
+    pub fn from_gltf(path: &Path) -> Result<Scene> {
+        let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let options = crate::gltf::Options {
+            transform: Affine3A::from_rotation_x(90f32.to_radians()),
+            ..Default::default()
+        };
+        let mut materials = Vec::new();
+        let import = crate::gltf::load(path, &options, &mut materials)?;
+        let raw: RawScene = toml::from_str("").expect("an empty scene parses");
+        let ctx = Ctx { text: "", path };
+        let (bake, _) = ctx.bake_settings(&raw, None)?;
+        let camera = match import.cameras.first() {
+            Some(c) => Some(c.camera),
+            None => import.bounds().map(|(lo, hi)| {
+                let target = 0.5 * (lo + hi);
+                let radius = (0.5 * (hi - lo).length()).max(1e-3);
+                let vfov_deg = 40.0f32;
+                let distance = 1.1 * radius / (0.5 * vfov_deg).to_radians().sin();
+                let dir = Vec3::new(1.0, -1.6, 0.9).normalize();
+                Camera {
+                    position: target + distance * dir,
+                    target,
+                    up: Vec3::Z,
+                    vfov_deg,
+                }
+            }),
+        };
+        Ok(Scene {
+            path: path.to_path_buf(),
+            hash: sha256(&bytes),
+            camera,
+            environment: Environment::Constant(Vec3::splat(GLTF_SCENE_ENVIRONMENT)),
+            lights: import.lights,
+            materials,
+            objects: Vec::new(),
+            shapes: import.shapes,
+            bake,
+            preset: None,
+            warnings: import.warnings,
+        })
     }
 
     /// Every triangle of the scene for ray tracing: environment shapes and the OSLF objects
@@ -223,6 +318,8 @@ struct RawScene {
     #[serde(default)]
     mesh: Vec<RawMesh>,
     #[serde(default)]
+    gltf: Vec<RawGltf>,
+    #[serde(default)]
     bake: RawBake,
     #[serde(default)]
     presets: BTreeMap<String, RawBake>,
@@ -231,8 +328,12 @@ struct RawScene {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawCamera {
-    position: Point,
-    target: Spanned<Point>,
+    /// Required unless `gltf` names the camera.
+    position: Option<Point>,
+    /// Required unless `gltf` names the camera.
+    target: Option<Spanned<Point>>,
+    /// The name of a node (or camera) of an included glTF file whose camera to use.
+    gltf: Option<Spanned<String>>,
     /// Default +Z.
     up: Option<Spanned<Direction>>,
     /// Default 40°.
@@ -415,6 +516,21 @@ struct RawMesh {
     material: Spanned<RawMaterial>,
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGltf {
+    /// A glTF 2.0 file, `.gltf` or `.glb`.
+    path: Spanned<String>,
+    /// Applied after the file's node transforms (e.g. `rotate = [90, 0, 0]`: Y-up to Z-up).
+    #[serde(default)]
+    transform: RawTransform,
+    /// Converts the file's photometric light units (cd, lx) to radiometric ones (W/sr, W/m²).
+    watts_per_lumen: Option<Positive>,
+    /// Import the file's `KHR_lights_punctual` lights.
+    #[serde(default = "yes")]
+    lights: bool,
+}
+
 fn default_segments() -> Segments {
     Segments(48)
 }
@@ -573,7 +689,7 @@ impl<'de> Deserialize<'de> for EncodingName {
             .map(EncodingName)
             .map_err(|_| {
                 D::Error::custom(format!(
-                    "unknown encoding {s:?} (expected \"rgb9e5\", \"rgba16f\" or \"rgba32f\")"
+                    "unknown encoding {s:?} (expected \"rgb9e5\", \"rgba16f\", \"rgba32f\" or \"bc6h\")"
                 ))
             })
     }
@@ -584,6 +700,13 @@ impl<'de> Deserialize<'de> for EncodingName {
 struct Ctx<'a> {
     text: &'a str,
     path: &'a Path,
+}
+
+/// A `[camera]` as written: explicit, or naming a glTF camera (resolved once the includes are
+/// read).
+enum CameraSpec {
+    Explicit(Camera),
+    Gltf(Spanned<String>),
 }
 
 impl Ctx<'_> {
@@ -628,19 +751,34 @@ impl Ctx<'_> {
 
     /// The `[camera]`, checked as the renderers need it: errors point at the key at fault
     /// (or at the table when the key was left at its default).
-    fn camera(&self, raw: Spanned<RawCamera>) -> Result<Camera> {
+    fn camera(&self, raw: Spanned<RawCamera>) -> Result<CameraSpec> {
         let table = raw.span();
         let c = raw.into_inner();
+        if let Some(name) = c.gltf {
+            if c.position.is_some() || c.target.is_some() || c.up.is_some() || c.vfov.is_some() {
+                return Err(self.error_at(
+                    table,
+                    "a [camera] with `gltf` takes the glTF camera as it is: give no position, target, up or vfov with it",
+                ));
+            }
+            return Ok(CameraSpec::Gltf(name));
+        }
+        let (Some(position), Some(target)) = (c.position, c.target) else {
+            return Err(self.error_at(
+                table,
+                "the [camera] needs `position` and `target` (or `gltf = \"NodeName\"`, a camera of an included glTF file)",
+            ));
+        };
         let vec = |v: Vec3| format!("[{}, {}, {}]", v.x, v.y, v.z);
         let camera = Camera {
-            position: c.position.0,
-            target: c.target.get_ref().0,
+            position: position.0,
+            target: target.get_ref().0,
             up: c.up.as_ref().map_or(Vec3::Z, |u| u.get_ref().0).normalize(),
             vfov_deg: c.vfov.as_ref().map_or(40.0, |v| v.get_ref().0),
         };
         let Some(forward) = (camera.target - camera.position).try_normalize() else {
             return Err(self.error_at(
-                c.target.span(),
+                target.span(),
                 format!(
                     "the camera's target {} coincides with its position",
                     vec(camera.target)
@@ -674,14 +812,52 @@ impl Ctx<'_> {
         camera
             .validate()
             .map_err(|e| self.locate(table, e.into()))?;
-        Ok(camera)
+        Ok(CameraSpec::Explicit(camera))
+    }
+
+    /// The scene camera: the `[camera]`'s, the glTF camera it names, or (without a
+    /// `[camera]`) the first camera of the included glTF files.
+    fn resolve_camera(
+        &self,
+        spec: Option<CameraSpec>,
+        cameras: &[GltfCamera],
+    ) -> Result<Option<Camera>> {
+        Ok(match spec {
+            Some(CameraSpec::Explicit(c)) => Some(c),
+            Some(CameraSpec::Gltf(name)) => {
+                let wanted = name.get_ref();
+                let found = cameras
+                    .iter()
+                    .find(|c| &c.node == wanted)
+                    .or_else(|| cameras.iter().find(|c| c.name.as_ref() == Some(wanted)));
+                match found {
+                    Some(c) => Some(c.camera),
+                    None => {
+                        let known: Vec<String> =
+                            cameras.iter().map(|c| format!("{:?}", c.node)).collect();
+                        return Err(self.error_at(
+                            name.span(),
+                            format!(
+                                "no glTF camera named {wanted:?} (the included glTF files have {})",
+                                if known.is_empty() {
+                                    "no perspective camera".to_string()
+                                } else {
+                                    format!("cameras on nodes {}", known.join(", "))
+                                }
+                            ),
+                        ));
+                    }
+                }
+            }
+            None => cameras.first().map(|c| c.camera),
+        })
     }
 
     fn build(&self, raw: RawScene, preset: Option<&str>) -> Result<Scene> {
         let hash = sha256(self.text.as_bytes());
         let (bake, epsilon_span) = self.bake_settings(&raw, preset)?;
 
-        let camera = match raw.camera {
+        let camera_spec = match raw.camera {
             Some(c) => Some(self.camera(c)?),
             None => None,
         };
@@ -825,6 +1001,25 @@ impl Ctx<'_> {
             add(mesh, &m.transform, &m.material, &mut materials)?;
         }
 
+        let mut warnings = Vec::new();
+        let mut gltf_cameras = Vec::new();
+        for g in &raw.gltf {
+            let file = self.existing_file(&g.path)?;
+            let options = crate::gltf::Options {
+                transform: g.transform.affine(),
+                watts_per_lumen: g
+                    .watts_per_lumen
+                    .map_or(crate::gltf::WATTS_PER_LUMEN, |w| w.0),
+                lights: g.lights,
+            };
+            let import = crate::gltf::load(&file, &options, &mut materials)?;
+            shapes_out.extend(import.shapes);
+            lights.extend(import.lights);
+            gltf_cameras.extend(import.cameras);
+            warnings.extend(import.warnings);
+        }
+        let camera = self.resolve_camera(camera_spec, &gltf_cameras)?;
+
         if objects.is_empty() {
             return Err(BakeError::Invalid(format!(
                 "{}: the scene has no [[object]]: there is nothing to bake a light field around",
@@ -843,6 +1038,7 @@ impl Ctx<'_> {
             shapes: shapes_out,
             bake,
             preset: preset.map(str::to_string),
+            warnings,
         })
     }
 
@@ -966,8 +1162,13 @@ impl Ctx<'_> {
                 oslf_format::meta::check_mantissa_bits(encoding, bits).map_err(|_| {
                     let problem = if (1..=9).contains(m.get_ref()) {
                         format!(
-                            "mantissa_bits = {} needs encoding = \"rgb9e5\" (the encoding is {encoding}, which keeps every bit)",
-                            m.get_ref()
+                            "mantissa_bits = {} needs encoding = \"rgb9e5\" (the encoding is {encoding}, {})",
+                            m.get_ref(),
+                            if encoding.is_block_compressed() {
+                                "whose precision its 4×4 blocks set"
+                            } else {
+                                "which keeps every bit"
+                            }
                         )
                     } else {
                         format!("mantissa_bits {} must be in 1..=9", m.get_ref())
@@ -991,7 +1192,7 @@ impl Ctx<'_> {
             encoding,
             zstd_level,
             mantissa_bits,
-            distance_channel: merged.distance_channel.unwrap_or(false),
+            distance_channel: merged.distance_channel.unwrap_or(true),
             env_cube: merged.env_cube.unwrap_or(true),
         };
         Ok((settings, epsilon_span))

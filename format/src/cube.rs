@@ -18,7 +18,7 @@
 //! `s = (x + 0.5) / n`, `t = (y + 0.5) / n`. When two components tie for the largest magnitude
 //! the face is chosen in the order x, y, z.
 
-use crate::encoding::{encode_distances, encode_texels, quantize_rgb9e5_bytes, Encoding};
+use crate::encoding::{encode_distances, encode_face_texels, quantize_rgb9e5_bytes, Encoding};
 use crate::filter::{filter_face_quantized, Filter};
 use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
 
@@ -113,19 +113,22 @@ impl CubeImage {
     }
 }
 
-/// Bytes of one face's raw (decompressed) data: encoded texels, then the distance plane.
+/// Bytes of one face's raw (decompressed) data: encoded texels ([`Encoding::face_bytes`]),
+/// then the distance plane.
 pub fn face_raw_size(
     encoding: Encoding,
     resolution: u32,
     distance_channel: bool,
 ) -> Result<u64, Error> {
-    let texels = u64::from(resolution) * u64::from(resolution);
-    let per_texel = encoding.bytes_per_texel() as u64 + if distance_channel { 4 } else { 0 };
-    texels.checked_mul(per_texel).ok_or(Error::Limit {
+    let overflow = || Error::Limit {
         what: "face raw size",
         value: u64::MAX,
         max: u64::MAX,
-    })
+    };
+    let texels = u64::from(resolution) * u64::from(resolution);
+    let color = encoding.face_bytes(resolution).ok_or_else(overflow)? as u64;
+    let dist = if distance_channel { texels * 4 } else { 0 };
+    color.checked_add(dist).ok_or_else(overflow)
 }
 
 /// Counters from [`encode_cube`].
@@ -253,7 +256,11 @@ pub fn encode_cube_with_filter(
         }
     })?;
     let texels = (res as usize) * (res as usize); // res <= 16384: no overflow
-    let color_bytes = texels * enc.bytes_per_texel();
+    let color_bytes = enc.face_bytes(res).ok_or(Error::Limit {
+        what: "cube resolution",
+        value: u64::from(res),
+        max: u64::from(MAX_CUBE_RESOLUTION),
+    })?;
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
     let filtered_size = crate::filter::filtered_face_size(
@@ -288,7 +295,7 @@ pub fn encode_cube_with_filter(
             });
         }
         let (color, dist_out) = raw.split_at_mut(color_bytes);
-        stats.clamped_texels += encode_texels(enc, rgb, color).map_err(|e| match e {
+        stats.clamped_texels += encode_face_texels(enc, res, rgb, color).map_err(|e| match e {
             Error::InvalidTexel { index, value } => Error::InvalidRadiance {
                 cube: cube_index,
                 face,

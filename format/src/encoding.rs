@@ -1,4 +1,5 @@
-//! Texel encodings: RGB9E5, RGBA16F and RGBA32F, and their slice encoders and decoders.
+//! Texel encodings: RGB9E5, RGBA16F, RGBA32F and BC6H, and their slice and face encoders and
+//! decoders.
 //!
 //! All encodings store linear RGB radiance, little-endian:
 //!
@@ -9,6 +10,9 @@
 //! * [`Encoding::Rgba16f`]: four IEEE binary16 values R, G, B, A with A = 1. Largest finite
 //!   value [`MAX_F16`] = 65504.
 //! * [`Encoding::Rgba32f`]: four IEEE binary32 values R, G, B, A with A = 1. Exact.
+//! * [`Encoding::Bc6h`]: unsigned BC6H blocks (`BC6H_UF16`), 16 bytes per 4×4 texels; a face
+//!   is encoded whole (padded by edge replication to a multiple of 4), see [`crate::bc6h`].
+//!   Largest value [`MAX_F16`] = 65504. Format version 4 and later.
 //!
 //! Radiance must be finite and non-negative. Values above an encoding's largest finite value
 //! are clamped to it (never encoded as infinity) and counted.
@@ -35,36 +39,77 @@ pub enum Encoding {
     Rgba16f,
     /// Float RGBA, 16 bytes per texel.
     Rgba32f,
+    /// Unsigned BC6H blocks, 16 bytes per 4×4 texels (1 byte per texel when the face side is
+    /// a multiple of 4). Stores of format version 4 and later.
+    Bc6h,
 }
 
 impl Encoding {
     /// All encodings, in tag order.
-    pub const ALL: [Encoding; 3] = [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f];
+    pub const ALL: [Encoding; 4] = [
+        Encoding::Rgb9e5,
+        Encoding::Rgba16f,
+        Encoding::Rgba32f,
+        Encoding::Bc6h,
+    ];
 
-    /// Bytes one texel takes: 4, 8 or 16.
+    /// The per-texel encodings (all but the block-compressed [`Encoding::Bc6h`]), in tag order:
+    /// those [`encode_texels`] and [`decode_texels`] take.
+    pub const PER_TEXEL: [Encoding; 3] = [Encoding::Rgb9e5, Encoding::Rgba16f, Encoding::Rgba32f];
+
+    /// Bytes one texel takes: 4, 8 or 16; for [`Encoding::Bc6h`] 1, the average over a face
+    /// whose side is a multiple of 4 (use [`Encoding::face_bytes`] for the exact size of a face).
     pub fn bytes_per_texel(self) -> usize {
         match self {
             Encoding::Rgb9e5 => 4,
             Encoding::Rgba16f => 8,
             Encoding::Rgba32f => 16,
+            Encoding::Bc6h => 1,
         }
     }
 
-    /// `"rgb9e5"`, `"rgba16f"` or `"rgba32f"`.
+    /// Whether texels are encoded in blocks of a face rather than one by one
+    /// ([`Encoding::Bc6h`]).
+    pub fn is_block_compressed(self) -> bool {
+        self == Encoding::Bc6h
+    }
+
+    /// Bytes of the encoded texels of one face of `resolution`² texels: `resolution² ×
+    /// bytes_per_texel`, or `⌈resolution / 4⌉² × 16` for BC6H. `None` on overflow.
+    pub fn face_bytes(self, resolution: u32) -> Option<usize> {
+        match self {
+            Encoding::Bc6h => crate::bc6h::face_bytes(resolution),
+            _ => (resolution as usize)
+                .checked_mul(resolution as usize)?
+                .checked_mul(self.bytes_per_texel()),
+        }
+    }
+
+    /// The oldest store format version that may hold this encoding: 4 for BC6H, 1 otherwise.
+    pub fn min_version(self) -> u32 {
+        match self {
+            Encoding::Bc6h => 4,
+            _ => 1,
+        }
+    }
+
+    /// `"rgb9e5"`, `"rgba16f"`, `"rgba32f"` or `"bc6h"`.
     pub fn name(self) -> &'static str {
         match self {
             Encoding::Rgb9e5 => "rgb9e5",
             Encoding::Rgba16f => "rgba16f",
             Encoding::Rgba32f => "rgba32f",
+            Encoding::Bc6h => "bc6h",
         }
     }
 
-    /// The on-disk tag: 0, 1 or 2.
+    /// The on-disk tag: 0, 1, 2 or 3.
     pub fn tag(self) -> u32 {
         match self {
             Encoding::Rgb9e5 => 0,
             Encoding::Rgba16f => 1,
             Encoding::Rgba32f => 2,
+            Encoding::Bc6h => 3,
         }
     }
 
@@ -74,6 +119,7 @@ impl Encoding {
             0 => Some(Encoding::Rgb9e5),
             1 => Some(Encoding::Rgba16f),
             2 => Some(Encoding::Rgba32f),
+            3 => Some(Encoding::Bc6h),
             _ => None,
         }
     }
@@ -82,7 +128,7 @@ impl Encoding {
     pub fn max_value(self) -> f32 {
         match self {
             Encoding::Rgb9e5 => MAX_RGB9E5,
-            Encoding::Rgba16f => MAX_F16,
+            Encoding::Rgba16f | Encoding::Bc6h => MAX_F16,
             Encoding::Rgba32f => f32::MAX,
         }
     }
@@ -102,6 +148,7 @@ impl std::str::FromStr for Encoding {
             "rgb9e5" => Ok(Encoding::Rgb9e5),
             "rgba16f" => Ok(Encoding::Rgba16f),
             "rgba32f" => Ok(Encoding::Rgba32f),
+            "bc6h" => Ok(Encoding::Bc6h),
             _ => Err(Error::UnknownEncoding(s.to_string())),
         }
     }
@@ -227,8 +274,12 @@ fn is_valid(rgb: [f32; 3]) -> bool {
 ///
 /// Returns how many texels had a channel above [`Encoding::max_value`] and were clamped.
 /// Fails with [`Error::InvalidTexel`] (naming the first bad texel) on NaN, infinite or
-/// negative radiance, and with [`Error::BufferSize`] on a wrong-sized `out`.
+/// negative radiance, with [`Error::BufferSize`] on a wrong-sized `out`, and with
+/// [`Error::WholeFaceEncoding`] for BC6H, which encodes whole faces ([`encode_face_texels`]).
 pub fn encode_texels(encoding: Encoding, src: &[[f32; 3]], out: &mut [u8]) -> Result<u64, Error> {
+    if encoding.is_block_compressed() {
+        return Err(Error::WholeFaceEncoding { encoding });
+    }
     let bpt = encoding.bytes_per_texel();
     let expected = src.len().checked_mul(bpt);
     if expected != Some(out.len()) {
@@ -260,17 +311,71 @@ pub fn encode_texels(encoding: Encoding, src: &[[f32; 3]], out: &mut [u8]) -> Re
                     d.copy_from_slice(&f.to_le_bytes());
                 }
             }
+            Encoding::Bc6h => return Err(Error::WholeFaceEncoding { encoding }),
         }
     }
     Ok(clamped)
+}
+
+/// Encodes one face (`src`: `resolution²` texels, row-major) into `out` (exactly
+/// [`Encoding::face_bytes`] bytes), in any encoding: BC6H through [`crate::bc6h::encode_face`],
+/// the others texel by texel as [`encode_texels`]. Returns the clamped texel count; the errors
+/// are [`encode_texels`]'s.
+pub fn encode_face_texels(
+    encoding: Encoding,
+    resolution: u32,
+    src: &[[f32; 3]],
+    out: &mut [u8],
+) -> Result<u64, Error> {
+    let texels = (resolution as usize).checked_mul(resolution as usize);
+    if texels != Some(src.len()) {
+        return Err(Error::BufferSize {
+            what: "face texels",
+            expected: texels.unwrap_or(usize::MAX) as u64,
+            actual: src.len() as u64,
+        });
+    }
+    match encoding {
+        Encoding::Bc6h => crate::bc6h::encode_face(src, resolution, out),
+        _ => encode_texels(encoding, src, out),
+    }
+}
+
+/// Decodes one face (`src`: exactly [`Encoding::face_bytes`] bytes) into `out`
+/// (`resolution²` texels, row-major), in any encoding. `cube` and `face` only name the face in
+/// errors: a BC6H block with a reserved mode is an [`Error::ReservedBc6hMode`]; the other
+/// encodings never fail on content.
+pub fn decode_face_texels(
+    encoding: Encoding,
+    resolution: u32,
+    src: &[u8],
+    out: &mut [[f32; 3]],
+    cube: u32,
+    face: usize,
+) -> Result<(), Error> {
+    let texels = (resolution as usize).checked_mul(resolution as usize);
+    if texels != Some(out.len()) {
+        return Err(Error::BufferSize {
+            what: "decoded face texels",
+            expected: texels.unwrap_or(usize::MAX) as u64,
+            actual: out.len() as u64,
+        });
+    }
+    match encoding {
+        Encoding::Bc6h => crate::bc6h::decode_face(src, resolution, out, cube, face),
+        _ => decode_texels(encoding, src, out),
+    }
 }
 
 /// Decodes `src` (exactly `out.len() * encoding.bytes_per_texel()` bytes) into `out`.
 ///
 /// Decoding never fails on content: every bit pattern decodes to some value (RGBA16F and
 /// RGBA32F patterns that are NaN or infinite decode as such; the store's writer never
-/// produces them).
+/// produces them). BC6H is an [`Error::WholeFaceEncoding`]: use [`decode_face_texels`].
 pub fn decode_texels(encoding: Encoding, src: &[u8], out: &mut [[f32; 3]]) -> Result<(), Error> {
+    if encoding.is_block_compressed() {
+        return Err(Error::WholeFaceEncoding { encoding });
+    }
     let bpt = encoding.bytes_per_texel();
     let expected = out.len().checked_mul(bpt);
     if expected != Some(src.len()) {
@@ -293,6 +398,7 @@ pub fn decode_texels(encoding: Encoding, src: &[u8], out: &mut [[f32; 3]]) -> Re
                 };
                 [f(0), f(1), f(2)]
             }
+            Encoding::Bc6h => return Err(Error::WholeFaceEncoding { encoding }),
         };
     }
     Ok(())
@@ -449,7 +555,7 @@ mod tests {
     #[test]
     fn encode_texels_counts_and_rejects() {
         let src = [[1.0, 2.0, 3.0], [7e4, 0.0, 0.0]];
-        for enc in Encoding::ALL {
+        for enc in Encoding::PER_TEXEL {
             let mut out = vec![0u8; src.len() * enc.bytes_per_texel()];
             let clamped = encode_texels(enc, &src, &mut out).unwrap();
             assert_eq!(clamped, if enc == Encoding::Rgba32f { 0 } else { 1 });
@@ -474,6 +580,16 @@ mod tests {
             assert_eq!(Encoding::from_tag(enc.tag()), Some(enc));
         }
         assert!("rgb10".parse::<Encoding>().is_err());
+        assert_eq!("BC6H".parse::<Encoding>().unwrap(), Encoding::Bc6h);
+        assert_eq!(Encoding::Bc6h.tag(), 3);
+        assert_eq!(Encoding::Bc6h.face_bytes(32), Some(1024));
+        assert_eq!(Encoding::Bc6h.face_bytes(5), Some(4 * 16));
+        assert_eq!(Encoding::Rgb9e5.face_bytes(5), Some(100));
+        let mut out = [0u8; 16];
+        assert!(matches!(
+            encode_texels(Encoding::Bc6h, &[[0.0; 3]; 16], &mut out),
+            Err(Error::WholeFaceEncoding { .. })
+        ));
         assert_eq!(Encoding::default(), Encoding::Rgb9e5);
     }
 }

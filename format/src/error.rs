@@ -248,8 +248,28 @@ pub enum Error {
     )]
     UnknownFilter { id: u32, offset: u64 },
     /// An unknown encoding name.
-    #[error("unknown encoding {0:?} (expected rgb9e5, rgba16f or rgba32f)")]
+    #[error("unknown encoding {0:?} (expected rgb9e5, rgba16f, rgba32f or bc6h)")]
     UnknownEncoding(String),
+    /// A BC6H block whose mode field (the low 5 bits of its first byte) is one of the four
+    /// reserved values: the face is damaged (a GPU would decode the block to black).
+    #[error("cube {cube}, face {face}, BC6H block {block} (byte {byte} of the face's texels): reserved mode {mode:#07b}", byte = block * 16)]
+    ReservedBc6hMode {
+        cube: u32,
+        face: usize,
+        block: usize,
+        mode: u8,
+    },
+    /// A block-compressed encoding (BC6H) passed to a per-texel encoder or decoder, which
+    /// cannot split a face into its 4×4 blocks.
+    #[error("{encoding} encodes whole faces in 4×4 blocks, not single texels (use encode_face_texels / decode_face_texels)")]
+    WholeFaceEncoding { encoding: crate::Encoding },
+    /// An encoding the store's format version cannot hold (BC6H needs version 4).
+    #[error("encoding {encoding} at header byte offset 16 needs format version {needs} or later, but the store is version {version}")]
+    EncodingVersion {
+        encoding: crate::Encoding,
+        version: u32,
+        needs: u32,
+    },
     /// A shard argument that is not `I/N` with `N ≥ 1` and `I < N`.
     #[error("invalid shard {0:?}: expected I/N with N at least 1 and I in 0..N (e.g. 0/4)")]
     InvalidShardSpec(String),

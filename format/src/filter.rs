@@ -63,7 +63,10 @@ impl Filter {
     /// bits: [`Filter::PredictPacked`] for RGB9E5 with at most 6 bits, where it is smaller
     /// and faster to read than filter 2, [`Filter::PredictRows`] otherwise (with 7 to 9 bits
     /// filter 3's code splits residuals across bytes and compresses worse: docs/measurements.md,
-    /// "Quantized RGB9E5").
+    /// "Quantized RGB9E5"). BC6H stores get [`Filter::PredictRows`] too: filters 1 to 3 leave
+    /// BC6H blocks as they are (regrouping their bytes into planes compressed worse: 1.004
+    /// against 0.973 bytes per texel on the example scene; crate docs, "BC6H") and predict the
+    /// distance plane.
     pub fn for_store(encoding: Encoding, mantissa_bits: u32) -> Self {
         if encoding == Encoding::Rgb9e5 && mantissa_bits <= 6 {
             Filter::PredictPacked
@@ -113,10 +116,12 @@ pub fn filtered_face_size(
 ) -> Option<usize> {
     let texels = (resolution as usize).checked_mul(resolution as usize)?;
     let color = match (filter, encoding) {
-        (Filter::PredictPacked, Encoding::Rgb9e5) => packed_planes(mantissa_bits),
-        _ => encoding.bytes_per_texel(),
+        (Filter::PredictPacked, Encoding::Rgb9e5) => {
+            texels.checked_mul(packed_planes(mantissa_bits))?
+        }
+        _ => encoding.face_bytes(resolution)?,
     };
-    texels.checked_mul(color + if distance { 4 } else { 0 })
+    color.checked_add(if distance { texels.checked_mul(4)? } else { 0 })
 }
 
 /// Checks the lengths of a filter's input `raw` (the raw face) and output `filtered`;
@@ -251,6 +256,8 @@ pub fn filter_face_quantized(
         (_, Encoding::Rgb9e5) => rgb9e5_forward(n, t, rc, oc),
         (_, Encoding::Rgba16f) => ints_forward::<2>(n, t, rc, oc),
         (_, Encoding::Rgba32f) => ints_forward::<4>(n, t, rc, oc),
+        // BC6H blocks are left as they are (byte planes of them compress worse).
+        (_, Encoding::Bc6h) => oc.copy_from_slice(rc),
     }
     if distance {
         distance_forward(n, t, rd, od);
@@ -325,6 +332,7 @@ pub fn unfilter_face_quantized(
         (_, Encoding::Rgb9e5) => rgb9e5_inverse(n, t, fc, oc),
         (_, Encoding::Rgba16f) => ints_inverse::<2>(n, t, fc, oc),
         (_, Encoding::Rgba32f) => ints_inverse::<4>(n, t, fc, oc),
+        (_, Encoding::Bc6h) => oc.copy_from_slice(fc),
     }
     if distance {
         distance_inverse(n, t, fd, od);
@@ -1248,8 +1256,7 @@ mod tests {
         for enc in Encoding::ALL {
             for res in [1u32, 2, 3, 5, 16] {
                 for distance in [false, true] {
-                    let len = (res * res) as usize
-                        * (enc.bytes_per_texel() + if distance { 4 } else { 0 });
+                    let len = filtered_face_size(Filter::None, enc, res, distance, 9).unwrap();
                     for kind in 0..3 {
                         let raw: Vec<u8> = (0..len)
                             .map(|i| match kind {

@@ -185,6 +185,13 @@ impl Header {
         let tag = le_u32(b, 16);
         let encoding = Encoding::from_tag(tag)
             .ok_or_else(|| invalid("encoding", 16, format!("unknown encoding tag {tag}")))?;
+        if version < encoding.min_version() {
+            return Err(Error::EncodingVersion {
+                encoding,
+                version,
+                needs: encoding.min_version(),
+            });
+        }
         let index_width = match le_u32(b, 20) {
             2 => IndexWidth::U16,
             4 => IndexWidth::U32,

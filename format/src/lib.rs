@@ -28,9 +28,9 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (3); readers also accept [`MIN_VERSION`] (1) and 2, see "Versions" |
+//! | 8      | `u32`     | version = [`VERSION`] (4); readers also accept [`MIN_VERSION`] (1) to 3, see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
-//! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F |
+//! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F, 3 BC6H (version 4 and later: in an older store 3 is [`Error::EncodingVersion`]) |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
 //! | 24     | `u32`     | cube face resolution `n` (1..=16384) |
 //! | 28     | `u32`     | sample-map resolution `m` per patch (1..=16384) |
@@ -48,12 +48,13 @@
 //! | 160    | `u64`     | checksum of the sample points section |
 //! | 168    | `u64`     | checksum of the sample maps section |
 //! | 176    | `u32`     | face filter: 0 none, 1 predict, 2 predict-rows, 3 predict-packed (see "Face filters"; writers use 3 for RGB9E5 with `mantissa_bits` ≤ 6, else 2); other ids are refused ([`Error::UnknownFilter`]) |
-//! | 180    | `u64`     | checksum of the decoded faces (version 3; see "Checksum of the decoded faces"): written by `finish()`, zero in a partial file. Versions 1 and 2: reserved, zero |
+//! | 180    | `u64`     | checksum of the decoded faces (version 3 and later; see "Checksum of the decoded faces"): written by `finish()`, zero in a partial file. Versions 1 and 2: reserved, zero |
 //! | 188    | 60 bytes  | reserved, zero |
 //! | 248    | `u64`     | checksum of header bytes 0..248 |
 //!
 //! A reader checks, in order: magic, version, header checksum, flags, tags, filter, reserved bytes
-//! (180..248 in versions 1 and 2, 188..248 from version 3);
+//! (180..248 in versions 1 and 2, 188..248 from version 3), that the encoding is allowed in the
+//! version;
 //! refuses files without the COMPLETE flag ([`Error::NotFinished`]); then the section layout
 //! against the real file size; then each section's checksum before parsing it. The header's
 //! encoding, resolutions, flags and counts must agree with the metadata.
@@ -63,7 +64,7 @@
 //! | bytes | content |
 //! |------:|---------|
 //! | 4, 4  | `u32` object_count, `u32` patch_count (equal to the header's) |
-//! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag, `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
+//! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag (as the header's; 3 only from version 4), `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
 //! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Versions 2 and 3: absent in version 1, whose stores read as 9 |
 //! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
 //! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count |
@@ -101,12 +102,13 @@
 //! | 0–7   | zero padding to a multiple of 8 |
 //!
 //! Each face is one independent zstd frame that decompresses to exactly the *filtered size*:
-//! the *raw size* `n² × bytes_per_texel (+ n² × 4 with the distance channel)`, except with
-//! filter 3 on RGB9E5, where it is `n² × ⌈(5 + 3k) / 8⌉ (+ n² × 4)` for the metadata's
-//! `mantissa_bits` k. The *raw face* is the `n²`
-//! encoded texels (row 0 first, column 0 first; see [`cube`] for the orientation), then, with
-//! the distance channel, `n²` `f32` distances to the first hit (`f32::MAX` where the ray
-//! escaped). With filter 0 the frame holds the raw face itself; with filter 1, 2 or 3 it holds the
+//! the *raw size* `T (+ n² × 4 with the distance channel)`, where the texel part `T` is `n² ×
+//! bytes_per_texel` (4, 8, 16) for RGB9E5, RGBA16F, RGBA32F and `⌈n/4⌉² × 16` for BC6H,
+//! except with filter 3 on RGB9E5, where it is `n² × ⌈(5 + 3k) / 8⌉ (+ n² × 4)` for the
+//! metadata's `mantissa_bits` k. The *raw face* is the `n²` encoded texels (row 0 first,
+//! column 0 first; see [`cube`] for the orientation) — for BC6H the `⌈n/4⌉²` 16-byte blocks,
+//! block row 0 first, each covering 4×4 texels (see "BC6H") — then, with the distance
+//! channel, `n²` `f32` distances to the first hit (`f32::MAX` where the ray escaped). With filter 0 the frame holds the raw face itself; with filter 1, 2 or 3 it holds the
 //! raw face transformed as "Face filters" describes, and readers undo the filter. The records make
 //! a partial file recoverable without its table of contents ([`StoreWriter::resume`]). Cube
 //! `sample_count`, if the environment flag is set, is an environment map captured at the
@@ -190,6 +192,10 @@
 //!   input; texels quantized to k bits (see "Quantized RGB9E5") leave residuals that are
 //!   multiples of `s`.
 //!
+//! **BC6H texels** (filters 1, 2 and 3): the blocks are left unchanged (the identity on the
+//! texel part); the distance plane is transformed as in filter 1. (Byte planes of the blocks,
+//! plane `j` = byte `j` of every block, compressed worse: see "BC6H".)
+//!
 //! Every row after the first depends only on the row above, so decoders reconstruct a row in
 //! vector registers without a texel-to-texel dependency; filter 1's left neighbour chains
 //! the texels of a row. Filter 1 ignores `mantissa_bits`.
@@ -227,8 +233,9 @@
 //! ## Encodings and measured accuracy
 //!
 //! See [`encoding`] for the bit layouts. Radiance must be finite and non-negative; values above
-//! the largest finite value (RGB9E5 65408, RGBA16F 65504) are clamped to it and counted in
-//! [`EncodeStats::clamped_texels`]. RGBA32F is exact. Measured by `tests/accuracy.rs` over
+//! the largest finite value (RGB9E5 65408, RGBA16F and BC6H 65504) are clamped to it and
+//! counted in [`EncodeStats::clamped_texels`]. RGBA32F is exact. BC6H's error depends on the
+//! texels sharing a block, not on single values: see "BC6H". Measured by `tests/accuracy.rs` over
 //! 20 001 log-spaced values in 1e-4..6e4 times the colour ratios (1,1,1), (1,0.5,0.25),
 //! (1,1e-3,0), (0.2,1,0.7), (0.01,0.1,1) (100 005 texels):
 //!
@@ -236,6 +243,38 @@
 //! |----------|-------------------------------|------------------|--------------------|
 //! | RGB9E5   | 1.935e-3 / 7.04e-4 (bound 2⁻⁹ = 1.953e-3) | 1.940e-3 (bound 2⁻⁹) | 1.0 / 5.6e-2 (channels far below the largest share its exponent and lose precision, down to 0) |
 //! | RGBA16F  | 4.84e-4 / 1.76e-4 | 4.84e-4 | 4.88e-4 / 1.76e-4 for channels ≥ 6.1e-5 (bound 2⁻¹¹ = 4.883e-4; below, absolute error ≤ 2⁻²⁵) |
+//!
+//! ## BC6H
+//!
+//! Encoding 3 stores each face as unsigned BC6H blocks (`BC6H_UF16`: Vulkan
+//! `BC6H_UFLOAT_BLOCK`, wgpu `Bc6hRgbUfloat`), 16 bytes per 4×4 texels, so a GPU with BC
+//! texture compression can sample the blocks as they are. A face whose side `n` is not a
+//! multiple of 4 is padded to `4⌈n/4⌉` by edge replication before encoding (texel `(x, y)`
+//! beyond the face takes texel `(min(x, n−1), min(y, n−1))`); decoders crop the padding. The
+//! values a reader returns are the BC6H specification's (D3D11 functional specification,
+//! Khronos Data Format Specification "BC6H"): the binary16 bit patterns its unsigned decoder
+//! produces, converted exactly to `f32` (at most 65504; never infinite, NaN or negative).
+//! Radiance above 65504 is clamped to it and counted, as for RGBA16F. A block whose 5-bit mode
+//! field is reserved (`0b10011`, `0b10111`, `0b11011`, `0b11111`) is invalid in a store:
+//! [`Store::read_face_raw`] and [`Store::read_face`] return [`Error::ReservedBc6hMode`] naming
+//! the cube, face and block. `mantissa_bits` is 9. See [`bc6h`] for the encoder and decoder.
+//!
+//! The writer's encoder is the `block_compression` crate's port of Intel's ISPC BC6H encoder
+//! at [`bc6h::Quality::DEFAULT`] (`basic`). Measured on the example scene (`cargo run
+//! --release -p oslf-format --example bc6h_quality -- STORE [N]` on RGBA32F bakes of the
+//! quick preset, 489 cubes of 32², and of the same scene at 128², 16 cubes; one thread of a
+//! 2-core machine, timings ±50 % with its load), for very-fast / fast / basic / slow /
+//! very-slow: encode time per cube 32² 0.38 / 3.99 / 9.79 / 39.3 / 79.7 ms, 128² 5.86 / 66.2
+//! / 153 / 671 / 1371 ms; RMSLE against the exact texels 32² 2.39e-2 / 1.98e-2 / 1.91e-2 /
+//! 1.87e-2 / 1.86e-2, 128² 1.60e-2 / 1.48e-2 / 1.44e-2 / 1.42e-2 / 1.40e-2 (RGB9E5: 2.5e-4).
+//! `basic` is within 3 % of `very-slow`'s error at a tenth of its time. These
+//! 4-samples-per-texel cube maps are dominated by Monte Carlo noise, which a 4×4 block with
+//! two endpoints and 8 or 16 interpolation steps cannot follow: the mean per-texel error of
+//! any channel relative to the texel's largest is 11 % (32²) and 10 % (128²), the largest
+//! about 3. On smooth radiance (neighbouring texels within about 3 %) it is below 2.5 %
+//! (`tests/bc6h.rs`). Bytes per texel on disk, zstd level 3, the blocks alone: 32² 0.968,
+//! 128² 0.922 (regrouped as 16 byte planes, one per byte of a block: 1.002 and 0.935, so the
+//! filters leave the blocks alone), against RGB9E5's 3.443 and 3.121.
 //!
 //! ## Quantized RGB9E5
 //!
@@ -251,7 +290,7 @@
 //! ## Checksum of the decoded faces
 //!
 //! The frame checksums cover the compressed bytes, which decode differently under another
-//! face filter id or `mantissa_bits`. Header bytes 180..188 (version 3) hold the xxh3-64 of
+//! face filter id or `mantissa_bits`. Header bytes 180..188 (version 3 and later) hold the xxh3-64 of
 //! the concatenation of the xxh3-64 checksums (`u64`, 8 bytes each) of every *raw face* (the
 //! decompressed, unfiltered face: encoded texels, then the distance plane), cube-major, faces
 //! in layer order: `cube_count × 6 × 8` bytes hashed, nothing for a store without cubes.
@@ -269,13 +308,15 @@
 //! ## Versions
 //!
 //! Version 2 added `mantissa_bits` to the metadata (4 bytes after the scene hash); version 3
-//! the checksum of the decoded faces (header bytes 180..188, reserved zero before). Readers
-//! accept versions [`MIN_VERSION`] (1) to [`VERSION`] (3) and refuse others
-//! ([`Error::UnsupportedVersion`]); a version-1 metadata section has no `mantissa_bits` and
-//! reads as 9; versions 1 and 2 have no checksum of the decoded faces, so [`Store::verify`]
-//! checks their frames but not what they decode to. Every other byte of the layout is the
-//! same in all versions. Writers write version 3; [`StoreWriter::resume`] continues partial
-//! files of versions 2 and 3 (finishing them as version 3).
+//! the checksum of the decoded faces (header bytes 180..188, reserved zero before); version 4
+//! the BC6H encoding (tag 3, refused in older stores with [`Error::EncodingVersion`] from the
+//! header, [`Error::InvalidMetadata`] from the metadata). Readers accept versions
+//! [`MIN_VERSION`] (1) to [`VERSION`] (4) and refuse others ([`Error::UnsupportedVersion`]); a
+//! version-1 metadata section has no `mantissa_bits` and reads as 9; versions 1 and 2 have no
+//! checksum of the decoded faces, so [`Store::verify`] checks their frames but not what they
+//! decode to. Every other byte of the layout is the same in all versions: a version-3 store is
+//! a version-4 store that holds no BC6H. Writers write version 4; [`StoreWriter::resume`]
+//! continues partial files of versions 2 to 4 (finishing them as version 4).
 //!
 //! ## Shards
 //!
@@ -301,6 +342,7 @@
 //! syncs, renames over the target and syncs the directory: a crash leaves either no store or a
 //! complete one under the final name.
 
+pub mod bc6h;
 pub(crate) mod bytes;
 pub mod cube;
 pub mod encoding;
@@ -328,7 +370,7 @@ pub use writer::{StoreSummary, StoreWriter};
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
 /// metadata, read as 9).
 pub const MIN_VERSION: u32 = 1;

@@ -244,6 +244,15 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
     let tag = r.u32()?;
     let encoding =
         Encoding::from_tag(tag).ok_or_else(|| bad(at, format!("unknown encoding tag {tag}")))?;
+    if version < encoding.min_version() {
+        return Err(bad(
+            at,
+            format!(
+                "encoding {encoding} needs format version {} or later (the store is version {version})",
+                encoding.min_version()
+            ),
+        ));
+    }
     let distance_channel = r.bool("distance_channel")?;
     let at = r.offset();
     let zstd_level = r.i32()?;

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::bytes::align8;
 use crate::cube::{face_raw_size, CubeImage, FACES};
-use crate::encoding::{decode_distances, decode_texels};
+use crate::encoding::{decode_distances, decode_face_texels};
 use crate::error::io_at;
 use crate::filter::{unfilter_face_quantized, Filter};
 use crate::header::{Header, Section, HEADER_BYTES};
@@ -509,7 +509,8 @@ impl Store {
         ))
     }
 
-    /// Bytes of one face's raw data: `res² * bytes_per_texel`, plus `res² * 4` with the
+    /// Bytes of one face's raw data: the encoded texels ([`crate::Encoding::face_bytes`]:
+    /// `res² * bytes_per_texel`, or `⌈res/4⌉² * 16` for BC6H), plus `res² * 4` with the
     /// distance channel.
     pub fn face_raw_size(&self) -> usize {
         self.face_raw_size
@@ -535,8 +536,24 @@ impl Store {
 
     /// Decompresses one face into `out` (exactly [`Store::face_raw_size`] bytes): the encoded
     /// texels, then the distance plane if any, exactly as a GPU upload wants. Verifies the
-    /// frame's checksum first.
+    /// frame's checksum first; in a BC6H store, also that no block has a reserved mode
+    /// ([`Error::ReservedBc6hMode`]), so the blocks are safe to upload as they are.
     pub fn read_face_raw(&self, cube: u32, face: usize, out: &mut [u8]) -> Result<(), Error> {
+        self.read_face_raw_unchecked(cube, face, out)?;
+        if self.header.encoding.is_block_compressed() {
+            let color = self
+                .header
+                .encoding
+                .face_bytes(self.header.cube_resolution)
+                .unwrap_or(0)
+                .min(out.len());
+            crate::bc6h::check_blocks(&out[..color], cube, face)?;
+        }
+        Ok(())
+    }
+
+    /// [`Store::read_face_raw`] without the BC6H mode check.
+    fn read_face_raw_unchecked(&self, cube: u32, face: usize, out: &mut [u8]) -> Result<(), Error> {
         let e = self.face_entry(cube, face)?;
         if out.len() != self.face_raw_size {
             return Err(Error::BufferSize {
@@ -635,11 +652,11 @@ impl Store {
             return Err(Error::NoDistanceChannel);
         }
         let mut raw = vec![0u8; self.face_raw_size];
-        self.read_face_raw(cube, face, &mut raw)?;
-        let texels = (self.header.cube_resolution as usize).pow(2);
-        let color_bytes = texels * self.header.encoding.bytes_per_texel();
+        self.read_face_raw_unchecked(cube, face, &mut raw)?;
+        let (enc, res) = (self.header.encoding, self.header.cube_resolution);
+        let color_bytes = enc.face_bytes(res).unwrap_or(usize::MAX);
         let (color, dist) = raw.split_at(color_bytes.min(raw.len()));
-        decode_texels(self.header.encoding, color, rgb)?;
+        decode_face_texels(enc, res, color, rgb, cube, face)?;
         if let Some(d) = distance {
             decode_distances(dist, d)?;
         }

@@ -339,8 +339,10 @@ impl StoreWriter {
     /// no finished cube maps, so create the store again; [`Error::ResumeMismatch`] if it was
     /// started with different settings (naming each bake parameter, count or object that
     /// differs, the partial's value and this bake's), is damaged, or is not a partial store of
-    /// format version 2 or [`VERSION`] (version 2 partial files are continued as version 3:
-    /// the layouts differ only in the header's decoded-faces checksum, which `finish()` writes).
+    /// format version 2 to [`VERSION`] (older partial files are continued as the current
+    /// version: version 2's layout differs only in the header's decoded-faces checksum, which
+    /// `finish()` writes; version 3's only in the version number, version 4 adding the BC6H
+    /// encoding).
     pub fn resume(
         path: &Path,
         meta: &StoreMeta,
@@ -950,7 +952,7 @@ fn restore_partial(
 }
 
 /// Parses the header of a partial file for [`StoreWriter::resume`]: an OSLF header of a
-/// resumable version (2 or [`VERSION`]) whose fixed sections lie in the order and at the
+/// resumable version (2 to [`VERSION`]) whose fixed sections lie in the order and at the
 /// places `create()` puts them. The error says what is wrong with it.
 fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
     if bytes[..8] != MAGIC {

@@ -527,7 +527,7 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     let mut b = good.clone();
     b[8..12].copy_from_slice(&7u32.to_le_bytes());
     assert!(refused(&b)
-        .starts_with("it is format version 7, and this writer continues only versions 2 to 3"));
+        .starts_with("it is format version 7, and this writer continues only versions 2 to 4"));
     let mut b = good.clone();
     b[30] ^= 1;
     assert!(refused(&b).starts_with("its header is damaged: header checksum mismatch"));
@@ -537,7 +537,8 @@ fn a_damaged_partial_is_refused_with_a_reason() {
 }
 
 /// A partial file written by the version-2 writer (the same layout, without the checksum of
-/// the decoded faces) is continued and finished as version 3, byte-identical to a fresh bake.
+/// the decoded faces) is continued and finished as the current version (4), byte-identical to
+/// a fresh bake.
 #[test]
 fn a_version_2_partial_is_finished_as_version_3() {
     let f = fixture(spec());

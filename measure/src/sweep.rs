@@ -32,7 +32,8 @@ pub const BAKE_KEYS: [&str; 7] = [
 ];
 
 /// Runtime settings the sweep can vary. `blend` takes `distance`, `angle`, `avg`, `rN`
-/// (B^r with power N), `nN` (B^n) or `envmap` (the environment-map baseline).
+/// (B^r with power N), `nN` (B^n), `envmap` (the environment-map baseline) or `parallax` (that
+/// map parallax-corrected).
 pub const RUNTIME_KEYS: [&str; 4] = ["phi_shader", "blend", "m", "order"];
 
 /// One setting changed from the defaults: `key = value`.
@@ -175,6 +176,7 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
                 "angle" => p.blend = Blend::Angle,
                 "avg" => p.blend = Blend::Average,
                 "envmap" => p.source = Source::EnvMap,
+                "parallax" => p.source = Source::Parallax,
                 _ if v.len() > 1 && (v.starts_with('r') || v.starts_with('n')) => {
                     p.blend = if v.starts_with('r') {
                         Blend::Reflection
@@ -186,7 +188,7 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
                     })?;
                 }
                 _ => {
-                    return check(c, false, "{distance, angle, avg, rN, nN, envmap}");
+                    return check(c, false, "{distance, angle, avg, rN, nN, envmap, parallax}");
                 }
             }
         }
@@ -202,8 +204,10 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
 
 /// A short name of a blend setting, as `--vary blend=` takes it.
 pub fn blend_label(p: &ShadingParams) -> String {
-    if p.source == Source::EnvMap {
-        return "envmap".into();
+    match p.source {
+        Source::EnvMap => return "envmap".into(),
+        Source::Parallax => return "parallax".into(),
+        Source::Oslf => {}
     }
     match p.blend {
         Blend::Distance => "distance".into(),

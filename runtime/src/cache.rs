@@ -26,8 +26,8 @@ use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
 use std::time::Instant;
 
-use oslf_format::Store;
 use crate::face::FaceLayout;
+use oslf_format::Store;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -433,12 +433,7 @@ impl CubeCache {
             let decoded: Vec<_> = to_decode
                 .par_iter()
                 .map(|&(cube, face, slot)| {
-                    (
-                        cube,
-                        face,
-                        slot,
-                        decode_face(store, cube, face, &layout),
-                    )
+                    (cube, face, slot, decode_face(store, cube, face, &layout))
                 })
                 .collect();
             stats.decode_seconds += start.elapsed().as_secs_f64();
@@ -573,7 +568,7 @@ impl CubeCache {
 /// Bytes of one cube map in the GPU pool: six faces of texels in the store's encoding with their
 /// mip levels, and the distance planes when the store has them ([`FaceLayout`]).
 pub fn cube_bytes(store: &Store) -> u64 {
-    6 * FaceLayout::new(store, store.header().encoding).payload_bytes() as u64
+    6 * FaceLayout::for_store(store, false).payload_bytes() as u64
 }
 
 /// The GPU slots `--cache-mb MB` buys: whole cube maps of [`cube_bytes`], at least one.

@@ -49,6 +49,16 @@ impl FaceLayout {
         }
     }
 
+    /// The layout the GPU pool uses for `store` on an adapter with (`adapter_has_bc`) or
+    /// without BC texture compression: the store's encoding where the pool can hold it
+    /// ([`crate::pool::upload_encoding`]).
+    pub fn for_store(store: &Store, adapter_has_bc: bool) -> Self {
+        Self::new(
+            store,
+            crate::pool::upload_encoding(store.header().encoding, adapter_has_bc),
+        )
+    }
+
     /// The side of level `l`.
     pub fn side(&self, l: u32) -> u32 {
         (self.res >> l).max(1)
@@ -71,7 +81,12 @@ impl FaceLayout {
 
     /// Bytes of the whole payload.
     pub fn payload_bytes(&self) -> usize {
-        self.depth_offset() + if self.depth { (self.res as usize).pow(2) * 2 } else { 0 }
+        self.depth_offset()
+            + if self.depth {
+                (self.res as usize).pow(2) * 2
+            } else {
+                0
+            }
     }
 
     /// Reads face `face` of cube `cube` from `store` and builds its payload. Level 0 is the
@@ -116,10 +131,18 @@ impl FaceLayout {
     }
 
     /// Decodes level `l` of `payload` to linear RGB.
-    pub fn decode_level(&self, payload: &[u8], l: u32) -> Result<Vec<[f32; 3]>, oslf_format::Error> {
+    pub fn decode_level(
+        &self,
+        payload: &[u8],
+        l: u32,
+    ) -> Result<Vec<[f32; 3]>, oslf_format::Error> {
         let at = self.level_offset(l);
         let mut rgb = vec![[0.0f32; 3]; (self.side(l) as usize).pow(2)];
-        decode_texels(self.encoding, &payload[at..at + self.level_bytes(l)], &mut rgb)?;
+        decode_texels(
+            self.encoding,
+            &payload[at..at + self.level_bytes(l)],
+            &mut rgb,
+        )?;
         Ok(rgb)
     }
 
@@ -150,7 +173,8 @@ pub fn downsample(src: &[[f32; 3]], side: u32) -> Vec<[f32; 3]> {
     let mut out = vec![[0.0f32; 3]; h * h];
     for y in 0..h {
         for x in 0..h {
-            let at = |dx: usize, dy: usize| src[(2 * y + dy).min(s - 1) * s + (2 * x + dx).min(s - 1)];
+            let at =
+                |dx: usize, dy: usize| src[(2 * y + dy).min(s - 1) * s + (2 * x + dx).min(s - 1)];
             let (a, b, c, d) = (at(0, 0), at(1, 0), at(0, 1), at(1, 1));
             out[y * h + x] = std::array::from_fn(|k| ((a[k] + b[k]) + (c[k] + d[k])) * 0.25);
         }

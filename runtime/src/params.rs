@@ -498,7 +498,11 @@ impl ShadeUniform {
             } else {
                 1
             },
-            depth_steps: if p.depth && k.has_depth { DEPTH_STEPS } else { 0 },
+            depth_steps: if p.depth && k.has_depth {
+                DEPTH_STEPS
+            } else {
+                0
+            },
             depth_thickness: DEPTH_THICKNESS_TEXELS * std::f32::consts::FRAC_PI_2
                 / k.cube_res.max(1) as f32,
             probe_pos: [0.0; 4],

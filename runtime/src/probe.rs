@@ -90,7 +90,10 @@ mod tests {
     fn rays_from_the_centre_keep_their_direction_and_offset_rays_bend() {
         let (lo, hi) = (Vec3::splat(-2.0), Vec3::splat(2.0));
         let d = Vec3::new(1.0, 0.0, 0.0);
-        assert_eq!(parallax_dir(Vec3::ZERO, d, Vec3::ZERO, lo, hi), Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(
+            parallax_dir(Vec3::ZERO, d, Vec3::ZERO, lo, hi),
+            Vec3::new(2.0, 0.0, 0.0)
+        );
         // From (0, 1, 0) along +x the wall x = 2 is met at (2, 1, 0): seen from the centre at 26.6°.
         let p = parallax_dir(Vec3::Y, d, Vec3::ZERO, lo, hi);
         assert_eq!(p, Vec3::new(2.0, 1.0, 0.0));

@@ -440,7 +440,14 @@ impl<C: CubeTexels> Shader<'_, C> {
 
     /// Blended radiance towards `dir` for the ray from `x` at mip level `lod`, each candidate
     /// depth-corrected when the uniform asks (as `blend_read`).
-    fn blend_read(&self, c: &Candidates, w: [f32; 4], x: Vec3, dir: Vec3, lod: f32) -> Option<Vec3> {
+    fn blend_read(
+        &self,
+        c: &Candidates,
+        w: [f32; 4],
+        x: Vec3,
+        dir: Vec3,
+        lod: f32,
+    ) -> Option<Vec3> {
         let (mut acc, mut wsum, mut hidden, mut hsum) = (Vec3::ZERO, 0.0, Vec3::ZERO, 0.0);
         for j in 0..4 {
             if w[j] > 0.0 {
@@ -506,7 +513,36 @@ impl<C: CubeTexels> Shader<'_, C> {
         best
     }
 
+    /// The mean, weighted by ⟨n, s_j⟩, over the candidates in front of `x` that see it (as
+    /// `recon_visible`).
+    fn recon_visible(&self, c: &Candidates, x: Vec3, n: Vec3) -> Option<Vec3> {
+        let (mut acc, mut count) = (Vec3::ZERO, 0.0f32);
+        for j in 0..4 {
+            let i = c.idx[j];
+            let cos_j = n.dot(c.s[j]);
+            if i == INVALID_INDEX || cos_j <= 0.0 {
+                continue;
+            }
+            let d = x - self.samples[i as usize];
+            let mut missing = false;
+            let seen = self.depth_toward(i, d, &mut missing);
+            if missing || d.length() > seen * (1.0 + self.uniform.depth_thickness) {
+                continue;
+            }
+            if let Some(l) = self.lookup(i, d) {
+                acc += l * cos_j;
+                count += cos_j;
+            }
+        }
+        (count > 0.0).then(|| acc / count)
+    }
+
     fn recon(&self, c: &Candidates, x: Vec3, n: Vec3) -> Vec3 {
+        if self.uniform.depth_steps > 0 {
+            if let Some(m) = self.recon_visible(c, x, n) {
+                return m;
+            }
+        }
         let ideal = self.recon_choice(c, n, false);
         if ideal == 4 {
             return Vec3::ZERO;
@@ -610,11 +646,22 @@ impl<C: CubeTexels> Shader<'_, C> {
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
     /// `cube` = INVALID, the blend), as `sample_radiance`. `None` when a face was not available.
-    fn sample_radiance(&self, c: &Candidates, cube: u32, wn: [f32; 4], x: Vec3, s: &AsSample) -> Option<Vec3> {
+    fn sample_radiance(
+        &self,
+        c: &Candidates,
+        cube: u32,
+        wn: [f32; 4],
+        x: Vec3,
+        s: &AsSample,
+    ) -> Option<Vec3> {
         let u = &self.uniform;
         let lod = self.sample_lod(s.l, s.lpdf);
         if u.order == 1 && cube == INVALID_INDEX {
-            let w = if u.blend != 4 { self.blend_weights(c, s.l) } else { wn };
+            let w = if u.blend != 4 {
+                self.blend_weights(c, s.l)
+            } else {
+                wn
+            };
             return Some(
                 self.blend_read(c, w, x, s.l, lod)
                     .unwrap_or_else(|| self.env_read(x, s.l, lod)),
@@ -681,7 +728,16 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn glossy(&self, c: &Candidates, pixel: u32, x: Vec3, n: Vec3, t: Vec3, v: Vec3, r: Vec3) -> Vec3 {
+    fn glossy(
+        &self,
+        c: &Candidates,
+        pixel: u32,
+        x: Vec3,
+        n: Vec3,
+        t: Vec3,
+        v: Vec3,
+        r: Vec3,
+    ) -> Vec3 {
         let u = &self.uniform;
         let b = n.cross(t);
         let nv = n.dot(v);
@@ -692,7 +748,9 @@ impl<C: CubeTexels> Shader<'_, C> {
             return self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0;
         }
         if u.order == 1 {
-            return self.integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv).0;
+            return self
+                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv)
+                .0;
         }
         let axis = if u.blend == 4 { n } else { r };
         let w = self.blend_weights(c, axis);
@@ -816,7 +874,7 @@ impl StoreCubes {
     /// Decodes every cube of `store` (in parallel) as the renderer uploads them. Errors name
     /// the cube.
     pub fn decode(store: &oslf_format::Store) -> crate::Result<Self> {
-        Self::decode_as(store, FaceLayout::new(store, store.header().encoding))
+        Self::decode_as(store, FaceLayout::for_store(store, false))
     }
 
     /// Decodes every cube of `store` built as `layout` says. Errors name the cube.

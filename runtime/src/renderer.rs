@@ -13,6 +13,7 @@ use oslf_geometry::Camera;
 use crate::buffers::{upload_sample_maps, StoreBuffers};
 use crate::cache::{CacheConfig, CacheStats, CubeCache};
 use crate::error::{Result, RuntimeError};
+use crate::face::FaceLayout;
 use crate::geometry::ObjectMesh;
 use crate::gpu::Gpu;
 use crate::params::{Background, ShadeUniform, ShadingParams, Source, StoreConstants};
@@ -20,7 +21,6 @@ use crate::pipelines::{
     GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines, DEPTH_FORMAT, GBUFFER_FORMAT,
     OUTPUT_FORMAT, WORKGROUP,
 };
-use crate::face::FaceLayout;
 use crate::pool::{CubePool, PoolLayout};
 use crate::reference::GTexel;
 
@@ -253,7 +253,7 @@ impl Renderer {
         let limits = gpu.limits();
         check_textures_fit(&limits, &store)?;
         let cube_count = store.cube_count();
-        let face = FaceLayout::new(&store, store.header().encoding);
+        let face = FaceLayout::for_store(&store, false);
         let layout = PoolLayout::plan(&limits, face, cube_count, &config)?;
         let mesh = ObjectMesh::from_store(&store, store.meta().bake.epsilon / 20.0);
         let cache = open_cache(&store, &layout, &config);
@@ -272,7 +272,9 @@ impl Renderer {
             mip_levels: face.levels,
             has_depth: face.depth,
             origin: mesh.origin.to_array(),
-            fitted_box: crate::probe::fit_proxy_box(&store, mesh.origin)?,
+            // A damaged environment cube leaves no fitted box; the cache reports the damage
+            // when it loads the cube (below), and parallax then asks for a given box.
+            fitted_box: crate::probe::fit_proxy_box(&store, mesh.origin).unwrap_or(None),
         };
         let mut renderer = Self {
             gpu,
@@ -440,7 +442,7 @@ impl Renderer {
         if params.source == Source::Parallax && self.proxy_box(params).is_none() {
             return Err(RuntimeError::Parameter(
                 "source parallax needs a proxy box: this store has no environment cube with a \
-                 distance channel to fit one to (give the box, e.g. --proxy-box)"
+                 readable distance channel to fit one to (give the box, e.g. --proxy-box)"
                     .into(),
             ));
         }

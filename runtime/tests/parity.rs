@@ -158,7 +158,10 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
 #[test]
 fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
     let store = open_store();
-    assert!(store.header().has_distance(), "the test store bakes distances");
+    assert!(
+        store.header().has_distance(),
+        "the test store bakes distances"
+    );
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
     let base = ShadingParams {
@@ -179,7 +182,12 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         compare(&depth, &plain, 1e-3).1 < 0.95,
         "depth correction changes nothing"
     );
-    for blend in [Blend::Distance, Blend::Angle, Blend::Average, Blend::Reflection] {
+    for blend in [
+        Blend::Distance,
+        Blend::Angle,
+        Blend::Average,
+        Blend::Reflection,
+    ] {
         check(
             &mut r,
             &cubes,
@@ -249,10 +257,34 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         "filtering changes nothing"
     );
     for (filter, order, depth, source, label) in [
-        (GlossyFilter::Mip, Order::PerDirection, true, Source::Oslf, "glossy mip per direction depth"),
-        (GlossyFilter::Point, Order::PerPoint, false, Source::Oslf, "glossy point plain"),
-        (GlossyFilter::Mip, Order::PerPoint, true, Source::EnvMap, "glossy mip envmap"),
-        (GlossyFilter::Mip, Order::PerPoint, true, Source::Parallax, "glossy mip parallax"),
+        (
+            GlossyFilter::Mip,
+            Order::PerDirection,
+            true,
+            Source::Oslf,
+            "glossy mip per direction depth",
+        ),
+        (
+            GlossyFilter::Point,
+            Order::PerPoint,
+            false,
+            Source::Oslf,
+            "glossy point plain",
+        ),
+        (
+            GlossyFilter::Mip,
+            Order::PerPoint,
+            true,
+            Source::EnvMap,
+            "glossy mip envmap",
+        ),
+        (
+            GlossyFilter::Mip,
+            Order::PerPoint,
+            true,
+            Source::Parallax,
+            "glossy mip parallax",
+        ),
     ] {
         check(&mut r, &cubes, glossy(filter, order, depth, source), label);
     }

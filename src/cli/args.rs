@@ -36,7 +36,7 @@ pub struct ShadingArgs {
     pub glossy_filter: GlossyFilter,
     /// The proxy box of `--source parallax`, world space: xmin,ymin,zmin,xmax,ymax,zmax
     /// [default: fitted to the environment cube's distances].
-    #[arg(long, value_parser = parse_box)]
+    #[arg(long, value_parser = parse_box, allow_hyphen_values = true)]
     pub proxy_box: Option<[[f32; 3]; 2]>,
     /// φ_shader in degrees (§6.3).
     #[arg(long, default_value_t = 65.0)]

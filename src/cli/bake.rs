@@ -32,6 +32,10 @@ pub struct Args {
     /// Apply the scene's `[presets.NAME]` over its `[bake]` settings.
     #[arg(short, long)]
     preset: Option<String>,
+    /// Store the cube maps in this encoding instead of the scene's `encoding` (after the
+    /// preset): rgb9e5, rgba16f, rgba32f or bc6h.
+    #[arg(long, value_parser = parse_encoding)]
+    encoding: Option<oslf_format::Encoding>,
     /// Continue an interrupted bake from `<output>.partial`, keeping its finished cube maps.
     #[arg(long)]
     resume: bool,
@@ -61,6 +65,10 @@ pub struct Args {
     quiet: bool,
 }
 
+fn parse_encoding(s: &str) -> Result<oslf_format::Encoding, String> {
+    s.parse().map_err(|e: oslf_format::Error| e.to_string())
+}
+
 fn parse_shard(s: &str) -> Result<ShardSpec, String> {
     s.parse().map_err(|e: oslf_format::Error| e.to_string())
 }
@@ -70,7 +78,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn run_in_pool(args: Args) -> anyhow::Result<()> {
-    let scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    let mut scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    scene
+        .warnings
+        .iter()
+        .for_each(|w| eprintln!("warning: {w}"));
+    if let Some(encoding) = args.encoding {
+        if oslf_format::meta::check_mantissa_bits(encoding, scene.bake.mantissa_bits).is_err() {
+            bail!(
+                "--encoding {encoding}: the scene sets mantissa_bits = {}, which applies to rgb9e5 only (remove it from the scene or preset, or bake with --encoding rgb9e5)",
+                scene.bake.mantissa_bits
+            );
+        }
+        scene.bake.encoding = encoding;
+    }
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default();
         let store = PathBuf::from(stem).with_extension("oslf");

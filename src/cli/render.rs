@@ -14,7 +14,7 @@ use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
     Blend, CacheConfig, CacheStats, Frame, FrameBytes, Gpu, Granularity, Mode, RenderOptions,
-    Renderer,
+    Renderer, ShadingParams, Source,
 };
 
 use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
@@ -118,7 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let frame = renderer.render(&camera, &params, &options)?;
     let render_seconds = t.elapsed().as_secs_f64();
-    let degraded = fallback_report(&renderer, &frame);
+    let degraded = fallback_report(&renderer, &frame, &params);
     if args.strict && !degraded.is_empty() {
         bail!(
             "the image would be degraded (--strict; nothing written):\n  {}",
@@ -230,30 +230,38 @@ fn check_frame_memory(args: &Args, store: &Store, gpu: &Gpu) -> anyhow::Result<(
 }
 
 /// What the frame fell back on, and why, one line each; empty when the image is exact.
-fn fallback_report(renderer: &Renderer, frame: &Frame) -> Vec<String> {
+fn fallback_report(renderer: &Renderer, frame: &Frame, params: &ShadingParams) -> Vec<String> {
     let store = renderer.store();
     let env = store.env_cube_index();
-    let mut lines: Vec<String> = renderer
-        .cache()
-        .errors
-        .iter()
-        .map(|e| {
-            if Some(e.cube) == env {
-                format!(
-                    "the environment cube (cube {}) face {} cannot be decoded: {}; the \
+    let reflects = !matches!(params.mode, Mode::Recon);
+    let mut lines: Vec<String> = Vec::new();
+    if params.depth && !store.header().has_distance() && params.source == Source::Oslf {
+        lines.push(format!(
+            "the store has no distance channel, so {} are not depth-corrected: plain lookups as \
+             the thesis did (rebake with distance_channel = true, or pass --no-depth)",
+            if reflects {
+                "reflections and reconstruction"
+            } else {
+                "reconstruction lookups"
+            }
+        ));
+    }
+    lines.extend(renderer.cache().errors.iter().map(|e| {
+        if Some(e.cube) == env {
+            format!(
+                "the environment cube (cube {}) face {} cannot be decoded: {}; the \
                      background, the environment-map baseline and every reflection that falls \
                      back to it show black there",
-                    e.cube, e.face, e.message
-                )
-            } else {
-                format!(
-                    "cube {} (sample point {}) face {} cannot be decoded: {}; that sample point \
+                e.cube, e.face, e.message
+            )
+        } else {
+            format!(
+                "cube {} (sample point {}) face {} cannot be decoded: {}; that sample point \
                      is left out of its blends",
-                    e.cube, e.cube, e.face, e.message
-                )
-            }
-        })
-        .collect();
+                e.cube, e.cube, e.face, e.message
+            )
+        }
+    }));
     if frame.fallbacks > 0 {
         let unit = match renderer.cache().granularity() {
             Granularity::Cube => "cube maps",

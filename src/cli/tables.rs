@@ -12,7 +12,9 @@ use oslf_format::Store;
 use oslf_measure::judge::{judge, render_truth, time_interleaved, Judgement, TimedJob};
 use oslf_measure::sweep::blend_label;
 use oslf_measure::table::{csv_cell, Table};
-use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, Order, Renderer, ShadingParams, Source};
+use oslf_runtime::{
+    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, ShadingParams, Source,
+};
 
 /// Reproduce the thesis's tables on a scene: Table 6.1 (reconstruction error) and Table 6.2
 /// (mirror-reflection error of the environment map and of every OSLF blend) for each store
@@ -158,11 +160,52 @@ fn ms(j: Option<&Judgement>) -> String {
     j.map_or("–".into(), |j| format!("{:.1}", j.frame_ms))
 }
 
-/// The glossy table's methods: (integration order, source, label).
-const GLOSSY_METHODS: [(Order, Source, &str); 3] = [
-    (Order::PerPoint, Source::Oslf, "per point"),
-    (Order::PerDirection, Source::Oslf, "per direction"),
-    (Order::PerPoint, Source::EnvMap, "EnvMap"),
+/// The glossy table's methods: (integration order, source, filter, depth correction, label).
+/// The first is the thesis's (point sampling, plain lookups); the rest use filtered importance
+/// sampling.
+const GLOSSY_METHODS: [(Order, Source, GlossyFilter, bool, &str); 6] = [
+    (
+        Order::PerPoint,
+        Source::Oslf,
+        GlossyFilter::Point,
+        false,
+        "thesis",
+    ),
+    (
+        Order::PerPoint,
+        Source::Oslf,
+        GlossyFilter::Mip,
+        false,
+        "FIS",
+    ),
+    (
+        Order::PerPoint,
+        Source::Oslf,
+        GlossyFilter::Mip,
+        true,
+        "FIS + depth",
+    ),
+    (
+        Order::PerDirection,
+        Source::Oslf,
+        GlossyFilter::Mip,
+        true,
+        "per direction",
+    ),
+    (
+        Order::PerPoint,
+        Source::EnvMap,
+        GlossyFilter::Mip,
+        false,
+        "EnvMap",
+    ),
+    (
+        Order::PerPoint,
+        Source::Parallax,
+        GlossyFilter::Mip,
+        false,
+        "Parallax",
+    ),
 ];
 
 /// The record name of one glossy measurement.
@@ -255,7 +298,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         for &(nu, nv) in &lobes {
             let truth = truth_of(Mode::Glossy, nu, nv, &format!("glossy-{nu}-{nv}"))?;
             for &m in &args.glossy_m {
-                for (order, source, label) in GLOSSY_METHODS {
+                for (order, source, glossy_filter, depth, label) in GLOSSY_METHODS {
                     let p = ShadingParams {
                         mode: Mode::Glossy,
                         nu,
@@ -263,6 +306,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                         m,
                         order,
                         source,
+                        glossy_filter,
+                        depth,
                         ..base_params()
                     };
                     bench.measure("AS", finest, &as_name(nu, nv, m, label), p, &truth)?;
@@ -336,32 +381,45 @@ fn parse_lobes(lobes: &[String]) -> anyhow::Result<Vec<(f32, f32)>> {
         .collect()
 }
 
-/// Table 6.2's rows: the environment map, then every blend of §4 (B^r and B^n at N = 1, 4, 8,
-/// 16).
+/// Table 6.2's rows: the two baselines (the environment map, and that map parallax-corrected),
+/// then every blend of §4 (B^r and B^n at N = 1, 4, 8, 16). Each OSLF row is measured twice:
+/// with plain lookups as the thesis did, and depth-corrected (records named "… depth").
 fn mirror_methods() -> Vec<(String, ShadingParams)> {
-    let mirror = |blend: Blend, blend_n: f32, source: Source| ShadingParams {
+    let mirror = |blend: Blend, blend_n: f32, source: Source, depth: bool| ShadingParams {
         mode: Mode::Mirror,
         blend,
         blend_n,
         source,
+        depth,
         ..base_params()
     };
     let default_n = base_params().blend_n;
-    let mut methods = vec![(
-        "EnvMap".to_string(),
-        mirror(Blend::Normal, default_n, Source::EnvMap),
-    )];
-    for (name, blend) in [
-        ("closest distance (4.3)", Blend::Distance),
-        ("closest angle (4.4)", Blend::Angle),
-        ("B^avg (4.9)", Blend::Average),
-    ] {
-        methods.push((name.into(), mirror(blend, default_n, Source::Oslf)));
-    }
+    let mut methods = vec![
+        (
+            "EnvMap".to_string(),
+            mirror(Blend::Normal, default_n, Source::EnvMap, false),
+        ),
+        (
+            "Parallax".to_string(),
+            mirror(Blend::Normal, default_n, Source::Parallax, false),
+        ),
+    ];
+    let mut blends: Vec<(String, Blend, f32)> = vec![
+        ("closest distance (4.3)".into(), Blend::Distance, default_n),
+        ("closest angle (4.4)".into(), Blend::Angle, default_n),
+        ("B^avg (4.9)".into(), Blend::Average, default_n),
+    ];
     for (name, blend) in [("B^r", Blend::Reflection), ("B^n", Blend::Normal)] {
         for n in [1.0, 4.0, 8.0, 16.0] {
-            methods.push((format!("{name} N={n}"), mirror(blend, n, Source::Oslf)));
+            blends.push((format!("{name} N={n}"), blend, n));
         }
+    }
+    for (name, blend, n) in blends {
+        methods.push((name.clone(), mirror(blend, n, Source::Oslf, false)));
+        methods.push((
+            format!("{name} depth"),
+            mirror(blend, n, Source::Oslf, true),
+        ));
     }
     methods
 }
@@ -395,30 +453,49 @@ fn table_6_1(bench: &Bench, resolutions: &[u32], points: &[usize]) -> Table {
     t
 }
 
-/// Table 6.2: mirror-reflection error, its ratio to the environment map, frame time; a column
-/// group per store.
+/// Table 6.2: mirror-reflection error with plain (thesis) and depth-corrected lookups, the
+/// ratios to both baselines, frame times; a column group per store.
 fn table_6_2(bench: &Bench, resolutions: &[u32], methods: &[(String, ShadingParams)]) -> Table {
     let mut headers = vec!["method".to_string()];
     for res in resolutions {
-        headers.push(format!("L* {res}²"));
-        headers.push(format!("÷ EnvMap {res}²"));
-        headers.push(format!("ms {res}²"));
+        for h in [
+            "L*",
+            "L* depth",
+            "÷ EnvMap",
+            "÷ EnvMap depth",
+            "÷ Parallax depth",
+            "ms",
+            "ms depth",
+        ] {
+            headers.push(format!("{h} {res}²"));
+        }
     }
     let header_refs: Vec<&str> = headers.iter().map(String::as_str).collect();
     let mut t = Table::new(
-        "Table 6.2: mirror-reflection error (RMSE of L* ÷ 100 against the ground truth), ratio to the environment map, frame time",
+        "Table 6.2: mirror-reflection error (RMSE of L* ÷ 100 against the ground truth) with plain (thesis) and depth-corrected lookups, ratios to the environment map and to the parallax-corrected map, frame time",
         &header_refs,
     );
-    for (name, _) in methods {
+    let ratio = |j: Option<&Judgement>, base: Option<&Judgement>| {
+        j.zip(base).map_or("–".into(), |(j, e)| {
+            format!("{:.3}", j.metrics.rmse_lab[0] / e.metrics.rmse_lab[0])
+        })
+    };
+    for (name, _) in methods.iter().filter(|(n, _)| !n.ends_with(" depth")) {
         let mut row = vec![name.clone()];
         for r in 0..resolutions.len() {
             let j = bench.find("6.2", r, name);
+            let d = bench.find("6.2", r, &format!("{name} depth"));
             let env = bench.find("6.2", r, "EnvMap");
-            row.push(l100(j));
-            row.push(j.zip(env).map_or("–".into(), |(j, e)| {
-                format!("{:.3}", j.metrics.rmse_lab[0] / e.metrics.rmse_lab[0])
-            }));
-            row.push(ms(j));
+            let parallax = bench.find("6.2", r, "Parallax");
+            row.extend([
+                l100(j),
+                l100(d),
+                ratio(j, env),
+                ratio(d, env),
+                ratio(d, parallax),
+                ms(j),
+                ms(d),
+            ]);
         }
         t.push(row);
     }
@@ -435,16 +512,30 @@ fn glossy_table(
 ) -> Table {
     let mut t = Table::new(
         &format!(
-            "Ashikhmin–Shirley (R_s = 1, R_d = 0, blend B^n N=4, {resolution}² cube maps): RMSE of L* ÷ 100 against the ground truth, frame time",
+            "Ashikhmin–Shirley (R_s = 1, R_d = 0, blend B^n N=4, {resolution}² cube maps): RMSE of L* ÷ 100 against the ground truth, frame time. thesis: point sampling, plain lookups, per point; FIS: filtered importance sampling; depth: depth-corrected lookups; EnvMap and Parallax with FIS",
         ),
         &[
-            "n_u", "n_v", "M", "per point L*", "ms", "per direction L*", "ms", "EnvMap L*", "ms",
+            "n_u",
+            "n_v",
+            "M",
+            "thesis L*",
+            "ms",
+            "FIS L*",
+            "ms",
+            "FIS + depth L*",
+            "ms",
+            "per direction L*",
+            "ms",
+            "EnvMap L*",
+            "ms",
+            "Parallax L*",
+            "ms",
         ],
     );
     for &(nu, nv) in lobes {
         for &m in sample_counts {
             let mut row = vec![nu.to_string(), nv.to_string(), m.to_string()];
-            for (_, _, label) in GLOSSY_METHODS {
+            for (_, _, _, _, label) in GLOSSY_METHODS {
                 let j = bench.find("AS", finest, &as_name(nu, nv, m, label));
                 row.push(l100(j));
                 row.push(ms(j));
@@ -458,18 +549,20 @@ fn glossy_table(
 /// One CSV line per record.
 fn records_csv(records: &[Record]) -> String {
     let mut csv = String::from(
-        "table,store,cube_resolution,method,mode,blend,n_u,n_v,m,order,pixels,rmse_l,rmse_a,rmse_b,rmse_r,rmse_g,rmse_b_rgb,psnr_db,frame_ms,cold_ms\n",
+        "table,store,cube_resolution,method,mode,blend,depth,glossy_filter,n_u,n_v,m,order,pixels,rmse_l,rmse_a,rmse_b,rmse_r,rmse_g,rmse_b_rgb,psnr_db,frame_ms,cold_ms\n",
     );
     for r in records {
         let m = &r.judgement.metrics;
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6},{},{:.3},{:.3}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6},{},{:.3},{:.3}\n",
             r.table,
             csv_cell(&r.store.display().to_string()),
             r.cube_resolution,
             csv_cell(&r.method),
             r.params.mode.name(),
             blend_label(&r.params),
+            r.params.depth,
+            r.params.glossy_filter.name(),
             r.params.nu,
             r.params.nv,
             r.params.m,

@@ -32,8 +32,8 @@ use anyhow::{anyhow, Context};
 use glam::Vec3;
 use oslf_runtime::Camera;
 use oslf_runtime::{
-    Background, Blend, CacheConfig, Frame, Gpu, GlossyFilter, Mode, Order, RenderOptions,
-    Renderer, ShadingParams, Source,
+    Background, Blend, CacheConfig, Frame, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer,
+    ShadingParams, Source,
 };
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};

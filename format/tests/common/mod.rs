@@ -232,6 +232,10 @@ pub fn close_bits(enc: Encoding, bits: u32, want: [f32; 3], got: [f32; 3]) -> bo
             Encoding::Rgba32f => err == 0.0,
             Encoding::Rgba16f => err <= w.abs() * 4.9e-4 + 6.0e-8,
             Encoding::Rgb9e5 => f64::from(err) <= steps * (f64::from(max) / 256.0 * 1.004 + 6.0e-8),
+            // BC6H is lossy per 4×4 block, without a per-texel bound on arbitrary data: this only
+            // checks the range; the round-trip tests compare BC6H faces with the reference
+            // encoder and decoder instead (format/tests/bc6h.rs states the error bounds).
+            Encoding::Bc6h => g.is_finite() && (0.0..=65504.0).contains(&g),
         }
     })
 }

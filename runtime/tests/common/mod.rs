@@ -69,6 +69,19 @@ pub fn store_path_without_env_cube() -> PathBuf {
     .clone()
 }
 
+/// The path of [`SCENE`] baked without the distance channel (baked on first use): a store as
+/// they were before depth-corrected lookups.
+pub fn store_path_without_distances() -> PathBuf {
+    static PATH: OnceLock<PathBuf> = OnceLock::new();
+    PATH.get_or_init(|| {
+        bake_scene(
+            &format!("{SCENE}distance_channel = false\n"),
+            "oslf-runtime-tests-no-distance",
+        )
+    })
+    .clone()
+}
+
 /// Bakes `scene` into a fresh directory `name`-PID under the temporary directory.
 fn bake_scene(scene: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
