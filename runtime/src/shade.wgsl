@@ -116,6 +116,20 @@ fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
     return f32(h >> 8u) * (1.0 / 16777216.0);
 }
 
+// Number k of Monte Carlo sample i of integration j at this pixel: per-pixel random numbers for
+// point sampling; with FILTER the Hammersley set ((i + ½)/M stratum centres, radical inverse of
+// i), the same at every pixel, as Křivánek & Colbert (2008) pair it with filtered lookups: the
+// estimate is then smooth instead of noisy.
+fn sample_u(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+    if (FILTER) {
+        if ((k & 1u) == 0u) {
+            return 0.5;
+        }
+        return f32(reverseBits(i)) * 2.3283064365386963e-10;
+    }
+    return rand(pixel, i, j, k);
+}
+
 // ---- cube maps ----
 
 // Face and face coordinates (s, t) of a direction: the Vulkan table in oslf_format::cube.
@@ -201,15 +215,10 @@ struct Tap {
 };
 
 fn tap(dir: vec3<f32>) -> Tap {
-    return tap_level(dir, 0u);
-}
-
-// `tap` on mip `level`, whose faces are cube_res >> level wide.
-fn tap_level(dir: vec3<f32>, level: u32) -> Tap {
     let fst = face_st(dir);
     var t: Tap;
     t.face = u32(fst.x);
-    let n = max(P.cube_res >> level, 1u);
+    let n = P.cube_res;
     let nf = f32(n);
     let fx = clamp(fst.y * nf - 0.5, 0.0, nf - 1.0);
     let fy = clamp(fst.z * nf - 0.5, 0.0, nf - 1.0);
@@ -260,7 +269,8 @@ fn lookup(cube: u32, dir: vec3<f32>) -> vec4<f32> {
 }
 
 // Radiance of cube `cube` towards `dir` at fractional mip level `lod` (filtered importance
-// sampling): bilinear on the two nearest levels, blended linearly. Marks the face.
+// sampling): bilinear across face edges (`seamless_level`: a coarse level's face seams would
+// show) on the two nearest levels, blended linearly. Marks the faces it reads.
 fn lookup_lod(cube: u32, dir: vec3<f32>, lod: f32) -> vec4<f32> {
     if (!(lod > 0.0)) {
         return lookup(cube, dir);
@@ -269,21 +279,19 @@ fn lookup_lod(cube: u32, dir: vec3<f32>, lod: f32) -> vec4<f32> {
     let l = min(lod, f32(top));
     let l0 = u32(floor(l));
     let f = l - f32(l0);
-    let t0 = tap_level(dir, l0);
-    atomicOr(&feedback[cube], 1u << t0.face);
-    let a = read_tap_level(cube, t0, l0);
+    let a = seamless_level(cube, dir, l0, true);
     if (!(f > 0.0)) {
         return a;
     }
-    let l1 = min(l0 + 1u, top);
-    let b = read_tap_level(cube, tap_level(dir, l1), l1);
+    let b = seamless_level(cube, dir, min(l0 + 1u, top), true);
     return vec4<f32>(a.rgb + (b.rgb - a.rgb) * f, a.w * b.w);
 }
 
 // The mip level for a Monte Carlo sample towards `dir` with log2(M p(dir)) = `lpdf`
-// (Křivánek & Colbert 2008): ½ log2(Ω_s / Ω_p) + 1, where Ω_s = 1 / (M p) is the sample's share
-// of the sphere and Ω_p = (2/N)² / (1 + s² + t²)^{3/2} the solid angle of a level-0 texel at
-// face coordinates (s, t) ∈ [-1, 1]². 0 without FILTER.
+// (Křivánek & Colbert 2008): ½ log2(Ω_s / Ω_p), where Ω_s = 1 / (M p) is the sample's share of
+// the sphere and Ω_p = (2/N)² / (1 + s² + t²)^{3/2} the solid angle of a level-0 texel at face
+// coordinates (s, t) ∈ [-1, 1]². Without their +1 bias: on the example scene it blurred narrow
+// lobes (docs/measurements.md). 0 without FILTER.
 fn sample_lod(dir: vec3<f32>, lpdf: f32) -> f32 {
     if (!FILTER) {
         return 0.0;
@@ -292,7 +300,7 @@ fn sample_lod(dir: vec3<f32>, lpdf: f32) -> f32 {
     let sc = 2.0 * fst.y - 1.0;
     let tc = 2.0 * fst.z - 1.0;
     let log_texel = 2.0 * log2(2.0 / f32(P.cube_res)) - 1.5 * log2(1.0 + sc * sc + tc * tc);
-    return max(0.5 * (-lpdf - log_texel) + 1.0, 0.0);
+    return max(0.5 * (-lpdf - log_texel), 0.0);
 }
 
 // ---- depth-corrected lookups (§6.3's RGBZ) ----
@@ -804,14 +812,14 @@ fn integrate(cube: u32, j: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
     for (var i = 0u; i < P.m; i++) {
-        let s = sample_as(i, rand(pixel, i, j, 0u), rand(pixel, i, j, 1u), n, t, b, v, nv);
+        let s = sample_as(i, sample_u(pixel, i, j, 0u), sample_u(pixel, i, j, 1u), n, t, b, v, nv);
         if (s.weight > 0.0) {
             let l = sample_radiance(cube, wn, x, s);
             if (l.w == 0.0) { ok = 0.0; }
             acc += l.rgb * s.weight;
         }
         if (DIFFUSE) {
-            let d = sample_diffuse(i, rand(pixel, i, j, 2u), rand(pixel, i, j, 3u), n, t, b, nv);
+            let d = sample_diffuse(i, sample_u(pixel, i, j, 2u), sample_u(pixel, i, j, 3u), n, t, b, nv);
             if (d.weight > 0.0) {
                 let l = sample_radiance(cube, wn, x, d);
                 if (l.w == 0.0) { ok = 0.0; }
@@ -905,12 +913,12 @@ fn face_point(face: u32, s: f32, t: f32) -> vec3<f32> {
     }
 }
 
-// Texel (x, y) of `face` of cube `cube`, where (x, y) may lie one texel off the face: then the
-// texel of the adjacent face that the direction through that texel centre, extended on
-// `face`'s plane, lands in (nearest texel). w = 1 when that face was resident, 0 when not
-// (then the colour is 0 and must not be used). No feedback mark.
-fn seam_texel(cube: u32, face: u32, x: i32, y: i32) -> vec4<f32> {
-    let n = i32(P.cube_res);
+// Texel (x, y) of mip `level` of `face` of cube `cube`, where (x, y) may lie one texel off the
+// face: then the texel of the adjacent face that the direction through that texel centre,
+// extended on `face`'s plane, lands in (nearest texel). w = 1 when that face was resident, 0
+// when not (then the colour is 0 and must not be used). Marks the face it reads when `mark`.
+fn seam_texel(cube: u32, face: u32, x: i32, y: i32, level: u32, mark: bool) -> vec4<f32> {
+    let n = i32(max(P.cube_res >> level, 1u));
     var f = face;
     var c = vec2<i32>(x, y);
     if (x < 0 || y < 0 || x >= n || y >= n) {
@@ -919,23 +927,25 @@ fn seam_texel(cube: u32, face: u32, x: i32, y: i32) -> vec4<f32> {
         f = u32(fst.x);
         c = vec2<i32>(min(i32(fst.y * nf), n - 1), min(i32(fst.z * nf), n - 1));
     }
-    // One texel: a tap whose four corners are that texel (read_tap finds it in the pool).
+    if (mark) {
+        atomicOr(&feedback[cube], 1u << f);
+    }
+    // One texel: a tap whose four corners are that texel (read_tap_level finds it in the pool).
     let u = vec2<u32>(c);
-    return read_tap(cube, Tap(f, u.x, u.y, u.x, u.y, 0.0, 0.0));
+    return read_tap_level(cube, Tap(f, u.x, u.y, u.x, u.y, 0.0, 0.0), level);
 }
 
-// Radiance of cube `cube` towards `dir`, bilinear ACROSS face edges: the four texel centres
-// around the direction on its face, those off the face read from the adjacent face
-// (`seam_texel`), with the usual bilinear weights. At a corner of the cube, where three faces
-// meet, the texel off the face in both directions does not exist: it is the mean of the other
-// three. 0 when a face it reads is not resident. No feedback mark. For the background only:
-// `lookup` (reflections, reconstruction) clamps at face edges, and every published error figure
-// depends on that.
-fn seamless_read(cube: u32, dir: vec3<f32>) -> vec3<f32> {
+// Radiance of mip `level` of cube `cube` towards `dir`, bilinear ACROSS face edges: the four
+// texel centres around the direction on its face, those off the face read from the adjacent
+// face (`seam_texel`), with the usual bilinear weights. At a corner of the cube, where three
+// faces meet, the texel off the face in both directions does not exist: it is the mean of the
+// other three. `.w` = 0 when a face it reads is not resident. Marks the faces it reads when
+// `mark`. Written without a local array (see `Candidates`).
+fn seamless_level(cube: u32, dir: vec3<f32>, level: u32, mark: bool) -> vec4<f32> {
     let fst = face_st(dir);
     let face = u32(fst.x);
-    let n = i32(P.cube_res);
-    let nf = f32(P.cube_res);
+    let n = i32(max(P.cube_res >> level, 1u));
+    let nf = f32(n);
     let fx = fst.y * nf - 0.5;
     let fy = fst.z * nf - 0.5;
     let x0 = i32(floor(fx));
@@ -947,21 +957,29 @@ fn seamless_read(cube: u32, dir: vec3<f32>) -> vec3<f32> {
     if ((x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n)) {
         corner = select(0u, 1u, x0 >= 0) + select(0u, 2u, y0 >= 0);
     }
-    var t = array<vec4<f32>, 4>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    for (var k = 0u; k < 4u; k++) {
-        if (k != corner) {
-            t[k] = seam_texel(cube, face, x0 + i32(k & 1u), y0 + i32(k >> 1u));
-        }
+    var t0 = vec4<f32>(0.0);
+    var t1 = vec4<f32>(0.0);
+    var t2 = vec4<f32>(0.0);
+    var t3 = vec4<f32>(0.0);
+    if (corner != 0u) { t0 = seam_texel(cube, face, x0, y0, level, mark); }
+    if (corner != 1u) { t1 = seam_texel(cube, face, x0 + 1, y0, level, mark); }
+    if (corner != 2u) { t2 = seam_texel(cube, face, x0, y0 + 1, level, mark); }
+    if (corner != 3u) { t3 = seam_texel(cube, face, x0 + 1, y0 + 1, level, mark); }
+    let mean = (t0 + t1 + t2 + t3) * (1.0 / 3.0);
+    if (corner == 0u) { t0 = mean; } else if (corner == 1u) { t1 = mean; } else if (corner == 2u) { t2 = mean; } else if (corner == 3u) { t3 = mean; }
+    if (t0.w * t1.w * t2.w * t3.w == 0.0) {
+        return vec4<f32>(0.0);
     }
-    if (corner < 4u) {
-        t[corner] = (t[0] + t[1] + t[2] + t[3]) * (1.0 / 3.0);
-    }
-    if (t[0].w * t[1].w * t[2].w * t[3].w == 0.0) {
-        return vec3<f32>(0.0);
-    }
-    let top = t[0].rgb + (t[1].rgb - t[0].rgb) * wx;
-    let bottom = t[2].rgb + (t[3].rgb - t[2].rgb) * wx;
-    return top + (bottom - top) * wy;
+    let top = t0.rgb + (t1.rgb - t0.rgb) * wx;
+    let bottom = t2.rgb + (t3.rgb - t2.rgb) * wx;
+    return vec4<f32>(top + (bottom - top) * wy, 1.0);
+}
+
+// `seamless_level` at level 0 without feedback marks: for the background only. `lookup`
+// (reflections, reconstruction) clamps at face edges, and every published error figure
+// depends on that; filtered glossy samples (`lookup_lod`) read across edges at every level.
+fn seamless_read(cube: u32, dir: vec3<f32>) -> vec3<f32> {
+    return seamless_level(cube, dir, 0u, false).rgb;
 }
 
 // What background pixel `px` shows, alpha 0. The environment cube is pinned resident, so it is
