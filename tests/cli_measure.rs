@@ -146,7 +146,11 @@ fn tables_reproduce_the_thesis_layout_with_consistent_outputs() {
     // × 6 methods on the finer store.
     assert_eq!(rows.len(), 2 * 25 + 24, "{csv}");
     for method in ["Parallax", "B^n N=4 depth"] {
-        assert_eq!(rows.iter().filter(|r| r[3] == method).count(), 2, "{method}");
+        assert_eq!(
+            rows.iter().filter(|r| r[3] == method).count(),
+            2,
+            "{method}"
+        );
     }
     assert_eq!(rows.iter().filter(|r| r[0] == "6.1").count(), 2);
     assert_eq!(

@@ -28,3 +28,16 @@ fn every_preset_loads() {
         "thesis-compact differs from thesis only in mantissa_bits"
     );
 }
+
+/// `examples/room.toml` includes `examples/room.glb` (the generator's output is committed): it
+/// loads with its glTF geometry and lights, warns about nothing, and its presets load.
+#[test]
+fn the_gltf_room_example_loads() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/room.toml");
+    for preset in [None, Some("thesis")] {
+        let scene = Scene::load(&path, preset).unwrap_or_else(|e| panic!("{preset:?}: {e}"));
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        assert!(!scene.objects.is_empty(), "the teapot is the OSLF object");
+        assert!(!scene.lights.is_empty(), "the glTF lights are imported");
+    }
+}

@@ -1,7 +1,8 @@
 //! The two-level LRU cube-map cache (thesis §4.3, Tables 6.3–6.7).
 //!
 //! * **RAM level**: decoded faces (the store's raw face bytes after zstd and the prediction
-//!   filter, ready to upload) under a byte budget, least recently used evicted first.
+//!   filter, ready to upload: [`FaceLayout`] payloads, BC6H blocks included) under a byte
+//!   budget of their real size, least recently used evicted first.
 //! * **GPU level**: a pool of cube-map *slots* (six faces each, laid side by side in the
 //!   layers of up to [`MAX_POOL_TEXTURES`] 2D texture arrays: a layer holds as many faces as
 //!   the device's widest texture allows, an array at most `max_texture_array_layers` layers). An indirection table maps each cube (sample point) to
@@ -275,6 +276,17 @@ impl CubeCache {
     /// The number of GPU slots.
     pub fn slots(&self) -> u32 {
         self.slot_owner.len() as u32
+    }
+
+    /// What each face's payload holds (encoding, mip levels, distance plane): the layout the
+    /// GPU pool uses.
+    pub fn face_layout(&self) -> FaceLayout {
+        self.face
+    }
+
+    /// Bytes of the faces the RAM level holds now.
+    pub fn ram_bytes_used(&self) -> u64 {
+        self.ram_used
     }
 
     /// The granularity.
@@ -565,20 +577,40 @@ impl CubeCache {
 
 // Budgets given in megabytes (the `--cache-mb` and `--ram-mb` flags of `oslf render`).
 
-/// Bytes of one cube map in the GPU pool: six faces of texels in the store's encoding with their
-/// mip levels, and the distance planes when the store has them ([`FaceLayout`]).
+/// Bytes of one cube map in the GPU pool on an adapter with BC texture compression (what
+/// [`crate::Gpu::headless`] gives where the adapter offers it): [`cube_bytes_with`]`(store,
+/// true)`.
 pub fn cube_bytes(store: &Store) -> u64 {
-    6 * FaceLayout::for_store(store, false).payload_bytes() as u64
+    cube_bytes_with(store, true)
 }
 
-/// The GPU slots `--cache-mb MB` buys: whole cube maps of [`cube_bytes`], at least one.
+/// Bytes of one cube map in the GPU pool on an adapter with (`adapter_has_bc`,
+/// [`crate::Gpu::has_bc`]) or without BC texture compression: six faces of texels in the pool's
+/// encoding (BC6H blocks, 1 byte per texel, or RGB9E5 for a BC6H store without BC) with their
+/// mip levels, and the distance planes when the store has them ([`FaceLayout::payload_bytes`]).
+pub fn cube_bytes_with(store: &Store, adapter_has_bc: bool) -> u64 {
+    6 * FaceLayout::for_store(store, adapter_has_bc).payload_bytes() as u64
+}
+
+/// The GPU slots `--cache-mb MB` buys on an adapter with BC texture compression:
+/// [`slots_for_megabytes_with`]`(store, mb, true)`.
 pub fn slots_for_megabytes(store: &Store, mb: f64) -> crate::Result<u32> {
+    slots_for_megabytes_with(store, mb, true)
+}
+
+/// The GPU slots `--cache-mb MB` buys on an adapter with (`adapter_has_bc`) or without BC
+/// texture compression: whole cube maps of [`cube_bytes_with`], at least one.
+pub fn slots_for_megabytes_with(
+    store: &Store,
+    mb: f64,
+    adapter_has_bc: bool,
+) -> crate::Result<u32> {
     if !(mb.is_finite() && mb > 0.0) {
         return Err(crate::RuntimeError::Parameter(
             "--cache-mb must be a positive number".into(),
         ));
     }
-    let cube_bytes = cube_bytes(store);
+    let cube_bytes = cube_bytes_with(store, adapter_has_bc);
     let slots = (mb * 1e6 / cube_bytes as f64).floor();
     if slots < 1.0 {
         return Err(crate::RuntimeError::Parameter(format!(

@@ -21,6 +21,9 @@ pub struct Gpu {
     /// Whether the "GPU" is the CPU (lavapipe, llvmpipe, WARP): its textures then live in
     /// system memory, which `oslf render` counts before it starts.
     pub shares_system_memory: bool,
+    /// Whether the device has `TEXTURE_COMPRESSION_BC` enabled: BC6H stores are then uploaded
+    /// as their blocks ([`Gpu::has_bc`]).
+    bc: bool,
     errors: Arc<Mutex<Vec<String>>>,
 }
 
@@ -33,8 +36,23 @@ impl Gpu {
     /// adapter, so a machine with a Vulkan driver never probes EGL (whose platform probing
     /// prints stray errors). `WGPU_BACKEND` overrides the choice.
     ///
+    /// The device gets `TEXTURE_COMPRESSION_BC` when the adapter offers it (lavapipe and
+    /// desktop GPUs do), so BC6H stores are uploaded as they are ([`Gpu::has_bc`]).
+    ///
     /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
     pub fn headless() -> Result<Self> {
+        Self::headless_with_bc(true)
+    }
+
+    /// [`Gpu::headless`] on a device without `TEXTURE_COMPRESSION_BC`, whatever the adapter
+    /// offers: BC6H stores are then decoded on the CPU and uploaded as RGB9E5 (`--no-bc`).
+    pub fn headless_without_bc() -> Result<Self> {
+        Self::headless_with_bc(false)
+    }
+
+    /// [`Gpu::headless`], requesting BC texture compression only when `bc` (and the adapter
+    /// offers it).
+    pub fn headless_with_bc(bc: bool) -> Result<Self> {
         quiet_device_select_layer();
         let order = match wgpu::Backends::from_env() {
             Some(backends) => vec![backends],
@@ -51,15 +69,22 @@ impl Gpu {
                 compatible_surface: None,
                 apply_limit_buckets: false,
             })) {
-                Ok(adapter) => return Self::on_adapter(&adapter),
+                Ok(adapter) => return Self::on_adapter_with_bc(&adapter, bc),
                 Err(e) => last = format!("{backends:?}: {e}"),
             }
         }
         Err(RuntimeError::NoAdapter(last))
     }
 
-    /// Creates a device on `adapter` with the adapter's limits.
+    /// Creates a device on `adapter` with the adapter's limits, and BC texture compression
+    /// when the adapter offers it.
     pub fn on_adapter(adapter: &wgpu::Adapter) -> Result<Self> {
+        Self::on_adapter_with_bc(adapter, true)
+    }
+
+    /// [`Gpu::on_adapter`], requesting `TEXTURE_COMPRESSION_BC` only when `bc` and the adapter
+    /// offers it.
+    pub fn on_adapter_with_bc(adapter: &wgpu::Adapter, bc: bool) -> Result<Self> {
         let info = adapter.get_info();
         let adapter_name = format!("{} ({}, {:?})", info.name, info.driver, info.backend);
         // The G-buffer and the output are Rgba32Float render targets (renderer.rs); GL adapters
@@ -79,9 +104,14 @@ impl Gpu {
             });
         }
         let limits = adapter.limits();
+        let features = if bc {
+            adapter.features() & wgpu::Features::TEXTURE_COMPRESSION_BC
+        } else {
+            wgpu::Features::empty()
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("oslf"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: limits,
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -97,7 +127,9 @@ impl Gpu {
     }
 
     /// Wraps a device and queue the application owns. Create it with the limits the store
-    /// needs ([`crate::Renderer::new`] says which it lacks).
+    /// needs ([`crate::Renderer::new`] says which it lacks). BC6H stores are uploaded as blocks
+    /// when the device has `TEXTURE_COMPRESSION_BC` enabled ([`Gpu::without_bc`] turns that
+    /// off).
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_name: String) -> Self {
         let errors = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&errors);
@@ -106,13 +138,30 @@ impl Gpu {
                 v.push(e.to_string());
             }
         }));
+        let bc = device
+            .features()
+            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
         Self {
             device,
             queue,
             adapter_name,
             shares_system_memory: false,
+            bc,
             errors,
         }
+    }
+
+    /// Whether renderers on this GPU upload BC6H stores as their blocks (`Bc6hRgbUfloat`): the
+    /// device has `TEXTURE_COMPRESSION_BC` and it was not turned off. Otherwise BC6H faces are
+    /// decoded on the CPU and uploaded as RGB9E5.
+    pub fn has_bc(&self) -> bool {
+        self.bc
+    }
+
+    /// This GPU with BC uploads turned off (the RGB9E5 fallback), the device unchanged.
+    pub fn without_bc(mut self) -> Self {
+        self.bc = false;
+        self
     }
 
     /// The limits of the device.

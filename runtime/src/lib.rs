@@ -17,8 +17,16 @@
 //!   - Ashikhmin–Shirley by Monte Carlo (5.3–5.12) with R_s, R_d, n_u, n_v, M, in both
 //!     integration orders of §5.2, stratified over the four quadrants, tangent frames from
 //!     ∂x/∂u so anisotropy follows the surface;
-//!   - the environment-map baseline: one cube at the object's centre, by direction alone.
-//!     See [`params`].
+//!   - the environment-map baseline: one cube at the object's centre, by direction alone;
+//!     and the baseline engines use, that cube parallax-corrected against a proxy box fitted
+//!     to its distances ([`probe`]). See [`params`].
+//!
+//!   Beyond the thesis, with a store's distance channel (§6.3's RGBZ; a twin R16Float pool),
+//!   every mirror and glossy lookup is *depth-corrected*: each sample point's cube is traced as
+//!   a distance impostor to where the ray from the shaded point meets the scene, and
+//!   reconstruction averages the candidates that see the shaded point. Glossy samples use
+//!   *filtered importance sampling* (Křivánek & Colbert 2008) over per-face mip chains
+//!   ([`face`]).
 //!
 //!   Pixels off the object keep alpha 0 and show the [`Background`] of
 //!   [`RenderOptions::background`]: transparent black by default, the environment cube along
@@ -43,7 +51,9 @@
 //!
 //! Cube maps are bound as 2D texture arrays (six layers per slot) and filtered bilinearly
 //! inside a face by the shader itself, so that the CPU reference can reproduce the filtering
-//! exactly. Numbers: f32 throughout; non-finite results are replaced by 0 before they reach a
+//! exactly. BC6H stores are uploaded as their blocks (`Bc6hRgbUfloat`, 1 byte per texel) when
+//! the device has BC texture compression ([`Gpu::has_bc`]), else decoded on the CPU to RGB9E5
+//! ([`face`]). Numbers: f32 throughout; non-finite results are replaced by 0 before they reach a
 //! pixel.
 //!
 //! ```no_run

@@ -6,6 +6,11 @@
 //! `res >> l` wide and lies at `x >> l`), and, for stores with a distance channel, a twin
 //! R16Float array of the same size holds the distance planes (level 0 only): shade.wgsl's
 //! `pool0` … `pool3` and `dpool0` … `dpool3`.
+//!
+//! On an adapter with BC texture compression, BC6H stores are held as `Bc6hRgbUfloat` blocks
+//! (1 byte per texel at level 0; [`FaceLayout`] keeps every level of every face whole blocks
+//! at block-aligned x). shade.wgsl reads them with `textureLoad` like any float texture: the
+//! hardware decodes the block.
 
 use std::time::Instant;
 
@@ -15,7 +20,8 @@ use crate::cache::{CacheConfig, Upload, MAX_POOL_TEXTURES};
 use crate::error::{Result, RuntimeError};
 use crate::face::FaceLayout;
 
-/// The GPU pool's default size when no slot budget is given: 1 GiB of cube-map texels.
+/// The GPU pool's default size when no slot budget is given: 1 GiB of cube-map payloads (the
+/// real bytes of [`FaceLayout::payload_bytes`]: blocks for BC6H, mips and distance planes).
 pub const DEFAULT_POOL_BYTES: u64 = 1 << 30;
 
 /// Where the pool's cubes lie, from the device's limits, the store and the cache configuration.
@@ -113,28 +119,21 @@ impl PoolLayout {
         self.slots.div_ceil(self.slots_per_texture)
     }
 
-    /// The size of pool texture `t`: its slots' faces, 2^face_shift side by side per layer;
-    /// one texel when it holds no slot.
-    fn texture_size(&self, t: u32) -> wgpu::Extent3d {
+    /// The size of pool texture `t`: its slots' faces, 2^face_shift side by side per layer
+    /// (multiples of 4 for BC6H, whose faces are); `None` when it holds no slot (the pool then
+    /// makes a placeholder).
+    fn texture_size(&self, t: u32) -> Option<wgpu::Extent3d> {
         let in_this = self
             .slots
             .saturating_sub(t * self.slots_per_texture)
             .min(self.slots_per_texture);
         let faces = in_this * 6;
         let per_layer = 1u32 << self.face_shift;
-        if in_this == 0 {
-            wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            }
-        } else {
-            wgpu::Extent3d {
-                width: self.cube_res * faces.min(per_layer),
-                height: self.cube_res,
-                depth_or_array_layers: faces.div_ceil(per_layer),
-            }
-        }
+        (in_this > 0).then(|| wgpu::Extent3d {
+            width: self.cube_res * faces.min(per_layer),
+            height: self.cube_res,
+            depth_or_array_layers: faces.div_ceil(per_layer),
+        })
     }
 
     /// Pool texture, array layer and x offset of `face` of `slot`.
@@ -148,25 +147,23 @@ impl PoolLayout {
 }
 
 /// The encoding the pool holds the faces of a store of `store_encoding` in: the store's own,
-/// except BC6H, which is decoded on the CPU and re-encoded as RGB9E5 (`Rgb9e5Ufloat`) for now
-/// (`adapter_has_bc`, the adapter's `TEXTURE_COMPRESSION_BC` feature, is for the GPU-native
-/// BC6H upload still to come). The CPU reference must build its faces in the same encoding,
-/// so that it sees the values the GPU samples (BC6H → f32 → RGB9E5 → f32).
+/// except BC6H on an adapter without BC texture compression (`adapter_has_bc`: the device's
+/// `TEXTURE_COMPRESSION_BC`, [`crate::Gpu::has_bc`]), which is decoded on the CPU and
+/// re-encoded as RGB9E5 (`Rgb9e5Ufloat`). [`FaceLayout::new`] also falls back to RGB9E5 for
+/// BC6H faces whose side is not a multiple of 4. The CPU reference must build its faces in
+/// the same layout, so that it sees the values the GPU samples (BC6H → f32, or BC6H → f32 →
+/// RGB9E5 → f32).
 pub fn upload_encoding(store_encoding: Encoding, adapter_has_bc: bool) -> Encoding {
-    // The GPU-native path will add `Encoding::Bc6h if adapter_has_bc => Encoding::Bc6h` once
-    // the pool has a `Bc6hRgbUfloat` payload layout (blocks; mips of at least 4² texels) and
-    // the renderer requests the BC feature.
-    let _ = adapter_has_bc;
     match store_encoding {
+        Encoding::Bc6h if adapter_has_bc => Encoding::Bc6h,
         Encoding::Bc6h => Encoding::Rgb9e5,
         e => e,
     }
 }
 
-/// The texture format of a cube-map encoding (a store encoding the pool does not hold, BC6H,
-/// maps to that of its [`upload_encoding`]).
+/// The texture format of a pool encoding.
 fn texture_format(e: Encoding) -> wgpu::TextureFormat {
-    match upload_encoding(e, false) {
+    match e {
         Encoding::Rgb9e5 => wgpu::TextureFormat::Rgb9e5Ufloat,
         Encoding::Rgba16f => wgpu::TextureFormat::Rgba16Float,
         Encoding::Rgba32f => wgpu::TextureFormat::Rgba32Float,
@@ -222,6 +219,13 @@ impl CubePool {
             height: 1,
             depth_or_array_layers: 1,
         };
+        // Block-compressed placeholders are one block.
+        let (bw, bh) = format.block_dimensions();
+        let placeholder = wgpu::Extent3d {
+            width: bw,
+            height: bh,
+            depth_or_array_layers: 1,
+        };
         let mut pool = Self {
             layout,
             textures: Vec::new(),
@@ -230,12 +234,17 @@ impl CubePool {
             depth_views: Vec::new(),
         };
         for t in 0..MAX_POOL_TEXTURES {
-            let size = layout.texture_size(t);
-            let levels = if size == one { 1 } else { face.levels };
+            let (size, levels) = match layout.texture_size(t) {
+                None => (placeholder, 1),
+                Some(size) => (size, face.levels),
+            };
             let (tex, view) = array_texture(device, "cube pool", size, levels, format);
             pool.textures.push(tex);
             pool.views.push(view);
-            let dsize = if face.depth { size } else { one };
+            let dsize = match layout.texture_size(t) {
+                Some(size) if face.depth => size,
+                _ => one,
+            };
             let (tex, view) = array_texture(
                 device,
                 "cube distance pool",
@@ -264,19 +273,17 @@ impl CubePool {
     pub fn upload(&self, queue: &wgpu::Queue, uploads: &[Upload]) -> f64 {
         let start = Instant::now();
         let face = self.layout.face;
-        let bpt = face.encoding.bytes_per_texel() as u32;
         for u in uploads {
             let (tex, layer, x) = self.layout.place(u.slot, u.face as u32);
             for l in 0..face.levels {
                 let at = face.level_offset(l);
-                let side = face.side(l);
                 write_region(
                     queue,
                     &self.textures[tex],
                     l,
                     (x >> l, layer),
-                    side,
-                    side * bpt,
+                    face.side(l),
+                    face.level_rows(l),
                     &u.texels[at..at + face.level_bytes(l)],
                 );
             }
@@ -288,7 +295,7 @@ impl CubePool {
                     0,
                     (x, layer),
                     res,
-                    res * 2,
+                    (res * 2, res),
                     &u.texels[face.depth_offset()..],
                 );
             }
@@ -297,15 +304,16 @@ impl CubePool {
     }
 }
 
-/// Writes a `side`² region of `texture`'s mip `level` at `(x, 0, layer)` from `bytes`, rows of
-/// `row_bytes`.
+/// Writes a `side`² region (texels) of `texture`'s mip `level` at `(x, 0, layer)` from `bytes`:
+/// `rows` rows of `row_bytes` (rows of texels, or for BC6H rows of 4×4 blocks, as wgpu's
+/// `TexelCopyBufferLayout` counts them).
 fn write_region(
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
     level: u32,
     (x, layer): (u32, u32),
     side: u32,
-    row_bytes: u32,
+    (row_bytes, rows): (u32, u32),
     bytes: &[u8],
 ) {
     queue.write_texture(
@@ -319,7 +327,7 @@ fn write_region(
         wgpu::TexelCopyBufferLayout {
             offset: 0,
             bytes_per_row: Some(row_bytes),
-            rows_per_image: Some(side),
+            rows_per_image: Some(rows),
         },
         wgpu::Extent3d {
             width: side,

@@ -155,8 +155,8 @@ fn finite3(c: Vec3) -> Vec3 {
 }
 
 // `j` indexes the four candidates' parallel arrays (indices, directions, weights), as in
-// shade.wgsl.
-#[allow(clippy::needless_range_loop)]
+// shade.wgsl; `!(x > 0.0)` is shade.wgsl's NaN-aware test, kept word for word.
+#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {
     /// Radiance of `cube` towards `dir`, marking the face as needed (as `lookup`/`fetch`).
     fn lookup(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
@@ -201,14 +201,24 @@ impl<C: CubeTexels> Shader<'_, C> {
         let l = lod.min(top as f32);
         let l0 = l.floor() as u32;
         let f = l - l0 as f32;
-        let (face, s, t) = face_st(dir);
-        self.mark(cube, face);
-        let a = self.read_tap(cube, face, s, t, l0);
+        let a = self.seamless_level(cube, dir, l0, true);
         if !(f > 0.0) {
             return a;
         }
-        let b = self.read_tap(cube, face, s, t, (l0 + 1).min(top));
+        let b = self.seamless_level(cube, dir, (l0 + 1).min(top), true);
         Some(a? + (b? - a?) * f)
+    }
+
+    /// Number `k` of sample `i` of integration `j` (as `sample_u`): random, or the Hammersley
+    /// set when filtering.
+    fn sample_u(&self, pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+        if self.uniform.mip_levels > 1 {
+            if k & 1 == 0 {
+                return 0.5;
+            }
+            return i.reverse_bits() as f32 * 2.328_306_4e-10;
+        }
+        rand(pixel, i, j, k)
     }
 
     /// The mip level of a sample towards `dir` with log2(M p) = `lpdf` (as `sample_lod`).
@@ -220,18 +230,22 @@ impl<C: CubeTexels> Shader<'_, C> {
         let (sc, tc) = (2.0 * s - 1.0, 2.0 * t - 1.0);
         let log_texel = 2.0 * (2.0 / self.uniform.cube_res as f32).log2()
             - 1.5 * (1.0 + sc * sc + tc * tc).log2();
-        (0.5 * (-lpdf - log_texel) + 1.0).max(0.0)
+        (0.5 * (-lpdf - log_texel)).max(0.0)
     }
 
     /// Distance from sample point `cube` to the first hit towards `d` (nearest texel), marking
-    /// the face; sets `missing` when the face is not available (as `depth_toward`).
-    fn depth_toward(&self, cube: u32, d: Vec3, missing: &mut bool) -> f32 {
+    /// the face (every face when it is not available and `walk`); sets `missing` then (as
+    /// `depth_toward`).
+    fn depth_toward(&self, cube: u32, d: Vec3, walk: bool, missing: &mut bool) -> f32 {
         let (face, s, t) = face_st(d);
         self.mark(cube, face);
         let n = self.uniform.cube_res;
         let x = ((s * n as f32) as u32).min(n - 1);
         let y = ((t * n as f32) as u32).min(n - 1);
         self.cubes.depth(cube, face, x, y).unwrap_or_else(|| {
+            if let Some(f) = self.feedback.get(cube as usize).filter(|_| walk) {
+                f.fetch_or(63, Ordering::Relaxed);
+            }
             *missing = true;
             FAR_DISTANCE
         })
@@ -253,7 +267,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             return (r, 1.0);
         }
         let d = x + r * (1.0 / w) - p;
-        (d, d.length() - self.depth_toward(cube, d, missing))
+        (d, d.length() - self.depth_toward(cube, d, true, missing))
     }
 
     /// The depth-corrected lookup direction of sample point `cube` for the ray from `x` along
@@ -306,12 +320,19 @@ impl<C: CubeTexels> Shader<'_, C> {
         (b.0.normalize(), 1.0)
     }
 
-    /// Texel `(x, y)` of `face` of `cube`, where `(x, y)` may lie one texel off the face: then
-    /// the texel of the adjacent face that the direction through that texel centre, extended on
-    /// `face`'s plane, lands in (nearest texel). `None` when that face is not available. No
-    /// feedback mark (as `seam_texel`).
-    fn seam_texel(&self, cube: u32, face: usize, x: i32, y: i32) -> Option<Vec3> {
-        let n = self.uniform.cube_res as i32;
+    /// Texel `(x, y)` of mip `level` of `face` of `cube`, where `(x, y)` may lie one texel off
+    /// the face: then the texel of the adjacent face that the direction through that texel
+    /// centre, extended on `face`'s plane, lands in (nearest texel). `None` when that face is
+    /// not available. Marks the face it reads when `mark` (as `seam_texel`).
+    fn seam_texel(
+        &self,
+        cube: u32,
+        face: usize,
+        (x, y): (i32, i32),
+        level: u32,
+        mark: bool,
+    ) -> Option<Vec3> {
+        let n = (self.uniform.cube_res >> level).max(1) as i32;
         let (mut f, mut c) = (face, (x, y));
         if x < 0 || y < 0 || x >= n || y >= n {
             let nf = n as f32;
@@ -323,20 +344,22 @@ impl<C: CubeTexels> Shader<'_, C> {
             f = f2;
             c = (((s * nf) as i32).min(n - 1), ((t * nf) as i32).min(n - 1));
         }
-        self.cubes.texel(cube, f, 0, c.0 as u32, c.1 as u32)
+        if mark {
+            self.mark(cube, f);
+        }
+        self.cubes.texel(cube, f, level, c.0 as u32, c.1 as u32)
     }
 
-    /// Radiance of `cube` towards `dir`, bilinear *across* face edges: the four texel centres
-    /// around the direction on its face, those off the face read from the adjacent face
-    /// ([`Self::seam_texel`]), with the usual bilinear weights. At a corner of the cube, where
-    /// three faces meet, the texel off the face in both directions does not exist: it is the
-    /// mean of the other three. `None` when a face it reads is not available. No feedback mark
-    /// (as `seamless_read`). For the background only: `lookup` (reflections, reconstruction)
-    /// clamps at face edges.
-    fn seamless_read(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
+    /// Radiance of mip `level` of `cube` towards `dir`, bilinear *across* face edges: the four
+    /// texel centres around the direction on its face, those off the face read from the
+    /// adjacent face ([`Self::seam_texel`]), with the usual bilinear weights. At a corner of
+    /// the cube, where three faces meet, the texel off the face in both directions does not
+    /// exist: it is the mean of the other three. `None` when a face it reads is not available.
+    /// Marks the faces it reads when `mark` (as `seamless_level`).
+    fn seamless_level(&self, cube: u32, dir: Vec3, level: u32, mark: bool) -> Option<Vec3> {
         let (face, s, t) = face_st(dir);
-        let n = self.uniform.cube_res as i32;
-        let nf = self.uniform.cube_res as f32;
+        let n = (self.uniform.cube_res >> level).max(1) as i32;
+        let nf = n as f32;
         let fx = s * nf - 0.5;
         let fy = t * nf - 0.5;
         let (x0, y0) = (fx.floor() as i32, fy.floor() as i32);
@@ -346,18 +369,28 @@ impl<C: CubeTexels> Shader<'_, C> {
         if (x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n) {
             corner = usize::from(x0 >= 0) + 2 * usize::from(y0 >= 0);
         }
-        let mut t = [Vec3::ZERO; 4];
-        for k in 0..4 {
-            if k != corner {
-                t[k] = self.seam_texel(cube, face, x0 + (k & 1) as i32, y0 + (k >> 1) as i32)?;
+        // Every texel is read (and its face marked) before any is missed, as on the GPU.
+        let read: [Option<Vec3>; 4] = std::array::from_fn(|k| {
+            if k == corner {
+                Some(Vec3::ZERO)
+            } else {
+                let at = (x0 + (k & 1) as i32, y0 + (k >> 1) as i32);
+                self.seam_texel(cube, face, at, level, mark)
             }
-        }
+        });
+        let mut t = [read[0]?, read[1]?, read[2]?, read[3]?];
         if corner < 4 {
             t[corner] = (t[0] + t[1] + t[2] + t[3]) * (1.0 / 3.0);
         }
         let top = t[0] + (t[1] - t[0]) * wx;
         let bottom = t[2] + (t[3] - t[2]) * wx;
         Some(top + (bottom - top) * wy)
+    }
+
+    /// `seamless_level` at level 0 without feedback marks: for the background only (as
+    /// `seamless_read`). `lookup` (reflections, reconstruction) clamps at face edges.
+    fn seamless_read(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
+        self.seamless_level(cube, dir, 0, false)
     }
 
     fn candidates(&self, patch: u32, u: f32, v: f32, x: Vec3, n: Vec3) -> Candidates {
@@ -525,7 +558,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             }
             let d = x - self.samples[i as usize];
             let mut missing = false;
-            let seen = self.depth_toward(i, d, &mut missing);
+            let seen = self.depth_toward(i, d, false, &mut missing);
             if missing || d.length() > seen * (1.0 + self.uniform.depth_thickness) {
                 continue;
             }
@@ -700,8 +733,8 @@ impl<C: CubeTexels> Shader<'_, C> {
                 let s = if k == 0 {
                     self.sample_as(
                         i,
-                        rand(pixel, i, j, 0),
-                        rand(pixel, i, j, 1),
+                        self.sample_u(pixel, i, j, 0),
+                        self.sample_u(pixel, i, j, 1),
                         n,
                         t,
                         b,
@@ -712,7 +745,15 @@ impl<C: CubeTexels> Shader<'_, C> {
                     if u.rd <= 0.0 {
                         continue;
                     }
-                    self.sample_diffuse(i, rand(pixel, i, j, 2), rand(pixel, i, j, 3), n, t, b, nv)
+                    self.sample_diffuse(
+                        i,
+                        self.sample_u(pixel, i, j, 2),
+                        self.sample_u(pixel, i, j, 3),
+                        n,
+                        t,
+                        b,
+                        nv,
+                    )
                 };
                 if s.weight <= 0.0 {
                     continue;
@@ -871,13 +912,16 @@ pub struct StoreCubes {
 }
 
 impl StoreCubes {
-    /// Decodes every cube of `store` (in parallel) as the renderer uploads them. Errors name
-    /// the cube.
+    /// Decodes every cube of `store` (in parallel) as a renderer on an adapter with BC texture
+    /// compression uploads them (BC6H stores as their blocks; the other encodings do not
+    /// depend on it). To match a given renderer, use [`StoreCubes::decode_as`] with its
+    /// [`crate::Renderer::face_layout`]. Errors name the cube.
     pub fn decode(store: &oslf_format::Store) -> crate::Result<Self> {
-        Self::decode_as(store, FaceLayout::for_store(store, false))
+        Self::decode_as(store, FaceLayout::for_store(store, true))
     }
 
-    /// Decodes every cube of `store` built as `layout` says. Errors name the cube.
+    /// Decodes every cube of `store` built as `layout` says (the GPU's payloads: for BC6H the
+    /// specification's decoder, what the hardware returns). Errors name the cube.
     pub fn decode_as(store: &oslf_format::Store, layout: FaceLayout) -> crate::Result<Self> {
         use rayon::prelude::*;
         type Cube = (Vec<Vec<Vec3>>, Vec<f32>);

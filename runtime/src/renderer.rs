@@ -253,7 +253,8 @@ impl Renderer {
         let limits = gpu.limits();
         check_textures_fit(&limits, &store)?;
         let cube_count = store.cube_count();
-        let face = FaceLayout::for_store(&store, false);
+        // BC6H stores go up as their blocks where the device has BC texture compression.
+        let face = FaceLayout::for_store(&store, gpu.has_bc());
         let layout = PoolLayout::plan(&limits, face, cube_count, &config)?;
         let mesh = ObjectMesh::from_store(&store, store.meta().bake.epsilon / 20.0);
         let cache = open_cache(&store, &layout, &config);
@@ -322,6 +323,12 @@ impl Renderer {
     /// The tessellated object.
     pub fn mesh(&self) -> &ObjectMesh {
         &self.mesh
+    }
+
+    /// What each cube face holds in the GPU pool (encoding, mip levels, distance plane): build
+    /// the CPU reference with the same ([`crate::reference::StoreCubes::decode_as`]).
+    pub fn face_layout(&self) -> FaceLayout {
+        self.cache.face_layout()
     }
 
     /// The cache (its cumulative statistics, decode errors, slot count).

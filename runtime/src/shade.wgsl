@@ -309,13 +309,18 @@ fn sample_lod(dir: vec3<f32>, lpdf: f32) -> f32 {
 var<private> depth_missing: bool;
 
 // Distance from sample point `cube` to the first hit towards `d`: the nearest texel of its
-// distance plane. Marks the face as needed.
-fn depth_toward(cube: u32, d: vec3<f32>) -> f32 {
+// distance plane. Marks the face as needed; when it is not resident and `walk` (a search that
+// stops there and, with the face resident, could go on to any other), every face of the cube,
+// so that the frame's feedback holds at least what it needs with everything resident.
+fn depth_toward(cube: u32, d: vec3<f32>, walk: bool) -> f32 {
     let fst = face_st(d);
     let face = u32(fst.x);
     atomicOr(&feedback[cube], 1u << face);
     let entry = slots[cube];
     if ((entry & (1u << face)) == 0u) {
+        if (walk) {
+            atomicOr(&feedback[cube], 63u);
+        }
         depth_missing = true;
         return FAR;
     }
@@ -334,7 +339,7 @@ fn depth_probe(cube: u32, p: vec3<f32>, x: vec3<f32>, r: vec3<f32>, w: f32) -> v
         return vec4<f32>(r, 1.0);
     }
     let d = x + r * (1.0 / w) - p;
-    return vec4<f32>(d, length(d) - depth_toward(cube, d));
+    return vec4<f32>(d, length(d) - depth_toward(cube, d, true));
 }
 
 // Where sample point `cube` sees the ray from x along r meet the scene, traced against its
@@ -655,7 +660,7 @@ fn recon_visible(x: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
         if (c == INVALID || cos_j <= 0.0) { continue; }
         let d = x - samples[c].xyz;
         depth_missing = false;
-        let seen = depth_toward(c, d);
+        let seen = depth_toward(c, d, false);
         if (depth_missing || length(d) > seen * (1.0 + P.depth_thickness)) { continue; }
         let l = lookup(c, d);
         if (l.w > 0.0) {

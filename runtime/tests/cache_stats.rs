@@ -104,12 +104,10 @@ fn an_unlimited_cache_stops_missing_once_the_orbit_comes_round_and_a_small_one_k
             for p in [Phase::Cold, Phase::Steady, Phase::All] {
                 let (s, a) = (phase(&small, p), phase(&all, p));
                 // The same path needs the same units; reconstruction's fallback (another
-                // candidate when the nearest is not resident) marks what it reads as well, so
-                // a short budget can only add requests.
+                // candidate when the nearest is not resident) marks what it reads as well, and a
+                // depth-corrected lookup that meets a face not resident marks its whole cube,
+                // so a short budget can only add requests.
                 assert!(s.requests >= a.requests, "{p:?}: {s:?} vs {a:?}");
-                if mode == Mode::Glossy {
-                    assert_eq!(s.requests, a.requests, "{p:?}: {s:?} vs {a:?}");
-                }
                 if p != Phase::Cold {
                     assert!(s.misses > a.misses, "{p:?}: {s:?} vs {a:?}");
                 }
@@ -151,10 +149,13 @@ fn whole_cubes_decode_at_least_the_bytes_of_single_faces() {
             );
             // A cube request is a face request's cube: six times the units at most.
             assert!(f.requests > c.requests && f.requests <= 6 * c.requests);
-            // A cold view does not read every face of every cube it needs.
+            // A cold view does not read every face of every cube it needs, except that a
+            // depth-corrected reflection meeting a face not resident requests its whole cube
+            // (its search could go on to any face).
             let (c, f) = (phase(&cube, Phase::Cold), phase(&face, Phase::Cold));
             assert!(
-                c.bytes_decoded > f.bytes_decoded,
+                c.bytes_decoded > f.bytes_decoded
+                    || (mode != Mode::Recon && c.bytes_decoded == f.bytes_decoded),
                 "{mode:?}: {c:?} vs {f:?}"
             );
         }

@@ -108,6 +108,10 @@ pub struct Args {
     /// No progress lines on stderr.
     #[arg(short, long)]
     quiet: bool,
+    /// Do not upload BC6H stores as BC6H blocks even where the GPU has BC texture
+    /// compression: decode them on the CPU and upload RGB9E5.
+    #[arg(long)]
+    no_bc: bool,
 }
 
 /// One renderer's worth of work, with what it cost to set up.
@@ -152,17 +156,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if sizes.is_empty() {
         bail!("--slots needs at least one size");
     }
+    let gpu = Gpu::headless_with_bc(!args.no_bc)?;
+    // Megabytes buy cube maps of the pool's real size (BC6H blocks where the GPU has BC).
     let budgets = sizes
         .iter()
-        .map(|s| Ok((s.label(), s.gpu_slots(&store)?)))
+        .map(|s| {
+            let slots = match s {
+                CacheSize::Megabytes(mb) => {
+                    Some(cache::slots_for_megabytes_with(&store, *mb, gpu.has_bc())?)
+                }
+                s => s.gpu_slots(&store)?,
+            };
+            Ok((s.label(), slots))
+        })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let shadings = shadings(&args)?;
 
-    let gpu = Gpu::headless()?;
-    let (device, queue, adapter) = (
+    let (device, queue, adapter, bc) = (
         gpu.device.clone(),
         gpu.queue.clone(),
         gpu.adapter_name.clone(),
+        gpu.has_bc(),
     );
     let config = |granularity, gpu_slots| CacheConfig {
         gpu_slots,
@@ -177,7 +191,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         points: probe.store().sample_points().len(),
         cubes: probe.store().cube_count(),
         resolution: probe.store().cube_resolution(),
-        cube_bytes: cache::cube_bytes(probe.store()),
+        cube_bytes: cache::cube_bytes_with(probe.store(), bc),
     };
     drop(probe);
     let paths = camera_paths(&args, start)?;

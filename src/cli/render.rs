@@ -76,6 +76,10 @@ pub struct Args {
     /// Write the frame's and the cumulative cache statistics as JSON to this file.
     #[arg(long)]
     stats_json: Option<PathBuf>,
+    /// Do not upload BC6H stores as BC6H blocks even where the GPU has BC texture
+    /// compression: decode them on the CPU and upload RGB9E5.
+    #[arg(long)]
+    no_bc: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -91,9 +95,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("note: {note}");
     }
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
+    let gpu = Gpu::headless_with_bc(!args.no_bc)?;
     let gpu_slots = match (args.cache_slots, args.cache_mb) {
         (Some(s), _) => Some(s),
-        (None, Some(mb)) => Some(cache::slots_for_megabytes(&store, mb)?),
+        (None, Some(mb)) => Some(cache::slots_for_megabytes_with(&store, mb, gpu.has_bc())?),
         (None, None) => None,
     };
     let config = CacheConfig {
@@ -102,7 +107,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         granularity: args.granularity,
         slots_per_texture: None,
     };
-    let gpu = Gpu::headless()?;
     check_frame_memory(&args, &store, &gpu)?;
     let adapter = gpu.adapter_name.clone();
     let t = Instant::now();
@@ -128,7 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut pixels = frame.pixels.clone();
     if args.cpu {
         let t = Instant::now();
-        let cubes = StoreCubes::decode(renderer.store())?;
+        let cubes = StoreCubes::decode_as(renderer.store(), renderer.face_layout())?;
         let (cpu, _) = renderer.reference_image(&camera, &params, &cubes)?;
         pixels = cpu;
         println!("cpu reference  {:.2} s", t.elapsed().as_secs_f64());
@@ -140,11 +144,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     println!("adapter        {adapter}");
     println!(
-        "store          {}: {} sample points, {}² cube maps, {} slots on the GPU",
+        "store          {}: {} sample points, {}² cube maps, {} slots on the GPU ({})",
         args.store.display(),
         renderer.store().sample_points().len(),
         renderer.store().cube_resolution(),
-        renderer.cache().slots()
+        renderer.cache().slots(),
+        renderer.face_layout().encoding
     );
     println!(
         "image          {} and {} ({}x{}, {} shading pass{}, {:.3} s; setup {:.2} s)",

@@ -82,6 +82,19 @@ pub fn store_path_without_distances() -> PathBuf {
     .clone()
 }
 
+/// The path of [`SCENE`] baked with BC6H cube maps (`encoding = "bc6h"`, format v4; baked on
+/// first use). Its 8² faces are whole 4×4 blocks.
+pub fn store_path_bc6h() -> PathBuf {
+    static PATH: OnceLock<PathBuf> = OnceLock::new();
+    PATH.get_or_init(|| {
+        bake_scene(
+            &format!("{SCENE}encoding = \"bc6h\"\n"),
+            "oslf-runtime-tests-bc6h",
+        )
+    })
+    .clone()
+}
+
 /// Bakes `scene` into a fresh directory `name`-PID under the temporary directory.
 fn bake_scene(scene: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
