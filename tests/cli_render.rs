@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{oslf, runtime_fixture};
+use common::{oslf, read_exr, runtime_fixture};
 
 fn render(args: &[&str]) -> std::process::Output {
     oslf("render").args(args).output().unwrap()
@@ -47,13 +47,7 @@ fn renders_exr_and_png_and_prints_cache_statistics() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains("miss rate"), "{stdout}");
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        &exr,
-        |res, _| vec![[0f32; 4]; res.width() * res.height()],
-        |px, pos, (r, g, b, a): (f32, f32, f32, f32)| px[pos.y() * 64 + pos.x()] = [r, g, b, a],
-    )
-    .unwrap();
-    let px = &image.layer_data.channel_data.pixels;
+    let (_, px) = read_exr(&exr);
     assert_eq!(px.len(), 64 * 48);
     assert!(px.iter().any(|p| p[3] == 1.0) && px.iter().any(|p| p[3] == 0.0));
     assert!(px.iter().all(|p| p.iter().all(|c| c.is_finite())));
@@ -61,19 +55,6 @@ fn renders_exr_and_png_and_prints_cache_statistics() {
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(stats["frame"]["requests"].as_u64().unwrap() > 0);
-}
-
-/// The pixels of the RGBA OpenEXR at `path`, row-major.
-fn read_exr(path: &std::path::Path) -> (usize, Vec<[f32; 4]>) {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a]
-        },
-    )
-    .unwrap();
-    image.layer_data.channel_data.pixels
 }
 
 /// Renders the test store at 64×48 into `name`.exr with `extra` flags.

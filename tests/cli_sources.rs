@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{oslf, runtime_fixture, temp_dir};
+use common::{oslf, read_exr, runtime_fixture, temp_dir};
 
 /// Renders `store` at 64×48 into `dir/name.exr` with `extra` flags: (success, stderr, path).
 fn render(store: &Path, dir: &Path, name: &str, extra: &[&str]) -> (bool, String, PathBuf) {
@@ -24,18 +24,6 @@ fn render(store: &Path, dir: &Path, name: &str, extra: &[&str]) -> (bool, String
         String::from_utf8_lossy(&run.stderr).into_owned(),
         out,
     )
-}
-
-fn pixels(path: &Path) -> Vec<[f32; 4]> {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a]
-        },
-    )
-    .unwrap();
-    image.layer_data.channel_data.pixels.1
 }
 
 #[test]
@@ -68,7 +56,7 @@ fn every_source_and_switch_renders_and_changes_the_image() {
         let (ok, e, out) = render(&store, &dir, name, &flags);
         assert!(ok, "{name}: {e}");
         assert!(!e.contains("warning"), "{name}: {e}");
-        let px = pixels(&out);
+        let (_, px) = read_exr(&out);
         assert!(px.iter().flatten().all(|v| v.is_finite()), "{name}");
         images.push((name, px));
     }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::oslf;
+use common::{oslf, read_exr};
 
 /// The lid scene of tests/common on a box, so the background behind it holds geometry too.
 fn scene_text() -> String {
@@ -12,18 +12,6 @@ fn scene_text() -> String {
          material = {{ color = [0.5, 0.4, 0.3] }}\n",
         common::LID_SCENE
     )
-}
-
-fn read_exr(path: &std::path::Path) -> Vec<[f32; 4]> {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a]
-        },
-    )
-    .unwrap();
-    image.layer_data.channel_data.pixels.1
 }
 
 #[test]
@@ -46,7 +34,7 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        read_exr(&dir.join(format!("{prefix}-mirror.exr")))
+        read_exr(&dir.join(format!("{prefix}-mirror.exr"))).1
     };
     let plain = truth("none", "plain");
     let behind = truth("scene", "behind");

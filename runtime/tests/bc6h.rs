@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{all_finite, compare, mean, open_store, store_path_bc6h};
+use common::{compare, mean, open_store, store_path_bc6h};
 use oslf_format::{Encoding, Store};
 use oslf_runtime::cache::{cube_bytes_with, slots_for_megabytes_with};
 use oslf_runtime::face::{bc6h_levels, mip_levels, FaceLayout};
@@ -32,41 +32,14 @@ fn open_bc6h() -> Store {
     store
 }
 
-/// Renders `params` on the GPU and on the CPU from the same G-buffer; asserts agreement (the
-/// tolerance of parity.rs).
+/// [`common::check_parity`] at this file's frame size.
 fn check(
     renderer: &mut Renderer,
     cubes: &StoreCubes,
     params: ShadingParams,
     label: &str,
 ) -> Vec<[f32; 4]> {
-    let camera = renderer.default_view();
-    let frame = renderer.render(&camera, &params, &options()).unwrap();
-    assert_eq!(
-        frame.stats.unresolved, 0,
-        "{label}: budget holds everything"
-    );
-    let (cpu, _) = renderer.reference_image(&camera, &params, cubes).unwrap();
-    assert!(all_finite(&frame.pixels), "{label}: non-finite GPU pixel");
-    assert!(all_finite(&cpu), "{label}: non-finite CPU pixel");
-    let (n, share, mae) = compare(&frame.pixels, &cpu, 2e-3);
-    println!(
-        "{label}: {n} object pixels, {:.4}% within 2e-3, mean |gpu-cpu| {mae:.2e}, mean {:.4}",
-        share * 100.0,
-        mean(&cpu)
-    );
-    assert!(
-        n > (W * H / 10) as usize,
-        "{label}: the object covers {n} pixels"
-    );
-    assert!(mean(&cpu) > 1e-3, "{label}: the image is black");
-    assert!(
-        share >= 0.995,
-        "{label}: only {:.3}% of pixels agree",
-        share * 100.0
-    );
-    assert!(mae < 2e-3, "{label}: mean difference {mae}");
-    frame.pixels
+    common::check_parity(renderer, cubes, params, (W, H), label)
 }
 
 /// Every mode on `renderer` against the CPU reference built with the renderer's own layout.

@@ -3,58 +3,23 @@
 
 mod common;
 
-use common::{all_finite, compare, mean, open_store};
+use common::{compare, open_store};
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
-    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams,
-    Source,
+    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, ShadingParams, Source,
 };
 
 const W: u32 = 96;
 const H: u32 = 72;
 
-fn options() -> RenderOptions {
-    RenderOptions {
-        width: W,
-        height: H,
-        ..Default::default()
-    }
-}
-
-/// Renders `params` on the GPU and on the CPU from the same G-buffer; asserts agreement.
+/// [`common::check_parity`] at this file's frame size.
 fn check(
     renderer: &mut Renderer,
     cubes: &StoreCubes,
     params: ShadingParams,
     label: &str,
 ) -> Vec<[f32; 4]> {
-    let camera = renderer.default_view();
-    let frame = renderer.render(&camera, &params, &options()).unwrap();
-    assert_eq!(
-        frame.stats.unresolved, 0,
-        "{label}: budget holds everything"
-    );
-    let (cpu, _) = renderer.reference_image(&camera, &params, cubes).unwrap();
-    assert!(all_finite(&frame.pixels), "{label}: non-finite GPU pixel");
-    assert!(all_finite(&cpu), "{label}: non-finite CPU pixel");
-    let (n, share, mae) = compare(&frame.pixels, &cpu, 2e-3);
-    println!(
-        "{label}: {n} object pixels, {:.4}% within 2e-3, mean |gpu-cpu| {mae:.2e}, mean {:.4}",
-        share * 100.0,
-        mean(&cpu)
-    );
-    assert!(
-        n > (W * H / 10) as usize,
-        "{label}: the object covers {n} pixels"
-    );
-    assert!(mean(&cpu) > 1e-3, "{label}: the image is black");
-    assert!(
-        share >= 0.995,
-        "{label}: only {:.3}% of pixels agree",
-        share * 100.0
-    );
-    assert!(mae < 2e-3, "{label}: mean difference {mae}");
-    frame.pixels
+    common::check_parity(renderer, cubes, params, (W, H), label)
 }
 
 #[test]

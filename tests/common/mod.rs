@@ -50,3 +50,16 @@ pub fn temp_dir(suite: &str, name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// The width and the pixels (row-major RGBA) of the OpenEXR image at `path`.
+pub fn read_exr(path: &std::path::Path) -> (usize, Vec<[f32; 4]>) {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a]
+        },
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    image.layer_data.channel_data.pixels
+}
