@@ -149,21 +149,8 @@ impl Light {
                 position,
                 intensity,
             } => {
-                let d = *position - p;
-                let r2 = d.length_squared();
-                if !(r2 > 0.0 && r2.is_finite()) {
-                    return None;
-                }
-                let r = r2.sqrt();
-                let e = *intensity / r2;
-                if !e.is_finite() || e == Vec3::ZERO {
-                    return None;
-                }
-                Some(LightSample {
-                    dir: d / r,
-                    distance: r,
-                    irradiance: e,
-                })
+                let (dir, r, r2) = toward(*position, p)?;
+                lit(dir, r, *intensity / r2)
             }
             Light::Spot {
                 position,
@@ -172,25 +159,11 @@ impl Light {
                 inner_angle,
                 outer_angle,
             } => {
-                let d = *position - p;
-                let r2 = d.length_squared();
-                if !(r2 > 0.0 && r2.is_finite()) {
-                    return None;
-                }
-                let r = r2.sqrt();
-                let dir = d / r;
+                let (dir, r, r2) = toward(*position, p)?;
                 let axis = direction.try_normalize()?;
                 // ψ is the angle between the axis and the direction from the light to `p`.
                 let a = spot_falloff(-dir.dot(axis), *inner_angle, *outer_angle);
-                let e = *intensity * (a / r2);
-                if !e.is_finite() || e == Vec3::ZERO {
-                    return None;
-                }
-                Some(LightSample {
-                    dir,
-                    distance: r,
-                    irradiance: e,
-                })
+                lit(dir, r, *intensity * (a / r2))
             }
             Light::Sun {
                 direction,
@@ -267,6 +240,31 @@ pub fn spot_falloff(cos_psi: f32, inner_angle: f32, outer_angle: f32) -> f32 {
     } else {
         0.0
     }
+}
+
+/// The unit direction from `p` to a light at `position`, the distance and its square; `None`
+/// when the light is at `p` or infinitely far.
+fn toward(position: Vec3, p: Vec3) -> Option<(Vec3, f32, f32)> {
+    let d = position - p;
+    let r2 = d.length_squared();
+    if !(r2 > 0.0 && r2.is_finite()) {
+        return None;
+    }
+    let r = r2.sqrt();
+    Some((d / r, r, r2))
+}
+
+/// The sample of a light at distance `r` along `dir` giving irradiance `e`; `None` when `e` is
+/// zero or not finite.
+fn lit(dir: Vec3, r: f32, e: Vec3) -> Option<LightSample> {
+    if !e.is_finite() || e == Vec3::ZERO {
+        return None;
+    }
+    Some(LightSample {
+        dir,
+        distance: r,
+        irradiance: e,
+    })
 }
 
 #[cfg(test)]

@@ -577,40 +577,23 @@ impl CubeCache {
 
 // Budgets given in megabytes (the `--cache-mb` and `--ram-mb` flags of `oslf render`).
 
-/// Bytes of one cube map in the GPU pool on an adapter with BC texture compression (what
-/// [`crate::Gpu::headless`] gives where the adapter offers it): [`cube_bytes_with`]`(store,
-/// true)`.
-pub fn cube_bytes(store: &Store) -> u64 {
-    cube_bytes_with(store, true)
-}
-
 /// Bytes of one cube map in the GPU pool on an adapter with (`adapter_has_bc`,
 /// [`crate::Gpu::has_bc`]) or without BC texture compression: six faces of texels in the pool's
 /// encoding (BC6H blocks, 1 byte per texel, or RGB9E5 for a BC6H store without BC) with their
 /// mip levels, and the distance planes when the store has them ([`FaceLayout::payload_bytes`]).
-pub fn cube_bytes_with(store: &Store, adapter_has_bc: bool) -> u64 {
+pub fn cube_bytes(store: &Store, adapter_has_bc: bool) -> u64 {
     6 * FaceLayout::for_store(store, adapter_has_bc).payload_bytes() as u64
 }
 
-/// The GPU slots `--cache-mb MB` buys on an adapter with BC texture compression:
-/// [`slots_for_megabytes_with`]`(store, mb, true)`.
-pub fn slots_for_megabytes(store: &Store, mb: f64) -> crate::Result<u32> {
-    slots_for_megabytes_with(store, mb, true)
-}
-
 /// The GPU slots `--cache-mb MB` buys on an adapter with (`adapter_has_bc`) or without BC
-/// texture compression: whole cube maps of [`cube_bytes_with`], at least one.
-pub fn slots_for_megabytes_with(
-    store: &Store,
-    mb: f64,
-    adapter_has_bc: bool,
-) -> crate::Result<u32> {
+/// texture compression: whole cube maps of [`cube_bytes`], at least one.
+pub fn slots_for_megabytes(store: &Store, mb: f64, adapter_has_bc: bool) -> crate::Result<u32> {
     if !(mb.is_finite() && mb > 0.0) {
         return Err(crate::RuntimeError::Parameter(
             "--cache-mb must be a positive number".into(),
         ));
     }
-    let cube_bytes = cube_bytes_with(store, adapter_has_bc);
+    let cube_bytes = cube_bytes(store, adapter_has_bc);
     let slots = (mb * 1e6 / cube_bytes as f64).floor();
     if slots < 1.0 {
         return Err(crate::RuntimeError::Parameter(format!(

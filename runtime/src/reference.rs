@@ -201,11 +201,12 @@ impl<C: CubeTexels> Shader<'_, C> {
         let l = lod.min(top as f32);
         let l0 = l.floor() as u32;
         let f = l - l0 as f32;
-        let a = self.seamless_level(cube, dir, l0, true);
+        let fst = face_st(dir);
+        let a = self.seamless_level(cube, fst, l0, true);
         if !(f > 0.0) {
             return a;
         }
-        let b = self.seamless_level(cube, dir, (l0 + 1).min(top), true);
+        let b = self.seamless_level(cube, fst, (l0 + 1).min(top), true);
         Some(a? + (b? - a?) * f)
     }
 
@@ -350,14 +351,20 @@ impl<C: CubeTexels> Shader<'_, C> {
         self.cubes.texel(cube, f, level, c.0 as u32, c.1 as u32)
     }
 
-    /// Radiance of mip `level` of `cube` towards `dir`, bilinear *across* face edges: the four
+    /// Radiance of mip `level` of `cube` at `face_st` of a direction, bilinear *across* face
+    /// edges: the four
     /// texel centres around the direction on its face, those off the face read from the
     /// adjacent face ([`Self::seam_texel`]), with the usual bilinear weights. At a corner of
     /// the cube, where three faces meet, the texel off the face in both directions does not
     /// exist: it is the mean of the other three. `None` when a face it reads is not available.
     /// Marks the faces it reads when `mark` (as `seamless_level`).
-    fn seamless_level(&self, cube: u32, dir: Vec3, level: u32, mark: bool) -> Option<Vec3> {
-        let (face, s, t) = face_st(dir);
+    fn seamless_level(
+        &self,
+        cube: u32,
+        (face, s, t): (usize, f32, f32),
+        level: u32,
+        mark: bool,
+    ) -> Option<Vec3> {
         let n = (self.uniform.cube_res >> level).max(1) as i32;
         let nf = n as f32;
         let fx = s * nf - 0.5;
@@ -390,7 +397,7 @@ impl<C: CubeTexels> Shader<'_, C> {
     /// `seamless_level` at level 0 without feedback marks: for the background only (as
     /// `seamless_read`). `lookup` (reflections, reconstruction) clamps at face edges.
     fn seamless_read(&self, cube: u32, dir: Vec3) -> Option<Vec3> {
-        self.seamless_level(cube, dir, 0, false)
+        self.seamless_level(cube, face_st(dir), 0, false)
     }
 
     fn candidates(&self, patch: u32, u: f32, v: f32, x: Vec3, n: Vec3) -> Candidates {
@@ -995,6 +1002,23 @@ impl CubeTexels for StoreCubes {
 mod tests {
     use super::*;
 
+    /// The constants of a store without sample points, maps or distances: environment cube
+    /// `env_cube`, faces of `cube_res`².
+    fn store_constants(env_cube: u32, cube_res: u32) -> crate::params::StoreConstants {
+        crate::params::StoreConstants {
+            sample_count: 0,
+            env_cube,
+            map_res: 1,
+            index16: true,
+            cube_res,
+            slots_per_texture: 1,
+            mip_levels: 1,
+            has_depth: false,
+            origin: [0.0; 3],
+            fitted_box: None,
+        }
+    }
+
     #[test]
     fn tangent_frames_are_unit_and_orthogonal_even_where_du_vanishes() {
         for n in [
@@ -1029,20 +1053,9 @@ mod tests {
 
     #[test]
     fn camera_rays_are_the_cameras_directions_through_pixel_centres() {
-        use crate::params::{Background, ShadeUniform, ShadingParams, StoreConstants};
+        use crate::params::{Background, ShadeUniform, ShadingParams};
         use oslf_geometry::Camera;
-        let k = StoreConstants {
-            sample_count: 0,
-            env_cube: u32::MAX,
-            map_res: 1,
-            index16: true,
-            cube_res: 1,
-            slots_per_texture: 1,
-            mip_levels: 1,
-            has_depth: false,
-            origin: [0.0; 3],
-            fitted_box: None,
-        };
+        let k = store_constants(u32::MAX, 1);
         for (camera, (w, h)) in [
             (
                 Camera {
@@ -1096,19 +1109,8 @@ mod tests {
 
     #[test]
     fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
-        use crate::params::{Background, ShadeUniform, ShadingParams, StoreConstants};
-        let k = StoreConstants {
-            sample_count: 0,
-            env_cube: 0,
-            map_res: 1,
-            index16: true,
-            cube_res: 1,
-            slots_per_texture: 1,
-            mip_levels: 1,
-            has_depth: false,
-            origin: [0.0; 3],
-            fitted_box: None,
-        };
+        use crate::params::{Background, ShadeUniform, ShadingParams};
+        let k = store_constants(0, 1);
         let camera = oslf_geometry::Camera {
             position: Vec3::new(0.0, -3.0, 0.0),
             target: Vec3::ZERO,
@@ -1182,23 +1184,12 @@ mod tests {
     /// filtering within each face, as `lookup` does, shows a seam 5-20 times larger.)
     #[test]
     fn the_env_background_is_continuous_across_face_edges() {
-        use crate::params::{Background, ShadeUniform, ShadingParams, StoreConstants};
+        use crate::params::{Background, ShadeUniform, ShadingParams};
         use oslf_geometry::Camera;
         const FACTOR: f32 = 1.5;
         let (w, h) = (160u32, 120u32);
         for res in [8, 32] {
-            let k = StoreConstants {
-                sample_count: 0,
-                env_cube: 0,
-                map_res: 1,
-                index16: true,
-                cube_res: res,
-                slots_per_texture: 1,
-                mip_levels: 1,
-                has_depth: false,
-                origin: [0.0; 3],
-                fitted_box: None,
-            };
+            let k = store_constants(0, res);
             // Views across edges of every orientation, vertical and horizontal in the image,
             // and across a corner of the cube.
             for (target, up) in [

@@ -267,14 +267,24 @@ impl CacheSize {
         }
     }
 
-    /// The [`crate::CacheConfig::gpu_slots`] for `store` (`None` = all).
-    pub fn gpu_slots(&self, store: &oslf_format::Store) -> Result<Option<u32>> {
+    /// The [`crate::CacheConfig::gpu_slots`] for `store` (`None` = all) on an adapter with
+    /// (`adapter_has_bc`, [`crate::Gpu::has_bc`]) or without BC texture compression, which
+    /// decides how many cube maps a megabyte buys.
+    pub fn gpu_slots(
+        &self,
+        store: &oslf_format::Store,
+        adapter_has_bc: bool,
+    ) -> Result<Option<u32>> {
         Ok(match *self {
             Self::Slots(n) => Some(n),
             Self::Percent(p) => {
                 Some(((p / 100.0 * f64::from(store.cube_count())).ceil() as u32).max(1))
             }
-            Self::Megabytes(mb) => Some(crate::cache::slots_for_megabytes(store, mb)?),
+            Self::Megabytes(mb) => Some(crate::cache::slots_for_megabytes(
+                store,
+                mb,
+                adapter_has_bc,
+            )?),
             Self::All => None,
         })
     }

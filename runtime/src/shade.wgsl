@@ -279,11 +279,12 @@ fn lookup_lod(cube: u32, dir: vec3<f32>, lod: f32) -> vec4<f32> {
     let l = min(lod, f32(top));
     let l0 = u32(floor(l));
     let f = l - f32(l0);
-    let a = seamless_level(cube, dir, l0, true);
+    let fst = face_st(dir);
+    let a = seamless_level(cube, fst, l0, true);
     if (!(f > 0.0)) {
         return a;
     }
-    let b = seamless_level(cube, dir, min(l0 + 1u, top), true);
+    let b = seamless_level(cube, fst, min(l0 + 1u, top), true);
     return vec4<f32>(a.rgb + (b.rgb - a.rgb) * f, a.w * b.w);
 }
 
@@ -940,14 +941,14 @@ fn seam_texel(cube: u32, face: u32, x: i32, y: i32, level: u32, mark: bool) -> v
     return read_tap_level(cube, Tap(f, u.x, u.y, u.x, u.y, 0.0, 0.0), level);
 }
 
-// Radiance of mip `level` of cube `cube` towards `dir`, bilinear ACROSS face edges: the four
-// texel centres around the direction on its face, those off the face read from the adjacent
-// face (`seam_texel`), with the usual bilinear weights. At a corner of the cube, where three
+// Radiance of mip `level` of cube `cube` at `fst` (`face_st` of the direction: face and face
+// coordinates), bilinear ACROSS face edges: the four texel centres around the direction on its
+// face, those off the face read from the adjacent face (`seam_texel`), with the usual bilinear
+// weights. At a corner of the cube, where three
 // faces meet, the texel off the face in both directions does not exist: it is the mean of the
 // other three. `.w` = 0 when a face it reads is not resident. Marks the faces it reads when
 // `mark`. Written without a local array (see `Candidates`).
-fn seamless_level(cube: u32, dir: vec3<f32>, level: u32, mark: bool) -> vec4<f32> {
-    let fst = face_st(dir);
+fn seamless_level(cube: u32, fst: vec3<f32>, level: u32, mark: bool) -> vec4<f32> {
     let face = u32(fst.x);
     let n = i32(max(P.cube_res >> level, 1u));
     let nf = f32(n);
@@ -984,7 +985,7 @@ fn seamless_level(cube: u32, dir: vec3<f32>, level: u32, mark: bool) -> vec4<f32
 // (reflections, reconstruction) clamps at face edges, and every published error figure
 // depends on that; filtered glossy samples (`lookup_lod`) read across edges at every level.
 fn seamless_read(cube: u32, dir: vec3<f32>) -> vec3<f32> {
-    return seamless_level(cube, dir, 0u, false).rgb;
+    return seamless_level(cube, face_st(dir), 0u, false).rgb;
 }
 
 // What background pixel `px` shows, alpha 0. The environment cube is pinned resident, so it is

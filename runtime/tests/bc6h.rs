@@ -7,7 +7,7 @@ mod common;
 
 use common::{compare, mean, open_store, store_path_bc6h};
 use oslf_format::{Encoding, Store};
-use oslf_runtime::cache::{cube_bytes_with, slots_for_megabytes_with};
+use oslf_runtime::cache::{cube_bytes, slots_for_megabytes};
 use oslf_runtime::face::{bc6h_levels, mip_levels, FaceLayout};
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
@@ -217,15 +217,15 @@ fn the_cache_counts_one_byte_per_texel_of_bc6h() {
     let dist = if depth { 2 * res * res } else { 0 };
     assert_eq!(bc.payload_bytes(), res * res + mips + dist);
     assert_eq!(fallback.level_bytes(0), 4 * res * res);
-    assert_eq!(cube_bytes_with(&store, true), 6 * bc.payload_bytes() as u64);
+    assert_eq!(cube_bytes(&store, true), 6 * bc.payload_bytes() as u64);
     assert_eq!(
-        cube_bytes_with(&store, false),
+        cube_bytes(&store, false),
         6 * fallback.payload_bytes() as u64
     );
-    assert!(cube_bytes_with(&store, true) < cube_bytes_with(&store, false));
-    let mb = 10.0 * cube_bytes_with(&store, true) as f64 / 1e6;
-    assert_eq!(slots_for_megabytes_with(&store, mb, true).unwrap(), 10);
-    assert!(slots_for_megabytes_with(&store, mb, false).unwrap() < 10);
+    assert!(cube_bytes(&store, true) < cube_bytes(&store, false));
+    let mb = 10.0 * cube_bytes(&store, true) as f64 / 1e6;
+    assert_eq!(slots_for_megabytes(&store, mb, true).unwrap(), 10);
+    assert!(slots_for_megabytes(&store, mb, false).unwrap() < 10);
 
     let ram_budget = 1 << 20;
     let mut r = Renderer::new(

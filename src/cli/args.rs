@@ -228,12 +228,16 @@ pub fn parse_glossy_filter(s: &str) -> std::result::Result<GlossyFilter, String>
     s.parse::<GlossyFilter>().map_err(|e| e.to_string())
 }
 
+/// Comma-separated numbers.
+fn parse_numbers(s: &str) -> std::result::Result<Vec<f32>, String> {
+    s.split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect()
+}
+
 /// Six finite numbers `xmin,ymin,zmin,xmax,ymax,zmax` with min < max on each axis.
 pub fn parse_box(s: &str) -> std::result::Result<[[f32; 3]; 2], String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
-        .collect::<std::result::Result<_, _>>()?;
+    let v = parse_numbers(s)?;
     match v.as_slice() {
         [a, b, c, d, e, f] if v.iter().all(|c| c.is_finite()) && a < d && b < e && c < f => {
             Ok([[*a, *b, *c], [*d, *e, *f]])
@@ -246,10 +250,7 @@ pub fn parse_box(s: &str) -> std::result::Result<[[f32; 3]; 2], String> {
 
 /// Three finite numbers `x,y,z`.
 pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
-        .collect::<std::result::Result<_, _>>()?;
+    let v = parse_numbers(s)?;
     match v.as_slice() {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
         _ => Err(format!("{s:?} is not three finite numbers x,y,z")),

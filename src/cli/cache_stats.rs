@@ -160,15 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Megabytes buy cube maps of the pool's real size (BC6H blocks where the GPU has BC).
     let budgets = sizes
         .iter()
-        .map(|s| {
-            let slots = match s {
-                CacheSize::Megabytes(mb) => {
-                    Some(cache::slots_for_megabytes_with(&store, *mb, gpu.has_bc())?)
-                }
-                s => s.gpu_slots(&store)?,
-            };
-            Ok((s.label(), slots))
-        })
+        .map(|s| Ok((s.label(), s.gpu_slots(&store, gpu.has_bc())?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let shadings = shadings(&args)?;
 
@@ -191,7 +183,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         points: probe.store().sample_points().len(),
         cubes: probe.store().cube_count(),
         resolution: probe.store().cube_resolution(),
-        cube_bytes: cache::cube_bytes_with(probe.store(), bc),
+        cube_bytes: cache::cube_bytes(probe.store(), bc),
     };
     drop(probe);
     let paths = camera_paths(&args, start)?;

@@ -98,7 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let gpu = Gpu::headless_with_bc(!args.no_bc)?;
     let gpu_slots = match (args.cache_slots, args.cache_mb) {
         (Some(s), _) => Some(s),
-        (None, Some(mb)) => Some(cache::slots_for_megabytes_with(&store, mb, gpu.has_bc())?),
+        (None, Some(mb)) => Some(cache::slots_for_megabytes(&store, mb, gpu.has_bc())?),
         (None, None) => None,
     };
     let config = CacheConfig {
