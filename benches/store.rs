@@ -78,7 +78,7 @@ fn reencode(
     let points = source.sample_points().to_vec();
     let res = meta.bake.sample_map_resolution;
     let mut indices = Vec::new();
-    for p in 0..meta.patches.len() as u32 {
+    for p in 0..meta.map_count() as u32 {
         let map = source.sample_map(p).expect("sample map");
         for y in 0..res {
             for x in 0..res {

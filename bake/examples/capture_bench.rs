@@ -30,7 +30,11 @@ fn main() -> anyhow::Result<()> {
     let geometry = TriangleScene::build(
         scene.instances(true, settings.epsilon * oslf_bake::bake::TESSELLATION_ERROR),
     )?;
-    let placement = oslf_bake::sample_points::place(&scene.objects, settings, &geometry)?;
+    let placement = oslf_bake::sample_points::place(
+        &oslf_bake::surface::Surfaces::new(&scene.objects, settings)?,
+        settings,
+        &geometry,
+    )?;
     let capture = CaptureSettings::from_bake(settings);
     let integrator = Integrator::for_scene(&scene, &geometry);
     let mut hash = 0xcbf2_9ce4_8422_2325u64;

@@ -3,10 +3,10 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use glam::{Mat4, Vec3};
+use glam::{Affine3A, Mat4, Vec3};
 use oslf_format::{
-    BakeParams, CameraInfo, EncodedCube, ObjectInfo, Patch, SampleMaps, SamplePoint, ShardSpec,
-    ShardWriter, StoreMeta, StoreWriter,
+    BakeParams, CameraInfo, EncodedCube, MeshInfo, ObjectInfo, Patch, SampleMaps, SamplePoint,
+    ShardSpec, ShardWriter, StoreMeta, StoreWriter,
 };
 use rayon::prelude::*;
 
@@ -16,7 +16,7 @@ use crate::error::{BakeError, Result};
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::EmptyScene;
 use crate::sample_map::{self, SampleMapStats};
-use crate::sample_points::{self, global_patches};
+use crate::sample_points::{self, Surfaces};
 use crate::scene::Scene;
 
 /// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε.
@@ -241,7 +241,8 @@ pub fn bake_shard(
     report.bvh_build_seconds = geometry.build_time().as_secs_f64();
 
     let t = Instant::now();
-    let placement = sample_points::place(&scene.objects, settings, &geometry)?;
+    let surfaces = Surfaces::new(&scene.objects, settings)?;
+    let placement = sample_points::place(&surfaces, settings, &geometry)?;
     report.placement_seconds = t.elapsed().as_secs_f64();
     report.points_placed = placement.placed;
     report.points_removed_close = placement.removed_close;
@@ -249,14 +250,13 @@ pub fn bake_shard(
     let points = placement.points;
 
     let t = Instant::now();
-    let object_patches = global_patches(&scene.objects);
-    let patches: Vec<_> = object_patches.iter().map(|&(_, p)| p).collect();
-    let map_rows = patches.len() as u64 * u64::from(settings.sample_map_resolution);
+    let domains = surfaces.maps();
+    let map_rows = domains.len() as u64 * u64::from(settings.sample_map_resolution);
     let build_maps = |points: &[SamplePoint]| {
         // One bar per build (refinement rebuilds the maps with the added points).
         let bar = progress_bar(options.progress, map_rows, "sample-map rows");
         let built = sample_map::build(
-            &patches,
+            &domains,
             points,
             &geometry,
             settings.sample_map_resolution,
@@ -273,7 +273,7 @@ pub fn bake_shard(
     let mut min_distance = placement.radius;
     let mut rays = map_stats.rays;
     for _ in 0..sample_points::REFINE_ROUNDS {
-        let short = sample_map::short_texels(&maps);
+        let short = sample_map::short_texels(&maps, &domains);
         if short.is_empty() {
             break;
         }
@@ -281,7 +281,7 @@ pub fn bake_shard(
         let added = sample_points::refine(
             &mut points,
             &short,
-            &object_patches,
+            &domains,
             settings.sample_map_resolution,
             settings.epsilon,
             min_distance,
@@ -303,7 +303,7 @@ pub fn bake_shard(
     report.sample_maps = map_stats;
     report.sample_map_seconds = t.elapsed().as_secs_f64();
 
-    let meta = store_meta(scene);
+    let meta = store_meta(scene, &surfaces);
     report.shard = shard.map(|s| s.to_string());
     let mut writer = Sink::open(options, shard, &meta, &points, &maps, &mut report.restarted)?;
     report.cubes_resumed = writer.done();
@@ -498,17 +498,33 @@ pub fn partial_path(output: &Path) -> PathBuf {
 }
 
 /// Everything the store says about the scene and the bake, besides the points, maps and cubes.
-pub fn store_meta(scene: &Scene) -> StoreMeta {
+/// A mesh object is stored in world space (identity transform) with its atlas's vertices.
+pub fn store_meta(scene: &Scene, surfaces: &Surfaces) -> StoreMeta {
     let s = &scene.bake;
     let mut objects = Vec::new();
     let mut patches = Vec::new();
-    for o in &scene.objects {
+    for (i, o) in scene.objects.iter().enumerate() {
+        let (transform, patch_count, mesh) = match surfaces.atlas(i) {
+            None => (o.transform, o.object_patches.len() as u32, None),
+            Some(atlas) => {
+                let m = &atlas.mesh;
+                let mesh = MeshInfo {
+                    atlas_grid: atlas.grid,
+                    positions: m.positions.iter().map(|p| p.to_array()).collect(),
+                    normals: m.normals.iter().map(|n| n.to_array()).collect(),
+                    uvs: m.uvs.iter().map(|uv| uv.to_array()).collect(),
+                    triangles: m.triangles.clone(),
+                };
+                (Affine3A::IDENTITY, atlas.grid * atlas.grid, Some(mesh))
+            }
+        };
         objects.push(ObjectInfo {
             name: o.name.clone(),
-            transform: Mat4::from(o.transform).to_cols_array_2d(),
+            transform: Mat4::from(transform).to_cols_array_2d(),
             base_color: o.base_color.to_array(),
-            first_patch: patches.len() as u32,
-            patch_count: o.object_patches.len() as u32,
+            first_patch: surfaces.first_map(i),
+            patch_count,
+            mesh,
         });
         patches.extend(o.object_patches.iter().map(|p| Patch {
             control_points: p.cp.map(|c| c.to_array()),
@@ -541,15 +557,14 @@ pub fn store_meta(scene: &Scene) -> StoreMeta {
     }
 }
 
-/// Centre of the bounding box of all OSLF patches' control points (world space).
+/// Centre of the bounding box of all OSLF patches' control points and mesh vertices (world
+/// space).
 pub fn object_centre(scene: &Scene) -> Vec3 {
     let mut lo = Vec3::splat(f32::MAX);
     let mut hi = Vec3::splat(f32::MIN);
-    for p in scene.objects.iter().flat_map(|o| &o.patches) {
-        for c in p.cp {
-            lo = lo.min(c);
-            hi = hi.max(c);
-        }
+    for c in scene.objects.iter().flat_map(|o| o.points()) {
+        lo = lo.min(c);
+        hi = hi.max(c);
     }
     (lo + hi) * 0.5
 }

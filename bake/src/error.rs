@@ -77,6 +77,9 @@ impl From<oslf_geometry::GeometryError> for BakeError {
                 message,
             },
             oslf_geometry::GeometryError::Invalid(message) => BakeError::Invalid(message),
+            e @ oslf_geometry::GeometryError::AtlasTooLarge { .. } => {
+                BakeError::Invalid(e.to_string())
+            }
         }
     }
 }

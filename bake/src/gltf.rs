@@ -41,6 +41,8 @@ use gltf::mesh::Mode;
 use gltf::texture::WrappingMode;
 use gltf::Semantic;
 
+use oslf_geometry::atlas::UvSource;
+
 use crate::camera::Camera;
 use crate::light::Light;
 use crate::material::Material;
@@ -66,6 +68,20 @@ pub struct Options {
     pub watts_per_lumen: f32,
     /// Import the file's `KHR_lights_punctual` lights.
     pub lights: bool,
+    /// Names of nodes whose meshes are OSLF objects ([`Import::objects`]) rather than
+    /// environment shapes. Each must name a node with a mesh.
+    pub objects: Vec<String>,
+    /// Also make OSLF objects of the nodes whose `extras` hold `"oslf": true` (how a `.glb`
+    /// given as the whole scene names its objects).
+    pub objects_from_extras: bool,
+}
+
+/// Whether a node's `extras` hold `"oslf": true`.
+fn marked_oslf(node: &gltf::Node) -> bool {
+    node.extras().as_ref().is_some_and(|raw| {
+        serde_json::from_str::<serde_json::Value>(raw.get())
+            .is_ok_and(|v| v.get("oslf") == Some(&serde_json::Value::Bool(true)))
+    })
 }
 
 impl Default for Options {
@@ -74,6 +90,8 @@ impl Default for Options {
             transform: Affine3A::IDENTITY,
             watts_per_lumen: WATTS_PER_LUMEN,
             lights: true,
+            objects: Vec::new(),
+            objects_from_extras: false,
         }
     }
 }
@@ -91,11 +109,26 @@ pub struct GltfCamera {
     pub aspect_ratio: Option<f32>,
 }
 
+/// A node chosen as an OSLF object ([`Options::objects`]).
+#[derive(Clone, Debug)]
+pub struct ImportedObject {
+    /// The node's name.
+    pub node: String,
+    /// The node's mesh (all primitives) in scene space; `uvs` are the base-colour texture's.
+    pub mesh: Mesh,
+    /// Raw `TEXCOORD_1` (lightmap) and `TEXCOORD_0`, where every primitive has the set.
+    pub uv_sets: Vec<(UvSource, Vec<Vec2>)>,
+    /// The first primitive's material (an index into the materials passed to [`load`]).
+    pub material: u32,
+}
+
 /// What a glTF file contributes to a scene.
 #[derive(Clone, Debug, Default)]
 pub struct Import {
     /// Triangle meshes in scene space; `material` indexes the materials passed to [`load`].
     pub shapes: Vec<Shape>,
+    /// The nodes named in [`Options::objects`], in traversal order.
+    pub objects: Vec<ImportedObject>,
     pub lights: Vec<Light>,
     /// Perspective cameras in the order of the scene traversal (depth first, children in
     /// file order).
@@ -319,6 +352,15 @@ fn load_bytes(
     loader.warn_document();
     let mut import = Import::default();
     loader.traverse(options, materials, &mut import)?;
+    for name in &options.objects {
+        if !import.objects.iter().any(|o| &o.node == name) {
+            return Err(error(
+                path,
+                "nodes",
+                format!("objects names {name:?}, but no node of the scene with that name has a triangle mesh"),
+            ));
+        }
+    }
     import.warnings = std::mem::take(&mut loader.warnings);
     Ok(import)
 }
@@ -711,7 +753,11 @@ impl<'d> Loader<'d> {
             let world = Affine3A::from_mat4(global);
             let world = options.transform * world;
             if let Some(mesh) = node.mesh() {
-                self.node_mesh(&node, &at, &mesh, &world, materials, import)?;
+                let object = node
+                    .name()
+                    .is_some_and(|n| options.objects.iter().any(|o| o == n))
+                    || (options.objects_from_extras && marked_oslf(&node));
+                self.node_mesh(&node, &at, &mesh, &world, object, materials, import)?;
             }
             if node.skin().is_some() {
                 self.warn(format!(
@@ -902,15 +948,23 @@ impl<'d> Loader<'d> {
 
     // --- meshes ----------------------------------------------------------------------------
 
+    /// Reads `node`'s mesh into `import.shapes`, or, when `object` is set, into one
+    /// `import.objects` entry (its primitives merged, with their raw `TEXCOORD_1` and
+    /// `TEXCOORD_0` as atlas candidates where every primitive has them).
+    #[allow(clippy::too_many_arguments)]
     fn node_mesh(
         &mut self,
         node: &gltf::Node,
         at: &str,
         mesh: &gltf::Mesh,
         world: &Affine3A,
+        object: bool,
         materials: &mut Vec<Material>,
         import: &mut Import,
     ) -> Result<()> {
+        let mut merged: Option<ImportedObject> = None;
+        let (mut lightmap, mut texture): (Option<Vec<Vec2>>, Option<Vec<Vec2>>) =
+            (Some(Vec::new()), Some(Vec::new()));
         let mesh_label = label("meshes", mesh.index(), mesh.name());
         if node.weights().is_some() || mesh.weights().is_some() {
             self.warn(format!(
@@ -969,12 +1023,91 @@ impl<'d> Loader<'d> {
                     ),
                 ));
             }
-            import.shapes.push(Shape {
-                mesh: m,
-                material: material_index,
-            });
+            if !object {
+                import.shapes.push(Shape {
+                    mesh: m,
+                    material: material_index,
+                });
+                continue;
+            }
+            let n = m.positions.len();
+            for (set, uvs) in [(1, &mut lightmap), (0, &mut texture)] {
+                match (self.texcoords(&prim, set, &json_at, n)?, uvs.as_mut()) {
+                    (Some(read), Some(all)) => all.extend(read),
+                    _ => *uvs = None,
+                }
+            }
+            match &mut merged {
+                None => {
+                    merged = Some(ImportedObject {
+                        node: node.name().unwrap_or_default().to_string(),
+                        mesh: m,
+                        uv_sets: Vec::new(),
+                        material: material_index,
+                    })
+                }
+                Some(o) => {
+                    if o.material != material_index {
+                        self.warn(format!(
+                            "{at}: an OSLF object has one material: {what} keeps the first primitive's"
+                        ));
+                    }
+                    o.mesh.append(&m);
+                }
+            }
+        }
+        if let Some(mut o) = merged {
+            o.uv_sets = [(UvSource::Lightmap, lightmap), (UvSource::Texture, texture)]
+                .into_iter()
+                .filter_map(|(s, uvs)| Some((s, uvs?)))
+                .collect();
+            import.objects.push(o);
         }
         Ok(())
+    }
+
+    /// The primitive's `TEXCOORD_{set}` as read (no texture transform), `None` if absent;
+    /// `n` is its vertex count.
+    fn texcoords(
+        &mut self,
+        prim: &gltf::Primitive,
+        set: u32,
+        json_at: &str,
+        n: usize,
+    ) -> Result<Option<Vec<Vec2>>> {
+        let Some(acc) = prim.get(&Semantic::TexCoords(set)) else {
+            return Ok(None);
+        };
+        let at = format!("{json_at}.attributes.TEXCOORD_{set}");
+        let flat = self.read_floats(
+            &acc,
+            &at,
+            Dimensions::Vec2,
+            &[
+                (DataType::F32, true),
+                (DataType::U8, true),
+                (DataType::U16, true),
+            ],
+            "vec2 of f32, normalized u8 or normalized u16",
+        )?;
+        if flat.len() != 2 * n {
+            return Err(self.err(
+                at,
+                format!(
+                    "accessor {} has {} elements, POSITION has {n}",
+                    acc.index(),
+                    flat.len() / 2
+                ),
+            ));
+        }
+        let uvs: Vec<Vec2> = flat.chunks_exact(2).map(Vec2::from_slice).collect();
+        if let Some(i) = uvs.iter().position(|p| !p.is_finite()) {
+            return Err(self.err(
+                at,
+                format!("accessor {}: element {i} is not finite", acc.index()),
+            ));
+        }
+        Ok(Some(uvs))
     }
 
     fn primitive_mesh(
@@ -1065,36 +1198,10 @@ impl<'d> Loader<'d> {
                         ));
                         vec![map.apply(Vec2::ZERO); n]
                     }
-                    Some(acc) => {
-                        let at = format!("{json_at}.attributes.TEXCOORD_{}", map.set);
-                        let flat = self.read_floats(
-                            &acc,
-                            &at,
-                            Dimensions::Vec2,
-                            &[
-                                (DataType::F32, true),
-                                (DataType::U8, true),
-                                (DataType::U16, true),
-                            ],
-                            "vec2 of f32, normalized u8 or normalized u16",
-                        )?;
-                        if flat.len() != 2 * n {
-                            return Err(self.err(
-                                at,
-                                format!(
-                                    "accessor {} has {} elements, POSITION has {n}",
-                                    acc.index(),
-                                    flat.len() / 2
-                                ),
-                            ));
-                        }
-                        let uvs: Vec<Vec2> = flat.chunks_exact(2).map(Vec2::from_slice).collect();
-                        if let Some(i) = uvs.iter().position(|p| !p.is_finite()) {
-                            return Err(self.err(
-                                at,
-                                format!("accessor {}: element {i} is not finite", acc.index()),
-                            ));
-                        }
+                    Some(_) => {
+                        let uvs = self
+                            .texcoords(prim, map.set, json_at, n)?
+                            .expect("the attribute is present");
                         if uvs.iter().any(|&uv| map.beyond_clamp(uv)) {
                             self.warn(format!(
                                 "{what}: texture coordinates beyond [0, 1] along a CLAMP_TO_EDGE axis are not supported: the texture repeats there"

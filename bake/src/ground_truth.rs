@@ -113,9 +113,13 @@ pub struct GroundTruth<'s> {
     scene: &'s Scene,
     /// Everything, the object included: what reflected rays and paths see.
     geometry: TriangleScene,
-    /// The object's patches alone, `SurfaceHit::object` = global patch index (store order).
+    /// The OSLF objects alone, `SurfaceHit::object` = an index into `patches` and `colors`:
+    /// one per Bézier patch (store order), one per mesh object.
     object: TriangleScene,
-    patches: Vec<BezierPatch>,
+    /// The Bézier patch hit (its normal and ∂x/∂u are evaluated exactly), or `None` for a
+    /// mesh, shaded with its interpolated normal and a frame built from it alone (as the
+    /// runtime does).
+    patches: Vec<Option<BezierPatch>>,
     colors: Vec<Vec3>,
     camera: Camera,
 }
@@ -136,7 +140,16 @@ impl<'s> GroundTruth<'s> {
                     material: object.material,
                     object: patches.len() as u32,
                 });
-                patches.push(*patch);
+                patches.push(Some(*patch));
+                colors.push(object.base_color);
+            }
+            if let Some(source) = &object.mesh {
+                instances.push(Instance {
+                    mesh: source.mesh.clone(),
+                    material: object.material,
+                    object: patches.len() as u32,
+                });
+                patches.push(None);
                 colors.push(object.base_color);
             }
         }
@@ -311,7 +324,10 @@ impl<'s> GroundTruth<'s> {
         };
         let spp = settings.spp.max(1);
         let (u, v) = (hit.uv.x, hit.uv.y);
-        let n = patch.normal(u, v);
+        let n = match patch {
+            Some(patch) => patch.normal(u, v),
+            None => hit.shading_normal,
+        };
         let view = -ray.dir;
         let mut ng = hit.geometric_normal;
         if ng.dot(view) < 0.0 {
@@ -334,7 +350,7 @@ impl<'s> GroundTruth<'s> {
                 }
             }
             Term::Glossy(lobe) => {
-                let (du, _) = patch.partials(u, v);
+                let du = patch.as_ref().map_or(Vec3::ZERO, |p| p.partials(u, v).0);
                 let t = (du - n * n.dot(du))
                     .try_normalize()
                     .unwrap_or_else(|| Frame::from_normal(n).x);

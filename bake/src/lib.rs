@@ -49,5 +49,6 @@ pub mod preflight;
 pub mod sample_map;
 pub mod sample_points;
 pub mod scene;
+pub mod surface;
 
 pub use error::{BakeError, Result};

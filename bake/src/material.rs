@@ -62,6 +62,23 @@ impl Material {
         }
     }
 
+    /// The mean albedo over the texture's domain (a checker's two colours equally, an image's
+    /// texels clamped as [`Material::eval`] clamps them): the C_s of Eq. 4.12 a store carries.
+    pub fn mean_albedo(&self) -> Vec3 {
+        match &self.albedo {
+            Texture::Constant(c) => *c,
+            Texture::Checker { a, b, .. } => (*a + *b) * 0.5,
+            Texture::Image(img) => {
+                let sum: Vec3 = img
+                    .pixels
+                    .iter()
+                    .map(|p| Vec3::new(clamp01(p.x), clamp01(p.y), clamp01(p.z)))
+                    .sum();
+                sum / img.pixels.len().max(1) as f32
+            }
+        }
+    }
+
     /// The albedo at `uv`, clamped to `[0, 1]` (a non-finite component reads as 0).
     pub fn eval(&self, uv: Vec2) -> Vec3 {
         let a = self.albedo.eval(uv);

@@ -362,7 +362,7 @@ struct Counts {
     /// The thread count the times are for (at least 1), and it as `f64`.
     threads: usize,
     th: f64,
-    /// Bézier patches over all OSLF objects.
+    /// Sample maps over all OSLF objects: Bézier patches and mesh atlas pages.
     patches: u64,
     /// Sample points requested (`sample_count`, or the area over `sample_spacing`).
     requested: u64,
@@ -399,12 +399,19 @@ fn requested_points(scene: &Scene) -> u64 {
     match scene.bake.sample_count {
         SampleDensity::Count(n) => u64::from(n),
         SampleDensity::Spacing(h) => {
+            let mesh_area: f64 = scene
+                .objects
+                .iter()
+                .filter_map(|o| o.mesh.as_ref())
+                .map(|m| m.mesh.area())
+                .sum();
             let area: f64 = scene
                 .objects
                 .iter()
                 .flat_map(|o| &o.patches)
                 .map(patch_area)
-                .sum();
+                .sum::<f64>()
+                + mesh_area;
             (area / (0.866_025_4 * f64::from(h) * f64::from(h))).ceil() as u64
         }
     }
@@ -426,7 +433,13 @@ fn triangle_counts(scene: &Scene) -> (u64, u64) {
         .iter()
         .flat_map(|o| &o.patches)
         .map(|p| 2 * u64::from(p.tessellation_level(max_error)).pow(2))
-        .sum();
+        .sum::<u64>()
+        + scene
+            .objects
+            .iter()
+            .filter_map(|o| o.mesh.as_ref())
+            .map(|m| m.mesh.triangles.len() as u64)
+            .sum::<u64>();
     let triangles = shape_triangles + object_triangles;
     // The environment cube's second BVH (bake.rs: built when the store has an environment cube
     // and the scene has shapes), alive during the capture.
@@ -440,7 +453,16 @@ impl Counts {
         let s = &scene.bake;
         let threads = threads.max(1);
         let th = threads as f64;
-        let patches: u64 = scene.objects.iter().map(|o| o.patches.len() as u64).sum();
+        // Sample maps: one per patch, k² per mesh atlas (laid out as the bake will; a mesh
+        // the atlas refuses fails the bake itself, and counts as one map here).
+        let patches: u64 = match crate::surface::Surfaces::new(&scene.objects, s) {
+            Ok(surfaces) => u64::from(surfaces.map_count()),
+            Err(_) => scene
+                .objects
+                .iter()
+                .map(|o| o.patches.len() as u64 + u64::from(o.mesh.is_some()))
+                .sum(),
+        };
 
         // Sample points.
         let requested = requested_points(scene);

@@ -1,4 +1,5 @@
-//! Sample maps (thesis §3.3): per patch and texel, the four nearest OSLF sample points that lie
+//! Sample maps (thesis §3.3): per map (a Bézier patch or a mesh atlas page, [`crate::surface`])
+//! and texel, the four nearest OSLF sample points that lie
 //! within φ_samplemap of the texel's normal (Eq. 3.9–3.10) AND are visible from the texel's
 //! surface point — checked by casting a ray, which enforces the free-space condition the thesis
 //! could only hope for (its lid artefact, §6.3).
@@ -10,14 +11,15 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::{SampleMaps, SamplePoint, INVALID_INDEX};
 use rayon::prelude::*;
 
-use crate::bezier::BezierPatch;
 use crate::ray::{Intersector, Ray};
+use crate::surface::MapDomain;
 
 /// Visibility rays start this fraction of ε above the texel's point on the patch: above the
 /// tessellation error (at most ε/50), well below the sample points at ε.
 pub const VISIBILITY_LIFT: f32 = 0.05;
 
-/// Counts over all texels of all sample maps.
+/// Counts over all used texels of all sample maps (atlas texels no chart touches are not
+/// counted: they hold no index and no fragment ever reads them).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct SampleMapStats {
     pub texels: u64,
@@ -116,26 +118,31 @@ pub fn texel_indices(
     (found, rays)
 }
 
-/// Texels with fewer than four indices, as (patch, x, y), in storage order.
-pub fn short_texels(maps: &SampleMaps) -> Vec<(u32, u32, u32)> {
+/// Used texels with fewer than four indices, as (map, x, y), in storage order.
+pub fn short_texels(maps: &SampleMaps, domains: &[MapDomain]) -> Vec<(u32, u32, u32)> {
     let res = maps.resolution as usize;
     maps.indices
         .iter()
         .enumerate()
         .filter(|(_, t)| t[3] == INVALID_INDEX)
         .map(|(i, _)| {
-            let patch = i / (res * res);
+            let map = i / (res * res);
             let texel = i % (res * res);
-            (patch as u32, (texel % res) as u32, (texel / res) as u32)
+            (map as u32, (texel % res) as u32, (texel / res) as u32)
+        })
+        .filter(|&(map, x, y)| {
+            domains
+                .get(map as usize)
+                .is_some_and(|d| d.texel(x, y, maps.resolution).is_some())
         })
         .collect()
 }
 
-/// Builds every patch's sample map at `resolution`² texels (row-major, texel (x, y) centred on
-/// u = (x + ½)/res, v = (y + ½)/res). `progress` advances by one per texel row
-/// (`patches × resolution` rows in all).
+/// Builds every map's sample map at `resolution`² texels (row-major, texel (x, y) centred on
+/// u = (x + ½)/res, v = (y + ½)/res). Atlas texels no chart touches hold no index.
+/// `progress` advances by one per texel row (`maps × resolution` rows in all).
 pub fn build(
-    patches: &[&BezierPatch],
+    maps: &[MapDomain],
     points: &[SamplePoint],
     geometry: &impl Intersector,
     resolution: u32,
@@ -148,28 +155,28 @@ pub fn build(
     let res = resolution as usize;
     // Written in place, row by row in parallel: at 4096² the map is 256 MiB of u32 indices,
     // and per-row vectors gathered afterwards would hold it twice.
-    let mut indices = vec![[INVALID_INDEX; 4]; patches.len() * res * res];
-    let rays: u64 = indices
+    let mut indices = vec![[INVALID_INDEX; 4]; maps.len() * res * res];
+    let (rays, unused): (u64, u64) = indices
         .par_chunks_mut(res.max(1))
         .enumerate()
         .map(|(row, texels)| {
-            let patch = patches[row / res];
-            let y = row % res;
-            let v = (y as f32 + 0.5) / res as f32;
-            let mut rays = 0;
+            let map = maps[row / res];
+            let y = (row % res) as u32;
+            let (mut rays, mut unused) = (0, 0);
             for (x, out) in texels.iter_mut().enumerate() {
-                let u = (x as f32 + 0.5) / res as f32;
-                let p = patch.eval(u, v);
-                let n = patch.normal(u, v);
+                let Some((p, n)) = map.texel(x as u32, y, resolution) else {
+                    unused += 1;
+                    continue;
+                };
                 let lift = epsilon * VISIBILITY_LIFT;
                 let (ids, r) = texel_indices(&index, geometry, p, n, cos_phi, lift);
                 rays += r;
                 *out = ids;
             }
             progress.inc(1);
-            rays
+            (rays, unused)
         })
-        .sum();
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     let mut stats = SampleMapStats {
         rays,
         ..Default::default()
@@ -183,6 +190,10 @@ pub fn build(
             stats.empty += 1;
         }
     }
+    // Unused atlas texels hold no index but are not short.
+    stats.texels -= unused;
+    stats.short -= unused;
+    stats.empty -= unused;
     (
         SampleMaps {
             resolution,

@@ -1,8 +1,9 @@
-//! OSLF sample points: spread over the patches with controlled coverage, offset by ε along the
-//! normal (thesis §3.1), and culled where the free-space condition fails (§3.3).
+//! OSLF sample points: spread over the objects' surfaces (Bézier patches and mesh triangles,
+//! [`crate::surface`]) with controlled coverage, offset by ε along the normal (thesis §3.1),
+//! and culled where the free-space condition fails (§3.3).
 //!
 //! Placement is *weighted sample elimination* (Yuksel 2015, "Sample Elimination for Generating
-//! Poisson Disk Sample Sets"): many candidates are drawn uniformly by area over all patches, then
+//! Poisson Disk Sample Sets"): many candidates are drawn uniformly by area over all surfaces, then
 //! the one most crowded by its neighbours is removed until the requested count remains. The
 //! result is a Poisson-disk set of exactly the requested size, deterministic for a seed.
 
@@ -10,18 +11,16 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::num::NonZero;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::SamplePoint;
 
-use crate::bezier::BezierPatch;
 use crate::error::{BakeError, Result};
 use crate::ray::{Intersector, Ray};
 use crate::sampling::Rng;
-use crate::scene::{BakeSettings, OslfObject, SampleDensity};
-
-/// Cells per patch side used to tabulate surface area.
-const AREA_GRID: usize = 32;
+use crate::scene::{BakeSettings, SampleDensity};
+pub use crate::surface::Surfaces;
+use crate::surface::{MapDomain, SurfacePoint};
 /// Candidates drawn per requested point.
 const CANDIDATES_PER_POINT: usize = 6;
 /// Directions probed around each sample point by the free-space tests.
@@ -44,7 +43,7 @@ pub struct Placement {
     pub removed_close: usize,
     /// Removed: inside geometry.
     pub removed_inside: usize,
-    /// Total surface area of the patches.
+    /// Total surface area of the OSLF objects.
     pub area: f32,
     /// Poisson-disk radius of the placement (about half the typical spacing).
     pub radius: f32,
@@ -54,37 +53,27 @@ pub struct Placement {
     pub rays: u64,
 }
 
-/// All OSLF patches of a scene, in store order (objects in order, patches in order).
-pub fn global_patches(objects: &[OslfObject]) -> Vec<(u32, &BezierPatch)> {
-    objects
-        .iter()
-        .enumerate()
-        .flat_map(|(o, obj)| obj.patches.iter().map(move |p| (o as u32, p)))
-        .collect()
-}
-
-/// Places sample points over every patch of `objects`, offsets them and removes invalid ones.
+/// Places sample points over every map domain of `surfaces` (patches and mesh triangles),
+/// offsets them and removes invalid ones.
 pub fn place(
-    objects: &[OslfObject],
+    surfaces: &Surfaces,
     settings: &BakeSettings,
     geometry: &impl Intersector,
 ) -> Result<Placement> {
-    let patches = global_patches(objects);
-    let table = AreaTable::new(&patches);
-    if table.total.is_nan() || table.total <= 0.0 {
+    let area = surfaces.area();
+    if area.is_nan() || area <= 0.0 {
         return Err(BakeError::Invalid(
-            "the OSLF patches have zero surface area: no sample points can be placed".into(),
+            "the OSLF objects have zero surface area: no sample points can be placed".into(),
         ));
     }
     let count = match settings.sample_count {
         SampleDensity::Count(n) => n as usize,
         // Hexagonal packing: each point covers (√3/2)·h².
         SampleDensity::Spacing(h) => {
-            let n = (table.total / (0.866_025_4 * h * h)).ceil();
+            let n = (area / (0.866_025_4 * h * h)).ceil();
             if !(1.0..=16e6).contains(&n) {
                 return Err(BakeError::Invalid(format!(
-                    "sample_spacing {h} gives {n} points over an area of {} (allowed: 1 to 16 million)",
-                    table.total
+                    "sample_spacing {h} gives {n} points over an area of {area} (allowed: 1 to 16 million)"
                 )));
             }
             n as usize
@@ -92,15 +81,15 @@ pub fn place(
     };
 
     let mut rng = Rng::new(settings.seed, PLACEMENT_STREAM);
-    let candidates: Vec<Candidate> = (0..count * CANDIDATES_PER_POINT)
-        .map(|_| table.sample(&patches, &mut rng))
+    let candidates: Vec<SurfacePoint> = (0..count * CANDIDATES_PER_POINT)
+        .map(|_| surfaces.sample(&mut rng))
         .collect();
-    let kept = eliminate(&candidates, count, table.total);
+    let kept = eliminate(&candidates, count, area);
 
     let mut placement = Placement {
         placed: kept.len(),
-        area: table.total,
-        radius: poisson_radius(table.total, count),
+        area,
+        radius: poisson_radius(area, count),
         ..Default::default()
     };
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
@@ -112,7 +101,7 @@ pub fn place(
                 position: position.to_array(),
                 normal: c.normal.to_array(),
                 uv: c.uv.to_array(),
-                patch: c.patch,
+                patch: c.map,
                 object: c.object,
             }),
             FreeSpace::TooClose => placement.removed_close += 1,
@@ -135,70 +124,9 @@ pub fn place(
 /// The placement RNG's stream id (cube-map texels use hashed streams of their own).
 const PLACEMENT_STREAM: u64 = 0x0051_a3c1_e5ee_d000;
 
-/// One candidate point on the surface.
-#[derive(Clone, Copy, Debug)]
-struct Candidate {
-    position: Vec3,
-    normal: Vec3,
-    uv: Vec2,
-    patch: u32,
-    object: u32,
-}
-
-/// Patch area tabulated on an `AREA_GRID²` grid of (u, v) cells per patch, as a CDF.
-struct AreaTable {
-    cdf: Vec<f32>,
-    total: f32,
-}
-
-impl AreaTable {
-    fn new(patches: &[(u32, &BezierPatch)]) -> Self {
-        let n = AREA_GRID;
-        let cell = 1.0 / n as f32;
-        let mut cdf = Vec::with_capacity(patches.len() * n * n);
-        let mut total = 0.0f64;
-        for (_, patch) in patches {
-            for j in 0..n {
-                for i in 0..n {
-                    let (du, dv) = patch.partials((i as f32 + 0.5) * cell, (j as f32 + 0.5) * cell);
-                    let area = du.cross(dv).length() * cell * cell;
-                    total += if area.is_finite() { area as f64 } else { 0.0 };
-                    cdf.push(total as f32);
-                }
-            }
-        }
-        AreaTable {
-            cdf,
-            total: total as f32,
-        }
-    }
-
-    /// A point drawn with density proportional to area (exact within each cell's linearisation).
-    fn sample(&self, patches: &[(u32, &BezierPatch)], rng: &mut Rng) -> Candidate {
-        let n = AREA_GRID;
-        let target = rng.next_f32() * self.total;
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= target)
-            .min(self.cdf.len() - 1);
-        let patch_index = k / (n * n);
-        let cell = k % (n * n);
-        let u = ((cell % n) as f32 + rng.next_f32()) / n as f32;
-        let v = ((cell / n) as f32 + rng.next_f32()) / n as f32;
-        let (object, patch) = patches[patch_index];
-        Candidate {
-            position: patch.eval(u, v),
-            normal: patch.normal(u, v),
-            uv: Vec2::new(u, v),
-            patch: patch_index as u32,
-            object,
-        }
-    }
-}
-
 /// Weighted sample elimination down to `target` points; returns kept candidate indices in
 /// ascending order.
-fn eliminate(candidates: &[Candidate], target: usize, area: f32) -> Vec<usize> {
+fn eliminate(candidates: &[SurfacePoint], target: usize, area: f32) -> Vec<usize> {
     let m = candidates.len();
     if m <= target {
         return (0..m).collect();
@@ -279,7 +207,7 @@ fn poisson_radius(area: f32, n: usize) -> f32 {
 pub fn refine(
     points: &mut Vec<SamplePoint>,
     short_texels: &[(u32, u32, u32)],
-    patches: &[(u32, &BezierPatch)],
+    maps: &[MapDomain],
     resolution: u32,
     epsilon: f32,
     min_distance: f32,
@@ -295,13 +223,15 @@ pub fn refine(
         if added.len() >= max_new {
             break;
         }
-        let Some(&(object, patch)) = patches.get(patch_index as usize) else {
+        let Some(map) = maps.get(patch_index as usize) else {
+            continue;
+        };
+        let Some((base, normal)) = map.texel(x, y, resolution) else {
             continue;
         };
         let u = (x as f32 + 0.5) / resolution as f32;
         let v = (y as f32 + 0.5) / resolution as f32;
-        let normal = patch.normal(u, v);
-        let position = patch.eval(u, v) + normal * epsilon;
+        let position = base + normal * epsilon;
         let q = position.to_array();
         let near_existing =
             !existing.is_empty() && tree.nearest_one::<SquaredEuclidean>(&q).distance < min_sq;
@@ -317,7 +247,7 @@ pub fn refine(
                 normal: normal.to_array(),
                 uv: [u, v],
                 patch: patch_index,
-                object,
+                object: map.object(),
             });
         }
     }

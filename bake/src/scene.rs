@@ -29,27 +29,43 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::ray::ENVIRONMENT_OBJECT;
+use crate::surface::MeshSource;
 use crate::texture::{ImageTexture, Texture};
 use crate::{obj, shapes};
+use oslf_geometry::atlas::UvSource;
 
 /// The smallest ε relative to an object's largest coordinate magnitude, 2⁻²⁰ (twice
 /// [`crate::bvh::SELF_TOLERANCE`]); see `check_epsilon`.
 pub const MIN_EPSILON_RELATIVE: f32 = 2.0 * crate::bvh::SELF_TOLERANCE;
 
-/// An OSLF object: the Bézier patches a light field is baked around.
+/// An OSLF object: the Bézier patches or the triangle mesh a light field is baked around.
 #[derive(Clone, Debug)]
 pub struct OslfObject {
     pub name: String,
-    /// Patches in object space, as read.
+    /// Patches in object space, as read (empty for a mesh object).
     pub object_patches: Vec<BezierPatch>,
     /// The same patches in world space (`transform` applied).
     pub patches: Vec<BezierPatch>,
+    /// A triangle-mesh object: the mesh in world space and its candidate atlas uv sets.
+    pub mesh: Option<MeshSource>,
     /// Object to world.
     pub transform: Affine3A,
     /// Index into [`Scene::materials`].
     pub material: u32,
     /// The material's mean albedo: the C_s of Eq. 4.12 that the store carries.
     pub base_color: Vec3,
+}
+
+impl OslfObject {
+    /// Every point that defines the object's surface in world space: control points or mesh
+    /// vertices.
+    pub fn points(&self) -> impl Iterator<Item = Vec3> + '_ {
+        let mesh = self
+            .mesh
+            .iter()
+            .flat_map(|m| m.mesh.positions.iter().copied());
+        self.patches.iter().flat_map(|p| p.cp).chain(mesh)
+    }
 }
 
 /// A piece of environment geometry (everything that is not an OSLF object), in world space.
@@ -131,28 +147,37 @@ pub const GLTF_SCENE_ENVIRONMENT: f32 = 1.0;
 impl Scene {
     /// Reads and validates a scene file, applying the named preset (from its `[presets.NAME]`).
     ///
-    /// A `.gltf` / `.glb` path is read with [`Scene::from_gltf`] (so that its own errors and
-    /// warnings come first) and then refused: its meshes would have to be the OSLF object, and
-    /// mesh OSLF objects are not supported yet.
+    /// A `.gltf` / `.glb` path is read with [`Scene::from_gltf`]: its OSLF objects are the
+    /// nodes marked `"extras": {"oslf": true}`; a file without one is refused (there would be
+    /// nothing to bake), as is a preset (a glTF file has none).
     pub fn load(path: &Path, preset: Option<&str>) -> Result<Scene> {
         if is_gltf_path(path) {
             let scene = Scene::from_gltf(path)?;
-            let warned = if scene.warnings.is_empty() {
-                String::new()
-            } else {
-                format!(" (its warnings: {})", scene.warnings.join("; "))
-            };
-            return Err(BakeError::Invalid(format!(
-                "{}: a glTF file cannot be the scene yet: its meshes would have to be the OSLF \
-                 object, and mesh OSLF objects are not supported yet (an OSLF object is made of \
-                 Bézier patches). Include the file from a TOML scene instead, with \
-                 [[gltf]] path = {:?} and an [[object]] of patches (docs/scene-format.md, \
-                 \"glTF scenes\"){warned}",
-                path.display(),
-                path.file_name()
-                    .map(|n| n.to_string_lossy())
-                    .unwrap_or_default()
-            )));
+            if let Some(name) = preset {
+                return Err(BakeError::Invalid(format!(
+                    "{}: a glTF file given as the scene has no presets (asked for {name:?}); \
+                     include it from a TOML scene with [[gltf]] to choose bake settings",
+                    path.display()
+                )));
+            }
+            if scene.objects.is_empty() {
+                let warned = if scene.warnings.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (its warnings: {})", scene.warnings.join("; "))
+                };
+                return Err(BakeError::Invalid(format!(
+                    "{}: no node is marked as an OSLF object: there is nothing to bake a light \
+                     field around. Mark the nodes to bake with \"extras\": {{\"oslf\": true}}, \
+                     or include the file from a TOML scene with [[gltf]] path = {:?} and \
+                     objects = [\"NODE\", ...] (docs/scene-format.md, \"glTF scenes\"){warned}",
+                    path.display(),
+                    path.file_name()
+                        .map(|n| n.to_string_lossy())
+                        .unwrap_or_default()
+                )));
+            }
+            return Ok(scene);
         }
         let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
             path: path.to_path_buf(),
@@ -191,9 +216,10 @@ impl Scene {
         ctx.build(raw, preset)
     }
 
-    /// A scene made from a glTF file alone, with defaults for the rest, and no OSLF object
-    /// (so it cannot be baked; [`Scene::load`] refuses it, and it is meant for path-traced
-    /// views such as [`crate::camera::render`]):
+    /// A scene made from a glTF file alone, with defaults for the rest. Its OSLF objects are
+    /// the mesh nodes whose `extras` hold `"oslf": true` (triangle-mesh objects); without one
+    /// it cannot be baked ([`Scene::load`] refuses it) but serves path-traced views such as
+    /// [`crate::camera::render`]. The defaults:
     /// - the file rotated from glTF's Y-up to the scene's Z-up (`rotate = [90, 0, 0]`), its
     ///   lights converted with [`crate::gltf::WATTS_PER_LUMEN`];
     /// - the camera: the file's first perspective camera, else one framing the bounds of its
@@ -207,13 +233,20 @@ impl Scene {
         })?;
         let options = crate::gltf::Options {
             transform: Affine3A::from_rotation_x(90f32.to_radians()),
+            objects_from_extras: true,
             ..Default::default()
         };
         let mut materials = Vec::new();
-        let import = crate::gltf::load(path, &options, &mut materials)?;
+        let mut import = crate::gltf::load(path, &options, &mut materials)?;
+        let objects = mesh_objects(std::mem::take(&mut import.objects), &materials);
         let raw: RawScene = toml::from_str("").expect("an empty scene parses");
         let ctx = Ctx { text: "", path };
         let (bake, _) = ctx.bake_settings(&raw, None)?;
+        for object in &objects {
+            if let Some(message) = epsilon_problem(bake.epsilon, object) {
+                return Err(BakeError::Invalid(format!("{}: {message}", path.display())));
+            }
+        }
         let camera = match import.cameras.first() {
             Some(c) => Some(c.camera),
             None => import.bounds().map(|(lo, hi)| {
@@ -237,7 +270,7 @@ impl Scene {
             environment: Environment::Constant(Vec3::splat(GLTF_SCENE_ENVIRONMENT)),
             lights: import.lights,
             materials,
-            objects: Vec::new(),
+            objects,
             shapes: import.shapes,
             bake,
             preset: None,
@@ -262,6 +295,9 @@ impl Scene {
                 let mut mesh = Mesh::default();
                 for patch in &object.patches {
                     mesh.append(&patch.tessellate(patch.tessellation_level(max_error)));
+                }
+                if let Some(source) = &object.mesh {
+                    mesh.append(&source.mesh);
                 }
                 out.push(Instance {
                     mesh,
@@ -413,8 +449,11 @@ struct RawDirectionalLight {
 struct RawObject {
     #[serde(default)]
     name: Option<String>,
-    /// `"newell-teapot"` (the built-in data) or a path to a patch file.
-    patches: Spanned<String>,
+    /// `"newell-teapot"` (the built-in data) or a path to a patch file. Exactly one of
+    /// `patches` and `mesh`.
+    patches: Option<Spanned<String>>,
+    /// A Wavefront OBJ file: a triangle-mesh object, its sample maps in a UV atlas.
+    mesh: Option<Spanned<String>>,
     /// Which patches to use, `[first, end)`; all by default.
     select: Option<Spanned<[u32; 2]>>,
     #[serde(default)]
@@ -529,6 +568,10 @@ struct RawGltf {
     /// Import the file's `KHR_lights_punctual` lights.
     #[serde(default = "yes")]
     lights: bool,
+    /// Names of nodes whose meshes become OSLF objects (triangle-mesh objects, their sample
+    /// maps in a UV atlas) instead of environment geometry.
+    #[serde(default)]
+    objects: Vec<String>,
 }
 
 fn default_segments() -> Segments {
@@ -914,36 +957,40 @@ impl Ctx<'_> {
         for spanned in raw.object {
             let span = spanned.span();
             let o = spanned.into_inner();
-            let mut patches = if o.patches.get_ref() == "newell-teapot" {
-                bezier::newell_teapot()
-            } else {
-                let file = self.existing_file(&o.patches)?;
-                let text = std::fs::read_to_string(&file).map_err(|source| BakeError::Io {
-                    path: file.clone(),
-                    source,
-                })?;
-                bezier::parse_patch_file(&text, &file)?
-            };
-            if let Some(select) = &o.select {
-                let [first, end] = *select.get_ref();
-                if first >= end || end as usize > patches.len() {
-                    return Err(self.error_at(
-                        select.span(),
-                        format!(
-                            "select = [{first}, {end}] is not a non-empty range within the {} patches",
-                            patches.len()
-                        ),
-                    ));
-                }
-                patches = patches[first as usize..end as usize].to_vec();
-            }
             let transform = o.transform.affine();
+            let (patches, mesh) = match (&o.patches, &o.mesh) {
+                (Some(patches), None) => (self.object_patches(patches, o.select.as_ref())?, None),
+                (None, Some(path)) => {
+                    if let Some(select) = &o.select {
+                        return Err(self.error_at(
+                            select.span(),
+                            "`select` picks patches; a `mesh` object has none",
+                        ));
+                    }
+                    let file = self.existing_file(path)?;
+                    let mut mesh = crate::obj::load_obj(&file)?;
+                    mesh.transform(&transform);
+                    let uvs = mesh.uvs.clone();
+                    let source = MeshSource {
+                        mesh,
+                        uv_sets: vec![(UvSource::Texture, uvs)],
+                    };
+                    (Vec::new(), Some(source))
+                }
+                _ => {
+                    return Err(self.error_at(
+                        span,
+                        "an [[object]] needs exactly one of `patches` (Bézier patches) or `mesh` (an OBJ file)",
+                    ))
+                }
+            };
             let (material, base_color) = self.material(&o.material, &mut materials)?;
             let world = patches.iter().map(|p| p.transformed(&transform)).collect();
             let object = OslfObject {
                 name: o.name.unwrap_or_else(|| format!("object{}", objects.len())),
                 object_patches: patches,
                 patches: world,
+                mesh,
                 transform,
                 material,
                 base_color,
@@ -1011,8 +1058,14 @@ impl Ctx<'_> {
                     .watts_per_lumen
                     .map_or(crate::gltf::WATTS_PER_LUMEN, |w| w.0),
                 lights: g.lights,
+                objects: g.objects.clone(),
+                objects_from_extras: false,
             };
             let import = crate::gltf::load(&file, &options, &mut materials)?;
+            for object in mesh_objects(import.objects, &materials) {
+                self.check_epsilon(bake.epsilon, epsilon_span.clone(), &object, g.path.span())?;
+                objects.push(object);
+            }
             shapes_out.extend(import.shapes);
             lights.extend(import.lights);
             gltf_cameras.extend(import.cameras);
@@ -1198,6 +1251,39 @@ impl Ctx<'_> {
         Ok((settings, epsilon_span))
     }
 
+    /// The patches an `[[object]]` names: the built-in teapot or a patch file, cut to
+    /// `select`.
+    fn object_patches(
+        &self,
+        patches: &Spanned<String>,
+        select: Option<&Spanned<[u32; 2]>>,
+    ) -> Result<Vec<BezierPatch>> {
+        let mut out = if patches.get_ref() == "newell-teapot" {
+            bezier::newell_teapot()
+        } else {
+            let file = self.existing_file(patches)?;
+            let text = std::fs::read_to_string(&file).map_err(|source| BakeError::Io {
+                path: file.clone(),
+                source,
+            })?;
+            bezier::parse_patch_file(&text, &file)?
+        };
+        if let Some(select) = select {
+            let [first, end] = *select.get_ref();
+            if first >= end || end as usize > out.len() {
+                return Err(self.error_at(
+                    select.span(),
+                    format!(
+                        "select = [{first}, {end}] is not a non-empty range within the {} patches",
+                        out.len()
+                    ),
+                ));
+            }
+            out = out[first as usize..end as usize].to_vec();
+        }
+        Ok(out)
+    }
+
     /// Refuses an ε that the bake cannot honour for `object` (located at `epsilon_span`, or at
     /// the object when ε is the default). Two limits, both reported with the smallest ε that
     /// works:
@@ -1224,12 +1310,33 @@ impl Ctx<'_> {
     }
 }
 
+/// OSLF objects of the glTF nodes chosen as objects (world space, identity transform), their
+/// base colour the material's mean albedo.
+fn mesh_objects(
+    imported: Vec<crate::gltf::ImportedObject>,
+    materials: &[Material],
+) -> Vec<OslfObject> {
+    imported
+        .into_iter()
+        .map(|o| OslfObject {
+            name: o.node,
+            object_patches: Vec::new(),
+            patches: Vec::new(),
+            mesh: Some(MeshSource {
+                mesh: o.mesh,
+                uv_sets: o.uv_sets,
+            }),
+            transform: Affine3A::IDENTITY,
+            material: o.material,
+            base_color: materials[o.material as usize].mean_albedo(),
+        })
+        .collect()
+}
+
 /// Why the bake cannot honour `epsilon` for `object`, if it cannot (see `Ctx::check_epsilon`).
 fn epsilon_problem(epsilon: f32, object: &OslfObject) -> Option<String> {
     let extent = object
-        .patches
-        .iter()
-        .flat_map(|p| p.cp)
+        .points()
         .fold(0f32, |m, c| m.max(c.abs().max_element()));
     let f32_limit = MIN_EPSILON_RELATIVE * extent;
     if epsilon < f32_limit {

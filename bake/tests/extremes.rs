@@ -12,7 +12,7 @@ use oslf_bake::bvh::TriangleScene;
 use oslf_bake::capture::{capture_cube, CaptureSettings};
 use oslf_bake::integrator::Integrator;
 use oslf_bake::sample_map;
-use oslf_bake::sample_points::{self, global_patches};
+use oslf_bake::sample_points::{self, Surfaces};
 use oslf_bake::scene::Scene;
 
 /// The teapot (28 patches) under a uniform sky and a point light, nothing else: radiance is
@@ -112,11 +112,10 @@ fn compare_with_unit_scene(
     let (scene, unit) = scene_pair(translate, scale, 0.1, 100);
     let (geo, unit_geo) = (geometry(&scene), geometry(&unit));
     let place = |s: &Scene, g: &TriangleScene| {
-        let placement = sample_points::place(&s.objects, &s.bake, g).unwrap();
-        let patches = global_patches(&s.objects);
-        let refs: Vec<_> = patches.iter().map(|&(_, p)| p).collect();
+        let surfaces = Surfaces::new(&s.objects, &s.bake).unwrap();
+        let placement = sample_points::place(&surfaces, &s.bake, g).unwrap();
         let (_, stats) = sample_map::build(
-            &refs,
+            &surfaces.maps(),
             &placement.points,
             g,
             16,
@@ -321,7 +320,12 @@ fn epsilon_from_the_smallest_allowed_to_ten_times_the_object() {
         // ε is large against the object's features).
         let scene = load(&text).unwrap();
         let geo = geometry(&scene);
-        let placement = sample_points::place(&scene.objects, &scene.bake, &geo).unwrap();
+        let placement = sample_points::place(
+            &Surfaces::new(&scene.objects, &scene.bake).unwrap(),
+            &scene.bake,
+            &geo,
+        )
+        .unwrap();
         let below = placement
             .points
             .iter()

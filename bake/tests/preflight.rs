@@ -13,7 +13,7 @@ use oslf_bake::bake::{bake, BakeOptions, TESSELLATION_ERROR};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::light::Light;
 use oslf_bake::preflight::{self, check, estimate, Estimate, Limits, PreflightError};
-use oslf_bake::sample_points;
+use oslf_bake::sample_points::{self, Surfaces};
 use oslf_bake::scene::Scene;
 
 // --- a counting allocator: current and peak heap bytes ---------------------------------------
@@ -372,8 +372,14 @@ fn bvh_and_placement_constants_cover_the_allocations() {
         / geometry.triangle_count() as f64;
     let e = estimate(&scene, THREADS);
     let per_triangle = bvh_heap as f64 / geometry.triangle_count() as f64;
-    let (placement, place_heap) =
-        heap_peak(|| sample_points::place(&scene.objects, settings, &geometry).unwrap());
+    let (placement, place_heap) = heap_peak(|| {
+        sample_points::place(
+            &Surfaces::new(&scene.objects, settings).unwrap(),
+            settings,
+            &geometry,
+        )
+        .unwrap()
+    });
     let per_candidate = place_heap as f64 / (20_000.0 * preflight::CANDIDATES_PER_POINT as f64);
     println!(
         "BVH: {} triangles (estimated {}), {per_triangle:.0} B a triangle at the peak, {resident:.0} B kept; placement: {} points, {per_candidate:.0} B a candidate",

@@ -90,6 +90,10 @@ impl<'a> ByteReader<'a> {
     pub(crate) fn u64(&mut self) -> Result<u64, Error> {
         Ok(u64::from_le_bytes(self.array()?))
     }
+    /// An `f32`, finite or not (callers check).
+    pub(crate) fn f32(&mut self) -> Result<f32, Error> {
+        Ok(f32::from_le_bytes(self.array()?))
+    }
 
     /// A finite `f32`; `what` names the field in the error.
     pub(crate) fn finite_f32(&mut self, what: &str) -> Result<f32, Error> {

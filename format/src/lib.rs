@@ -1,8 +1,11 @@
 //! # The OSLF store
 //!
 //! An OSLF store holds an *offset surface light field* (Jason Ang, 2003): HDR cube maps captured
-//! at sample points offset by ε above the Bézier patches of an object, plus per-patch *sample
-//! maps* giving, for each texel of a patch's (u, v) domain, the 4 nearest sample points. The
+//! at sample points offset by ε above the surfaces of its objects (bicubic Bézier patches or,
+//! from version 5, triangle meshes), plus *sample maps* giving, for each texel of a map's
+//! (u, v) domain, the 4 nearest sample points. A Bézier patch has one sample map; a triangle
+//! mesh has an atlas of `k × k` sample maps ("pages", see "Triangle-mesh objects"). Where the
+//! layout says *patch* index or count, read *map*: a Bézier patch or an atlas page. The
 //! bake writes it with [`StoreWriter`]; the runtime reads it with [`Store`], which reads the
 //! fixed sections and the table of contents into memory, validates every structural byte before
 //! trusting it, and reads cube frames with positioned reads as they are needed (no memory map:
@@ -28,7 +31,7 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (4); readers also accept [`MIN_VERSION`] (1) to 3, see "Versions" |
+//! | 8      | `u32`     | version = [`VERSION`] (5); readers also accept [`MIN_VERSION`] (1) to 4, see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
 //! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F, 3 BC6H (version 4 and later: in an older store 3 is [`Error::EncodingVersion`]) |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
@@ -36,7 +39,7 @@
 //! | 28     | `u32`     | sample-map resolution `m` per patch (1..=16384) |
 //! | 32     | `u64`     | sample_count (sample points) |
 //! | 40     | `u64`     | cube_count = sample_count + (1 if environment cube) (≤ 2³²−1) |
-//! | 48     | `u64`     | patch_count |
+//! | 48     | `u64`     | patch_count: the number of sample maps (Bézier patches plus atlas pages; before version 5, patches) |
 //! | 56     | `u64`     | object_count |
 //! | 64     | `u64` ×2  | metadata offset (= 256), size |
 //! | 80     | `u64` ×2  | sample points offset, size (= 40 × sample_count) |
@@ -63,21 +66,46 @@
 //!
 //! | bytes | content |
 //! |------:|---------|
-//! | 4, 4  | `u32` object_count, `u32` patch_count (equal to the header's) |
+//! | 4, 4  | `u32` object_count, `u32` patch_count = map count (equal to the header's) |
 //! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag (as the header's; 3 only from version 4), `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
 //! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Versions 2 and 3: absent in version 1, whose stores read as 9 |
 //! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
-//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count |
-//! | 192 × patch_count | patches, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
+//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count (its maps `first_patch..first_patch + patch_count`); from version 5, then `u32` kind (0 Bézier patches, 1 triangle mesh) and, for kind 1, the mesh record below |
+//! | 192 × B | the Bézier patches' control points, B = Σ patch_count over the Bézier objects (before version 5 every object is Bézier, so B = patch_count), in object order, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
 //!
-//! The section must end exactly after the last patch. Every float is finite. Object patch
-//! ranges lie inside `0..patch_count`, in ascending order, without overlaps.
+//! A **mesh record** (object kind 1, version 5 and later) continues the object record:
+//!
+//! | bytes | content |
+//! |------:|---------|
+//! | 4     | `u32` atlas grid `k` ≥ 1, with `k²` = the object's patch_count |
+//! | 4, 4  | `u32` vertex_count V ≥ 3, `u32` triangle_count T ≥ 1 |
+//! | 32 × V | vertices: `f32`×3 position (object space), `f32`×3 unit normal (object space; length 1 within 1e-3), `f32`×2 atlas uv in `[0, 1]²` |
+//! | 12 × T | triangles: `u32`×3 vertex indices, each `< V` |
+//!
+//! The section must end exactly after the last Bézier patch. Every float is finite. The
+//! objects' map ranges tile `0..patch_count`: the first starts at 0, each starts where the
+//! previous one ends, the last ends at patch_count (empty ranges are allowed for Bézier
+//! objects). Readers check a mesh's counts against the bytes left in the section before
+//! allocating anything. The Bézier control points of object `i` are the `patch_count`
+//! records after those of the Bézier objects before it ([`StoreMeta::patches_of`]).
+//!
+//! ## Triangle-mesh objects
+//!
+//! A mesh object's atlas uv `(s, t) ∈ [0, 1]²` spans a `k × k` grid of pages; page `(px, py)`,
+//! with `px = min(⌊s·k⌋, k − 1)` and `py = min(⌊t·k⌋, k − 1)`, is sample map `first_patch +
+//! py·k + px`, and its local uv is `(s·k − px, t·k − py)`. Each page is an ordinary m × m
+//! sample map: texel `(x, y)` is centred at local `((x + ½)/m, (y + ½)/m)`, atlas texel
+//! `(px·m + x, py·m + y)`. A sample point on a mesh records the page's map index as `patch`
+//! and the local page uv as `uv`. The shading normal of a mesh is the interpolated vertex
+//! normal (barycentric, renormalized); the geometric (face) normal serves only ray offsets and
+//! side tests.
 //!
 //! ## Sample points section
 //!
 //! sample_count records of 40 bytes ([`SamplePoint`], `#[repr(C)]`): `f32`×3 position (the
 //! offset point, world space), `f32`×3 normal (unit surface normal at the base point), `f32`×2
-//! uv on the patch (each in `[0, 1]`), `u32` patch (global index), `u32` object. Floats finite;
+//! uv on the patch, or local uv on the atlas page (each in `[0, 1]`), `u32` patch (global map
+//! index), `u32` object. Floats finite;
 //! `object < object_count`; `patch` inside that object's patch range.
 //!
 //! ## Sample maps section
@@ -310,13 +338,18 @@
 //! Version 2 added `mantissa_bits` to the metadata (4 bytes after the scene hash); version 3
 //! the checksum of the decoded faces (header bytes 180..188, reserved zero before); version 4
 //! the BC6H encoding (tag 3, refused in older stores with [`Error::EncodingVersion`] from the
-//! header, [`Error::InvalidMetadata`] from the metadata). Readers accept versions
-//! [`MIN_VERSION`] (1) to [`VERSION`] (4) and refuse others ([`Error::UnsupportedVersion`]); a
+//! header, [`Error::InvalidMetadata`] from the metadata); version 5 triangle-mesh objects: a
+//! `u32` kind after each object record (and, for a mesh, its mesh record), the header's and
+//! metadata's patch_count counting sample maps (patches plus atlas pages), and control points
+//! for the Bézier objects' patches only. Readers accept versions
+//! [`MIN_VERSION`] (1) to [`VERSION`] (5) and refuse others ([`Error::UnsupportedVersion`]); a
 //! version-1 metadata section has no `mantissa_bits` and reads as 9; versions 1 and 2 have no
 //! checksum of the decoded faces, so [`Store::verify`] checks their frames but not what they
-//! decode to. Every other byte of the layout is the same in all versions: a version-3 store is
-//! a version-4 store that holds no BC6H. Writers write version 4; [`StoreWriter::resume`]
-//! continues partial files of versions 2 to 4 (finishing them as version 4).
+//! decode to; before version 5 every object is Bézier (no kind field). Every other byte of the
+//! layout is the same in all versions: a version-3 store is a version-4 store that holds no
+//! BC6H. Writers write version 5; [`StoreWriter::resume`] continues partial files of versions
+//! 2 to 4 as version 4 (their shared layout; such a bake cannot hold mesh objects) and of
+//! version 5 as version 5.
 //!
 //! ## Shards
 //!
@@ -360,7 +393,7 @@ pub use cube::{encode_cube, encode_cube_with_filter, CubeImage, EncodeStats, Enc
 pub use encoding::Encoding;
 pub use error::Error;
 pub use filter::Filter;
-pub use meta::{BakeParams, CameraInfo, ObjectInfo, Patch, SamplePoint, StoreMeta};
+pub use meta::{BakeParams, CameraInfo, MeshInfo, ObjectInfo, Patch, SamplePoint, StoreMeta};
 pub use sample_map::{IndexWidth, SampleMapView, SampleMaps, INVALID_INDEX};
 pub use shard::{ShardSpec, ShardSummary, ShardWriter};
 pub use store::{Store, VerifyReport};
@@ -370,7 +403,7 @@ pub use writer::{StoreSummary, StoreWriter};
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
 /// metadata, read as 9).
 pub const MIN_VERSION: u32 = 1;

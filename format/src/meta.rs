@@ -32,7 +32,9 @@ pub struct Patch {
     pub control_points: [[f32; 3]; 16],
 }
 
-/// An object made of a contiguous range of patches.
+/// An object: a contiguous range of sample maps (global map indices `first_patch ..
+/// first_patch + patch_count`), each either a bicubic Bézier patch (`mesh` is `None`; its
+/// control points are in [`StoreMeta::patches`]) or one page of a triangle mesh's atlas.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ObjectInfo {
     /// UTF-8 name, at most [`MAX_NAME_BYTES`] bytes.
@@ -41,11 +43,46 @@ pub struct ObjectInfo {
     pub transform: [[f32; 4]; 4],
     /// Linear RGB base colour.
     pub base_color: [f32; 3],
-    /// First global patch index of the object.
+    /// First global map index (patch or atlas page) of the object.
     pub first_patch: u32,
-    /// Number of patches of the object.
+    /// Number of sample maps of the object: its Bézier patches, or the `k²` pages of its
+    /// atlas.
     pub patch_count: u32,
+    /// The triangle mesh of a mesh object (format version 5 and later); `None` for an object
+    /// made of Bézier patches.
+    pub mesh: Option<MeshInfo>,
 }
+
+/// A triangle-mesh object (format version 5): vertices in object space and an atlas of
+/// `atlas_grid`² pages, each an ordinary m×m sample map. Atlas uv `(s, t) ∈ [0, 1]²` spans the
+/// whole grid; page `(px, py)` with `px = min(⌊s·k⌋, k−1)`, `py = min(⌊t·k⌋, k−1)` is map
+/// `first_patch + py·k + px`, at local uv `(s·k − px, t·k − py)`.
+///
+/// Shading uses the interpolated vertex normal (barycentric, renormalized).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshInfo {
+    /// Pages per atlas side, `k` ≥ 1; the object's `patch_count` is `k²`.
+    pub atlas_grid: u32,
+    /// Vertex positions, object space (at least 3).
+    pub positions: Vec<[f32; 3]>,
+    /// Unit vertex normals, object space (one per vertex).
+    pub normals: Vec<[f32; 3]>,
+    /// Atlas uvs in `[0, 1]²` (one per vertex).
+    pub uvs: Vec<[f32; 2]>,
+    /// Vertex indices (each `< positions.len()`), at least one triangle.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Object kind tag of a Bézier object (format version 5).
+pub const OBJECT_KIND_BEZIER: u32 = 0;
+/// Object kind tag of a triangle-mesh object (format version 5).
+pub const OBJECT_KIND_MESH: u32 = 1;
+/// Bytes of one mesh vertex record.
+const VERTEX_BYTES: usize = 32;
+/// Bytes of one mesh triangle record.
+const TRIANGLE_BYTES: usize = 12;
+/// How far from 1 a stored normal's length may be.
+pub const NORMAL_LENGTH_TOLERANCE: f32 = 1e-3;
 
 /// The viewpoint the scene was set up with.
 #[derive(Clone, Debug, PartialEq)]
@@ -106,7 +143,11 @@ impl Default for BakeParams {
 /// Everything in the metadata section.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StoreMeta {
+    /// The objects, whose map ranges tile `0..map_count()` in order.
     pub objects: Vec<ObjectInfo>,
+    /// Control points of the Bézier objects' patches only, in object order (their count is
+    /// the sum of `patch_count` over the objects without a mesh); see
+    /// [`StoreMeta::patches_of`]. Mesh objects' atlas pages have none.
     pub patches: Vec<Patch>,
     pub bake: BakeParams,
     pub camera: Option<CameraInfo>,
@@ -115,7 +156,34 @@ pub struct StoreMeta {
     pub has_env_cube: bool,
 }
 
-/// Minimum bytes of one object record (empty name).
+impl StoreMeta {
+    /// Number of sample maps: Bézier patches plus atlas pages (the header's `patch_count`),
+    /// the sum of the objects' `patch_count`.
+    pub fn map_count(&self) -> usize {
+        self.objects.iter().map(|o| o.patch_count as usize).sum()
+    }
+
+    /// The control points of object `object`'s Bézier patches (its maps in order); empty for
+    /// a mesh object or an index out of range.
+    pub fn patches_of(&self, object: usize) -> &[Patch] {
+        let Some(o) = self.objects.get(object) else {
+            return &[];
+        };
+        if o.mesh.is_some() {
+            return &[];
+        }
+        let start: usize = self.objects[..object]
+            .iter()
+            .filter(|o| o.mesh.is_none())
+            .map(|o| o.patch_count as usize)
+            .sum();
+        self.patches
+            .get(start..start.saturating_add(o.patch_count as usize))
+            .unwrap_or(&[])
+    }
+}
+
+/// Minimum bytes of one object record (empty name, version 4).
 const OBJECT_MIN_BYTES: usize = 4 + 64 + 12 + 8;
 /// Bytes of one patch record.
 const PATCH_BYTES: usize = 16 * 3 * 4;
@@ -136,13 +204,14 @@ pub fn check_mantissa_bits(encoding: Encoding, bits: u32) -> Result<(), String> 
 }
 
 /// Serialises metadata in the layout of format version `version` (versions 2 and later
-/// record `mantissa_bits` after the scene hash; version 1 does not, so it can only express 9). No
+/// record `mantissa_bits` after the scene hash; version 1 does not, so it can only express 9;
+/// versions 5 and later record each object's kind and mesh, which older ones cannot express). No
 /// validation: [`decode_meta`] validates, and the writer checks its input by decoding what it
 /// encoded.
 pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u32(meta.objects.len() as u32);
-    w.u32(meta.patches.len() as u32);
+    w.u32(u32::try_from(meta.map_count()).unwrap_or(u32::MAX));
     let b = &meta.bake;
     w.f32(b.epsilon);
     w.f32(b.phi_samplemap_deg);
@@ -182,6 +251,30 @@ pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
         }
         w.u32(o.first_patch);
         w.u32(o.patch_count);
+        if version >= 5 {
+            match &o.mesh {
+                None => w.u32(OBJECT_KIND_BEZIER),
+                Some(m) => {
+                    w.u32(OBJECT_KIND_MESH);
+                    w.u32(m.atlas_grid);
+                    let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+                    w.u32(count(m.positions.len()));
+                    w.u32(count(m.triangles.len()));
+                    // Vertices whose arrays disagree in length are written short; decode_meta
+                    // (run by the writer on what it encodes) then refuses them.
+                    for ((p, n), uv) in m.positions.iter().zip(&m.normals).zip(&m.uvs) {
+                        for v in p.iter().chain(n).chain(uv) {
+                            w.f32(*v);
+                        }
+                    }
+                    for t in &m.triangles {
+                        for i in t {
+                            w.u32(*i);
+                        }
+                    }
+                }
+            }
+        }
     }
     for p in &meta.patches {
         for v in p.control_points.iter().flatten() {
@@ -198,7 +291,7 @@ fn bad(offset: u64, detail: impl Into<String>) -> Error {
     }
 }
 
-/// Parses and validates the metadata section of a store of format `version` (1 to 3); `base`
+/// Parses and validates the metadata section of a store of format `version` (1 to 5); `base`
 /// is its byte offset in the file (for error messages).
 pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<StoreMeta, Error> {
     debug_assert!((1..=VERSION).contains(&version));
@@ -311,7 +404,8 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
         None
     };
 
-    if object_count > r.remaining() / OBJECT_MIN_BYTES {
+    let object_min = OBJECT_MIN_BYTES + if version >= 5 { 4 } else { 0 };
+    if object_count > r.remaining() / object_min {
         return Err(bad(
             base,
             format!(
@@ -322,6 +416,7 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
     }
     let mut objects = Vec::with_capacity(object_count);
     let mut prev_end = 0u64;
+    let mut bezier_patches = 0u64;
     for i in 0..object_count {
         let at = r.offset();
         let len = r.u32()? as usize;
@@ -346,36 +441,53 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
         let first_patch = r.u32()?;
         let count = r.u32()?;
         let end = u64::from(first_patch) + u64::from(count);
-        if u64::from(first_patch) < prev_end || end > patch_count as u64 {
+        if u64::from(first_patch) != prev_end || end > patch_count as u64 {
             return Err(bad(
                 at,
                 format!(
-                    "object {i}: patch range {first_patch}..{end} overlaps the previous object (ending at {prev_end}) or exceeds the patch count {patch_count}"
+                    "object {i}: map range {first_patch}..{end} does not start where the previous object ends ({prev_end}) or exceeds the map count {patch_count}"
                 ),
             ));
         }
         prev_end = end;
+        let mesh = if version >= 5 {
+            decode_mesh(&mut r, i, count)?
+        } else {
+            None
+        };
+        if mesh.is_none() {
+            bezier_patches += u64::from(count);
+        }
         objects.push(ObjectInfo {
             name,
             transform,
             base_color,
             first_patch,
             patch_count: count,
+            mesh,
         });
     }
+    if prev_end != patch_count as u64 {
+        return Err(bad(
+            r.offset(),
+            format!(
+                "the objects' maps end at {prev_end}, but the map count is {patch_count} (object ranges must tile 0..{patch_count})"
+            ),
+        ));
+    }
 
-    let needed = (patch_count as u64) * PATCH_BYTES as u64;
+    let needed = bezier_patches * PATCH_BYTES as u64;
     if needed != r.remaining() as u64 {
         return Err(bad(
             r.offset(),
             format!(
-                "{patch_count} patches need {needed} bytes but {} remain in the section",
+                "{bezier_patches} Bézier patches need {needed} bytes but {} remain in the section",
                 r.remaining()
             ),
         ));
     }
-    let mut patches = Vec::with_capacity(patch_count);
-    for _ in 0..patch_count {
+    let mut patches = Vec::with_capacity(bezier_patches as usize);
+    for _ in 0..bezier_patches {
         let mut control_points = [[0f32; 3]; 16];
         for v in control_points.iter_mut().flatten() {
             *v = r.finite_f32("patch control point")?;
@@ -389,6 +501,109 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
         camera,
         has_env_cube,
     })
+}
+
+/// Parses the version-5 tail of object `i`'s record (its kind, and a mesh object's atlas
+/// grid, vertices and triangles); `maps` is the object's map count.
+fn decode_mesh(r: &mut ByteReader<'_>, i: usize, maps: u32) -> Result<Option<MeshInfo>, Error> {
+    let at = r.offset();
+    match r.u32()? {
+        OBJECT_KIND_BEZIER => return Ok(None),
+        OBJECT_KIND_MESH => {}
+        kind => {
+            return Err(bad(
+                at,
+                format!("object {i}: unknown kind {kind} (0 Bézier patches, 1 triangle mesh)"),
+            ))
+        }
+    }
+    let at = r.offset();
+    let atlas_grid = r.u32()?;
+    if atlas_grid == 0 || u64::from(atlas_grid) * u64::from(atlas_grid) != u64::from(maps) {
+        return Err(bad(
+            at,
+            format!(
+                "object {i}: atlas grid {atlas_grid} must be ≥ 1 with {atlas_grid}² equal to its map count {maps}"
+            ),
+        ));
+    }
+    let at = r.offset();
+    let vertex_count = r.u32()? as usize;
+    let triangle_count = r.u32()? as usize;
+    if vertex_count < 3 || triangle_count < 1 {
+        return Err(bad(
+            at,
+            format!(
+                "object {i}: a mesh needs at least 3 vertices and 1 triangle ({vertex_count} vertices, {triangle_count} triangles)"
+            ),
+        ));
+    }
+    let needed = (vertex_count as u64) * VERTEX_BYTES as u64
+        + (triangle_count as u64) * TRIANGLE_BYTES as u64;
+    if needed > r.remaining() as u64 {
+        return Err(bad(
+            at,
+            format!(
+                "object {i}: {vertex_count} vertices and {triangle_count} triangles need {needed} bytes but {} remain in the section",
+                r.remaining()
+            ),
+        ));
+    }
+    let mut positions = Vec::with_capacity(vertex_count);
+    let mut normals = Vec::with_capacity(vertex_count);
+    let mut uvs = Vec::with_capacity(vertex_count);
+    for v in 0..vertex_count {
+        let at = r.offset();
+        let mut f = [0f32; 8];
+        for x in &mut f {
+            *x = r.f32()?;
+        }
+        if !f.iter().all(|x| x.is_finite()) {
+            return Err(bad(
+                at,
+                format!("object {i}: vertex {v} has a non-finite field {f:?}"),
+            ));
+        }
+        let n = [f[3], f[4], f[5]];
+        let len = n.iter().map(|x| f64::from(*x).powi(2)).sum::<f64>().sqrt();
+        if (len - 1.0).abs() > f64::from(NORMAL_LENGTH_TOLERANCE) {
+            return Err(bad(
+                at + 12,
+                format!("object {i}: vertex {v} normal {n:?} has length {len}, not 1"),
+            ));
+        }
+        let uv = [f[6], f[7]];
+        if !uv.iter().all(|x| (0.0..=1.0).contains(x)) {
+            return Err(bad(
+                at + 24,
+                format!("object {i}: vertex {v} atlas uv {uv:?} outside [0, 1]²"),
+            ));
+        }
+        positions.push([f[0], f[1], f[2]]);
+        normals.push(n);
+        uvs.push(uv);
+    }
+    let mut triangles = Vec::with_capacity(triangle_count);
+    for t in 0..triangle_count {
+        let at = r.offset();
+        let tri = [r.u32()?, r.u32()?, r.u32()?];
+        if let Some(&bad_index) = tri.iter().find(|&&x| x as usize >= vertex_count) {
+            return Err(bad(
+                at,
+                format!(
+                    "object {i}: triangle {t} vertex index {bad_index} out of range ({vertex_count} vertices)"
+                ),
+            ));
+        }
+        triangles.push(tri);
+    }
+    Ok(Some(MeshInfo {
+        atlas_grid,
+        positions,
+        normals,
+        uvs,
+        triangles,
+    }))
 }
 
 /// Encodes sample points little-endian, field by field (works on any host).

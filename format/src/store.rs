@@ -319,7 +319,7 @@ impl Store {
         if h.has_distance() != b.distance_channel || h.has_env_cube() != meta.has_env_cube {
             return Err(disagree("flags", 12, format!("{:#x}", h.flags)));
         }
-        if h.patch_count != meta.patches.len() as u64 {
+        if h.patch_count != meta.map_count() as u64 {
             return Err(disagree("patch_count", 48, h.patch_count.to_string()));
         }
         if h.object_count != meta.objects.len() as u64 {
@@ -456,7 +456,8 @@ impl Store {
         self.header.index_width
     }
 
-    /// Patch `patch`'s sample map, zero-copy.
+    /// Sample map `patch` (a Bézier patch's or an atlas page's, by global map index),
+    /// zero-copy.
     pub fn sample_map(&self, patch: u32) -> Result<SampleMapView<'_>, Error> {
         let h = &self.header;
         if u64::from(patch) >= h.patch_count {

@@ -130,10 +130,32 @@ impl Prefix {
         maps: &SampleMaps,
         filter: Filter,
     ) -> Result<Self, Error> {
-        let meta_bytes = encode_meta(meta, VERSION);
-        // Validate by decoding what was encoded (same checks as the reader).
+        Self::build_version(meta, points, maps, filter, VERSION)
+    }
+
+    /// [`Prefix::build`] in the layout of format `version` (4 or [`VERSION`]: a version-4
+    /// layout, for continuing older partial files, cannot hold mesh objects).
+    pub(crate) fn build_version(
+        meta: &StoreMeta,
+        points: &[SamplePoint],
+        maps: &SampleMaps,
+        filter: Filter,
+        version: u32,
+    ) -> Result<Self, Error> {
         let meta_offset = HEADER_BYTES as u64;
-        let decoded = decode_meta(&meta_bytes, meta_offset, VERSION)?;
+        if version < 5 {
+            if let Some(i) = meta.objects.iter().position(|o| o.mesh.is_some()) {
+                return Err(Error::InvalidMetadata {
+                    offset: meta_offset,
+                    detail: format!(
+                        "object {i} is a triangle mesh, which format version {version} cannot hold"
+                    ),
+                });
+            }
+        }
+        let meta_bytes = encode_meta(meta, version);
+        // Validate by decoding what was encoded (same checks as the reader).
+        let decoded = decode_meta(&meta_bytes, meta_offset, version)?;
         if decoded != *meta {
             return Err(Error::InvalidMetadata {
                 offset: meta_offset,
@@ -152,7 +174,7 @@ impl Prefix {
             })?;
         let (index_width, map_bytes) = encode_maps(
             maps,
-            meta.patches.len(),
+            meta.map_count(),
             meta.bake.sample_map_resolution,
             sample_count,
         )?;
@@ -174,7 +196,7 @@ impl Prefix {
             flags |= FLAG_ENV_CUBE;
         }
         let header = Header {
-            version: VERSION,
+            version,
             flags,
             encoding: meta.bake.encoding,
             filter,
@@ -183,7 +205,7 @@ impl Prefix {
             sample_map_resolution: meta.bake.sample_map_resolution,
             sample_count,
             cube_count: u64::from(total),
-            patch_count: meta.patches.len() as u64,
+            patch_count: meta.map_count() as u64,
             object_count: meta.objects.len() as u64,
             meta: m,
             points: p,
@@ -339,10 +361,11 @@ impl StoreWriter {
     /// no finished cube maps, so create the store again; [`Error::ResumeMismatch`] if it was
     /// started with different settings (naming each bake parameter, count or object that
     /// differs, the partial's value and this bake's), is damaged, or is not a partial store of
-    /// format version 2 to [`VERSION`] (older partial files are continued as the current
-    /// version: version 2's layout differs only in the header's decoded-faces checksum, which
-    /// `finish()` writes; version 3's only in the version number, version 4 adding the BC6H
-    /// encoding).
+    /// format version 2 to [`VERSION`]. Partial files of versions 2 to 4 are continued and
+    /// finished as version 4 (version 2's layout differs from version 4's only in the header's
+    /// decoded-faces checksum, which `finish()` writes; version 3's only in the version number,
+    /// version 4 adding the BC6H encoding), so they cannot take mesh objects, whose object
+    /// records need version 5; version-5 partial files are finished as version 5.
     pub fn resume(
         path: &Path,
         meta: &StoreMeta,
@@ -351,7 +374,8 @@ impl StoreWriter {
     ) -> Result<Self, Error> {
         let partial = partial_path(path);
         let filter = Filter::for_store(meta.bake.encoding, meta.bake.mantissa_bits);
-        let prefix = Prefix::build(meta, points, maps, filter)?;
+        // Validate the inputs before touching the partial file.
+        let mut prefix = Prefix::build(meta, points, maps, filter)?;
         let mut file = open_partial(&partial)?;
         let file_len = file.metadata().map_err(io_at(&partial, "stat"))?.len();
         let mut rd = PartialReader {
@@ -360,6 +384,15 @@ impl StoreWriter {
             file_len,
         };
         let (got, old) = rd.header()?;
+        if old.version < 5 {
+            // Versions 2 to 4 share version 4's metadata layout: continue as version 4.
+            prefix = Prefix::build_version(meta, points, maps, filter, 4).map_err(|e| {
+                rd.mismatch(format!(
+                    "it is format version {}, which this bake cannot continue ({e}); bake without --resume to start over",
+                    old.version
+                ))
+            })?;
+        }
         let old_meta_bytes = rd.metadata(&old, &prefix.header, meta)?;
         rd.compare_header_and_metadata(got, &old_meta_bytes, &prefix)?;
         drop(old_meta_bytes);
@@ -701,9 +734,10 @@ impl PartialReader<'_> {
     ) -> Result<(), Error> {
         // finish() may have patched the header before a crash: compare without those fields.
         // The section checksums are left out too: the sections themselves are compared next.
-        // A version-2 partial file is continued as the current version.
+        // A version-2 or version-3 partial file is continued as version 4, the layout it
+        // shares.
         let mut want = prefix.header.to_bytes();
-        got[8..12].copy_from_slice(&VERSION.to_le_bytes());
+        got[8..12].copy_from_slice(&prefix.header.version.to_le_bytes());
         let normalise = |b: &mut [u8; HEADER_BYTES]| {
             b[FINISH_FIELDS].fill(0);
             b[SECTION_CHECKSUMS].fill(0);
@@ -745,8 +779,8 @@ impl PartialReader<'_> {
                 let which = match name {
                     "sample points" => format!("point {}", at / SAMPLE_POINT_BYTES),
                     _ => {
-                        let per_patch = (bytes.len() / meta.patches.len().max(1)).max(1);
-                        format!("patch {}", at / per_patch)
+                        let per_patch = (bytes.len() / meta.map_count().max(1)).max(1);
+                        format!("map {}", at / per_patch)
                     }
                 };
                 return Err(self.mismatch(format!(
@@ -1069,6 +1103,7 @@ pub(crate) fn setting_differences(
         None => "none".into(),
     };
     diff("camera", camera(&old.camera), camera(&new.camera));
+    let mut mesh_note = None;
     if old.objects.len() != new.objects.len() {
         diff(
             "object count",
@@ -1111,6 +1146,22 @@ pub(crate) fn setting_differences(
                 u64::from(y.first_patch) + u64::from(y.patch_count)
             ),
         );
+        let kind = |m: &Option<crate::MeshInfo>| match m {
+            None => "Bézier patches".to_string(),
+            Some(m) => format!(
+                "triangle mesh ({} vertices, {} triangles, {}×{} atlas pages)",
+                m.positions.len(),
+                m.triangles.len(),
+                m.atlas_grid,
+                m.atlas_grid
+            ),
+        };
+        let (a, b) = (kind(&x.mesh), kind(&y.mesh));
+        if a != b {
+            diff(&format!("{name} kind"), a, b);
+        } else if x.mesh != y.mesh {
+            mesh_note = Some(format!("the vertices or triangles of {name}"));
+        }
     }
     if old.patches.len() != new.patches.len() {
         diff(
@@ -1126,5 +1177,6 @@ pub(crate) fn setting_differences(
     {
         d.push(format!("the control points of patch {i}"));
     }
+    d.extend(mesh_note);
     d
 }

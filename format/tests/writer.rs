@@ -527,7 +527,7 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     let mut b = good.clone();
     b[8..12].copy_from_slice(&7u32.to_le_bytes());
     assert!(refused(&b)
-        .starts_with("it is format version 7, and this writer continues only versions 2 to 4"));
+        .starts_with("it is format version 7, and this writer continues only versions 2 to 5"));
     let mut b = good.clone();
     b[30] ^= 1;
     assert!(refused(&b).starts_with("its header is damaged: header checksum mismatch"));
@@ -536,29 +536,43 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     assert!(refused(&b).starts_with("its metadata section (byte offset 256) is damaged"));
 }
 
-/// A partial file written by the version-2 writer (the same layout, without the checksum of
-/// the decoded faces) is continued and finished as the current version (4), byte-identical to
-/// a fresh bake.
+/// A partial file written by the version-2 writer (version 4's layout, without the checksum
+/// of the decoded faces; here the complete version-2 fixture, whose finish() was interrupted
+/// as far as resume can tell) is continued and finished as version 4: the version-2 bytes
+/// with version 4's header (version number, decoded-faces checksum). A bake with a mesh
+/// object cannot continue it (version 4 cannot hold meshes).
 #[test]
-fn a_version_2_partial_is_finished_as_version_3() {
-    let f = fixture(spec());
-    let want = reference(&f);
+fn a_version_2_partial_is_finished_as_version_4() {
+    let spec2 = Spec {
+        distance: true,
+        seed: 3,
+        mantissa_bits: 5,
+        ..Spec::default()
+    };
+    let f = fixture(spec2);
+    let fixture_path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v2-rgb9e5-5bits.oslf");
+    let old = std::fs::read(&fixture_path).unwrap();
     let (_dir, path) = temp_store("v2.oslf");
-    start(&path, &f, 4);
-    let partial = partial_path(&path);
-    let mut b = std::fs::read(&partial).unwrap();
-    assert_eq!(
-        b[180..188],
-        [0; 8],
-        "a partial file has no decoded checksum yet"
-    );
-    b[8..12].copy_from_slice(&2u32.to_le_bytes());
-    let sum = xxhash_rust::xxh3::xxh3_64(&b[..248]);
-    b[248..256].copy_from_slice(&sum.to_le_bytes());
-    std::fs::write(&partial, &b).unwrap();
+    std::fs::copy(&fixture_path, partial_path(&path)).unwrap();
     complete(&path, &f);
-    assert_eq!(std::fs::read(&path).unwrap(), want);
+    let now = std::fs::read(&path).unwrap();
     let store = Store::open(&path).unwrap();
-    assert_eq!(store.header().version, VERSION);
+    assert_eq!(store.header().version, 4);
     assert!(store.verify().unwrap().decoded_checksum);
+    assert_eq!(store.meta(), Store::open(&fixture_path).unwrap().meta());
+    assert_eq!(old[12..180], now[12..180]);
+    assert_eq!(old[188..248], now[188..248]);
+    assert_eq!(old[256..], now[256..]);
+
+    let m = with_mesh(fixture(spec2), spec2);
+    let (_dir, path) = temp_store("v2m.oslf");
+    std::fs::copy(&fixture_path, partial_path(&path)).unwrap();
+    let e = StoreWriter::resume(&path, &m.meta, &m.points, &m.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("format version 2") && what.contains("triangle mesh")),
+        "{e}"
+    );
 }

@@ -8,16 +8,20 @@
 //! - [`bezier`]: patches, their evaluation and robust normals (Eq. 3.1–3.4), tessellation with
 //!   an error bound, the Newell teapot and the patch-file parser;
 //! - [`mesh`]: indexed triangle meshes, the common currency of tessellation, shapes and the BVH;
+//! - [`atlas`]: the uv atlas of a triangle-mesh object (a `k × k` grid of sample-map pages), from
+//!   the mesh's own uvs or per-triangle charts, and the surface point of every atlas texel;
 //! - [`camera`]: the pinhole camera and the direction through each pixel.
 //!
 //! It depends on `glam` and `thiserror` only. Image files, the store and the GPU live in the
 //! crates that need them (`oslf-bake`, `oslf-format`, `oslf-runtime`).
 
+pub mod atlas;
 pub mod bezier;
 pub mod camera;
 pub mod error;
 pub mod mesh;
 
+pub use atlas::{Atlas, AtlasOptions, TexelSurface, UvSource};
 pub use bezier::BezierPatch;
 pub use camera::Camera;
 pub use error::{GeometryError, Result};

@@ -24,7 +24,8 @@ pub(crate) struct StoreBuffers {
     pub index_count: u32,
     /// Sample-point positions, object-relative, w = 1 (shade.wgsl's `samples`).
     pub samples: wgpu::Buffer,
-    /// Per patch its 16 control points and its base colour (shade.wgsl's `patches`).
+    /// Per sample map its 16 control points (zero for a mesh's atlas page) and its object's
+    /// base colour (shade.wgsl's `patches`).
     pub patches: wgpu::Buffer,
     /// The cache's indirection table, one entry per cube (shade.wgsl's `slots`).
     pub slots: wgpu::Buffer,
@@ -117,14 +118,15 @@ impl StoreBuffers {
     }
 }
 
-/// Uploads `store`'s sample maps as stored (zero-copy): one integer array layer per patch,
+/// Uploads `store`'s sample maps as stored (zero-copy): one integer array layer per sample map
+/// (Bézier patch or atlas page),
 /// `Rgba16Uint` or `Rgba32Uint` by the store's index width. Returns the `D2Array` view
 /// (shade.wgsl's `sample_maps`).
 ///
 /// Errors with [`RuntimeError::Store`] when a sample map cannot be read.
 pub(crate) fn upload_sample_maps(gpu: &Gpu, store: &Store) -> Result<wgpu::TextureView> {
     let map_res = store.header().sample_map_resolution;
-    let patch_count = store.meta().patches.len() as u32;
+    let patch_count = store.meta().map_count() as u32;
     let index16 = store.index_width() == IndexWidth::U16;
     let map_format = if index16 {
         wgpu::TextureFormat::Rgba16Uint

@@ -1,12 +1,17 @@
-//! The object's Bézier patches as triangle meshes for the G-buffer pass: every vertex carries
-//! its patch id and patch parameters (u, v), so the shader can find its sample-map texel.
+//! The store's objects as triangles for the G-buffer pass: Bézier patches tessellated, and
+//! triangle-mesh objects (format version 5) as they are. Every vertex carries its sample-map
+//! id and parameters (u, v) — a patch's (u, v), or a mesh's atlas uv with the atlas grid, from
+//! which the G-buffer shader picks the page per fragment — so the shading pass can find its
+//! sample-map texel.
 
 use glam::{DAffine3, DMat4, DVec3, Vec3};
 use oslf_format::Store;
 use oslf_geometry::BezierPatch;
 
-/// One vertex as `GVertex` in gbuffer.wgsl: position and patch id + 1 (exact as `f32` below
-/// 2²⁴), the unit normal and u, then v.
+/// One vertex as `GVertex` in gbuffer.wgsl: position and map id + 1 (exact as `f32` below
+/// 2²⁴), the unit normal and u, then v and the atlas grid `k` (`v[1]`; 0 for a Bézier patch,
+/// whose id is its map. For a mesh, the id is the object's first map and (u, v) its atlas uv:
+/// the G-buffer shader adds the page `py·k + px` per fragment and makes (u, v) page-local).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GVertex {
@@ -26,58 +31,124 @@ pub const MAX_LEVEL: u32 = 64;
 /// object's centre the same positions keep 24 bits of the object's own size. The renderer
 /// subtracts `origin` from the sample points and the camera as well.
 pub struct ObjectMesh {
-    /// World position of this mesh's coordinate origin: the centre of the control points'
-    /// bounds, as f32.
+    /// World position of this mesh's coordinate origin: the centre of the bounds of the
+    /// control points and mesh vertices, as f32.
     pub origin: Vec3,
-    /// Every patch of the store, transformed to world space minus `origin` (in f64, then
-    /// rounded), in store order.
+    /// One entry per sample map of the store (indexed by map): a Bézier patch transformed to
+    /// world space minus `origin` (in f64, then rounded), or, for a page of a mesh object's
+    /// atlas, a patch of zero control points (its ∂x/∂u is zero, so the shaders build the
+    /// anisotropic tangent frame from the normal alone).
     pub patches: Vec<BezierPatch>,
-    /// The base colour C_s of each patch's object.
+    /// The base colour C_s of each map's object (indexed by map).
     pub colors: Vec<Vec3>,
-    /// Vertices, patch after patch.
+    /// Vertices, patch after patch, then each mesh object's (in object order).
     pub vertices: Vec<GVertex>,
     /// Triangle list (three indices per triangle).
     pub indices: Vec<u32>,
+    /// Bounds of the control points and mesh vertices relative to `origin`.
+    relative_lo: Vec3,
+    relative_hi: Vec3,
 }
 
 impl ObjectMesh {
-    /// Tessellates every patch of `store` so that the flat triangles stay within
-    /// `max_error` of the surface (clamped to `1..=MAX_LEVEL` quads per side). Normals come
-    /// from [`BezierPatch::normal`], which takes the limit at collapsed edges (never NaN).
+    /// Tessellates every Bézier patch of `store` so that the flat triangles stay within
+    /// `max_error` of the surface (clamped to `1..=MAX_LEVEL` quads per side), and emits every
+    /// mesh object's triangles with world positions (its transform) and world normals (the
+    /// inverse transpose of the transform, renormalized; shading interpolates these vertex
+    /// normals). Patch normals come from [`BezierPatch::normal`], which takes the limit at
+    /// collapsed edges (never NaN).
     pub fn from_store(store: &Store, max_error: f32) -> Self {
         let meta = store.meta();
-        let mut world: Vec<[DVec3; 16]> = Vec::with_capacity(meta.patches.len());
-        let mut colors = Vec::with_capacity(meta.patches.len());
-        for object in &meta.objects {
+        let maps = meta.map_count();
+        // World-space control points per map (None for an atlas page), and mesh vertices.
+        let mut world: Vec<Option<[DVec3; 16]>> = Vec::with_capacity(maps);
+        let mut colors = Vec::with_capacity(maps);
+        struct WorldMesh {
+            positions: Vec<DVec3>,
+            normals: Vec<Vec3>,
+            uvs: Vec<[f32; 2]>,
+            triangles: Vec<[u32; 3]>,
+            first_map: u32,
+            grid: u32,
+        }
+        let mut meshes = Vec::new();
+        for (i, object) in meta.objects.iter().enumerate() {
             let affine = DAffine3::from_mat4(DMat4::from_cols_array_2d(
                 &object.transform.map(|c| c.map(f64::from)),
             ));
-            let first = object.first_patch as usize;
-            let end = first + object.patch_count as usize;
-            for p in &meta.patches[first..end] {
-                world.push(
-                    p.control_points
-                        .map(|c| affine.transform_point3(Vec3::from_array(c).as_dvec3())),
-                );
-                colors.push(Vec3::from_array(object.base_color));
+            let color = Vec3::from_array(object.base_color);
+            match &object.mesh {
+                None => {
+                    for p in meta.patches_of(i) {
+                        world
+                            .push(Some(p.control_points.map(|c| {
+                                affine.transform_point3(Vec3::from_array(c).as_dvec3())
+                            })));
+                        colors.push(color);
+                    }
+                }
+                Some(m) => {
+                    for _ in 0..object.patch_count {
+                        world.push(None);
+                        colors.push(color);
+                    }
+                    let normal_matrix = affine.matrix3.inverse().transpose();
+                    meshes.push(WorldMesh {
+                        positions: m
+                            .positions
+                            .iter()
+                            .map(|&p| affine.transform_point3(Vec3::from_array(p).as_dvec3()))
+                            .collect(),
+                        normals: m
+                            .normals
+                            .iter()
+                            .map(|&n| {
+                                let w = normal_matrix * Vec3::from_array(n).as_dvec3();
+                                let w = w.normalize_or_zero();
+                                if w == DVec3::ZERO {
+                                    Vec3::Z
+                                } else {
+                                    w.as_vec3()
+                                }
+                            })
+                            .collect(),
+                        uvs: m.uvs.clone(),
+                        triangles: m.triangles.clone(),
+                        first_map: object.first_patch,
+                        grid: m.atlas_grid,
+                    });
+                }
             }
         }
-        let (lo, hi) = world.iter().flatten().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &c| (lo.min(c), hi.max(c)),
-        );
-        let origin = if world.is_empty() {
+        let (lo, hi) = world
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(meshes.iter().flat_map(|m| &m.positions))
+            .fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), &c| (lo.min(c), hi.max(c)),
+            );
+        let empty = lo.x > hi.x;
+        let origin = if empty {
             Vec3::ZERO
         } else {
             ((lo + hi) * 0.5).as_vec3()
         };
+        let relative = |c: DVec3| (c - origin.as_dvec3()).as_vec3();
         let patches: Vec<BezierPatch> = world
             .iter()
-            .map(|cp| BezierPatch::new(cp.map(|c| (c - origin.as_dvec3()).as_vec3())))
+            .map(|cp| match cp {
+                Some(cp) => BezierPatch::new(cp.map(relative)),
+                None => BezierPatch::new([Vec3::ZERO; 16]),
+            })
             .collect();
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
-        for (id, patch) in patches.iter().enumerate() {
+        for (id, (patch, cp)) in patches.iter().zip(&world).enumerate() {
+            if cp.is_none() {
+                continue;
+            }
             let level = patch.tessellation_level(max_error).clamp(1, MAX_LEVEL);
             let mesh = patch.tessellate(level);
             let base = vertices.len() as u32;
@@ -93,38 +164,54 @@ impl ObjectMesh {
                 indices.extend(t.iter().map(|i| base + i));
             }
         }
+        for m in &meshes {
+            let base = vertices.len() as u32;
+            let tag = m.first_map as f32 + 1.0;
+            for ((&p, n), uv) in m.positions.iter().zip(&m.normals).zip(&m.uvs) {
+                let p = relative(p);
+                vertices.push(GVertex {
+                    position_patch: [p.x, p.y, p.z, tag],
+                    normal_u: [n.x, n.y, n.z, uv[0]],
+                    v: [uv[1], m.grid as f32, 0.0, 0.0],
+                });
+            }
+            for t in &m.triangles {
+                indices.extend(t.iter().map(|i| base + i));
+            }
+        }
+        let (relative_lo, relative_hi) = if empty {
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
+        } else {
+            (relative(lo), relative(hi))
+        };
         Self {
             origin,
             patches,
             colors,
             vertices,
             indices,
+            relative_lo,
+            relative_hi,
         }
     }
 
-    /// The centre of the bounding box of all control points (world space).
+    /// The centre of the bounding box of all control points and mesh vertices (world
+    /// space).
     pub fn centre(&self) -> Vec3 {
         let (lo, hi) = self.bounds();
         (lo + hi) * 0.5
     }
 
-    /// Axis-aligned bounds of all control points (world space).
+    /// Axis-aligned bounds of all control points and mesh vertices (world space).
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let (lo, hi) = self.relative_bounds();
         (lo + self.origin, hi + self.origin)
     }
 
-    /// Axis-aligned bounds of all control points relative to [`Self::origin`].
+    /// Axis-aligned bounds of all control points and mesh vertices relative to
+    /// [`Self::origin`] (infinite, lo > hi, when there are none).
     pub fn relative_bounds(&self) -> (Vec3, Vec3) {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for p in &self.patches {
-            for c in p.cp {
-                lo = lo.min(c);
-                hi = hi.max(c);
-            }
-        }
-        (lo, hi)
+        (self.relative_lo, self.relative_hi)
     }
 }
 

@@ -5,7 +5,10 @@
 //!
 //! * **Geometry** ([`geometry`]): the object's bicubic Bézier patches, tessellated into
 //!   triangles that carry patch id and (u, v), with normals taken from the limit at collapsed
-//!   patch edges.
+//!   patch edges; and triangle-mesh objects (format version 5), whose vertices carry the
+//!   object's first map id, the atlas uv and the atlas grid, from which the G-buffer pass
+//!   picks the atlas page (sample map) and page-local uv per pixel. Meshes shade with the
+//!   interpolated vertex normal.
 //! * **Frame** ([`renderer`]): a G-buffer pass writes per pixel the world position, patch id,
 //!   shading normal and (u, v) (gbuffer.wgsl); a compute pass (shade.wgsl) reads the pixel's
 //!   sample-map texel with `textureLoad` (indices are never interpolated, §3.4), the four

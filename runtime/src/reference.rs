@@ -34,9 +34,10 @@ pub trait CubeTexels: Sync {
 /// One pixel of the G-buffer, as gbuffer.wgsl writes it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GTexel {
-    /// World position and patch id + 1 (0 = background).
+    /// World position and sample-map id + 1 (0 = background): a Bézier patch's, or the atlas
+    /// page's that gbuffer.wgsl picked from a mesh's atlas uv.
     pub position_patch: [f32; 4],
-    /// Octahedral normal, u, v.
+    /// Octahedral normal, u, v (on the patch, or local to the atlas page).
     pub normal_uv: [f32; 4],
 }
 
@@ -45,10 +46,11 @@ pub struct Shader<'a, C: CubeTexels> {
     pub uniform: ShadeUniform,
     /// Sample-point positions (world space).
     pub samples: &'a [Vec3],
-    /// World-space patches and their base colours C_s.
+    /// Per sample map: the world-space patch (zero control points for a mesh's atlas page,
+    /// whose tangent frame then comes from the normal alone) and its object's base colour C_s.
     pub patches: &'a [BezierPatch],
     pub colors: &'a [Vec3],
-    /// One sample map per patch.
+    /// One sample map per map index (Bézier patch or atlas page).
     pub maps: &'a [SampleMapView<'a>],
     pub cubes: &'a C,
     /// Feedback masks, one per cube (sample points, then the environment cube).

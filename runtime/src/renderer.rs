@@ -207,11 +207,12 @@ fn padded_row(width: u32, bytes_per_texel: u32) -> u32 {
 }
 
 /// Errors with [`RuntimeError::Limits`] when the device's 2D textures cannot hold `store`'s
-/// cube faces or sample maps, or its array layers one sample-map layer per patch.
+/// cube faces or sample maps, or its array layers one sample-map layer per map (Bézier patch
+/// or atlas page).
 fn check_textures_fit(limits: &wgpu::Limits, store: &Store) -> Result<()> {
     let res = store.header().cube_resolution;
     let map_res = store.header().sample_map_resolution;
-    let patch_count = store.meta().patches.len() as u32;
+    let patch_count = store.meta().map_count() as u32;
     if res > limits.max_texture_dimension_2d || map_res > limits.max_texture_dimension_2d {
         return Err(RuntimeError::Limits(format!(
             "cube faces of {res}² and sample maps of {map_res}² need 2D textures of that \
@@ -221,7 +222,7 @@ fn check_textures_fit(limits: &wgpu::Limits, store: &Store) -> Result<()> {
     }
     if patch_count == 0 || patch_count > limits.max_texture_array_layers {
         return Err(RuntimeError::Limits(format!(
-            "{patch_count} patches need as many sample-map layers; the device allows {}",
+            "{patch_count} sample maps (patches and atlas pages) need as many layers; the device allows {}",
             limits.max_texture_array_layers
         )));
     }
@@ -764,7 +765,7 @@ impl Renderer {
             .iter()
             .map(|s| Vec3::from_array(s.position) - self.mesh.origin)
             .collect();
-        let maps = (0..self.mesh.patches.len() as u32)
+        let maps = (0..self.store.meta().map_count() as u32)
             .map(|p| self.store.sample_map(p))
             .collect::<Result<Vec<_>, _>>()
             .map_err(|source| RuntimeError::Store {

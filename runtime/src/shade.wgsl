@@ -437,7 +437,9 @@ fn patch_du(p: u32, u: f32, v: f32) -> vec3<f32> {
 }
 
 // Unit tangent from ∂x/∂u made orthogonal to n; where ∂x/∂u vanishes or is parallel to n (a
-// collapsed patch edge) the frame of Duff et al. (2017) built from n alone.
+// collapsed patch edge) the frame of Duff et al. (2017) built from n alone. Pages of a triangle
+// mesh's atlas have zero control points in `patches` (geometry.rs), so their ∂x/∂u is exactly
+// zero and their frame always comes from n alone (as reference.rs's `tangent_frame` does).
 fn tangent_frame(n: vec3<f32>, du: vec3<f32>) -> vec3<f32> {
     let t = du - n * dot(n, du);
     let l2 = dot(t, t);

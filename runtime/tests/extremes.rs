@@ -47,6 +47,7 @@ fn synthetic_store_with(points: usize, map_res: u32, cube_res: u32) -> std::path
             base_color: [0.5, 0.5, 0.5],
             first_patch: 0,
             patch_count: 1,
+            mesh: None,
         }],
         patches: vec![patch],
         bake: BakeParams {

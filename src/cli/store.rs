@@ -290,11 +290,23 @@ fn info(path: &Path, json: bool) -> Result<()> {
             "env_cube_index": s.env_cube_index(),
             "sample_points": h.sample_count,
             "cubes": s.cube_count(),
-            "patches": m.patches.len(),
-            "objects": m.objects.iter().map(|o| serde_json::json!({
-                "name": o.name, "first_patch": o.first_patch, "patch_count": o.patch_count,
-                "base_color": o.base_color,
-            })).collect::<Vec<_>>(),
+            // Sample maps: Bézier patches plus mesh atlas pages (format version 5).
+            "patches": m.map_count(),
+            "sample_maps": m.map_count(),
+            "bezier_patches": m.patches.len(),
+            "objects": m.objects.iter().map(|o| {
+                let mut v = serde_json::json!({
+                    "name": o.name, "first_patch": o.first_patch, "patch_count": o.patch_count,
+                    "base_color": o.base_color,
+                    "kind": if o.mesh.is_some() { "mesh" } else { "bezier" },
+                });
+                if let Some(mesh) = &o.mesh {
+                    v["vertices"] = mesh.positions.len().into();
+                    v["triangles"] = mesh.triangles.len().into();
+                    v["atlas_grid"] = mesh.atlas_grid.into();
+                }
+                v
+            }).collect::<Vec<_>>(),
             "cube_resolution": b.cube_resolution,
             "sample_map_resolution": b.sample_map_resolution,
             "index_width_bytes": s.index_width().bytes(),
@@ -352,21 +364,32 @@ fn info(path: &Path, json: bool) -> Result<()> {
         }
     );
     println!(
-        "objects          {} ({} patches)",
+        "objects          {} ({} sample maps: {} Bézier patches, {} atlas pages)",
         m.objects.len(),
-        m.patches.len()
+        m.map_count(),
+        m.patches.len(),
+        m.map_count() - m.patches.len()
     );
     for o in &m.objects {
-        println!(
-            "  {:?}: patches {}..{}",
-            o.name,
+        let range = format!(
+            "{}..{}",
             o.first_patch,
             u64::from(o.first_patch) + u64::from(o.patch_count)
         );
+        match &o.mesh {
+            None => println!("  {:?}: Bézier patches {range}", o.name),
+            Some(mesh) => println!(
+                "  {:?}: triangle mesh, {} vertices, {} triangles, {k}x{k} atlas pages (maps {range})",
+                o.name,
+                mesh.positions.len(),
+                mesh.triangles.len(),
+                k = mesh.atlas_grid
+            ),
+        }
     }
     println!("cube resolution  {0}x{0} per face", b.cube_resolution);
     println!(
-        "sample maps      {0}x{0} per patch, {1}-byte indices",
+        "sample maps      {0}x{0} per patch or atlas page, {1}-byte indices",
         b.sample_map_resolution,
         s.index_width().bytes()
     );

@@ -9,7 +9,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let _ = store.sample_points().len();
-    let patches = store.meta().patches.len() as u32;
+    let patches = store.meta().map_count() as u32;
     for patch in 0..patches.min(8) {
         if let Ok(map) = store.sample_map(patch) {
             let r = map.resolution();

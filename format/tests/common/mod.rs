@@ -89,6 +89,7 @@ pub fn fixture(spec: Spec) -> Fixture {
         base_color: [0.8, 0.6, 0.2],
         first_patch: 0,
         patch_count: split,
+        mesh: None,
     }];
     objects.push(ObjectInfo {
         name: "lid".into(),
@@ -96,6 +97,7 @@ pub fn fixture(spec: Spec) -> Fixture {
         base_color: [0.1, 0.2, 0.3],
         first_patch: split,
         patch_count: spec.patches as u32 - split,
+        mesh: None,
     });
     let meta = StoreMeta {
         objects,
@@ -238,4 +240,95 @@ pub fn close_bits(enc: Encoding, bits: u32, want: [f32; 3], got: [f32; 3]) -> bo
             Encoding::Bc6h => g.is_finite() && (0.0..=65504.0).contains(&g),
         }
     })
+}
+
+/// Asserts that two complete stores hold the same sample points, sample maps and cube payload
+/// bytes (their headers, metadata layouts — format version 5 adds each object's kind — and
+/// so table-of-contents offsets may differ).
+pub fn assert_same_sections(old: &[u8], new: &[u8]) {
+    let (ho, hn) = (
+        oslf_format::header::Header::parse(old).unwrap(),
+        oslf_format::header::Header::parse(new).unwrap(),
+    );
+    let get = |b: &'_ [u8], s: oslf_format::header::Section| -> Vec<u8> {
+        b[s.offset as usize..s.end() as usize].to_vec()
+    };
+    assert_eq!(get(old, ho.points), get(new, hn.points), "sample points");
+    assert_eq!(get(old, ho.maps), get(new, hn.maps), "sample maps");
+    assert_eq!(get(old, ho.payload), get(new, hn.payload), "cube payload");
+    assert_eq!(ho.points_checksum, hn.points_checksum);
+    assert_eq!(ho.maps_checksum, hn.maps_checksum);
+}
+
+/// The mesh object [`with_mesh`] adds: a bent quad of 5 vertices and 4 triangles over a 2×2
+/// atlas (4 sample maps).
+pub fn test_mesh() -> MeshInfo {
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    MeshInfo {
+        atlas_grid: 2,
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.5, 0.5, 0.3],
+        ],
+        normals: vec![
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0],
+            [0.0, s, s],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0],
+        ],
+        uvs: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5]],
+        triangles: vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
+    }
+}
+
+/// `f` (the fixture of `spec`) with a third object, a triangle mesh ([`test_mesh`]) owning 4
+/// atlas pages after the Bézier patches, 3 sample points on its pages (with their cubes,
+/// inserted before the environment cube) and sample maps for its pages.
+pub fn with_mesh(mut f: Fixture, spec: Spec) -> Fixture {
+    let mut rng = Rng(spec.seed.wrapping_mul(31) | 1);
+    let first = spec.patches as u32;
+    f.meta.objects.push(ObjectInfo {
+        name: "mesh".into(),
+        transform: [
+            [2.0, 0.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0, 0.0],
+            [0.0, 0.0, 2.0, 0.0],
+            [0.0, 3.0, 0.0, 1.0],
+        ],
+        base_color: [0.3, 0.9, 0.4],
+        first_patch: first,
+        patch_count: 4,
+        mesh: Some(test_mesh()),
+    });
+    let object = (f.meta.objects.len() - 1) as u32;
+    let old_points = f.points.len();
+    for i in 0..3u32 {
+        f.points.push(SamplePoint {
+            position: [rng.unit(), 3.0 + rng.unit(), 0.1],
+            normal: [0.0, 0.0, 1.0],
+            uv: [rng.unit(), rng.unit()],
+            patch: first + i,
+            object,
+        });
+    }
+    let total = f.points.len() as u64;
+    let m2 = (spec.map_res as usize).pow(2);
+    for _ in 0..4 * m2 {
+        let valid = (rng.next_u64() % 5) as usize;
+        f.maps.indices.push(std::array::from_fn(|k| {
+            if k < valid {
+                (rng.next_u64() % total) as u32
+            } else {
+                INVALID_INDEX
+            }
+        }));
+    }
+    // New cubes go after the old sample points' cubes, before the environment cube.
+    let extra: Vec<CubeImage> = (0..3).map(|i| f.cubes[i % f.cubes.len()].clone()).collect();
+    f.cubes.splice(old_points..old_points, extra);
+    f
 }

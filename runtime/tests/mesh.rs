@@ -1,0 +1,449 @@
+//! Triangle-mesh objects (format version 5): a synthetic store holding a Bézier plane and a
+//! bent grid whose 2×2 atlas pages point at sample points with distinct cube colours. The GPU
+//! matches the CPU reference in every mode and blend; each pixel reads the sample map of the
+//! atlas page its atlas uv falls in; both objects render.
+
+mod common;
+
+use oslf_format::{
+    encode_cube, BakeParams, CameraInfo, CubeImage, Encoding, MeshInfo, ObjectInfo, Patch,
+    SampleMaps, SamplePoint, StoreMeta, StoreWriter, INVALID_INDEX,
+};
+use oslf_runtime::reference::StoreCubes;
+use oslf_runtime::{
+    Blend, CacheConfig, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams, Source,
+};
+
+const W: u32 = 96;
+const H: u32 = 72;
+const EPS: f32 = 0.02;
+/// The mesh's object-to-world translation along x; the plane's is −1.1.
+const MESH_X: f32 = 0.1;
+/// Atlas grid k.
+const K: u32 = 2;
+/// Segments of the grid per side: 7, so triangles straddle the page border at 0.5 and the page
+/// is chosen per fragment.
+const SEGMENTS: u32 = 7;
+/// Cube colour of each page, `py·k + px`: (0,0) red, (1,0) green, (0,1) blue, (1,1) yellow;
+/// the Bézier plane's points are grey.
+const PAGE_COLORS: [[f32; 3]; 4] = [
+    [1.0, 0.1, 0.1],
+    [0.1, 1.0, 0.1],
+    [0.1, 0.1, 1.0],
+    [1.0, 1.0, 0.1],
+];
+const GREY: [f32; 3] = [0.6, 0.6, 0.6];
+
+/// The bend of the grid: z as a function of object-space x, and its slope.
+fn bend(x: f32) -> (f32, f32) {
+    (0.2 * x * (1.0 - x), 0.2 * (1.0 - 2.0 * x))
+}
+
+fn normal_at(x: f32) -> [f32; 3] {
+    let (_, dz) = bend(x);
+    let l = (dz * dz + 1.0).sqrt();
+    [-dz / l, 0.0, 1.0 / l]
+}
+
+fn translate(x: f32) -> [[f32; 4]; 4] {
+    [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [x, 0.0, 0.0, 1.0],
+    ]
+}
+
+/// The bent grid over `[0, 1]²` (object space) with atlas uv = (x, y).
+fn grid_mesh() -> MeshInfo {
+    let n = SEGMENTS + 1;
+    let mut m = MeshInfo {
+        atlas_grid: K,
+        positions: Vec::new(),
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (i as f32 / SEGMENTS as f32, j as f32 / SEGMENTS as f32);
+            m.positions.push([x, y, bend(x).0]);
+            m.normals.push(normal_at(x));
+            m.uvs.push([x, y]);
+        }
+    }
+    for j in 0..SEGMENTS {
+        for i in 0..SEGMENTS {
+            let a = j * n + i;
+            // Counter-clockwise seen from +z.
+            m.triangles.push([a, a + 1, a + n + 1]);
+            m.triangles.push([a, a + n + 1, a + n]);
+        }
+    }
+    m
+}
+
+/// Sample maps whose every texel lists `points` (global indices with their local uv) sorted by
+/// distance to the texel centre.
+fn map_of(points: &[(u32, [f32; 2])], res: u32) -> Vec<[u32; 4]> {
+    let mut out = Vec::new();
+    for y in 0..res {
+        for x in 0..res {
+            let c = [(x as f32 + 0.5) / res as f32, (y as f32 + 0.5) / res as f32];
+            let mut p: Vec<(f32, u32)> = points
+                .iter()
+                .map(|(i, uv)| ((uv[0] - c[0]).powi(2) + (uv[1] - c[1]).powi(2), *i))
+                .collect();
+            p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            out.push(std::array::from_fn(|k| {
+                p.get(k).map_or(INVALID_INDEX, |v| v.1)
+            }));
+        }
+    }
+    out
+}
+
+/// The synthetic store's path, written once per test binary (the tests run in parallel).
+fn mesh_store() -> std::path::PathBuf {
+    static PATH: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    PATH.get_or_init(write_mesh_store).clone()
+}
+
+/// Writes the synthetic store: object 0 a Bézier plane (map 0), object 1 the bent grid (maps
+/// 1..5), 4 sample points per map, cubes of the map's colour with per-texel variation, an
+/// environment cube, distances.
+fn write_mesh_store() -> std::path::PathBuf {
+    let map_res = 8;
+    let cube_res = 8;
+    let plane = Patch {
+        // u along y, v along x: the normal ∂x/∂v × ∂x/∂u is +z.
+        control_points: std::array::from_fn(|k| [(k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0, 0.0]),
+    };
+    let meta = StoreMeta {
+        objects: vec![
+            ObjectInfo {
+                name: "plane".into(),
+                transform: translate(-1.1),
+                base_color: [0.5, 0.5, 0.5],
+                first_patch: 0,
+                patch_count: 1,
+                mesh: None,
+            },
+            ObjectInfo {
+                name: "bent grid".into(),
+                transform: translate(MESH_X),
+                base_color: [0.9, 0.8, 0.7],
+                first_patch: 1,
+                patch_count: K * K,
+                mesh: Some(grid_mesh()),
+            },
+        ],
+        patches: vec![plane],
+        bake: BakeParams {
+            epsilon: EPS,
+            cube_resolution: cube_res,
+            sample_map_resolution: map_res,
+            samples_per_texel: 1,
+            encoding: Encoding::Rgba16f,
+            distance_channel: true,
+            ..Default::default()
+        },
+        camera: Some(CameraInfo {
+            position: [0.0, -0.6, 2.2],
+            target: [0.0, 0.5, 0.0],
+            up: [0.0, 1.0, 0.0],
+            vfov_deg: 55.0,
+        }),
+        has_env_cube: true,
+    };
+    let quarter = [[0.25f32, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]];
+    let mut points = Vec::new();
+    let mut colors = Vec::new();
+    let mut indices = Vec::new();
+    // The plane: uv = (u, v) = (y, x).
+    let mut own = Vec::new();
+    for uv in quarter {
+        own.push((points.len() as u32, uv));
+        points.push(SamplePoint {
+            position: [-1.1 + uv[1], uv[0], EPS],
+            normal: [0.0, 0.0, 1.0],
+            uv,
+            patch: 0,
+            object: 0,
+        });
+        colors.push(GREY);
+    }
+    indices.extend(map_of(&own, map_res));
+    // The mesh's pages.
+    for page in 0..K * K {
+        let (px, py) = ((page % K) as f32, (page / K) as f32);
+        let mut own = Vec::new();
+        for uv in quarter {
+            let (x, y) = ((px + uv[0]) / K as f32, (py + uv[1]) / K as f32);
+            let n = normal_at(x);
+            own.push((points.len() as u32, uv));
+            points.push(SamplePoint {
+                position: [
+                    MESH_X + x + EPS * n[0],
+                    y + EPS * n[1],
+                    bend(x).0 + EPS * n[2],
+                ],
+                normal: n,
+                uv,
+                patch: 1 + page,
+                object: 1,
+            });
+            colors.push(PAGE_COLORS[page as usize]);
+        }
+        indices.extend(map_of(&own, map_res));
+    }
+    colors.push([0.3, 0.35, 0.4]); // the environment cube
+    let maps = SampleMaps {
+        resolution: map_res,
+        indices,
+    };
+    let dir = std::env::temp_dir().join(format!("oslf-runtime-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("mesh.oslf");
+    let mut w = StoreWriter::create(&path, &meta, &points, &maps).unwrap();
+    for (cube, c) in colors.iter().enumerate() {
+        let mut image = CubeImage::black(cube_res, true);
+        for (f, face) in image.faces.iter_mut().enumerate() {
+            for (i, t) in face.iter_mut().enumerate() {
+                let s = 0.5 + ((f * 7 + i * 13 + cube * 5) % 11) as f32 / 10.0;
+                *t = [c[0] * s, c[1] * s, c[2] * s];
+            }
+        }
+        if let Some(d) = image.distance.as_mut() {
+            for (f, face) in d.iter_mut().enumerate() {
+                for (i, t) in face.iter_mut().enumerate() {
+                    *t = 0.5 + ((f + i) % 5) as f32 * 0.3;
+                }
+            }
+        }
+        let (encoded, _) = encode_cube(&image, &meta.bake, cube as u32).unwrap();
+        w.append(encoded).unwrap();
+    }
+    w.finish().unwrap();
+    path
+}
+
+fn open() -> (Renderer, StoreCubes) {
+    let store = oslf_format::Store::open(&mesh_store()).unwrap();
+    assert_eq!(store.meta().map_count(), 5);
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    (r, cubes)
+}
+
+fn check(r: &mut Renderer, cubes: &StoreCubes, params: ShadingParams, label: &str) {
+    common::check_parity(r, cubes, params, (W, H), label);
+}
+
+#[test]
+fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
+    let (mut r, cubes) = open();
+    let base = ShadingParams::default();
+    check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            mode: Mode::Recon,
+            ..base
+        },
+        "recon",
+    );
+    for blend in Blend::ALL {
+        for n in [1.0, 4.0] {
+            for depth in [false, true] {
+                let p = ShadingParams {
+                    mode: Mode::Mirror,
+                    blend,
+                    blend_n: n,
+                    depth,
+                    ..base
+                };
+                check(
+                    &mut r,
+                    &cubes,
+                    p,
+                    &format!("mirror {} N={n} depth={depth}", blend.name()),
+                );
+            }
+        }
+    }
+    check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            mode: Mode::ReconMirror,
+            ..base
+        },
+        "recon + C_s mirror",
+    );
+    check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            mode: Mode::Mirror,
+            source: Source::EnvMap,
+            ..base
+        },
+        "mirror envmap",
+    );
+    for order in [Order::PerPoint, Order::PerDirection] {
+        // Anisotropic lobes: the mesh's tangent frame comes from its normal alone.
+        for (nu, nv) in [(10.0, 10.0), (1000.0, 10.0)] {
+            let p = ShadingParams {
+                mode: Mode::Glossy,
+                order,
+                nu,
+                nv,
+                m: 8,
+                ..base
+            };
+            check(
+                &mut r,
+                &cubes,
+                p,
+                &format!("glossy {order:?} n_u={nu} n_v={nv}"),
+            );
+        }
+    }
+    check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            mode: Mode::ReconGlossy,
+            rs: 0.3,
+            rd: 0.5,
+            m: 4,
+            ..base
+        },
+        "recon + C_s glossy with diffuse term",
+    );
+}
+
+/// Renders reconstruction alone; returns the pixels and the G-buffer.
+fn recon(r: &mut Renderer) -> (Vec<[f32; 4]>, Vec<oslf_runtime::reference::GTexel>) {
+    let options = RenderOptions {
+        width: W,
+        height: H,
+        ..Default::default()
+    };
+    let camera = r.default_view();
+    let params = ShadingParams {
+        mode: Mode::Recon,
+        ..Default::default()
+    };
+    let frame = r.render(&camera, &params, &options).unwrap();
+    (frame.pixels, r.read_gbuffer().unwrap())
+}
+
+/// The page whose colour `c` shows, if one clearly does.
+fn page_of_colour(c: [f32; 4]) -> Option<u32> {
+    let [r, g, b, _] = c;
+    let hi = |a: f32, o: f32| a > 3.0 * o;
+    match (hi(r, b), hi(g, b), hi(r, g), hi(g, r), hi(b, r) && hi(b, g)) {
+        (true, true, false, false, _) => Some(3),
+        (true, _, true, _, _) => Some(0),
+        (_, true, _, true, _) => Some(1),
+        (_, _, _, _, true) => Some(2),
+        _ => None,
+    }
+}
+
+#[test]
+fn each_pixel_reads_the_atlas_page_its_uv_falls_in() {
+    let (mut r, _) = open();
+    let (pixels, gbuffer) = recon(&mut r);
+    let origin = r.mesh().origin;
+    let mut per_page = [0usize; 4];
+    let mut checked = 0;
+    for (g, p) in gbuffer.iter().zip(&pixels) {
+        let id = g.position_patch[3];
+        if id < 1.5 {
+            continue; // background (0) or the plane (1)
+        }
+        // Object-space position on the grid: atlas uv = (x, y).
+        let x = g.position_patch[0] + origin.x - MESH_X;
+        let y = g.position_patch[1] + origin.y;
+        let near_border = |v: f32| (v * K as f32 - (v * K as f32).round()).abs() < 0.02;
+        if near_border(x) || near_border(y) {
+            continue;
+        }
+        let (px, py) = (
+            ((x * K as f32).floor() as u32).min(K - 1),
+            ((y * K as f32).floor() as u32).min(K - 1),
+        );
+        let page = py * K + px;
+        assert_eq!(
+            id,
+            (2 + page) as f32,
+            "atlas uv ({x}, {y}) lies in page ({px}, {py})"
+        );
+        let (lu, lv) = (x * K as f32 - px as f32, y * K as f32 - py as f32);
+        assert!(
+            (g.normal_uv[2] - lu).abs() < 0.01 && (g.normal_uv[3] - lv).abs() < 0.01,
+            "local uv {:?} for ({lu}, {lv})",
+            &g.normal_uv[2..]
+        );
+        assert_eq!(p[3], 1.0);
+        assert_eq!(
+            page_of_colour(*p),
+            Some(page),
+            "pixel {p:?} at atlas uv ({x}, {y}) in page ({px}, {py})"
+        );
+        per_page[page as usize] += 1;
+        checked += 1;
+    }
+    println!("pixels per page {per_page:?}");
+    assert!(
+        per_page.iter().all(|n| *n > 20),
+        "every page is seen: {per_page:?}"
+    );
+    assert!(checked > 200);
+    // In particular page (1, 0): green.
+    assert!(per_page[1] > 20);
+}
+
+#[test]
+fn a_bezier_object_and_a_mesh_object_both_render() {
+    let (mut r, _) = open();
+    // The bounds take in the mesh's vertices: x from −1.1 (plane) to 1.1 (grid).
+    let (lo, hi) = r.mesh().bounds();
+    assert!(
+        (lo.x + 1.1).abs() < 1e-5 && (hi.x - 1.1).abs() < 1e-5,
+        "{lo} {hi}"
+    );
+    let top = bend(3.0 / SEGMENTS as f32).0;
+    assert!((hi.z - top).abs() < 1e-5, "the bend's top vertex: {hi}");
+    assert_eq!(r.mesh().patches.len(), 5, "one per sample map");
+    assert!(r.mesh().patches[1..]
+        .iter()
+        .all(|p| p.cp == [glam::Vec3::ZERO; 16]));
+    let (pixels, gbuffer) = recon(&mut r);
+    let mut plane = 0;
+    let mut mesh = 0;
+    for (g, p) in gbuffer.iter().zip(&pixels) {
+        match g.position_patch[3] {
+            1.0 => {
+                plane += 1;
+                // Grey.
+                assert!(
+                    p[0] > 0.05
+                        && (p[0] - p[1]).abs() < 0.02 * p[0]
+                        && (p[0] - p[2]).abs() < 0.02 * p[0],
+                    "{p:?}"
+                );
+            }
+            id if id >= 2.0 => {
+                assert!(id <= 5.0 && id.fract() == 0.0, "map id {id}");
+                mesh += 1;
+            }
+            _ => assert_eq!(p[3], 0.0),
+        }
+    }
+    println!("plane {plane} pixels, mesh {mesh} pixels");
+    assert!(plane > 300 && mesh > 300, "plane {plane}, mesh {mesh}");
+}
