@@ -41,3 +41,32 @@ fn the_gltf_room_example_loads() {
         assert!(!scene.lights.is_empty(), "the glTF lights are imported");
     }
 }
+
+/// `examples/meshes.toml` includes `examples/room.glb` and `examples/blob.glb` (both generators'
+/// outputs are committed) and makes two of their nodes mesh OSLF objects: the blob, without
+/// texture coordinates, gets an atlas of per-triangle charts; the ball keeps its TEXCOORD_0.
+#[test]
+fn the_mesh_objects_example_loads_and_lays_out_its_atlases() {
+    use oslf_bake::surface::Surfaces;
+    use oslf_geometry::atlas::UvSource;
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/meshes.toml");
+    for preset in [None, Some("thesis")] {
+        let scene = Scene::load(&path, preset).unwrap_or_else(|e| panic!("{preset:?}: {e}"));
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["Ball", "Blob"]);
+        assert!(scene.objects.iter().all(|o| o.patches.is_empty()));
+        let blob = scene.objects[1].mesh.as_ref().expect("a mesh object");
+        assert_eq!(blob.mesh.triangles.len(), 1280);
+        let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
+        let ball = surfaces.atlas(0).expect("the ball's atlas");
+        let blob = surfaces.atlas(1).expect("the blob's atlas");
+        assert_eq!(ball.source, UvSource::Texture, "{:?}", ball.rejected);
+        assert_eq!(blob.source, UvSource::Charts);
+        assert_eq!(
+            surfaces.map_count(),
+            ball.grid * ball.grid + blob.grid * blob.grid
+        );
+    }
+}

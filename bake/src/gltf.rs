@@ -1009,8 +1009,11 @@ impl<'d> Loader<'d> {
             }
             let material = prim.material();
             let (material_index, uv_map) = self.material(&material, materials)?;
-            let mut m =
-                self.primitive_mesh(&prim, &json_at, &what, triangles_from, uv_map.as_ref())?;
+            let PrimitiveMesh {
+                mesh: mut m,
+                vertices,
+                split,
+            } = self.primitive_mesh(&prim, &json_at, &what, triangles_from, uv_map.as_ref())?;
             if m.triangles.is_empty() {
                 continue;
             }
@@ -1030,10 +1033,13 @@ impl<'d> Loader<'d> {
                 });
                 continue;
             }
-            let n = m.positions.len();
             for (set, uvs) in [(1, &mut lightmap), (0, &mut texture)] {
-                match (self.texcoords(&prim, set, &json_at, n)?, uvs.as_mut()) {
-                    (Some(read), Some(all)) => all.extend(read),
+                match (self.texcoords(&prim, set, &json_at, vertices)?, uvs.as_mut()) {
+                    // Flat-shaded primitives were split per triangle corner: follow the split.
+                    (Some(read), Some(all)) => match &split {
+                        None => all.extend(read),
+                        Some(source) => all.extend(source.iter().map(|&i| read[i as usize])),
+                    },
                     _ => *uvs = None,
                 }
             }
@@ -1117,7 +1123,7 @@ impl<'d> Loader<'d> {
         what: &str,
         mode: Mode,
         uv_map: Option<&UvMap>,
-    ) -> Result<Mesh> {
+    ) -> Result<PrimitiveMesh> {
         let pos_at = format!("{json_at}.attributes.POSITION");
         let accessor = prim
             .get(&Semantic::Positions)
@@ -1247,18 +1253,29 @@ impl<'d> Loader<'d> {
                 }
             }
         };
-        let mesh = match normals {
-            Some(normals) => Mesh {
-                positions,
-                normals,
-                uvs,
-                triangles,
-            },
-            None => flat_shaded(&positions, &uvs, &triangles),
+        let vertices = positions.len();
+        let (mesh, split) = match normals {
+            Some(normals) => (
+                Mesh {
+                    positions,
+                    normals,
+                    uvs,
+                    triangles,
+                },
+                None,
+            ),
+            None => {
+                let split = triangles.iter().flatten().copied().collect();
+                (flat_shaded(&positions, &uvs, &triangles), Some(split))
+            }
         };
         mesh.validate()
             .map_err(|e| self.err(json_at.to_string(), e.to_string()))?;
-        Ok(mesh)
+        Ok(PrimitiveMesh {
+            mesh,
+            vertices,
+            split,
+        })
     }
 
     // --- materials and textures -------------------------------------------------------------
@@ -1565,6 +1582,16 @@ fn wrapped_image(
 
 /// A mesh with one vertex per triangle corner and the face normal at each (glTF's rule for
 /// primitives without normals). Degenerate triangles get +z.
+/// A primitive read into a mesh.
+struct PrimitiveMesh {
+    mesh: Mesh,
+    /// Elements of the primitive's `POSITION` accessor.
+    vertices: usize,
+    /// Where the mesh was flat-shaded (split per triangle corner): the accessor element of
+    /// each mesh vertex.
+    split: Option<Vec<u32>>,
+}
+
 fn flat_shaded(positions: &[Vec3], uvs: &[Vec2], triangles: &[[u32; 3]]) -> Mesh {
     let mut m = Mesh::new();
     for t in triangles {

@@ -970,11 +970,13 @@ impl Ctx<'_> {
                     let file = self.existing_file(path)?;
                     let mut mesh = crate::obj::load_obj(&file)?;
                     mesh.transform(&transform);
-                    let uvs = mesh.uvs.clone();
-                    let source = MeshSource {
-                        mesh,
-                        uv_sets: vec![(UvSource::Texture, uvs)],
+                    // An OBJ without `vt` reads as all-zero uvs: no texture set then.
+                    let uv_sets = if mesh.uvs.iter().any(|&uv| uv != Vec2::ZERO) {
+                        vec![(UvSource::Texture, mesh.uvs.clone())]
+                    } else {
+                        Vec::new()
                     };
+                    let source = MeshSource { mesh, uv_sets };
                     (Vec::new(), Some(source))
                 }
                 _ => {

@@ -87,8 +87,13 @@ impl MapDomain<'_> {
 /// One area cell: a patch's (u, v) cell or a mesh triangle.
 #[derive(Clone, Copy, Debug)]
 enum Cell {
-    /// Map index, cell column and row.
-    Patch { map: u32, i: u16, j: u16 },
+    /// Object, patch of the object, cell column and row.
+    Patch {
+        object: u32,
+        patch: u32,
+        i: u16,
+        j: u16,
+    },
     /// Object index and triangle.
     Triangle { object: u32, triangle: u32 },
 }
@@ -136,25 +141,24 @@ impl<'s> Surfaces<'s> {
             cells.push(cell);
             cdf.push(total as f32);
         };
-        let mut map = 0u32;
         let n = AREA_GRID;
         let cell = 1.0 / n as f32;
         for (o, object) in objects.iter().enumerate() {
-            for patch in &object.patches {
+            for (p, patch) in object.patches.iter().enumerate() {
                 for j in 0..n {
                     for i in 0..n {
                         let (du, dv) =
                             patch.partials((i as f32 + 0.5) * cell, (j as f32 + 0.5) * cell);
                         let area = du.cross(dv).length() * cell * cell;
                         let c = Cell::Patch {
-                            map,
+                            object: o as u32,
+                            patch: p as u32,
                             i: i as u16,
                             j: j as u16,
                         };
                         push(c, area, &mut cells, &mut cdf);
                     }
                 }
-                map += 1;
             }
             if let Some(source) = &object.mesh {
                 for (t, tri) in source.mesh.triangles.iter().enumerate() {
@@ -270,16 +274,21 @@ impl<'s> Surfaces<'s> {
             .min(self.cells.len().saturating_sub(1));
         let (a, b) = (rng.next_f32(), rng.next_f32());
         match self.cells[k] {
-            Cell::Patch { map, i, j } => {
+            Cell::Patch {
+                object,
+                patch,
+                i,
+                j,
+            } => {
                 let n = AREA_GRID as f32;
                 let u = (f32::from(i) + a) / n;
                 let v = (f32::from(j) + b) / n;
-                let (object, patch) = self.patch_of(map);
+                let bezier = &self.objects[object as usize].patches[patch as usize];
                 SurfacePoint {
-                    position: patch.eval(u, v),
-                    normal: patch.normal(u, v),
+                    position: bezier.eval(u, v),
+                    normal: bezier.normal(u, v),
                     uv: Vec2::new(u, v),
-                    map,
+                    map: self.first_map[object as usize] + patch,
                     object,
                 }
             }
@@ -293,7 +302,7 @@ impl<'s> Surfaces<'s> {
     }
 
     /// The surface point of object `object`'s input triangle `triangle` at `bary`.
-    pub fn mesh_point(&self, object: u32, triangle: u32, bary: [f32; 3]) -> SurfacePoint {
+    fn mesh_point(&self, object: u32, triangle: u32, bary: [f32; 3]) -> SurfacePoint {
         let atlas = self.atlases[object as usize]
             .as_ref()
             .expect("triangle cells belong to mesh objects");
@@ -306,15 +315,5 @@ impl<'s> Surfaces<'s> {
             map: self.first_map[object as usize] + page,
             object,
         }
-    }
-
-    /// The object and patch of a Bézier map.
-    fn patch_of(&self, map: u32) -> (u32, &BezierPatch) {
-        let o = self.first_map.partition_point(|&f| f <= map) - 1;
-        let object = &self.objects[o];
-        (
-            o as u32,
-            &object.patches[(map - self.first_map[o]) as usize],
-        )
     }
 }

@@ -320,6 +320,7 @@ fn lights_and_their_unit_conversion() {
         transform: Affine3A::from_rotation_x(FRAC_PI_2),
         watts_per_lumen: 0.01,
         lights: true,
+        ..Default::default()
     };
     let (import, _) = self::import(&path, &options);
     let Light::Point {
@@ -522,7 +523,7 @@ transform = {{ translate = [0, 0, 1], rotate = [90, 0, 0], scale = 2 }}
 }
 
 #[test]
-fn a_gltf_file_as_the_scene_is_refused_with_a_reason() {
+fn a_gltf_file_without_a_marked_object_is_refused_with_a_reason() {
     let mut b = Builder::new();
     let pos = b.positions(&TRIANGLE);
     let doc = json!({
@@ -533,7 +534,7 @@ fn a_gltf_file_as_the_scene_is_refused_with_a_reason() {
     let path = write(&d, "only.glb", &b.glb(doc));
     let e = Scene::load(&path, None).unwrap_err().to_string();
     assert!(
-        e.contains("only.glb") && e.contains("mesh OSLF objects are not supported yet"),
+        e.contains("only.glb") && e.contains("no node is marked as an OSLF object"),
         "{e}"
     );
     // Its defaults: a camera framing the bounds, a white uniform environment, no object.
