@@ -1034,7 +1034,10 @@ impl<'d> Loader<'d> {
                 continue;
             }
             for (set, uvs) in [(1, &mut lightmap), (0, &mut texture)] {
-                match (self.texcoords(&prim, set, &json_at, vertices)?, uvs.as_mut()) {
+                match (
+                    self.texcoords(&prim, set, &json_at, vertices)?,
+                    uvs.as_mut(),
+                ) {
                     // Flat-shaded primitives were split per triangle corner: follow the split.
                     (Some(read), Some(all)) => match &split {
                         None => all.extend(read),
