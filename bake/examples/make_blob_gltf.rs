@@ -13,7 +13,6 @@
 #[path = "../tests/data/gltf_builder.rs"]
 mod gltf_builder;
 
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 use glam::Vec3;
@@ -24,68 +23,6 @@ use serde_json::json;
 const RADIUS: f32 = 0.17;
 /// Height of the table top in room.glb.
 const TABLE_TOP: f32 = 0.78;
-
-/// The icosahedron's 12 vertices and 20 counter-clockwise faces.
-fn icosahedron() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let v = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .map(|p| Vec3::from_array(p).normalize());
-    let f = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    (v.to_vec(), f)
-}
-
-/// Splits every triangle into four, projecting new vertices onto the unit sphere.
-fn subdivide(points: &mut Vec<Vec3>, faces: &[[u32; 3]]) -> Vec<[u32; 3]> {
-    let mut midpoint: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut mid = |a: u32, b: u32, points: &mut Vec<Vec3>| {
-        *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
-            points.push((points[a as usize] + points[b as usize]).normalize());
-            (points.len() - 1) as u32
-        })
-    };
-    let mut out = Vec::with_capacity(faces.len() * 4);
-    for &[a, b, c] in faces {
-        let ab = mid(a, b, points);
-        let bc = mid(b, c, points);
-        let ca = mid(c, a, points);
-        out.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-    }
-    out
-}
 
 /// The blob's radius along unit direction `d`.
 fn radius(d: Vec3) -> f32 {
@@ -100,10 +37,8 @@ fn main() {
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/blob.glb"),
         PathBuf::from,
     );
-    let (mut dirs, mut faces) = icosahedron();
-    for _ in 0..3 {
-        faces = subdivide(&mut dirs, &faces);
-    }
+    let sphere = oslf_bake::mesh::Mesh::icosphere(3);
+    let (dirs, faces) = (sphere.positions, sphere.triangles);
     // Lift so the lowest point rests on the table top.
     let lowest = dirs
         .iter()

@@ -6,7 +6,6 @@
 #[path = "data/gltf_builder.rs"]
 mod gltf_builder;
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -54,65 +53,10 @@ fn scene_in(dir: &Path, text: &str) -> Result<Scene, BakeError> {
     Scene::load(&path, None)
 }
 
-/// The unit icosphere: the icosahedron subdivided `levels` times, vertices on the unit sphere,
-/// faces counter-clockwise seen from outside.
+/// The unit icosphere subdivided `levels` times: its vertices (unit directions) and triangles.
 fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut points: Vec<Vec3> = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|p| Vec3::from_array(*p).normalize())
-    .collect();
-    let mut faces: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut midpoint: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut next = Vec::with_capacity(faces.len() * 4);
-        for &[a, b, c] in &faces {
-            let mut mid = |a: u32, b: u32| {
-                *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    points.push((points[a as usize] + points[b as usize]).normalize());
-                    (points.len() - 1) as u32
-                })
-            };
-            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        faces = next;
-    }
-    (points, faces)
+    let m = oslf_bake::mesh::Mesh::icosphere(levels);
+    (m.positions, m.triangles)
 }
 
 /// A `.glb` of one node `name` holding a sphere (smooth normals, no texture coordinates) of

@@ -763,64 +763,11 @@ mod tests {
 
     /// A bumpy subdivided icosahedron: 20·4^levels triangles of varied sizes, no uvs.
     fn blob(levels: u32) -> Mesh {
-        let g = (1.0 + 5f32.sqrt()) / 2.0;
-        let mut positions: Vec<Vec3> = [
-            (-1.0, g, 0.0),
-            (1.0, g, 0.0),
-            (-1.0, -g, 0.0),
-            (1.0, -g, 0.0),
-            (0.0, -1.0, g),
-            (0.0, 1.0, g),
-            (0.0, -1.0, -g),
-            (0.0, 1.0, -g),
-            (g, 0.0, -1.0),
-            (g, 0.0, 1.0),
-            (-g, 0.0, -1.0),
-            (-g, 0.0, 1.0),
-        ]
-        .iter()
-        .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-        .collect();
-        let mut triangles: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        for _ in 0..levels {
-            let mut next = Vec::new();
-            let mut mids = std::collections::BTreeMap::new();
-            let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
-                *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    let p = ((positions[a as usize] + positions[b as usize]) / 2.0).normalize();
-                    positions.push(p);
-                    positions.len() as u32 - 1
-                })
-            };
-            for [a, b, c] in triangles {
-                let ab = mid(a, b, &mut positions);
-                let bc = mid(b, c, &mut positions);
-                let ca = mid(c, a, &mut positions);
-                next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-            }
-            triangles = next;
-        }
+        let Mesh {
+            mut positions,
+            triangles,
+            ..
+        } = Mesh::icosphere(levels);
         let mut rng = Rng(0x1234_5678_9abc_def1);
         for p in &mut positions {
             *p *= 0.6 + 0.8 * rng.next();

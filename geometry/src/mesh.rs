@@ -138,6 +138,61 @@ impl Mesh {
         Ok(())
     }
 
+    /// The unit icosphere: the icosahedron subdivided `subdivisions` times (20·4ⁿ triangles,
+    /// each split into four with the new vertices projected onto the sphere), wound
+    /// counter-clockwise seen from outside; normals equal positions, uvs are zero.
+    pub fn icosphere(subdivisions: u32) -> Mesh {
+        let t = (1.0 + 5f32.sqrt()) / 2.0;
+        let mut positions: Vec<Vec3> = [
+            [-1.0, t, 0.0],
+            [1.0, t, 0.0],
+            [-1.0, -t, 0.0],
+            [1.0, -t, 0.0],
+            [0.0, -1.0, t],
+            [0.0, 1.0, t],
+            [0.0, -1.0, -t],
+            [0.0, 1.0, -t],
+            [t, 0.0, -1.0],
+            [t, 0.0, 1.0],
+            [-t, 0.0, -1.0],
+            [-t, 0.0, 1.0],
+        ]
+        .iter()
+        .map(|&p| Vec3::from_array(p).normalize())
+        .collect();
+        #[rustfmt::skip]
+        let mut triangles: Vec<[u32; 3]> = vec![
+            [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
+            [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+            [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
+            [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+        ];
+        for _ in 0..subdivisions {
+            // Edge midpoints by sorted vertex pair: shared by the edge's two triangles.
+            let mut midpoints = std::collections::BTreeMap::new();
+            let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
+                *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    positions.push((positions[a as usize] + positions[b as usize]).normalize());
+                    positions.len() as u32 - 1
+                })
+            };
+            let mut next = Vec::with_capacity(triangles.len() * 4);
+            for [a, b, c] in triangles {
+                let ab = mid(a, b, &mut positions);
+                let bc = mid(b, c, &mut positions);
+                let ca = mid(c, a, &mut positions);
+                next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+            }
+            triangles = next;
+        }
+        Mesh {
+            normals: positions.clone(),
+            uvs: vec![Vec2::ZERO; positions.len()],
+            positions,
+            triangles,
+        }
+    }
+
     /// Replaces the normals by smooth, area-weighted vertex normals computed from the
     /// triangles. A vertex that touches no non-degenerate triangle gets `+z`.
     pub fn compute_smooth_normals(&mut self) {
@@ -227,5 +282,25 @@ mod tests {
         m.triangles.pop();
         m.positions[0].x = f32::NAN;
         assert!(m.validate().is_err());
+    }
+
+    #[test]
+    fn icosphere_is_a_closed_outward_unit_sphere() {
+        for n in 0..3 {
+            let m = Mesh::icosphere(n);
+            assert_eq!(m.triangles.len(), 20 * 4usize.pow(n));
+            // Euler: V − E + F = 2 with E = 3F/2.
+            assert_eq!(m.positions.len(), 2 + m.triangles.len() / 2);
+            assert!(m.positions.iter().all(|p| (p.length() - 1.0).abs() < 1e-6));
+            m.validate().unwrap();
+            for t in &m.triangles {
+                let [a, b, c] = m.corners(t).unwrap();
+                let outward = (b - a).cross(c - a).dot(a + b + c);
+                assert!(outward > 0.0, "triangle {t:?} winds inward");
+            }
+            // Its area approaches 4π from below.
+            let area = m.area();
+            assert!(area < 4.0 * std::f64::consts::PI && area > 0.6 * 4.0 * std::f64::consts::PI);
+        }
     }
 }
