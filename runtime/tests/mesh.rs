@@ -10,9 +10,7 @@ use oslf_format::{
     SampleMaps, SamplePoint, StoreMeta, StoreWriter, INVALID_INDEX,
 };
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{
-    Blend, CacheConfig, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams, Source,
-};
+use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams, Source};
 
 const W: u32 = 96;
 const H: u32 = 72;
@@ -291,37 +289,10 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
         },
         "mirror envmap",
     );
-    for order in [Order::PerPoint, Order::PerDirection] {
-        // Anisotropic lobes: the mesh's tangent frame comes from its normal alone.
-        for (nu, nv) in [(10.0, 10.0), (1000.0, 10.0)] {
-            let p = ShadingParams {
-                mode: Mode::Glossy,
-                order,
-                nu,
-                nv,
-                m: 8,
-                ..base
-            };
-            check(
-                &mut r,
-                &cubes,
-                p,
-                &format!("glossy {order:?} n_u={nu} n_v={nv}"),
-            );
-        }
+    // Anisotropic lobes among them: the mesh's tangent frame comes from its normal alone.
+    for (p, label) in common::glossy_cases(base) {
+        check(&mut r, &cubes, p, &label);
     }
-    check(
-        &mut r,
-        &cubes,
-        ShadingParams {
-            mode: Mode::ReconGlossy,
-            rs: 0.3,
-            rd: 0.5,
-            m: 4,
-            ..base
-        },
-        "recon + C_s glossy with diffuse term",
-    );
 }
 
 /// Renders reconstruction alone; returns the pixels and the G-buffer.

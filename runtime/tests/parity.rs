@@ -85,36 +85,9 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
         compare(&env, &mirrors[0], 1e-3).1 < 0.9,
         "OSLF and environment map coincide"
     );
-    for order in [Order::PerPoint, Order::PerDirection] {
-        for (nu, nv) in [(10.0, 10.0), (1000.0, 10.0)] {
-            let p = ShadingParams {
-                mode: Mode::Glossy,
-                order,
-                nu,
-                nv,
-                m: 8,
-                ..base
-            };
-            check(
-                &mut r,
-                &cubes,
-                p,
-                &format!("glossy {order:?} n_u={nu} n_v={nv}"),
-            );
-        }
+    for (p, label) in common::glossy_cases(base) {
+        check(&mut r, &cubes, p, &label);
     }
-    check(
-        &mut r,
-        &cubes,
-        ShadingParams {
-            mode: Mode::ReconGlossy,
-            rs: 0.3,
-            rd: 0.5,
-            m: 4,
-            ..base
-        },
-        "recon + C_s glossy with diffuse term",
-    );
     assert!(compare(&recon, &env, 1e-3).1 < 0.9);
 }
 

@@ -200,3 +200,34 @@ pub fn check_parity(
     assert!(mae < 2e-3, "{label}: mean difference {mae}");
     frame.pixels
 }
+
+/// The glossy cases every parity test covers, as (params, label): both integration orders with
+/// an isotropic and an anisotropic lobe (M = 8), then recon + C_s glossy with a diffuse term.
+pub fn glossy_cases(
+    base: oslf_runtime::ShadingParams,
+) -> Vec<(oslf_runtime::ShadingParams, String)> {
+    use oslf_runtime::{Mode, Order, ShadingParams};
+    let mut cases = Vec::new();
+    for order in [Order::PerPoint, Order::PerDirection] {
+        for (nu, nv) in [(10.0, 10.0), (1000.0, 10.0)] {
+            let p = ShadingParams {
+                mode: Mode::Glossy,
+                order,
+                nu,
+                nv,
+                m: 8,
+                ..base
+            };
+            cases.push((p, format!("glossy {order:?} n_u={nu} n_v={nv}")));
+        }
+    }
+    let p = ShadingParams {
+        mode: Mode::ReconGlossy,
+        rs: 0.3,
+        rd: 0.5,
+        m: 4,
+        ..base
+    };
+    cases.push((p, "recon + C_s glossy with diffuse term".into()));
+    cases
+}
