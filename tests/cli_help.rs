@@ -1,5 +1,5 @@
 //! The command tree: every subcommand answers `--help`, `oslf --help` lists them, completion
-//! scripts cover them, and a wrong subcommand is a clear error.
+//! scripts cover them, a wrong subcommand is a clear error, and a closed output pipe is no panic.
 
 mod common;
 
@@ -76,4 +76,35 @@ fn a_wrong_subcommand_or_shell_is_a_clear_error() {
     let out = oslf("completions tcsh").output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("tcsh"));
+}
+
+/// Output into a pipe whose reader has gone (`oslf store info S | head -1`) ends the process quietly,
+/// killed by SIGPIPE as any Unix tool, never with a panic about printing to stdout.
+#[cfg(unix)]
+#[test]
+fn a_closed_output_pipe_ends_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+
+    let store = common::runtime_fixture::store_path();
+    for args in [vec!["store", "info"], vec!["store", "verify"]] {
+        let mut cmd = common::oslf(args[0]);
+        let mut child = cmd
+            .args(&args[1..])
+            .arg(&store)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the read end before the program writes (it is still starting).
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert!(
+            out.status.success() || out.status.signal() == Some(libc::SIGPIPE),
+            "{args:?}: {:?}: {stderr}",
+            out.status
+        );
+    }
 }
