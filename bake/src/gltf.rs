@@ -135,6 +135,9 @@ pub struct Import {
     pub cameras: Vec<GltfCamera>,
     /// Unsupported features met, each naming the file and the node, mesh or material.
     pub warnings: Vec<String>,
+    /// The external files the document refers to and that were read (buffers, images), in
+    /// reading order: with the file itself, everything the import depends on.
+    pub files: Vec<PathBuf>,
 }
 
 impl Import {
@@ -346,6 +349,7 @@ fn load_bytes(
             || path.display().to_string(),
             |n| n.to_string_lossy().into_owned(),
         ),
+        files: Default::default(),
     };
     loader.load_buffers(bin)?;
     loader.check_views()?;
@@ -362,6 +366,7 @@ fn load_bytes(
         }
     }
     import.warnings = std::mem::take(&mut loader.warnings);
+    import.files = loader.files.take();
     Ok(import)
 }
 
@@ -377,6 +382,8 @@ struct Loader<'d> {
     warnings: Vec<String>,
     /// The file's name, for warnings.
     file: String,
+    /// External files read (buffers, images), in reading order.
+    files: std::cell::RefCell<Vec<PathBuf>>,
 }
 
 /// `nodes[3] "Arm"` or `nodes[3]`.
@@ -454,8 +461,10 @@ impl<'d> Loader<'d> {
         let relative = percent_decode(uri)
             .ok_or_else(|| self.err(at, format!("{uri:?} is not a valid percent-encoded URI")))?;
         let file = self.dir.join(relative);
-        std::fs::read(&file)
-            .map_err(|e| self.err(at, format!("cannot read {}: {e}", file.display())))
+        let bytes = std::fs::read(&file)
+            .map_err(|e| self.err(at, format!("cannot read {}: {e}", file.display())))?;
+        self.files.borrow_mut().push(file);
+        Ok(bytes)
     }
 
     /// Every buffer view within its buffer.

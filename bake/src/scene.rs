@@ -117,7 +117,10 @@ pub enum SampleDensity {
 pub struct Scene {
     /// The scene file.
     pub path: PathBuf,
-    /// SHA-256 of the scene file's bytes.
+    /// SHA-256 of the scene file's bytes followed by the SHA-256 of every file it includes
+    /// (patch files, OBJ meshes, textures, environment maps, glTF files with their buffers and
+    /// images), in reading order: a store records it, and `oslf truth --store` and `oslf
+    /// tables` check it, so an edited include is a different scene.
     pub hash: [u8; 32],
     pub camera: Option<Camera>,
     pub environment: Environment,
@@ -212,7 +215,11 @@ impl Scene {
                 message: e.message().to_string(),
             }
         })?;
-        let ctx = Ctx { text, path };
+        let ctx = Ctx {
+            text,
+            path,
+            included: Default::default(),
+        };
         ctx.build(raw, preset)
     }
 
@@ -240,7 +247,11 @@ impl Scene {
         let mut import = crate::gltf::load(path, &options, &mut materials)?;
         let objects = mesh_objects(std::mem::take(&mut import.objects), &materials);
         let raw: RawScene = toml::from_str("").expect("an empty scene parses");
-        let ctx = Ctx { text: "", path };
+        let ctx = Ctx {
+            text: "",
+            path,
+            included: Default::default(),
+        };
         let (bake, _) = ctx.bake_settings(&raw, None)?;
         for object in &objects {
             if let Some(message) = epsilon_problem(bake.epsilon, object) {
@@ -265,7 +276,7 @@ impl Scene {
         };
         Ok(Scene {
             path: path.to_path_buf(),
-            hash: sha256(&bytes),
+            hash: scene_hash(&bytes, &import.files)?,
             camera,
             environment: Environment::Constant(Vec3::splat(GLTF_SCENE_ENVIRONMENT)),
             lights: import.lights,
@@ -743,6 +754,8 @@ impl<'de> Deserialize<'de> for EncodingName {
 struct Ctx<'a> {
     text: &'a str,
     path: &'a Path,
+    /// Every file the scene includes, in reading order (for [`Scene::hash`]).
+    included: std::cell::RefCell<Vec<PathBuf>>,
 }
 
 /// A `[camera]` as written: explicit, or naming a glTF camera (resolved once the includes are
@@ -783,6 +796,7 @@ impl Ctx<'_> {
     fn existing_file(&self, path: &Spanned<String>) -> Result<PathBuf> {
         let resolved = self.resolve(path.get_ref());
         if resolved.is_file() {
+            self.included.borrow_mut().push(resolved.clone());
             Ok(resolved)
         } else {
             Err(self.error_at(
@@ -897,7 +911,6 @@ impl Ctx<'_> {
     }
 
     fn build(&self, raw: RawScene, preset: Option<&str>) -> Result<Scene> {
-        let hash = sha256(self.text.as_bytes());
         let (bake, epsilon_span) = self.bake_settings(&raw, preset)?;
 
         let camera_spec = match raw.camera {
@@ -1064,6 +1077,9 @@ impl Ctx<'_> {
                 objects_from_extras: false,
             };
             let import = crate::gltf::load(&file, &options, &mut materials)?;
+            self.included
+                .borrow_mut()
+                .extend(import.files.iter().cloned());
             for object in mesh_objects(import.objects, &materials) {
                 self.check_epsilon(bake.epsilon, epsilon_span.clone(), &object, g.path.span())?;
                 objects.push(object);
@@ -1082,6 +1098,7 @@ impl Ctx<'_> {
             )));
         }
 
+        let hash = scene_hash(self.text.as_bytes(), &self.included.borrow())?;
         Ok(Scene {
             path: self.path.to_path_buf(),
             hash,
@@ -1395,6 +1412,21 @@ impl RawTransform {
         let translation = self.translate.map_or(Vec3::ZERO, |t| t.0);
         Affine3A::from_scale_rotation_translation(Vec3::splat(scale), rotation, translation)
     }
+}
+
+/// [`Scene::hash`]: SHA-256 of `text` and of the SHA-256 of each of `files`, in order.
+fn scene_hash(text: &[u8], files: &[PathBuf]) -> Result<[u8; 32]> {
+    use sha2::Digest;
+    let mut hasher = sha2::Sha256::new();
+    hasher.update(text);
+    for file in files {
+        let bytes = std::fs::read(file).map_err(|source| BakeError::Io {
+            path: file.clone(),
+            source,
+        })?;
+        hasher.update(sha256(&bytes));
+    }
+    Ok(hasher.finalize().into())
 }
 
 fn sha256(bytes: &[u8]) -> [u8; 32] {

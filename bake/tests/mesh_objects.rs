@@ -1138,3 +1138,51 @@ epsilon = 0.01
         "({cx}, {cy})"
     );
 }
+
+/// The scene hash a store records covers the files the scene includes: the same files give
+/// the same hash, an edited OBJ or glTF include (or its external buffer) a different one.
+#[test]
+fn the_scene_hash_covers_the_included_files() {
+    let d = dir("hash");
+    let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    write(&d, "quad.obj", quad.as_bytes());
+    let text = r#"
+[[object]]
+mesh = "quad.obj"
+material = { color = [0.5, 0.5, 0.5] }
+"#;
+    let first = scene_in(&d, text).unwrap().hash;
+    assert_eq!(scene_in(&d, text).unwrap().hash, first, "deterministic");
+    write(&d, "quad.obj", format!("{quad}# edited\n").as_bytes());
+    let edited = scene_in(&d, text).unwrap().hash;
+    assert_ne!(edited, first, "an edited OBJ is a different scene");
+
+    // A .gltf with an external buffer: editing the buffer alone changes the hash.
+    let mut b = Builder::new();
+    let (dirs, faces) = icosphere(0);
+    let positions: Vec<[f32; 3]> = dirs.iter().map(|p| (*p * 0.5).to_array()).collect();
+    let pos = b.positions(&positions);
+    let idx = b.indices_u32(&faces.concat());
+    let doc = json!({
+        "nodes": [{"name": "Ico", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}],
+    });
+    let (gltf, bin) = b.gltf_external(doc, "ico.bin");
+    write(&d, "ico.gltf", &gltf);
+    write(&d, "ico.bin", &bin);
+    let text = r#"
+[[gltf]]
+path = "ico.gltf"
+objects = ["Ico"]
+"#;
+    let before = scene_in(&d, text).unwrap().hash;
+    let mut moved = bin.clone();
+    // The first vertex's x coordinate (the positions accessor starts the buffer).
+    moved[0..4].copy_from_slice(&0.4f32.to_le_bytes());
+    write(&d, "ico.bin", &moved);
+    let after = scene_in(&d, text).unwrap().hash;
+    assert_ne!(
+        before, after,
+        "an edited external buffer is a different scene"
+    );
+}
