@@ -132,11 +132,17 @@ fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
     let scene = dir.join("ball.toml");
     std::fs::write(&scene, SCENE).unwrap();
     let store = dir.join("ball.oslf");
-    run(oslf("bake")
-        .arg(&scene)
-        .arg("-o")
-        .arg(&store)
-        .args(["--preview", "none", "-q"]));
+    let summary =
+        run(oslf("bake")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&store)
+            .args(["--preview", "none", "-q"]));
+    // The OBJ has no texture coordinates: the summary says how the atlas was laid out.
+    assert!(
+        summary.contains("atlas          \"ball\": ") && summary.contains("per-triangle charts"),
+        "{summary}"
+    );
 
     let info = run(oslf("store").args(["info", "--json"]).arg(&store));
     let info: serde_json::Value = serde_json::from_str(&info).unwrap();

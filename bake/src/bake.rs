@@ -18,6 +18,7 @@ use crate::ray::EmptyScene;
 use crate::sample_map::{self, SampleMapStats};
 use crate::sample_points::{self, Surfaces};
 use crate::scene::Scene;
+use oslf_geometry::atlas::UvSource;
 
 /// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε.
 pub const TESSELLATION_ERROR: f32 = 1.0 / 50.0;
@@ -147,6 +148,8 @@ pub struct BakeReport {
     /// Points added where sample-map texels found fewer than four (§6.3).
     pub points_added: usize,
     pub sample_maps: SampleMapStats,
+    /// The atlas of each mesh object, in object order.
+    pub atlases: Vec<AtlasReport>,
     /// Cubes of this store (or, for a shard, of this shard).
     pub cubes: u32,
     /// `I/N` when this bake was shard `I` of `N`; `cubes` then counts the shard's cubes.
@@ -179,6 +182,20 @@ pub struct BakeReport {
     pub bytes_per_texel: f64,
     /// Texels whose radiance exceeded the encoding's range and were clamped.
     pub clamped_texels: u64,
+}
+
+/// How a mesh object's sample maps were laid out.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AtlasReport {
+    pub object: String,
+    /// Pages per side: the object has `grid²` sample maps.
+    pub grid: u32,
+    /// Texels per page side (the sample-map resolution).
+    pub page_resolution: u32,
+    /// `lightmap` (TEXCOORD_1), `texture` (TEXCOORD_0, OBJ `vt`) or `charts` (per triangle).
+    pub source: &'static str,
+    /// The uv sets tried and not used, each with why.
+    pub rejected: Vec<String>,
 }
 
 /// CPU nanoseconds run so far by the process's live threads (Linux `schedstat`), if known.
@@ -242,6 +259,7 @@ pub fn bake_shard(
 
     let t = Instant::now();
     let surfaces = Surfaces::new(&scene.objects, settings)?;
+    report.atlases = atlas_reports(scene, &surfaces);
     let placement = sample_points::place(&surfaces, settings, &geometry)?;
     report.placement_seconds = t.elapsed().as_secs_f64();
     report.points_placed = placement.placed;
@@ -495,6 +513,34 @@ pub fn partial_path(output: &Path) -> PathBuf {
     let mut name = output.as_os_str().to_os_string();
     name.push(".partial");
     PathBuf::from(name)
+}
+
+/// The atlases of `scene`'s mesh objects, for the report.
+fn atlas_reports(scene: &Scene, surfaces: &Surfaces) -> Vec<AtlasReport> {
+    let name = |s: UvSource| match s {
+        UvSource::Lightmap => "lightmap",
+        UvSource::Texture => "texture",
+        UvSource::Charts => "charts",
+    };
+    scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| {
+            let atlas = surfaces.atlas(i)?;
+            Some(AtlasReport {
+                object: o.name.clone(),
+                grid: atlas.grid,
+                page_resolution: atlas.page_resolution,
+                source: name(atlas.source),
+                rejected: atlas
+                    .rejected
+                    .iter()
+                    .map(|(s, why)| format!("{}: {why}", name(*s)))
+                    .collect(),
+            })
+        })
+        .collect()
 }
 
 /// Everything the store says about the scene and the bake, besides the points, maps and cubes.

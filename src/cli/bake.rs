@@ -212,6 +212,20 @@ fn print_summary(r: &BakeReport) {
         100.0 * m.short as f64 / m.texels.max(1) as f64,
         m.empty
     );
+    for a in &r.atlases {
+        let uvs = match a.source {
+            "lightmap" => "its TEXCOORD_1",
+            "texture" => "its TEXCOORD_0",
+            _ => "per-triangle charts",
+        };
+        println!(
+            "atlas          {:?}: {}x{} pages of {}², from {uvs}",
+            a.object, a.grid, a.grid, a.page_resolution
+        );
+        for why in &a.rejected {
+            println!("               not used: {why}");
+        }
+    }
     println!(
         "cube maps      {} of {}² texels, {} samples per texel{}",
         r.cubes,
