@@ -137,6 +137,25 @@ fn main() {
             },
         ),
         (
+            "glossy M=16, per point, plain lookups (FIS only)",
+            ShadingParams {
+                mode: Mode::Glossy,
+                m: 16,
+                depth: false,
+                ..base
+            },
+        ),
+        (
+            "glossy M=16, per point, plain lookups, point sampling",
+            ShadingParams {
+                mode: Mode::Glossy,
+                m: 16,
+                depth: false,
+                glossy_filter: oslf_runtime::GlossyFilter::Point,
+                ..base
+            },
+        ),
+        (
             "glossy M=16, per direction",
             ShadingParams {
                 mode: Mode::Glossy,

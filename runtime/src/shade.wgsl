@@ -938,9 +938,13 @@ fn seam_texel(cube: u32, face: u32, x: i32, y: i32, level: u32, mark: bool) -> v
     if (mark) {
         atomicOr(&feedback[cube], 1u << f);
     }
-    // One texel: a tap whose four corners are that texel (read_tap_level finds it in the pool).
+    let entry = slots[cube];
+    if ((entry & (1u << f)) == 0u) {
+        return vec4<f32>(0.0);
+    }
+    let at = place(entry, f);
     let u = vec2<u32>(c);
-    return read_tap_level(cube, Tap(f, u.x, u.y, u.x, u.y, 0.0, 0.0), level);
+    return vec4<f32>(load_texel(at.x, i32(at.y), vec2<u32>((at.z >> level) + u.x, u.y), level), 1.0);
 }
 
 // Radiance of mip `level` of cube `cube` at `fst` (`face_st` of the direction: face and face
@@ -960,6 +964,15 @@ fn seamless_level(cube: u32, fst: vec3<f32>, level: u32, mark: bool) -> vec4<f32
     let y0 = i32(floor(fy));
     let wx = fx - floor(fx);
     let wy = fy - floor(fy);
+    if (x0 >= 0 && y0 >= 0 && x0 + 1 < n && y0 + 1 < n) {
+        // All four texels on the face (the common case): one bilinear tap, the same
+        // arithmetic as below.
+        if (mark) {
+            atomicOr(&feedback[cube], 1u << face);
+        }
+        let t = Tap(face, u32(x0), u32(y0), u32(x0 + 1), u32(y0 + 1), wx, wy);
+        return read_tap_level(cube, t, level);
+    }
     // The texel off the face in both directions, as k = column + 2 * row; 4 = none.
     var corner = 4u;
     if ((x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n)) {
