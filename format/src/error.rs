@@ -193,8 +193,8 @@ pub enum Error {
     /// A face index that is not 0..6.
     #[error("face index {face} out of range (0..6)")]
     FaceOutOfRange { face: usize },
-    /// A patch index past the end of the store.
-    #[error("patch index {patch} out of range (the store has {count} patches)")]
+    /// A sample-map index (a patch or an atlas page) past the end of the store.
+    #[error("sample map {patch} out of range (the store has {count} sample maps: patches and atlas pages)")]
     PatchOutOfRange { patch: u32, count: u32 },
     /// A distance plane was requested from a store baked without one.
     #[error("the store has no distance channel")]

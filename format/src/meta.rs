@@ -11,11 +11,12 @@ use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTIO
 pub struct SamplePoint {
     /// The offset point (world space) where the cube was captured.
     pub position: [f32; 3],
-    /// Unit surface normal at the base point on the patch (world space).
+    /// Unit surface normal at the base point (world space; a mesh's interpolated normal).
     pub normal: [f32; 3],
-    /// Parameter of the base point on its patch, in `[0, 1]²`.
+    /// Parameter of the base point on its sample map, in `[0, 1]²`: the patch's (u, v), or
+    /// the local uv on a mesh's atlas page.
     pub uv: [f32; 2],
-    /// Global patch index.
+    /// Global sample-map index: a Bézier patch or an atlas page.
     pub patch: u32,
     /// Object index.
     pub object: u32,

@@ -60,10 +60,13 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Layout::Cross)]
         layout: Layout,
     },
-    /// Export one patch's sample map as a false-colour PNG (colour from a hash of the index;
-    /// missing entries black).
+    /// Export one sample map as a false-colour PNG (colour from a hash of the index; missing
+    /// entries black)
     ExportSampleMap {
         store: PathBuf,
+        /// The map: a Bézier patch, or a page of a mesh object's atlas (`oslf store info` lists
+        /// each object's maps).
+        #[arg(value_name = "MAP")]
         patch: u32,
         #[arg(short, long)]
         output: PathBuf,
