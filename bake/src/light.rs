@@ -77,16 +77,30 @@ impl Light {
                 )))
             }
         };
+        let finite_position = |p: Vec3, what: &str| -> Result<()> {
+            if p.is_finite() {
+                Ok(())
+            } else {
+                Err(BakeError::Invalid(format!(
+                    "{what} position {p} is not finite"
+                )))
+            }
+        };
+        let nonzero_direction = |d: Vec3, what: &str| -> Result<()> {
+            if d.is_finite() && d.length_squared() >= 1e-12 {
+                Ok(())
+            } else {
+                Err(BakeError::Invalid(format!(
+                    "{what} direction {d} must be a finite non-zero vector"
+                )))
+            }
+        };
         match self {
             Light::Point {
                 position,
                 intensity,
             } => {
-                if !position.is_finite() {
-                    return Err(BakeError::Invalid(format!(
-                        "point light position {position} is not finite"
-                    )));
-                }
+                finite_position(*position, "point light")?;
                 non_negative(*intensity, "intensity")
             }
             Light::Spot {
@@ -96,16 +110,8 @@ impl Light {
                 inner_angle,
                 outer_angle,
             } => {
-                if !position.is_finite() {
-                    return Err(BakeError::Invalid(format!(
-                        "spot light position {position} is not finite"
-                    )));
-                }
-                if !direction.is_finite() || direction.length_squared() < 1e-12 {
-                    return Err(BakeError::Invalid(format!(
-                        "spot light direction {direction} must be a finite non-zero vector"
-                    )));
-                }
+                finite_position(*position, "spot light")?;
+                nonzero_direction(*direction, "spot light")?;
                 if !(outer_angle.is_finite() && *outer_angle > 0.0 && *outer_angle <= 0.5 * PI) {
                     return Err(BakeError::Invalid(format!(
                         "spot light outer cone angle {outer_angle} must be in (0, π/2] radians"
@@ -123,11 +129,7 @@ impl Light {
                 irradiance,
                 angular_radius,
             } => {
-                if !direction.is_finite() || direction.length_squared() < 1e-12 {
-                    return Err(BakeError::Invalid(format!(
-                        "sun direction {direction} must be a finite non-zero vector"
-                    )));
-                }
+                nonzero_direction(*direction, "sun")?;
                 if !(angular_radius.is_finite()
                     && *angular_radius >= 0.0
                     && *angular_radius < 0.5 * PI)

@@ -130,11 +130,7 @@ pub fn short_texels(maps: &SampleMaps, domains: &[MapDomain]) -> Vec<(u32, u32, 
             let texel = i % (res * res);
             (map as u32, (texel % res) as u32, (texel / res) as u32)
         })
-        .filter(|&(map, x, y)| {
-            domains
-                .get(map as usize)
-                .is_some_and(|d| d.texel(x, y, maps.resolution).is_some())
-        })
+        .filter(|&(map, x, y)| domains.get(map as usize).is_some_and(|d| d.covers(x, y)))
         .collect()
 }
 

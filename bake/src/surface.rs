@@ -67,6 +67,15 @@ impl MapDomain<'_> {
         }
     }
 
+    /// Whether texel `(x, y)` stands for a surface point ([`MapDomain::texel`] is `Some`),
+    /// without evaluating it.
+    pub fn covers(&self, x: u32, y: u32) -> bool {
+        match *self {
+            MapDomain::Patch { .. } => true,
+            MapDomain::Page { atlas, page, .. } => atlas.texel(page, x, y).is_some(),
+        }
+    }
+
     /// Surface point and unit shading normal of texel `(x, y)` of a `resolution`² map (centred
     /// at u = (x + ½)/res, v = (y + ½)/res); `None` for atlas texels no chart touches.
     pub fn texel(&self, x: u32, y: u32, resolution: u32) -> Option<(Vec3, Vec3)> {

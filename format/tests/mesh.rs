@@ -12,14 +12,10 @@ use xxhash_rust::xxh3::xxh3_64;
 fn spec() -> Spec {
     Spec {
         encoding: Encoding::Rgba16f,
-        cube_res: 4,
-        map_res: 3,
         points: 6,
-        patches: 3,
         distance: true,
-        env: true,
         seed: 11,
-        mantissa_bits: 9,
+        ..Spec::default()
     }
 }
 

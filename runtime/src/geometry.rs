@@ -103,13 +103,9 @@ impl ObjectMesh {
                             .normals
                             .iter()
                             .map(|&n| {
-                                let w = normal_matrix * Vec3::from_array(n).as_dvec3();
-                                let w = w.normalize_or_zero();
-                                if w == DVec3::ZERO {
-                                    Vec3::Z
-                                } else {
-                                    w.as_vec3()
-                                }
+                                (normal_matrix * Vec3::from_array(n).as_dvec3())
+                                    .normalize_or(DVec3::Z)
+                                    .as_vec3()
                             })
                             .collect(),
                         uvs: m.uvs.clone(),
