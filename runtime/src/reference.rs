@@ -18,6 +18,12 @@ use crate::params::ShadeUniform;
 
 /// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
 const DEPTH_REFINE: u32 = 6;
+/// Depth-thicknesses within which a texel of a depth-corrected lookup agrees with the hit, at
+/// most half its distance (LOOKUP_AGREE in shade.wgsl).
+const LOOKUP_AGREE: f32 = 1.0;
+/// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
+/// shade.wgsl).
+const HIT_AGREE: f32 = 0.25;
 
 /// Where the reference reads cube-map texels.
 pub trait CubeTexels: Sync {
@@ -121,6 +127,45 @@ pub fn patch_du(p: &BezierPatch, u: f32, v: f32) -> Vec3 {
         }
     }
     du * 3.0
+}
+
+/// ∂x/∂v through the hodograph, in `f32` (as `patch_dv` in shade.wgsl).
+pub fn patch_dv(p: &BezierPatch, u: f32, v: f32) -> Vec3 {
+    let (bu, bv) = (bern3(u), bern2(v));
+    let mut dv = Vec3::ZERO;
+    for (i, bui) in bu.iter().enumerate() {
+        for (j, bvj) in bv.iter().enumerate() {
+            let d = p.cp[4 * i + j + 1] - p.cp[4 * i + j];
+            dv += d * (bui * bvj);
+        }
+    }
+    dv * 3.0
+}
+
+/// The shading normal at `(u, v)`: the patch's ∂x/∂u × ∂x/∂v facing as the interpolated
+/// vertex normal `ni`, or `ni` where that degenerates or turns more than 25° from it (as
+/// `patch_normal` in shade.wgsl).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn patch_normal(p: &BezierPatch, u: f32, v: f32, ni: Vec3) -> Vec3 {
+    let (du, dv) = (patch_du(p, u, v), patch_dv(p, u, v));
+    let e = du.cross(dv);
+    let len = e.length();
+    if !(len > 1e-6 * du.length() * dv.length()) {
+        return ni;
+    }
+    let sign = e.dot(ni);
+    let sign = if sign > 0.0 {
+        1.0
+    } else if sign < 0.0 {
+        -1.0
+    } else {
+        0.0
+    };
+    let ne = e * (sign / len);
+    if !(ne.dot(ni) > 0.9) {
+        return ni;
+    }
+    ne
 }
 
 /// Unit tangent orthogonal to `n` from ∂x/∂u, or the frame of Duff et al. (2017) where ∂x/∂u
@@ -320,7 +365,53 @@ impl<C: CubeTexels> Shader<'_, C> {
         if b.1 > u.depth_thickness * b.0.length() {
             return (r, -1.0);
         }
-        (b.0.normalize(), 1.0)
+        (b.0, 1.0)
+    }
+
+    /// Radiance of `cube` for the `depth_search` result `h` at level `lod`: on level 0 the
+    /// bilinear tap over the texels whose distance agrees with the hit's (as `depth_lookup`).
+    fn depth_lookup(&self, cube: u32, h: (Vec3, f32), lod: f32) -> Option<Vec3> {
+        if lod > 0.0 || h.1 < 0.0 {
+            return self.lookup_lod(cube, h.0, lod);
+        }
+        let (face, s, t) = face_st(h.0);
+        self.mark(cube, face);
+        let n = self.uniform.cube_res;
+        let nf = n as f32;
+        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
+        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
+        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
+        let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
+        let (wx, wy) = (fx - fx.floor(), fy - fy.floor());
+        let dist = if h.1 > 0.0 {
+            h.0.length()
+        } else {
+            FAR_DISTANCE
+        };
+        let tol = (LOOKUP_AGREE * self.uniform.depth_thickness).min(0.5) * dist;
+        let taps = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
+        let mut w = [
+            (1.0 - wx) * (1.0 - wy),
+            wx * (1.0 - wy),
+            (1.0 - wx) * wy,
+            wx * wy,
+        ];
+        let mut agree = [0.0f32; 4];
+        for k in 0..4 {
+            let d = self.cubes.depth(cube, face, taps[k].0, taps[k].1)?;
+            if (d - dist).abs() <= tol {
+                agree[k] = w[k];
+            }
+        }
+        let sum = agree[0] + agree[1] + agree[2] + agree[3];
+        if sum > 0.0 {
+            w = agree.map(|a| a / sum);
+        }
+        let mut c = Vec3::ZERO;
+        for k in 0..4 {
+            c += self.cubes.texel(cube, face, 0, taps[k].0, taps[k].1)? * w[k];
+        }
+        Some(c)
     }
 
     /// Texel `(x, y)` of mip `level` of `face` of `cube`, where `(x, y)` may lie one texel off
@@ -490,15 +581,21 @@ impl<C: CubeTexels> Shader<'_, C> {
         dir: Vec3,
         lod: f32,
     ) -> Option<Vec3> {
+        let depth = self.uniform.depth_steps > 0;
         let (mut acc, mut wsum, mut hidden, mut hsum) = (Vec3::ZERO, 0.0, Vec3::ZERO, 0.0);
+        let mut near = 3.4e38f32;
         for j in 0..4 {
             if w[j] > 0.0 {
-                let (d, status) = if self.uniform.depth_steps > 0 {
-                    self.depth_search(c.idx[j], x, dir)
+                let (l, status) = if depth {
+                    let h = self.depth_search(c.idx[j], x, dir);
+                    if h.1 > 0.0 {
+                        near = near.min((h.0 + self.samples[c.idx[j] as usize] - x).dot(dir));
+                    }
+                    (self.depth_lookup(c.idx[j], h, lod), h.1)
                 } else {
-                    (dir, 1.0)
+                    (self.lookup_lod(c.idx[j], dir, lod), 1.0)
                 };
-                if let Some(l) = self.lookup_lod(c.idx[j], d, lod) {
+                if let Some(l) = l {
                     if status >= 0.0 {
                         acc += l * w[j];
                         wsum += w[j];
@@ -507,6 +604,30 @@ impl<C: CubeTexels> Shader<'_, C> {
                         hsum += w[j];
                     }
                 }
+            }
+        }
+        if depth && near < 3.4e38 {
+            // The candidates' common hit (as `blend_read`).
+            let hit = x + dir * near;
+            let (mut cacc, mut csum) = (Vec3::ZERO, 0.0);
+            for j in 0..4 {
+                if w[j] > 0.0 {
+                    let d = hit - self.samples[c.idx[j] as usize];
+                    let dl = d.length();
+                    let mut missing = false;
+                    let seen = self.depth_toward(c.idx[j], d, false, &mut missing);
+                    if !missing
+                        && (dl - seen).abs() <= HIT_AGREE * self.uniform.depth_thickness * dl
+                    {
+                        if let Some(l) = self.depth_lookup(c.idx[j], (d, 1.0), lod) {
+                            cacc += l * w[j];
+                            csum += w[j];
+                        }
+                    }
+                }
+            }
+            if csum > 0.0 {
+                return Some(cacc / csum);
             }
         }
         if wsum > 0.0 {
@@ -571,7 +692,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             if missing || d.length() > seen * (1.0 + self.uniform.depth_thickness) {
                 continue;
             }
-            if let Some(l) = self.lookup(i, d) {
+            if let Some(l) = self.depth_lookup(i, (d, 1.0), 0.0) {
                 acc += l * cos_j;
                 count += cos_j;
             }
@@ -712,7 +833,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         let d = if cube == u.env_cube {
             self.env_dir(x, s.l)
         } else if u.depth_steps > 0 {
-            self.depth_search(cube, x, s.l).0
+            return self.depth_lookup(cube, self.depth_search(cube, x, s.l), lod);
         } else {
             s.l
         };
@@ -874,8 +995,12 @@ impl<C: CubeTexels> Shader<'_, C> {
             g.position_patch[1],
             g.position_patch[2],
         );
-        let n = crate::geometry::oct_decode([g.normal_uv[0], g.normal_uv[1]]);
         let (pu, pv) = (g.normal_uv[2], g.normal_uv[3]);
+        let ni = crate::geometry::oct_decode([g.normal_uv[0], g.normal_uv[1]]);
+        let n = self
+            .patches
+            .get(patch as usize)
+            .map_or(ni, |p| patch_normal(p, pu, pv, ni));
         let c = self.candidates(patch, pu, pv, x, n);
         let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
         let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
@@ -1178,6 +1303,105 @@ mod tests {
         fn resident(&self, _: u32) -> bool {
             true
         }
+    }
+
+    /// A cube whose every face holds a near surface (distance 2, red) on its left half and
+    /// nothing (blue) on its right: a silhouette down the middle of each face.
+    struct Silhouette(u32);
+
+    impl CubeTexels for Silhouette {
+        fn depth(&self, _: u32, _: usize, x: u32, _: u32) -> Option<f32> {
+            Some(if x < self.0 / 2 { 2.0 } else { FAR_DISTANCE })
+        }
+        fn texel(&self, _: u32, _: usize, _: u32, x: u32, _: u32) -> Option<Vec3> {
+            Some(if x < self.0 / 2 { Vec3::X } else { Vec3::Z })
+        }
+        fn resident(&self, _: u32) -> bool {
+            true
+        }
+    }
+
+    /// A depth-corrected lookup at a silhouette takes the radiance of the surface its hit lies
+    /// on, not the bilinear blend across the silhouette that a plain lookup gives: a hit at the
+    /// near surface's distance reads red, a ray that meets nothing blue; a hit whose distance
+    /// agrees with no texel, and a hidden one, the plain blend.
+    #[test]
+    fn depth_lookups_keep_the_hits_surface_at_a_silhouette() {
+        use crate::params::{Background, ShadeUniform, ShadingParams};
+        let res = 8;
+        let mut k = store_constants(INVALID_INDEX, res);
+        k.has_depth = true;
+        let camera = oslf_geometry::Camera {
+            position: Vec3::new(0.0, 0.0, 5.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            vfov_deg: 40.0,
+        };
+        let uniform = ShadeUniform::new(
+            &ShadingParams::default(),
+            glam::Mat4::IDENTITY,
+            &camera,
+            [4, 4],
+            &k,
+            Background::Env,
+        );
+        assert!(uniform.depth_steps > 0);
+        let shader = Shader {
+            uniform,
+            samples: &[Vec3::ZERO],
+            patches: &[],
+            colors: &[],
+            maps: &[],
+            cubes: &Silhouette(res),
+            feedback: &[],
+        };
+        // Face +x at s = ½: halfway between texel columns 3 (near) and 4 (nothing).
+        let dir = face_point(0, 0.5, 3.5 / res as f32).normalize();
+        let (face, s, _) = face_st(dir);
+        assert!(face == 0 && (s - 0.5).abs() < 1e-6, "{face} {s}");
+        let plain = shader.lookup(0, dir).unwrap();
+        assert!(
+            (plain - Vec3::new(0.5, 0.0, 0.5)).length() < 1e-5,
+            "{plain}"
+        );
+        let near = shader.depth_lookup(0, (dir * 2.0, 1.0), 0.0).unwrap();
+        assert_eq!(near, Vec3::X);
+        let none = shader.depth_lookup(0, (dir, 0.0), 0.0).unwrap();
+        assert_eq!(none, Vec3::Z);
+        let between = shader.depth_lookup(0, (dir * 50.0, 1.0), 0.0).unwrap();
+        assert!((between - plain).length() < 1e-6, "{between}");
+        let hidden = shader.depth_lookup(0, (dir, -1.0), 0.0).unwrap();
+        assert!((hidden - plain).length() < 1e-6, "{hidden}");
+    }
+
+    /// The shading normal is the patch's own (as the geometry crate evaluates it, to f32
+    /// rounding), facing as the interpolated normal it is given, and that normal where the
+    /// patch's degenerates (an atlas page's zero control points) or turns more than 25° away.
+    #[test]
+    fn patch_normals_are_the_patchs_own_facing_as_the_vertex_normal() {
+        let teapot = oslf_geometry::bezier::newell_teapot();
+        let mut compared = 0;
+        for p in &teapot {
+            for (u, v) in [(0.3, 0.6), (0.5, 0.5), (0.9, 0.15), (0.05, 0.95)] {
+                let exact = p.normal(u, v);
+                let du = patch_du(p, u, v);
+                let dv = patch_dv(p, u, v);
+                if du.cross(dv).length() < 1e-3 * du.length() * dv.length() {
+                    continue; // near a collapsed edge: f32 derivatives lose digits
+                }
+                let tilt = (exact + Vec3::new(0.05, -0.03, 0.02)).normalize();
+                let n = patch_normal(p, u, v, tilt);
+                assert!((n - exact).length() < 1e-4, "{n} {exact}");
+                let flipped = patch_normal(p, u, v, -tilt);
+                assert!((flipped + exact).length() < 1e-4, "{flipped} {exact}");
+                let far = (exact + tilt.any_orthonormal_vector()).normalize();
+                assert_eq!(patch_normal(p, u, v, far), far);
+                compared += 1;
+            }
+        }
+        assert!(compared > 100, "{compared}");
+        let page = BezierPatch::new([Vec3::ZERO; 16]);
+        assert_eq!(patch_normal(&page, 0.5, 0.5, Vec3::Y), Vec3::Y);
     }
 
     /// The environment background is as continuous across face edges as inside a face: the

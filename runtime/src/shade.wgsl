@@ -102,6 +102,13 @@ const PI: f32 = 3.14159265358979;
 const FAR: f32 = 65504.0;
 // Bisection steps that refine a depth-corrected hit (params.rs documents the search).
 const DEPTH_REFINE: u32 = 6u;
+// A texel of a depth-corrected lookup takes part in its bilinear tap when its distance lies
+// within this many depth_thickness of the hit's, at most half of it (`depth_lookup`;
+// reference.rs LOOKUP_AGREE).
+const LOOKUP_AGREE: f32 = 1.0;
+// A candidate sees the blend's common hit when its distance toward it lies within this many
+// depth_thickness (one texel angle) of the hit's (`blend_read`; reference.rs HIT_AGREE).
+const HIT_AGREE: f32 = 0.25;
 
 // ---- random numbers: PCG hash (Jarzynski & Olano 2020), identical in reference.rs ----
 
@@ -348,9 +355,10 @@ fn depth_probe(cube: u32, p: vec3<f32>, x: vec3<f32>, r: vec3<f32>, w: f32) -> v
 // refinement, as Umenhoffer et al. 2007, GPU Gems 3 ch. 17): the ray is walked in equal steps
 // of inverse distance from x, about one texel of the cube each (at most depth_steps); the first
 // step behind the surface brackets the hit and DEPTH_REFINE bisections narrow it.
-// xyz: the direction to look up; w: 1 hit; 0 no hit before infinity, or a face not resident
-// (xyz = r, the plain lookup); -1 the ray passed behind an occluder's silhouette, farther
-// behind the surface than depth_thickness allows (xyz = r; this point cannot see the hit).
+// xyz: the direction to look up; w: 1 hit (xyz = the hit's offset from the sample point, its
+// length the hit's distance); 0 no hit before infinity, or a face not resident (xyz = r, the
+// plain lookup); -1 the ray passed behind an occluder's silhouette, farther behind the surface
+// than depth_thickness allows (xyz = r; this point cannot see the hit).
 fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     let p = samples[cube].xyz;
     let lo = length(x - p);
@@ -397,7 +405,46 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     if (b.w > P.depth_thickness * length(b.xyz)) {
         return vec4<f32>(r, -1.0);
     }
-    return vec4<f32>(normalize(b.xyz), 1.0);
+    return vec4<f32>(b.xyz, 1.0);
+}
+
+// Radiance of sample point `cube` for `h`, a `depth_search` result (or a hit offset with w = 1),
+// at mip level `lod`. On level 0 the bilinear tap keeps only the texels whose distance agrees
+// with the hit's (within LOOKUP_AGREE depth_thickness of it; for a ray that meets nothing, the
+// texels that see nothing either): where the hit lies at an occluder's silhouette it takes its
+// own surface's radiance, not a blend with what lies behind or in front of it (depth-guided
+// reconstruction, as joint bilateral upsampling: Kopf et al. 2007). All four texels when none
+// agrees, for a hit this point cannot see (w < 0), and on coarser levels (no distance mips).
+fn depth_lookup(cube: u32, h: vec4<f32>, lod: f32) -> vec4<f32> {
+    if (lod > 0.0 || h.w < 0.0) {
+        return lookup_lod(cube, h.xyz, lod);
+    }
+    let t = tap(h.xyz);
+    atomicOr(&feedback[cube], 1u << t.face);
+    let entry = slots[cube];
+    if ((entry & (1u << t.face)) == 0u) {
+        return vec4<f32>(0.0);
+    }
+    var dist = FAR;
+    if (h.w > 0.0) { dist = length(h.xyz); }
+    let tol = min(LOOKUP_AGREE * P.depth_thickness, 0.5) * dist;
+    let at = place(entry, t.face);
+    let c00 = vec2<u32>(at.z + t.x0, t.y0);
+    let c10 = vec2<u32>(at.z + t.x1, t.y0);
+    let c01 = vec2<u32>(at.z + t.x0, t.y1);
+    let c11 = vec2<u32>(at.z + t.x1, t.y1);
+    let layer = i32(at.y);
+    let d = vec4<f32>(load_depth(at.x, layer, c00), load_depth(at.x, layer, c10),
+        load_depth(at.x, layer, c01), load_depth(at.x, layer, c11));
+    var w = vec4<f32>((1.0 - t.wx) * (1.0 - t.wy), t.wx * (1.0 - t.wy), (1.0 - t.wx) * t.wy, t.wx * t.wy);
+    let agree = select(vec4<f32>(0.0), w, abs(d - vec4<f32>(dist)) <= vec4<f32>(tol));
+    let sum = agree.x + agree.y + agree.z + agree.w;
+    if (sum > 0.0) {
+        w = agree / sum;
+    }
+    let c = load_texel(at.x, layer, c00, 0u) * w.x + load_texel(at.x, layer, c10, 0u) * w.y
+        + load_texel(at.x, layer, c01, 0u) * w.z + load_texel(at.x, layer, c11, 0u) * w.w;
+    return vec4<f32>(c, 1.0);
 }
 
 // ---- geometry ----
@@ -434,6 +481,39 @@ fn patch_du(p: u32, u: f32, v: f32) -> vec3<f32> {
         }
     }
     return du * 3.0;
+}
+
+fn patch_dv(p: u32, u: f32, v: f32) -> vec3<f32> {
+    let bu = bern3(u);
+    let bv = bern2(v);
+    var dv = vec3<f32>(0.0);
+    for (var i = 0u; i < 4u; i++) {
+        for (var j = 0u; j < 3u; j++) {
+            let d = patches[p].cp[4u * i + j + 1u].xyz - patches[p].cp[4u * i + j].xyz;
+            dv += d * (bu[i] * bv[j]);
+        }
+    }
+    return dv * 3.0;
+}
+
+// The shading normal at (u, v) of patch p: the patch's own, ∂x/∂u × ∂x/∂v, facing as the
+// G-buffer's interpolated vertex normal `ni` (which the tessellation carries, chord errors
+// and all: at grazing angles a small tilt turns the reflected ray far). `ni` where the patch
+// normal degenerates (a collapsed edge, whose limit normal the vertices carry), turns more
+// than 25° from it, and on mesh atlas pages (zero control points).
+fn patch_normal(p: u32, u: f32, v: f32, ni: vec3<f32>) -> vec3<f32> {
+    let du = patch_du(p, u, v);
+    let dv = patch_dv(p, u, v);
+    let e = cross(du, dv);
+    let len = length(e);
+    if (!(len > 1e-6 * length(du) * length(dv))) {
+        return ni;
+    }
+    let ne = e * (sign(dot(e, ni)) / len);
+    if (!(dot(ne, ni) > 0.9)) {
+        return ni;
+    }
+    return ne;
 }
 
 // Unit tangent from ∂x/∂u made orthogonal to n; where ∂x/∂u vanishes or is parallel to n (a
@@ -567,18 +647,31 @@ fn blend_fetch(w: vec4<f32>, t: Tap) -> vec4<f32> {
 // up where it sees the ray meet the scene (`depth_search`, with DEPTH) or along `dir`. While
 // any candidate sees the hit, those that cannot are left out; `.w` = 0 when no lookup was
 // resident.
+//
+// With DEPTH the candidates then agree on one hit: the nearest along the ray of those their
+// searches found (a thin occluder that one candidate's search resolves and another's steps
+// over is still there). Every candidate whose distance plane sees that point (within HIT_AGREE
+// depth_thickness) is looked up towards it, blended with its weight; the others are left out.
+// When none sees it, the blend of the candidates' own hits above.
 fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     var hidden = vec3<f32>(0.0);
     var hsum = 0.0;
+    var near = 3.4e38;
     for (var j = 0u; j < 4u; j++) {
         if (w[j] > 0.0) {
             var h = vec4<f32>(dir, 1.0);
+            var l = vec4<f32>(0.0);
             if (DEPTH) {
                 h = depth_search(cand.idx[j], x, dir);
+                if (h.w > 0.0) {
+                    near = min(near, dot(h.xyz + samples[cand.idx[j]].xyz - x, dir));
+                }
+                l = depth_lookup(cand.idx[j], h, lod);
+            } else {
+                l = lookup_lod(cand.idx[j], h.xyz, lod);
             }
-            let l = lookup_lod(cand.idx[j], h.xyz, lod);
             if (l.w > 0.0) {
                 if (h.w >= 0.0) {
                     acc += l.rgb * w[j];
@@ -588,6 +681,29 @@ fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32>
                     hsum += w[j];
                 }
             }
+        }
+    }
+    if (DEPTH && near < 3.4e38) {
+        let hit = x + dir * near;
+        var cacc = vec3<f32>(0.0);
+        var csum = 0.0;
+        for (var j = 0u; j < 4u; j++) {
+            if (w[j] > 0.0) {
+                let d = hit - samples[cand.idx[j]].xyz;
+                let dl = length(d);
+                depth_missing = false;
+                let seen = depth_toward(cand.idx[j], d, false);
+                if (!depth_missing && abs(dl - seen) <= HIT_AGREE * P.depth_thickness * dl) {
+                    let l = depth_lookup(cand.idx[j], vec4<f32>(d, 1.0), lod);
+                    if (l.w > 0.0) {
+                        cacc += l.rgb * w[j];
+                        csum += w[j];
+                    }
+                }
+            }
+        }
+        if (csum > 0.0) {
+            return vec4<f32>(cacc / csum, 1.0);
         }
     }
     if (wsum > 0.0) {
@@ -665,7 +781,7 @@ fn recon_visible(x: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
         depth_missing = false;
         let seen = depth_toward(c, d, false);
         if (depth_missing || length(d) > seen * (1.0 + P.depth_thickness)) { continue; }
-        let l = lookup(c, d);
+        let l = depth_lookup(c, vec4<f32>(d, 1.0), 0.0);
         if (l.w > 0.0) {
             acc += l.rgb * cos_j;
             count += cos_j;
@@ -806,7 +922,7 @@ fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample) -> vec4<
     if (cube == P.env_cube) {
         d = env_dir(x, l);
     } else if (DEPTH) {
-        d = depth_search(cube, x, l).xyz;
+        return depth_lookup(cube, depth_search(cube, x, l), lod);
     }
     return lookup_lod(cube, d, lod);
 }
@@ -1032,9 +1148,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pid = u32(g0.w - 0.5);
     let x = g0.xyz;
-    let n = oct_decode(g1.xy);
     let u = g1.z;
     let v_param = g1.w;
+    let n = patch_normal(pid, u, v_param, oct_decode(g1.xy));
     candidates(pid, u, v_param, x, n);
     let v = normalize(P.camera_pos.xyz - x);
     let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
