@@ -26,8 +26,10 @@
 //!
 //!   Beyond the thesis, with a store's distance channel (§6.3's RGBZ; a twin R16Float pool),
 //!   every mirror and glossy lookup is *depth-corrected*: each sample point's cube is traced as
-//!   a distance impostor to where the ray from the shaded point meets the scene, and
-//!   reconstruction averages the candidates that see the shaded point. Glossy samples use
+//!   a distance impostor to where the ray from the shaded point meets the scene, the candidates
+//!   agree on the nearest such hit, and each reads only the texels whose distances agree with
+//!   it; reconstruction averages the candidates that see the shaded point. Shading normals are
+//!   the patches' own (∂x/∂u × ∂x/∂v at the G-buffer's (u, v)). Glossy samples use
 //!   *filtered importance sampling* (Křivánek & Colbert 2008) over per-face mip chains
 //!   ([`face`]).
 //!

@@ -329,7 +329,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
         let mut missing = false;
         let w0 = 1.0 / lo;
-        let a = self.depth_probe(cube, p, x, r, w0, &mut missing);
+        let mut a = self.depth_probe(cube, p, x, r, w0, &mut missing);
         if missing {
             return (r, 0.0);
         }
@@ -348,6 +348,7 @@ impl<C: CubeTexels> Shader<'_, C> {
                 break;
             }
             wa = w;
+            a = q;
         }
         for _ in 0..DEPTH_REFINE {
             let wm = 0.5 * (wa + wb);
@@ -357,6 +358,7 @@ impl<C: CubeTexels> Shader<'_, C> {
                 b = q;
             } else {
                 wa = wm;
+                a = q;
             }
         }
         if missing || !(wb > 0.0) {
@@ -364,6 +366,12 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
         if b.1 > u.depth_thickness * b.0.length() {
             return (r, -1.0);
+        }
+        if b.1 - a.1 > 0.0 {
+            let ws = wa + (wb - wa) * (-a.1 / (b.1 - a.1));
+            if ws > 0.0 {
+                return (x + r * (1.0 / ws) - p, 1.0);
+            }
         }
         (b.0, 1.0)
     }
@@ -1372,6 +1380,108 @@ mod tests {
         assert!((between - plain).length() < 1e-6, "{between}");
         let hidden = shader.depth_lookup(0, (dir, -1.0), 0.0).unwrap();
         assert!((hidden - plain).length() < 1e-6, "{hidden}");
+    }
+
+    /// Two sample points over a ceiling 10 away (blue), with a small plate halfway (red) that
+    /// only the first one's cube holds (too thin for the second's texels, say).
+    struct TwoViews {
+        res: u32,
+        points: [Vec3; 2],
+    }
+
+    impl TwoViews {
+        fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3) {
+            let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
+            let p = self.points[cube as usize];
+            if d.z <= 0.0 {
+                return (FAR_DISTANCE, Vec3::Y);
+            }
+            let t = (5.0 - p.z) / d.z;
+            let q = p + d * t;
+            if cube == 0 && q.x * q.x + q.y * q.y < 0.25 {
+                return (t * d.length(), Vec3::X);
+            }
+            ((10.0 - p.z) / d.z * d.length(), Vec3::Z)
+        }
+    }
+
+    impl CubeTexels for TwoViews {
+        fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+            Some(self.trace(cube, face, x, y).0)
+        }
+        fn texel(&self, cube: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
+            Some(self.trace(cube, face, x, y).1)
+        }
+        fn resident(&self, _: u32) -> bool {
+            true
+        }
+    }
+
+    /// The candidates agree on the nearest hit their searches find: the plate that one
+    /// candidate's cube resolves is what the blend shows, the other candidate (whose distances
+    /// do not see the plate's point) left out, not a mix of plate and ceiling.
+    #[test]
+    fn depth_corrected_blends_agree_on_the_nearest_hit() {
+        use crate::params::{Background, ShadeUniform, ShadingParams};
+        let res = 64;
+        let mut k = store_constants(INVALID_INDEX, res);
+        k.has_depth = true;
+        let camera = oslf_geometry::Camera {
+            position: Vec3::new(0.0, -5.0, 1.0),
+            target: Vec3::ZERO,
+            up: Vec3::Z,
+            vfov_deg: 40.0,
+        };
+        let uniform = ShadeUniform::new(
+            &ShadingParams::default(),
+            glam::Mat4::IDENTITY,
+            &camera,
+            [4, 4],
+            &k,
+            Background::Env,
+        );
+        let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
+        let cubes = TwoViews { res, points };
+        let shader = Shader {
+            uniform,
+            samples: &points,
+            patches: &[],
+            colors: &[],
+            maps: &[],
+            cubes: &cubes,
+            feedback: &[],
+        };
+        let x = Vec3::ZERO;
+        let c = Candidates {
+            idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
+            s: [
+                points[0].normalize(),
+                points[1].normalize(),
+                Vec3::Z,
+                Vec3::Z,
+            ],
+            count: 2,
+        };
+        // Each candidate alone: the plate (the first), the ceiling (the second).
+        let first = shader
+            .blend_read(&c, [1.0, 0.0, 0.0, 0.0], x, Vec3::Z, 0.0)
+            .unwrap();
+        let second = shader
+            .blend_read(&c, [0.0, 1.0, 0.0, 0.0], x, Vec3::Z, 0.0)
+            .unwrap();
+        assert!((first - Vec3::X).length() < 1e-5, "{first}");
+        assert!((second - Vec3::Z).length() < 1e-5, "{second}");
+        // Together, with the second weighted three times the first: the plate.
+        let both = shader
+            .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, Vec3::Z, 0.0)
+            .unwrap();
+        assert!((both - Vec3::X).length() < 1e-5, "{both}");
+        // A ray past the plate's edge meets the ceiling for both.
+        let past = Vec3::new(0.3, 0.0, 1.0).normalize();
+        let both = shader
+            .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, past, 0.0)
+            .unwrap();
+        assert!((both - Vec3::Z).length() < 1e-5, "{both}");
     }
 
     /// The shading normal is the patch's own (as the geometry crate evaluates it, to f32

@@ -354,7 +354,9 @@ fn depth_probe(cube: u32, p: vec3<f32>, x: vec3<f32>, r: vec3<f32>, w: f32) -> v
 // distance plane as distance impostors are (Szirmay-Kalos et al. 2005; linear search, then
 // refinement, as Umenhoffer et al. 2007, GPU Gems 3 ch. 17): the ray is walked in equal steps
 // of inverse distance from x, about one texel of the cube each (at most depth_steps); the first
-// step behind the surface brackets the hit and DEPTH_REFINE bisections narrow it.
+// step behind the surface brackets the hit and DEPTH_REFINE bisections narrow it; the hit is
+// where the bracket's two signed distances interpolate to zero (a secant step, as in relief
+// mapping: Risser et al. 2007), so that other sample points can check they see it.
 // xyz: the direction to look up; w: 1 hit (xyz = the hit's offset from the sample point, its
 // length the hit's distance); 0 no hit before infinity, or a face not resident (xyz = r, the
 // plain lookup); -1 the ray passed behind an occluder's silhouette, farther behind the surface
@@ -388,6 +390,7 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
             break;
         }
         wa = w;
+        a = q;
     }
     for (var i = 0u; i < DEPTH_REFINE; i++) {
         let wm = 0.5 * (wa + wb);
@@ -397,6 +400,7 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
             b = q;
         } else {
             wa = wm;
+            a = q;
         }
     }
     if (depth_missing || !(wb > 0.0)) {
@@ -404,6 +408,12 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     }
     if (b.w > P.depth_thickness * length(b.xyz)) {
         return vec4<f32>(r, -1.0);
+    }
+    if (b.w - a.w > 0.0) {
+        let ws = wa + (wb - wa) * (-a.w / (b.w - a.w));
+        if (ws > 0.0) {
+            return vec4<f32>(x + r * (1.0 / ws) - p, 1.0);
+        }
     }
     return vec4<f32>(b.xyz, 1.0);
 }
@@ -768,8 +778,9 @@ fn recon_choice(n: vec3<f32>, resident_only: bool) -> u32 {
 // by its distance plane (x no farther than the surface it sees that way, within
 // depth_thickness). The baked object is diffuse, so each such cube holds x's radiance, each
 // with its own Monte Carlo noise: the mean of k is less noisy than the one the thesis picks,
-// and the weight favours the views that resolve x best. `.w` = 0 when no candidate qualifies
-// (then the thesis's choice within φ_shader, below).
+// and the weight favours the views that resolve x best. Each is read depth-guided
+// (`depth_lookup`), so that x at the object's silhouette does not take in what lies behind it.
+// `.w` = 0 when no candidate qualifies (then the thesis's choice within φ_shader, below).
 fn recon_visible(x: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var count = 0.0;
