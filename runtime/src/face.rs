@@ -253,9 +253,8 @@ const TENT: [f32; 4] = [1.0, 3.0, 3.0, 1.0];
 /// The next mip level of a `side`² level: each texel the 4×4 tent [1 3 3 1] ⊗ [1 3 3 1] / 64
 /// around its 2×2 block (the face's edge texels repeated beyond it), summed in a fixed order.
 /// Every finer texel weighs ¼ in all, so the mean is kept. The tent rather than the 2×2 box
-/// because filtered importance sampling reads a few coarse levels bilinearly: the box's
-/// blocks alias into bands there, and the tent's smoother levels lower the error of 16-sample
-/// glossy frames of wide lobes by 6–7 % (docs/measurements.md).
+/// because filtered importance sampling reads a few coarse levels bilinearly with a fixed set
+/// of directions: the box's blocks show there as bands across a wide lobe's reflection.
 pub fn downsample(src: &[[f32; 3]], side: u32) -> Vec<[f32; 3]> {
     let s = side as usize;
     let h = (s / 2).max(1);
