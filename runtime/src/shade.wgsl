@@ -493,6 +493,7 @@ fn patch_du(p: u32, u: f32, v: f32) -> vec3<f32> {
     return du * 3.0;
 }
 
+// ∂x/∂v of patch p at (u, v) through the hodograph, as `patch_du`.
 fn patch_dv(p: u32, u: f32, v: f32) -> vec3<f32> {
     let bu = bern3(u);
     let bv = bern2(v);
