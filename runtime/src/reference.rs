@@ -1313,6 +1313,30 @@ mod tests {
         }
     }
 
+    /// The default shading (depth-corrected) of a store of `res`² cubes with distances and no
+    /// environment cube.
+    fn depth_uniform(res: u32) -> crate::params::ShadeUniform {
+        use crate::params::{Background, ShadeUniform, ShadingParams};
+        let mut k = store_constants(INVALID_INDEX, res);
+        k.has_depth = true;
+        let camera = oslf_geometry::Camera {
+            position: Vec3::new(0.0, -5.0, 1.0),
+            target: Vec3::ZERO,
+            up: Vec3::Z,
+            vfov_deg: 40.0,
+        };
+        let u = ShadeUniform::new(
+            &ShadingParams::default(),
+            glam::Mat4::IDENTITY,
+            &camera,
+            [4, 4],
+            &k,
+            Background::Env,
+        );
+        assert!(u.depth_steps > 0);
+        u
+    }
+
     /// A cube whose every face holds a near surface (distance 2, red) on its left half and
     /// nothing (blue) on its right: a silhouette down the middle of each face.
     struct Silhouette(u32);
@@ -1335,27 +1359,9 @@ mod tests {
     /// agrees with no texel, and a hidden one, the plain blend.
     #[test]
     fn depth_lookups_keep_the_hits_surface_at_a_silhouette() {
-        use crate::params::{Background, ShadeUniform, ShadingParams};
         let res = 8;
-        let mut k = store_constants(INVALID_INDEX, res);
-        k.has_depth = true;
-        let camera = oslf_geometry::Camera {
-            position: Vec3::new(0.0, 0.0, 5.0),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            vfov_deg: 40.0,
-        };
-        let uniform = ShadeUniform::new(
-            &ShadingParams::default(),
-            glam::Mat4::IDENTITY,
-            &camera,
-            [4, 4],
-            &k,
-            Background::Env,
-        );
-        assert!(uniform.depth_steps > 0);
         let shader = Shader {
-            uniform,
+            uniform: depth_uniform(res),
             samples: &[Vec3::ZERO],
             patches: &[],
             colors: &[],
@@ -1422,24 +1428,8 @@ mod tests {
     /// do not see the plate's point) left out, not a mix of plate and ceiling.
     #[test]
     fn depth_corrected_blends_agree_on_the_nearest_hit() {
-        use crate::params::{Background, ShadeUniform, ShadingParams};
         let res = 64;
-        let mut k = store_constants(INVALID_INDEX, res);
-        k.has_depth = true;
-        let camera = oslf_geometry::Camera {
-            position: Vec3::new(0.0, -5.0, 1.0),
-            target: Vec3::ZERO,
-            up: Vec3::Z,
-            vfov_deg: 40.0,
-        };
-        let uniform = ShadeUniform::new(
-            &ShadingParams::default(),
-            glam::Mat4::IDENTITY,
-            &camera,
-            [4, 4],
-            &k,
-            Background::Env,
-        );
+        let uniform = depth_uniform(res);
         let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
         let cubes = TwoViews { res, points };
         let shader = Shader {
