@@ -129,6 +129,34 @@ pub fn patch_du(p: &BezierPatch, u: f32, v: f32) -> Vec3 {
     du * 3.0
 }
 
+/// Where face coordinates `(s, t)` land on a face of side `n`: the four texels around them,
+/// clamped at the face's edges, and the bilinear weights (as `Tap` in shade.wgsl).
+struct Tap {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+    wx: f32,
+    wy: f32,
+}
+
+impl Tap {
+    fn new(n: u32, s: f32, t: f32) -> Self {
+        let nf = n as f32;
+        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
+        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
+        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
+        Tap {
+            x0,
+            y0,
+            x1: (x0 + 1).min(n - 1),
+            y1: (y0 + 1).min(n - 1),
+            wx: fx - fx.floor(),
+            wy: fy - fy.floor(),
+        }
+    }
+}
+
 /// ∂x/∂v through the hodograph, in `f32` (as `patch_dv` in shade.wgsl).
 pub fn patch_dv(p: &BezierPatch, u: f32, v: f32) -> Vec3 {
     let (bu, bv) = (bern3(u), bern2(v));
@@ -222,13 +250,14 @@ impl<C: CubeTexels> Shader<'_, C> {
     /// `lookup` on mip `level`, without the feedback mark (as `read_tap_level`): bilinear
     /// within the face.
     fn read_tap(&self, cube: u32, face: usize, s: f32, t: f32, level: u32) -> Option<Vec3> {
-        let n = (self.uniform.cube_res >> level).max(1);
-        let nf = n as f32;
-        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
-        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
-        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
-        let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
-        let (wx, wy) = (fx - fx.floor(), fy - fy.floor());
+        let Tap {
+            x0,
+            y0,
+            x1,
+            y1,
+            wx,
+            wy,
+        } = Tap::new((self.uniform.cube_res >> level).max(1), s, t);
         let t00 = self.cubes.texel(cube, face, level, x0, y0)?;
         let t10 = self.cubes.texel(cube, face, level, x1, y0)?;
         let t01 = self.cubes.texel(cube, face, level, x0, y1)?;
@@ -384,13 +413,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
         let (face, s, t) = face_st(h.0);
         self.mark(cube, face);
-        let n = self.uniform.cube_res;
-        let nf = n as f32;
-        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
-        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
-        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
-        let (x1, y1) = ((x0 + 1).min(n - 1), (y0 + 1).min(n - 1));
-        let (wx, wy) = (fx - fx.floor(), fy - fy.floor());
+        let Tap {
+            x0,
+            y0,
+            x1,
+            y1,
+            wx,
+            wy,
+        } = Tap::new(self.uniform.cube_res, s, t);
         let dist = if h.1 > 0.0 {
             h.0.length()
         } else {
