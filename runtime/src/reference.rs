@@ -24,6 +24,8 @@ const LOOKUP_AGREE: f32 = 1.0;
 /// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
 /// shade.wgsl).
 const HIT_AGREE: f32 = 0.25;
+/// Most filtered lookups of one sample of an anisotropic lobe (ANISO_TAPS in shade.wgsl).
+const ANISO_TAPS: u32 = 4;
 
 /// Where the reference reads cube-map texels.
 pub trait CubeTexels: Sync {
@@ -215,6 +217,9 @@ struct AsSample {
     weight: f32,
     /// log2(M p(l)).
     lpdf: f32,
+    /// Filtered lookups along `axis` for an anisotropic lobe (as in shade.wgsl); ≤ 1: one.
+    axis: Vec3,
+    taps: u32,
 }
 
 fn fresnel(rs: f32, c: f32) -> f32 {
@@ -813,7 +818,25 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
-        AsSample { l, weight, lpdf }
+        // An anisotropic lobe's cell: ⌈ρ⌉ taps along 2 √(Ω_s ρ) (as `sample_as`).
+        let (mut axis, mut taps) = (Vec3::ZERO, 1);
+        let rho = ((u.nu.max(u.nv) + 1.0) / (u.nu.min(u.nv) + 1.0)).sqrt();
+        if u.mip_levels > 1 && rho > 1.5 {
+            let major = if u.nu < u.nv { t } else { b };
+            let across = major - l * major.dot(l);
+            let len = across.length();
+            if len > 1e-6 {
+                taps = (rho.ceil() as u32).min(ANISO_TAPS);
+                axis = across * (2.0 * ((-lpdf).exp2() * rho).sqrt() / len);
+            }
+        }
+        AsSample {
+            l,
+            weight,
+            lpdf,
+            axis,
+            taps,
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -842,7 +865,13 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
-        AsSample { l, weight, lpdf }
+        AsSample {
+            l,
+            weight,
+            lpdf,
+            axis: Vec3::ZERO,
+            taps: 1,
+        }
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
@@ -871,11 +900,27 @@ impl<C: CubeTexels> Shader<'_, C> {
         let d = if cube == u.env_cube {
             self.env_dir(x, s.l)
         } else if u.depth_steps > 0 {
-            return self.depth_lookup(cube, self.depth_search(cube, x, s.l), lod);
+            let h = self.depth_search(cube, x, s.l);
+            if s.taps <= 1 {
+                return self.depth_lookup(cube, h, lod);
+            }
+            h.0
         } else {
             s.l
         };
-        self.lookup_lod(cube, d, lod)
+        if s.taps <= 1 {
+            return self.lookup_lod(cube, d, lod);
+        }
+        // Taps along the anisotropic cell (as `sample_radiance`).
+        let dn = d.normalize();
+        let axis = s.axis - dn * s.axis.dot(dn);
+        let tap_lod = self.sample_lod(s.l, s.lpdf + (s.taps as f32).log2());
+        let mut acc = Vec3::ZERO;
+        for k in 0..s.taps {
+            let o = (k as f32 + 0.5) / s.taps as f32 - 0.5;
+            acc += self.lookup_lod(cube, dn + axis * o, tap_lod)?;
+        }
+        Some(acc / s.taps as f32)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1502,6 +1547,73 @@ mod tests {
             .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, past, 0.0)
             .unwrap();
         assert!((both - Vec3::Z).length() < 1e-5, "{both}");
+    }
+
+    /// A filtered sample of an anisotropic lobe is read in ⌈ρ⌉ taps (at most ANISO_TAPS) along
+    /// the long axis of its cell, across the sample direction, 2 √(Ω_s ρ) long; an isotropic
+    /// lobe, and point sampling, in one.
+    #[test]
+    fn anisotropic_lobes_spread_their_samples_taps_along_the_wide_axis() {
+        use crate::params::{Background, GlossyFilter, ShadeUniform, ShadingParams};
+        let mut k = store_constants(INVALID_INDEX, 64);
+        k.mip_levels = 7;
+        let camera = oslf_geometry::Camera {
+            position: Vec3::new(0.0, -5.0, 1.0),
+            target: Vec3::ZERO,
+            up: Vec3::Z,
+            vfov_deg: 40.0,
+        };
+        let (n, t, b) = (Vec3::Z, Vec3::X, Vec3::Y);
+        let v = Vec3::new(0.0, -0.6, 0.8);
+        for (nu, nv, taps, major) in [
+            (10.0, 1000.0, 4, t),
+            (1000.0, 100.0, 4, b),
+            (10.0, 30.0, 2, t),
+            (100.0, 100.0, 1, t),
+        ] {
+            for filter in [GlossyFilter::Mip, GlossyFilter::Point] {
+                let p = ShadingParams {
+                    nu,
+                    nv,
+                    glossy_filter: filter,
+                    ..ShadingParams::default()
+                };
+                let uniform = ShadeUniform::new(
+                    &p,
+                    glam::Mat4::IDENTITY,
+                    &camera,
+                    [4, 4],
+                    &k,
+                    Background::Env,
+                );
+                let shader = Shader {
+                    uniform,
+                    samples: &[],
+                    patches: &[],
+                    colors: &[],
+                    maps: &[],
+                    cubes: &SmoothCube(64),
+                    feedback: &[],
+                };
+                for i in 0..16 {
+                    let s = shader.sample_as(i, 0.5, 0.3, n, t, b, v, n.dot(v));
+                    if filter == GlossyFilter::Point {
+                        assert_eq!(s.taps, 1);
+                        continue;
+                    }
+                    assert_eq!(s.taps, taps, "{nu}:{nv}");
+                    if taps == 1 {
+                        continue;
+                    }
+                    let rho = ((nu.max(nv) + 1.0) / (nu.min(nv) + 1.0)).sqrt();
+                    let len = 2.0 * ((-s.lpdf).exp2() * rho).sqrt();
+                    assert!((s.axis.length() - len).abs() < 1e-4 * len, "{}", s.axis);
+                    assert!(s.axis.dot(s.l).abs() < 1e-4 * len);
+                    let dir = (major - s.l * major.dot(s.l)).normalize();
+                    assert!(s.axis.normalize().dot(dir) > 0.9999, "{nu}:{nv} {}", s.axis);
+                }
+            }
+        }
     }
 
     /// The shading normal is the patch's own (as the geometry crate evaluates it, to f32

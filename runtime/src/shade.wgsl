@@ -109,6 +109,9 @@ const LOOKUP_AGREE: f32 = 1.0;
 // A candidate sees the blend's common hit when its distance toward it lies within this many
 // depth_thickness (one texel angle) of the hit's (`blend_read`; reference.rs HIT_AGREE).
 const HIT_AGREE: f32 = 0.25;
+// Most filtered lookups of one sample of an anisotropic lobe (`sample_as`; reference.rs
+// ANISO_TAPS).
+const ANISO_TAPS: u32 = 4u;
 
 // ---- random numbers: PCG hash (Jarzynski & Olano 2020), identical in reference.rs ----
 
@@ -858,6 +861,11 @@ struct AsSample {
     // log2(M p(l)), p the solid-angle density l was drawn with: the sample's mip level
     // (`sample_lod`).
     lpdf: f32,
+    // An anisotropic lobe's sample covers a long cell: `taps` filtered lookups spread along
+    // `axis` (its length in radians, across l) instead of one (`sample_radiance`). taps ≤ 1:
+    // one lookup.
+    axis: vec3<f32>,
+    taps: u32,
 };
 
 fn fresnel(rs: f32, c: f32) -> f32 {
@@ -896,6 +904,24 @@ fn sample_as(i: u32, xi1r: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f3
     if (vh > 0.0 && nl > 0.0) {
         out.weight = fresnel(P.rs, vh) * nl / max(nv, nl);
     }
+    // The lobe is ρ = √((n_max + 1)/(n_min + 1)) times longer along the axis of the smaller
+    // exponent. A filtered sample (area Ω_s = 1 / (M p)) then covers a cell about ρ times longer
+    // than wide, which one isotropic lookup either blurs across or leaves gaps along: ⌈ρ⌉ taps
+    // (at most ANISO_TAPS), each of area Ω_s / taps, along 2 √(Ω_s ρ) (the factor 2 measured
+    // best on the example scene: docs/measurements.md), as anisotropic texture filtering does.
+    out.taps = 1u;
+    out.axis = vec3<f32>(0.0);
+    let rho = sqrt((max(P.nu, P.nv) + 1.0) / (min(P.nu, P.nv) + 1.0));
+    if (FILTER && rho > 1.5) {
+        var major = b;
+        if (P.nu < P.nv) { major = t; }
+        let across = major - out.l * dot(major, out.l);
+        let len = length(across);
+        if (len > 1e-6) {
+            out.taps = min(u32(ceil(rho)), ANISO_TAPS);
+            out.axis = across * (2.0 * sqrt(exp2(-out.lpdf) * rho) / len);
+        }
+    }
     return out;
 }
 
@@ -918,8 +944,9 @@ fn sample_diffuse(i: u32, r1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<
 // The radiance of sample `s` for the shaded point x: cube `cube` (depth-corrected for a
 // sample point with DEPTH, parallax-corrected for the environment cube with SOURCE 2), or (per
 // direction, cube = INVALID) the blend of the candidates with the environment cube where none
-// is resident; filtered at the sample's mip level with FILTER. `.w` = 0 when a cube's face was
-// not resident.
+// is resident; filtered at the sample's mip level with FILTER, per point in `s.taps` lookups
+// along `s.axis` around the corrected direction for an anisotropic lobe. `.w` = 0 when a cube's
+// face was not resident.
 fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample) -> vec4<f32> {
     let l = s.l;
     let lod = sample_lod(l, s.lpdf);
@@ -934,9 +961,29 @@ fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample) -> vec4<
     if (cube == P.env_cube) {
         d = env_dir(x, l);
     } else if (DEPTH) {
-        return depth_lookup(cube, depth_search(cube, x, l), lod);
+        let h = depth_search(cube, x, l);
+        if (s.taps <= 1u) {
+            return depth_lookup(cube, h, lod);
+        }
+        d = h.xyz;
     }
-    return lookup_lod(cube, d, lod);
+    if (s.taps <= 1u) {
+        return lookup_lod(cube, d, lod);
+    }
+    let dn = normalize(d);
+    let axis = s.axis - dn * dot(s.axis, dn);
+    let tap_lod = sample_lod(l, s.lpdf + log2(f32(s.taps)));
+    var acc = vec3<f32>(0.0);
+    var ok = 1.0;
+    for (var k = 0u; k < s.taps; k++) {
+        let r = lookup_lod(cube, dn + axis * ((f32(k) + 0.5) / f32(s.taps) - 0.5), tap_lod);
+        acc += r.rgb;
+        ok = min(ok, r.w);
+    }
+    if (ok == 0.0) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(acc / f32(s.taps), 1.0);
 }
 
 // Integrates over one source (Eq. 5.12): cube `cube` (per point), or the blend of the
