@@ -904,14 +904,16 @@ impl<C: CubeTexels> Shader<'_, C> {
             if s.taps <= 1 {
                 return self.depth_lookup(cube, h, lod);
             }
-            h.0
+            return self.depth_taps(cube, h.0, s);
         } else {
             s.l
         };
-        if s.taps <= 1 {
-            return self.lookup_lod(cube, d, lod);
-        }
-        // Taps along the anisotropic cell (as `sample_radiance`).
+        self.lookup_lod(cube, d, lod)
+    }
+
+    /// The taps of a depth-corrected sample of an anisotropic lobe around the corrected
+    /// direction `d` (as `depth_taps`).
+    fn depth_taps(&self, cube: u32, d: Vec3, s: &AsSample) -> Option<Vec3> {
         let dn = d.normalize();
         let axis = s.axis - dn * s.axis.dot(dn);
         let tap_lod = self.sample_lod(s.l, s.lpdf + (s.taps as f32).log2());
