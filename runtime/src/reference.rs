@@ -183,15 +183,7 @@ pub fn patch_normal(p: &BezierPatch, u: f32, v: f32, ni: Vec3) -> Vec3 {
     if !(len > 1e-6 * du.length() * dv.length()) {
         return ni;
     }
-    let sign = e.dot(ni);
-    let sign = if sign > 0.0 {
-        1.0
-    } else if sign < 0.0 {
-        -1.0
-    } else {
-        0.0
-    };
-    let ne = e * (sign / len);
+    let ne = (if e.dot(ni) < 0.0 { -e } else { e }) / len;
     if !(ne.dot(ni) > 0.9) {
         return ni;
     }
@@ -1296,15 +1288,7 @@ mod tests {
                 &k,
                 Background::Env,
             );
-            let shader = Shader {
-                uniform,
-                samples: &[],
-                patches: &[],
-                colors: &[],
-                maps: &[],
-                cubes: &NoCubes,
-                feedback: &[],
-            };
+            let shader = bare_shader(uniform, &[], &NoCubes);
             for (i, j) in [
                 (0, 0),
                 (w - 1, 0),
@@ -1414,6 +1398,23 @@ mod tests {
         u
     }
 
+    /// A shader with no patches or sample maps: for the parts that need only cubes.
+    fn bare_shader<'a, C: CubeTexels>(
+        uniform: ShadeUniform,
+        samples: &'a [Vec3],
+        cubes: &'a C,
+    ) -> Shader<'a, C> {
+        Shader {
+            uniform,
+            samples,
+            patches: &[],
+            colors: &[],
+            maps: &[],
+            cubes,
+            feedback: &[],
+        }
+    }
+
     /// A cube whose every face holds a near surface (distance 2, red) on its left half and
     /// nothing (blue) on its right: a silhouette down the middle of each face.
     struct Silhouette(u32);
@@ -1437,15 +1438,8 @@ mod tests {
     #[test]
     fn depth_lookups_keep_the_hits_surface_at_a_silhouette() {
         let res = 8;
-        let shader = Shader {
-            uniform: depth_uniform(res),
-            samples: &[Vec3::ZERO],
-            patches: &[],
-            colors: &[],
-            maps: &[],
-            cubes: &Silhouette(res),
-            feedback: &[],
-        };
+        let cubes = Silhouette(res);
+        let shader = bare_shader(depth_uniform(res), &[Vec3::ZERO], &cubes);
         // Face +x at s = ½: halfway between texel columns 3 (near) and 4 (nothing).
         let dir = face_point(0, 0.5, 3.5 / res as f32).normalize();
         let (face, s, _) = face_st(dir);
@@ -1509,15 +1503,7 @@ mod tests {
         let uniform = depth_uniform(res);
         let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
         let cubes = TwoViews { res, points };
-        let shader = Shader {
-            uniform,
-            samples: &points,
-            patches: &[],
-            colors: &[],
-            maps: &[],
-            cubes: &cubes,
-            feedback: &[],
-        };
+        let shader = bare_shader(uniform, &points, &cubes);
         let x = Vec3::ZERO;
         let c = Candidates {
             idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
@@ -1588,15 +1574,7 @@ mod tests {
                     &k,
                     Background::Env,
                 );
-                let shader = Shader {
-                    uniform,
-                    samples: &[],
-                    patches: &[],
-                    colors: &[],
-                    maps: &[],
-                    cubes: &SmoothCube(64),
-                    feedback: &[],
-                };
+                let shader = bare_shader(uniform, &[], &SmoothCube(64));
                 for i in 0..16 {
                     let s = shader.sample_as(i, 0.5, 0.3, n, t, b, v, n.dot(v));
                     if filter == GlossyFilter::Point {

@@ -523,7 +523,7 @@ fn patch_normal(p: u32, u: f32, v: f32, ni: vec3<f32>) -> vec3<f32> {
     if (!(len > 1e-6 * length(du) * length(dv))) {
         return ni;
     }
-    let ne = e * (sign(dot(e, ni)) / len);
+    let ne = select(e, -e, dot(e, ni) < 0.0) / len;
     if (!(dot(ne, ni) > 0.9)) {
         return ni;
     }
