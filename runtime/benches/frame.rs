@@ -13,7 +13,10 @@
 //! warm time; cold − warm is the cost of filling the cache (and of compiling the pipeline).
 //! Frames are timed to GPU completion without reading the image back. Then, for each mirror
 //! blend, OSLF and environment-map frames interleaved (21 each, medians) give the ratio of the
-//! two in the same machine state. Writes Markdown tables to stdout and CSV to
+//! two in the same machine state; for four Ashikhmin–Shirley lobes, filtered importance sampling
+//! at M = 16 (with and without depth correction) against the thesis's point sampling at M = 256,
+//! likewise interleaved (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
+//! `OSLF_BENCH_ROUNDS` sets its rounds). Writes Markdown tables to stdout and CSV to
 //! `target/frame-times.csv`.
 
 use std::path::PathBuf;
@@ -301,6 +304,83 @@ fn main() {
                 a / b
             );
             csv.push_str(&format!("ratio {},{w},{h},,{a:.2},,,,\n", blend.name()));
+        }
+    }
+    // Filtered importance sampling at M = 16 against the thesis's point sampling at M = 256,
+    // per lobe: warm frames interleaved (OSLF_BENCH_ROUNDS rounds, default 9, medians), so the
+    // ratios compare the same machine state.
+    let rounds: usize = std::env::var("OSLF_BENCH_ROUNDS")
+        .ok()
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(9);
+    if filter.is_empty() || "glossy ratio".contains(filter.as_str()) {
+        println!();
+        println!("| lobe n_u:n_v | size | thesis M=256 (ms) | FIS M=16 (ms) | ratio | FIS + depth M=16 (ms) | ratio |");
+        println!("| --- | --- | ---: | ---: | ---: | ---: | ---: |");
+        let (w, h) = (655u32, 460u32);
+        let opts = RenderOptions {
+            width: w,
+            height: h,
+            read_pixels: false,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(
+            Gpu::headless().unwrap(),
+            Store::open(&path).unwrap(),
+            CacheConfig::default(),
+        )
+        .unwrap();
+        let camera = r.default_view();
+        for (nu, nv) in [
+            (10.0, 10.0),
+            (100.0, 100.0),
+            (1000.0, 1000.0),
+            (10.0, 1000.0),
+        ] {
+            let fis = ShadingParams {
+                mode: Mode::Glossy,
+                m: 16,
+                nu,
+                nv,
+                ..base
+            };
+            let configs = [
+                ShadingParams {
+                    m: 256,
+                    depth: false,
+                    glossy_filter: oslf_runtime::GlossyFilter::Point,
+                    ..fis
+                },
+                ShadingParams {
+                    depth: false,
+                    ..fis
+                },
+                fis,
+            ];
+            let mut times = vec![Vec::new(); configs.len()];
+            for c in &configs {
+                r.render(&camera, c, &opts).unwrap();
+            }
+            for _ in 0..rounds {
+                for (c, t) in configs.iter().zip(&mut times) {
+                    let start = Instant::now();
+                    r.render(&camera, c, &opts).unwrap();
+                    t.push(start.elapsed().as_secs_f64() * 1e3);
+                }
+            }
+            let m: Vec<f64> = times.into_iter().map(median).collect();
+            println!(
+                "| {nu}:{nv} | {w}×{h} | {:.1} | {:.1} | {:.3} | {:.1} | {:.3} |",
+                m[0],
+                m[1],
+                m[1] / m[0],
+                m[2],
+                m[2] / m[0]
+            );
+            csv.push_str(&format!(
+                "glossy ratio {nu}:{nv},{w},{h},,{:.2},,,,\nglossy ratio {nu}:{nv} FIS M=16,{w},{h},,{:.2},,,,\nglossy ratio {nu}:{nv} FIS+depth M=16,{w},{h},,{:.2},,,,\n",
+                m[0], m[1], m[2]
+            ));
         }
     }
     let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/frame-times.csv");

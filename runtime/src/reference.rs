@@ -77,6 +77,36 @@ fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16777216.0)
 }
 
+/// (ξ1, ξ2) of filtered glossy sample `i` of `m` (as `filter_xi`): for m = n² the centres of
+/// an n × n grid of strata through Shirley & Chiu's concentric map to the disc, as polar
+/// coordinates (ξ1 = φ/2π, ξ2 = r²), so that each sample's cell is compact; else the
+/// Hammersley set.
+pub fn filter_xi(i: u32, m: u32) -> [f32; 2] {
+    let n = (m as f32).sqrt().round() as u32;
+    if n * n != m {
+        return [
+            (i as f32 + 0.5) / m as f32,
+            i.reverse_bits() as f32 * 2.328_306_4e-10,
+        ];
+    }
+    let a = 2.0 * ((i % n) as f32 + 0.5) / n as f32 - 1.0;
+    let b = 2.0 * ((i / n) as f32 + 0.5) / n as f32 - 1.0;
+    if a == 0.0 && b == 0.0 {
+        return [0.0, 0.0]; // the centre cell of an odd n
+    }
+    let (mut r, mut phi) = if a.abs() > b.abs() {
+        (a, 0.25 * PI * (b / a))
+    } else {
+        (b, 0.5 * PI - 0.25 * PI * (a / b))
+    };
+    if r < 0.0 {
+        r = -r;
+        phi += PI;
+    }
+    let x1 = phi * (0.5 / PI);
+    [x1 - x1.floor(), r * r]
+}
+
 /// Face and face coordinates of a direction: [`oslf_format::cube::direction_to_face_st`].
 pub fn face_st(d: Vec3) -> (usize, f32, f32) {
     oslf_format::cube::direction_to_face_st(d.to_array())
@@ -283,16 +313,18 @@ impl<C: CubeTexels> Shader<'_, C> {
         Some(a? + (b? - a?) * f)
     }
 
-    /// Number `k` of sample `i` of integration `j` (as `sample_u`): random, or the Hammersley
-    /// set when filtering.
+    /// Number `k` of sample `i` of integration `j` (as `sample_u`): ξ1 (k even, stratified)
+    /// or ξ2 (k odd), random, or when filtering the fixed set [`filter_xi`].
     fn sample_u(&self, pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+        let m = self.uniform.m;
         if self.uniform.mip_levels > 1 {
-            if k & 1 == 0 {
-                return 0.5;
-            }
-            return i.reverse_bits() as f32 * 2.328_306_4e-10;
+            return filter_xi(i, m)[(k & 1) as usize];
         }
-        rand(pixel, i, j, k)
+        let r = rand(pixel, i, j, k);
+        if k & 1 == 0 {
+            return (i as f32 + r) / m as f32;
+        }
+        r
     }
 
     /// The mip level of a sample towards `dir` with log2(M p) = `lpdf` (as `sample_lod`).
@@ -770,8 +802,7 @@ impl<C: CubeTexels> Shader<'_, C> {
     #[allow(clippy::too_many_arguments)]
     fn sample_as(
         &self,
-        i: u32,
-        xi1r: f32,
+        xi1: f32,
         xi2: f32,
         n: Vec3,
         t: Vec3,
@@ -780,7 +811,6 @@ impl<C: CubeTexels> Shader<'_, C> {
         nv: f32,
     ) -> AsSample {
         let u = &self.uniform;
-        let xi1 = (i as f32 + xi1r) / u.m as f32;
         let q = ((xi1 * 4.0) as u32).min(3);
         let xq = xi1 * 4.0 - q as f32;
         let half_angle = 0.5 * PI * xq;
@@ -832,18 +862,8 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn sample_diffuse(
-        &self,
-        i: u32,
-        r1: f32,
-        r2: f32,
-        n: Vec3,
-        t: Vec3,
-        b: Vec3,
-        nv: f32,
-    ) -> AsSample {
+    fn sample_diffuse(&self, xi1: f32, r2: f32, n: Vec3, t: Vec3, b: Vec3, nv: f32) -> AsSample {
         let u = &self.uniform;
-        let xi1 = (i as f32 + r1) / u.m as f32;
         let phi = 2.0 * PI * xi1;
         let rad = r2.sqrt();
         let z = (1.0 - r2).max(0.0).sqrt();
@@ -939,7 +959,6 @@ impl<C: CubeTexels> Shader<'_, C> {
             for k in 0..2 {
                 let s = if k == 0 {
                     self.sample_as(
-                        i,
                         self.sample_u(pixel, i, j, 0),
                         self.sample_u(pixel, i, j, 1),
                         n,
@@ -953,7 +972,6 @@ impl<C: CubeTexels> Shader<'_, C> {
                         continue;
                     }
                     self.sample_diffuse(
-                        i,
                         self.sample_u(pixel, i, j, 2),
                         self.sample_u(pixel, i, j, 3),
                         n,
@@ -1576,7 +1594,7 @@ mod tests {
                 );
                 let shader = bare_shader(uniform, &[], &SmoothCube(64));
                 for i in 0..16 {
-                    let s = shader.sample_as(i, 0.5, 0.3, n, t, b, v, n.dot(v));
+                    let s = shader.sample_as((i as f32 + 0.5) / 16.0, 0.3, n, t, b, v, n.dot(v));
                     if filter == GlossyFilter::Point {
                         assert_eq!(s.taps, 1);
                         continue;
@@ -1594,6 +1612,45 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Filtered samples for M = n² are the grid's stratum centres through the concentric map:
+    /// mapped back to the square (the map's inverse), sample i lands at the centre of cell i;
+    /// every (ξ1, ξ2) lies in [0, 1)², and other M take the Hammersley set.
+    #[test]
+    fn filtered_samples_are_concentric_stratum_centres() {
+        for n in [1u32, 2, 3, 4, 5, 8, 16] {
+            let m = n * n;
+            for i in 0..m {
+                let [x1, x2] = filter_xi(i, m);
+                assert!(
+                    (0.0..1.0).contains(&x1) && (0.0..1.0).contains(&x2),
+                    "{m} {i}"
+                );
+                // Polar (r, φ) on the disc back to the square [-1, 1]² (Shirley & Chiu).
+                let (r, mut phi) = (x2.sqrt(), 2.0 * PI * x1);
+                if phi > 1.75 * PI {
+                    phi -= 2.0 * PI;
+                }
+                let (a, b) = if phi < 0.25 * PI {
+                    (r, r * phi / (0.25 * PI))
+                } else if phi < 0.75 * PI {
+                    (-r * (phi - 0.5 * PI) / (0.25 * PI), r)
+                } else if phi < 1.25 * PI {
+                    (-r, -r * (phi - PI) / (0.25 * PI))
+                } else {
+                    (r * (phi - 1.5 * PI) / (0.25 * PI), -r)
+                };
+                let cell = |c: f32| (c + 1.0) * 0.5 * n as f32;
+                let (ca, cb) = (cell(a), cell(b));
+                assert!(
+                    (ca - ((i % n) as f32 + 0.5)).abs() < 1e-4
+                        && (cb - ((i / n) as f32 + 0.5)).abs() < 1e-4,
+                    "m {m} sample {i}: cell ({ca}, {cb})"
+                );
+            }
+        }
+        assert_eq!(filter_xi(3, 12), [3.5 / 12.0, 0.75]);
     }
 
     /// The shading normal is the patch's own (as the geometry crate evaluates it, to f32

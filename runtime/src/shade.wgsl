@@ -126,18 +126,50 @@ fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
     return f32(h >> 8u) * (1.0 / 16777216.0);
 }
 
-// Number k of Monte Carlo sample i of integration j at this pixel: per-pixel random numbers for
-// point sampling; with FILTER the Hammersley set ((i + ½)/M stratum centres, radical inverse of
-// i), the same at every pixel, as Křivánek & Colbert (2008) pair it with filtered lookups: the
-// estimate is then smooth instead of noisy.
+// Number k of Monte Carlo sample i of integration j at this pixel; k = 0, 2 are ξ1 of the
+// specular and diffuse samples (stratified: in [i/M, (i+1)/M)), k = 1, 3 their ξ2. Per-pixel
+// random numbers for point sampling; with FILTER a fixed set, the same at every pixel, as
+// Křivánek & Colbert (2008) pair it with filtered lookups: the estimate is then smooth instead
+// of noisy (`filter_xi`).
 fn sample_u(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
     if (FILTER) {
-        if ((k & 1u) == 0u) {
-            return 0.5;
-        }
-        return f32(reverseBits(i)) * 2.3283064365386963e-10;
+        return filter_xi(i)[k & 1u];
     }
-    return rand(pixel, i, j, k);
+    let r = rand(pixel, i, j, k);
+    if ((k & 1u) == 0u) {
+        return (f32(i) + r) / f32(P.m);
+    }
+    return r;
+}
+
+// (ξ1, ξ2) of filtered sample i of M. For M = n² the centres of an n × n grid of strata mapped
+// to the disc by Shirley & Chiu's concentric map (1997), read as polar coordinates (ξ1 = φ/2π,
+// ξ2 = r²: the disc's area measure is uniform in both): every sample's cell is compact, so
+// the isotropic filtered lookup of its area covers it (Hammersley's cells near the lobe's
+// peak are thin wedges, and a wide lobe's peak is then read too often). Other M: the
+// Hammersley set ((i + ½)/M, radical inverse of i). reference.rs `filter_xi` computes the same.
+fn filter_xi(i: u32) -> vec2<f32> {
+    let n = u32(round(sqrt(f32(P.m))));
+    if (n * n != P.m) {
+        return vec2<f32>((f32(i) + 0.5) / f32(P.m), f32(reverseBits(i)) * 2.3283064365386963e-10);
+    }
+    let a = 2.0 * (f32(i % n) + 0.5) / f32(n) - 1.0;
+    let b = 2.0 * (f32(i / n) + 0.5) / f32(n) - 1.0;
+    if (a == 0.0 && b == 0.0) {
+        return vec2<f32>(0.0); // the centre cell of an odd n
+    }
+    var r = b;
+    var phi = 0.5 * PI - 0.25 * PI * (a / b);
+    if (abs(a) > abs(b)) {
+        r = a;
+        phi = 0.25 * PI * (b / a);
+    }
+    if (r < 0.0) {
+        r = -r;
+        phi += PI;
+    }
+    let x1 = phi * (0.5 / PI);
+    return vec2<f32>(x1 - floor(x1), r * r);
 }
 
 // ---- cube maps ----
@@ -875,13 +907,12 @@ fn fresnel(rs: f32, c: f32) -> f32 {
     return rs + (1.0 - rs) * k2 * k2 * k;
 }
 
-// Sample i of M from the specular lobe, stratified in ξ1 over the four quadrants (Eq. 5.9 with
-// the exponent in φ, see NOTES.md), reflected about h (5.10). With k = v the estimator
+// The specular lobe's sample at (ξ1, ξ2): ξ1 picks the quadrant and φ in it (Eq. 5.9 with the
+// exponent in φ, see NOTES.md), ξ2 the angle from n, reflected about h (5.10). With k = v the estimator
 // f_sr ⟨n,l⟩ / p(l) of 5.5, 5.8, 5.11 reduces to F(⟨v,h⟩) ⟨n,l⟩ / max(⟨n,v⟩, ⟨n,l⟩):
 // no exponent, no 0/0 at h = n, finite for any n_u, n_v.
-fn sample_as(i: u32, xi1r: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> AsSample {
+fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> AsSample {
     var out: AsSample;
-    let xi1 = (f32(i) + xi1r) / f32(P.m);
     let q = min(u32(xi1 * 4.0), 3u);
     let xq = xi1 * 4.0 - f32(q);
     let half_angle = 0.5 * PI * xq;
@@ -926,9 +957,8 @@ fn sample_as(i: u32, xi1r: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f3
 }
 
 // Cosine-weighted sample for the diffuse term 5.4: f_dr ⟨n,l⟩ / p(l) = π f_dr.
-fn sample_diffuse(i: u32, r1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, nv: f32) -> AsSample {
+fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, nv: f32) -> AsSample {
     var out: AsSample;
-    let xi1 = (f32(i) + r1) / f32(P.m);
     let phi = 2.0 * PI * xi1;
     let rad = sqrt(r2);
     let z = sqrt(max(0.0, 1.0 - r2));
@@ -1000,14 +1030,14 @@ fn integrate(cube: u32, j: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
     for (var i = 0u; i < P.m; i++) {
-        let s = sample_as(i, sample_u(pixel, i, j, 0u), sample_u(pixel, i, j, 1u), n, t, b, v, nv);
+        let s = sample_as(sample_u(pixel, i, j, 0u), sample_u(pixel, i, j, 1u), n, t, b, v, nv);
         if (s.weight > 0.0) {
             let l = sample_radiance(cube, wn, x, s);
             if (l.w == 0.0) { ok = 0.0; }
             acc += l.rgb * s.weight;
         }
         if (DIFFUSE) {
-            let d = sample_diffuse(i, sample_u(pixel, i, j, 2u), sample_u(pixel, i, j, 3u), n, t, b, nv);
+            let d = sample_diffuse(sample_u(pixel, i, j, 2u), sample_u(pixel, i, j, 3u), n, t, b, nv);
             if (d.weight > 0.0) {
                 let l = sample_radiance(cube, wn, x, d);
                 if (l.w == 0.0) { ok = 0.0; }
