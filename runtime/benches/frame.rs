@@ -19,7 +19,7 @@
 //! `OSLF_BENCH_ROUNDS` sets its rounds). Writes Markdown tables to stdout and CSV to
 //! `target/frame-times.csv`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use oslf_bake::bake::{bake, BakeOptions};
@@ -48,6 +48,26 @@ fn store_path() -> PathBuf {
         bake(&scene, &options).unwrap();
     }
     out
+}
+
+/// A renderer of the store at `path` with the default cache (every cube fits).
+fn renderer(path: &Path) -> Renderer {
+    Renderer::new(
+        Gpu::headless().unwrap(),
+        Store::open(path).unwrap(),
+        CacheConfig::default(),
+    )
+    .unwrap()
+}
+
+/// Options for a frame of `w` × `h` that is not read back.
+fn frame_options(w: u32, h: u32) -> RenderOptions {
+    RenderOptions {
+        width: w,
+        height: h,
+        read_pixels: false,
+        ..Default::default()
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -253,23 +273,13 @@ fn main() {
     println!("| mirror blend | size | OSLF warm (ms) | environment map warm (ms) | ratio |");
     println!("| --- | --- | ---: | ---: | ---: |");
     for (w, h) in [(655u32, 460u32), (1280, 720)] {
-        let opts = RenderOptions {
-            width: w,
-            height: h,
-            read_pixels: false,
-            ..Default::default()
-        };
+        let opts = frame_options(w, h);
         let env = ShadingParams {
             mode: Mode::Mirror,
             source: Source::EnvMap,
             ..base
         };
-        let mut r_env = Renderer::new(
-            Gpu::headless().unwrap(),
-            Store::open(&path).unwrap(),
-            CacheConfig::default(),
-        )
-        .unwrap();
+        let mut r_env = renderer(&path);
         let camera = r_env.default_view();
         r_env.render(&camera, &env, &opts).unwrap();
         for blend in Blend::ALL {
@@ -281,12 +291,7 @@ fn main() {
                 blend,
                 ..base
             };
-            let mut r = Renderer::new(
-                Gpu::headless().unwrap(),
-                Store::open(&path).unwrap(),
-                CacheConfig::default(),
-            )
-            .unwrap();
+            let mut r = renderer(&path);
             r.render(&camera, &oslf, &opts).unwrap();
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..21 {
@@ -318,18 +323,8 @@ fn main() {
         println!("| lobe n_u:n_v | size | thesis M=256 (ms) | FIS M=16 (ms) | ratio | FIS + depth M=16 (ms) | ratio |");
         println!("| --- | --- | ---: | ---: | ---: | ---: | ---: |");
         let (w, h) = (655u32, 460u32);
-        let opts = RenderOptions {
-            width: w,
-            height: h,
-            read_pixels: false,
-            ..Default::default()
-        };
-        let mut r = Renderer::new(
-            Gpu::headless().unwrap(),
-            Store::open(&path).unwrap(),
-            CacheConfig::default(),
-        )
-        .unwrap();
+        let opts = frame_options(w, h);
+        let mut r = renderer(&path);
         let camera = r.default_view();
         for (nu, nv) in [
             (10.0, 10.0),

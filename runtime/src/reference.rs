@@ -313,18 +313,17 @@ impl<C: CubeTexels> Shader<'_, C> {
         Some(a? + (b? - a?) * f)
     }
 
-    /// Number `k` of sample `i` of integration `j` (as `sample_u`): ξ1 (k even, stratified)
-    /// or ξ2 (k odd), random, or when filtering the fixed set [`filter_xi`].
-    fn sample_u(&self, pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+    /// (ξ1, ξ2) of sample `i` of integration `j`, numbers `k` and `k + 1` (as `sample_xi`):
+    /// random with ξ1 stratified, or when filtering the fixed set [`filter_xi`].
+    fn sample_xi(&self, pixel: u32, i: u32, j: u32, k: u32) -> [f32; 2] {
         let m = self.uniform.m;
         if self.uniform.mip_levels > 1 {
-            return filter_xi(i, m)[(k & 1) as usize];
+            return filter_xi(i, m);
         }
-        let r = rand(pixel, i, j, k);
-        if k & 1 == 0 {
-            return (i as f32 + r) / m as f32;
-        }
-        r
+        [
+            (i as f32 + rand(pixel, i, j, k)) / m as f32,
+            rand(pixel, i, j, k + 1),
+        ]
     }
 
     /// The mip level of a sample towards `dir` with log2(M p) = `lpdf` (as `sample_lod`).
@@ -957,28 +956,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         let wn = self.blend_weights(c, n);
         for i in 0..u.m {
             for k in 0..2 {
+                if k == 1 && u.rd <= 0.0 {
+                    continue;
+                }
+                let [x1, x2] = self.sample_xi(pixel, i, j, 2 * k);
                 let s = if k == 0 {
-                    self.sample_as(
-                        self.sample_u(pixel, i, j, 0),
-                        self.sample_u(pixel, i, j, 1),
-                        n,
-                        t,
-                        b,
-                        v,
-                        nv,
-                    )
+                    self.sample_as(x1, x2, n, t, b, v, nv)
                 } else {
-                    if u.rd <= 0.0 {
-                        continue;
-                    }
-                    self.sample_diffuse(
-                        self.sample_u(pixel, i, j, 2),
-                        self.sample_u(pixel, i, j, 3),
-                        n,
-                        t,
-                        b,
-                        nv,
-                    )
+                    self.sample_diffuse(x1, x2, n, t, b, nv)
                 };
                 if s.weight <= 0.0 {
                     continue;

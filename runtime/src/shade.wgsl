@@ -126,20 +126,16 @@ fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
     return f32(h >> 8u) * (1.0 / 16777216.0);
 }
 
-// Number k of Monte Carlo sample i of integration j at this pixel; k = 0, 2 are ξ1 of the
-// specular and diffuse samples (stratified: in [i/M, (i+1)/M)), k = 1, 3 their ξ2. Per-pixel
-// random numbers for point sampling; with FILTER a fixed set, the same at every pixel, as
-// Křivánek & Colbert (2008) pair it with filtered lookups: the estimate is then smooth instead
-// of noisy (`filter_xi`).
-fn sample_u(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+// (ξ1, ξ2) of Monte Carlo sample i of integration j at this pixel, numbers k and k + 1 of it
+// (k = 0: the specular sample, k = 2: the diffuse one); ξ1 is stratified, in [i/M, (i+1)/M).
+// Per-pixel random numbers for point sampling; with FILTER a fixed set, the same at every
+// pixel, as Křivánek & Colbert (2008) pair it with filtered lookups: the estimate is then
+// smooth instead of noisy (`filter_xi`).
+fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
     if (FILTER) {
-        return filter_xi(i)[k & 1u];
+        return filter_xi(i);
     }
-    let r = rand(pixel, i, j, k);
-    if ((k & 1u) == 0u) {
-        return (f32(i) + r) / f32(P.m);
-    }
-    return r;
+    return vec2<f32>((f32(i) + rand(pixel, i, j, k)) / f32(P.m), rand(pixel, i, j, k + 1u));
 }
 
 // (ξ1, ξ2) of filtered sample i of M. For M = n² the centres of an n × n grid of strata mapped
@@ -1030,14 +1026,16 @@ fn integrate(cube: u32, j: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
     for (var i = 0u; i < P.m; i++) {
-        let s = sample_as(sample_u(pixel, i, j, 0u), sample_u(pixel, i, j, 1u), n, t, b, v, nv);
+        let xi = sample_xi(pixel, i, j, 0u);
+        let s = sample_as(xi.x, xi.y, n, t, b, v, nv);
         if (s.weight > 0.0) {
             let l = sample_radiance(cube, wn, x, s);
             if (l.w == 0.0) { ok = 0.0; }
             acc += l.rgb * s.weight;
         }
         if (DIFFUSE) {
-            let d = sample_diffuse(sample_u(pixel, i, j, 2u), sample_u(pixel, i, j, 3u), n, t, b, nv);
+            let xd = sample_xi(pixel, i, j, 2u);
+            let d = sample_diffuse(xd.x, xd.y, n, t, b, nv);
             if (d.weight > 0.0) {
                 let l = sample_radiance(cube, wn, x, d);
                 if (l.w == 0.0) { ok = 0.0; }
