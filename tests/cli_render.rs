@@ -55,6 +55,16 @@ fn renders_exr_and_png_and_prints_cache_statistics() {
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(stats["frame"]["requests"].as_u64().unwrap() > 0);
+    // The shading pass's GPU time where the adapter has timestamp queries (lavapipe and
+    // desktop GPUs do), null where not; printed when known.
+    let gpu = &stats["shade_gpu_seconds"];
+    match gpu.as_f64() {
+        Some(s) => assert!(
+            s > 0.0 && s.is_finite() && stdout.contains("on the GPU"),
+            "{s}"
+        ),
+        None => assert!(gpu.is_null() && !stdout.contains("on the GPU"), "{gpu}"),
+    }
 }
 
 /// Renders the test store at 64×48 into `name`.exr with `extra` flags.

@@ -15,7 +15,9 @@
 //! blend, OSLF and environment-map frames interleaved (21 each, medians) give the ratio of the
 //! two in the same machine state; for four Ashikhmin–Shirley lobes, filtered importance sampling
 //! at M = 16 (with and without depth correction) against the thesis's point sampling at M = 256,
-//! likewise interleaved (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
+//! likewise interleaved, frame times and (where the device has timestamp queries) the shading
+//! pass's GPU time, which leaves out what every frame pays alike (G-buffer, feedback read-back,
+//! cache) (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
 //! `OSLF_BENCH_ROUNDS` sets its rounds). Writes Markdown tables to stdout and CSV to
 //! `target/frame-times.csv`.
 
@@ -320,8 +322,10 @@ fn main() {
         .unwrap_or(9);
     if filter.is_empty() || "glossy ratio".contains(filter.as_str()) {
         println!();
-        println!("| lobe n_u:n_v | size | thesis M=256 (ms) | FIS M=16 (ms) | ratio | FIS + depth M=16 (ms) | ratio |");
-        println!("| --- | --- | ---: | ---: | ---: | ---: | ---: |");
+        println!("| lobe n_u:n_v | size | thesis M=256 (ms) | FIS M=16 (ms) | ratio | FIS + depth M=16 (ms) | ratio | thesis shading GPU (ms) | FIS shading GPU (ms) | ratio | FIS + depth shading GPU (ms) | ratio |");
+        println!(
+            "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        );
         let (w, h) = (655u32, 460u32);
         let opts = frame_options(w, h);
         let mut r = renderer(&path);
@@ -353,24 +357,40 @@ fn main() {
                 fis,
             ];
             let mut times = vec![Vec::new(); configs.len()];
+            let mut gpu_times = vec![Vec::new(); configs.len()];
             for c in &configs {
                 r.render(&camera, c, &opts).unwrap();
             }
             for _ in 0..rounds {
-                for (c, t) in configs.iter().zip(&mut times) {
+                for ((c, t), g) in configs.iter().zip(&mut times).zip(&mut gpu_times) {
                     let start = Instant::now();
-                    r.render(&camera, c, &opts).unwrap();
+                    let frame = r.render(&camera, c, &opts).unwrap();
                     t.push(start.elapsed().as_secs_f64() * 1e3);
+                    g.extend(frame.shade_gpu_seconds.map(|s| s * 1e3));
                 }
             }
             let m: Vec<f64> = times.into_iter().map(median).collect();
+            // Shading-pass GPU times, where the device has timestamp queries.
+            let g: Vec<String> = if gpu_times.iter().all(|g| g.len() == rounds) {
+                let g: Vec<f64> = gpu_times.into_iter().map(median).collect();
+                vec![
+                    format!("{:.2}", g[0]),
+                    format!("{:.2}", g[1]),
+                    format!("{:.3}", g[1] / g[0]),
+                    format!("{:.2}", g[2]),
+                    format!("{:.3}", g[2] / g[0]),
+                ]
+            } else {
+                vec!["–".to_string(); 5]
+            };
             println!(
-                "| {nu}:{nv} | {w}×{h} | {:.1} | {:.1} | {:.3} | {:.1} | {:.3} |",
+                "| {nu}:{nv} | {w}×{h} | {:.1} | {:.1} | {:.3} | {:.1} | {:.3} | {} |",
                 m[0],
                 m[1],
                 m[1] / m[0],
                 m[2],
-                m[2] / m[0]
+                m[2] / m[0],
+                g.join(" | ")
             );
             csv.push_str(&format!(
                 "glossy ratio {nu}:{nv},{w},{h},,{:.2},,,,\nglossy ratio {nu}:{nv} FIS M=16,{w},{h},,{:.2},,,,\nglossy ratio {nu}:{nv} FIS+depth M=16,{w},{h},,{:.2},,,,\n",

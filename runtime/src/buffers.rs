@@ -31,8 +31,12 @@ pub(crate) struct StoreBuffers {
     pub slots: wgpu::Buffer,
     /// One mask of needed faces per cube, written by the shader (shade.wgsl's `feedback`).
     pub feedback: wgpu::Buffer,
-    /// Where `feedback` is copied to be read on the CPU.
+    /// Where `feedback` is copied to be read on the CPU, followed at `timestamps_offset` by
+    /// the shading pass's two GPU timestamps where the device has timestamp queries (the
+    /// renderer's `ShadeTimer`): one map per pass reads both.
     pub feedback_readback: wgpu::Buffer,
+    /// Byte offset of the timestamps in `feedback_readback`.
+    pub timestamps_offset: u64,
 }
 
 impl StoreBuffers {
@@ -84,7 +88,7 @@ impl StoreBuffers {
         });
         let feedback_readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("feedback readback"),
-            size: table_len,
+            size: table_len + TIMESTAMP_BYTES,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -114,9 +118,13 @@ impl StoreBuffers {
             slots,
             feedback,
             feedback_readback,
+            timestamps_offset: table_len,
         }
     }
 }
+
+/// Bytes of the shading pass's two GPU timestamps (u64 ticks, start and end).
+pub const TIMESTAMP_BYTES: u64 = 16;
 
 /// Uploads `store`'s sample maps as stored (zero-copy): one integer array layer per sample map
 /// (Bézier patch or atlas page),

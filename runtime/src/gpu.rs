@@ -37,7 +37,9 @@ impl Gpu {
     /// prints stray errors). `WGPU_BACKEND` overrides the choice.
     ///
     /// The device gets `TEXTURE_COMPRESSION_BC` when the adapter offers it (lavapipe and
-    /// desktop GPUs do), so BC6H stores are uploaded as they are ([`Gpu::has_bc`]).
+    /// desktop GPUs do), so BC6H stores are uploaded as they are ([`Gpu::has_bc`]), and
+    /// `TIMESTAMP_QUERY` when offered, so frames report their shading pass's GPU time
+    /// ([`crate::Frame::shade_gpu_seconds`]).
     ///
     /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
     pub fn headless() -> Result<Self> {
@@ -104,11 +106,10 @@ impl Gpu {
             });
         }
         let limits = adapter.limits();
-        let features = if bc {
-            adapter.features() & wgpu::Features::TEXTURE_COMPRESSION_BC
-        } else {
-            wgpu::Features::empty()
-        };
+        let mut features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        if bc {
+            features |= adapter.features() & wgpu::Features::TEXTURE_COMPRESSION_BC;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("oslf"),
             required_features: features,
@@ -162,6 +163,14 @@ impl Gpu {
     pub fn without_bc(mut self) -> Self {
         self.bc = false;
         self
+    }
+
+    /// Whether the device has `TIMESTAMP_QUERY` enabled: renderers on it then time their
+    /// shading passes on the GPU ([`crate::Frame::shade_gpu_seconds`]).
+    pub fn has_timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// The limits of the device.

@@ -18,14 +18,14 @@ use crate::params::ShadeUniform;
 
 /// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
 const DEPTH_REFINE: u32 = 6;
+/// Steps of a glossy sample's depth correction (DEPTH_ITERATIONS in shade.wgsl).
+const DEPTH_ITERATIONS: u32 = 2;
 /// Depth-thicknesses within which a texel of a depth-corrected lookup agrees with the hit, at
 /// most half its distance (LOOKUP_AGREE in shade.wgsl).
 const LOOKUP_AGREE: f32 = 1.0;
 /// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
 /// shade.wgsl).
 const HIT_AGREE: f32 = 0.25;
-/// Most filtered lookups of one sample of an anisotropic lobe (ANISO_TAPS in shade.wgsl).
-const ANISO_TAPS: u32 = 4;
 
 /// Where the reference reads cube-map texels.
 pub trait CubeTexels: Sync {
@@ -239,9 +239,6 @@ struct AsSample {
     weight: f32,
     /// log2(M p(l)).
     lpdf: f32,
-    /// Filtered lookups along `axis` for an anisotropic lobe (as in shade.wgsl); ≤ 1: one.
-    axis: Vec3,
-    taps: u32,
 }
 
 fn fresnel(rs: f32, c: f32) -> f32 {
@@ -274,7 +271,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
     }
 
-    /// `lookup` on mip `level`, without the feedback mark (as `read_tap_level`): bilinear
+    /// `lookup` on mip `level`, without the feedback mark (as `read_tap`): bilinear
     /// within the face.
     fn read_tap(&self, cube: u32, face: usize, s: f32, t: f32, level: u32) -> Option<Vec3> {
         let Tap {
@@ -431,6 +428,24 @@ impl<C: CubeTexels> Shader<'_, C> {
             }
         }
         (b.0, 1.0)
+    }
+
+    /// The depth-corrected lookup direction of sample point `cube` for a glossy sample from
+    /// `x` along `l`: DEPTH_ITERATIONS fixed-point steps on the spheres of the stored
+    /// distances, `l` where a step finds nothing or `x` lies outside (as `depth_iterate`).
+    fn depth_iterate(&self, cube: u32, x: Vec3, l: Vec3) -> Vec3 {
+        let o = x - self.samples[cube as usize];
+        let (ol, oo) = (o.dot(l), o.dot(o));
+        let mut missing = false;
+        let mut q = l;
+        for _ in 0..DEPTH_ITERATIONS {
+            let dist = self.depth_toward(cube, q, true, &mut missing);
+            if !(dist < FAR_DISTANCE) || !(dist * dist > oo) {
+                return l;
+            }
+            q = o + l * ((ol * ol - (oo - dist * dist)).sqrt() - ol);
+        }
+        q
     }
 
     /// Radiance of `cube` for the `depth_search` result `h` at level `lod`: on level 0 the
@@ -839,25 +854,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
-        // An anisotropic lobe's cell: ⌈ρ⌉ taps along 2 √(Ω_s ρ) (as `sample_as`).
-        let (mut axis, mut taps) = (Vec3::ZERO, 1);
-        let rho = ((u.nu.max(u.nv) + 1.0) / (u.nu.min(u.nv) + 1.0)).sqrt();
-        if u.mip_levels > 1 && rho > 1.5 {
-            let major = if u.nu < u.nv { t } else { b };
-            let across = major - l * major.dot(l);
-            let len = across.length();
-            if len > 1e-6 {
-                taps = (rho.ceil() as u32).min(ANISO_TAPS);
-                axis = across * (2.0 * ((-lpdf).exp2() * rho).sqrt() / len);
-            }
-        }
-        AsSample {
-            l,
-            weight,
-            lpdf,
-            axis,
-            taps,
-        }
+        AsSample { l, weight, lpdf }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -876,13 +873,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
-        AsSample {
-            l,
-            weight,
-            lpdf,
-            axis: Vec3::ZERO,
-            taps: 1,
-        }
+        AsSample { l, weight, lpdf }
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
@@ -911,29 +902,11 @@ impl<C: CubeTexels> Shader<'_, C> {
         let d = if cube == u.env_cube {
             self.env_dir(x, s.l)
         } else if u.depth_steps > 0 {
-            let h = self.depth_search(cube, x, s.l);
-            if s.taps <= 1 {
-                return self.depth_lookup(cube, h, lod);
-            }
-            return self.depth_taps(cube, h.0, s);
+            self.depth_iterate(cube, x, s.l)
         } else {
             s.l
         };
         self.lookup_lod(cube, d, lod)
-    }
-
-    /// The taps of a depth-corrected sample of an anisotropic lobe around the corrected
-    /// direction `d` (as `depth_taps`).
-    fn depth_taps(&self, cube: u32, d: Vec3, s: &AsSample) -> Option<Vec3> {
-        let dn = d.normalize();
-        let axis = s.axis - dn * s.axis.dot(dn);
-        let tap_lod = self.sample_lod(s.l, s.lpdf + (s.taps as f32).log2());
-        let mut acc = Vec3::ZERO;
-        for k in 0..s.taps {
-            let o = (k as f32 + 0.5) / s.taps as f32 - 0.5;
-            acc += self.lookup_lod(cube, dn + axis * o, tap_lod)?;
-        }
-        Some(acc / s.taps as f32)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1462,6 +1435,83 @@ mod tests {
         assert!((hidden - plain).length() < 1e-6, "{hidden}");
     }
 
+    /// A sample point's view of a ceiling at z = 10 (nothing below the horizon), or of a
+    /// sphere of radius 3 around it (`sphere`).
+    struct Ceiling {
+        res: u32,
+        p: Vec3,
+        sphere: bool,
+    }
+
+    impl CubeTexels for Ceiling {
+        fn depth(&self, _: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+            if self.sphere {
+                return Some(3.0);
+            }
+            let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
+            Some(if d.z > 0.0 {
+                (10.0 - self.p.z) / d.z * d.length()
+            } else {
+                FAR_DISTANCE
+            })
+        }
+        fn texel(&self, _: u32, _: usize, _: u32, _: u32, _: u32) -> Option<Vec3> {
+            Some(Vec3::ONE)
+        }
+        fn resident(&self, _: u32) -> bool {
+            true
+        }
+    }
+
+    /// A glossy sample's depth correction (`depth_iterate`) turns the direction from the
+    /// shaded point into the one from the sample point to where the ray meets what the sample
+    /// point sees: exactly on a sphere of equal distances, within a few texels' angle on a
+    /// ceiling where the plain direction is off by ten times more; the plain direction for a
+    /// ray that meets nothing, and for a shaded point outside the sphere.
+    #[test]
+    fn glossy_depth_correction_finds_where_the_ray_meets_the_stored_distances() {
+        let res = 64;
+        let p = Vec3::new(0.0, 0.0, 0.1);
+        let x = Vec3::new(0.8, 0.3, 0.0);
+        let l = Vec3::new(-0.6, 0.2, 1.0).normalize();
+        let angle = |a: Vec3, b: Vec3| a.normalize().dot(b.normalize()).clamp(-1.0, 1.0).acos();
+        let sphere = Ceiling {
+            res,
+            p,
+            sphere: true,
+        };
+        let shader = bare_shader(depth_uniform(res), std::slice::from_ref(&p), &sphere);
+        let q = shader.depth_iterate(0, x, l);
+        let along = q - (x - p);
+        assert!((q.length() - 3.0).abs() < 1e-5, "{q}");
+        assert!(angle(along, l) < 1e-3 && along.dot(l) > 0.0, "{q}");
+        let far = Vec3::new(3.0, 0.0, 0.0);
+        assert_eq!(shader.depth_iterate(0, far, l), l);
+
+        let ceiling = Ceiling {
+            res,
+            p,
+            sphere: false,
+        };
+        let shader = bare_shader(depth_uniform(res), std::slice::from_ref(&p), &ceiling);
+        let hit = x + l * (10.0 / l.z) - p;
+        let q = shader.depth_iterate(0, x, l);
+        let texel = std::f32::consts::FRAC_PI_2 / res as f32;
+        assert!(
+            angle(q, hit) < 3.0 * texel,
+            "{} texels",
+            angle(q, hit) / texel
+        );
+        assert!(
+            angle(l, hit) > 10.0 * angle(q, hit),
+            "{} {}",
+            angle(l, hit),
+            angle(q, hit)
+        );
+        let down = Vec3::new(0.3, 0.0, -1.0).normalize();
+        assert_eq!(shader.depth_iterate(0, x, down), down);
+    }
+
     /// Two sample points over a ceiling 10 away (blue), with a small plate halfway (red) that
     /// only the first one's cube holds (too thin for the second's texels, say).
     struct TwoViews {
@@ -1538,65 +1588,6 @@ mod tests {
             .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, past, 0.0)
             .unwrap();
         assert!((both - Vec3::Z).length() < 1e-5, "{both}");
-    }
-
-    /// A filtered sample of an anisotropic lobe is read in ⌈ρ⌉ taps (at most ANISO_TAPS) along
-    /// the long axis of its cell, across the sample direction, 2 √(Ω_s ρ) long; an isotropic
-    /// lobe, and point sampling, in one.
-    #[test]
-    fn anisotropic_lobes_spread_their_samples_taps_along_the_wide_axis() {
-        use crate::params::{Background, GlossyFilter, ShadeUniform, ShadingParams};
-        let mut k = store_constants(INVALID_INDEX, 64);
-        k.mip_levels = 7;
-        let camera = oslf_geometry::Camera {
-            position: Vec3::new(0.0, -5.0, 1.0),
-            target: Vec3::ZERO,
-            up: Vec3::Z,
-            vfov_deg: 40.0,
-        };
-        let (n, t, b) = (Vec3::Z, Vec3::X, Vec3::Y);
-        let v = Vec3::new(0.0, -0.6, 0.8);
-        for (nu, nv, taps, major) in [
-            (10.0, 1000.0, 4, t),
-            (1000.0, 100.0, 4, b),
-            (10.0, 30.0, 2, t),
-            (100.0, 100.0, 1, t),
-        ] {
-            for filter in [GlossyFilter::Mip, GlossyFilter::Point] {
-                let p = ShadingParams {
-                    nu,
-                    nv,
-                    glossy_filter: filter,
-                    ..ShadingParams::default()
-                };
-                let uniform = ShadeUniform::new(
-                    &p,
-                    glam::Mat4::IDENTITY,
-                    &camera,
-                    [4, 4],
-                    &k,
-                    Background::Env,
-                );
-                let shader = bare_shader(uniform, &[], &SmoothCube(64));
-                for i in 0..16 {
-                    let s = shader.sample_as((i as f32 + 0.5) / 16.0, 0.3, n, t, b, v, n.dot(v));
-                    if filter == GlossyFilter::Point {
-                        assert_eq!(s.taps, 1);
-                        continue;
-                    }
-                    assert_eq!(s.taps, taps, "{nu}:{nv}");
-                    if taps == 1 {
-                        continue;
-                    }
-                    let rho = ((nu.max(nv) + 1.0) / (nu.min(nv) + 1.0)).sqrt();
-                    let len = 2.0 * ((-s.lpdf).exp2() * rho).sqrt();
-                    assert!((s.axis.length() - len).abs() < 1e-4 * len, "{}", s.axis);
-                    assert!(s.axis.dot(s.l).abs() < 1e-4 * len);
-                    let dir = (major - s.l * major.dot(s.l)).normalize();
-                    assert!(s.axis.normalize().dot(dir) > 0.9999, "{nu}:{nv} {}", s.axis);
-                }
-            }
-        }
     }
 
     /// Filtered samples for M = n² are the grid's stratum centres through the concentric map:

@@ -10,7 +10,7 @@ use glam::{Mat4, Vec3};
 use oslf_format::Store;
 use oslf_geometry::Camera;
 
-use crate::buffers::{upload_sample_maps, StoreBuffers};
+use crate::buffers::{upload_sample_maps, StoreBuffers, TIMESTAMP_BYTES};
 use crate::cache::{CacheConfig, CacheStats, CubeCache};
 use crate::error::{Result, RuntimeError};
 use crate::face::FaceLayout;
@@ -82,6 +82,51 @@ pub struct Frame {
     /// ([`crate::CubeCache::errors`]), or, when streaming, loads that arrive next frame. 0 means
     /// the image is exactly what the store holds.
     pub fallbacks: u64,
+    /// GPU time of the frame's shading passes (timestamps at the start and end of each
+    /// compute pass, summed), without the G-buffer pass, the feedback read-back and the cache:
+    /// the part of a frame that the shading parameters (M, filtering, depth correction) set.
+    /// `None` where the device has no `TIMESTAMP_QUERY` ([`Gpu::has_timestamps`]).
+    pub shade_gpu_seconds: Option<f64>,
+}
+
+/// Timestamps written at the start and end of the shading pass, resolved into `resolve` and
+/// copied behind the feedback masks (`StoreBuffers::feedback_readback`).
+struct ShadeTimer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    /// Nanoseconds per tick (`Queue::get_timestamp_period`).
+    period_ns: f64,
+}
+
+impl ShadeTimer {
+    fn new(gpu: &Gpu) -> Option<Self> {
+        if !gpu.has_timestamps() {
+            return None;
+        }
+        Some(Self {
+            queries: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("shade timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shade timestamps"),
+                size: TIMESTAMP_BYTES,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            period_ns: f64::from(gpu.queue.get_timestamp_period()),
+        })
+    }
+
+    /// Seconds between the two timestamps in `bytes` (start, end; u64 ticks); `None` for an
+    /// end before the start (a device whose counter wrapped or was reset between them).
+    fn seconds(&self, bytes: &[u8]) -> Option<f64> {
+        let start = u64::from_le_bytes(bytes.get(0..8)?.try_into().ok()?);
+        let end = u64::from_le_bytes(bytes.get(8..16)?.try_into().ok()?);
+        let ticks = end.checked_sub(start)?;
+        Some(ticks as f64 * self.period_ns * 1e-9)
+    }
 }
 
 /// The textures of one image size and the shading bind group that binds them.
@@ -198,6 +243,7 @@ pub struct Renderer {
     background: Background,
     targets: Option<SizedTargets>,
     cube_count: u32,
+    timer: Option<ShadeTimer>,
 }
 
 /// Bytes of one row of `width` texels of `bytes_per_texel`, padded for buffer copies.
@@ -293,7 +339,9 @@ impl Renderer {
             background: Background::None,
             targets: None,
             cube_count,
+            timer: None,
         };
+        renderer.timer = ShadeTimer::new(&renderer.gpu);
         renderer.load_env_cube();
         renderer.write_slots();
         renderer.gpu.take_errors()?;
@@ -465,12 +513,14 @@ impl Renderer {
             .queue
             .write_buffer(&self.buffers.uniform, 0, bytemuck::bytes_of(&u));
         let mut stats: Option<CacheStats> = None;
+        let mut shade_gpu_seconds = self.timer.as_ref().map(|_| 0.0);
         let mut passes = 0;
         let mut fallbacks;
         let max_passes = opts.max_passes.max(1);
         loop {
             passes += 1;
-            let (needed, readback) = self.shade_pass(passes == 1)?;
+            let (needed, readback, gpu_seconds) = self.shade_pass(passes == 1)?;
+            shade_gpu_seconds = shade_gpu_seconds.zip(gpu_seconds).map(|(a, b)| a + b);
             let start = Instant::now();
             let (uploads, mut frame_stats) =
                 self.cache.plan(&needed, &self.store, opts.resolve_misses);
@@ -504,12 +554,14 @@ impl Renderer {
             stats,
             passes,
             fallbacks,
+            shade_gpu_seconds,
         })
     }
 
     /// Runs the G-buffer pass (if `geometry`) and the shading pass, and returns the feedback
-    /// masks and the seconds spent copying them out of the mapped buffer.
-    fn shade_pass(&mut self, geometry: bool) -> Result<(Vec<u32>, f64)> {
+    /// masks, the seconds spent copying them out of the mapped buffer and the shading pass's
+    /// GPU seconds (with timestamps).
+    fn shade_pass(&mut self, geometry: bool) -> Result<(Vec<u32>, f64, Option<f64>)> {
         let targets = self
             .targets
             .as_ref()
@@ -526,15 +578,30 @@ impl Renderer {
             0,
             &self.buffers.feedback_readback,
             0,
-            None,
+            Some(self.buffers.timestamps_offset),
         );
+        let stamps = self.buffers.timestamps_offset;
+        if let Some(timer) = &self.timer {
+            encoder.resolve_query_set(&timer.queries, 0..2, &timer.resolve, 0);
+            encoder.copy_buffer_to_buffer(
+                &timer.resolve,
+                0,
+                &self.buffers.feedback_readback,
+                stamps,
+                Some(TIMESTAMP_BYTES),
+            );
+        }
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.wait()?;
         let start = Instant::now();
         let bytes = map_read(&self.gpu, &self.buffers.feedback_readback)?;
-        let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+        let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..stamps as usize]);
         masks.truncate(self.cube_count as usize);
-        Ok((masks, start.elapsed().as_secs_f64()))
+        let gpu_seconds = self
+            .timer
+            .as_ref()
+            .and_then(|t| t.seconds(&bytes[stamps as usize..]));
+        Ok((masks, start.elapsed().as_secs_f64(), gpu_seconds))
     }
 
     /// Encodes the G-buffer pass: clears the targets and rasterizes the mesh into them.
@@ -588,7 +655,14 @@ impl Renderer {
     ) -> Result<()> {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("shade"),
-            timestamp_writes: None,
+            timestamp_writes: self
+                .timer
+                .as_ref()
+                .map(|t| wgpu::ComputePassTimestampWrites {
+                    query_set: &t.queries,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
         });
         let pipeline = self
             .shade

@@ -102,6 +102,8 @@ const PI: f32 = 3.14159265358979;
 const FAR: f32 = 65504.0;
 // Bisection steps that refine a depth-corrected hit (params.rs documents the search).
 const DEPTH_REFINE: u32 = 6u;
+// Steps of a glossy sample's depth correction (`depth_iterate`; reference.rs DEPTH_ITERATIONS).
+const DEPTH_ITERATIONS: u32 = 2u;
 // A texel of a depth-corrected lookup takes part in its bilinear tap when its distance lies
 // within this many depth_thickness of the hit's, at most half of it (`depth_lookup`;
 // reference.rs LOOKUP_AGREE).
@@ -109,9 +111,6 @@ const LOOKUP_AGREE: f32 = 1.0;
 // A candidate sees the blend's common hit when its distance toward it lies within this many
 // depth_thickness (one texel angle) of the hit's (`blend_read`; reference.rs HIT_AGREE).
 const HIT_AGREE: f32 = 0.25;
-// Most filtered lookups of one sample of an anisotropic lobe (`sample_as`; reference.rs
-// ANISO_TAPS).
-const ANISO_TAPS: u32 = 4u;
 
 // ---- random numbers: PCG hash (Jarzynski & Olano 2020), identical in reference.rs ----
 
@@ -166,6 +165,45 @@ fn filter_xi(i: u32) -> vec2<f32> {
     }
     let x1 = phi * (0.5 / PI);
     return vec2<f32>(x1 - floor(x1), r * r);
+}
+
+// ---- feedback marks ----
+
+// The faces this invocation has read, gathered per cube (`mark_face`) and written to the
+// feedback buffer once at its end (`flush_marks`) instead of one atomic per read: the four
+// candidates' cubes (`mark_cube`, set after `candidates`) and the environment cube; any other
+// cube is marked at once. The buffer ends the frame with the same bits either way. (Atomics
+// on the few cubes every pixel reads dominated glossy frames on an NVIDIA H200:
+// docs/measurements.md.)
+var<private> mark_cube: vec4<u32>;
+var<private> mark_bits: vec4<u32>;
+var<private> mark_env: u32;
+
+fn mark_face(cube: u32, bits: u32) {
+    if (cube == mark_cube.x) {
+        mark_bits.x |= bits;
+    } else if (cube == mark_cube.y) {
+        mark_bits.y |= bits;
+    } else if (cube == mark_cube.z) {
+        mark_bits.z |= bits;
+    } else if (cube == mark_cube.w) {
+        mark_bits.w |= bits;
+    } else if (cube == P.env_cube) {
+        mark_env |= bits;
+    } else {
+        atomicOr(&feedback[cube], bits);
+    }
+}
+
+fn flush_marks() {
+    for (var k = 0u; k < 4u; k++) {
+        if (mark_bits[k] != 0u) {
+            atomicOr(&feedback[mark_cube[k]], mark_bits[k]);
+        }
+    }
+    if (mark_env != 0u) {
+        atomicOr(&feedback[P.env_cube], mark_env);
+    }
 }
 
 // ---- cube maps ----
@@ -273,17 +311,12 @@ fn tap(dir: vec3<f32>) -> Tap {
 // feedback buffer. `w` is 1 when the face was resident, 0 when not (then the colour is 0 and
 // must not be used).
 fn fetch(cube: u32, t: Tap) -> vec4<f32> {
-    atomicOr(&feedback[cube], 1u << t.face);
+    mark_face(cube, 1u << t.face);
     return read_tap(cube, t);
 }
 
 // `fetch` without the feedback mark.
 fn read_tap(cube: u32, t: Tap) -> vec4<f32> {
-    return read_tap_level(cube, t, 0u);
-}
-
-// `read_tap` on mip `level` (`t` from `tap_level` at that level).
-fn read_tap_level(cube: u32, t: Tap, level: u32) -> vec4<f32> {
     let entry = slots[cube];
     if ((entry & (1u << t.face)) == 0u) {
         return vec4<f32>(0.0);
@@ -291,11 +324,10 @@ fn read_tap_level(cube: u32, t: Tap, level: u32) -> vec4<f32> {
     let at = place(entry, t.face);
     let tex = at.x;
     let layer = i32(at.y);
-    let x = at.z >> level;
-    let t00 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y0), level);
-    let t10 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y0), level);
-    let t01 = load_texel(tex, layer, vec2<u32>(x + t.x0, t.y1), level);
-    let t11 = load_texel(tex, layer, vec2<u32>(x + t.x1, t.y1), level);
+    let t00 = load_texel(tex, layer, vec2<u32>(at.z + t.x0, t.y0), 0u);
+    let t10 = load_texel(tex, layer, vec2<u32>(at.z + t.x1, t.y0), 0u);
+    let t01 = load_texel(tex, layer, vec2<u32>(at.z + t.x0, t.y1), 0u);
+    let t11 = load_texel(tex, layer, vec2<u32>(at.z + t.x1, t.y1), 0u);
     let top = t00 + (t10 - t00) * t.wx;
     let bottom = t01 + (t11 - t01) * t.wx;
     return vec4<f32>(top + (bottom - top) * t.wy, 1.0);
@@ -354,11 +386,11 @@ var<private> depth_missing: bool;
 fn depth_toward(cube: u32, d: vec3<f32>, walk: bool) -> f32 {
     let fst = face_st(d);
     let face = u32(fst.x);
-    atomicOr(&feedback[cube], 1u << face);
+    mark_face(cube, 1u << face);
     let entry = slots[cube];
     if ((entry & (1u << face)) == 0u) {
         if (walk) {
-            atomicOr(&feedback[cube], 63u);
+            mark_face(cube, 63u);
         }
         depth_missing = true;
         return FAR;
@@ -449,6 +481,30 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(b.xyz, 1.0);
 }
 
+// Where sample point `cube` sees the ray from x along l meet the scene, for a glossy sample:
+// the fixed-point iteration of distance impostors (Szirmay-Kalos et al. 2005). Each step reads
+// the distance D the sample point p stores towards its current guess and moves the guess to
+// where the ray leaves the sphere of radius D around p; DEPTH_ITERATIONS steps, each one texel
+// read, instead of `depth_search`'s walk: a filtered sample reads an area many texels wide, so
+// the search's texel-exact silhouettes do not show, and its cost would be paid M times per
+// candidate (docs/measurements.md). Returns the direction to look up from p (unnormalized): l
+// itself where a step finds nothing that way (FAR, or a face not resident) or x outside the
+// sphere (p sees something nearer than x that way).
+fn depth_iterate(cube: u32, x: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    let o = x - samples[cube].xyz;
+    let ol = dot(o, l);
+    let oo = dot(o, o);
+    var q = l;
+    for (var k = 0u; k < DEPTH_ITERATIONS; k++) {
+        let dist = depth_toward(cube, q, true);
+        if (!(dist < FAR) || !(dist * dist > oo)) {
+            return l;
+        }
+        q = o + l * (sqrt(ol * ol - (oo - dist * dist)) - ol);
+    }
+    return q;
+}
+
 // Radiance of sample point `cube` for `h`, a `depth_search` result (or a hit offset with w = 1),
 // at mip level `lod`. On level 0 the bilinear tap keeps only the texels whose distance agrees
 // with the hit's (within LOOKUP_AGREE depth_thickness of it; for a ray that meets nothing, the
@@ -461,7 +517,7 @@ fn depth_lookup(cube: u32, h: vec4<f32>, lod: f32) -> vec4<f32> {
         return lookup_lod(cube, h.xyz, lod);
     }
     let t = tap(h.xyz);
-    atomicOr(&feedback[cube], 1u << t.face);
+    mark_face(cube, 1u << t.face);
     let entry = slots[cube];
     if ((entry & (1u << t.face)) == 0u) {
         return vec4<f32>(0.0);
@@ -889,11 +945,6 @@ struct AsSample {
     // log2(M p(l)), p the solid-angle density l was drawn with: the sample's mip level
     // (`sample_lod`).
     lpdf: f32,
-    // An anisotropic lobe's sample covers a long cell: `taps` filtered lookups spread along
-    // `axis` (its length in radians, across l) instead of one, where the lookup is
-    // depth-corrected (`depth_taps`). taps ≤ 1: one lookup.
-    axis: vec3<f32>,
-    taps: u32,
 };
 
 fn fresnel(rs: f32, c: f32) -> f32 {
@@ -931,24 +982,6 @@ fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: ve
     if (vh > 0.0 && nl > 0.0) {
         out.weight = fresnel(P.rs, vh) * nl / max(nv, nl);
     }
-    // The lobe is ρ = √((n_max + 1)/(n_min + 1)) times longer along the axis of the smaller
-    // exponent. A filtered sample (area Ω_s = 1 / (M p)) then covers a cell about ρ times longer
-    // than wide, which one isotropic lookup either blurs across or leaves gaps along: ⌈ρ⌉ taps
-    // (at most ANISO_TAPS), each of area Ω_s / taps, along 2 √(Ω_s ρ) (the factor 2 measured
-    // best on the example scene: docs/measurements.md), as anisotropic texture filtering does.
-    out.taps = 1u;
-    out.axis = vec3<f32>(0.0);
-    let rho = sqrt((max(P.nu, P.nv) + 1.0) / (min(P.nu, P.nv) + 1.0));
-    if (FILTER && rho > 1.5) {
-        var major = b;
-        if (P.nu < P.nv) { major = t; }
-        let across = major - out.l * dot(major, out.l);
-        let len = length(across);
-        if (len > 1e-6) {
-            out.taps = min(u32(ceil(rho)), ANISO_TAPS);
-            out.axis = across * (2.0 * sqrt(exp2(-out.lpdf) * rho) / len);
-        }
-    }
     return out;
 }
 
@@ -970,12 +1003,10 @@ fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n
 // The radiance of sample `s` for the shaded point x: cube `cube` (depth-corrected for a
 // sample point with DEPTH, parallax-corrected for the environment cube with SOURCE 2), or (per
 // direction, cube = INVALID) the blend of the candidates with the environment cube where none
-// is resident; filtered at the sample's mip level with FILTER, per point and depth-corrected in
-// `s.taps` lookups along `s.axis` for an anisotropic lobe (`depth_taps`). `.w` = 0 when a
-// cube's face was not resident.
-fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample) -> vec4<f32> {
+// is resident; filtered at mip level `lod` (`sample_lod`) with FILTER. `.w` = 0 when a cube's
+// face was not resident.
+fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32) -> vec4<f32> {
     let l = s.l;
-    let lod = sample_lod(l, s.lpdf);
     if (ORDER == 1u && cube == INVALID) {
         var w = wn;
         if (BLEND != 4u) { w = blend_weights(l); }
@@ -987,75 +1018,90 @@ fn sample_radiance(cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample) -> vec4<
     if (cube == P.env_cube) {
         d = env_dir(x, l);
     } else if (DEPTH) {
-        let h = depth_search(cube, x, l);
-        if (s.taps <= 1u) {
-            return depth_lookup(cube, h, lod);
-        }
-        return depth_taps(cube, h.xyz, s);
+        d = depth_iterate(cube, x, l);
     }
     return lookup_lod(cube, d, lod);
 }
 
-// The taps of a depth-corrected sample `s` of an anisotropic lobe around the corrected
-// direction `d` (see AsSample). Only where the lookup is depth-corrected: the taps share the
-// one search, whereas without it each tap costs what a sample does, and M four times larger
-// filters better than four taps (docs/measurements.md).
-fn depth_taps(cube: u32, d: vec3<f32>, s: AsSample) -> vec4<f32> {
-    let dn = normalize(d);
-    let axis = s.axis - dn * dot(s.axis, dn);
-    let tap_lod = sample_lod(s.l, s.lpdf + log2(f32(s.taps)));
-    var acc = vec3<f32>(0.0);
-    var ok = 1.0;
-    for (var k = 0u; k < s.taps; k++) {
-        let r = lookup_lod(cube, dn + axis * ((f32(k) + 0.5) / f32(s.taps) - 0.5), tap_lod);
-        acc += r.rgb;
-        ok = min(ok, r.w);
-    }
-    if (ok == 0.0) {
-        return vec4<f32>(0.0);
-    }
-    return vec4<f32>(acc / f32(s.taps), 1.0);
-}
+// Per-cube sums of an integration (Eq. 5.12), by component: entry k belongs to `cubes[k]`.
+struct Sums {
+    r: vec4<f32>,
+    g: vec4<f32>,
+    b: vec4<f32>,
+    // 0 where a face that entry needed was not resident.
+    ok: vec4<f32>,
+};
 
-// Integrates over one source (Eq. 5.12): cube `cube` (per point), or the blend of the
-// candidates per direction (cube = INVALID). `.w` = 0 when a needed face was not resident.
-// The diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE).
-fn integrate(cube: u32, j: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> vec4<f32> {
-    var acc = vec3<f32>(0.0);
-    var ok = 1.0;
+// The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
+// once: entry k integrates over `cubes[k]` where `used[k]`, with the random numbers of
+// integration j0 + k; cube INVALID is the blend of the candidates per direction. With FILTER
+// every source takes the same fixed samples, so each is drawn once for all of them. The
+// diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
+// call site: lavapipe pays for every inlined copy whether it runs or not.
+fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> Sums {
+    var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
     for (var i = 0u; i < P.m; i++) {
-        let xi = sample_xi(pixel, i, j, 0u);
-        let s = sample_as(xi.x, xi.y, n, t, b, v, nv);
-        if (s.weight > 0.0) {
-            let l = sample_radiance(cube, wn, x, s);
-            if (l.w == 0.0) { ok = 0.0; }
-            acc += l.rgb * s.weight;
+        var spec: AsSample;
+        var diff: AsSample;
+        var spec_lod = 0.0;
+        var diff_lod = 0.0;
+        if (FILTER) {
+            let xi = filter_xi(i);
+            spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
+            spec_lod = sample_lod(spec.l, spec.lpdf);
+            if (DIFFUSE) {
+                diff = sample_diffuse(xi.x, xi.y, n, t, b, nv);
+                diff_lod = sample_lod(diff.l, diff.lpdf);
+            }
         }
-        if (DIFFUSE) {
-            let xd = sample_xi(pixel, i, j, 2u);
-            let d = sample_diffuse(xd.x, xd.y, n, t, b, nv);
-            if (d.weight > 0.0) {
-                let l = sample_radiance(cube, wn, x, d);
-                if (l.w == 0.0) { ok = 0.0; }
-                acc += l.rgb * d.weight;
+        for (var k = 0u; k < 4u; k++) {
+            if (!used[k]) { continue; }
+            if (!FILTER) {
+                let xi = sample_xi(pixel, i, j0 + k, 0u);
+                spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
+            }
+            if (spec.weight > 0.0) {
+                let l = sample_radiance(cubes[k], wn, x, spec, spec_lod);
+                if (l.w == 0.0) { out.ok[k] = 0.0; }
+                out.r[k] += l.r * spec.weight;
+                out.g[k] += l.g * spec.weight;
+                out.b[k] += l.b * spec.weight;
+            }
+            if (DIFFUSE) {
+                if (!FILTER) {
+                    let xd = sample_xi(pixel, i, j0 + k, 2u);
+                    diff = sample_diffuse(xd.x, xd.y, n, t, b, nv);
+                }
+                if (diff.weight > 0.0) {
+                    let l = sample_radiance(cubes[k], wn, x, diff, diff_lod);
+                    if (l.w == 0.0) { out.ok[k] = 0.0; }
+                    out.r[k] += l.r * diff.weight;
+                    out.g[k] += l.g * diff.weight;
+                    out.b[k] += l.b * diff.weight;
+                }
             }
         }
     }
-    return vec4<f32>(acc / f32(max(P.m, 1u)), ok);
+    return out;
+}
+
+// Entry k of `integrate`'s sums as the estimate (÷ M).
+fn estimate(s: Sums, k: u32) -> vec3<f32> {
+    return vec3<f32>(s.r[k], s.g[k], s.b[k]) / f32(max(P.m, 1u));
 }
 
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
-// (4.7); the environment cube (j = 4) when no candidate is usable. Per direction (order B):
-// one integration over the blend. One loop with one call site: lavapipe pays for every
-// inlined copy whether it runs or not.
+// (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
+// (order B): one integration over the blend. Both passes through one `integrate` call.
 fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     let b = cross(n, t);
     let nv = dot(n, v);
     let use_env = SOURCE != 0u || cand.count == 0u;
+    let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return integrate(INVALID, 4u, pixel, x, n, t, b, v, nv).rgb;
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv), 0u);
     }
     var axis = r;
     if (BLEND == 4u) { axis = n; }
@@ -1063,21 +1109,23 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
     if (!use_env) { w = blend_weights(axis); }
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
-    let first = select(0u, 4u, ORDER == 1u || SOURCE != 0u);
-    for (var j = first; j < 5u; j++) {
-        var cube = INVALID;
-        var wj = 0.0;
-        if (j < 4u) {
-            if (w[j] > 0.0) { cube = cand.idx[j]; wj = w[j]; }
-        } else if (wsum == 0.0) {
-            cube = P.env_cube;
-            wj = 1.0;
+    // Phase 0: the candidates; phase 1: the environment cube, when none was usable.
+    for (var phase = select(0u, 1u, use_env); phase < 2u; phase++) {
+        var cubes = cand.idx;
+        var used = w > vec4<f32>(0.0);
+        var wp = w;
+        if (phase == 1u) {
+            if (wsum > 0.0 || P.env_cube == INVALID) { break; }
+            cubes = vec4<u32>(P.env_cube);
+            used = one;
+            wp = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         }
-        if (cube == INVALID) { continue; }
-        let est = integrate(cube, j, pixel, x, n, t, b, v, nv);
-        if (est.w > 0.0 || j == 4u) {
-            acc += est.rgb * wj;
-            wsum += wj;
+        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv);
+        for (var k = 0u; k < 4u; k++) {
+            if (used[k] && (sums.ok[k] > 0.0 || phase == 1u)) {
+                acc += estimate(sums, k) * wp[k];
+                wsum += wp[k];
+            }
         }
     }
     if (wsum > 0.0) { return acc / wsum; }
@@ -1129,39 +1177,33 @@ fn face_point(face: u32, s: f32, t: f32) -> vec3<f32> {
     }
 }
 
-// Texel (x, y) of mip `level` of `face` of cube `cube`, where (x, y) may lie one texel off the
-// face: then the texel of the adjacent face that the direction through that texel centre,
-// extended on `face`'s plane, lands in (nearest texel). w = 1 when that face was resident, 0
-// when not (then the colour is 0 and must not be used). Marks the face it reads when `mark`.
-fn seam_texel(cube: u32, face: u32, x: i32, y: i32, level: u32, mark: bool) -> vec4<f32> {
-    let n = i32(max(P.cube_res >> level, 1u));
-    var f = face;
-    var c = vec2<i32>(x, y);
-    if (x < 0 || y < 0 || x >= n || y >= n) {
-        let nf = f32(n);
-        let fst = face_st(face_point(face, (f32(x) + 0.5) / nf, (f32(y) + 0.5) / nf));
-        f = u32(fst.x);
-        c = vec2<i32>(min(i32(fst.y * nf), n - 1), min(i32(fst.z * nf), n - 1));
+// Face and texel (x, y) of a level n texels wide that texel (x, y) of `face` stands for, where
+// (x, y) may lie one texel off the face: then the texel of the adjacent face that the direction
+// through that texel centre, extended on `face`'s plane, lands in (nearest texel).
+fn seam_texel(face: u32, x: i32, y: i32, n: i32) -> vec3<u32> {
+    if (x >= 0 && y >= 0 && x < n && y < n) {
+        return vec3<u32>(face, u32(x), u32(y));
     }
-    if (mark) {
-        atomicOr(&feedback[cube], 1u << f);
-    }
-    let entry = slots[cube];
-    if ((entry & (1u << f)) == 0u) {
-        return vec4<f32>(0.0);
-    }
-    let at = place(entry, f);
-    let u = vec2<u32>(c);
-    return vec4<f32>(load_texel(at.x, i32(at.y), vec2<u32>((at.z >> level) + u.x, u.y), level), 1.0);
+    let nf = f32(n);
+    let fst = face_st(face_point(face, (f32(x) + 0.5) / nf, (f32(y) + 0.5) / nf));
+    return vec3<u32>(u32(fst.x), u32(min(i32(fst.y * nf), n - 1)), u32(min(i32(fst.z * nf), n - 1)));
+}
+
+// Texel `c` (face, x, y) of mip `level` of the slot in indirection entry `entry`.
+fn slot_texel(entry: u32, c: vec3<u32>, level: u32) -> vec3<f32> {
+    let at = place(entry, c.x);
+    return load_texel(at.x, i32(at.y), vec2<u32>((at.z >> level) + c.y, c.z), level);
 }
 
 // Radiance of mip `level` of cube `cube` at `fst` (`face_st` of the direction: face and face
 // coordinates), bilinear ACROSS face edges: the four texel centres around the direction on its
 // face, those off the face read from the adjacent face (`seam_texel`), with the usual bilinear
-// weights. At a corner of the cube, where three
-// faces meet, the texel off the face in both directions does not exist: it is the mean of the
-// other three. `.w` = 0 when a face it reads is not resident. Marks the faces it reads when
-// `mark`. Written without a local array (see `Candidates`).
+// weights. At a corner of the cube, where three faces meet, the texel off the face in both
+// directions does not exist: it is the mean of the other three. `.w` = 0 when a face it reads
+// is not resident. Marks the faces it reads when `mark`. The four texels are found first and
+// then read alike, so that an invocation at a face edge differs from its neighbours only in
+// `seam_texel`'s arithmetic, not in what it loads (lavapipe runs every path any lane takes).
+// Written without a local array (see `Candidates`).
 fn seamless_level(cube: u32, fst: vec3<f32>, level: u32, mark: bool) -> vec4<f32> {
     let face = u32(fst.x);
     let n = i32(max(P.cube_res >> level, 1u));
@@ -1172,35 +1214,34 @@ fn seamless_level(cube: u32, fst: vec3<f32>, level: u32, mark: bool) -> vec4<f32
     let y0 = i32(floor(fy));
     let wx = fx - floor(fx);
     let wy = fy - floor(fy);
-    if (x0 >= 0 && y0 >= 0 && x0 + 1 < n && y0 + 1 < n) {
-        // All four texels on the face (the common case): one bilinear tap, the same
-        // arithmetic as below.
-        if (mark) {
-            atomicOr(&feedback[cube], 1u << face);
-        }
-        let t = Tap(face, u32(x0), u32(y0), u32(x0 + 1), u32(y0 + 1), wx, wy);
-        return read_tap_level(cube, t, level);
-    }
     // The texel off the face in both directions, as k = column + 2 * row; 4 = none.
     var corner = 4u;
     if ((x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n)) {
         corner = select(0u, 1u, x0 >= 0) + select(0u, 2u, y0 >= 0);
     }
-    var t0 = vec4<f32>(0.0);
-    var t1 = vec4<f32>(0.0);
-    var t2 = vec4<f32>(0.0);
-    var t3 = vec4<f32>(0.0);
-    if (corner != 0u) { t0 = seam_texel(cube, face, x0, y0, level, mark); }
-    if (corner != 1u) { t1 = seam_texel(cube, face, x0 + 1, y0, level, mark); }
-    if (corner != 2u) { t2 = seam_texel(cube, face, x0, y0 + 1, level, mark); }
-    if (corner != 3u) { t3 = seam_texel(cube, face, x0 + 1, y0 + 1, level, mark); }
-    let mean = (t0 + t1 + t2 + t3) * (1.0 / 3.0);
-    if (corner == 0u) { t0 = mean; } else if (corner == 1u) { t1 = mean; } else if (corner == 2u) { t2 = mean; } else if (corner == 3u) { t3 = mean; }
-    if (t0.w * t1.w * t2.w * t3.w == 0.0) {
+    let c0 = seam_texel(face, x0, y0, n);
+    let c1 = seam_texel(face, x0 + 1, y0, n);
+    let c2 = seam_texel(face, x0, y0 + 1, n);
+    let c3 = seam_texel(face, x0 + 1, y0 + 1, n);
+    let bits = select(1u << c0.x, 0u, corner == 0u) | select(1u << c1.x, 0u, corner == 1u)
+        | select(1u << c2.x, 0u, corner == 2u) | select(1u << c3.x, 0u, corner == 3u);
+    if (mark) {
+        mark_face(cube, bits);
+    }
+    let entry = slots[cube];
+    if ((entry & bits) != bits) {
         return vec4<f32>(0.0);
     }
-    let top = t0.rgb + (t1.rgb - t0.rgb) * wx;
-    let bottom = t2.rgb + (t3.rgb - t2.rgb) * wx;
+    // The corner's texel is loaded too (a valid address; the value is replaced below).
+    var t0 = slot_texel(entry, c0, level);
+    var t1 = slot_texel(entry, c1, level);
+    var t2 = slot_texel(entry, c2, level);
+    var t3 = slot_texel(entry, c3, level);
+    if (corner == 0u) { t0 = vec3<f32>(0.0); } else if (corner == 1u) { t1 = vec3<f32>(0.0); } else if (corner == 2u) { t2 = vec3<f32>(0.0); } else if (corner == 3u) { t3 = vec3<f32>(0.0); }
+    let mean = (t0 + t1 + t2 + t3) * (1.0 / 3.0);
+    if (corner == 0u) { t0 = mean; } else if (corner == 1u) { t1 = mean; } else if (corner == 2u) { t2 = mean; } else if (corner == 3u) { t3 = mean; }
+    let top = t0 + (t1 - t0) * wx;
+    let bottom = t2 + (t3 - t2) * wx;
     return vec4<f32>(top + (bottom - top) * wy, 1.0);
 }
 
@@ -1244,6 +1285,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let v_param = g1.w;
     let n = patch_normal(pid, u, v_param, oct_decode(g1.xy));
     candidates(pid, u, v_param, x, n);
+    mark_cube = cand.idx;
+    mark_bits = vec4<u32>(0u);
+    mark_env = 0u;
     let v = normalize(P.camera_pos.xyz - x);
     let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
     let pixel = pcg(gid.x + pcg(gid.y + pcg(P.seed)));
@@ -1262,5 +1306,6 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     if ((TERMS & 1u) != 0u) {
         color += recon(x, n); // Eq. 3.12, 4.12
     }
+    flush_marks();
     textureStore(out_image, px, vec4<f32>(finite3(color), 1.0));
 }

@@ -151,8 +151,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         renderer.cache().slots(),
         renderer.face_layout().encoding
     );
+    let gpu_time = frame
+        .shade_gpu_seconds
+        .map(|s| format!(", shading {:.2} ms on the GPU", s * 1e3))
+        .unwrap_or_default();
     println!(
-        "image          {} and {} ({}x{}, {} shading pass{}, {:.3} s; setup {:.2} s)",
+        "image          {} and {} ({}x{}, {} shading pass{}, {:.3} s{gpu_time}; setup {:.2} s)",
         args.output.display(),
         png.display(),
         args.width,
@@ -172,6 +176,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "cumulative": renderer.cache().cumulative,
             "passes": frame.passes,
             "render_seconds": render_seconds,
+            "shade_gpu_seconds": frame.shade_gpu_seconds,
             "adapter": adapter,
         });
         std::fs::write(path, serde_json::to_string_pretty(&json)?)
