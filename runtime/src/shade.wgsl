@@ -1112,7 +1112,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
     // Phase 0: the candidates; phase 1: the environment cube, when none was usable.
     for (var phase = select(0u, 1u, use_env); phase < 2u; phase++) {
         var cubes = cand.idx;
-        var used = w > vec4<f32>(0.0);
+        var used = (w > vec4<f32>(0.0)) & (cubes != vec4<u32>(INVALID));
         var wp = w;
         if (phase == 1u) {
             if (wsum > 0.0 || P.env_cube == INVALID) { break; }
