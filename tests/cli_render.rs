@@ -55,15 +55,17 @@ fn renders_exr_and_png_and_prints_cache_statistics() {
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(stats["frame"]["requests"].as_u64().unwrap() > 0);
-    // The shading pass's GPU time where the adapter has timestamp queries (lavapipe and
-    // desktop GPUs do), null where not; printed when known.
-    let gpu = &stats["shade_gpu_seconds"];
-    match gpu.as_f64() {
-        Some(s) => assert!(
-            s > 0.0 && s.is_finite() && stdout.contains("on the GPU"),
-            "{s}"
-        ),
-        None => assert!(gpu.is_null() && !stdout.contains("on the GPU"), "{gpu}"),
+    // The passes' GPU times where the adapter has timestamp queries (lavapipe and desktop
+    // GPUs do), null where not; printed when known.
+    for key in ["shade_gpu_seconds", "gbuffer_gpu_seconds"] {
+        let gpu = &stats[key];
+        match gpu.as_f64() {
+            Some(s) => assert!(
+                s > 0.0 && s.is_finite() && stdout.contains("on the GPU"),
+                "{s}"
+            ),
+            None => assert!(gpu.is_null() && !stdout.contains("on the GPU"), "{gpu}"),
+        }
     }
 }
 

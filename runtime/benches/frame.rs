@@ -17,7 +17,7 @@
 //! at M = 16 (with and without depth correction) against the thesis's point sampling at M = 256,
 //! likewise interleaved, frame times and (where the device has timestamp queries) the shading
 //! pass's GPU time, which leaves out what every frame pays alike (G-buffer, feedback read-back,
-//! cache) (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
+//! cache), and the G-buffer pass's (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
 //! `OSLF_BENCH_ROUNDS` sets its rounds). Writes Markdown tables to stdout and CSV to
 //! `target/frame-times.csv`.
 
@@ -322,9 +322,9 @@ fn main() {
         .unwrap_or(9);
     if filter.is_empty() || "glossy ratio".contains(filter.as_str()) {
         println!();
-        println!("| lobe n_u:n_v | size | thesis M=256 (ms) | FIS M=16 (ms) | ratio | FIS + depth M=16 (ms) | ratio | thesis shading GPU (ms) | FIS shading GPU (ms) | ratio | FIS + depth shading GPU (ms) | ratio |");
+        println!("| lobe n_u:n_v | size | thesis M=256 (ms) | FIS M=16 (ms) | ratio | FIS + depth M=16 (ms) | ratio | thesis shading GPU (ms) | FIS shading GPU (ms) | ratio | FIS + depth shading GPU (ms) | ratio | G-buffer GPU (ms) |");
         println!(
-            "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+            "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
         );
         let (w, h) = (655u32, 460u32);
         let opts = frame_options(w, h);
@@ -358,6 +358,7 @@ fn main() {
             ];
             let mut times = vec![Vec::new(); configs.len()];
             let mut gpu_times = vec![Vec::new(); configs.len()];
+            let mut gbuffer_times = Vec::new();
             for c in &configs {
                 r.render(&camera, c, &opts).unwrap();
             }
@@ -367,6 +368,7 @@ fn main() {
                     let frame = r.render(&camera, c, &opts).unwrap();
                     t.push(start.elapsed().as_secs_f64() * 1e3);
                     g.extend(frame.shade_gpu_seconds.map(|s| s * 1e3));
+                    gbuffer_times.extend(frame.gbuffer_gpu_seconds.map(|s| s * 1e3));
                 }
             }
             let m: Vec<f64> = times.into_iter().map(median).collect();
@@ -379,9 +381,10 @@ fn main() {
                     format!("{:.3}", g[1] / g[0]),
                     format!("{:.2}", g[2]),
                     format!("{:.3}", g[2] / g[0]),
+                    format!("{:.2}", median(gbuffer_times)),
                 ]
             } else {
-                vec!["–".to_string(); 5]
+                vec!["–".to_string(); 6]
             };
             println!(
                 "| {nu}:{nv} | {w}×{h} | {:.1} | {:.1} | {:.3} | {:.1} | {:.3} | {} |",

@@ -32,8 +32,8 @@ pub(crate) struct StoreBuffers {
     /// One mask of needed faces per cube, written by the shader (shade.wgsl's `feedback`).
     pub feedback: wgpu::Buffer,
     /// Where `feedback` is copied to be read on the CPU, followed at `timestamps_offset` by
-    /// the shading pass's two GPU timestamps where the device has timestamp queries (the
-    /// renderer's `ShadeTimer`): one map per pass reads both.
+    /// the G-buffer and shading passes' GPU timestamps where the device has timestamp queries
+    /// (the renderer's `PassTimer`): one map per pass reads both.
     pub feedback_readback: wgpu::Buffer,
     /// Byte offset of the timestamps in `feedback_readback`.
     pub timestamps_offset: u64,
@@ -123,8 +123,8 @@ impl StoreBuffers {
     }
 }
 
-/// Bytes of the shading pass's two GPU timestamps (u64 ticks, start and end).
-pub const TIMESTAMP_BYTES: u64 = 16;
+/// Bytes of the G-buffer and shading passes' GPU timestamps (u64 ticks, start and end of each).
+pub const TIMESTAMP_BYTES: u64 = 32;
 
 /// Uploads `store`'s sample maps as stored (zero-copy): one integer array layer per sample map
 /// (Bézier patch or atlas page),

@@ -87,31 +87,59 @@ pub struct Frame {
     /// the part of a frame that the shading parameters (M, filtering, depth correction) set.
     /// `None` where the device has no `TIMESTAMP_QUERY` ([`Gpu::has_timestamps`]).
     pub shade_gpu_seconds: Option<f64>,
+    /// GPU time of the frame's G-buffer pass (rasterizing the object), likewise; with
+    /// `shade_gpu_seconds`, what the GPU spends on a frame.
+    pub gbuffer_gpu_seconds: Option<f64>,
 }
 
-/// Timestamps written at the start and end of the shading pass, resolved into `resolve` and
-/// copied behind the feedback masks (`StoreBuffers::feedback_readback`).
-struct ShadeTimer {
+/// Timestamps at the start and end of the G-buffer pass (queries 0, 1) and of the shading pass
+/// (2, 3), resolved into `resolve` (one pair per 256-byte resolve offset) and copied behind
+/// the feedback masks (`StoreBuffers::feedback_readback`), so one map per pass reads them.
+struct PassTimer {
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,
     /// Nanoseconds per tick (`Queue::get_timestamp_period`).
     period_ns: f64,
 }
 
-impl ShadeTimer {
+/// A pass's pair of timestamps: G-buffer or shading.
+#[derive(Clone, Copy)]
+enum TimedPass {
+    GBuffer = 0,
+    Shade = 1,
+}
+
+impl TimedPass {
+    /// Its two queries' indices.
+    fn queries(self) -> std::ops::Range<u32> {
+        2 * self as u32..2 * self as u32 + 2
+    }
+
+    /// Where its pair is resolved (resolve offsets are multiples of 256 bytes).
+    fn resolve_offset(self) -> u64 {
+        wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT * self as u64
+    }
+
+    /// Where its pair lies behind the feedback masks.
+    fn readback_offset(self) -> u64 {
+        TIMESTAMP_BYTES / 2 * self as u64
+    }
+}
+
+impl PassTimer {
     fn new(gpu: &Gpu) -> Option<Self> {
         if !gpu.has_timestamps() {
             return None;
         }
         Some(Self {
             queries: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("shade timestamps"),
+                label: Some("pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count: 4,
             }),
             resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("shade timestamps"),
-                size: TIMESTAMP_BYTES,
+                label: Some("pass timestamps"),
+                size: 2 * wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
@@ -119,11 +147,42 @@ impl ShadeTimer {
         })
     }
 
-    /// Seconds between the two timestamps in `bytes` (start, end; u64 ticks); `None` for an
-    /// end before the start (a device whose counter wrapped or was reset between them).
-    fn seconds(&self, bytes: &[u8]) -> Option<f64> {
-        let start = u64::from_le_bytes(bytes.get(0..8)?.try_into().ok()?);
-        let end = u64::from_le_bytes(bytes.get(8..16)?.try_into().ok()?);
+    /// The timestamp writes of `pass` for its pass descriptor.
+    fn writes(&self, pass: TimedPass) -> (&wgpu::QuerySet, Option<u32>, Option<u32>) {
+        let q = pass.queries();
+        (&self.queries, Some(q.start), Some(q.start + 1))
+    }
+
+    /// Encodes resolving `pass`'s pair and copying it behind the feedback masks at `stamps`.
+    fn encode_copy(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: TimedPass,
+        readback: &wgpu::Buffer,
+        stamps: u64,
+    ) {
+        encoder.resolve_query_set(
+            &self.queries,
+            pass.queries(),
+            &self.resolve,
+            pass.resolve_offset(),
+        );
+        encoder.copy_buffer_to_buffer(
+            &self.resolve,
+            pass.resolve_offset(),
+            readback,
+            stamps + pass.readback_offset(),
+            Some(TIMESTAMP_BYTES / 2),
+        );
+    }
+
+    /// Seconds between `pass`'s two timestamps in `bytes` (the read-back from `stamps` on;
+    /// start, end as u64 ticks); `None` for an end before the start (a device whose counter
+    /// wrapped or was reset between them).
+    fn seconds(&self, bytes: &[u8], pass: TimedPass) -> Option<f64> {
+        let at = pass.readback_offset() as usize;
+        let start = u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?);
+        let end = u64::from_le_bytes(bytes.get(at + 8..at + 16)?.try_into().ok()?);
         let ticks = end.checked_sub(start)?;
         Some(ticks as f64 * self.period_ns * 1e-9)
     }
@@ -243,7 +302,7 @@ pub struct Renderer {
     background: Background,
     targets: Option<SizedTargets>,
     cube_count: u32,
-    timer: Option<ShadeTimer>,
+    timer: Option<PassTimer>,
 }
 
 /// Bytes of one row of `width` texels of `bytes_per_texel`, padded for buffer copies.
@@ -341,7 +400,7 @@ impl Renderer {
             cube_count,
             timer: None,
         };
-        renderer.timer = ShadeTimer::new(&renderer.gpu);
+        renderer.timer = PassTimer::new(&renderer.gpu);
         renderer.load_env_cube();
         renderer.write_slots();
         renderer.gpu.take_errors()?;
@@ -514,13 +573,16 @@ impl Renderer {
             .write_buffer(&self.buffers.uniform, 0, bytemuck::bytes_of(&u));
         let mut stats: Option<CacheStats> = None;
         let mut shade_gpu_seconds = self.timer.as_ref().map(|_| 0.0);
+        let mut gbuffer_gpu_seconds = shade_gpu_seconds;
         let mut passes = 0;
         let mut fallbacks;
         let max_passes = opts.max_passes.max(1);
         loop {
             passes += 1;
-            let (needed, readback, gpu_seconds) = self.shade_pass(passes == 1)?;
-            shade_gpu_seconds = shade_gpu_seconds.zip(gpu_seconds).map(|(a, b)| a + b);
+            let (needed, readback, [gbuffer, shade]) = self.shade_pass(passes == 1)?;
+            let add = |sum: Option<f64>, t: Option<f64>| sum.zip(t).map(|(a, b)| a + b);
+            shade_gpu_seconds = add(shade_gpu_seconds, shade);
+            gbuffer_gpu_seconds = add(gbuffer_gpu_seconds, gbuffer);
             let start = Instant::now();
             let (uploads, mut frame_stats) =
                 self.cache.plan(&needed, &self.store, opts.resolve_misses);
@@ -555,13 +617,14 @@ impl Renderer {
             passes,
             fallbacks,
             shade_gpu_seconds,
+            gbuffer_gpu_seconds,
         })
     }
 
     /// Runs the G-buffer pass (if `geometry`) and the shading pass, and returns the feedback
-    /// masks, the seconds spent copying them out of the mapped buffer and the shading pass's
-    /// GPU seconds (with timestamps).
-    fn shade_pass(&mut self, geometry: bool) -> Result<(Vec<u32>, f64, Option<f64>)> {
+    /// masks, the seconds spent copying them out of the mapped buffer and the G-buffer and
+    /// shading passes' GPU seconds (with timestamps; the G-buffer's 0 when not `geometry`).
+    fn shade_pass(&mut self, geometry: bool) -> Result<(Vec<u32>, f64, [Option<f64>; 2])> {
         let targets = self
             .targets
             .as_ref()
@@ -582,14 +645,11 @@ impl Renderer {
         );
         let stamps = self.buffers.timestamps_offset;
         if let Some(timer) = &self.timer {
-            encoder.resolve_query_set(&timer.queries, 0..2, &timer.resolve, 0);
-            encoder.copy_buffer_to_buffer(
-                &timer.resolve,
-                0,
-                &self.buffers.feedback_readback,
-                stamps,
-                Some(TIMESTAMP_BYTES),
-            );
+            let readback = &self.buffers.feedback_readback;
+            if geometry {
+                timer.encode_copy(&mut encoder, TimedPass::GBuffer, readback, stamps);
+            }
+            timer.encode_copy(&mut encoder, TimedPass::Shade, readback, stamps);
         }
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.wait()?;
@@ -597,11 +657,15 @@ impl Renderer {
         let bytes = map_read(&self.gpu, &self.buffers.feedback_readback)?;
         let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..stamps as usize]);
         masks.truncate(self.cube_count as usize);
-        let gpu_seconds = self
-            .timer
-            .as_ref()
-            .and_then(|t| t.seconds(&bytes[stamps as usize..]));
-        Ok((masks, start.elapsed().as_secs_f64(), gpu_seconds))
+        let seconds = |pass| {
+            let t = self.timer.as_ref()?;
+            match (pass, geometry) {
+                (TimedPass::GBuffer, false) => Some(0.0),
+                _ => t.seconds(&bytes[stamps as usize..], pass),
+            }
+        };
+        let gpu = [seconds(TimedPass::GBuffer), seconds(TimedPass::Shade)];
+        Ok((masks, start.elapsed().as_secs_f64(), gpu))
     }
 
     /// Encodes the G-buffer pass: clears the targets and rasterizes the mesh into them.
@@ -637,7 +701,14 @@ impl Renderer {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
+            timestamp_writes: self.timer.as_ref().map(|t| {
+                let (query_set, begin, end) = t.writes(TimedPass::GBuffer);
+                wgpu::RenderPassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -655,14 +726,14 @@ impl Renderer {
     ) -> Result<()> {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("shade"),
-            timestamp_writes: self
-                .timer
-                .as_ref()
-                .map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: &t.queries,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }),
+            timestamp_writes: self.timer.as_ref().map(|t| {
+                let (query_set, begin, end) = t.writes(TimedPass::Shade);
+                wgpu::ComputePassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
         });
         let pipeline = self
             .shade

@@ -151,10 +151,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         renderer.cache().slots(),
         renderer.face_layout().encoding
     );
-    let gpu_time = frame
-        .shade_gpu_seconds
-        .map(|s| format!(", shading {:.2} ms on the GPU", s * 1e3))
-        .unwrap_or_default();
+    let gpu_time = match (frame.shade_gpu_seconds, frame.gbuffer_gpu_seconds) {
+        (Some(s), Some(g)) => format!(
+            ", on the GPU: shading {:.2} ms, G-buffer {:.2} ms",
+            s * 1e3,
+            g * 1e3
+        ),
+        _ => String::new(),
+    };
     println!(
         "image          {} and {} ({}x{}, {} shading pass{}, {:.3} s{gpu_time}; setup {:.2} s)",
         args.output.display(),
@@ -177,6 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "passes": frame.passes,
             "render_seconds": render_seconds,
             "shade_gpu_seconds": frame.shade_gpu_seconds,
+            "gbuffer_gpu_seconds": frame.gbuffer_gpu_seconds,
             "adapter": adapter,
         });
         std::fs::write(path, serde_json::to_string_pretty(&json)?)

@@ -178,13 +178,14 @@ pub fn check_parity(
         frame.stats.unresolved, 0,
         "{label}: budget holds everything"
     );
-    // The shading pass is timed on the GPU exactly where the device has timestamp queries.
-    let timed = frame.shade_gpu_seconds;
-    assert_eq!(timed.is_some(), renderer.gpu().has_timestamps(), "{label}");
-    assert!(
-        timed.is_none_or(|s| s > 0.0 && s.is_finite()),
-        "{label}: {timed:?}"
-    );
+    // The passes are timed on the GPU exactly where the device has timestamp queries.
+    for timed in [frame.shade_gpu_seconds, frame.gbuffer_gpu_seconds] {
+        assert_eq!(timed.is_some(), renderer.gpu().has_timestamps(), "{label}");
+        assert!(
+            timed.is_none_or(|s| s > 0.0 && s.is_finite()),
+            "{label}: {timed:?}"
+        );
+    }
     let (cpu, _) = renderer.reference_image(&camera, &params, cubes).unwrap();
     assert!(all_finite(&frame.pixels), "{label}: non-finite GPU pixel");
     assert!(all_finite(&cpu), "{label}: non-finite CPU pixel");
