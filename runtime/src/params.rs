@@ -244,7 +244,8 @@ pub struct ShadingParams {
     /// Depth-corrected lookups (needs a store with a distance channel): each sample point's
     /// reflection and glossy lookups go towards where the ray from the *shaded point* meets
     /// the scene as that sample point's distances describe it, instead of along the ray's
-    /// direction from the sample point (§6.3, RGBZ; see shade.wgsl `depth_search`).
+    /// direction from the sample point (§6.3, RGBZ; see shade.wgsl `depth_search` for
+    /// reflections and per-direction glossy, `depth_iterate` for per-point glossy samples).
     pub depth: bool,
     /// How the glossy term reads the cube maps.
     pub glossy_filter: GlossyFilter,
