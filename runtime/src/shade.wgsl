@@ -1061,25 +1061,25 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             if (!FILTER) {
                 let xi = sample_xi(pixel, i, j0 + k, 0u);
                 spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
-            }
-            if (spec.weight > 0.0) {
-                let l = sample_radiance(cubes[k], wn, x, spec, spec_lod);
-                if (l.w == 0.0) { out.ok[k] = 0.0; }
-                out.r[k] += l.r * spec.weight;
-                out.g[k] += l.g * spec.weight;
-                out.b[k] += l.b * spec.weight;
-            }
-            if (DIFFUSE) {
-                if (!FILTER) {
+                if (DIFFUSE) {
                     let xd = sample_xi(pixel, i, j0 + k, 2u);
                     diff = sample_diffuse(xd.x, xd.y, n, t, b, nv);
                 }
-                if (diff.weight > 0.0) {
-                    let l = sample_radiance(cubes[k], wn, x, diff, diff_lod);
+            }
+            // The specular sample, then the diffuse one: one sample_radiance call site.
+            for (var kind = 0u; kind < select(1u, 2u, DIFFUSE); kind++) {
+                var s = spec;
+                var lod = spec_lod;
+                if (kind == 1u) {
+                    s = diff;
+                    lod = diff_lod;
+                }
+                if (s.weight > 0.0) {
+                    let l = sample_radiance(cubes[k], wn, x, s, lod);
                     if (l.w == 0.0) { out.ok[k] = 0.0; }
-                    out.r[k] += l.r * diff.weight;
-                    out.g[k] += l.g * diff.weight;
-                    out.b[k] += l.b * diff.weight;
+                    out.r[k] += l.r * s.weight;
+                    out.g[k] += l.g * s.weight;
+                    out.b[k] += l.b * s.weight;
                 }
             }
         }
