@@ -1032,6 +1032,17 @@ struct Sums {
     ok: vec4<f32>,
 };
 
+// Adds sample `s`'s radiance × weight to entry k of `sums` (`sample_radiance` of cube `cube`).
+// A function, not a loop over the two kinds of sample: lavapipe ran FIS frames up to 1.8×
+// slower with even a one-pass loop around the read.
+fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32) {
+    let l = sample_radiance(cube, wn, x, s, lod);
+    if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
+    (*sums).r[k] += l.r * s.weight;
+    (*sums).g[k] += l.g * s.weight;
+    (*sums).b[k] += l.b * s.weight;
+}
+
 // The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
 // once: entry k integrates over `cubes[k]` where `used[k]`, with the random numbers of
 // integration j0 + k; cube INVALID is the blend of the candidates per direction. With FILTER
@@ -1066,21 +1077,11 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
                     diff = sample_diffuse(xd.x, xd.y, n, t, b, nv);
                 }
             }
-            // The specular sample, then the diffuse one: one sample_radiance call site.
-            for (var kind = 0u; kind < select(1u, 2u, DIFFUSE); kind++) {
-                var s = spec;
-                var lod = spec_lod;
-                if (kind == 1u) {
-                    s = diff;
-                    lod = diff_lod;
-                }
-                if (s.weight > 0.0) {
-                    let l = sample_radiance(cubes[k], wn, x, s, lod);
-                    if (l.w == 0.0) { out.ok[k] = 0.0; }
-                    out.r[k] += l.r * s.weight;
-                    out.g[k] += l.g * s.weight;
-                    out.b[k] += l.b * s.weight;
-                }
+            if (spec.weight > 0.0) {
+                accumulate(&out, k, cubes[k], wn, x, spec, spec_lod);
+            }
+            if (DIFFUSE && diff.weight > 0.0) {
+                accumulate(&out, k, cubes[k], wn, x, diff, diff_lod);
             }
         }
     }
