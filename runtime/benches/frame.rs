@@ -18,7 +18,8 @@
 //! likewise interleaved, frame times and (where the device has timestamp queries) the shading
 //! pass's GPU time, which leaves out what every frame pays alike (G-buffer, feedback read-back,
 //! cache), and the G-buffer pass's (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
-//! `OSLF_BENCH_ROUNDS` sets its rounds). Writes Markdown tables to stdout and CSV to
+//! `OSLF_BENCH_ROUNDS` sets its rounds, `OSLF_BENCH_SIZE=1920x1080` its image size, 655×460
+//! unless given). Writes Markdown tables to stdout and CSV to
 //! `target/frame-times.csv`.
 
 use std::path::{Path, PathBuf};
@@ -326,7 +327,16 @@ fn main() {
         println!(
             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
         );
-        let (w, h) = (655u32, 460u32);
+        let (w, h) = match std::env::var("OSLF_BENCH_SIZE") {
+            Ok(s) => s
+                .split_once('x')
+                .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+                .filter(|&(w, h): &(u32, u32)| w > 0 && h > 0)
+                .unwrap_or_else(|| {
+                    panic!("OSLF_BENCH_SIZE={s}: expected WIDTHxHEIGHT, e.g. 1920x1080")
+                }),
+            Err(_) => (655, 460),
+        };
         let opts = frame_options(w, h);
         let mut r = renderer(&path);
         let camera = r.default_view();

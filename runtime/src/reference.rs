@@ -114,7 +114,7 @@ pub fn face_st(d: Vec3) -> (usize, f32, f32) {
 
 /// The point of `face`'s plane (major axis ±1) at face coordinates `(s, t)`, which may lie
 /// outside `[0, 1]`: the inverse of [`face_st`] ([`oslf_format::cube::face_st_to_direction`],
-/// not normalized), as `face_point` in shade.wgsl.
+/// not normalized).
 pub fn face_point(face: usize, s: f32, t: f32) -> Vec3 {
     let sc = 2.0 * s - 1.0;
     let tc = 2.0 * t - 1.0;
@@ -126,6 +126,26 @@ pub fn face_point(face: usize, s: f32, t: f32) -> Vec3 {
         4 => Vec3::new(sc, -tc, 1.0),
         _ => Vec3::new(-sc, -tc, -1.0),
     }
+}
+
+/// Face and texel of a level `n` texels wide that texel `(x, y)` of `face` stands for, where
+/// `(x, y)` may lie one texel off the face: then the texel of the adjacent face that the
+/// direction through that texel's centre, extended on `face`'s plane, lands in (nearest
+/// texel). shade.wgsl's `seam_texel` reads the same texel from a table (SEAM_LO, SEAM_HI).
+pub fn seam_coords(face: usize, (x, y): (i32, i32), n: i32) -> (usize, (i32, i32)) {
+    if x >= 0 && y >= 0 && x < n && y < n {
+        return (face, (x, y));
+    }
+    let nf = n as f32;
+    let (f, s, t) = face_st(face_point(
+        face,
+        (x as f32 + 0.5) / nf,
+        (y as f32 + 0.5) / nf,
+    ));
+    (
+        f,
+        (((s * nf) as i32).min(n - 1), ((t * nf) as i32).min(n - 1)),
+    )
 }
 
 /// Candidates of a texel: the sample map's four entries with their directions from x.
@@ -496,9 +516,8 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// Texel `(x, y)` of mip `level` of `face` of `cube`, where `(x, y)` may lie one texel off
-    /// the face: then the texel of the adjacent face that the direction through that texel
-    /// centre, extended on `face`'s plane, lands in (nearest texel). `None` when that face is
-    /// not available. Marks the face it reads when `mark` (as `seam_texel`).
+    /// the face: then the texel of the adjacent face it stands for ([`seam_coords`]). `None`
+    /// when that face is not available. Marks the face it reads when `mark` (as `seam_texel`).
     fn seam_texel(
         &self,
         cube: u32,
@@ -508,17 +527,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         mark: bool,
     ) -> Option<Vec3> {
         let n = (self.uniform.cube_res >> level).max(1) as i32;
-        let (mut f, mut c) = (face, (x, y));
-        if x < 0 || y < 0 || x >= n || y >= n {
-            let nf = n as f32;
-            let (f2, s, t) = face_st(face_point(
-                face,
-                (x as f32 + 0.5) / nf,
-                (y as f32 + 0.5) / nf,
-            ));
-            f = f2;
-            c = (((s * nf) as i32).min(n - 1), ((t * nf) as i32).min(n - 1));
-        }
+        let (f, c) = seam_coords(face, (x, y), n);
         if mark {
             self.mark(cube, f);
         }
@@ -1312,6 +1321,62 @@ mod tests {
                 feedback: &[],
             };
             assert_eq!(shader.shade(1, 2, &GTexel::default()), want, "{bg:?}");
+        }
+    }
+
+    /// shade.wgsl's seam table (SEAM_LO, SEAM_HI, read from its source and decoded as its
+    /// `seam_texel` does) gives the texel `seam_coords` finds by projection, for every texel
+    /// one off a face's edge (corners aside), on faces of 1 to 1024 texels.
+    #[test]
+    fn shader_seam_table_matches_the_projection() {
+        let src = include_str!("shade.wgsl");
+        let table = |name: &str| -> [u32; 4] {
+            let head = format!("const {name} = vec4<u32>(");
+            let at = src.find(&head).expect(name) + head.len();
+            let body = &src[at..at + src[at..].find(')').unwrap()];
+            let v: Vec<u32> = body
+                .split(',')
+                .map(|w| {
+                    let w = w.trim().trim_end_matches('u');
+                    u32::from_str_radix(w.trim_start_matches("0x"), 16).unwrap()
+                })
+                .collect();
+            v.try_into().unwrap()
+        };
+        let (lo, hi) = (table("SEAM_LO"), table("SEAM_HI"));
+        let shader = |face: usize, x: i32, y: i32, n: i32| -> (usize, (i32, i32)) {
+            let in_x = x >= 0 && x < n;
+            let (e, a) = if in_x {
+                (if y >= n { 3 } else { 2 }, x)
+            } else {
+                (if x >= n { 1 } else { 0 }, y.clamp(0, n - 1))
+            };
+            let code = if face == 5 {
+                hi[e]
+            } else {
+                lo[e] >> (6 * face)
+            } & 63;
+            let along = if code & 16 != 0 { n - 1 - a } else { a };
+            let fixed = if code & 32 != 0 { n - 1 } else { 0 };
+            let c = if code & 8 != 0 {
+                (along, fixed)
+            } else {
+                (fixed, along)
+            };
+            ((code & 7) as usize, c)
+        };
+        for n in [1, 2, 3, 4, 6, 8, 16, 48, 64, 256, 1024] {
+            for face in 0..6 {
+                for a in 0..n {
+                    for (x, y) in [(-1, a), (n, a), (a, -1), (a, n)] {
+                        assert_eq!(
+                            shader(face, x, y, n),
+                            seam_coords(face, (x, y), n),
+                            "face {face}, texel ({x}, {y}) of {n}"
+                        );
+                    }
+                }
+            }
         }
     }
 
