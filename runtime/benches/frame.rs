@@ -53,10 +53,10 @@ fn store_path() -> PathBuf {
     out
 }
 
-/// A renderer of the store at `path` with the default cache (every cube fits).
-fn renderer(path: &Path) -> Renderer {
+/// A renderer of the store at `path` on `gpu` with the default cache (every cube fits).
+fn renderer(gpu: &Gpu, path: &Path) -> Renderer {
     Renderer::new(
-        Gpu::headless().unwrap(),
+        gpu.clone(),
         Store::open(path).unwrap(),
         CacheConfig::default(),
     )
@@ -81,6 +81,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn main() {
     // `cargo bench` passes --bench; ignore arguments.
     let path = store_path();
+    // One device for every renderer: a driver may run out of devices (an NVIDIA H200 found no
+    // Vulkan adapter for the 30th in one process).
+    let gpu = Gpu::headless().unwrap();
     // OSLF_BENCH_FILTER=text runs only the modes whose label contains it.
     let filter = std::env::var("OSLF_BENCH_FILTER").unwrap_or_default();
     let base = ShadingParams::default();
@@ -220,14 +223,13 @@ fn main() {
                 continue;
             }
             let store = Store::open(&path).unwrap();
-            let gpu = Gpu::headless().unwrap();
             adapter = gpu.adapter_name.clone();
             // OSLF_BENCH_SLOTS=n limits the GPU cache (default: every cube).
             let slots = std::env::var("OSLF_BENCH_SLOTS")
                 .ok()
                 .map(|s| s.parse().unwrap());
             let mut r = Renderer::new(
-                gpu,
+                gpu.clone(),
                 store,
                 CacheConfig {
                     gpu_slots: slots,
@@ -282,7 +284,7 @@ fn main() {
             source: Source::EnvMap,
             ..base
         };
-        let mut r_env = renderer(&path);
+        let mut r_env = renderer(&gpu, &path);
         let camera = r_env.default_view();
         r_env.render(&camera, &env, &opts).unwrap();
         for blend in Blend::ALL {
@@ -294,7 +296,7 @@ fn main() {
                 blend,
                 ..base
             };
-            let mut r = renderer(&path);
+            let mut r = renderer(&gpu, &path);
             r.render(&camera, &oslf, &opts).unwrap();
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..21 {
@@ -338,7 +340,7 @@ fn main() {
             Err(_) => (655, 460),
         };
         let opts = frame_options(w, h);
-        let mut r = renderer(&path);
+        let mut r = renderer(&gpu, &path);
         let camera = r.default_view();
         for (nu, nv) in [
             (10.0, 10.0),

@@ -10,7 +10,9 @@ use crate::error::{Result, RuntimeError};
 /// Build one with [`Gpu::headless`], or wrap an application's own device with
 /// [`Gpu::from_device`]. Uncaptured wgpu errors are collected, and every renderer call checks
 /// them ([`Gpu::take_errors`]), so a validation error surfaces as an error, never as a silent
-/// black image.
+/// black image. A clone shares the device (and its error list): several renderers can run on
+/// one device.
+#[derive(Clone)]
 pub struct Gpu {
     /// The device.
     pub device: wgpu::Device,
