@@ -107,6 +107,17 @@ pub fn filter_xi(i: u32, m: u32) -> [f32; 2] {
     [x1 - x1.floor(), r * r]
 }
 
+/// Samples per row of the filtered set of `m` (as `filter_rows`): n for m = n² when
+/// `filtered`, else 1.
+pub fn filter_rows(m: u32, filtered: bool) -> u32 {
+    let n = (m as f32).sqrt().round() as u32;
+    if filtered && n > 0 && n * n == m {
+        n
+    } else {
+        1
+    }
+}
+
 /// Face and face coordinates of a direction: [`oslf_format::cube::direction_to_face_st`].
 pub fn face_st(d: Vec3) -> (usize, f32, f32) {
     oslf_format::cube::direction_to_face_st(d.to_array())
@@ -317,8 +328,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         if !(lod > 0.0) {
             return self.lookup(cube, dir);
         }
+        self.lookup_levels(cube, dir, lod)
+    }
+
+    /// Radiance of `cube` towards `dir` at mip level `lod` ≥ 0 across face edges, the two
+    /// nearest levels blended (as `lookup_levels`).
+    fn lookup_levels(&self, cube: u32, dir: Vec3, lod: f32) -> Option<Vec3> {
         let top = self.uniform.mip_levels - 1;
-        let l = lod.min(top as f32);
+        let l = lod.clamp(0.0, top as f32);
         let l0 = l.floor() as u32;
         let f = l - l0 as f32;
         let fst = face_st(dir);
@@ -451,19 +468,28 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// The depth-corrected lookup direction of sample point `cube` for a glossy sample from
-    /// `x` along `l`: DEPTH_ITERATIONS fixed-point steps on the spheres of the stored
-    /// distances, `l` where a step finds nothing or `x` lies outside (as `depth_iterate`).
-    fn depth_iterate(&self, cube: u32, x: Vec3, l: Vec3) -> Vec3 {
+    /// `x` along `l` (as `depth_iterate`): for a `fresh` sample DEPTH_ITERATIONS fixed-point
+    /// steps on the spheres of the stored distances from `l`, `l` where a step finds nothing
+    /// or `x` lies outside, and `seed` set to the distance it converged to (0 for none); for
+    /// the others of its row, the sphere of radius `seed`, reading nothing.
+    fn depth_iterate(&self, cube: u32, x: Vec3, l: Vec3, fresh: bool, seed: &mut f32) -> Vec3 {
         let o = x - self.samples[cube as usize];
         let (ol, oo) = (o.dot(l), o.dot(o));
+        let step = |dist: f32| o + l * ((ol * ol - (oo - dist * dist)).sqrt() - ol);
+        if !fresh {
+            return if *seed * *seed > oo { step(*seed) } else { l };
+        }
         let mut missing = false;
         let mut q = l;
+        *seed = 0.0;
         for _ in 0..DEPTH_ITERATIONS {
             let dist = self.depth_toward(cube, q, true, &mut missing);
             if !(dist < FAR_DISTANCE) || !(dist * dist > oo) {
+                *seed = 0.0;
                 return l;
             }
-            q = o + l * ((ol * ol - (oo - dist * dist)).sqrt() - ol);
+            q = step(dist);
+            *seed = dist;
         }
         q
     }
@@ -886,7 +912,9 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
-    /// `cube` = INVALID, the blend), as `sample_radiance`. `None` when a face was not available.
+    /// `cube` = INVALID, the blend), as `sample_radiance`; `fresh` and `seed` as
+    /// `depth_iterate`. `None` when a face was not available.
+    #[allow(clippy::too_many_arguments)]
     fn sample_radiance(
         &self,
         c: &Candidates,
@@ -894,6 +922,8 @@ impl<C: CubeTexels> Shader<'_, C> {
         wn: [f32; 4],
         x: Vec3,
         s: &AsSample,
+        fresh: bool,
+        seed: &mut f32,
     ) -> Option<Vec3> {
         let u = &self.uniform;
         let lod = self.sample_lod(s.l, s.lpdf);
@@ -911,11 +941,15 @@ impl<C: CubeTexels> Shader<'_, C> {
         let d = if cube == u.env_cube {
             self.env_dir(x, s.l)
         } else if u.depth_steps > 0 {
-            self.depth_iterate(cube, x, s.l)
+            self.depth_iterate(cube, x, s.l, fresh, seed)
         } else {
             s.l
         };
-        self.lookup_lod(cube, d, lod)
+        if u.mip_levels > 1 {
+            self.lookup_levels(cube, d, lod)
+        } else {
+            self.lookup(cube, d)
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -936,7 +970,15 @@ impl<C: CubeTexels> Shader<'_, C> {
         let mut acc = Vec3::ZERO;
         let mut ok = true;
         let wn = self.blend_weights(c, n);
+        // Per kind of sample (specular, diffuse): `depth_iterate`'s seed, and whether the row
+        // has had its fresh sample (its first one above the surface).
+        let mut seed = [0.0f32; 2];
+        let mut fresh = [true; 2];
+        let rows = filter_rows(u.m, u.mip_levels > 1);
         for i in 0..u.m {
+            if i % rows == 0 {
+                fresh = [true; 2];
+            }
             for k in 0..2 {
                 if k == 1 && u.rd <= 0.0 {
                     continue;
@@ -950,10 +992,13 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if s.weight <= 0.0 {
                     continue;
                 }
-                let li = self.sample_radiance(c, cube, wn, x, &s).unwrap_or_else(|| {
-                    ok = false;
-                    Vec3::ZERO
-                });
+                let li = self
+                    .sample_radiance(c, cube, wn, x, &s, fresh[k as usize], &mut seed[k as usize])
+                    .unwrap_or_else(|| {
+                        ok = false;
+                        Vec3::ZERO
+                    });
+                fresh[k as usize] = false;
                 acc += li * s.weight;
             }
         }
@@ -1546,12 +1591,27 @@ mod tests {
             sphere: true,
         };
         let shader = bare_shader(depth_uniform(res), std::slice::from_ref(&p), &sphere);
-        let q = shader.depth_iterate(0, x, l);
+        let mut seed = 0.0;
+        let q = shader.depth_iterate(0, x, l, true, &mut seed);
         let along = q - (x - p);
         assert!((q.length() - 3.0).abs() < 1e-5, "{q}");
         assert!(angle(along, l) < 1e-3 && along.dot(l) > 0.0, "{q}");
+        assert!((seed - 3.0).abs() < 1e-3, "{seed}");
+        // The next sample of the row takes the sphere of that distance, reading nothing:
+        // exact on the sphere; the plain direction without a seed.
+        let l2 = Vec3::new(-0.5, 0.3, 1.0).normalize();
+        let q2 = shader.depth_iterate(0, x, l2, false, &mut seed);
+        assert!((q2.length() - 3.0).abs() < 1e-3, "{q2}");
+        assert!(angle(q2 - (x - p), l2) < 1e-3, "{q2}");
+        assert!(
+            (seed - 3.0).abs() < 1e-3,
+            "a warm sample keeps the seed: {seed}"
+        );
+        assert_eq!(shader.depth_iterate(0, x, l2, false, &mut 0.0), l2);
         let far = Vec3::new(3.0, 0.0, 0.0);
-        assert_eq!(shader.depth_iterate(0, far, l), l);
+        let mut seed = 1.0;
+        assert_eq!(shader.depth_iterate(0, far, l, true, &mut seed), l);
+        assert_eq!(seed, 0.0, "no hit leaves no seed");
 
         let ceiling = Ceiling {
             res,
@@ -1560,7 +1620,7 @@ mod tests {
         };
         let shader = bare_shader(depth_uniform(res), std::slice::from_ref(&p), &ceiling);
         let hit = x + l * (10.0 / l.z) - p;
-        let q = shader.depth_iterate(0, x, l);
+        let q = shader.depth_iterate(0, x, l, true, &mut 0.0);
         let texel = std::f32::consts::FRAC_PI_2 / res as f32;
         assert!(
             angle(q, hit) < 3.0 * texel,
@@ -1574,7 +1634,7 @@ mod tests {
             angle(q, hit)
         );
         let down = Vec3::new(0.3, 0.0, -1.0).normalize();
-        assert_eq!(shader.depth_iterate(0, x, down), down);
+        assert_eq!(shader.depth_iterate(0, x, down, true, &mut 0.0), down);
     }
 
     /// Two sample points over a ceiling 10 away (blue), with a small plate halfway (red) that

@@ -226,6 +226,23 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
     ] {
         check(&mut r, &cubes, glossy(filter, order, depth, source), label);
     }
+    // M = n²: the filtered grid's rows, where only each row's first sample runs the depth
+    // iteration (the specular and, with R_d > 0, the diffuse samples).
+    for (m, rd, label) in [
+        (16, 0.0, "glossy mip depth, M = 16"),
+        (9, 0.5, "glossy mip depth with diffuse, M = 9"),
+    ] {
+        check(
+            &mut r,
+            &cubes,
+            ShadingParams {
+                m,
+                rd,
+                ..glossy(GlossyFilter::Mip, Order::PerPoint, true, Source::Oslf)
+            },
+            label,
+        );
+    }
 }
 
 #[test]
