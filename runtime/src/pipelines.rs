@@ -238,6 +238,8 @@ pub(crate) struct ShadeBindings<'a> {
     pub depth_pool: &'a [wgpu::TextureView],
     /// `out_image`.
     pub output: &'a wgpu::TextureView,
+    /// `gb_depth`: the G-buffer pass's depth.
+    pub gb_depth: &'a wgpu::TextureView,
 }
 
 /// Binding of `pool0`; the pool arrays follow it.
@@ -246,6 +248,8 @@ const POOL_BINDING: u32 = 8;
 const DEPTH_POOL_BINDING: u32 = 12;
 /// Binding of `out_image`.
 const OUTPUT_BINDING: u32 = 16;
+/// Binding of `gb_depth`.
+const GB_DEPTH_BINDING: u32 = 17;
 
 /// The shading pass: its bind-group layout, shader module, and the compute pipelines built so
 /// far, one per [`ShadeKey`].
@@ -314,6 +318,11 @@ impl ShadePipelines {
             },
             count: None,
         });
+        entries.push(texture_entry(
+            GB_DEPTH_BINDING,
+            wgpu::TextureSampleType::Depth,
+            d2,
+        ));
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shade"),
             entries: &entries,
@@ -371,6 +380,10 @@ impl ShadePipelines {
         entries.push(wgpu::BindGroupEntry {
             binding: OUTPUT_BINDING,
             resource: wgpu::BindingResource::TextureView(b.output),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: GB_DEPTH_BINDING,
+            resource: wgpu::BindingResource::TextureView(b.gb_depth),
         });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shade"),

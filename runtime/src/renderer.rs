@@ -201,12 +201,17 @@ struct SizedTargets {
 
 impl SizedTargets {
     /// Creates the G-buffer, depth and output textures for `width` × `height` and the shading
-    /// bind group `bind` makes of the views of position, normal and output.
+    /// bind group `bind` makes of the views of position, normal, output and depth.
     fn new(
         device: &wgpu::Device,
         width: u32,
         height: u32,
-        bind: impl FnOnce(&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView) -> wgpu::BindGroup,
+        bind: impl FnOnce(
+            &wgpu::TextureView,
+            &wgpu::TextureView,
+            &wgpu::TextureView,
+            &wgpu::TextureView,
+        ) -> wgpu::BindGroup,
     ) -> Self {
         let size = wgpu::Extent3d {
             width,
@@ -233,7 +238,9 @@ impl SizedTargets {
         let depth = make(
             "depth",
             DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
         );
         let output = make(
             "output",
@@ -243,7 +250,12 @@ impl SizedTargets {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let shade_group = bind(&view(&gb_position), &view(&gb_normal), &view(&output));
+        let shade_group = bind(
+            &view(&gb_position),
+            &view(&gb_normal),
+            &view(&output),
+            &view(&depth),
+        );
         Self {
             width,
             height,
@@ -522,7 +534,7 @@ impl Renderer {
                 limits.max_texture_dimension_2d
             )));
         }
-        let targets = SizedTargets::new(&self.gpu.device, width, height, |gp, gn, out| {
+        let targets = SizedTargets::new(&self.gpu.device, width, height, |gp, gn, out, dv| {
             self.shade.bind_group(
                 &self.gpu.device,
                 &ShadeBindings {
@@ -537,6 +549,7 @@ impl Renderer {
                     pool: self.pool.views(),
                     depth_pool: self.pool.depth_views(),
                     output: out,
+                    gb_depth: dv,
                 },
             )
         });
@@ -668,13 +681,17 @@ impl Renderer {
         Ok((masks, start.elapsed().as_secs_f64(), gpu))
     }
 
-    /// Encodes the G-buffer pass: clears the targets and rasterizes the mesh into them.
+    /// Encodes the G-buffer pass: clears depth and rasterizes the mesh into the targets. The
+    /// colour targets are not cleared: the shading pass and `read_gbuffer` take a pixel as
+    /// covered where its depth is below the cleared 1.0 and ignore the colour elsewhere (an
+    /// NVIDIA H200 spent most of the pass clearing the two Rgba32Float targets:
+    /// docs/measurements.md).
     fn encode_gbuffer(&self, encoder: &mut wgpu::CommandEncoder, targets: &SizedTargets) {
         let gp = targets.gb_position.create_view(&Default::default());
         let gn = targets.gb_normal.create_view(&Default::default());
         let dv = targets.depth.create_view(&Default::default());
-        let clear = wgpu::Operations {
-            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+        let keep = wgpu::Operations {
+            load: wgpu::LoadOp::Load,
             store: wgpu::StoreOp::Store,
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -684,13 +701,13 @@ impl Renderer {
                     view: &gp,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: clear,
+                    ops: keep,
                 }),
                 Some(wgpu::RenderPassColorAttachment {
                     view: &gn,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: clear,
+                    ops: keep,
                 }),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -754,12 +771,22 @@ impl Renderer {
         &self,
         pick: impl Fn(&SizedTargets) -> &wgpu::Texture,
     ) -> Result<Vec<[f32; 4]>> {
+        self.read_texture(pick, wgpu::TextureAspect::All)
+    }
+
+    /// Reads aspect `aspect` of a render target back, texel type `T`, row-major.
+    fn read_texture<T: bytemuck::Pod>(
+        &self,
+        pick: impl Fn(&SizedTargets) -> &wgpu::Texture,
+        aspect: wgpu::TextureAspect,
+    ) -> Result<Vec<T>> {
+        let texel = std::mem::size_of::<T>();
         let targets = self
             .targets
             .as_ref()
             .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
         let (w, h) = (targets.width, targets.height);
-        let row = padded_row(w, 16);
+        let row = padded_row(w, texel as u32);
         let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: u64::from(row) * u64::from(h),
@@ -772,7 +799,7 @@ impl Renderer {
                 texture: pick(targets),
                 mip_level: 0,
                 origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
+                aspect,
             },
             wgpu::TexelCopyBufferInfo {
                 buffer: &buffer,
@@ -793,21 +820,33 @@ impl Renderer {
         let mut out = Vec::with_capacity((w * h) as usize);
         for y in 0..h as usize {
             let start = y * row as usize;
-            let line: &[[f32; 4]] = bytemuck::cast_slice(&bytes[start..start + w as usize * 16]);
+            let line: &[T] = bytemuck::cast_slice(&bytes[start..start + w as usize * texel]);
             out.extend_from_slice(line);
         }
         Ok(out)
     }
 
-    /// The G-buffer of the last frame, for the CPU reference.
+    /// The G-buffer of the last frame, for the CPU reference: zero where depth says no
+    /// triangle covers the pixel (the colour targets are not cleared: `encode_gbuffer`).
     pub fn read_gbuffer(&self) -> Result<Vec<GTexel>> {
         let p = self.read_texture_rgba32f(|t| &t.gb_position)?;
         let n = self.read_texture_rgba32f(|t| &t.gb_normal)?;
+        let z: Vec<f32> = self.read_texture(|t| &t.depth, wgpu::TextureAspect::DepthOnly)?;
         Ok(p.into_iter()
             .zip(n)
-            .map(|(position_patch, normal_uv)| GTexel {
-                position_patch,
-                normal_uv,
+            .zip(z)
+            .map(|((position_patch, normal_uv), z)| {
+                if z < 1.0 {
+                    GTexel {
+                        position_patch,
+                        normal_uv,
+                    }
+                } else {
+                    GTexel {
+                        position_patch: [0.0; 4],
+                        normal_uv: [0.0; 4],
+                    }
+                }
             })
             .collect())
     }

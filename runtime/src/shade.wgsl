@@ -95,6 +95,9 @@ struct PatchGpu {
 @group(0) @binding(14) var dpool2: texture_2d_array<f32>;
 @group(0) @binding(15) var dpool3: texture_2d_array<f32>;
 @group(0) @binding(16) var out_image: texture_storage_2d<rgba32float, write>;
+// The G-buffer pass's depth: below 1.0 (the clear) where a triangle covers the pixel; the
+// colour targets are not cleared, so only there do gb_position and gb_normal hold this frame.
+@group(0) @binding(17) var gb_depth: texture_depth_2d;
 
 const INVALID: u32 = 0xffffffffu;
 const PI: f32 = 3.14159265358979;
@@ -1351,7 +1354,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let px = vec2<i32>(i32(gid.x), i32(gid.y));
     let g0 = textureLoad(gb_position, px, 0);
     let g1 = textureLoad(gb_normal, px, 0);
-    if (g0.w < 0.5) {
+    if (!(textureLoad(gb_depth, px, 0) < 1.0) || g0.w < 0.5) {
         textureStore(out_image, px, background(gid.xy));
         return;
     }

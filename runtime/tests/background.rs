@@ -246,6 +246,52 @@ fn the_background_changes_neither_the_object_nor_the_mask_nor_the_cache_counters
     );
 }
 
+/// A frame shows nothing of the previous one: the G-buffer pass clears only depth, and the
+/// shading pass and `read_gbuffer` take a pixel as covered by its depth, not by the colour
+/// targets, which keep the last view's texels where nothing covers them now. After a close
+/// view, a far one matches a fresh renderer's bit for bit, image and G-buffer.
+#[test]
+fn a_frame_keeps_nothing_of_the_previous_view() {
+    let new = || {
+        Renderer::new(
+            Gpu::headless().unwrap(),
+            open_store(),
+            CacheConfig::default(),
+        )
+        .unwrap()
+    };
+    let mut r = new();
+    let near = r.default_view();
+    let far = Camera {
+        position: near.target + (near.position - near.target) * 3.0,
+        ..near
+    };
+    let params = ShadingParams::default();
+    let opts = options(Background::None);
+    let first = r.render(&near, &params, &opts).unwrap();
+    let second = r.render(&far, &params, &opts).unwrap();
+    let mut fresh = new();
+    let alone = fresh.render(&far, &params, &opts).unwrap();
+    let covered = |f: &Frame| f.pixels.iter().filter(|p| p[3] == 1.0).count();
+    assert!(
+        covered(&first) > 2 * covered(&alone),
+        "the far view shows the object smaller: {} against {} pixels",
+        covered(&first),
+        covered(&alone)
+    );
+    assert!(
+        second.pixels == alone.pixels,
+        "the far view differs after the near one"
+    );
+    let (a, b) = (r.read_gbuffer().unwrap(), fresh.read_gbuffer().unwrap());
+    assert!(
+        a.iter()
+            .zip(&b)
+            .all(|(a, b)| a.position_patch == b.position_patch && a.normal_uv == b.normal_uv),
+        "the G-buffer keeps texels of the near view"
+    );
+}
+
 #[test]
 fn an_env_background_without_an_environment_cube_is_a_parameter_error() {
     let store = oslf_format::Store::open(&store_path_without_env_cube()).unwrap();
