@@ -11,6 +11,9 @@ use crate::params::ShadeUniform;
 pub(crate) const GBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// The G-buffer pass's depth buffer.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The depth the G-buffer pass clears to: a pixel is covered where its depth is below it
+/// (shade.wgsl `gb_depth`; the colour targets are not cleared).
+pub(crate) const DEPTH_CLEAR: f32 = 1.0;
 /// The shaded image (`out_image` in shade.wgsl).
 pub(crate) const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// shade.wgsl's `@workgroup_size` on each side.

@@ -18,8 +18,8 @@ use crate::geometry::ObjectMesh;
 use crate::gpu::Gpu;
 use crate::params::{Background, ShadeUniform, ShadingParams, Source, StoreConstants};
 use crate::pipelines::{
-    GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines, DEPTH_FORMAT, GBUFFER_FORMAT,
-    OUTPUT_FORMAT, WORKGROUP,
+    GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines, DEPTH_CLEAR, DEPTH_FORMAT,
+    GBUFFER_FORMAT, OUTPUT_FORMAT, WORKGROUP,
 };
 use crate::pool::{CubePool, PoolLayout};
 use crate::reference::GTexel;
@@ -683,7 +683,7 @@ impl Renderer {
 
     /// Encodes the G-buffer pass: clears depth and rasterizes the mesh into the targets. The
     /// colour targets are not cleared: the shading pass and `read_gbuffer` take a pixel as
-    /// covered where its depth is below the cleared 1.0 and ignore the colour elsewhere (an
+    /// covered where its depth is below [`DEPTH_CLEAR`] and ignore the colour elsewhere (an
     /// NVIDIA H200 spent most of the pass clearing the two Rgba32Float targets:
     /// docs/measurements.md).
     fn encode_gbuffer(&self, encoder: &mut wgpu::CommandEncoder, targets: &SizedTargets) {
@@ -713,7 +713,7 @@ impl Renderer {
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &dv,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
+                    load: wgpu::LoadOp::Clear(DEPTH_CLEAR),
                     store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
@@ -836,16 +836,13 @@ impl Renderer {
             .zip(n)
             .zip(z)
             .map(|((position_patch, normal_uv), z)| {
-                if z < 1.0 {
+                if z < DEPTH_CLEAR {
                     GTexel {
                         position_patch,
                         normal_uv,
                     }
                 } else {
-                    GTexel {
-                        position_patch: [0.0; 4],
-                        normal_uv: [0.0; 4],
-                    }
+                    GTexel::default()
                 }
             })
             .collect())
