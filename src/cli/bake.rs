@@ -9,10 +9,10 @@ use oslf_bake::bake::{
 };
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::camera;
-use oslf_bake::image_file;
 use oslf_bake::integrator::Integrator;
 use oslf_bake::scene::Scene;
 use oslf_format::ShardSpec;
+use oslf_util::image_file;
 
 /// Bake an offset surface light field: sample points ε above the object's Bézier patches, a
 /// ray-traced HDR cube map at each, and per-patch sample maps, all written to one store.

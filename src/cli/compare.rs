@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use glam::Vec3;
-use oslf_bake::image_file;
 use oslf_runtime::metrics::{compare, Metrics};
+use oslf_util::image_file;
 
 /// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,
 /// the thesis's scale), RMSE of linear R, G, B, and PSNR, over the reference's object mask.

@@ -8,7 +8,6 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glam::Vec3;
-use oslf_bake::image_file;
 use oslf_format::Store;
 use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
@@ -16,6 +15,7 @@ use oslf_runtime::{
     Blend, CacheConfig, CacheStats, Frame, FrameBytes, Gpu, Granularity, Mode, RenderOptions,
     Renderer, ShadingParams, Source,
 };
+use oslf_util::image_file;
 
 use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
 
@@ -138,7 +138,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("cpu reference  {:.2} s", t.elapsed().as_secs_f64());
     }
     let rgb: Vec<Vec3> = pixels.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
-    oslf_bake::image_file::write_exr_rgba(&args.output, args.width, args.height, &pixels)?;
+    image_file::write_exr_rgba(&args.output, args.width, args.height, &pixels)?;
     let png = args.output.with_extension("png");
     image_file::write_png(&png, args.width, args.height, &rgb, args.exposure)?;
 
@@ -210,7 +210,7 @@ fn check_frame_memory(args: &Args, store: &Store, gpu: &Gpu) -> anyhow::Result<(
         0
     };
     let needed = frame.readback + images + cpu_reference + targets;
-    let Some(available) = oslf_bake::preflight::available_memory() else {
+    let Some(available) = oslf_util::machine::available_memory() else {
         return Ok(());
     };
     if needed > available {

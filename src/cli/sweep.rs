@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
-use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
 use oslf_measure::judge::render_truth;
 use oslf_measure::pareto::pareto_front;
@@ -15,6 +14,7 @@ use oslf_measure::sweep::{
 };
 use oslf_measure::table::Table;
 use oslf_runtime::{Mode, Order, ShadingParams};
+use oslf_util::image_file;
 
 /// Bake variants of a scene and render them with variants of the runtime settings, one setting
 /// changed at a time from the defaults; judge every combination against the ray-traced ground

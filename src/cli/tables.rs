@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthImage, TruthSettings};
-use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
 use oslf_format::Store;
 use oslf_measure::judge::{judge, render_truth, time_interleaved, Judgement, TimedJob};
@@ -15,6 +14,7 @@ use oslf_measure::table::{csv_cell, Table};
 use oslf_runtime::{
     Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, ShadingParams, Source,
 };
+use oslf_util::image_file;
 
 /// Reproduce the thesis's tables on a scene: Table 6.1 (reconstruction error) and Table 6.2
 /// (mirror-reflection error of the environment map and of every OSLF blend) for each store

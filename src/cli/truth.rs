@@ -7,8 +7,8 @@ use anyhow::bail;
 use glam::Vec3;
 use oslf_bake::ashikhmin_shirley::AsLobe;
 use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
-use oslf_bake::image_file;
 use oslf_bake::scene::Scene;
+use oslf_util::image_file;
 
 /// Render the ground truth a runtime image is judged against: the scene's camera, one ray per
 /// pixel centre onto the OSLF object alone, shaded with the bake's path tracer in the scene the

@@ -1,0 +1,126 @@
+//! Writing rendered images: OpenEXR (linear f32, for measurement) and tone-mapped PNG (for eyes).
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Result, UtilError};
+
+/// Writes linear RGB as a 32-bit float OpenEXR file. `pixels` is row-major, top row first.
+pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    check_size(path, width, height, pixels)?;
+    let w = width as usize;
+    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
+        let p = pixels[y * w + x];
+        (p.x, p.y, p.z)
+    })
+    .map_err(|e| UtilError::Image {
+        path: path.to_path_buf(),
+        message: format!("cannot write OpenEXR: {e}"),
+    })
+}
+
+/// Writes linear RGB and alpha (an object mask) as a 32-bit float OpenEXR file. `pixels` is
+/// row-major, top row first.
+pub fn write_exr_rgba(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<()> {
+    if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
+        return Err(UtilError::Image {
+            path: path.to_path_buf(),
+            message: format!(
+                "{} pixels do not make a {width}x{height} image",
+                pixels.len()
+            ),
+        });
+    }
+    let w = width as usize;
+    exr::prelude::write_rgba_file(path, w, height as usize, |x, y| {
+        let p = pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    })
+    .map_err(|e| UtilError::Image {
+        path: path.to_path_buf(),
+        message: format!("cannot write OpenEXR: {e}"),
+    })
+}
+
+/// Tone maps linear RGB (exposure, then the ACES filmic fit of Narkowicz 2015, then the sRGB
+/// curve) and writes an 8-bit PNG. NaN or negative values map to black.
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    exposure: f32,
+) -> Result<()> {
+    check_size(path, width, height, pixels)?;
+    let mut bytes = Vec::with_capacity(pixels.len() * 3);
+    for p in pixels {
+        for c in p.to_array() {
+            bytes.push(to_srgb8(aces(c * exposure)));
+        }
+    }
+    image::save_buffer(path, &bytes, width, height, image::ColorType::Rgb8).map_err(|e| {
+        UtilError::Image {
+            path: path.to_path_buf(),
+            message: format!("cannot write PNG: {e}"),
+        }
+    })
+}
+
+fn check_size(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
+    if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
+        return Err(UtilError::Image {
+            path: path.to_path_buf(),
+            message: format!(
+                "{} pixels do not make a {width}x{height} image",
+                pixels.len()
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// ACES filmic tone curve (Narkowicz 2015 fit); maps [0, ∞) to [0, 1).
+pub fn aces(x: f32) -> f32 {
+    if x.is_nan() || x <= 0.0 {
+        return 0.0;
+    }
+    let x = x.min(1e6);
+    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+/// Linear [0, 1] to an 8-bit sRGB value.
+pub fn to_srgb8(linear: f32) -> u8 {
+    let l = if linear.is_nan() {
+        0.0
+    } else {
+        linear.clamp(0.0, 1.0)
+    };
+    let s = if l <= 0.003_130_8 {
+        12.92 * l
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_curve_is_monotone_and_bounded() {
+        assert_eq!(aces(f32::NAN), 0.0);
+        assert_eq!(aces(-1.0), 0.0);
+        assert!(aces(f32::INFINITY) <= 1.0);
+        let mut last = 0.0;
+        for i in 0..1000 {
+            let v = aces(i as f32 * 0.05);
+            assert!(v >= last);
+            last = v;
+        }
+        assert_eq!(to_srgb8(0.0), 0);
+        assert_eq!(to_srgb8(1.0), 255);
+        assert_eq!(to_srgb8(0.5), 188);
+    }
+}
