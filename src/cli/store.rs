@@ -263,75 +263,122 @@ fn convert(input: &Path, output: &Path, encoding: Encoding) -> Result<()> {
 
 fn info(path: &Path, json: bool) -> Result<()> {
     let s = open(path)?;
+    let sizes = Sizes::of(&s);
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&info_json(path, &s, &sizes))?
+        );
+    } else {
+        print_info(path, &s, &sizes);
+    }
+    Ok(())
+}
+
+/// What `store info` reports of the cube data's size.
+struct Sizes {
+    texels: u64,
+    cube_bytes: u64,
+    raw_bytes: u64,
+    bytes_per_texel: f64,
+    ratio: f64,
+    scene_hash: String,
+}
+
+impl Sizes {
+    fn of(s: &Store) -> Sizes {
+        let h = s.header();
+        let texels = u64::from(s.cube_count()) * FACES as u64 * u64::from(h.cube_resolution).pow(2);
+        let cube_bytes = s.cube_bytes();
+        let raw_bytes = u64::from(s.cube_count()) * FACES as u64 * s.face_raw_size() as u64;
+        let bytes_per_texel = if texels > 0 {
+            cube_bytes as f64 / texels as f64
+        } else {
+            0.0
+        };
+        let ratio = if cube_bytes > 0 {
+            raw_bytes as f64 / cube_bytes as f64
+        } else {
+            0.0
+        };
+        let scene_hash = s
+            .meta()
+            .bake
+            .scene_hash
+            .iter()
+            .map(|v| format!("{v:02x}"))
+            .collect();
+        Sizes {
+            texels,
+            cube_bytes,
+            raw_bytes,
+            bytes_per_texel,
+            ratio,
+            scene_hash,
+        }
+    }
+}
+
+/// `store info --json`.
+fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
     let h = s.header();
     let m = s.meta();
     let b = &m.bake;
-    let texels = u64::from(s.cube_count()) * FACES as u64 * u64::from(h.cube_resolution).pow(2);
-    let cube_bytes = s.cube_bytes();
-    let raw_bytes = u64::from(s.cube_count()) * FACES as u64 * s.face_raw_size() as u64;
-    let bytes_per_texel = if texels > 0 {
-        cube_bytes as f64 / texels as f64
-    } else {
-        0.0
-    };
-    let ratio = if cube_bytes > 0 {
-        raw_bytes as f64 / cube_bytes as f64
-    } else {
-        0.0
-    };
-    let hex: String = b.scene_hash.iter().map(|v| format!("{v:02x}")).collect();
-    if json {
-        let v = serde_json::json!({
-            "path": path.display().to_string(),
-            "version": h.version,
-            "flags": h.flags,
-            "encoding": b.encoding.name(),
-            "mantissa_bits": b.mantissa_bits,
-            "face_filter": h.filter.name(),
-            "encoded_bytes_per_texel": b.encoding.bytes_per_texel(),
-            "distance_channel": b.distance_channel,
-            "env_cube_index": s.env_cube_index(),
-            "sample_points": h.sample_count,
-            "cubes": s.cube_count(),
-            // Sample maps: Bézier patches plus mesh atlas pages (format version 5).
-            "patches": m.map_count(),
-            "sample_maps": m.map_count(),
-            "bezier_patches": m.patches.len(),
-            "objects": m.objects.iter().map(|o| {
-                let mut v = serde_json::json!({
-                    "name": o.name, "first_patch": o.first_patch, "patch_count": o.patch_count,
-                    "base_color": o.base_color,
-                    "kind": if o.mesh.is_some() { "mesh" } else { "bezier" },
-                });
-                if let Some(mesh) = &o.mesh {
-                    v["vertices"] = mesh.positions.len().into();
-                    v["triangles"] = mesh.triangles.len().into();
-                    v["atlas_grid"] = mesh.atlas_grid.into();
-                }
-                v
-            }).collect::<Vec<_>>(),
-            "cube_resolution": b.cube_resolution,
-            "sample_map_resolution": b.sample_map_resolution,
-            "index_width_bytes": s.index_width().bytes(),
-            "bake": {
-                "epsilon": b.epsilon, "phi_samplemap_deg": b.phi_samplemap_deg,
-                "samples_per_texel": b.samples_per_texel, "bounces": b.bounces,
-                "seed": b.seed, "zstd_level": b.zstd_level, "scene_hash": hex,
-            },
-            "camera": m.camera.as_ref().map(|c| serde_json::json!({
-                "position": c.position, "target": c.target, "up": c.up, "vfov_deg": c.vfov_deg,
-            })),
-            "file_size": s.file_size(),
-            "face_raw_size": s.face_raw_size(),
-            "cube_bytes": cube_bytes,
-            "raw_cube_bytes": raw_bytes,
-            "texels": texels,
-            "disk_bytes_per_texel": bytes_per_texel,
-            "compression_ratio": ratio,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
-    }
+    serde_json::json!({
+        "path": path.display().to_string(),
+        "version": h.version,
+        "flags": h.flags,
+        "encoding": b.encoding.name(),
+        "mantissa_bits": b.mantissa_bits,
+        "face_filter": h.filter.name(),
+        "encoded_bytes_per_texel": b.encoding.bytes_per_texel(),
+        "distance_channel": b.distance_channel,
+        "env_cube_index": s.env_cube_index(),
+        "sample_points": h.sample_count,
+        "cubes": s.cube_count(),
+        // Sample maps: Bézier patches plus mesh atlas pages (format version 5).
+        "patches": m.map_count(),
+        "sample_maps": m.map_count(),
+        "bezier_patches": m.patches.len(),
+        "objects": m.objects.iter().map(|o| {
+            let mut v = serde_json::json!({
+                "name": o.name, "first_patch": o.first_patch, "patch_count": o.patch_count,
+                "base_color": o.base_color,
+                "kind": if o.mesh.is_some() { "mesh" } else { "bezier" },
+            });
+            if let Some(mesh) = &o.mesh {
+                v["vertices"] = mesh.positions.len().into();
+                v["triangles"] = mesh.triangles.len().into();
+                v["atlas_grid"] = mesh.atlas_grid.into();
+            }
+            v
+        }).collect::<Vec<_>>(),
+        "cube_resolution": b.cube_resolution,
+        "sample_map_resolution": b.sample_map_resolution,
+        "index_width_bytes": s.index_width().bytes(),
+        "bake": {
+            "epsilon": b.epsilon, "phi_samplemap_deg": b.phi_samplemap_deg,
+            "samples_per_texel": b.samples_per_texel, "bounces": b.bounces,
+            "seed": b.seed, "zstd_level": b.zstd_level, "scene_hash": z.scene_hash,
+        },
+        "camera": m.camera.as_ref().map(|c| serde_json::json!({
+            "position": c.position, "target": c.target, "up": c.up, "vfov_deg": c.vfov_deg,
+        })),
+        "file_size": s.file_size(),
+        "face_raw_size": s.face_raw_size(),
+        "cube_bytes": z.cube_bytes,
+        "raw_cube_bytes": z.raw_bytes,
+        "texels": z.texels,
+        "disk_bytes_per_texel": z.bytes_per_texel,
+        "compression_ratio": z.ratio,
+    })
+}
+
+/// `store info` as text.
+fn print_info(path: &Path, s: &Store, z: &Sizes) {
+    let h = s.header();
+    let m = s.meta();
+    let b = &m.bake;
     println!("store            {}", path.display());
     println!("format version   {} (flags {:#x})", h.version, h.flags);
     println!("face filter      {} (id {})", h.filter, h.filter.id());
@@ -400,7 +447,7 @@ fn info(path: &Path, json: bool) -> Result<()> {
         "bake             epsilon {}, phi {} deg, {} spp, {} bounces, seed {}, zstd level {}",
         b.epsilon, b.phi_samplemap_deg, b.samples_per_texel, b.bounces, b.seed, b.zstd_level
     );
-    println!("scene hash       {hex}");
+    println!("scene hash       {}", z.scene_hash);
     if let Some(c) = &m.camera {
         println!(
             "camera           position {:?}, target {:?}, up {:?}, vfov {} deg",
@@ -408,9 +455,14 @@ fn info(path: &Path, json: bool) -> Result<()> {
         );
     }
     println!("file size        {} bytes", s.file_size());
-    println!("cube data        {cube_bytes} bytes compressed, {raw_bytes} raw, {texels} texels");
-    println!("on disk          {bytes_per_texel:.3} bytes/texel, compression ratio {ratio:.2}x");
-    Ok(())
+    println!(
+        "cube data        {} bytes compressed, {} raw, {} texels",
+        z.cube_bytes, z.raw_bytes, z.texels
+    );
+    println!(
+        "on disk          {:.3} bytes/texel, compression ratio {:.2}x",
+        z.bytes_per_texel, z.ratio
+    );
 }
 
 fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> {
