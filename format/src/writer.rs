@@ -20,7 +20,7 @@ use crate::header::{
     FLAG_DISTANCE, FLAG_ENV_CUBE, HEADER_BYTES, SECTION_CHECKSUMS,
 };
 use crate::meta::{
-    decode_meta, encode_meta, encode_points, validate_points, SamplePoint, StoreMeta,
+    decode_meta, encode_meta, encode_points, validate_points, ObjectInfo, SamplePoint, StoreMeta,
     SAMPLE_POINT_BYTES,
 };
 use crate::sample_map::{encode_maps, SampleMaps};
@@ -1015,6 +1015,83 @@ fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
     Ok(h)
 }
 
+/// How a setting compared by [`setting_differences`] reads from a store's header and
+/// metadata, as its messages print it.
+type ReadSetting = fn(&Header, &StoreMeta) -> String;
+
+/// The settings [`setting_differences`] compares, in the order it names them: the name its
+/// messages use and how to read the value.
+const SETTINGS: [(&str, ReadSetting); 16] = [
+    ("scene hash (the scene file's text)", |_, m| {
+        let s: String = m.bake.scene_hash[..8]
+            .iter()
+            .map(|v| format!("{v:02x}"))
+            .collect();
+        format!("{s}…")
+    }),
+    ("seed", |_, m| m.bake.seed.to_string()),
+    ("cube_resolution", |_, m| m.bake.cube_resolution.to_string()),
+    ("sample count", |h, _| h.sample_count.to_string()),
+    ("sample_map_resolution", |_, m| {
+        m.bake.sample_map_resolution.to_string()
+    }),
+    ("samples_per_texel", |_, m| {
+        m.bake.samples_per_texel.to_string()
+    }),
+    ("bounces", |_, m| m.bake.bounces.to_string()),
+    ("epsilon", |_, m| m.bake.epsilon.to_string()),
+    ("phi_samplemap", |_, m| {
+        format!("{}°", m.bake.phi_samplemap_deg)
+    }),
+    ("encoding", |_, m| m.bake.encoding.to_string()),
+    ("mantissa_bits", |_, m| m.bake.mantissa_bits.to_string()),
+    ("face filter", |h, _| h.filter.to_string()),
+    ("distance_channel", |_, m| {
+        m.bake.distance_channel.to_string()
+    }),
+    ("zstd_level", |_, m| m.bake.zstd_level.to_string()),
+    ("env_cube", |_, m| m.has_env_cube.to_string()),
+    ("camera", |_, m| match &m.camera {
+        Some(c) => format!(
+            "position {:?}, target {:?}, up {:?}, vfov {}°",
+            c.position, c.target, c.up, c.vfov_deg
+        ),
+        None => "none".into(),
+    }),
+];
+
+/// How a field compared by [`setting_differences`] reads from an object.
+type ReadObjectField = fn(&ObjectInfo) -> String;
+
+/// The fields of an object [`setting_differences`] compares, named as its messages name them
+/// after the object.
+const OBJECT_FIELDS: [(&str, ReadObjectField); 4] = [
+    ("name", |o| format!("{:?}", o.name)),
+    ("transform", |o| format!("{:?}", o.transform)),
+    ("colour", |o| format!("{:?}", o.base_color)),
+    ("patches", |o| {
+        format!(
+            "{}..{}",
+            o.first_patch,
+            u64::from(o.first_patch) + u64::from(o.patch_count)
+        )
+    }),
+];
+
+/// What an object is made of, as [`setting_differences`] names it.
+fn object_kind(o: &ObjectInfo) -> String {
+    match &o.mesh {
+        None => "Bézier patches".to_string(),
+        Some(m) => format!(
+            "triangle mesh ({} vertices, {} triangles, {}×{} atlas pages)",
+            m.positions.len(),
+            m.triangles.len(),
+            m.atlas_grid,
+            m.atlas_grid
+        ),
+    }
+}
+
 /// What differs between the settings a partial file was started with (`old`) and those of
 /// the bake that wants to continue it (`new`): one `"name old (this bake: new)"` per bake
 /// parameter, count, camera, object or patch. Empty if they agree.
@@ -1031,78 +1108,9 @@ pub(crate) fn setting_differences(
             d.push(format!("{name} {a} ({new_label}: {b})"));
         }
     };
-    let hex = |h: &[u8; 32]| -> String {
-        let s: String = h.iter().take(8).map(|v| format!("{v:02x}")).collect();
-        format!("{s}…")
-    };
-    let (a, b) = (&old.bake, &new.bake);
-    diff(
-        "scene hash (the scene file's text)",
-        hex(&a.scene_hash),
-        hex(&b.scene_hash),
-    );
-    diff("seed", a.seed.to_string(), b.seed.to_string());
-    diff(
-        "cube_resolution",
-        a.cube_resolution.to_string(),
-        b.cube_resolution.to_string(),
-    );
-    diff(
-        "sample count",
-        old_header.sample_count.to_string(),
-        new_header.sample_count.to_string(),
-    );
-    diff(
-        "sample_map_resolution",
-        a.sample_map_resolution.to_string(),
-        b.sample_map_resolution.to_string(),
-    );
-    diff(
-        "samples_per_texel",
-        a.samples_per_texel.to_string(),
-        b.samples_per_texel.to_string(),
-    );
-    diff("bounces", a.bounces.to_string(), b.bounces.to_string());
-    diff("epsilon", a.epsilon.to_string(), b.epsilon.to_string());
-    diff(
-        "phi_samplemap",
-        format!("{}°", a.phi_samplemap_deg),
-        format!("{}°", b.phi_samplemap_deg),
-    );
-    diff("encoding", a.encoding.to_string(), b.encoding.to_string());
-    diff(
-        "mantissa_bits",
-        a.mantissa_bits.to_string(),
-        b.mantissa_bits.to_string(),
-    );
-    diff(
-        "face filter",
-        old_header.filter.to_string(),
-        new_header.filter.to_string(),
-    );
-    diff(
-        "distance_channel",
-        a.distance_channel.to_string(),
-        b.distance_channel.to_string(),
-    );
-    diff(
-        "zstd_level",
-        a.zstd_level.to_string(),
-        b.zstd_level.to_string(),
-    );
-    diff(
-        "env_cube",
-        old.has_env_cube.to_string(),
-        new.has_env_cube.to_string(),
-    );
-    let camera = |c: &Option<crate::CameraInfo>| match c {
-        Some(c) => format!(
-            "position {:?}, target {:?}, up {:?}, vfov {}°",
-            c.position, c.target, c.up, c.vfov_deg
-        ),
-        None => "none".into(),
-    };
-    diff("camera", camera(&old.camera), camera(&new.camera));
+    for (name, read) in SETTINGS {
+        diff(name, read(old_header, old), read(new_header, new));
+    }
     let mut mesh_note = None;
     if old.objects.len() != new.objects.len() {
         diff(
@@ -1117,50 +1125,15 @@ pub(crate) fn setting_differences(
         .enumerate()
         .find(|(_, (x, y))| x != y)
     {
-        let name = format!("object {i} ({:?})", y.name);
-        diff(
-            &format!("{name} name"),
-            format!("{:?}", x.name),
-            format!("{:?}", y.name),
-        );
-        diff(
-            &format!("{name} transform"),
-            format!("{:?}", x.transform),
-            format!("{:?}", y.transform),
-        );
-        diff(
-            &format!("{name} colour"),
-            format!("{:?}", x.base_color),
-            format!("{:?}", y.base_color),
-        );
-        diff(
-            &format!("{name} patches"),
-            format!(
-                "{}..{}",
-                x.first_patch,
-                u64::from(x.first_patch) + u64::from(x.patch_count)
-            ),
-            format!(
-                "{}..{}",
-                y.first_patch,
-                u64::from(y.first_patch) + u64::from(y.patch_count)
-            ),
-        );
-        let kind = |m: &Option<crate::MeshInfo>| match m {
-            None => "Bézier patches".to_string(),
-            Some(m) => format!(
-                "triangle mesh ({} vertices, {} triangles, {}×{} atlas pages)",
-                m.positions.len(),
-                m.triangles.len(),
-                m.atlas_grid,
-                m.atlas_grid
-            ),
-        };
-        let (a, b) = (kind(&x.mesh), kind(&y.mesh));
+        let object = format!("object {i} ({:?})", y.name);
+        for (field, read) in OBJECT_FIELDS {
+            diff(&format!("{object} {field}"), read(x), read(y));
+        }
+        let (a, b) = (object_kind(x), object_kind(y));
         if a != b {
-            diff(&format!("{name} kind"), a, b);
+            diff(&format!("{object} kind"), a, b);
         } else if x.mesh != y.mesh {
-            mesh_note = Some(format!("the vertices or triangles of {name}"));
+            mesh_note = Some(format!("the vertices or triangles of {object}"));
         }
     }
     if old.patches.len() != new.patches.len() {
