@@ -337,7 +337,7 @@ impl ShardWriter {
         let file_len = file.metadata().map_err(io_at(&partial, "stat"))?.len();
         let mismatch = |what: String| Error::ResumeMismatch {
             path: partial.clone(),
-            what: format!("{what}; bake without --resume to start over"),
+            what,
         };
         let never_created = |detail: String| Error::PartialNeverCreated {
             path: partial.clone(),
@@ -765,10 +765,10 @@ fn open_shard(path: &Path) -> Result<OpenShard, Error> {
     reader.read_exact(&mut b).map_err(io_at(path, "read"))?;
     let header = ShardHeader::parse(&b).map_err(bad)?;
     if header.flags & SHARD_COMPLETE == 0 {
-        return Err(bad(format!(
-            "shard {} was never finished (the COMPLETE flag is clear); finish its bake with --resume",
-            header.spec
-        )));
+        return Err(Error::UnfinishedShard {
+            path: path.to_path_buf(),
+            shard: header.spec,
+        });
     }
     if header.file_size != file_len {
         return Err(bad(format!(

@@ -388,7 +388,7 @@ impl StoreWriter {
             // Versions 2 to 4 share version 4's metadata layout: continue as version 4.
             prefix = Prefix::build_version(meta, points, maps, filter, 4).map_err(|e| {
                 rd.mismatch(format!(
-                    "it is format version {}, which this bake cannot continue ({e}); bake without --resume to start over",
+                    "it is format version {}, which this bake cannot continue ({e})",
                     old.version
                 ))
             })?;
@@ -616,7 +616,8 @@ fn open_partial(partial: &Path) -> Result<File, Error> {
 
 /// The end of the errors that find a partial file's fixed sections differ from this bake's
 /// although every setting is the same.
-const SAME_SETTINGS: &str = "although every setting is the same (written by another version of oslf?); bake without --resume to start over";
+const SAME_SETTINGS: &str =
+    "although every setting is the same (written by another version of oslf?)";
 
 /// A partial file read front to back by [`StoreWriter::resume`], and the errors it reports.
 struct PartialReader<'a> {
@@ -640,19 +641,11 @@ struct Recovered {
 }
 
 impl PartialReader<'_> {
-    /// [`Error::ResumeMismatch`] saying `what` differs.
+    /// [`Error::ResumeMismatch`] saying `what` differs or is damaged.
     fn mismatch(&self, what: String) -> Error {
         Error::ResumeMismatch {
             path: self.partial.to_path_buf(),
             what,
-        }
-    }
-
-    /// [`Error::ResumeMismatch`] saying `what` is damaged.
-    fn damaged(&self, what: String) -> Error {
-        Error::ResumeMismatch {
-            path: self.partial.to_path_buf(),
-            what: format!("{what}; bake without --resume to start over"),
         }
     }
 
@@ -683,7 +676,7 @@ impl PartialReader<'_> {
         if got.iter().all(|b| *b == 0) {
             return Err(self.never_created("its header is all zero bytes".into()));
         }
-        let old = parse_partial_header(&got).map_err(|what| self.damaged(what))?;
+        let old = parse_partial_header(&got).map_err(|what| self.mismatch(what))?;
         // create() writes the fixed sections front to back, then syncs, before any cube.
         let fixed_end = old.payload.offset;
         if file_len < fixed_end {
@@ -707,19 +700,19 @@ impl PartialReader<'_> {
         self.read(&mut old_meta_bytes)?;
         let computed = xxh3_64(&old_meta_bytes);
         if computed != old.meta_checksum {
-            return Err(self.damaged(format!(
+            return Err(self.mismatch(format!(
                 "its metadata section (byte offset {}) is damaged: checksum {computed:#018x}, its header says {:#018x}",
                 old.meta.offset, old.meta_checksum
             )));
         }
         let old_meta = decode_meta(&old_meta_bytes, old.meta.offset, old.version)
-            .map_err(|e| self.damaged(format!("its metadata section is damaged: {e}")))?;
+            .map_err(|e| self.mismatch(format!("its metadata section is damaged: {e}")))?;
         let differences = setting_differences(old, &old_meta, new_header, meta, "this bake");
         if !differences.is_empty() {
-            return Err(self.mismatch(format!(
-                "it was started with different settings: {}; bake without --resume to start over, or pass the settings it was started with",
-                differences.join(", ")
-            )));
+            return Err(Error::ResumeSettings {
+                path: self.partial.to_path_buf(),
+                differences,
+            });
         }
         Ok(old_meta_bytes)
     }
