@@ -378,11 +378,14 @@
 pub mod bc6h;
 pub(crate) mod bytes;
 pub mod cube;
+mod differences;
 pub mod encoding;
 mod error;
 pub mod filter;
 pub mod header;
 pub mod meta;
+mod prefix;
+mod resume;
 pub mod sample_map;
 pub mod shard;
 pub mod store;
