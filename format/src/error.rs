@@ -285,12 +285,15 @@ pub enum Error {
     /// which, with the byte offset where one applies).
     #[error("shard file {path}: {detail}")]
     InvalidShard { path: PathBuf, detail: String },
-    /// A shard file whose bake never finished it (a partial shard): its bake must be resumed
-    /// before the shards can be merged.
-    #[error("shard file {path}: shard {shard} was never finished (the COMPLETE flag is clear)")]
+    /// A shard file, shard `index` of `count`, whose bake never finished it (a partial shard):
+    /// its bake must be resumed before the shards can be merged.
+    #[error(
+        "shard file {path}: shard {index}/{count} was never finished (the COMPLETE flag is clear)"
+    )]
     UnfinishedShard {
         path: PathBuf,
-        shard: crate::shard::ShardSpec,
+        index: u32,
+        count: u32,
     },
     /// Shard files that do not make one store together: missing or repeated shard indices,
     /// different shard counts, or different scenes or settings (`0` names them).

@@ -43,7 +43,8 @@ fn open_shard(path: &Path) -> Result<OpenShard, Error> {
     if header.flags & SHARD_COMPLETE == 0 {
         return Err(Error::UnfinishedShard {
             path: path.to_path_buf(),
-            shard: header.spec,
+            index: header.spec.index(),
+            count: header.spec.count(),
         });
     }
     if header.file_size != file_len {
