@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{oslf, read_exr, runtime_fixture, temp_dir};
+use common::{oslf, read_exr, runtime_fixture};
 
 /// Renders `store` at 64×48 into `dir/name.exr` with `extra` flags: (success, stderr, path).
 fn render(store: &Path, dir: &Path, name: &str, extra: &[&str]) -> (bool, String, PathBuf) {
@@ -29,7 +29,8 @@ fn render(store: &Path, dir: &Path, name: &str, extra: &[&str]) -> (bool, String
 #[test]
 fn every_source_and_switch_renders_and_changes_the_image() {
     let store = runtime_fixture::store_path();
-    let dir = temp_dir("sources", "all");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let mut images = Vec::new();
     for (name, flags) in [
         ("oslf", vec!["--mode", "mirror"]),
@@ -74,7 +75,8 @@ fn every_source_and_switch_renders_and_changes_the_image() {
 #[test]
 fn bad_source_flags_are_named() {
     let store = runtime_fixture::store_path();
-    let dir = temp_dir("sources", "bad");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     for (flags, expect) in [
         (vec!["--source", "probe"], "unknown source \"probe\""),
         (vec!["--proxy-box", "1,2,3"], "is not a box"),
@@ -94,7 +96,8 @@ fn bad_source_flags_are_named() {
 #[test]
 fn a_store_without_distances_says_so_and_parallax_needs_a_box() {
     let store = runtime_fixture::store_path_without_distances();
-    let dir = temp_dir("sources", "no-distance");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let (ok, e, out) = render(&store, &dir, "default", &["--mode", "mirror"]);
     assert!(ok, "{e}");
     assert!(
