@@ -172,7 +172,7 @@ fn resume_of_a_partial_killed_during_create_starts_over() {
     let dir = tmp.path();
     let partial = dir.join("lid.oslf.partial");
     for keep in [0u64, 100, 300] {
-        let out = bake_in(&dir, SCENE, &["--max-cubes", "1"]);
+        let out = bake_in(dir, SCENE, &["--max-cubes", "1"]);
         assert!(out.status.success(), "{}", stderr(&out));
         let len = std::fs::metadata(&partial).unwrap().len();
         assert!(keep < len);
@@ -182,7 +182,7 @@ fn resume_of_a_partial_killed_during_create_starts_over() {
             .unwrap()
             .set_len(keep)
             .unwrap();
-        let out = bake_in(&dir, SCENE, &["--resume"]);
+        let out = bake_in(dir, SCENE, &["--resume"]);
         let err = stderr(&out);
         assert!(out.status.success(), "{err}");
         let lines: Vec<&str> = err.lines().collect();
@@ -214,7 +214,7 @@ fn resume_with_other_settings_names_each_setting() {
     let text = format!(
         "{SCENE}\n[presets.seed9]\nseed = 9\n\n[presets.res4]\ncube_resolution = 4\nseed = 9\n"
     );
-    let out = bake_in(&dir, &text, &["--max-cubes", "2"]);
+    let out = bake_in(dir, &text, &["--max-cubes", "2"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let partial = dir.join("lid.oslf.partial");
     let before = std::fs::read(&partial).unwrap();
@@ -226,7 +226,7 @@ fn resume_with_other_settings_names_each_setting() {
             "seed 0 (this bake: 9), cube_resolution 2 (this bake: 4)",
         ),
     ] {
-        let out = bake_in(&dir, &text, &["--resume", "-p", preset]);
+        let out = bake_in(dir, &text, &["--resume", "-p", preset]);
         assert!(!out.status.success());
         let err = stderr(&out);
         assert_eq!(
@@ -243,7 +243,7 @@ fn resume_with_other_settings_names_each_setting() {
         );
     }
     // The settings it was started with continue it.
-    let out = bake_in(&dir, &text, &["--resume"]);
+    let out = bake_in(dir, &text, &["--resume"]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         String::from_utf8_lossy(&out.stdout).contains("(2 recovered from the interrupted bake)")
@@ -294,7 +294,7 @@ fn unwritable_outputs_fail_before_the_bake() {
     assert!(!out.exists());
     assert!(!dir.join("lid.oslf.partial").exists());
     assert_eq!(
-        std::fs::read_dir(&dir).unwrap().count(),
+        std::fs::read_dir(dir).unwrap().count(),
         1,
         "only the scene, no probe files"
     );

@@ -85,7 +85,7 @@ fn merged_shards_are_byte_identical_to_a_single_bake() {
             .map(|i| {
                 // Thread counts differ per shard: the bytes must not.
                 let threads = (1 + i % 2).to_string();
-                shard(&scene, &dir, i, n, &["-j", &threads])
+                shard(&scene, dir, i, n, &["-j", &threads])
             })
             .collect();
         shards.reverse(); // merge takes them in any order
@@ -115,7 +115,7 @@ fn an_interrupted_shard_resumes_and_merges_to_the_same_bytes() {
     let mut shards = Vec::new();
     for i in 0..n {
         if i != 1 {
-            shards.push(shard(&scene, &dir, i, n, &[]));
+            shards.push(shard(&scene, dir, i, n, &[]));
             continue;
         }
         // Shard 1 (8 cubes) stops after 3 cubes, again after 2 more, then finishes.
@@ -209,7 +209,7 @@ fn resume_refuses_another_shard_or_other_settings() {
 fn merge_names_missing_repeated_and_mismatched_shards() {
     let (tmp, scene, _) = setup();
     let dir = tmp.path();
-    let s: Vec<PathBuf> = (0..4).map(|i| shard(&scene, &dir, i, 4, &[])).collect();
+    let s: Vec<PathBuf> = (0..4).map(|i| shard(&scene, dir, i, 4, &[])).collect();
     let out = dir.join("out.oslf");
     let check = |shards: &[PathBuf], needles: &[&str]| {
         let err = run_err(&mut merge(shards, &out));

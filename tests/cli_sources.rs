@@ -54,7 +54,7 @@ fn every_source_and_switch_renders_and_changes_the_image() {
             vec!["--mode", "glossy", "-M", "4", "--glossy-filter", "point"],
         ),
     ] {
-        let (ok, e, out) = render(&store, &dir, name, &flags);
+        let (ok, e, out) = render(&store, dir, name, &flags);
         assert!(ok, "{name}: {e}");
         assert!(!e.contains("warning"), "{name}: {e}");
         let (_, px) = read_exr(&out);
@@ -87,7 +87,7 @@ fn bad_source_flags_are_named() {
             "cannot be used with",
         ),
     ] {
-        let (ok, e, _) = render(&store, &dir, "bad", &flags);
+        let (ok, e, _) = render(&store, dir, "bad", &flags);
         assert!(!ok, "{flags:?} must fail");
         assert!(e.contains(expect), "{flags:?}: {e}");
     }
@@ -98,14 +98,14 @@ fn a_store_without_distances_says_so_and_parallax_needs_a_box() {
     let store = runtime_fixture::store_path_without_distances();
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let (ok, e, out) = render(&store, &dir, "default", &["--mode", "mirror"]);
+    let (ok, e, out) = render(&store, dir, "default", &["--mode", "mirror"]);
     assert!(ok, "{e}");
     assert!(
         e.contains("warning:") && e.contains("no distance channel") && e.contains("--no-depth"),
         "{e}"
     );
     assert!(out.exists());
-    let (ok, e, out) = render(&store, &dir, "strict", &["--mode", "mirror", "--strict"]);
+    let (ok, e, out) = render(&store, dir, "strict", &["--mode", "mirror", "--strict"]);
     assert!(
         !ok && e.contains("--strict") && e.contains("no distance channel"),
         "{e}"
@@ -113,19 +113,19 @@ fn a_store_without_distances_says_so_and_parallax_needs_a_box() {
     assert!(!out.exists());
     let (ok, e, _) = render(
         &store,
-        &dir,
+        dir,
         "plain",
         &["--mode", "mirror", "--no-depth", "--strict"],
     );
     assert!(ok && !e.contains("warning"), "{e}");
-    let (ok, e, _) = render(&store, &dir, "parallax", &["--source", "parallax"]);
+    let (ok, e, _) = render(&store, dir, "parallax", &["--source", "parallax"]);
     assert!(
         !ok && e.contains("no distance channel") && e.contains("--proxy-box"),
         "{e}"
     );
     let (ok, e, _) = render(
         &store,
-        &dir,
+        dir,
         "parallax-box",
         &[
             "--source",

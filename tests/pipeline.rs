@@ -57,7 +57,7 @@ fn bake_with_threads(
 fn same_scene_and_seed_give_the_same_bytes_with_one_or_two_threads() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = scene(&dir);
+    let scene = scene(dir);
     let a = dir.join("one.oslf");
     let b = dir.join("two.oslf");
     bake_with_threads(&scene, &a, 1, None, false);
@@ -71,7 +71,7 @@ fn same_scene_and_seed_give_the_same_bytes_with_one_or_two_threads() {
 fn an_interrupted_bake_resumes_to_the_same_store() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = scene(&dir);
+    let scene = scene(dir);
     let whole = dir.join("whole.oslf");
     bake_with_threads(&scene, &whole, 2, None, false);
 
@@ -97,7 +97,7 @@ fn an_interrupted_bake_resumes_to_the_same_store() {
 fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = scene(&dir);
+    let scene = scene(dir);
     let out = dir.join("s.oslf");
     bake_with_threads(&scene, &out, 2, None, false);
     let store = Store::open(&out).unwrap();
@@ -163,7 +163,7 @@ fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
 fn sample_points_sit_epsilon_above_their_patch() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = scene(&dir);
+    let scene = scene(dir);
     let out = dir.join("p.oslf");
     bake_with_threads(&scene, &out, 2, None, false);
     let store = Store::open(&out).unwrap();
