@@ -218,7 +218,7 @@ impl StoreWriter {
     /// no finished cube maps, so create the store again; [`Error::ResumeMismatch`] if it was
     /// started with different settings (naming each bake parameter, count or object that
     /// differs, the partial's value and this bake's), is damaged, or is not a partial store of
-    /// format version 2 to [`VERSION`]. Partial files of versions 2 to 4 are continued and
+    /// format version 2 to [`crate::VERSION`]. Partial files of versions 2 to 4 are continued and
     /// finished as version 4 (version 2's layout differs from version 4's only in the header's
     /// decoded-faces checksum, which `finish()` writes; version 3's only in the version number,
     /// version 4 adding the BC6H encoding), so they cannot take mesh objects, whose object

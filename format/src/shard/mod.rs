@@ -1,5 +1,5 @@
 //! Shards: a deterministic share of a store's cube maps, baked on its own machine and merged
-//! into the store later ([`merge`]), byte for byte the store a single bake writes.
+//! into the store later ([`merge()`]), byte for byte the store a single bake writes.
 //!
 //! Shard `I/N` holds the cubes `i` with `i % N == I` (interleaved: neighbouring sample points
 //! cost about the same to trace, so every shard gets a fair share of the expensive ones, and
@@ -35,7 +35,7 @@
 //! decoded-faces checksum hashes) and a `u64` checksum of those 48 bytes.
 //!
 //! A shard is written to `<path>.partial` and renamed when finished, like a store;
-//! [`ShardWriter::resume`] keeps its complete records after a kill. [`merge`] checks that the
+//! [`ShardWriter::resume`] keeps its complete records after a kill. [`merge()`] checks that the
 //! shards form one complete set (same shard count, every index once, identical prefixes),
 //! then writes the store through [`crate::StoreWriter`]: the prefix, the records in cube
 //! order, the table of contents.

@@ -103,7 +103,7 @@ impl ShardWriter {
     /// every complete cube record (valid record header, frame checksums and trailer),
     /// truncates the rest and continues.
     ///
-    /// Errors as [`StoreWriter::resume`]: [`Error::NoPartial`], [`Error::PartialNeverCreated`]
+    /// Errors as [`crate::StoreWriter::resume`]: [`Error::NoPartial`], [`Error::PartialNeverCreated`]
     /// (start over with `create`), [`Error::ResumeMismatch`] naming what differs.
     pub fn resume(
         path: &Path,
