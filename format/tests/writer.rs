@@ -571,3 +571,38 @@ fn a_version_2_partial_is_finished_as_version_4() {
         "{e}"
     );
 }
+
+/// A shard whose bake never finished it is refused by the merge, naming the file and the
+/// shard (index and count), with no hint of a command-line flag.
+#[test]
+fn merging_an_unfinished_shard_names_it() {
+    let f = fixture(spec());
+    let (dir, _) = temp_store("unused.oslf");
+    let total = f.cubes.len() as u32;
+    let mut paths = Vec::new();
+    for index in 0..2 {
+        let s = ShardSpec::new(index, 2).unwrap();
+        let path = dir.path().join(format!("s.shard-{index}"));
+        let mut w = ShardWriter::create(&path, s, &f.meta, &f.points, &f.maps).unwrap();
+        for k in 0..s.cubes_of(total) {
+            let i = s.cube(k);
+            w.append(encoded(&f, i as usize)).unwrap();
+        }
+        if index == 0 {
+            w.finish().unwrap();
+            paths.push(path);
+        } else {
+            // Killed before finish(): the file keeps its `.partial` name.
+            paths.push(w.partial_path().to_path_buf());
+            drop(w);
+        }
+    }
+    let e = shard::merge(&paths, &dir.path().join("merged.oslf"))
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::UnfinishedShard { path, index: 1, count: 2 } if *path == paths[1]),
+        "{e}"
+    );
+    assert!(!e.to_string().contains("--"), "{e}");
+}
