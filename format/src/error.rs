@@ -270,11 +270,13 @@ pub enum Error {
     /// A block-compressed encoding (BC6H) passed to a per-texel encoder or decoder, which
     /// cannot split a face into its 4×4 blocks.
     #[error("{encoding} encodes whole faces in 4×4 blocks, not single texels (use encode_face_texels / decode_face_texels)")]
-    WholeFaceEncoding { encoding: crate::Encoding },
+    WholeFaceEncoding {
+        encoding: crate::encoding_kind::Encoding,
+    },
     /// An encoding the store's format version cannot hold (BC6H needs version 4).
     #[error("encoding {encoding} at header byte offset 16 needs format version {needs} or later, but the store is version {version}")]
     EncodingVersion {
-        encoding: crate::Encoding,
+        encoding: crate::encoding_kind::Encoding,
         version: u32,
         needs: u32,
     },
