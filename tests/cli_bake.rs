@@ -4,13 +4,10 @@ mod common;
 
 use common::{oslf, LID_SCENE as SCENE};
 
-fn temp_dir(name: &str) -> std::path::PathBuf {
-    common::temp_dir("bake-cli", name)
-}
-
 #[test]
 fn bakes_a_store_with_summary_preview_and_json_report() {
-    let dir = temp_dir("ok");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, SCENE).unwrap();
     let out = oslf("bake")
@@ -49,7 +46,8 @@ fn bakes_a_store_with_summary_preview_and_json_report() {
 
 #[test]
 fn a_bad_scene_fails_with_a_located_message() {
-    let dir = temp_dir("bad");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let scene = dir.join("bad.toml");
     std::fs::write(
         &scene,
@@ -64,8 +62,13 @@ fn a_bad_scene_fails_with_a_located_message() {
         .unwrap();
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
+    // The error is located at the bad value's line and column.
+    let line = 1 + SCENE
+        .lines()
+        .position(|l| l == "sample_count = 12")
+        .unwrap();
     assert!(
-        stderr.contains(&format!("{}:16:16", scene.display())),
+        stderr.contains(&format!("{}:{line}:16", scene.display())),
         "{stderr}"
     );
     assert!(!dir.join("bad.oslf").exists());
@@ -84,7 +87,8 @@ fn a_missing_scene_file_is_named() {
 
 #[test]
 fn oslf_truth_writes_every_mode_and_checks_the_store() {
-    let dir = temp_dir("truth");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, SCENE).unwrap();
     let bake = oslf("bake")
@@ -164,10 +168,11 @@ fn stderr(out: &std::process::Output) -> String {
 /// while creating it) holds no cube maps: `--resume` says so in one line and starts over.
 #[test]
 fn resume_of_a_partial_killed_during_create_starts_over() {
-    let dir = temp_dir("torn");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let partial = dir.join("lid.oslf.partial");
     for keep in [0u64, 100, 300] {
-        let out = bake_in(&dir, SCENE, &["--max-cubes", "1"]);
+        let out = bake_in(dir, SCENE, &["--max-cubes", "1"]);
         assert!(out.status.success(), "{}", stderr(&out));
         let len = std::fs::metadata(&partial).unwrap().len();
         assert!(keep < len);
@@ -177,7 +182,7 @@ fn resume_of_a_partial_killed_during_create_starts_over() {
             .unwrap()
             .set_len(keep)
             .unwrap();
-        let out = bake_in(&dir, SCENE, &["--resume"]);
+        let out = bake_in(dir, SCENE, &["--resume"]);
         let err = stderr(&out);
         assert!(out.status.success(), "{err}");
         let lines: Vec<&str> = err.lines().collect();
@@ -204,11 +209,12 @@ fn resume_of_a_partial_killed_during_create_starts_over() {
 /// each setting that differs, both values, and what to do.
 #[test]
 fn resume_with_other_settings_names_each_setting() {
-    let dir = temp_dir("settings");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let text = format!(
         "{SCENE}\n[presets.seed9]\nseed = 9\n\n[presets.res4]\ncube_resolution = 4\nseed = 9\n"
     );
-    let out = bake_in(&dir, &text, &["--max-cubes", "2"]);
+    let out = bake_in(dir, &text, &["--max-cubes", "2"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let partial = dir.join("lid.oslf.partial");
     let before = std::fs::read(&partial).unwrap();
@@ -220,7 +226,7 @@ fn resume_with_other_settings_names_each_setting() {
             "seed 0 (this bake: 9), cube_resolution 2 (this bake: 4)",
         ),
     ] {
-        let out = bake_in(&dir, &text, &["--resume", "-p", preset]);
+        let out = bake_in(dir, &text, &["--resume", "-p", preset]);
         assert!(!out.status.success());
         let err = stderr(&out);
         assert_eq!(
@@ -237,7 +243,7 @@ fn resume_with_other_settings_names_each_setting() {
         );
     }
     // The settings it was started with continue it.
-    let out = bake_in(&dir, &text, &["--resume"]);
+    let out = bake_in(dir, &text, &["--resume"]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         String::from_utf8_lossy(&out.stdout).contains("(2 recovered from the interrupted bake)")
@@ -248,7 +254,8 @@ fn resume_with_other_settings_names_each_setting() {
 /// store is written (and no sample maps computed) when only the report or preview is bad.
 #[test]
 fn unwritable_outputs_fail_before_the_bake() {
-    let dir = temp_dir("unwritable");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, SCENE).unwrap();
     let run = |args: &[&str]| {
@@ -287,7 +294,7 @@ fn unwritable_outputs_fail_before_the_bake() {
     assert!(!out.exists());
     assert!(!dir.join("lid.oslf.partial").exists());
     assert_eq!(
-        std::fs::read_dir(&dir).unwrap().count(),
+        std::fs::read_dir(dir).unwrap().count(),
         1,
         "only the scene, no probe files"
     );
@@ -295,7 +302,8 @@ fn unwritable_outputs_fail_before_the_bake() {
 
 #[test]
 fn preflight_refuses_a_bake_too_slow_for_its_limit_before_any_work() {
-    let dir = temp_dir("preflight");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let scene = dir.join("slow.toml");
     // 65 536 paths per texel of 200 cube maps of 128² on one thread: weeks by any estimate
     // (the optimistic end is what is checked against the 12 h limit).

@@ -12,30 +12,11 @@ use std::sync::OnceLock;
 use oslf_bake::bake::{bake, BakeOptions};
 use oslf_bake::scene::Scene;
 
-const SCENE: &str = r#"
-[camera]
-position = [5.5, -6.5, 4.5]
-target = [0.0, 0.0, 1.0]
-vfov = 36.0
-
-[environment]
-uniform = [0.6, 0.7, 0.9]
-
-[[point_light]]
-position = [3.0, -2.0, 6.0]
-intensity = [40.0, 38.0, 35.0]
-
-[[object]]
-name = "teapot"
-patches = "newell-teapot"
-select = [0, 28]
-material = { color = [0.1, 0.42, 0.12] }
-
-[[box]]
-size = [8.0, 6.0, 0.2]
-transform = { translate = [0.0, 0.0, -0.1] }
-material = { checker = { a = [0.6, 0.5, 0.3], b = [0.3, 0.2, 0.1], scale = 2.0 } }
-
+/// The teapot test scene (tests/fixtures/teapot.toml) at toy resolutions, and a preset with
+/// finer cube maps.
+const SCENE: &str = concat!(
+    include_str!("fixtures/teapot.toml"),
+    r#"
 [bake]
 epsilon = 0.1
 sample_count = 80
@@ -47,7 +28,8 @@ seed = 3
 
 [presets.fine]
 cube_resolution = 16
-"#;
+"#
+);
 
 struct Fixture {
     dir: PathBuf,

@@ -8,7 +8,7 @@ mod common;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use common::{oslf, read_exr, temp_dir};
+use common::{oslf, read_exr};
 
 /// A UV-less sphere of `radius` as Wavefront OBJ text (positions, normals, faces `v//vn`),
 /// `rings` × `segments` quads, counter-clockwise seen from outside.
@@ -127,7 +127,8 @@ fn render(store: &Path, out: &Path, flags: &[&str]) -> Vec<[f32; 4]> {
 
 #[test]
 fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
-    let dir = temp_dir("meshes", "obj");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     std::fs::write(dir.join("ball.obj"), sphere_obj(0.5, 12, 24)).unwrap();
     let scene = dir.join("ball.toml");
     std::fs::write(&scene, SCENE).unwrap();

@@ -7,10 +7,6 @@ use std::path::{Path, PathBuf};
 
 use common::oslf;
 
-fn temp_dir(name: &str) -> PathBuf {
-    common::temp_dir("shard-cli", name)
-}
-
 /// The small scene of tests/common (its environment cube is the cube past the sample points):
 /// 24 sample points, 25 cubes.
 const SCENE: &str = common::LID_SCENE;
@@ -67,11 +63,13 @@ fn merge(shards: &[PathBuf], output: &Path) -> std::process::Command {
     cmd
 }
 
-fn setup(name: &str) -> (PathBuf, PathBuf, Vec<u8>) {
-    let dir = temp_dir(name);
-    let scene = dir.join("lid.toml");
+/// A temporary directory with the scene and its single-bake store: (the directory, the scene
+/// file, the store's bytes).
+fn setup() -> (tempfile::TempDir, PathBuf, Vec<u8>) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("lid.toml");
     std::fs::write(&scene, SCENE).unwrap();
-    let single = dir.join("single.oslf");
+    let single = dir.path().join("single.oslf");
     bake(&scene, &single, &[]);
     let bytes = std::fs::read(&single).unwrap();
     (dir, scene, bytes)
@@ -79,14 +77,15 @@ fn setup(name: &str) -> (PathBuf, PathBuf, Vec<u8>) {
 
 #[test]
 fn merged_shards_are_byte_identical_to_a_single_bake() {
-    let (dir, scene, single) = setup("identical");
+    let (tmp, scene, single) = setup();
+    let dir = tmp.path();
     // N = 1; N dividing nothing; N larger than the cube count (empty shards).
     for n in [1, 2, 3, 7, CUBES + 3] {
         let mut shards: Vec<PathBuf> = (0..n)
             .map(|i| {
                 // Thread counts differ per shard: the bytes must not.
                 let threads = (1 + i % 2).to_string();
-                shard(&scene, &dir, i, n, &["-j", &threads])
+                shard(&scene, dir, i, n, &["-j", &threads])
             })
             .collect();
         shards.reverse(); // merge takes them in any order
@@ -110,12 +109,13 @@ fn merged_shards_are_byte_identical_to_a_single_bake() {
 
 #[test]
 fn an_interrupted_shard_resumes_and_merges_to_the_same_bytes() {
-    let (dir, scene, single) = setup("resume");
+    let (tmp, scene, single) = setup();
+    let dir = tmp.path();
     let n = 3;
     let mut shards = Vec::new();
     for i in 0..n {
         if i != 1 {
-            shards.push(shard(&scene, &dir, i, n, &[]));
+            shards.push(shard(&scene, dir, i, n, &[]));
             continue;
         }
         // Shard 1 (8 cubes) stops after 3 cubes, again after 2 more, then finishes.
@@ -157,7 +157,8 @@ fn an_interrupted_shard_resumes_and_merges_to_the_same_bytes() {
 
 #[test]
 fn resume_refuses_another_shard_or_other_settings() {
-    let (dir, scene, _) = setup("resume-refuse");
+    let (tmp, scene, _) = setup();
+    let dir = tmp.path();
     let out = dir.join("s");
     bake(&scene, &out, &["--shard", "0/4", "--max-cubes", "1"]);
     let err = run_err(
@@ -206,8 +207,9 @@ fn resume_refuses_another_shard_or_other_settings() {
 
 #[test]
 fn merge_names_missing_repeated_and_mismatched_shards() {
-    let (dir, scene, _) = setup("refuse");
-    let s: Vec<PathBuf> = (0..4).map(|i| shard(&scene, &dir, i, 4, &[])).collect();
+    let (tmp, scene, _) = setup();
+    let dir = tmp.path();
+    let s: Vec<PathBuf> = (0..4).map(|i| shard(&scene, dir, i, 4, &[])).collect();
     let out = dir.join("out.oslf");
     let check = |shards: &[PathBuf], needles: &[&str]| {
         let err = run_err(&mut merge(shards, &out));

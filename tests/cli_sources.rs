@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{oslf, read_exr, runtime_fixture, temp_dir};
+use common::{oslf, read_exr, runtime_fixture};
 
 /// Renders `store` at 64×48 into `dir/name.exr` with `extra` flags: (success, stderr, path).
 fn render(store: &Path, dir: &Path, name: &str, extra: &[&str]) -> (bool, String, PathBuf) {
@@ -29,7 +29,8 @@ fn render(store: &Path, dir: &Path, name: &str, extra: &[&str]) -> (bool, String
 #[test]
 fn every_source_and_switch_renders_and_changes_the_image() {
     let store = runtime_fixture::store_path();
-    let dir = temp_dir("sources", "all");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let mut images = Vec::new();
     for (name, flags) in [
         ("oslf", vec!["--mode", "mirror"]),
@@ -53,7 +54,7 @@ fn every_source_and_switch_renders_and_changes_the_image() {
             vec!["--mode", "glossy", "-M", "4", "--glossy-filter", "point"],
         ),
     ] {
-        let (ok, e, out) = render(&store, &dir, name, &flags);
+        let (ok, e, out) = render(&store, dir, name, &flags);
         assert!(ok, "{name}: {e}");
         assert!(!e.contains("warning"), "{name}: {e}");
         let (_, px) = read_exr(&out);
@@ -74,7 +75,8 @@ fn every_source_and_switch_renders_and_changes_the_image() {
 #[test]
 fn bad_source_flags_are_named() {
     let store = runtime_fixture::store_path();
-    let dir = temp_dir("sources", "bad");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     for (flags, expect) in [
         (vec!["--source", "probe"], "unknown source \"probe\""),
         (vec!["--proxy-box", "1,2,3"], "is not a box"),
@@ -85,7 +87,7 @@ fn bad_source_flags_are_named() {
             "cannot be used with",
         ),
     ] {
-        let (ok, e, _) = render(&store, &dir, "bad", &flags);
+        let (ok, e, _) = render(&store, dir, "bad", &flags);
         assert!(!ok, "{flags:?} must fail");
         assert!(e.contains(expect), "{flags:?}: {e}");
     }
@@ -94,15 +96,16 @@ fn bad_source_flags_are_named() {
 #[test]
 fn a_store_without_distances_says_so_and_parallax_needs_a_box() {
     let store = runtime_fixture::store_path_without_distances();
-    let dir = temp_dir("sources", "no-distance");
-    let (ok, e, out) = render(&store, &dir, "default", &["--mode", "mirror"]);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let (ok, e, out) = render(&store, dir, "default", &["--mode", "mirror"]);
     assert!(ok, "{e}");
     assert!(
         e.contains("warning:") && e.contains("no distance channel") && e.contains("--no-depth"),
         "{e}"
     );
     assert!(out.exists());
-    let (ok, e, out) = render(&store, &dir, "strict", &["--mode", "mirror", "--strict"]);
+    let (ok, e, out) = render(&store, dir, "strict", &["--mode", "mirror", "--strict"]);
     assert!(
         !ok && e.contains("--strict") && e.contains("no distance channel"),
         "{e}"
@@ -110,19 +113,19 @@ fn a_store_without_distances_says_so_and_parallax_needs_a_box() {
     assert!(!out.exists());
     let (ok, e, _) = render(
         &store,
-        &dir,
+        dir,
         "plain",
         &["--mode", "mirror", "--no-depth", "--strict"],
     );
     assert!(ok && !e.contains("warning"), "{e}");
-    let (ok, e, _) = render(&store, &dir, "parallax", &["--source", "parallax"]);
+    let (ok, e, _) = render(&store, dir, "parallax", &["--source", "parallax"]);
     assert!(
         !ok && e.contains("no distance channel") && e.contains("--proxy-box"),
         "{e}"
     );
     let (ok, e, _) = render(
         &store,
-        &dir,
+        dir,
         "parallax-box",
         &[
             "--source",

@@ -16,7 +16,8 @@ fn scene_text() -> String {
 
 #[test]
 fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() {
-    let dir = common::temp_dir("truth-cli", "background");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, scene_text()).unwrap();
     let truth = |background: &str, prefix: &str| {

@@ -1,6 +1,6 @@
 //! End-to-end: scene file → bake → store, checked from the outside.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{Affine3A, Mat4, Vec3};
 use oslf_bake::bake::{bake, BakeOptions};
@@ -11,31 +11,10 @@ use oslf_bake::scene::Scene;
 use oslf_format::{Store, INVALID_INDEX};
 
 /// A small but complete scene: the teapot's lid and body on a table, a wall, a point light and
-/// a uniform sky, baked at toy resolutions.
-const SCENE: &str = r#"
-[environment]
-uniform = [0.6, 0.7, 0.9]
-
-[[point_light]]
-position = [3.0, -2.0, 6.0]
-intensity = [40.0, 38.0, 35.0]
-
-[[object]]
-name = "teapot"
-patches = "newell-teapot"
-select = [0, 28]
-material = { color = [0.1, 0.42, 0.12] }
-
-[[box]]
-size = [8.0, 6.0, 0.2]
-transform = { translate = [0.0, 0.0, -0.1] }
-material = { checker = { a = [0.6, 0.5, 0.3], b = [0.3, 0.2, 0.1], scale = 2.0 } }
-
-[[box]]
-size = [0.3, 6.0, 4.0]
-transform = { translate = [-4.0, 0.0, 2.0] }
-material = { color = [0.7, 0.7, 0.7] }
-
+/// a uniform sky (tests/fixtures/teapot.toml), baked at toy resolutions.
+const SCENE: &str = concat!(
+    include_str!("fixtures/teapot.toml"),
+    r#"
 [bake]
 epsilon = 0.1
 sample_count = 60
@@ -44,14 +23,8 @@ sample_map_resolution = 8
 samples_per_texel = 1
 bounces = 1
 seed = 7
-"#;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oslf-pipeline-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+"#
+);
 
 fn scene(dir: &Path) -> Scene {
     let path = dir.join("scene.toml");
@@ -82,8 +55,9 @@ fn bake_with_threads(
 
 #[test]
 fn same_scene_and_seed_give_the_same_bytes_with_one_or_two_threads() {
-    let dir = temp_dir("determinism");
-    let scene = scene(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = scene(dir);
     let a = dir.join("one.oslf");
     let b = dir.join("two.oslf");
     bake_with_threads(&scene, &a, 1, None, false);
@@ -95,8 +69,9 @@ fn same_scene_and_seed_give_the_same_bytes_with_one_or_two_threads() {
 
 #[test]
 fn an_interrupted_bake_resumes_to_the_same_store() {
-    let dir = temp_dir("resume");
-    let scene = scene(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = scene(dir);
     let whole = dir.join("whole.oslf");
     bake_with_threads(&scene, &whole, 2, None, false);
 
@@ -120,8 +95,9 @@ fn an_interrupted_bake_resumes_to_the_same_store() {
 /// `MAX_CANDIDATES`), visibility by a brute-force intersector.
 #[test]
 fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
-    let dir = temp_dir("samplemaps");
-    let scene = scene(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = scene(dir);
     let out = dir.join("s.oslf");
     bake_with_threads(&scene, &out, 2, None, false);
     let store = Store::open(&out).unwrap();
@@ -185,8 +161,9 @@ fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
 
 #[test]
 fn sample_points_sit_epsilon_above_their_patch() {
-    let dir = temp_dir("points");
-    let scene = scene(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = scene(dir);
     let out = dir.join("p.oslf");
     bake_with_threads(&scene, &out, 2, None, false);
     let store = Store::open(&out).unwrap();
@@ -218,7 +195,8 @@ fn sample_points_sit_epsilon_above_their_patch() {
 /// texel looking along −normal reports a first hit at about ε.
 #[test]
 fn the_distance_channel_sees_the_surface_epsilon_below() {
-    let dir = temp_dir("distance");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let path = dir.join("scene.toml");
     std::fs::write(
         &path,

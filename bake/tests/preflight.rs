@@ -325,9 +325,9 @@ fn a_tiny_bake_lands_within_2x_of_its_estimate() {
         "sample_count = 60\ncube_resolution = 16\nsample_map_resolution = 32\nsamples_per_texel = 1\nbounces = 0",
     );
     let e = estimate(&scene, THREADS);
-    let dir = tempdir();
+    let dir = tempfile::tempdir().unwrap();
     let options = BakeOptions {
-        output: dir.join("tiny.oslf"),
+        output: dir.path().join("tiny.oslf"),
         resume: false,
         progress: false,
         cube_limit: None,
@@ -414,12 +414,6 @@ fn units_read_well() {
     assert_eq!(preflight::duration(40.0), "40 s");
     assert_eq!(preflight::duration(3.5 * 3600.0), "3.5 h");
     assert_eq!(preflight::duration(14.0 * 86400.0), "14 days");
-}
-
-fn tempdir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oslf-preflight-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// `Limits::of_machine` reads this machine (values not checked, only that Linux has them),

@@ -8,23 +8,18 @@ use oslf_bake::scene::Scene;
 use oslf_format::encoding::{decode_rgb9e5, quantize_rgb9e5};
 use oslf_format::Store;
 
-const SCENE: &str = r#"
-[environment.sky]
-sun_direction = [0.6, -0.4, 0.7]
-sun_irradiance = [5.0, 5.0, 5.0]
-
-[[object]]
-patches = "newell-teapot"
-select = [20, 28]
-material = { color = [0.1, 0.4, 0.1] }
-
+/// The teapot's lid under a sky (tests/fixtures/teapot-lid.toml).
+const SCENE: &str = concat!(
+    include_str!("../../tests/fixtures/teapot-lid.toml"),
+    r#"
 [bake]
 sample_count = 12
 cube_resolution = 8
 sample_map_resolution = 4
 samples_per_texel = 4
 seed = 3
-"#;
+"#
+);
 
 /// Bakes the scene with `bits` (set on the parsed scene, so that the scene hash is the same).
 fn bake_with(bits: u32, dir: &Path) -> Store {

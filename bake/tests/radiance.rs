@@ -4,7 +4,6 @@
 //! The intersectors are analytic (infinite planes, spheres) and defined here.
 
 use std::f32::consts::{FRAC_1_PI, PI};
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
@@ -162,12 +161,6 @@ fn integrate_sphere(n_theta: usize, f: impl Fn(Vec3) -> f64) -> f64 {
         }
     }
     sum
-}
-
-fn temp_path(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oslf-radiance-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
 }
 
 /// A 16 × 8 lat-long map with random texels, zero below the horizon if `upper_only`.
@@ -426,6 +419,8 @@ fn sky_is_plausible() {
 
 #[test]
 fn image_loading() {
+    let dir = tempfile::tempdir().unwrap();
+    let temp_path = |name: &str| dir.path().join(name);
     // 8-bit PNG, sRGB-encoded.
     let png = temp_path("t.png");
     let mut img = image::RgbImage::new(3, 2);
@@ -1112,7 +1107,8 @@ fn render_preview_and_throughput() {
         let q = |v: f32| (linear_to_srgb(v) * 255.0 + 0.5) as u8;
         image::Rgb([q(c.x), q(c.y), q(c.z)])
     });
-    let path = temp_path("preview.png");
+    // Kept for viewing.
+    let path = tempfile::tempdir().unwrap().keep().join("preview.png");
     png.save(&path).unwrap();
     println!("preview: {}", path.display());
 }

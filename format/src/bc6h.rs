@@ -49,8 +49,7 @@ pub fn blocks_per_edge(resolution: u32) -> usize {
 /// Bytes of one BC6H face of `resolution`² texels: `⌈resolution / 4⌉² × 16`; `None` on
 /// overflow.
 pub fn face_bytes(resolution: u32) -> Option<usize> {
-    let b = blocks_per_edge(resolution);
-    b.checked_mul(b)?.checked_mul(BLOCK_BYTES)
+    crate::encoding_kind::bc6h_face_bytes(resolution)
 }
 
 /// The encoder's speed/quality trade-off (the `block_compression` crate's presets).

@@ -146,3 +146,8 @@ pub(crate) fn le_u64(b: &[u8], off: usize) -> u64 {
 pub(crate) fn align8(v: u64) -> Option<u64> {
     v.checked_add(7).map(|v| v & !7)
 }
+
+/// The zero bytes that pad `pos` to a multiple of 8.
+pub(crate) fn zero_pad(pos: u64) -> usize {
+    (align8(pos).unwrap_or(pos) - pos) as usize
+}

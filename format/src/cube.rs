@@ -217,49 +217,14 @@ pub fn encode_cube_with_filter(
     cube_index: u32,
     filter: Filter,
 ) -> Result<(EncodedCube, EncodeStats), Error> {
+    check_cube_shape(cube, params, cube_index)?;
     let res = params.cube_resolution;
-    if res == 0 || res > MAX_CUBE_RESOLUTION {
-        return Err(Error::Limit {
-            what: "cube resolution",
-            value: u64::from(res),
-            max: u64::from(MAX_CUBE_RESOLUTION),
-        });
-    }
-    if cube.resolution != res {
-        return Err(Error::CubeShape {
-            cube: cube_index,
-            detail: format!(
-                "resolution {} differs from the bake's {res}",
-                cube.resolution
-            ),
-        });
-    }
-    if cube.distance.is_some() != params.distance_channel {
-        return Err(Error::CubeShape {
-            cube: cube_index,
-            detail: format!(
-                "distance plane {} but the bake's distance_channel is {}",
-                if cube.distance.is_some() {
-                    "present"
-                } else {
-                    "absent"
-                },
-                params.distance_channel
-            ),
-        });
-    }
     let enc = params.encoding;
     crate::meta::check_mantissa_bits(enc, params.mantissa_bits).map_err(|detail| {
         Error::InvalidBakeParams {
             cube: cube_index,
             detail,
         }
-    })?;
-    let texels = (res as usize) * (res as usize); // res <= 16384: no overflow
-    let color_bytes = enc.face_bytes(res).ok_or(Error::Limit {
-        what: "cube resolution",
-        value: u64::from(res),
-        max: u64::from(MAX_CUBE_RESOLUTION),
     })?;
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
@@ -287,49 +252,7 @@ pub fn encode_cube_with_filter(
     let mut checksums = [0u64; FACES];
     let mut raw_checksums = [0u64; FACES];
     for face in 0..FACES {
-        let rgb = &cube.faces[face];
-        if rgb.len() != texels {
-            return Err(Error::CubeShape {
-                cube: cube_index,
-                detail: format!("face {face} has {} texels, expected {texels}", rgb.len()),
-            });
-        }
-        let (color, dist_out) = raw.split_at_mut(color_bytes);
-        stats.clamped_texels += encode_face_texels(enc, res, rgb, color).map_err(|e| match e {
-            Error::InvalidTexel { index, value } => Error::InvalidRadiance {
-                cube: cube_index,
-                face,
-                x: (index % res as usize) as u32,
-                y: (index / res as usize) as u32,
-                value,
-            },
-            other => other,
-        })?;
-        if enc == Encoding::Rgb9e5 {
-            quantize_rgb9e5_bytes(color, params.mantissa_bits);
-        }
-        if let Some(dist) = &cube.distance {
-            let d = &dist[face];
-            if d.len() != texels {
-                return Err(Error::CubeShape {
-                    cube: cube_index,
-                    detail: format!(
-                        "distance plane of face {face} has {} texels, expected {texels}",
-                        d.len()
-                    ),
-                });
-            }
-            if let Some(i) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-                return Err(Error::InvalidDistance {
-                    cube: cube_index,
-                    face,
-                    x: (i % res as usize) as u32,
-                    y: (i / res as usize) as u32,
-                    value: d.get(i).copied().unwrap_or(f32::NAN),
-                });
-            }
-            encode_distances(d, dist_out)?;
-        }
+        stats.clamped_texels += encode_raw_face(cube, params, cube_index, face, &mut raw)?;
         raw_checksums[face] = xxhash_rust::xxh3::xxh3_64(&raw);
         filter_face_quantized(
             filter,
@@ -367,6 +290,106 @@ pub fn encode_cube_with_filter(
         },
         stats,
     ))
+}
+
+/// Checks that `cube` (cube `cube_index`) has the shape of a bake with `params`: its
+/// resolution and whether it has a distance plane.
+fn check_cube_shape(cube: &CubeImage, params: &BakeParams, cube_index: u32) -> Result<(), Error> {
+    let res = params.cube_resolution;
+    if res == 0 || res > MAX_CUBE_RESOLUTION {
+        return Err(Error::Limit {
+            what: "cube resolution",
+            value: u64::from(res),
+            max: u64::from(MAX_CUBE_RESOLUTION),
+        });
+    }
+    if cube.resolution != res {
+        return Err(Error::CubeShape {
+            cube: cube_index,
+            detail: format!(
+                "resolution {} differs from the bake's {res}",
+                cube.resolution
+            ),
+        });
+    }
+    if cube.distance.is_some() != params.distance_channel {
+        return Err(Error::CubeShape {
+            cube: cube_index,
+            detail: format!(
+                "distance plane {} but the bake's distance_channel is {}",
+                if cube.distance.is_some() {
+                    "present"
+                } else {
+                    "absent"
+                },
+                params.distance_channel
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Encodes face `face` of `cube` (cube `cube_index` of a bake with `params`) into `raw`, the
+/// face's raw bytes: its texels (RGB9E5 ones quantized to the bake's mantissa bits), then its
+/// distance plane if any. Returns the count of clamped texels.
+fn encode_raw_face(
+    cube: &CubeImage,
+    params: &BakeParams,
+    cube_index: u32,
+    face: usize,
+    raw: &mut [u8],
+) -> Result<u64, Error> {
+    let (enc, res) = (params.encoding, params.cube_resolution);
+    let texels = (res as usize) * (res as usize); // res <= 16384: no overflow
+    let color_bytes = enc.face_bytes(res).ok_or(Error::Limit {
+        what: "cube resolution",
+        value: u64::from(res),
+        max: u64::from(MAX_CUBE_RESOLUTION),
+    })?;
+    let rgb = &cube.faces[face];
+    if rgb.len() != texels {
+        return Err(Error::CubeShape {
+            cube: cube_index,
+            detail: format!("face {face} has {} texels, expected {texels}", rgb.len()),
+        });
+    }
+    let (color, dist_out) = raw.split_at_mut(color_bytes);
+    let clamped = encode_face_texels(enc, res, rgb, color).map_err(|e| match e {
+        Error::InvalidTexel { index, value } => Error::InvalidRadiance {
+            cube: cube_index,
+            face,
+            x: (index % res as usize) as u32,
+            y: (index / res as usize) as u32,
+            value,
+        },
+        other => other,
+    })?;
+    if enc == Encoding::Rgb9e5 {
+        quantize_rgb9e5_bytes(color, params.mantissa_bits);
+    }
+    if let Some(dist) = &cube.distance {
+        let d = &dist[face];
+        if d.len() != texels {
+            return Err(Error::CubeShape {
+                cube: cube_index,
+                detail: format!(
+                    "distance plane of face {face} has {} texels, expected {texels}",
+                    d.len()
+                ),
+            });
+        }
+        if let Some(i) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+            return Err(Error::InvalidDistance {
+                cube: cube_index,
+                face,
+                x: (i % res as usize) as u32,
+                y: (i / res as usize) as u32,
+                value: d.get(i).copied().unwrap_or(f32::NAN),
+            });
+        }
+        encode_distances(d, dist_out)?;
+    }
+    Ok(clamped)
 }
 
 #[cfg(test)]

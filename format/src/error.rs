@@ -215,9 +215,17 @@ pub enum Error {
     /// The file is a partial store that `finish()` never completed.
     #[error("the store was never finished (the COMPLETE flag is clear); resume the bake")]
     NotFinished,
-    /// `resume()` found a partial file it cannot continue: started with different settings
-    /// (`what` names each, with both values), damaged, or not a partial store of a version it
-    /// continues. `what` ends with what to do.
+    /// `resume()` found a partial file started with other settings than the bake's:
+    /// `differences` names each (`"seed 1 (this bake: 2)"`), with both values. It can only be
+    /// continued with the settings it was started with, or the store created again.
+    #[error("cannot resume {path}: it was started with different settings: {}", differences.join(", "))]
+    ResumeSettings {
+        path: PathBuf,
+        differences: Vec<String>,
+    },
+    /// `resume()` found a partial file it cannot continue although the settings agree: damaged,
+    /// not a partial store of a version it continues, another shard, or written by another
+    /// version of the writer (`what` says which). The store must be created again.
     #[error("cannot resume {path}: {what}")]
     ResumeMismatch { path: PathBuf, what: String },
     /// `resume()` found a partial file whose fixed sections (header, metadata, sample points,
@@ -262,21 +270,33 @@ pub enum Error {
     /// A block-compressed encoding (BC6H) passed to a per-texel encoder or decoder, which
     /// cannot split a face into its 4×4 blocks.
     #[error("{encoding} encodes whole faces in 4×4 blocks, not single texels (use encode_face_texels / decode_face_texels)")]
-    WholeFaceEncoding { encoding: crate::Encoding },
+    WholeFaceEncoding {
+        encoding: crate::encoding_kind::Encoding,
+    },
     /// An encoding the store's format version cannot hold (BC6H needs version 4).
     #[error("encoding {encoding} at header byte offset 16 needs format version {needs} or later, but the store is version {version}")]
     EncodingVersion {
-        encoding: crate::Encoding,
+        encoding: crate::encoding_kind::Encoding,
         version: u32,
         needs: u32,
     },
     /// A shard argument that is not `I/N` with `N ≥ 1` and `I < N`.
     #[error("invalid shard {0:?}: expected I/N with N at least 1 and I in 0..N (e.g. 0/4)")]
     InvalidShardSpec(String),
-    /// A shard file that cannot be used: not a shard, damaged, unfinished or truncated
-    /// (`detail` says which, with the byte offset where one applies).
+    /// A shard file that cannot be used: not a shard, damaged or truncated (`detail` says
+    /// which, with the byte offset where one applies).
     #[error("shard file {path}: {detail}")]
     InvalidShard { path: PathBuf, detail: String },
+    /// A shard file, shard `index` of `count`, whose bake never finished it (a partial shard):
+    /// its bake must be resumed before the shards can be merged.
+    #[error(
+        "shard file {path}: shard {index}/{count} was never finished (the COMPLETE flag is clear)"
+    )]
+    UnfinishedShard {
+        path: PathBuf,
+        index: u32,
+        count: u32,
+    },
     /// Shard files that do not make one store together: missing or repeated shard indices,
     /// different shard counts, or different scenes or settings (`0` names them).
     #[error("cannot merge the shards: {0}")]

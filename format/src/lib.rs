@@ -378,11 +378,15 @@
 pub mod bc6h;
 pub(crate) mod bytes;
 pub mod cube;
+mod differences;
 pub mod encoding;
+mod encoding_kind;
 mod error;
 pub mod filter;
 pub mod header;
 pub mod meta;
+mod prefix;
+mod resume;
 pub mod sample_map;
 pub mod shard;
 pub mod store;
@@ -390,7 +394,7 @@ pub mod toc;
 pub mod writer;
 
 pub use cube::{encode_cube, encode_cube_with_filter, CubeImage, EncodeStats, EncodedCube};
-pub use encoding::Encoding;
+pub use encoding_kind::Encoding;
 pub use error::Error;
 pub use filter::Filter;
 pub use meta::{BakeParams, CameraInfo, MeshInfo, ObjectInfo, Patch, SamplePoint, StoreMeta};

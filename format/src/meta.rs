@@ -299,7 +299,54 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
     let mut r = ByteReader::new(bytes, base, "metadata");
     let object_count = r.u32()? as usize;
     let patch_count = r.u32()? as usize;
+    let (bake, has_env_cube) = decode_bake_params(&mut r, version)?;
+    let camera = decode_camera(&mut r)?;
+    let object_min = OBJECT_MIN_BYTES + if version >= 5 { 4 } else { 0 };
+    if object_count > r.remaining() / object_min {
+        return Err(bad(
+            base,
+            format!(
+                "object count {object_count} cannot fit in {} bytes",
+                r.remaining()
+            ),
+        ));
+    }
+    let objects = decode_objects(&mut r, version, object_count, patch_count)?;
+    let bezier_patches: u64 = objects
+        .iter()
+        .filter(|o| o.mesh.is_none())
+        .map(|o| u64::from(o.patch_count))
+        .sum();
+    let needed = bezier_patches * PATCH_BYTES as u64;
+    if needed != r.remaining() as u64 {
+        return Err(bad(
+            r.offset(),
+            format!(
+                "{bezier_patches} Bézier patches need {needed} bytes but {} remain in the section",
+                r.remaining()
+            ),
+        ));
+    }
+    let mut patches = Vec::with_capacity(bezier_patches as usize);
+    for _ in 0..bezier_patches {
+        let mut control_points = [[0f32; 3]; 16];
+        for v in control_points.iter_mut().flatten() {
+            *v = r.finite_f32("patch control point")?;
+        }
+        patches.push(Patch { control_points });
+    }
+    Ok(StoreMeta {
+        objects,
+        patches,
+        bake,
+        camera,
+        has_env_cube,
+    })
+}
 
+/// Parses and validates the bake parameters and the environment-cube flag of a store of
+/// format `version`.
+fn decode_bake_params(r: &mut ByteReader<'_>, version: u32) -> Result<(BakeParams, bool), Error> {
     let at = r.offset();
     let epsilon = r.finite_f32("epsilon")?;
     if epsilon <= 0.0 {
@@ -378,46 +425,48 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
         scene_hash,
         mantissa_bits,
     };
+    Ok((bake, has_env_cube))
+}
 
+/// Parses and validates the camera record (all zero when there is none).
+fn decode_camera(r: &mut ByteReader<'_>) -> Result<Option<CameraInfo>, Error> {
     let at = r.offset();
     let camera_present = r.bool("camera present")?;
     let mut cam = [0f32; 10];
     for v in &mut cam {
         *v = r.finite_f32("camera")?;
     }
-    let camera = if camera_present {
+    if camera_present {
         if !(cam[9] > 0.0 && cam[9] < 180.0) {
             return Err(bad(
                 at,
                 format!("camera vfov_deg {} must be in (0, 180)", cam[9]),
             ));
         }
-        Some(CameraInfo {
+        Ok(Some(CameraInfo {
             position: [cam[0], cam[1], cam[2]],
             target: [cam[3], cam[4], cam[5]],
             up: [cam[6], cam[7], cam[8]],
             vfov_deg: cam[9],
-        })
+        }))
     } else {
         if cam.iter().any(|v| v.to_bits() != 0) {
             return Err(bad(at, "absent camera must be all zero"));
         }
-        None
-    };
-
-    let object_min = OBJECT_MIN_BYTES + if version >= 5 { 4 } else { 0 };
-    if object_count > r.remaining() / object_min {
-        return Err(bad(
-            base,
-            format!(
-                "object count {object_count} cannot fit in {} bytes",
-                r.remaining()
-            ),
-        ));
+        Ok(None)
     }
+}
+
+/// Parses and validates the `object_count` object records of a store of format `version`, whose map
+/// ranges must tile `0..patch_count` in order.
+fn decode_objects(
+    r: &mut ByteReader<'_>,
+    version: u32,
+    object_count: usize,
+    patch_count: usize,
+) -> Result<Vec<ObjectInfo>, Error> {
     let mut objects = Vec::with_capacity(object_count);
     let mut prev_end = 0u64;
-    let mut bezier_patches = 0u64;
     for i in 0..object_count {
         let at = r.offset();
         let len = r.u32()? as usize;
@@ -452,13 +501,10 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
         }
         prev_end = end;
         let mesh = if version >= 5 {
-            decode_mesh(&mut r, i, count)?
+            decode_mesh(r, i, count)?
         } else {
             None
         };
-        if mesh.is_none() {
-            bezier_patches += u64::from(count);
-        }
         objects.push(ObjectInfo {
             name,
             transform,
@@ -476,32 +522,7 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
             ),
         ));
     }
-
-    let needed = bezier_patches * PATCH_BYTES as u64;
-    if needed != r.remaining() as u64 {
-        return Err(bad(
-            r.offset(),
-            format!(
-                "{bezier_patches} Bézier patches need {needed} bytes but {} remain in the section",
-                r.remaining()
-            ),
-        ));
-    }
-    let mut patches = Vec::with_capacity(bezier_patches as usize);
-    for _ in 0..bezier_patches {
-        let mut control_points = [[0f32; 3]; 16];
-        for v in control_points.iter_mut().flatten() {
-            *v = r.finite_f32("patch control point")?;
-        }
-        patches.push(Patch { control_points });
-    }
-    Ok(StoreMeta {
-        objects,
-        patches,
-        bake,
-        camera,
-        has_env_cube,
-    })
+    Ok(objects)
 }
 
 /// Parses the version-5 tail of object `i`'s record (its kind, and a mesh object's atlas

@@ -293,68 +293,8 @@ impl Store {
         let meta_bytes = &meta_bytes[..];
         check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
         let meta = decode_meta(meta_bytes, h.meta.offset, h.version)?;
-        let disagree = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
-            field,
-            offset,
-            detail: format!("{detail} (disagrees with the metadata)"),
-        };
-        let b = &meta.bake;
-        if h.encoding != b.encoding {
-            return Err(disagree("encoding", 16, format!("{}", h.encoding)));
-        }
-        if h.cube_resolution != b.cube_resolution {
-            return Err(disagree(
-                "cube_resolution",
-                24,
-                h.cube_resolution.to_string(),
-            ));
-        }
-        if h.sample_map_resolution != b.sample_map_resolution {
-            return Err(disagree(
-                "sample_map_resolution",
-                28,
-                h.sample_map_resolution.to_string(),
-            ));
-        }
-        if h.has_distance() != b.distance_channel || h.has_env_cube() != meta.has_env_cube {
-            return Err(disagree("flags", 12, format!("{:#x}", h.flags)));
-        }
-        if h.patch_count != meta.map_count() as u64 {
-            return Err(disagree("patch_count", 48, h.patch_count.to_string()));
-        }
-        if h.object_count != meta.objects.len() as u64 {
-            return Err(disagree("object_count", 56, h.object_count.to_string()));
-        }
-
-        // Counts.
-        let expected_cubes = h.sample_count.checked_add(u64::from(h.has_env_cube()));
-        if expected_cubes != Some(h.cube_count) || h.cube_count > u64::from(u32::MAX) {
-            return Err(Error::InvalidHeader {
-                field: "cube_count",
-                offset: 40,
-                detail: format!(
-                    "{} cubes for {} sample points{} (must be their sum, at most {})",
-                    h.cube_count,
-                    h.sample_count,
-                    if h.has_env_cube() {
-                        " + 1 env cube"
-                    } else {
-                        ""
-                    },
-                    u32::MAX
-                ),
-            });
-        }
-        if h.index_width != IndexWidth::for_sample_count(h.sample_count) {
-            return Err(Error::InvalidHeader {
-                field: "index_bytes",
-                offset: 20,
-                detail: format!(
-                    "{:?} indices for {} sample points (u16 iff at most 65535)",
-                    h.index_width, h.sample_count
-                ),
-            });
-        }
+        check_against_meta(h, &meta)?;
+        check_counts(h)?;
 
         // Sample points.
         expect_size(
@@ -849,6 +789,78 @@ fn check_toc(entries: &[u8], h: &Header, raw: u64) -> Result<(), Error> {
             field: "cube payload",
             offset: 120,
             detail: format!("payload ends at {payload_end} but its last cube ends at {cube_end}"),
+        });
+    }
+    Ok(())
+}
+
+/// Checks that the header `h` agrees with the metadata `meta` (encoding, resolutions, flags
+/// and counts); an [`Error::InvalidHeader`] names the first header field that disagrees.
+fn check_against_meta(h: &Header, meta: &StoreMeta) -> Result<(), Error> {
+    let disagree = |field: &'static str, offset: u64, detail: String| Error::InvalidHeader {
+        field,
+        offset,
+        detail: format!("{detail} (disagrees with the metadata)"),
+    };
+    let b = &meta.bake;
+    if h.encoding != b.encoding {
+        return Err(disagree("encoding", 16, format!("{}", h.encoding)));
+    }
+    if h.cube_resolution != b.cube_resolution {
+        return Err(disagree(
+            "cube_resolution",
+            24,
+            h.cube_resolution.to_string(),
+        ));
+    }
+    if h.sample_map_resolution != b.sample_map_resolution {
+        return Err(disagree(
+            "sample_map_resolution",
+            28,
+            h.sample_map_resolution.to_string(),
+        ));
+    }
+    if h.has_distance() != b.distance_channel || h.has_env_cube() != meta.has_env_cube {
+        return Err(disagree("flags", 12, format!("{:#x}", h.flags)));
+    }
+    if h.patch_count != meta.map_count() as u64 {
+        return Err(disagree("patch_count", 48, h.patch_count.to_string()));
+    }
+    if h.object_count != meta.objects.len() as u64 {
+        return Err(disagree("object_count", 56, h.object_count.to_string()));
+    }
+    Ok(())
+}
+
+/// Checks the header `h`'s cube count (the sample points plus the environment cube) and
+/// sample-map index width (u16 iff at most 65535 sample points).
+fn check_counts(h: &Header) -> Result<(), Error> {
+    let expected_cubes = h.sample_count.checked_add(u64::from(h.has_env_cube()));
+    if expected_cubes != Some(h.cube_count) || h.cube_count > u64::from(u32::MAX) {
+        return Err(Error::InvalidHeader {
+            field: "cube_count",
+            offset: 40,
+            detail: format!(
+                "{} cubes for {} sample points{} (must be their sum, at most {})",
+                h.cube_count,
+                h.sample_count,
+                if h.has_env_cube() {
+                    " + 1 env cube"
+                } else {
+                    ""
+                },
+                u32::MAX
+            ),
+        });
+    }
+    if h.index_width != IndexWidth::for_sample_count(h.sample_count) {
+        return Err(Error::InvalidHeader {
+            field: "index_bytes",
+            offset: 20,
+            detail: format!(
+                "{:?} indices for {} sample points (u16 iff at most 65535)",
+                h.index_width, h.sample_count
+            ),
         });
     }
     Ok(())

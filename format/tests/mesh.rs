@@ -129,7 +129,7 @@ fn a_mesh_store_resumes_byte_identical_and_names_a_changed_mesh() {
         .err()
         .unwrap();
     assert!(
-        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("the vertices or triangles of object 2")),
+        matches!(&e, Error::ResumeSettings { differences, .. } if differences.iter().any(|d| d.starts_with("the vertices or triangles of object 2"))),
         "{e}"
     );
     let mut other = f.meta.clone();

@@ -253,7 +253,8 @@ fn a_cube_with_another_filter_is_refused() {
     drop(w);
     assert!(matches!(
         StoreWriter::resume(&path, &f.meta, &f.points, &f.maps),
-        Err(Error::ResumeMismatch { .. })
+        Err(Error::ResumeSettings { differences, .. })
+            if differences == ["face filter none (this bake: predict-rows)"]
     ));
 }
 

@@ -322,12 +322,110 @@ struct Line<'a> {
 /// point count, then one `x, y, z` line per point. Errors are [`GeometryError::Parse`] naming
 /// `path`, the line and the column.
 pub fn parse_patch_file(text: &str, path: &Path) -> Result<Vec<BezierPatch>> {
-    let err = |line: usize, column: usize, message: String| GeometryError::Parse {
+    let err =
+        |line: usize, column: usize, message: String| parse_error(path, line, column, message);
+    let last_line = text.lines().count().max(1);
+    let mut it = significant_lines(text, path)?.into_iter();
+
+    let (patch_count, _, _) = count_line(it.next(), "patch", path, last_line)?;
+    // (line, column) of every index, to locate out-of-range errors after the point count.
+    let mut patch_indices: Vec<[(usize, usize, usize); 16]> =
+        Vec::with_capacity(patch_count.min(1 << 16));
+    for k in 0..patch_count {
+        let line = it.next().ok_or_else(|| {
+            err(
+                last_line,
+                1,
+                format!("file ends after {k} of {patch_count} patches"),
+            )
+        })?;
+        check_fields(&line, 16, "a patch line", path)?;
+        let mut idx = [(0usize, 0usize, 0usize); 16];
+        for (slot, f) in idx.iter_mut().zip(&line.fields) {
+            let i: usize = f.text.parse().map_err(|_| {
+                err(
+                    line.number,
+                    f.column,
+                    format!("invalid control-point index {:?}", f.text),
+                )
+            })?;
+            *slot = (i, line.number, f.column);
+        }
+        patch_indices.push(idx);
+    }
+    let (point_count, _, _) = count_line(it.next(), "point", path, last_line)?;
+    let mut points = Vec::with_capacity(point_count.min(1 << 20));
+    for k in 0..point_count {
+        let line = it.next().ok_or_else(|| {
+            err(
+                last_line,
+                1,
+                format!("file ends after {k} of {point_count} points"),
+            )
+        })?;
+        check_fields(&line, 3, "a point line", path)?;
+        let mut xyz = [0.0f32; 3];
+        for (c, f) in xyz.iter_mut().zip(&line.fields) {
+            let x: f32 = f.text.parse().map_err(|_| {
+                err(
+                    line.number,
+                    f.column,
+                    format!("invalid coordinate {:?}", f.text),
+                )
+            })?;
+            if !x.is_finite() {
+                return Err(err(
+                    line.number,
+                    f.column,
+                    format!("coordinate {:?} is not finite", f.text),
+                ));
+            }
+            *c = x;
+        }
+        points.push(Vec3::from_array(xyz));
+    }
+    if let Some(extra) = it.next() {
+        return Err(err(
+            extra.number,
+            extra.fields[0].column,
+            format!("unexpected data after {point_count} points"),
+        ));
+    }
+    patch_indices
+        .iter()
+        .map(|idx| {
+            let mut cp = [Vec3::ZERO; 16];
+            for (c, &(i, line, column)) in cp.iter_mut().zip(idx) {
+                if i == 0 || i > points.len() {
+                    return Err(err(
+                        line,
+                        column,
+                        format!("control-point index {i} out of range 1..={}", points.len()),
+                    ));
+                }
+                *c = points[i - 1];
+            }
+            Ok(BezierPatch { cp })
+        })
+        .collect()
+}
+
+/// A [`GeometryError::Parse`] of the patch file `path` at `line`, `column`.
+fn parse_error(path: &Path, line: usize, column: usize, message: String) -> GeometryError {
+    GeometryError::Parse {
         path: path.to_path_buf(),
         line,
         column,
         message,
-    };
+    }
+}
+
+/// The lines of the patch file `text` (at `path`) that hold fields, split into their fields:
+/// comments dropped, fields separated by commas and/or whitespace (a comma must sit between
+/// two fields).
+fn significant_lines<'a>(text: &'a str, path: &Path) -> Result<Vec<Line<'a>>> {
+    let err =
+        |line: usize, column: usize, message: String| parse_error(path, line, column, message);
     let mut lines = Vec::new();
     for (k, raw) in text.lines().enumerate() {
         let number = k + 1;
@@ -375,134 +473,64 @@ pub fn parse_patch_file(text: &str, path: &Path) -> Result<Vec<BezierPatch>> {
             });
         }
     }
-    let last_line = text.lines().count().max(1);
-    let mut it = lines.into_iter();
+    Ok(lines)
+}
 
-    let count_line = |line: Option<Line>, what: &str| -> Result<(usize, usize, usize)> {
-        let line = line.ok_or_else(|| err(last_line, 1, format!("missing {what} count")))?;
-        if line.fields.len() != 1 {
-            let f = &line.fields[1];
-            return Err(err(
-                line.number,
-                f.column,
-                format!(
-                    "expected a single {what} count, found {} fields",
-                    line.fields.len()
-                ),
-            ));
-        }
-        let f = &line.fields[0];
-        let n: usize = f.text.parse().map_err(|_| {
-            err(
-                line.number,
-                f.column,
-                format!("invalid {what} count {:?}", f.text),
-            )
-        })?;
-        if n == 0 {
-            return Err(err(line.number, f.column, format!("{what} count is 0")));
-        }
-        Ok((n, line.number, f.column))
-    };
-    let check_fields = |line: &Line, expected: usize, what: &str| -> Result<()> {
-        if line.fields.len() != expected {
-            let column = line
-                .fields
-                .get(expected)
-                .map_or(line.end_column, |f| f.column);
-            return Err(err(
-                line.number,
-                column,
-                format!(
-                    "{what} needs {expected} fields, found {}",
-                    line.fields.len()
-                ),
-            ));
-        }
-        Ok(())
-    };
-
-    let (patch_count, _, _) = count_line(it.next(), "patch")?;
-    // (line, column) of every index, to locate out-of-range errors after the point count.
-    let mut patch_indices: Vec<[(usize, usize, usize); 16]> =
-        Vec::with_capacity(patch_count.min(1 << 16));
-    for k in 0..patch_count {
-        let line = it.next().ok_or_else(|| {
-            err(
-                last_line,
-                1,
-                format!("file ends after {k} of {patch_count} patches"),
-            )
-        })?;
-        check_fields(&line, 16, "a patch line")?;
-        let mut idx = [(0usize, 0usize, 0usize); 16];
-        for (slot, f) in idx.iter_mut().zip(&line.fields) {
-            let i: usize = f.text.parse().map_err(|_| {
-                err(
-                    line.number,
-                    f.column,
-                    format!("invalid control-point index {:?}", f.text),
-                )
-            })?;
-            *slot = (i, line.number, f.column);
-        }
-        patch_indices.push(idx);
-    }
-    let (point_count, _, _) = count_line(it.next(), "point")?;
-    let mut points = Vec::with_capacity(point_count.min(1 << 20));
-    for k in 0..point_count {
-        let line = it.next().ok_or_else(|| {
-            err(
-                last_line,
-                1,
-                format!("file ends after {k} of {point_count} points"),
-            )
-        })?;
-        check_fields(&line, 3, "a point line")?;
-        let mut xyz = [0.0f32; 3];
-        for (c, f) in xyz.iter_mut().zip(&line.fields) {
-            let x: f32 = f.text.parse().map_err(|_| {
-                err(
-                    line.number,
-                    f.column,
-                    format!("invalid coordinate {:?}", f.text),
-                )
-            })?;
-            if !x.is_finite() {
-                return Err(err(
-                    line.number,
-                    f.column,
-                    format!("coordinate {:?} is not finite", f.text),
-                ));
-            }
-            *c = x;
-        }
-        points.push(Vec3::from_array(xyz));
-    }
-    if let Some(extra) = it.next() {
+/// The count (of patches or points, `what`) on `line`, with the line number and column where
+/// it stands; `last_line` locates a missing count.
+fn count_line(
+    line: Option<Line>,
+    what: &str,
+    path: &Path,
+    last_line: usize,
+) -> Result<(usize, usize, usize)> {
+    let err =
+        |line: usize, column: usize, message: String| parse_error(path, line, column, message);
+    let line = line.ok_or_else(|| err(last_line, 1, format!("missing {what} count")))?;
+    if line.fields.len() != 1 {
+        let f = &line.fields[1];
         return Err(err(
-            extra.number,
-            extra.fields[0].column,
-            format!("unexpected data after {point_count} points"),
+            line.number,
+            f.column,
+            format!(
+                "expected a single {what} count, found {} fields",
+                line.fields.len()
+            ),
         ));
     }
-    patch_indices
-        .iter()
-        .map(|idx| {
-            let mut cp = [Vec3::ZERO; 16];
-            for (c, &(i, line, column)) in cp.iter_mut().zip(idx) {
-                if i == 0 || i > points.len() {
-                    return Err(err(
-                        line,
-                        column,
-                        format!("control-point index {i} out of range 1..={}", points.len()),
-                    ));
-                }
-                *c = points[i - 1];
-            }
-            Ok(BezierPatch { cp })
-        })
-        .collect()
+    let f = &line.fields[0];
+    let n: usize = f.text.parse().map_err(|_| {
+        err(
+            line.number,
+            f.column,
+            format!("invalid {what} count {:?}", f.text),
+        )
+    })?;
+    if n == 0 {
+        return Err(err(line.number, f.column, format!("{what} count is 0")));
+    }
+    Ok((n, line.number, f.column))
+}
+
+/// Checks that `line` (`what`, e.g. "a patch line") has `expected` fields.
+fn check_fields(line: &Line, expected: usize, what: &str, path: &Path) -> Result<()> {
+    let err =
+        |line: usize, column: usize, message: String| parse_error(path, line, column, message);
+    if line.fields.len() != expected {
+        let column = line
+            .fields
+            .get(expected)
+            .map_or(line.end_column, |f| f.column);
+        return Err(err(
+            line.number,
+            column,
+            format!(
+                "{what} needs {expected} fields, found {}",
+                line.fields.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

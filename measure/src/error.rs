@@ -14,6 +14,15 @@ pub enum MeasureError {
     /// Writing an output file failed.
     #[error("{path}: {message}")]
     Output { path: PathBuf, message: String },
+    /// A sweep variation (`KEY=V1,V2,…`, [`crate::sweep::parse_vary`]) or a change of one
+    /// setting ([`crate::sweep::Change`]) that cannot be applied. `setting` names it: the key,
+    /// or the whole variation (quoted) where it has no key; `None` where the key is not one the
+    /// sweep knows (`problem` names it).
+    #[error("variation{}: {problem}", setting.as_ref().map(|s| format!(" {s}")).unwrap_or_default())]
+    Vary {
+        setting: Option<String>,
+        problem: String,
+    },
     /// An argument or input that cannot be measured.
     #[error("{0}")]
     Invalid(String),

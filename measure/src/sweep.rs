@@ -1,6 +1,6 @@
 //! The speed/accuracy sweep and the sensitivity analysis (thesis §8.1.1).
 //!
-//! Starting from a scene's settings (the *defaults*), each `--vary KEY=V1,V2,…` changes one
+//! Starting from a scene's settings (the *defaults*), each variation `KEY=V1,V2,…` changes one
 //! setting at a time. Bake keys give bake variants (each baked to its own store); runtime keys
 //! give runtime variants. Every bake variant is judged with every runtime variant against one
 //! ground truth of the unchanged scene ([`crate::judge`]), which records bake time, store size,
@@ -43,18 +43,32 @@ pub struct Change {
     pub value: String,
 }
 
+impl Change {
+    /// [`MeasureError::Vary`] naming this change's setting and `problem`.
+    fn problem(&self, problem: String) -> MeasureError {
+        MeasureError::Vary {
+            setting: Some(self.key.clone()),
+            problem,
+        }
+    }
+}
+
 /// Parses `KEY=V1,V2,…` into one change per value, checking the key and every value.
 pub fn parse_vary(spec: &str) -> Result<Vec<Change>> {
-    let (key, values) = spec
-        .split_once('=')
-        .ok_or_else(|| MeasureError::Invalid(format!("--vary {spec:?}: expected KEY=V1,V2,...")))?;
+    let (key, values) = spec.split_once('=').ok_or_else(|| MeasureError::Vary {
+        setting: Some(format!("{spec:?}")),
+        problem: "expected KEY=V1,V2,...".into(),
+    })?;
     let key = key.trim();
     if !BAKE_KEYS.contains(&key) && !RUNTIME_KEYS.contains(&key) {
-        return Err(MeasureError::Invalid(format!(
-            "--vary: unknown key {key:?} (bake: {}; runtime: {})",
-            BAKE_KEYS.join(", "),
-            RUNTIME_KEYS.join(", ")
-        )));
+        return Err(MeasureError::Vary {
+            setting: None,
+            problem: format!(
+                "unknown key {key:?} (bake: {}; runtime: {})",
+                BAKE_KEYS.join(", "),
+                RUNTIME_KEYS.join(", ")
+            ),
+        });
     }
     let changes: Vec<Change> = values
         .split(',')
@@ -92,22 +106,16 @@ fn default_settings() -> BakeSettings {
 }
 
 fn parse<T: std::str::FromStr>(c: &Change) -> Result<T> {
-    c.value.parse::<T>().map_err(|_| {
-        MeasureError::Invalid(format!(
-            "--vary {}: {:?} is not a valid value",
-            c.key, c.value
-        ))
-    })
+    c.value
+        .parse::<T>()
+        .map_err(|_| c.problem(format!("{:?} is not a valid value", c.value)))
 }
 
 fn check(c: &Change, ok: bool, range: &str) -> Result<()> {
     if ok {
         Ok(())
     } else {
-        Err(MeasureError::Invalid(format!(
-            "--vary {}: {} is outside {range}",
-            c.key, c.value
-        )))
+        Err(c.problem(format!("{} is outside {range}", c.value)))
     }
 }
 
@@ -148,7 +156,7 @@ pub fn apply_bake(s: &mut BakeSettings, c: &Change) -> Result<()> {
             let v: u32 = parse(c)?;
             check(c, (1..=9).contains(&v), "[1, 9]")?;
             oslf_format::meta::check_mantissa_bits(s.encoding, v)
-                .map_err(|e| MeasureError::Invalid(format!("--vary {}: {e}", c.key)))?;
+                .map_err(|e| c.problem(e.to_string()))?;
             s.mantissa_bits = v;
         }
         k => return Err(MeasureError::Invalid(format!("{k} is not a bake setting"))),
@@ -183,9 +191,9 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
                     } else {
                         Blend::Normal
                     };
-                    p.blend_n = v[1..].parse().map_err(|_| {
-                        MeasureError::Invalid(format!("--vary blend: {v:?}: expected rN or nN"))
-                    })?;
+                    p.blend_n = v[1..]
+                        .parse()
+                        .map_err(|_| c.problem(format!("{v:?}: expected rN or nN")))?;
                 }
                 _ => {
                     return check(c, false, "{distance, angle, avg, rN, nN, envmap, parallax}");
@@ -202,7 +210,7 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
     Ok(())
 }
 
-/// A short name of a blend setting, as `--vary blend=` takes it.
+/// A short name of a blend setting, as a `blend=` variation takes it.
 pub fn blend_label(p: &ShadingParams) -> String {
     match p.source {
         Source::EnvMap => return "envmap".into(),
@@ -339,7 +347,7 @@ pub fn bake_variant(scene: &Scene, change: &Change) -> Result<Scene> {
     apply_bake(&mut variant.bake, change)?;
     variant
         .check_epsilon()
-        .map_err(|e| MeasureError::Invalid(format!("--vary {}: {e}", change.key)))?;
+        .map_err(|e| change.problem(e.to_string()))?;
     Ok(variant)
 }
 
@@ -492,6 +500,19 @@ mod tests {
         ] {
             assert!(parse_vary(bad).is_err(), "{bad}");
         }
+        // The error names the setting (or the variation without one) and the problem.
+        assert!(matches!(
+            parse_vary("colour=1"),
+            Err(MeasureError::Vary { setting: None, problem }) if problem.starts_with("unknown key \"colour\" (bake: epsilon, ")
+        ));
+        assert!(matches!(
+            parse_vary("epsilon=-1"),
+            Err(MeasureError::Vary { setting: Some(s), problem }) if s == "epsilon" && problem == "-1 is outside (0, ∞)"
+        ));
+        assert!(matches!(
+            parse_vary("cube_resolution"),
+            Err(MeasureError::Vary { setting: Some(s), problem }) if s == "\"cube_resolution\"" && problem == "expected KEY=V1,V2,..."
+        ));
         let c = parse_vary("mantissa_bits=4,5,6,7").unwrap();
         let mut s = default_settings();
         apply_bake(&mut s, &c[1]).unwrap();

@@ -147,7 +147,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     }
     let mut limits = oslf_bake::preflight::Limits::of_machine(&output);
     limits.max_seconds = (args.max_hours > 0.0).then_some(args.max_hours * 3600.0);
-    let report = bake_shard(&scene, &options, args.shard, &limits)?;
+    let report = bake_shard(&scene, &options, args.shard, &limits).map_err(resume_flags)?;
     print_summary(&report);
     if !report.finished {
         println!(
@@ -277,4 +277,20 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+}
+
+/// `e`, where the store writer could not resume a partial store, with what to do in this
+/// command's flags.
+fn resume_flags(e: oslf_bake::BakeError) -> anyhow::Error {
+    use oslf_format::Error::{ResumeMismatch, ResumeSettings};
+    let hint = match &e {
+        oslf_bake::BakeError::Format(ResumeSettings { .. }) => {
+            "; bake without --resume to start over, or pass the settings it was started with"
+        }
+        oslf_bake::BakeError::Format(ResumeMismatch { .. }) => {
+            "; bake without --resume to start over"
+        }
+        _ => return e.into(),
+    };
+    anyhow::anyhow!("{e}{hint}")
 }

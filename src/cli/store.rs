@@ -124,6 +124,12 @@ pub fn run(cli: Args) -> Result<()> {
         }
         Command::Merge { shards, output } => {
             let s = oslf_format::shard::merge(&shards, &output)
+                .map_err(|e| match e {
+                    oslf_format::Error::UnfinishedShard { .. } => {
+                        anyhow::anyhow!("{e}; finish its bake with --resume")
+                    }
+                    e => e.into(),
+                })
                 .with_context(|| format!("cannot merge into {}", output.display()))?;
             println!(
                 "{}: {} shards merged — {} cubes, {} sample points, {} bytes",

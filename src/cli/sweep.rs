@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
 use oslf_bake::scene::Scene;
+use oslf_measure::error::MeasureError;
 use oslf_measure::judge::render_truth;
 use oslf_measure::pareto::pareto_front;
 use oslf_measure::plot::{plot_tradeoff, Panel, PlotPoint, PlotText};
@@ -113,7 +114,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             value: args.blend.clone(),
         },
     )
-    .context("--blend")?;
+    .map_err(|e| match e {
+        MeasureError::Vary { problem, .. } => anyhow::anyhow!("--blend: {problem}"),
+        e => e.into(),
+    })?;
     let specs: Vec<String> = if args.vary.is_empty() {
         DEFAULT_VARY.iter().map(|s| s.to_string()).collect()
     } else {
@@ -121,9 +125,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let mut changes = Vec::new();
     for s in &specs {
-        changes.extend(parse_vary(s)?);
+        changes.extend(parse_vary(s).map_err(vary_flag)?);
     }
-    check_changes(&scene, &changes)?;
+    check_changes(&scene, &changes).map_err(vary_flag)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
@@ -163,7 +167,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 r.judgement.metrics.rmse_lab[0]
             );
         }
-    })?;
+    })
+    .map_err(vary_flag)?;
     // Frame time is what the runtime settings trade: their front is over the default bake's
     // rows. Bake time is what the bake settings trade: over the default runtime settings' rows.
     let frame_front = front_of(&rows, |r| r.bake_change.is_none(), |r| r.judgement.frame_ms);
@@ -392,4 +397,19 @@ fn yes_no(on: Option<bool>) -> String {
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// `e`, where a variation cannot be applied, naming the `--vary` flag that gave it.
+fn vary_flag(e: MeasureError) -> anyhow::Error {
+    match e {
+        MeasureError::Vary {
+            setting: Some(setting),
+            problem,
+        } => anyhow::anyhow!("--vary {setting}: {problem}"),
+        MeasureError::Vary {
+            setting: None,
+            problem,
+        } => anyhow::anyhow!("--vary: {problem}"),
+        e => e.into(),
+    }
 }

@@ -4,7 +4,6 @@
 
 #![allow(dead_code)]
 
-use std::path::PathBuf;
 use std::process::Command;
 
 #[path = "../../format/tests/common/mod.rs"]
@@ -20,36 +19,19 @@ pub fn oslf(sub: &str) -> Command {
     command
 }
 
-/// A small scene: the teapot's lid (patches 20..28) under a sky, 12 sample points (24 after
-/// refinement, plus the environment cube: 25 cubes) of 2² texels. Bakes in well under a second.
-pub const LID_SCENE: &str = r#"
-[camera]
-position = [6.0, -6.0, 4.0]
-target = [0.0, 0.0, 1.0]
-
-[environment.sky]
-sun_direction = [0.6, -0.4, 0.7]
-sun_irradiance = [5.0, 5.0, 5.0]
-
-[[object]]
-patches = "newell-teapot"
-select = [20, 28]
-material = { color = [0.1, 0.4, 0.1] }
-
+/// A small scene: the teapot's lid (tests/fixtures/teapot-lid.toml), 12 sample points (24
+/// after refinement, plus the environment cube: 25 cubes) of 2² texels. Bakes in well under a
+/// second.
+pub const LID_SCENE: &str = concat!(
+    include_str!("../fixtures/teapot-lid.toml"),
+    r#"
 [bake]
 sample_count = 12
 cube_resolution = 2
 sample_map_resolution = 4
 samples_per_texel = 1
-"#;
-
-/// A fresh, empty directory `<tmp>/oslf-<suite>-<pid>-<name>` for one test.
-pub fn temp_dir(suite: &str, name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("oslf-{suite}-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+"#
+);
 
 /// The width and the pixels (row-major RGBA) of the OpenEXR image at `path`.
 pub fn read_exr(path: &std::path::Path) -> (usize, Vec<[f32; 4]>) {

@@ -7,38 +7,12 @@ use std::sync::OnceLock;
 use oslf_bake::bake::{bake, BakeOptions};
 use oslf_bake::scene::Scene;
 
-/// The teapot on a checkered table beside a wall, under a point light and a uniform sky, at
-/// toy resolutions: small enough to bake in a second, rich enough that every shading term
-/// differs from the others.
-pub const SCENE: &str = r#"
-[camera]
-position = [5.5, -6.5, 4.5]
-target = [0.0, 0.0, 1.0]
-vfov = 36.0
-
-[environment]
-uniform = [0.6, 0.7, 0.9]
-
-[[point_light]]
-position = [3.0, -2.0, 6.0]
-intensity = [40.0, 38.0, 35.0]
-
-[[object]]
-name = "teapot"
-patches = "newell-teapot"
-select = [0, 28]
-material = { color = [0.1, 0.42, 0.12] }
-
-[[box]]
-size = [8.0, 6.0, 0.2]
-transform = { translate = [0.0, 0.0, -0.1] }
-material = { checker = { a = [0.6, 0.5, 0.3], b = [0.3, 0.2, 0.1], scale = 2.0 } }
-
-[[box]]
-size = [0.3, 6.0, 4.0]
-transform = { translate = [-4.0, 0.0, 2.0] }
-material = { color = [0.7, 0.7, 0.7] }
-
+/// The teapot on a checkered table beside a wall, under a point light and a uniform sky
+/// (tests/fixtures/teapot.toml), at toy resolutions: small enough to bake in a second, rich
+/// enough that every shading term differs from the others.
+pub const SCENE: &str = concat!(
+    include_str!("../../../tests/fixtures/teapot.toml"),
+    r#"
 [bake]
 epsilon = 0.1
 sample_count = 120
@@ -47,7 +21,8 @@ sample_map_resolution = 16
 samples_per_texel = 1
 bounces = 1
 seed = 3
-"#;
+"#
+);
 
 /// The path of the baked test store (baked on first use).
 pub fn store_path() -> PathBuf {
