@@ -68,9 +68,8 @@ pub enum Quality {
 }
 
 impl Quality {
-    /// What the store's writer uses: [`Quality::Basic`] (measured on the example scene's cube
-    /// maps: within 3 % of `VerySlow`'s RMSLE at a tenth of its time, 4 % better than `Fast`
-    /// at 2.5 × its time; crate docs, "BC6H").
+    /// What the store's writer uses: [`Quality::Basic`], nearly `VerySlow`'s error at a small
+    /// part of its time (docs/measurements.md, "BC6H").
     pub const DEFAULT: Quality = Quality::Basic;
 
     /// All presets, fastest first.
@@ -552,7 +551,7 @@ mod tests {
             decode_face(&blocks, n, &mut back, 0, 0).unwrap();
             let e = face_error(&src, &back, 1e-3);
             // Red and green vary independently in a block: no single line in colour space
-            // fits them, so a few percent of error (2.3 % measured) is BC6H's own.
+            // fits them, so a few percent of error is BC6H's own.
             assert!(e.max_relative < 0.05, "n {n}: {e:?}");
         }
     }

@@ -246,17 +246,12 @@
 //! `q = (z >> 1) XOR −(z AND 1)` in `k` bits, then `C = (pC + q · s) mod 512`, green first as
 //! in filter 2. The distance plane follows the texel planes, transformed as in filter 1.
 //!
-//! Measured on cube maps of the example scene (`cargo bench --bench store`; zstd level 3, 4
-//! samples per texel), bytes per texel none → predict → predict-rows: quick preset (489 cubes
-//! of 32²) RGB9E5 3.490 → 3.432 → 3.443, RGBA16F 5.706 → 4.658 → 4.658, RGBA32F 10.039 →
-//! 9.207 → 9.207; thesis preset (`OSLF_BENCH_STORE=thesis.oslf OSLF_BENCH_CUBES=300`, the first
-//! 300 of its 1240 cubes of 128²) RGB9E5 3.411 → 3.155 → 3.142. The cube maps are dominated by
-//! Monte Carlo noise, which no lossless filter removes (docs/measurements.md, "Store sizes and read speed"). With
-//! `mantissa_bits` k < 9 (lossy, "Quantized RGB9E5"), RGB9E5 bytes per texel for k = 8 … 1,
-//! filter 3 (filter 2): quick 3.350 (3.149), 2.873 (2.837), 2.438 (2.489), 2.119 (2.189), 1.677
-//! (1.886), 1.334 (1.530), 1.030 (1.153), 0.573 (1.079); 128² (198 cubes of a thesis-like bake,
-//! 3.121 lossless) 3.028 (2.818), 2.559 (2.531), 2.192 (2.209), 1.858 (1.912), 1.436 (1.616),
-//! 1.135 (1.282), 0.827 (0.955), 0.489 (0.936). Hence writers use filter 3 for k ≤ 6.
+//! Why the filters: the predictors shrink smooth radiance, but a bake's cube maps are
+//! dominated by Monte Carlo noise, which no lossless filter removes; coarser lattices (k < 9)
+//! leave less noise, and at k ≤ 6 filter 3's packed codes beat filter 2's zero-filled
+//! mantissas, so writers use filter 3 there. Bytes per texel for every encoding, filter and k
+//! are measured in docs/measurements.md ("Store sizes and read speed", "Quantized RGB9E5";
+//! `cargo bench --bench store`).
 //!
 //! ## Encodings and measured accuracy
 //!
@@ -288,21 +283,12 @@
 //! the cube, face and block. `mantissa_bits` is 9. See [`bc6h`] for the encoder and decoder.
 //!
 //! The writer's encoder is the `block_compression` crate's port of Intel's ISPC BC6H encoder
-//! at [`bc6h::Quality::DEFAULT`] (`basic`). Measured on the example scene (`cargo run
-//! --release -p oslf-format --example bc6h_quality -- STORE [N]` on RGBA32F bakes of the
-//! quick preset, 489 cubes of 32², and of the same scene at 128², 16 cubes; one thread of a
-//! 2-core machine, timings ±50 % with its load), for very-fast / fast / basic / slow /
-//! very-slow: encode time per cube 32² 0.38 / 3.99 / 9.79 / 39.3 / 79.7 ms, 128² 5.86 / 66.2
-//! / 153 / 671 / 1371 ms; RMSLE against the exact texels 32² 2.39e-2 / 1.98e-2 / 1.91e-2 /
-//! 1.87e-2 / 1.86e-2, 128² 1.60e-2 / 1.48e-2 / 1.44e-2 / 1.42e-2 / 1.40e-2 (RGB9E5: 2.5e-4).
-//! `basic` is within 3 % of `very-slow`'s error at a tenth of its time. These
-//! 4-samples-per-texel cube maps are dominated by Monte Carlo noise, which a 4×4 block with
-//! two endpoints and 8 or 16 interpolation steps cannot follow: the mean per-texel error of
-//! any channel relative to the texel's largest is 11 % (32²) and 10 % (128²), the largest
-//! about 3. On smooth radiance (neighbouring texels within about 3 %) it is below 2.5 %
-//! (`tests/bc6h.rs`). Bytes per texel on disk, zstd level 3, the blocks alone: 32² 0.968,
-//! 128² 0.922 (regrouped as 16 byte planes, one per byte of a block: 1.002 and 0.935, so the
-//! filters leave the blocks alone), against RGB9E5's 3.443 and 3.121.
+//! at [`bc6h::Quality::DEFAULT`] (`basic`): nearly the error of the slowest preset at a small
+//! part of its time. BC6H is lossy: a 4×4 block with two endpoints and 8 or 16 interpolation
+//! steps cannot follow a bake's per-texel Monte Carlo noise, while smooth radiance stays within
+//! a few percent per texel (`tests/bc6h.rs`). The encoder presets' times and errors, the error
+//! per texel and the bytes per texel on disk are measured in docs/measurements.md ("BC6H";
+//! `cargo run --release -p oslf-format --example bc6h_quality -- STORE`).
 //!
 //! ## Quantized RGB9E5
 //!
