@@ -84,6 +84,8 @@ pub mod probe;
 pub mod reference;
 pub mod renderer;
 pub mod replay;
+#[cfg(test)]
+mod shader_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
 pub use error::{Result, RuntimeError};

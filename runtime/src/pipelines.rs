@@ -221,7 +221,7 @@ impl ShadeKey {
     }
 
     /// The override constants by name.
-    fn constants(&self, pools: u32, face_shift: u32) -> Vec<(&'static str, f64)> {
+    pub(crate) fn constants(&self, pools: u32, face_shift: u32) -> Vec<(&'static str, f64)> {
         vec![
             ("TERMS", f64::from(self.terms)),
             ("BLEND", f64::from(self.blend)),

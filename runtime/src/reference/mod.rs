@@ -42,15 +42,15 @@ pub use seams::seam_coords;
 pub use store::StoreCubes;
 
 /// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
-const DEPTH_REFINE: u32 = 6;
+pub(crate) const DEPTH_REFINE: u32 = 6;
 /// Steps of a glossy sample's depth correction (DEPTH_ITERATIONS in shade.wgsl).
-const DEPTH_ITERATIONS: u32 = 2;
+pub(crate) const DEPTH_ITERATIONS: u32 = 2;
 /// Depth-thicknesses within which a texel of a depth-corrected lookup agrees with the hit, at
 /// most half its distance (LOOKUP_AGREE in shade.wgsl).
-const LOOKUP_AGREE: f32 = 1.0;
+pub(crate) const LOOKUP_AGREE: f32 = 1.0;
 /// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
 /// shade.wgsl).
-const HIT_AGREE: f32 = 0.25;
+pub(crate) const HIT_AGREE: f32 = 0.25;
 
 /// Where the reference reads cube-map texels.
 pub trait CubeTexels: Sync {
