@@ -32,7 +32,7 @@ use oslf_format::Store;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::error::RuntimeError;
+use crate::error::{Param, RuntimeError};
 
 /// Most texture arrays in the GPU pool (bindings `pool0..pool3` in shade.wgsl).
 pub const MAX_POOL_TEXTURES: u32 = 4;
@@ -575,7 +575,7 @@ impl CubeCache {
     }
 }
 
-// Budgets given in megabytes (the `--cache-mb` and `--ram-mb` flags of `oslf render`).
+// Budgets given in megabytes.
 
 /// Bytes of one cube map in the GPU pool on an adapter with (`adapter_has_bc`,
 /// [`crate::Gpu::has_bc`]) or without BC texture compression: six faces of texels in the pool's
@@ -585,31 +585,36 @@ pub fn cube_bytes(store: &Store, adapter_has_bc: bool) -> u64 {
     6 * FaceLayout::for_store(store, adapter_has_bc).payload_bytes() as u64
 }
 
-/// The GPU slots `--cache-mb MB` buys on an adapter with (`adapter_has_bc`) or without BC
+/// The GPU slots a budget of `mb` megabytes buys on an adapter with (`adapter_has_bc`) or without BC
 /// texture compression: whole cube maps of [`cube_bytes`], at least one.
 pub fn slots_for_megabytes(store: &Store, mb: f64, adapter_has_bc: bool) -> crate::Result<u32> {
     if !(mb.is_finite() && mb > 0.0) {
-        return Err(crate::RuntimeError::Parameter(
-            "--cache-mb must be a positive number".into(),
-        ));
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::CacheMegabytes,
+            problem: format!("{mb} must be a positive number"),
+        });
     }
     let cube_bytes = cube_bytes(store, adapter_has_bc);
     let slots = (mb * 1e6 / cube_bytes as f64).floor();
     if slots < 1.0 {
-        return Err(crate::RuntimeError::Parameter(format!(
-            "--cache-mb {mb} holds no cube map ({:.3} MB each)",
-            cube_bytes as f64 / 1e6
-        )));
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::CacheMegabytes,
+            problem: format!(
+                "{mb} holds no cube map ({:.3} MB each)",
+                cube_bytes as f64 / 1e6
+            ),
+        });
     }
     Ok(slots.min(f64::from(u32::MAX)) as u32)
 }
 
-/// The RAM level's byte budget for `--ram-mb MB`.
+/// The RAM level's byte budget for a budget of `mb` megabytes.
 pub fn ram_bytes(mb: f64) -> crate::Result<u64> {
     if !(mb.is_finite() && mb >= 0.0) {
-        return Err(crate::RuntimeError::Parameter(
-            "--ram-mb must be a non-negative number".into(),
-        ));
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::RamMegabytes,
+            problem: format!("{mb} must be a non-negative number"),
+        });
     }
     Ok((mb * 1e6) as u64)
 }

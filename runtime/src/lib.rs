@@ -88,7 +88,7 @@ pub mod replay;
 mod shader_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
-pub use error::{Result, RuntimeError};
+pub use error::{Param, Result, RuntimeError};
 pub use gpu::Gpu;
 pub use oslf_geometry::Camera;
 pub use params::{Background, Blend, GlossyFilter, Mode, Order, ShadingParams, Source};

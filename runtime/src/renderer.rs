@@ -12,7 +12,7 @@ use oslf_geometry::Camera;
 
 use crate::buffers::{upload_sample_maps, StoreBuffers, TIMESTAMP_BYTES};
 use crate::cache::{CacheConfig, CacheStats, CubeCache};
-use crate::error::{Result, RuntimeError};
+use crate::error::{Param, Result, RuntimeError};
 use crate::face::FaceLayout;
 use crate::geometry::ObjectMesh;
 use crate::gpu::Gpu;
@@ -568,11 +568,12 @@ impl Renderer {
     ) -> Result<Frame> {
         params.validate()?;
         if params.source == Source::Parallax && self.proxy_box(params).is_none() {
-            return Err(RuntimeError::Parameter(
-                "source parallax needs a proxy box: this store has no environment cube with a \
-                 readable distance channel to fit one to (give the box, e.g. --proxy-box)"
+            return Err(RuntimeError::InvalidParam {
+                param: Param::ProxyBox,
+                problem: "missing: source parallax needs one, and this store has no environment \
+                          cube with a readable distance channel to fit one to (give the box)"
                     .into(),
-            ));
+            });
         }
         opts.background
             .validate(self.constants.env_cube != u32::MAX)?;

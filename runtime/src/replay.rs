@@ -36,7 +36,7 @@ use oslf_geometry::Camera;
 use serde::{Deserialize, Serialize};
 
 use crate::cache::{CacheStats, Granularity};
-use crate::error::{Result, RuntimeError};
+use crate::error::{Param, Result, RuntimeError};
 use crate::params::{Blend, Mode, ShadingParams};
 use crate::renderer::{RenderOptions, Renderer};
 
@@ -112,7 +112,7 @@ pub struct CameraPath {
 impl CameraPath {
     /// `frames` frames of `camera`; the steady state is every frame after the first.
     pub fn still(camera: Camera, frames: u32) -> Result<Self> {
-        check_frames(frames, "--still-frames")?;
+        check_frames(frames, Param::StillFrames)?;
         let n = frames as usize;
         Ok(Self {
             kind: PathKind::Still,
@@ -135,7 +135,7 @@ impl CameraPath {
     /// takes a whole number of frames (`360 · frames / degrees`), the second revolution shows
     /// exactly the first's cameras, so a budget holding every cube misses nothing there.
     pub fn orbit(start: Camera, frames: u32, degrees: f32) -> Result<Self> {
-        check_frames(frames, "--frames")?;
+        check_frames(frames, Param::OrbitFrames)?;
         check_degrees(degrees)?;
         let axis = start.up.try_normalize().unwrap_or(Vec3::Z);
         let offset = start.position - start.target;
@@ -196,12 +196,13 @@ impl CameraPath {
     }
 }
 
-/// Errors when a path flag asks for no frames (`flag` names it).
-pub fn check_frames(frames: u32, flag: &str) -> Result<()> {
+/// Errors when a path asks for no frames (`param` names which).
+pub fn check_frames(frames: u32, param: Param) -> Result<()> {
     if frames == 0 {
-        return Err(RuntimeError::Parameter(format!(
-            "{flag} 0: a path needs at least one frame"
-        )));
+        return Err(RuntimeError::InvalidParam {
+            param,
+            problem: "0: a path needs at least one frame".into(),
+        });
     }
     Ok(())
 }
@@ -209,9 +210,10 @@ pub fn check_frames(frames: u32, flag: &str) -> Result<()> {
 /// Errors when the orbit's angle is not a finite number.
 pub fn check_degrees(degrees: f32) -> Result<()> {
     if !degrees.is_finite() {
-        return Err(RuntimeError::Parameter(format!(
-            "--orbit-degrees {degrees} must be a finite number"
-        )));
+        return Err(RuntimeError::InvalidParam {
+            param: Param::OrbitDegrees,
+            problem: format!("{degrees} must be a finite number"),
+        });
     }
     Ok(())
 }

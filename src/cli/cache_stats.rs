@@ -12,7 +12,8 @@ use oslf_format::Store;
 use oslf_runtime::cache;
 use oslf_runtime::replay::{self, CacheSize, CameraPath, PathKind, Row, RowKey};
 use oslf_runtime::{
-    Blend, CacheConfig, Camera, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams,
+    Blend, CacheConfig, Camera, Gpu, Granularity, Mode, Param, RenderOptions, Renderer,
+    ShadingParams,
 };
 
 /// Replay renders of an OSLF store through the LRU cube-map cache and report its statistics,
@@ -287,8 +288,8 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     if args.paths.is_empty() {
         bail!("--paths needs at least one of still, orbit");
     }
-    replay::check_frames(args.still_frames, "--still-frames")?;
-    replay::check_frames(args.frames, "--frames")?;
+    replay::check_frames(args.still_frames, Param::StillFrames)?;
+    replay::check_frames(args.frames, Param::OrbitFrames)?;
     replay::check_degrees(args.orbit_degrees)?;
     if args.width == 0 || args.height == 0 {
         bail!("--width and --height must be at least 1");
