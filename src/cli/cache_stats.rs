@@ -266,7 +266,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     report.print();
     if let Some(path) = &args.csv {
-        std::fs::write(path, replay::to_csv(&rows))
+        std::fs::write(path, oslf_measure::cache_stats::to_csv(&rows))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(path) = &args.json {
@@ -384,7 +384,7 @@ impl Report<'_> {
             "units    requests, hits, misses, loads and over: cubes (unit cube) or faces (unit face)"
         );
         println!();
-        print!("{}", replay::format_table(self.rows));
+        print!("{}", oslf_measure::cache_stats::format_table(self.rows));
         println!();
         let infos = self.infos;
         println!(

@@ -1,12 +1,12 @@
 //! `oslf compare`: RMSE in CIELAB and linear RGB, and PSNR, between two OpenEXR images over a
-//! mask (thesis §6.1). See `oslf_runtime::metrics` for the exact conversion.
+//! mask (thesis §6.1). See `oslf_measure::metrics` for the exact conversion.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use glam::Vec3;
 use oslf_bake::image_file;
-use oslf_runtime::metrics::{compare, Metrics};
+use oslf_measure::metrics::{compare, Metrics};
 
 /// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,
 /// the thesis's scale), RMSE of linear R, G, B, and PSNR, over the reference's object mask.
