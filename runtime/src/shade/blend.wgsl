@@ -3,8 +3,9 @@
 // Its CPU twin: reference/blend.rs.
 
 // Vectors, not arrays: lavapipe gives every local array that is indexed dynamically its own
-// scratch memory, initialized per invocation even where the code is never reached (a 10×
-// slowdown measured with runtime/examples/lvp_probe.rs); dynamic vector indexing is cheap.
+// scratch memory, initialized per invocation even where the code is never reached (a large
+// slowdown measured with runtime/examples/lvp_probe.rs: docs/measurements.md); dynamic vector
+// indexing is cheap.
 struct Candidates {
     idx: vec4<u32>,
     // Directions s_j from the shaded point to sample point j, by component.

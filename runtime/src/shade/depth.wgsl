@@ -116,9 +116,8 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
 // candidate (docs/measurements.md). Only a `fresh` sample iterates: the others of its row of
 // the filtered sample grid (`filter_rows`), which lie side by side on the lobe, take the
 // sphere of the distance it converged to (`seed`: in, that distance, 0 for none; out, a fresh
-// sample's), reading nothing; on the example scene that moved the glossy errors at M = 16 by
-// −0.3 to +2.2 % for about a fifth of the frame time on lavapipe (docs/measurements.md). Returns the direction to
-// look up from p (unnormalized): l itself where a step finds nothing that way (FAR, or a face
+// sample's), reading nothing: a small change of the glossy errors for a large share of the
+// frame time (docs/measurements.md). Returns the direction to look up from p (unnormalized): l itself where a step finds nothing that way (FAR, or a face
 // not resident) or x outside the sphere (p sees something nearer than x that way). `entry` =
 // slots[cube] and o = x − p come from `integrate`, read once for all M samples.
 fn depth_iterate(cube: u32, entry: u32, o: vec3<f32>, l: vec3<f32>, fresh: bool, seed: ptr<function, f32>) -> vec3<f32> {

@@ -85,7 +85,8 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
         d = depth_iterate(cube, entry, o, l, fresh, seed);
     }
     // With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
-    // `lookup_lod`'s branch to `lookup` for every sample (FIS + depth frames 1.2× as long).
+    // `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
+    // (docs/measurements.md).
     if (FILTER) {
         return lookup_levels(cube, entry, d, lod);
     }
@@ -103,8 +104,8 @@ struct Sums {
 
 // Adds sample `s`'s radiance × weight to entry k of `sums` (`sample_radiance` of cube `cube`;
 // `fresh` and `seed` as `depth_iterate`).
-// A function, not a loop over the two kinds of sample: lavapipe ran FIS frames up to 1.8×
-// slower with even a one-pass loop around the read.
+// A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
+// slower with even a one-pass loop around the read (docs/measurements.md).
 fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
     let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
     if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
