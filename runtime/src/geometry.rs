@@ -185,7 +185,6 @@ impl WorldMesh {
 /// Per sample map, its world-space control points (`None` for a page of a mesh's atlas) and
 /// its object's base colour; and the mesh objects in world space: each object's transform
 /// applied in f64, normals by its inverse transpose.
-#[allow(clippy::type_complexity)]
 fn world_objects(
     meta: &oslf_format::StoreMeta,
 ) -> (Vec<Option<[DVec3; 16]>>, Vec<Vec3>, Vec<WorldMesh>) {

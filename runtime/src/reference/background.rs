@@ -1,9 +1,10 @@
 //! The background: what pixels off the object show. As shade/background.wgsl, function for function.
 
-use super::pixel::finite3;
-use super::{CubeTexels, Shader};
 use glam::Vec3;
 use oslf_format::INVALID_INDEX;
+
+use super::pixel::finite3;
+use super::{CubeTexels, Shader};
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {

@@ -1,8 +1,9 @@
 //! Blending the candidates of a texel (chapter 4). As shade/blend.wgsl, function for function.
 
-use super::{CubeTexels, Shader, HIT_AGREE};
 use glam::Vec3;
 use oslf_format::INVALID_INDEX;
+
+use super::{CubeTexels, Shader, HIT_AGREE};
 
 /// Candidates of a texel: the sample map's four entries with their directions from x.
 #[derive(Clone, Copy, Debug)]

@@ -1,7 +1,8 @@
 //! Cube maps: face coordinates, bilinear taps, mip lookups. As shade/cube.wgsl, function for function.
 
-use super::{CubeTexels, Shader};
 use glam::Vec3;
+
+use super::{CubeTexels, Shader};
 
 /// Face and face coordinates of a direction: [`oslf_format::cube::direction_to_face_st`].
 pub fn face_st(d: Vec3) -> (usize, f32, f32) {

@@ -3,10 +3,11 @@
 use std::f32::consts::PI;
 use std::sync::atomic::Ordering;
 
+use glam::Vec3;
+
 use super::cube::{face_st, Tap};
 use super::{CubeTexels, Shader, DEPTH_ITERATIONS, DEPTH_REFINE, LOOKUP_AGREE};
 use crate::face::FAR_DISTANCE;
-use glam::Vec3;
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {

@@ -1,7 +1,8 @@
 //! Feedback marks: the faces a lookup reads. As shade/feedback.wgsl, function for function.
 
-use super::{CubeTexels, Shader};
 use std::sync::atomic::Ordering;
+
+use super::{CubeTexels, Shader};
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {

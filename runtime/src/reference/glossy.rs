@@ -1,11 +1,13 @@
 //! Ashikhmin–Shirley by Monte Carlo (chapter 5). As shade/glossy.wgsl, function for function.
 
+use std::f32::consts::PI;
+
+use glam::Vec3;
+use oslf_format::INVALID_INDEX;
+
 use super::blend::Candidates;
 use super::random::filter_rows;
 use super::{CubeTexels, Shader};
-use glam::Vec3;
-use oslf_format::INVALID_INDEX;
-use std::f32::consts::PI;
 
 pub(super) struct AsSample {
     pub(super) l: Vec3,

@@ -1,8 +1,9 @@
 //! Mirror reflection (chapter 4). As shade/mirror.wgsl, function for function.
 
+use glam::Vec3;
+
 use super::blend::Candidates;
 use super::{CubeTexels, Shader};
-use glam::Vec3;
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {

@@ -6,7 +6,6 @@
 //! Residency and feedback work as on the GPU: a [`CubeTexels`] says which faces are available,
 //! and every face a lookup *would* read with everything resident is marked in the feedback
 //! masks (bit `f` of entry `cube` = face `f` needed).
-
 //!
 //! `j` indexes the four candidates' parallel arrays (indices, directions, weights), as in
 //! shade.wgsl; `!(x > 0.0)` is shade.wgsl's NaN-aware test, kept word for word.

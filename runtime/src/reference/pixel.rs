@@ -1,9 +1,10 @@
 //! The entry point: one pixel of the G-buffer shaded. As shade/pixel.wgsl, function for function.
 
+use glam::Vec3;
+
 use super::patch::{patch_du, patch_normal, tangent_frame};
 use super::random::pcg;
 use super::{CubeTexels, GTexel, Shader};
-use glam::Vec3;
 
 /// Replaces NaN and infinities by 0 (as `finite3`).
 pub(super) fn finite3(c: Vec3) -> Vec3 {

@@ -1,7 +1,8 @@
 //! Random numbers: the PCG hash (Jarzynski & Olano 2020) and the glossy samples' (ξ1, ξ2). As shade/random.wgsl, function for function.
 
-use super::{CubeTexels, Shader};
 use std::f32::consts::PI;
+
+use super::{CubeTexels, Shader};
 
 /// PCG hash (Jarzynski & Olano 2020), as `pcg` in shade.wgsl.
 pub fn pcg(v: u32) -> u32 {

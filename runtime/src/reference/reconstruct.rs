@@ -1,9 +1,10 @@
 //! Surface reconstruction (3.11–3.12, §6.3). As shade/reconstruct.wgsl, function for function.
 
-use super::blend::Candidates;
-use super::{CubeTexels, Shader};
 use glam::Vec3;
 use oslf_format::INVALID_INDEX;
+
+use super::blend::Candidates;
+use super::{CubeTexels, Shader};
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {

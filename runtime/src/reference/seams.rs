@@ -1,8 +1,9 @@
 //! Lookups filtered across face edges (for the background). As shade/seams.wgsl, function for function.
 
+use glam::Vec3;
+
 use super::cube::{face_point, face_st};
 use super::{CubeTexels, Shader};
-use glam::Vec3;
 
 /// Face and texel of a level `n` texels wide that texel `(x, y)` of `face` stands for, where
 /// `(x, y)` may lie one texel off the face: then the texel of the adjacent face that the

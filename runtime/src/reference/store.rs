@@ -1,8 +1,9 @@
 //! Every cube of a store decoded for the reference ("everything resident").
 
+use glam::Vec3;
+
 use super::CubeTexels;
 use crate::face::FaceLayout;
-use glam::Vec3;
 
 /// Every cube of a store as the GPU pool holds it, decoded to linear RGB: every mip level
 /// and the distance planes ([`FaceLayout`]). The reference's view of "everything resident".

@@ -1,9 +1,10 @@
 //! The camera's projection and a default view of an object.
 
-use super::Renderer;
-use crate::geometry::ObjectMesh;
 use glam::{Mat4, Vec3};
 use oslf_geometry::Camera;
+
+use super::Renderer;
+use crate::geometry::ObjectMesh;
 
 /// The camera's view-projection matrix (right-handed, depth 0..1 as wgpu wants), with near and
 /// far planes from the distance to the target.

@@ -1,6 +1,9 @@
 //! Reading a frame back: the image and the G-buffer, mapped from the GPU, and the CPU
 //! reference's image of the same G-buffer.
 
+use glam::Vec3;
+use oslf_geometry::Camera;
+
 use super::targets::{padded_row, SizedTargets};
 use super::Renderer;
 use crate::error::{Result, RuntimeError};
@@ -8,8 +11,6 @@ use crate::gpu::Gpu;
 use crate::params::ShadingParams;
 use crate::pipelines::DEPTH_CLEAR;
 use crate::reference::GTexel;
-use glam::Vec3;
-use oslf_geometry::Camera;
 
 impl Renderer {
     /// Reads one of the targets (an `Rgba32Float` texture) back to the CPU, row-major.
@@ -95,7 +96,7 @@ impl Renderer {
     }
 
     /// Shades the last frame's G-buffer on the CPU with the reference implementation, reading
-    /// cube maps from `cubes`, with the last frame's size and [`RenderOptions::background`].
+    /// cube maps from `cubes`, with the last frame's size and [`RenderOptions::background`](super::RenderOptions::background).
     /// Returns the image and the feedback masks it produced.
     pub fn reference_image<C: crate::reference::CubeTexels>(
         &self,

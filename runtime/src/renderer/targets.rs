@@ -88,7 +88,7 @@ impl SizedTargets {
 pub struct FrameBytes {
     /// The render targets on the GPU: two G-buffer textures, depth and the output.
     pub gpu: u64,
-    /// With [`RenderOptions::read_pixels`]: the read-back buffer and [`Frame::pixels`].
+    /// With [`RenderOptions::read_pixels`](super::RenderOptions::read_pixels): the read-back buffer and [`Frame::pixels`](super::Frame::pixels).
     pub readback: u64,
 }
 
