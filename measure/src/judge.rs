@@ -3,17 +3,17 @@
 
 use std::time::Instant;
 
+use crate::metrics::{compare, Metrics};
 use oslf_bake::ashikhmin_shirley::AsLobe;
 use oslf_bake::camera::Camera;
 use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
-use oslf_runtime::metrics::{compare, Metrics};
 use oslf_runtime::{Frame, Mode, RenderOptions, Renderer, ShadingParams};
 use serde::Serialize;
 
 use crate::error::{MeasureError, Result};
 
 /// The reference white of the CIELAB conversion (linear 1.0 = L* 100; see
-/// `oslf_runtime::metrics`).
+/// [`crate::metrics`]).
 pub const WHITE: f64 = 1.0;
 
 /// What one configuration measured.
@@ -121,13 +121,13 @@ pub fn compare_frame(truth: &TruthImage, frame: &Frame) -> Result<Metrics> {
         )));
     }
     let (t, f) = (&truth.pixels, &frame.pixels);
-    Ok(compare(
+    compare(
         t,
         f,
         truth.width as usize,
         |i| t[i][3] > 0.5 && f[i][3] > 0.5,
         WHITE,
-    )?)
+    )
 }
 
 /// The median, `None` for no values.

@@ -3,15 +3,17 @@
 //! Users of offset surface light fields trade speed for accuracy: cube-map resolution, sample
 //! density, ε, the blend and its power N, Monte Carlo samples M, the cache. This crate measures
 //! that trade on a user's own scene, against the ray-traced ground truth of
-//! [`oslf_bake::ground_truth`], with the image metrics of [`oslf_runtime::metrics`] (RMSE in
+//! [`oslf_bake::ground_truth`], with the image metrics of [`metrics`] (RMSE in
 //! CIELAB and linear RGB, PSNR; thesis §6.1).
 //!
 //! | module | what |
 //! | --- | --- |
+//! | [`metrics`] | image error: RMSE in CIELAB and linear RGB, PSNR, over a mask (thesis §6.1) |
 //! | [`judge`] | render one runtime configuration, compare it with the truth, time it |
 //! | [`table`] | result tables as aligned text, Markdown and CSV |
 //! | [`pareto`] | the Pareto front of (time, error) |
 //! | [`plot`] | the error-against-time plot with its front (PNG and SVG) |
+//! | [`cache_stats`] | the cache replays' rows ([`oslf_runtime::replay`]) as CSV and as a table |
 //! | [`sweep`] | bake variants of a scene, judge every variant with every runtime setting |
 //!
 //! Commands: `oslf tables` reproduces the thesis's Tables 6.1 and 6.2 and a new
@@ -19,8 +21,10 @@
 //! sensitivity analysis (thesis §8.1.1) and draws the plot. The cache-statistics tool is the
 //! `oslf cache-stats`.
 
+pub mod cache_stats;
 pub mod error;
 pub mod judge;
+pub mod metrics;
 pub mod pareto;
 pub mod plot;
 pub mod sweep;

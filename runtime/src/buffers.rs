@@ -11,6 +11,10 @@ use crate::geometry::ObjectMesh;
 use crate::gpu::Gpu;
 use crate::params::ShadeUniform;
 
+/// The vec4s of one patch in the `patches` buffer (shade.wgsl's `PatchGpu`): its 16 control
+/// points, then its base colour.
+pub(crate) const PATCH_VEC4S: usize = 17;
+
 /// The buffers of a store on the GPU. Storage buffers may not be empty: those that could be
 /// are padded with one element.
 pub(crate) struct StoreBuffers {
@@ -61,7 +65,7 @@ impl StoreBuffers {
             contents: bytemuck::cast_slice(&positions),
             usage: storage,
         });
-        let mut patch_data: Vec<[f32; 4]> = Vec::with_capacity(mesh.patches.len() * 17);
+        let mut patch_data: Vec<[f32; 4]> = Vec::with_capacity(mesh.patches.len() * PATCH_VEC4S);
         for (p, c) in mesh.patches.iter().zip(&mesh.colors) {
             patch_data.extend(p.cp.iter().map(|v| v.extend(0.0).to_array()));
             patch_data.push(c.extend(1.0).to_array());

@@ -32,7 +32,7 @@ use oslf_format::Store;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::error::RuntimeError;
+use crate::error::{Param, RuntimeError};
 
 /// Most texture arrays in the GPU pool (bindings `pool0..pool3` in shade.wgsl).
 pub const MAX_POOL_TEXTURES: u32 = 4;
@@ -169,6 +169,9 @@ impl Default for CacheConfig {
         }
     }
 }
+
+/// A face ready to upload: cube, face, slot, texels.
+type ReadyFace = (u32, u8, u32, Arc<[u8]>);
 
 /// One face to copy into a slot.
 #[derive(Clone, Debug)]
@@ -338,11 +341,28 @@ impl CubeCache {
             frames: 1,
             ..Default::default()
         };
+        self.receive_arrivals(frame, &mut stats);
+        let needed = self.frame_needs(needed);
+        self.count_hits(&needed, frame, &mut stats);
+        let wanted_faces = self.assign_slots(&needed, frame, &mut stats);
+        let ready = self.gather_faces(&wanted_faces, store, wait, frame, &mut stats);
+        let uploads = self.make_uploads(ready, &mut stats);
+        stats.update_rate();
+        (uploads, stats)
+    }
+
+    /// Books the faces that background decodes delivered since the last plan (streaming).
+    fn receive_arrivals(&mut self, frame: u64, stats: &mut CacheStats) {
         while let Ok((cube, face, r, seconds)) = self.arrivals_rx.try_recv() {
             self.in_flight.remove(&(cube, face));
             stats.decode_seconds += seconds;
-            let _ = self.record_decoded(cube, face, r, frame, &mut stats);
+            let _ = self.record_decoded(cube, face, r, frame, stats);
         }
+    }
+
+    /// The faces a frame needs per cube (bits 0–5 of its feedback mask; all six for the
+    /// pinned cube), one entry per cube.
+    fn frame_needs(&self, needed: &[u32]) -> Vec<u8> {
         let mut needed: Vec<u8> = needed.iter().map(|&m| (m & 63) as u8).collect();
         needed.resize(self.cube_slot.len(), 0);
         if let Some(p) = self.pinned {
@@ -350,7 +370,12 @@ impl CubeCache {
                 *n = 63;
             }
         }
-        // Hits and misses against what was resident when the frame was shaded.
+        needed
+    }
+
+    /// Counts the frame's requests and hits against what was resident when it was shaded,
+    /// and marks the slots it used (the pinned cube's never ages).
+    fn count_hits(&mut self, needed: &[u8], frame: u64, stats: &mut CacheStats) {
         for (cube, &want) in needed.iter().enumerate() {
             if want == 0 {
                 continue;
@@ -381,8 +406,16 @@ impl CubeCache {
                 }
             }
         }
+    }
 
-        // Give slots to the cubes that miss faces; collect the faces to load.
+    /// Gives slots to the cubes that miss faces, evicting the least recently used; returns the
+    /// faces to load as (cube, face, slot). Faces the budget cannot hold count as unresolved.
+    fn assign_slots(
+        &mut self,
+        needed: &[u8],
+        frame: u64,
+        stats: &mut CacheStats,
+    ) -> Vec<(u32, u8, u32)> {
         let mut wanted_faces: Vec<(u32, u8, u32)> = Vec::new();
         for (cube, &want) in needed.iter().enumerate() {
             if want == 0 || self.failed[cube] {
@@ -426,11 +459,24 @@ impl CubeCache {
             }
         }
 
-        // RAM level first, then decode the rest in parallel.
+        wanted_faces
+    }
+
+    /// The texels of `wanted_faces` that are ready this frame: from the RAM level first, then
+    /// decoded now in parallel (`wait`), or else sent to background decodes that arrive in a
+    /// later frame.
+    fn gather_faces(
+        &mut self,
+        wanted_faces: &[(u32, u8, u32)],
+        store: &Arc<Store>,
+        wait: bool,
+        frame: u64,
+        stats: &mut CacheStats,
+    ) -> Vec<ReadyFace> {
         let layout = self.face;
-        let mut ready: Vec<(u32, u8, u32, Arc<[u8]>)> = Vec::new();
+        let mut ready: Vec<ReadyFace> = Vec::new();
         let mut to_decode = Vec::new();
-        for &(cube, face, slot) in &wanted_faces {
+        for &(cube, face, slot) in wanted_faces {
             match self.ram.get_mut(&(cube, face)) {
                 Some(e) => {
                     e.used = frame;
@@ -450,7 +496,7 @@ impl CubeCache {
                 .collect();
             stats.decode_seconds += start.elapsed().as_secs_f64();
             for (cube, face, slot, r) in decoded {
-                if let Some(texels) = self.record_decoded(cube, face, r, frame, &mut stats) {
+                if let Some(texels) = self.record_decoded(cube, face, r, frame, stats) {
                     ready.push((cube, face, slot, texels));
                 }
             }
@@ -469,6 +515,11 @@ impl CubeCache {
                 }
             }
         }
+        ready
+    }
+
+    /// Makes the ready faces resident, in (cube, face) order, and counts the loads.
+    fn make_uploads(&mut self, mut ready: Vec<ReadyFace>, stats: &mut CacheStats) -> Vec<Upload> {
         ready.sort_by_key(|&(c, f, _, _)| (c, f));
         let mut uploads = Vec::with_capacity(ready.len());
         for (cube, face, slot, texels) in ready {
@@ -492,8 +543,7 @@ impl CubeCache {
             }
             Granularity::Face => uploads.len() as u64,
         };
-        stats.update_rate();
-        (uploads, stats)
+        uploads
     }
 
     /// Books a decoded face into the RAM level (or its failure); returns its texels.
@@ -575,7 +625,7 @@ impl CubeCache {
     }
 }
 
-// Budgets given in megabytes (the `--cache-mb` and `--ram-mb` flags of `oslf render`).
+// Budgets given in megabytes.
 
 /// Bytes of one cube map in the GPU pool on an adapter with (`adapter_has_bc`,
 /// [`crate::Gpu::has_bc`]) or without BC texture compression: six faces of texels in the pool's
@@ -585,31 +635,36 @@ pub fn cube_bytes(store: &Store, adapter_has_bc: bool) -> u64 {
     6 * FaceLayout::for_store(store, adapter_has_bc).payload_bytes() as u64
 }
 
-/// The GPU slots `--cache-mb MB` buys on an adapter with (`adapter_has_bc`) or without BC
+/// The GPU slots a budget of `mb` megabytes buys on an adapter with (`adapter_has_bc`) or without BC
 /// texture compression: whole cube maps of [`cube_bytes`], at least one.
 pub fn slots_for_megabytes(store: &Store, mb: f64, adapter_has_bc: bool) -> crate::Result<u32> {
     if !(mb.is_finite() && mb > 0.0) {
-        return Err(crate::RuntimeError::Parameter(
-            "--cache-mb must be a positive number".into(),
-        ));
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::CacheMegabytes,
+            problem: format!("{mb} must be a positive number"),
+        });
     }
     let cube_bytes = cube_bytes(store, adapter_has_bc);
     let slots = (mb * 1e6 / cube_bytes as f64).floor();
     if slots < 1.0 {
-        return Err(crate::RuntimeError::Parameter(format!(
-            "--cache-mb {mb} holds no cube map ({:.3} MB each)",
-            cube_bytes as f64 / 1e6
-        )));
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::CacheMegabytes,
+            problem: format!(
+                "{mb} holds no cube map ({:.3} MB each)",
+                cube_bytes as f64 / 1e6
+            ),
+        });
     }
     Ok(slots.min(f64::from(u32::MAX)) as u32)
 }
 
-/// The RAM level's byte budget for `--ram-mb MB`.
+/// The RAM level's byte budget for a budget of `mb` megabytes.
 pub fn ram_bytes(mb: f64) -> crate::Result<u64> {
     if !(mb.is_finite() && mb >= 0.0) {
-        return Err(crate::RuntimeError::Parameter(
-            "--ram-mb must be a non-negative number".into(),
-        ));
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::RamMegabytes,
+            problem: format!("{mb} must be a non-negative number"),
+        });
     }
     Ok((mb * 1e6) as u64)
 }

@@ -39,6 +39,41 @@ pub enum RuntimeError {
     /// A parameter outside its documented range (names the parameter).
     #[error("invalid parameter: {0}")]
     Parameter(String),
+    /// A parameter of a library call outside its range, named by [`Param`] so that a caller
+    /// can name it its own way (the CLI names its flag): `problem` says what is wrong with it.
+    #[error("invalid parameter: {} {problem}", param.name())]
+    InvalidParam { param: Param, problem: String },
+}
+
+/// Parameters that [`RuntimeError::InvalidParam`] names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Param {
+    /// The GPU cache's budget in megabytes ([`crate::cache::slots_for_megabytes`]).
+    CacheMegabytes,
+    /// The RAM level's budget in megabytes ([`crate::cache::ram_bytes`]).
+    RamMegabytes,
+    /// The frames of a still path ([`crate::replay::CameraPath::still`]).
+    StillFrames,
+    /// The frames of an orbit ([`crate::replay::CameraPath::orbit`]).
+    OrbitFrames,
+    /// The angle an orbit turns through ([`crate::replay::CameraPath::orbit`]).
+    OrbitDegrees,
+    /// The parallax proxy box ([`crate::ShadingParams::proxy_box`]).
+    ProxyBox,
+}
+
+impl Param {
+    /// The parameter's name in the library's words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Param::CacheMegabytes => "GPU cache budget (MB)",
+            Param::RamMegabytes => "RAM budget (MB)",
+            Param::StillFrames => "still path frames",
+            Param::OrbitFrames => "orbit frames",
+            Param::OrbitDegrees => "orbit degrees",
+            Param::ProxyBox => "proxy box",
+        }
+    }
 }
 
 /// `Result` with [`RuntimeError`].

@@ -21,12 +21,10 @@ use oslf_format::encoding::{decode_face_texels, encode_face_texels};
 use oslf_format::{Encoding, Store};
 
 /// The BC6H encoder quality of the mip levels the runtime builds (level 0 is the store's own
-/// blocks; encoding runs on every cache miss). Measured on `examples/gazebo.toml` at 64²
-/// (2094 faces, two cores): `VeryFast` builds them in 0.37 s, as fast as the RGB9E5 fallback
-/// decodes (0.36 s), `Fast` in 1.93 s; glossy (filtered importance sampling, the only reader
-/// of the mips) RMSE L* against the ground truth 5.377 and 5.360 (RGB9E5 store 5.293). On an
-/// 8² smooth three-channel gradient `VeryFast` is off by up to 19 %, `Fast` (and every slower
-/// preset) by 6 %.
+/// blocks; encoding runs on every cache miss): the fastest preset, which builds them about as
+/// fast as the RGB9E5 fallback decodes, at a glossy error (filtered importance sampling, the
+/// only reader of the mips) close to `Fast`'s; its larger error on smooth gradients is the
+/// price (docs/measurements.md, "Figures behind code comments").
 pub const MIP_QUALITY: Quality = Quality::VeryFast;
 
 /// Distances at or above this are stored as it: the largest finite binary16, and the value an

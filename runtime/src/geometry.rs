@@ -58,64 +58,7 @@ impl ObjectMesh {
     /// normals). Patch normals come from [`BezierPatch::normal`], which takes the limit at
     /// collapsed edges (never NaN).
     pub fn from_store(store: &Store, max_error: f32) -> Self {
-        let meta = store.meta();
-        let maps = meta.map_count();
-        // World-space control points per map (None for an atlas page), and mesh vertices.
-        let mut world: Vec<Option<[DVec3; 16]>> = Vec::with_capacity(maps);
-        let mut colors = Vec::with_capacity(maps);
-        struct WorldMesh {
-            positions: Vec<DVec3>,
-            normals: Vec<Vec3>,
-            uvs: Vec<[f32; 2]>,
-            triangles: Vec<[u32; 3]>,
-            first_map: u32,
-            grid: u32,
-        }
-        let mut meshes = Vec::new();
-        for (i, object) in meta.objects.iter().enumerate() {
-            let affine = DAffine3::from_mat4(DMat4::from_cols_array_2d(
-                &object.transform.map(|c| c.map(f64::from)),
-            ));
-            let color = Vec3::from_array(object.base_color);
-            match &object.mesh {
-                None => {
-                    for p in meta.patches_of(i) {
-                        world
-                            .push(Some(p.control_points.map(|c| {
-                                affine.transform_point3(Vec3::from_array(c).as_dvec3())
-                            })));
-                        colors.push(color);
-                    }
-                }
-                Some(m) => {
-                    for _ in 0..object.patch_count {
-                        world.push(None);
-                        colors.push(color);
-                    }
-                    let normal_matrix = affine.matrix3.inverse().transpose();
-                    meshes.push(WorldMesh {
-                        positions: m
-                            .positions
-                            .iter()
-                            .map(|&p| affine.transform_point3(Vec3::from_array(p).as_dvec3()))
-                            .collect(),
-                        normals: m
-                            .normals
-                            .iter()
-                            .map(|&n| {
-                                (normal_matrix * Vec3::from_array(n).as_dvec3())
-                                    .normalize_or(DVec3::Z)
-                                    .as_vec3()
-                            })
-                            .collect(),
-                        uvs: m.uvs.clone(),
-                        triangles: m.triangles.clone(),
-                        first_map: object.first_patch,
-                        grid: m.atlas_grid,
-                    });
-                }
-            }
-        }
+        let (world, colors, meshes) = world_objects(store.meta());
         let (lo, hi) = world
             .iter()
             .flatten()
@@ -141,39 +84,9 @@ impl ObjectMesh {
             .collect();
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
-        for (id, (patch, cp)) in patches.iter().zip(&world).enumerate() {
-            if cp.is_none() {
-                continue;
-            }
-            let level = patch.tessellation_level(max_error).clamp(1, MAX_LEVEL);
-            let mesh = patch.tessellate(level);
-            let base = vertices.len() as u32;
-            let tag = id as f32 + 1.0;
-            for ((p, n), uv) in mesh.positions.iter().zip(&mesh.normals).zip(&mesh.uvs) {
-                vertices.push(GVertex {
-                    position_patch: [p.x, p.y, p.z, tag],
-                    normal_u: [n.x, n.y, n.z, uv.x],
-                    v: [uv.y, 0.0, 0.0, 0.0],
-                });
-            }
-            for t in &mesh.triangles {
-                indices.extend(t.iter().map(|i| base + i));
-            }
-        }
+        tessellate_patches(&patches, &world, max_error, &mut vertices, &mut indices);
         for m in &meshes {
-            let base = vertices.len() as u32;
-            let tag = m.first_map as f32 + 1.0;
-            for ((&p, n), uv) in m.positions.iter().zip(&m.normals).zip(&m.uvs) {
-                let p = relative(p);
-                vertices.push(GVertex {
-                    position_patch: [p.x, p.y, p.z, tag],
-                    normal_u: [n.x, n.y, n.z, uv[0]],
-                    v: [uv[1], m.grid as f32, 0.0, 0.0],
-                });
-            }
-            for t in &m.triangles {
-                indices.extend(t.iter().map(|i| base + i));
-            }
+            m.emit(relative, &mut vertices, &mut indices);
         }
         let (relative_lo, relative_hi) = if empty {
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
@@ -233,6 +146,127 @@ pub fn oct_decode(e: [f32; 2]) -> Vec3 {
         n = Vec3::new((1.0 - n.y.abs()) * sx, (1.0 - n.x.abs()) * sy, n.z);
     }
     n.normalize()
+}
+
+/// A mesh object in world space (f64 positions, world normals).
+struct WorldMesh {
+    positions: Vec<DVec3>,
+    normals: Vec<Vec3>,
+    uvs: Vec<[f32; 2]>,
+    triangles: Vec<[u32; 3]>,
+    first_map: u32,
+    grid: u32,
+}
+
+impl WorldMesh {
+    /// Appends its vertices (positions made `relative` to the mesh's origin) and triangles.
+    fn emit(
+        &self,
+        relative: impl Fn(DVec3) -> Vec3,
+        vertices: &mut Vec<GVertex>,
+        indices: &mut Vec<u32>,
+    ) {
+        let base = vertices.len() as u32;
+        let tag = self.first_map as f32 + 1.0;
+        for ((&p, n), uv) in self.positions.iter().zip(&self.normals).zip(&self.uvs) {
+            let p = relative(p);
+            vertices.push(GVertex {
+                position_patch: [p.x, p.y, p.z, tag],
+                normal_u: [n.x, n.y, n.z, uv[0]],
+                v: [uv[1], self.grid as f32, 0.0, 0.0],
+            });
+        }
+        for t in &self.triangles {
+            indices.extend(t.iter().map(|i| base + i));
+        }
+    }
+}
+
+/// Per sample map, its world-space control points (`None` for a page of a mesh's atlas) and
+/// its object's base colour; and the mesh objects in world space: each object's transform
+/// applied in f64, normals by its inverse transpose.
+fn world_objects(
+    meta: &oslf_format::StoreMeta,
+) -> (Vec<Option<[DVec3; 16]>>, Vec<Vec3>, Vec<WorldMesh>) {
+    let maps = meta.map_count();
+    let mut world: Vec<Option<[DVec3; 16]>> = Vec::with_capacity(maps);
+    let mut colors = Vec::with_capacity(maps);
+    let mut meshes = Vec::new();
+    for (i, object) in meta.objects.iter().enumerate() {
+        let affine = DAffine3::from_mat4(DMat4::from_cols_array_2d(
+            &object.transform.map(|c| c.map(f64::from)),
+        ));
+        let color = Vec3::from_array(object.base_color);
+        match &object.mesh {
+            None => {
+                for p in meta.patches_of(i) {
+                    world
+                        .push(Some(p.control_points.map(|c| {
+                            affine.transform_point3(Vec3::from_array(c).as_dvec3())
+                        })));
+                    colors.push(color);
+                }
+            }
+            Some(m) => {
+                for _ in 0..object.patch_count {
+                    world.push(None);
+                    colors.push(color);
+                }
+                let normal_matrix = affine.matrix3.inverse().transpose();
+                meshes.push(WorldMesh {
+                    positions: m
+                        .positions
+                        .iter()
+                        .map(|&p| affine.transform_point3(Vec3::from_array(p).as_dvec3()))
+                        .collect(),
+                    normals: m
+                        .normals
+                        .iter()
+                        .map(|&n| {
+                            (normal_matrix * Vec3::from_array(n).as_dvec3())
+                                .normalize_or(DVec3::Z)
+                                .as_vec3()
+                        })
+                        .collect(),
+                    uvs: m.uvs.clone(),
+                    triangles: m.triangles.clone(),
+                    first_map: object.first_patch,
+                    grid: m.atlas_grid,
+                });
+            }
+        }
+    }
+    (world, colors, meshes)
+}
+
+/// Appends the triangles of every Bézier patch (those with control points in `world`),
+/// tessellated to stay within `max_error` of the surface, tagged with its map.
+fn tessellate_patches(
+    patches: &[BezierPatch],
+    world: &[Option<[DVec3; 16]>],
+    max_error: f32,
+    vertices: &mut Vec<GVertex>,
+    indices: &mut Vec<u32>,
+) {
+    for (id, (patch, cp)) in patches.iter().zip(world).enumerate() {
+        if cp.is_none() {
+            continue;
+        }
+        let level = patch.tessellation_level(max_error).clamp(1, MAX_LEVEL);
+        let mesh = patch.tessellate(level);
+        let base = vertices.len() as u32;
+        let tag = id as f32 + 1.0;
+        for ((p, n), uv) in mesh.positions.iter().zip(&mesh.normals).zip(&mesh.uvs) {
+            vertices.push(GVertex {
+                position_patch: [p.x, p.y, p.z, tag],
+                normal_u: [n.x, n.y, n.z, uv.x],
+                v: [uv.y, 0.0, 0.0, 0.0],
+            });
+        }
+        for t in &mesh.triangles {
+            indices.extend(t.iter().map(|i| base + i));
+        }
+    }
 }
 
 #[cfg(test)]

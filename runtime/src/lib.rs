@@ -43,12 +43,12 @@
 //! * **CPU reference** ([`reference`](mod@reference)): the same shading in Rust, function for function, used
 //!   by the parity tests against the GPU.
 //!
-//! * **Metrics** ([`metrics`]): RMSE in CIELAB and linear RGB and PSNR over a mask (§6.1), and
-//!   what `oslf compare` prints.
 //! * **Cache replay** ([`replay`]): camera paths (a still view, an orbit), the replay of a path
 //!   with a fresh renderer, and its cache counters summed per phase (cold start, steady state,
-//!   whole path) into rows, table and CSV: what `oslf cache-stats` prints (thesis Tables
-//!   6.3–6.7).
+//!   whole path) into rows: what `oslf cache-stats` reports (thesis Tables 6.3–6.7; the table
+//!   and CSV text are `oslf_measure::cache_stats`'s).
+//!
+//! Image error metrics (RMSE in CIELAB, PSNR) are `oslf_measure::metrics`'s.
 //!
 //! The crate depends on `oslf-format` (the store), `oslf-geometry` (patches and the camera it
 //! shares with the bake), wgpu and a few small crates; never on the bake, and it has no command
@@ -76,7 +76,6 @@ mod error;
 pub mod face;
 pub mod geometry;
 pub mod gpu;
-pub mod metrics;
 pub mod params;
 mod pipelines;
 mod pool;
@@ -84,9 +83,11 @@ pub mod probe;
 pub mod reference;
 pub mod renderer;
 pub mod replay;
+#[cfg(test)]
+mod shader_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
-pub use error::{Result, RuntimeError};
+pub use error::{Param, Result, RuntimeError};
 pub use gpu::Gpu;
 pub use oslf_geometry::Camera;
 pub use params::{Background, Blend, GlossyFilter, Mode, Order, ShadingParams, Source};

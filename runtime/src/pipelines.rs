@@ -19,6 +19,26 @@ pub(crate) const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba3
 /// shade.wgsl's `@workgroup_size` on each side.
 pub(crate) const WORKGROUP: u32 = 8;
 
+/// shade.wgsl, the shading pass: the files of shade/ joined, the bindings first, then the
+/// functions by concept in the order of their CPU twins (the files of the same names under
+/// reference/). Each file opens with a `// ---- shade/NAME.wgsl ----` banner, so a line that a
+/// naga error quotes can be found in its file.
+pub(crate) const SHADE_WGSL: &str = concat!(
+    include_str!("shade/bindings.wgsl"),
+    include_str!("shade/random.wgsl"),
+    include_str!("shade/feedback.wgsl"),
+    include_str!("shade/cube.wgsl"),
+    include_str!("shade/depth.wgsl"),
+    include_str!("shade/patch.wgsl"),
+    include_str!("shade/blend.wgsl"),
+    include_str!("shade/reconstruct.wgsl"),
+    include_str!("shade/mirror.wgsl"),
+    include_str!("shade/glossy.wgsl"),
+    include_str!("shade/seams.wgsl"),
+    include_str!("shade/background.wgsl"),
+    include_str!("shade/pixel.wgsl"),
+);
+
 /// A read-only or read-write storage buffer at `binding`.
 fn storage_entry(
     binding: u32,
@@ -201,7 +221,7 @@ impl ShadeKey {
     }
 
     /// The override constants by name.
-    fn constants(&self, pools: u32, face_shift: u32) -> Vec<(&'static str, f64)> {
+    pub(crate) fn constants(&self, pools: u32, face_shift: u32) -> Vec<(&'static str, f64)> {
         vec![
             ("TERMS", f64::from(self.terms)),
             ("BLEND", f64::from(self.blend)),
@@ -274,7 +294,7 @@ impl ShadePipelines {
         let layout = Self::bind_group_layout(device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shade.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shade.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(SHADE_WGSL.into()),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shade"),

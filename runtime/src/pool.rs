@@ -54,7 +54,7 @@ impl PoolLayout {
         // Faces lie side by side in a layer, 2^face_shift per layer (as many as the widest 2D
         // texture takes): one array then holds far more cubes than its layer count allows,
         // and lavapipe, which runs every branch under a mask, reads one array instead of
-        // several (a measured 2.23× → 1.67× for mirror B^n against the baseline).
+        // several (docs/measurements.md, "Figures behind code comments").
         let row_max = (limits.max_texture_dimension_2d / res).max(1);
         let shift_max = 31 - row_max.leading_zeros();
         let device_per_texture = ((u64::from(limits.max_texture_array_layers) << shift_max) / 6)

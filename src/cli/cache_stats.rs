@@ -12,7 +12,8 @@ use oslf_format::Store;
 use oslf_runtime::cache;
 use oslf_runtime::replay::{self, CacheSize, CameraPath, PathKind, Row, RowKey};
 use oslf_runtime::{
-    Blend, CacheConfig, Camera, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams,
+    Blend, CacheConfig, Camera, Gpu, Granularity, Mode, Param, RenderOptions, Renderer,
+    ShadingParams,
 };
 
 /// Replay renders of an OSLF store through the LRU cube-map cache and report its statistics,
@@ -265,7 +266,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     report.print();
     if let Some(path) = &args.csv {
-        std::fs::write(path, replay::to_csv(&rows))
+        std::fs::write(path, oslf_measure::cache_stats::to_csv(&rows))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(path) = &args.json {
@@ -287,8 +288,8 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     if args.paths.is_empty() {
         bail!("--paths needs at least one of still, orbit");
     }
-    replay::check_frames(args.still_frames, "--still-frames")?;
-    replay::check_frames(args.frames, "--frames")?;
+    replay::check_frames(args.still_frames, Param::StillFrames)?;
+    replay::check_frames(args.frames, Param::OrbitFrames)?;
     replay::check_degrees(args.orbit_degrees)?;
     if args.width == 0 || args.height == 0 {
         bail!("--width and --height must be at least 1");
@@ -383,7 +384,7 @@ impl Report<'_> {
             "units    requests, hits, misses, loads and over: cubes (unit cube) or faces (unit face)"
         );
         println!();
-        print!("{}", replay::format_table(self.rows));
+        print!("{}", oslf_measure::cache_stats::format_table(self.rows));
         println!();
         let infos = self.infos;
         println!(

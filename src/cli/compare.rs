@@ -1,11 +1,11 @@
 //! `oslf compare`: RMSE in CIELAB and linear RGB, and PSNR, between two OpenEXR images over a
-//! mask (thesis §6.1). See `oslf_runtime::metrics` for the exact conversion.
+//! mask (thesis §6.1). See `oslf_measure::metrics` for the exact conversion.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use glam::Vec3;
-use oslf_runtime::metrics::{compare, Metrics};
+use oslf_measure::metrics::{compare, Metrics};
 use oslf_util::image_file;
 
 /// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,

@@ -5,6 +5,7 @@ mod bake;
 mod cache_stats;
 mod compare;
 mod completions;
+mod flags;
 mod render;
 mod store;
 mod sweep;
@@ -50,7 +51,7 @@ enum Command {
 
 /// Runs the chosen subcommand.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {
+    let result = match cli.command {
         Command::Bake(a) => bake::run(a),
         Command::Render(a) => render::run(a),
         Command::View(a) => view::run(a),
@@ -61,7 +62,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sweep(a) => sweep::run(a),
         Command::CacheStats(a) => cache_stats::run(a),
         Command::Completions(a) => completions::run(a),
-    }
+    };
+    result.map_err(flags::name_flags)
 }
 
 #[cfg(test)]

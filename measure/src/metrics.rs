@@ -15,7 +15,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, RuntimeError};
+use crate::error::{MeasureError, Result};
 
 /// The D65 reference white in XYZ (Y = 1).
 pub const D65: [f64; 3] = [0.95047, 1.0, 1.08883];
@@ -75,23 +75,23 @@ pub fn compare(
     white: f64,
 ) -> Result<Metrics> {
     if reference.len() != test.len() {
-        return Err(RuntimeError::Parameter(format!(
-            "images differ in size: {} and {} pixels",
+        return Err(MeasureError::Invalid(format!(
+            "invalid parameter: images differ in size: {} and {} pixels",
             reference.len(),
             test.len()
         )));
     }
     if !(white.is_finite() && white > 0.0) {
-        return Err(RuntimeError::Parameter(format!(
-            "reference white {white} must be positive"
+        return Err(MeasureError::Invalid(format!(
+            "invalid parameter: reference white {white} must be positive"
         )));
     }
     let check = |which: &str, i: usize, p: &[f32; 4]| {
         if p[..3].iter().all(|c| c.is_finite() && *c >= 0.0) {
             Ok(())
         } else {
-            Err(RuntimeError::Parameter(format!(
-                "{which} image: pixel ({}, {}) is {:?} (must be finite and non-negative)",
+            Err(MeasureError::Invalid(format!(
+                "invalid parameter: {which} image: pixel ({}, {}) is {:?} (must be finite and non-negative)",
                 i % width.max(1),
                 i / width.max(1),
                 &p[..3]

@@ -1,0 +1,239 @@
+//! Ashikhmin–Shirley by Monte Carlo (chapter 5). As shade/glossy.wgsl, function for function.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+use oslf_format::INVALID_INDEX;
+
+use super::blend::Candidates;
+use super::random::filter_rows;
+use super::{CubeTexels, Shader};
+
+pub(super) struct AsSample {
+    pub(super) l: Vec3,
+    pub(super) weight: f32,
+    /// log2(M p(l)).
+    pub(super) lpdf: f32,
+}
+
+pub(super) fn fresnel(rs: f32, c: f32) -> f32 {
+    // Eq. 5.7 (Schlick)
+    let k = (1.0 - c).clamp(0.0, 1.0);
+    let k2 = k * k;
+    rs + (1.0 - rs) * k2 * k2 * k
+}
+
+#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+impl<C: CubeTexels> Shader<'_, C> {
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sample_as(
+        &self,
+        xi1: f32,
+        xi2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+    ) -> AsSample {
+        let u = &self.uniform;
+        let q = ((xi1 * 4.0) as u32).min(3);
+        let xq = xi1 * 4.0 - q as f32;
+        let half_angle = 0.5 * PI * xq;
+        let mut phi =
+            ((u.nu + 1.0).sqrt() * half_angle.sin()).atan2((u.nv + 1.0).sqrt() * half_angle.cos());
+        phi = match q {
+            1 => PI - phi,
+            2 => PI + phi,
+            3 => 2.0 * PI - phi,
+            _ => phi,
+        };
+        let (cp, sp) = (phi.cos(), phi.sin());
+        let e = u.nu * cp * cp + u.nv * sp * sp;
+        let cos_theta = (1.0 - xi2).powf(1.0 / (e + 1.0));
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let h = t * (sin_theta * cp) + b * (sin_theta * sp) + n * cos_theta;
+        let vh = v.dot(h);
+        let l = 2.0 * vh * h - v;
+        // Eq. 5.8 and 5.11 as in shade.wgsl.
+        let lpdf = (u.m as f32).log2() + 0.5 * ((u.nu + 1.0) * (u.nv + 1.0)).log2()
+            - (2.0 * PI).log2()
+            + e / (e + 1.0) * (1.0 - xi2).log2()
+            - (4.0 * vh.max(1e-30)).log2();
+        let nl = n.dot(l);
+        let weight = if vh > 0.0 && nl > 0.0 {
+            fresnel(u.rs, vh) * nl / nv.max(nl)
+        } else {
+            0.0
+        };
+        AsSample { l, weight, lpdf }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sample_diffuse(
+        &self,
+        xi1: f32,
+        r2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        nv: f32,
+    ) -> AsSample {
+        let u = &self.uniform;
+        let phi = 2.0 * PI * xi1;
+        let rad = r2.sqrt();
+        let z = (1.0 - r2).max(0.0).sqrt();
+        let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
+        let nl = n.dot(l);
+        let lpdf = (u.m as f32).log2() + (nl.max(1e-30) / PI).log2();
+        let fv = 1.0 - (1.0 - 0.5 * nv.max(0.0)).powf(5.0);
+        let fl = 1.0 - (1.0 - 0.5 * nl.max(0.0)).powf(5.0);
+        let weight = if nl > 0.0 {
+            28.0 / 23.0 * u.rd * (1.0 - u.rs) * fv * fl // Eq. 5.4 × π
+        } else {
+            0.0
+        };
+        AsSample { l, weight, lpdf }
+    }
+
+    /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
+    /// `cube` = INVALID, the blend), as `sample_radiance`; `fresh` and `seed` as
+    /// `depth_iterate`. `None` when a face was not available.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sample_radiance(
+        &self,
+        c: &Candidates,
+        cube: u32,
+        wn: [f32; 4],
+        x: Vec3,
+        s: &AsSample,
+        fresh: bool,
+        seed: &mut f32,
+    ) -> Option<Vec3> {
+        let u = &self.uniform;
+        let lod = self.sample_lod(s.l, s.lpdf);
+        if u.order == 1 && cube == INVALID_INDEX {
+            let w = if u.blend != 4 {
+                self.blend_weights(c, s.l)
+            } else {
+                wn
+            };
+            return Some(
+                self.blend_read(c, w, x, s.l, lod)
+                    .unwrap_or_else(|| self.env_read(x, s.l, lod)),
+            );
+        }
+        let d = if cube == u.env_cube {
+            self.env_dir(x, s.l)
+        } else if u.depth_steps > 0 {
+            self.depth_iterate(cube, x, s.l, fresh, seed)
+        } else {
+            s.l
+        };
+        if u.mip_levels > 1 {
+            self.lookup_levels(cube, d, lod)
+        } else {
+            self.lookup(cube, d)
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn integrate(
+        &self,
+        c: &Candidates,
+        cube: u32,
+        j: u32,
+        pixel: u32,
+        x: Vec3,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+    ) -> (Vec3, bool) {
+        let u = &self.uniform;
+        let mut acc = Vec3::ZERO;
+        let mut ok = true;
+        let wn = self.blend_weights(c, n);
+        // Per kind of sample (specular, diffuse): `depth_iterate`'s seed, and whether the row
+        // has had its fresh sample (its first one above the surface).
+        let mut seed = [0.0f32; 2];
+        let mut fresh = [true; 2];
+        let rows = filter_rows(u.m, u.mip_levels > 1);
+        for i in 0..u.m {
+            if i % rows == 0 {
+                fresh = [true; 2];
+            }
+            for k in 0..2 {
+                if k == 1 && u.rd <= 0.0 {
+                    continue;
+                }
+                let [x1, x2] = self.sample_xi(pixel, i, j, 2 * k);
+                let s = if k == 0 {
+                    self.sample_as(x1, x2, n, t, b, v, nv)
+                } else {
+                    self.sample_diffuse(x1, x2, n, t, b, nv)
+                };
+                if s.weight <= 0.0 {
+                    continue;
+                }
+                let li = self
+                    .sample_radiance(c, cube, wn, x, &s, fresh[k as usize], &mut seed[k as usize])
+                    .unwrap_or_else(|| {
+                        ok = false;
+                        Vec3::ZERO
+                    });
+                fresh[k as usize] = false;
+                acc += li * s.weight;
+            }
+        }
+        (acc / u.m.max(1) as f32, ok)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn glossy(
+        &self,
+        c: &Candidates,
+        pixel: u32,
+        x: Vec3,
+        n: Vec3,
+        t: Vec3,
+        v: Vec3,
+        r: Vec3,
+    ) -> Vec3 {
+        let u = &self.uniform;
+        let b = n.cross(t);
+        let nv = n.dot(v);
+        if u.source != 0 || c.count == 0 {
+            if u.env_cube == INVALID_INDEX {
+                return Vec3::ZERO;
+            }
+            return self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0;
+        }
+        if u.order == 1 {
+            return self
+                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv)
+                .0;
+        }
+        let axis = if u.blend == 4 { n } else { r };
+        let w = self.blend_weights(c, axis);
+        let mut acc = Vec3::ZERO;
+        let mut wsum = 0.0;
+        for j in 0..4 {
+            if w[j] > 0.0 {
+                let (est, ok) = self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv);
+                if ok {
+                    acc += est * w[j];
+                    wsum += w[j];
+                }
+            }
+        }
+        if wsum > 0.0 {
+            return acc / wsum;
+        }
+        if u.env_cube == INVALID_INDEX {
+            return Vec3::ZERO;
+        }
+        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0
+    }
+}

@@ -1,0 +1,90 @@
+//! The CPU reference of shade.wgsl: the same shading in Rust `f32`, function for function and
+//! in the same operation order, so that GPU images can be checked against it (the parity
+//! tests) and so that users without a GPU can still evaluate a G-buffer. Each file here is the
+//! twin of the file of the same name under shade/, its functions in the same order.
+//!
+//! Residency and feedback work as on the GPU: a [`CubeTexels`] says which faces are available,
+//! and every face a lookup *would* read with everything resident is marked in the feedback
+//! masks (bit `f` of entry `cube` = face `f` needed).
+//!
+//! `j` indexes the four candidates' parallel arrays (indices, directions, weights), as in
+//! shade.wgsl; `!(x > 0.0)` is shade.wgsl's NaN-aware test, kept word for word.
+
+use std::sync::atomic::AtomicU32;
+
+use glam::Vec3;
+use oslf_format::SampleMapView;
+use oslf_geometry::BezierPatch;
+
+use crate::params::ShadeUniform;
+
+mod background;
+mod blend;
+mod cube;
+mod depth;
+mod feedback;
+mod glossy;
+mod mirror;
+mod patch;
+mod pixel;
+mod random;
+mod reconstruct;
+mod seams;
+mod store;
+#[cfg(test)]
+mod tests;
+
+pub use cube::{face_point, face_st};
+pub use patch::{patch_du, patch_dv, patch_normal, tangent_frame};
+pub use random::{filter_rows, filter_xi, pcg};
+pub use seams::seam_coords;
+pub use store::StoreCubes;
+
+/// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
+pub(crate) const DEPTH_REFINE: u32 = 6;
+/// Steps of a glossy sample's depth correction (DEPTH_ITERATIONS in shade.wgsl).
+pub(crate) const DEPTH_ITERATIONS: u32 = 2;
+/// Depth-thicknesses within which a texel of a depth-corrected lookup agrees with the hit, at
+/// most half its distance (LOOKUP_AGREE in shade.wgsl).
+pub(crate) const LOOKUP_AGREE: f32 = 1.0;
+/// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
+/// shade.wgsl).
+pub(crate) const HIT_AGREE: f32 = 0.25;
+
+/// Where the reference reads cube-map texels.
+pub trait CubeTexels: Sync {
+    /// Texel `(x, y)` of mip `level` of `face` of cube `cube`, or `None` when that face is not
+    /// available (not resident, the GPU's fallback case).
+    fn texel(&self, cube: u32, face: usize, level: u32, x: u32, y: u32) -> Option<Vec3>;
+    /// Distance texel `(x, y)` of `face` of cube `cube` (as the GPU's binary16 plane holds it),
+    /// or `None` when that face is not available or has no distance plane.
+    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32>;
+    /// Whether any face of `cube` is available.
+    fn resident(&self, cube: u32) -> bool;
+}
+
+/// One pixel of the G-buffer, as gbuffer.wgsl writes it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GTexel {
+    /// World position and sample-map id + 1 (0 = background): a Bézier patch's, or the atlas
+    /// page's that gbuffer.wgsl picked from a mesh's atlas uv.
+    pub position_patch: [f32; 4],
+    /// Octahedral normal, u, v (on the patch, or local to the atlas page).
+    pub normal_uv: [f32; 4],
+}
+
+/// Everything the shader reads besides the G-buffer.
+pub struct Shader<'a, C: CubeTexels> {
+    pub uniform: ShadeUniform,
+    /// Sample-point positions (world space).
+    pub samples: &'a [Vec3],
+    /// Per sample map: the world-space patch (zero control points for a mesh's atlas page,
+    /// whose tangent frame then comes from the normal alone) and its object's base colour C_s.
+    pub patches: &'a [BezierPatch],
+    pub colors: &'a [Vec3],
+    /// One sample map per map index (Bézier patch or atlas page).
+    pub maps: &'a [SampleMapView<'a>],
+    pub cubes: &'a C,
+    /// Feedback masks, one per cube (sample points, then the environment cube).
+    pub feedback: &'a [AtomicU32],
+}

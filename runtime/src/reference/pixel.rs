@@ -1,0 +1,64 @@
+//! The entry point: one pixel of the G-buffer shaded. As shade/pixel.wgsl, function for function.
+
+use glam::Vec3;
+
+use super::patch::{patch_du, patch_normal, tangent_frame};
+use super::random::pcg;
+use super::{CubeTexels, GTexel, Shader};
+
+/// Replaces NaN and infinities by 0 (as `finite3`).
+pub(super) fn finite3(c: Vec3) -> Vec3 {
+    Vec3::from_array(c.to_array().map(|x| if x.is_finite() { x } else { 0.0 }))
+}
+
+#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+impl<C: CubeTexels> Shader<'_, C> {
+    /// Shades pixel `(px, py)` with G-buffer texel `g`: the background with alpha 0 off the
+    /// object, else the colour with alpha 1 (as `shade` in shade.wgsl).
+    pub fn shade(&self, px: u32, py: u32, g: &GTexel) -> [f32; 4] {
+        let u = &self.uniform;
+        if g.position_patch[3] < 0.5 {
+            return self.background(px, py);
+        }
+        let patch = (g.position_patch[3] - 0.5) as u32;
+        let x = Vec3::new(
+            g.position_patch[0],
+            g.position_patch[1],
+            g.position_patch[2],
+        );
+        let (pu, pv) = (g.normal_uv[2], g.normal_uv[3]);
+        let ni = crate::geometry::oct_decode([g.normal_uv[0], g.normal_uv[1]]);
+        let n = self
+            .patches
+            .get(patch as usize)
+            .map_or(ni, |p| patch_normal(p, pu, pv, ni));
+        let c = self.candidates(patch, pu, pv, x, n);
+        let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
+        let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
+        let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
+        let mut spec = Vec3::ZERO;
+        if u.terms & 2 != 0 {
+            spec = self.mirror(&c, x, n, r);
+        } else if u.terms & 4 != 0 {
+            let du = self
+                .patches
+                .get(patch as usize)
+                .map_or(Vec3::ZERO, |p| patch_du(p, pu, pv));
+            let t = tangent_frame(n, du);
+            spec = self.glossy(&c, pixel, x, n, t, v, r);
+        }
+        if u.terms & 8 != 0 {
+            spec *= self
+                .colors
+                .get(patch as usize)
+                .copied()
+                .unwrap_or(Vec3::ONE);
+        }
+        let mut color = spec;
+        if u.terms & 1 != 0 {
+            color += self.recon(&c, x, n); // Eq. 3.12, 4.12
+        }
+        let c = finite3(color);
+        [c.x, c.y, c.z, 1.0]
+    }
+}

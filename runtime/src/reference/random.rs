@@ -1,0 +1,74 @@
+//! Random numbers: the PCG hash (Jarzynski & Olano 2020) and the glossy samples' (ξ1, ξ2). As shade/random.wgsl, function for function.
+
+use std::f32::consts::PI;
+
+use super::{CubeTexels, Shader};
+
+/// PCG hash (Jarzynski & Olano 2020), as `pcg` in shade.wgsl.
+pub fn pcg(v: u32) -> u32 {
+    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+pub(super) fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+    let h = pcg(pixel.wrapping_add(pcg(i.wrapping_add(pcg(j.wrapping_mul(8).wrapping_add(k))))));
+    (h >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+impl<C: CubeTexels> Shader<'_, C> {
+    /// (ξ1, ξ2) of sample `i` of integration `j`, numbers `k` and `k + 1` (as `sample_xi`):
+    /// random with ξ1 stratified, or when filtering the fixed set [`filter_xi`].
+    pub(super) fn sample_xi(&self, pixel: u32, i: u32, j: u32, k: u32) -> [f32; 2] {
+        let m = self.uniform.m;
+        if self.uniform.mip_levels > 1 {
+            return filter_xi(i, m);
+        }
+        [
+            (i as f32 + rand(pixel, i, j, k)) / m as f32,
+            rand(pixel, i, j, k + 1),
+        ]
+    }
+}
+
+/// (ξ1, ξ2) of filtered glossy sample `i` of `m` (as `filter_xi`): for m = n² the centres of
+/// an n × n grid of strata through Shirley & Chiu's concentric map to the disc, as polar
+/// coordinates (ξ1 = φ/2π, ξ2 = r²), so that each sample's cell is compact; else the
+/// Hammersley set.
+pub fn filter_xi(i: u32, m: u32) -> [f32; 2] {
+    let n = (m as f32).sqrt().round() as u32;
+    if n * n != m {
+        return [
+            (i as f32 + 0.5) / m as f32,
+            i.reverse_bits() as f32 * 2.328_306_4e-10,
+        ];
+    }
+    let a = 2.0 * ((i % n) as f32 + 0.5) / n as f32 - 1.0;
+    let b = 2.0 * ((i / n) as f32 + 0.5) / n as f32 - 1.0;
+    if a == 0.0 && b == 0.0 {
+        return [0.0, 0.0]; // the centre cell of an odd n
+    }
+    let (mut r, mut phi) = if a.abs() > b.abs() {
+        (a, 0.25 * PI * (b / a))
+    } else {
+        (b, 0.5 * PI - 0.25 * PI * (a / b))
+    };
+    if r < 0.0 {
+        r = -r;
+        phi += PI;
+    }
+    let x1 = phi * (0.5 / PI);
+    [x1 - x1.floor(), r * r]
+}
+
+/// Samples per row of the filtered set of `m` (as `filter_rows`): n for m = n² when
+/// `filtered`, else 1.
+pub fn filter_rows(m: u32, filtered: bool) -> u32 {
+    let n = (m as f32).sqrt().round() as u32;
+    if filtered && n > 0 && n * n == m {
+        n
+    } else {
+        1
+    }
+}

@@ -1,0 +1,743 @@
+use std::f32::consts::PI;
+
+use oslf_format::INVALID_INDEX;
+
+use super::blend::Candidates;
+use super::glossy::fresnel;
+use super::*;
+use crate::face::FAR_DISTANCE;
+
+/// The constants of a store without sample points, maps or distances: environment cube
+/// `env_cube`, faces of `cube_res`².
+fn store_constants(env_cube: u32, cube_res: u32) -> crate::params::StoreConstants {
+    crate::params::StoreConstants {
+        sample_count: 0,
+        env_cube,
+        map_res: 1,
+        index16: true,
+        cube_res,
+        slots_per_texture: 1,
+        mip_levels: 1,
+        has_depth: false,
+        origin: [0.0; 3],
+        fitted_box: None,
+    }
+}
+
+#[test]
+fn tangent_frames_are_unit_and_orthogonal_even_where_du_vanishes() {
+    for n in [
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::new(0.6, 0.0, -0.8),
+        Vec3::new(-1e-8, 1.0, 0.0).normalize(),
+    ] {
+        for du in [Vec3::ZERO, n * 3.0, Vec3::X, Vec3::new(1e-30, 0.0, 0.0)] {
+            let t = tangent_frame(n, du);
+            assert!(t.is_finite(), "{n} {du}");
+            assert!((t.length() - 1.0).abs() < 1e-5, "{n} {du} {t}");
+            assert!(t.dot(n).abs() < 1e-5, "{n} {du} {t}");
+        }
+    }
+}
+
+/// No cube is ever available.
+struct NoCubes;
+
+impl CubeTexels for NoCubes {
+    fn texel(&self, _: u32, _: usize, _: u32, _: u32, _: u32) -> Option<Vec3> {
+        None
+    }
+    fn depth(&self, _: u32, _: usize, _: u32, _: u32) -> Option<f32> {
+        None
+    }
+    fn resident(&self, _: u32) -> bool {
+        false
+    }
+}
+
+#[test]
+fn camera_rays_are_the_cameras_directions_through_pixel_centres() {
+    use crate::params::{Background, ShadeUniform, ShadingParams};
+    use oslf_geometry::Camera;
+    let k = store_constants(u32::MAX, 1);
+    for (camera, (w, h)) in [
+        (
+            Camera {
+                position: Vec3::new(5.5, -6.5, 4.5),
+                target: Vec3::new(0.0, 0.0, 1.0),
+                up: Vec3::Z,
+                vfov_deg: 36.0,
+            },
+            (96, 72),
+        ),
+        (
+            Camera {
+                position: Vec3::new(0.0, 0.0, 3.0),
+                target: Vec3::ZERO,
+                up: Vec3::Y,
+                vfov_deg: 150.0,
+            },
+            (7, 300),
+        ),
+    ] {
+        let uniform = ShadeUniform::new(
+            &ShadingParams::default(),
+            glam::Mat4::IDENTITY,
+            &camera,
+            [w, h],
+            &k,
+            Background::Env,
+        );
+        let shader = bare_shader(uniform, &[], &NoCubes);
+        for (i, j) in [
+            (0, 0),
+            (w - 1, 0),
+            (w / 2, h / 2),
+            (0, h - 1),
+            (w - 1, h - 1),
+        ] {
+            let want = camera.direction(i as f32 + 0.5, j as f32 + 0.5, w, h);
+            let got = shader.camera_ray(i, j);
+            assert!((got - want).length() < 1e-6, "{i},{j}: {got} vs {want}");
+        }
+    }
+}
+
+#[test]
+fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
+    use crate::params::{Background, ShadeUniform, ShadingParams};
+    let k = store_constants(0, 1);
+    let camera = oslf_geometry::Camera {
+        position: Vec3::new(0.0, -3.0, 0.0),
+        target: Vec3::ZERO,
+        up: Vec3::Z,
+        vfov_deg: 40.0,
+    };
+    for (bg, want) in [
+        (Background::None, [0.0; 4]),
+        (Background::Color([0.5, 1.0, 3.0]), [0.5, 1.0, 3.0, 0.0]),
+        // Not resident: black, never a stale or non-finite value.
+        (Background::Env, [0.0; 4]),
+    ] {
+        let shader = Shader {
+            uniform: ShadeUniform::new(
+                &ShadingParams::default(),
+                glam::Mat4::IDENTITY,
+                &camera,
+                [4, 3],
+                &k,
+                bg,
+            ),
+            samples: &[],
+            patches: &[],
+            colors: &[],
+            maps: &[],
+            cubes: &NoCubes,
+            feedback: &[],
+        };
+        assert_eq!(shader.shade(1, 2, &GTexel::default()), want, "{bg:?}");
+    }
+}
+
+/// shade.wgsl's seam table (SEAM_LO, SEAM_HI, read from its source and decoded as its
+/// `seam_texel` does) gives the texel `seam_coords` finds by projection, for every texel
+/// one off a face's edge (corners aside), on faces of 1 to 1024 texels.
+#[test]
+fn shader_seam_table_matches_the_projection() {
+    let src = crate::pipelines::SHADE_WGSL;
+    let table = |name: &str| -> [u32; 4] {
+        let head = format!("const {name} = vec4<u32>(");
+        let at = src.find(&head).expect(name) + head.len();
+        let body = &src[at..at + src[at..].find(')').unwrap()];
+        let v: Vec<u32> = body
+            .split(',')
+            .map(|w| {
+                let w = w.trim().trim_end_matches('u');
+                u32::from_str_radix(w.trim_start_matches("0x"), 16).unwrap()
+            })
+            .collect();
+        v.try_into().unwrap()
+    };
+    let (lo, hi) = (table("SEAM_LO"), table("SEAM_HI"));
+    let shader = |face: usize, x: i32, y: i32, n: i32| -> (usize, (i32, i32)) {
+        let in_x = x >= 0 && x < n;
+        let (e, a) = if in_x {
+            (if y >= n { 3 } else { 2 }, x)
+        } else {
+            (if x >= n { 1 } else { 0 }, y.clamp(0, n - 1))
+        };
+        let code = if face == 5 {
+            hi[e]
+        } else {
+            lo[e] >> (6 * face)
+        } & 63;
+        let along = if code & 16 != 0 { n - 1 - a } else { a };
+        let fixed = if code & 32 != 0 { n - 1 } else { 0 };
+        let c = if code & 8 != 0 {
+            (along, fixed)
+        } else {
+            (fixed, along)
+        };
+        ((code & 7) as usize, c)
+    };
+    for n in [1, 2, 3, 4, 6, 8, 16, 48, 64, 256, 1024] {
+        for face in 0..6 {
+            for a in 0..n {
+                for (x, y) in [(-1, a), (n, a), (a, -1), (a, n)] {
+                    assert_eq!(
+                        shader(face, x, y, n),
+                        seam_coords(face, (x, y), n),
+                        "face {face}, texel ({x}, {y}) of {n}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn face_points_invert_face_st() {
+    for face in 0..6 {
+        for (s, t) in [(0.5, 0.5), (0.1, 0.8), (0.97, 0.03), (0.02, 0.99)] {
+            let p = face_point(face, s, t);
+            let (f, s2, t2) = face_st(p);
+            assert_eq!(f, face, "{face} {s} {t}");
+            assert!(
+                (s2 - s).abs() < 1e-6 && (t2 - t).abs() < 1e-6,
+                "{face} {s} {t}"
+            );
+            let want = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
+            assert!((p.normalize() - want).length() < 1e-6, "{face} {s} {t}");
+        }
+    }
+}
+
+/// A resident cube of resolution `n` whose texels are a smooth (linear) function of the
+/// directions through their centres.
+struct SmoothCube(u32);
+
+impl CubeTexels for SmoothCube {
+    fn depth(&self, _: u32, _: usize, _: u32, _: u32) -> Option<f32> {
+        None
+    }
+    fn texel(&self, _: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
+        assert!(face < 6 && x < self.0 && y < self.0, "{face} {x} {y}");
+        let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.0));
+        Some(Vec3::splat(0.5) + d * Vec3::new(0.4, 0.3, 0.2))
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
+/// The default shading (depth-corrected) of a store of `res`² cubes with distances and no
+/// environment cube.
+fn depth_uniform(res: u32) -> crate::params::ShadeUniform {
+    use crate::params::{Background, ShadeUniform, ShadingParams};
+    let mut k = store_constants(INVALID_INDEX, res);
+    k.has_depth = true;
+    let camera = oslf_geometry::Camera {
+        position: Vec3::new(0.0, -5.0, 1.0),
+        target: Vec3::ZERO,
+        up: Vec3::Z,
+        vfov_deg: 40.0,
+    };
+    let u = ShadeUniform::new(
+        &ShadingParams::default(),
+        glam::Mat4::IDENTITY,
+        &camera,
+        [4, 4],
+        &k,
+        Background::Env,
+    );
+    assert!(u.depth_steps > 0);
+    u
+}
+
+/// A shader with no patches or sample maps: for the parts that need only cubes.
+fn bare_shader<'a, C: CubeTexels>(
+    uniform: ShadeUniform,
+    samples: &'a [Vec3],
+    cubes: &'a C,
+) -> Shader<'a, C> {
+    Shader {
+        uniform,
+        samples,
+        patches: &[],
+        colors: &[],
+        maps: &[],
+        cubes,
+        feedback: &[],
+    }
+}
+
+/// A cube whose every face holds a near surface (distance 2, red) on its left half and
+/// nothing (blue) on its right: a silhouette down the middle of each face.
+struct Silhouette(u32);
+
+impl CubeTexels for Silhouette {
+    fn depth(&self, _: u32, _: usize, x: u32, _: u32) -> Option<f32> {
+        Some(if x < self.0 / 2 { 2.0 } else { FAR_DISTANCE })
+    }
+    fn texel(&self, _: u32, _: usize, _: u32, x: u32, _: u32) -> Option<Vec3> {
+        Some(if x < self.0 / 2 { Vec3::X } else { Vec3::Z })
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
+/// A depth-corrected lookup at a silhouette takes the radiance of the surface its hit lies
+/// on, not the bilinear blend across the silhouette that a plain lookup gives: a hit at the
+/// near surface's distance reads red, a ray that meets nothing blue; a hit whose distance
+/// agrees with no texel, and a hidden one, the plain blend.
+#[test]
+fn depth_lookups_keep_the_hits_surface_at_a_silhouette() {
+    let res = 8;
+    let cubes = Silhouette(res);
+    let shader = bare_shader(depth_uniform(res), &[Vec3::ZERO], &cubes);
+    // Face +x at s = ½: halfway between texel columns 3 (near) and 4 (nothing).
+    let dir = face_point(0, 0.5, 3.5 / res as f32).normalize();
+    let (face, s, _) = face_st(dir);
+    assert!(face == 0 && (s - 0.5).abs() < 1e-6, "{face} {s}");
+    let plain = shader.lookup(0, dir).unwrap();
+    assert!(
+        (plain - Vec3::new(0.5, 0.0, 0.5)).length() < 1e-5,
+        "{plain}"
+    );
+    let near = shader.depth_lookup(0, (dir * 2.0, 1.0), 0.0).unwrap();
+    assert_eq!(near, Vec3::X);
+    let none = shader.depth_lookup(0, (dir, 0.0), 0.0).unwrap();
+    assert_eq!(none, Vec3::Z);
+    let between = shader.depth_lookup(0, (dir * 50.0, 1.0), 0.0).unwrap();
+    assert!((between - plain).length() < 1e-6, "{between}");
+    let hidden = shader.depth_lookup(0, (dir, -1.0), 0.0).unwrap();
+    assert!((hidden - plain).length() < 1e-6, "{hidden}");
+}
+
+/// A sample point's view of a ceiling at z = 10 (nothing below the horizon), or of a
+/// sphere of radius 3 around it (`sphere`).
+struct Ceiling {
+    res: u32,
+    p: Vec3,
+    sphere: bool,
+}
+
+impl CubeTexels for Ceiling {
+    fn depth(&self, _: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+        if self.sphere {
+            return Some(3.0);
+        }
+        let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
+        Some(if d.z > 0.0 {
+            (10.0 - self.p.z) / d.z * d.length()
+        } else {
+            FAR_DISTANCE
+        })
+    }
+    fn texel(&self, _: u32, _: usize, _: u32, _: u32, _: u32) -> Option<Vec3> {
+        Some(Vec3::ONE)
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
+/// A glossy sample's depth correction (`depth_iterate`) turns the direction from the
+/// shaded point into the one from the sample point to where the ray meets what the sample
+/// point sees: exactly on a sphere of equal distances, within a few texels' angle on a
+/// ceiling where the plain direction is off by ten times more; the plain direction for a
+/// ray that meets nothing, and for a shaded point outside the sphere.
+#[test]
+fn glossy_depth_correction_finds_where_the_ray_meets_the_stored_distances() {
+    let res = 64;
+    let p = Vec3::new(0.0, 0.0, 0.1);
+    let x = Vec3::new(0.8, 0.3, 0.0);
+    let l = Vec3::new(-0.6, 0.2, 1.0).normalize();
+    let angle = |a: Vec3, b: Vec3| a.normalize().dot(b.normalize()).clamp(-1.0, 1.0).acos();
+    let sphere = Ceiling {
+        res,
+        p,
+        sphere: true,
+    };
+    let shader = bare_shader(depth_uniform(res), std::slice::from_ref(&p), &sphere);
+    let mut seed = 0.0;
+    let q = shader.depth_iterate(0, x, l, true, &mut seed);
+    let along = q - (x - p);
+    assert!((q.length() - 3.0).abs() < 1e-5, "{q}");
+    assert!(angle(along, l) < 1e-3 && along.dot(l) > 0.0, "{q}");
+    assert!((seed - 3.0).abs() < 1e-3, "{seed}");
+    // The next sample of the row takes the sphere of that distance, reading nothing:
+    // exact on the sphere; the plain direction without a seed.
+    let l2 = Vec3::new(-0.5, 0.3, 1.0).normalize();
+    let q2 = shader.depth_iterate(0, x, l2, false, &mut seed);
+    assert!((q2.length() - 3.0).abs() < 1e-3, "{q2}");
+    assert!(angle(q2 - (x - p), l2) < 1e-3, "{q2}");
+    assert!(
+        (seed - 3.0).abs() < 1e-3,
+        "a warm sample keeps the seed: {seed}"
+    );
+    assert_eq!(shader.depth_iterate(0, x, l2, false, &mut 0.0), l2);
+    let far = Vec3::new(3.0, 0.0, 0.0);
+    let mut seed = 1.0;
+    assert_eq!(shader.depth_iterate(0, far, l, true, &mut seed), l);
+    assert_eq!(seed, 0.0, "no hit leaves no seed");
+
+    let ceiling = Ceiling {
+        res,
+        p,
+        sphere: false,
+    };
+    let shader = bare_shader(depth_uniform(res), std::slice::from_ref(&p), &ceiling);
+    let hit = x + l * (10.0 / l.z) - p;
+    let q = shader.depth_iterate(0, x, l, true, &mut 0.0);
+    let texel = std::f32::consts::FRAC_PI_2 / res as f32;
+    assert!(
+        angle(q, hit) < 3.0 * texel,
+        "{} texels",
+        angle(q, hit) / texel
+    );
+    assert!(
+        angle(l, hit) > 10.0 * angle(q, hit),
+        "{} {}",
+        angle(l, hit),
+        angle(q, hit)
+    );
+    let down = Vec3::new(0.3, 0.0, -1.0).normalize();
+    assert_eq!(shader.depth_iterate(0, x, down, true, &mut 0.0), down);
+}
+
+/// Two sample points over a ceiling 10 away (blue), with a small plate halfway (red) that
+/// only the first one's cube holds (too thin for the second's texels, say).
+struct TwoViews {
+    res: u32,
+    points: [Vec3; 2],
+}
+
+impl TwoViews {
+    fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3) {
+        let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
+        let p = self.points[cube as usize];
+        if d.z <= 0.0 {
+            return (FAR_DISTANCE, Vec3::Y);
+        }
+        let t = (5.0 - p.z) / d.z;
+        let q = p + d * t;
+        if cube == 0 && q.x * q.x + q.y * q.y < 0.25 {
+            return (t * d.length(), Vec3::X);
+        }
+        ((10.0 - p.z) / d.z * d.length(), Vec3::Z)
+    }
+}
+
+impl CubeTexels for TwoViews {
+    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+        Some(self.trace(cube, face, x, y).0)
+    }
+    fn texel(&self, cube: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
+        Some(self.trace(cube, face, x, y).1)
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
+/// The candidates agree on the nearest hit their searches find: the plate that one
+/// candidate's cube resolves is what the blend shows, the other candidate (whose distances
+/// do not see the plate's point) left out, not a mix of plate and ceiling.
+#[test]
+fn depth_corrected_blends_agree_on_the_nearest_hit() {
+    let res = 64;
+    let uniform = depth_uniform(res);
+    let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
+    let cubes = TwoViews { res, points };
+    let shader = bare_shader(uniform, &points, &cubes);
+    let x = Vec3::ZERO;
+    let c = Candidates {
+        idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
+        s: [
+            points[0].normalize(),
+            points[1].normalize(),
+            Vec3::Z,
+            Vec3::Z,
+        ],
+        count: 2,
+    };
+    // Each candidate alone: the plate (the first), the ceiling (the second).
+    let first = shader
+        .blend_read(&c, [1.0, 0.0, 0.0, 0.0], x, Vec3::Z, 0.0)
+        .unwrap();
+    let second = shader
+        .blend_read(&c, [0.0, 1.0, 0.0, 0.0], x, Vec3::Z, 0.0)
+        .unwrap();
+    assert!((first - Vec3::X).length() < 1e-5, "{first}");
+    assert!((second - Vec3::Z).length() < 1e-5, "{second}");
+    // Together, with the second weighted three times the first: the plate.
+    let both = shader
+        .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, Vec3::Z, 0.0)
+        .unwrap();
+    assert!((both - Vec3::X).length() < 1e-5, "{both}");
+    // A ray past the plate's edge meets the ceiling for both.
+    let past = Vec3::new(0.3, 0.0, 1.0).normalize();
+    let both = shader
+        .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, past, 0.0)
+        .unwrap();
+    assert!((both - Vec3::Z).length() < 1e-5, "{both}");
+}
+
+/// Filtered samples for M = n² are the grid's stratum centres through the concentric map:
+/// mapped back to the square (the map's inverse), sample i lands at the centre of cell i;
+/// every (ξ1, ξ2) lies in [0, 1)², and other M take the Hammersley set.
+#[test]
+fn filtered_samples_are_concentric_stratum_centres() {
+    for n in [1u32, 2, 3, 4, 5, 8, 16] {
+        let m = n * n;
+        for i in 0..m {
+            let [x1, x2] = filter_xi(i, m);
+            assert!(
+                (0.0..1.0).contains(&x1) && (0.0..1.0).contains(&x2),
+                "{m} {i}"
+            );
+            // Polar (r, φ) on the disc back to the square [-1, 1]² (Shirley & Chiu).
+            let (r, mut phi) = (x2.sqrt(), 2.0 * PI * x1);
+            if phi > 1.75 * PI {
+                phi -= 2.0 * PI;
+            }
+            let (a, b) = if phi < 0.25 * PI {
+                (r, r * phi / (0.25 * PI))
+            } else if phi < 0.75 * PI {
+                (-r * (phi - 0.5 * PI) / (0.25 * PI), r)
+            } else if phi < 1.25 * PI {
+                (-r, -r * (phi - PI) / (0.25 * PI))
+            } else {
+                (r * (phi - 1.5 * PI) / (0.25 * PI), -r)
+            };
+            let cell = |c: f32| (c + 1.0) * 0.5 * n as f32;
+            let (ca, cb) = (cell(a), cell(b));
+            assert!(
+                (ca - ((i % n) as f32 + 0.5)).abs() < 1e-4
+                    && (cb - ((i / n) as f32 + 0.5)).abs() < 1e-4,
+                "m {m} sample {i}: cell ({ca}, {cb})"
+            );
+        }
+    }
+    assert_eq!(filter_xi(3, 12), [3.5 / 12.0, 0.75]);
+}
+
+/// The shading normal is the patch's own (as the geometry crate evaluates it, to f32
+/// rounding), facing as the interpolated normal it is given, and that normal where the
+/// patch's degenerates (an atlas page's zero control points) or turns more than 25° away.
+#[test]
+fn patch_normals_are_the_patchs_own_facing_as_the_vertex_normal() {
+    let teapot = oslf_geometry::bezier::newell_teapot();
+    let mut compared = 0;
+    for p in &teapot {
+        for (u, v) in [(0.3, 0.6), (0.5, 0.5), (0.9, 0.15), (0.05, 0.95)] {
+            let exact = p.normal(u, v);
+            let du = patch_du(p, u, v);
+            let dv = patch_dv(p, u, v);
+            if du.cross(dv).length() < 1e-3 * du.length() * dv.length() {
+                continue; // near a collapsed edge: f32 derivatives lose digits
+            }
+            let tilt = (exact + Vec3::new(0.05, -0.03, 0.02)).normalize();
+            let n = patch_normal(p, u, v, tilt);
+            assert!((n - exact).length() < 1e-4, "{n} {exact}");
+            let flipped = patch_normal(p, u, v, -tilt);
+            assert!((flipped + exact).length() < 1e-4, "{flipped} {exact}");
+            let far = (exact + tilt.any_orthonormal_vector()).normalize();
+            assert_eq!(patch_normal(p, u, v, far), far);
+            compared += 1;
+        }
+    }
+    assert!(compared > 100, "{compared}");
+    let page = BezierPatch::new([Vec3::ZERO; 16]);
+    assert_eq!(patch_normal(&page, 0.5, 0.5, Vec3::Y), Vec3::Y);
+}
+
+/// The environment background is as continuous across face edges as inside a face: the
+/// largest difference between adjacent pixels whose rays lie on different faces is at most
+/// `FACTOR` times the largest between adjacent pixels on one face. (Clamped bilinear
+/// filtering within each face, as `lookup` does, shows a seam 5-20 times larger.)
+#[test]
+fn the_env_background_is_continuous_across_face_edges() {
+    use crate::params::{Background, ShadeUniform, ShadingParams};
+    use oslf_geometry::Camera;
+    const FACTOR: f32 = 1.5;
+    let (w, h) = (160u32, 120u32);
+    for res in [8, 32] {
+        let k = store_constants(0, res);
+        // Views across edges of every orientation, vertical and horizontal in the image,
+        // and across a corner of the cube.
+        for (target, up) in [
+            (Vec3::new(1.0, 0.05, 1.0), Vec3::Y),
+            (Vec3::new(1.0, 1.0, 0.1), Vec3::Z),
+            (Vec3::new(-1.0, -1.0, -0.2), Vec3::Z),
+            (Vec3::new(0.1, 1.0, 1.0), Vec3::X),
+            (Vec3::new(0.2, -1.0, -1.0), Vec3::X),
+            (Vec3::new(1.0, 1.0, 1.0), Vec3::Z),
+        ] {
+            let camera = Camera {
+                position: Vec3::ZERO,
+                target,
+                up,
+                vfov_deg: 50.0,
+            };
+            let shader = Shader {
+                uniform: ShadeUniform::new(
+                    &ShadingParams::default(),
+                    glam::Mat4::IDENTITY,
+                    &camera,
+                    [w, h],
+                    &k,
+                    Background::Env,
+                ),
+                samples: &[],
+                patches: &[],
+                colors: &[],
+                maps: &[],
+                cubes: &SmoothCube(res),
+                feedback: &[],
+            };
+            let px = |i: u32, j: u32| {
+                let c = shader.shade(i, j, &GTexel::default());
+                assert!(c.iter().all(|x| x.is_finite()) && c[3] == 0.0, "{c:?}");
+                (
+                    face_st(shader.camera_ray(i, j)).0,
+                    Vec3::new(c[0], c[1], c[2]),
+                )
+            };
+            let img: Vec<_> = (0..h).flat_map(|j| (0..w).map(move |i| (i, j))).collect();
+            let img: Vec<_> = img.into_iter().map(|(i, j)| px(i, j)).collect();
+            let (mut seam, mut inside, mut seam_pairs) = (0f32, 0f32, 0);
+            for j in 0..h {
+                for i in 0..w {
+                    let a = img[(j * w + i) as usize];
+                    for (di, dj) in [(1, 0), (0, 1)] {
+                        if i + di >= w || j + dj >= h {
+                            continue;
+                        }
+                        let b = img[((j + dj) * w + i + di) as usize];
+                        let d = (a.1 - b.1).abs().max_element();
+                        if a.0 == b.0 {
+                            inside = inside.max(d);
+                        } else {
+                            seam = seam.max(d);
+                            seam_pairs += 1;
+                        }
+                    }
+                }
+            }
+            println!("res {res} {target}: across edges {seam:.2e}, inside {inside:.2e}");
+            assert!(
+                seam_pairs > w.min(h) as usize / 2,
+                "{target}: no face edge in view"
+            );
+            assert!(
+                inside > 0.0 && seam <= FACTOR * inside,
+                "res {res} {target}: a seam of {seam} where one face varies by {inside}"
+            );
+        }
+    }
+}
+
+#[test]
+fn fresnel_is_schlick_at_both_ends() {
+    assert_eq!(fresnel(0.04, 1.0), 0.04);
+    assert!((fresnel(0.04, 0.0) - 1.0).abs() < 1e-6);
+    assert!((fresnel(0.04, -0.5) - 1.0).abs() < 1e-6);
+}
+
+/// Each file here and its twin under shade/ hold the functions they share in the same order.
+#[test]
+fn reference_files_follow_the_shader_files_order() {
+    let pairs: [(&str, &str, &str); 12] = [
+        (
+            "random",
+            include_str!("../shade/random.wgsl"),
+            include_str!("random.rs"),
+        ),
+        (
+            "feedback",
+            include_str!("../shade/feedback.wgsl"),
+            include_str!("feedback.rs"),
+        ),
+        (
+            "cube",
+            include_str!("../shade/cube.wgsl"),
+            include_str!("cube.rs"),
+        ),
+        (
+            "depth",
+            include_str!("../shade/depth.wgsl"),
+            include_str!("depth.rs"),
+        ),
+        (
+            "patch",
+            include_str!("../shade/patch.wgsl"),
+            include_str!("patch.rs"),
+        ),
+        (
+            "blend",
+            include_str!("../shade/blend.wgsl"),
+            include_str!("blend.rs"),
+        ),
+        (
+            "reconstruct",
+            include_str!("../shade/reconstruct.wgsl"),
+            include_str!("reconstruct.rs"),
+        ),
+        (
+            "mirror",
+            include_str!("../shade/mirror.wgsl"),
+            include_str!("mirror.rs"),
+        ),
+        (
+            "glossy",
+            include_str!("../shade/glossy.wgsl"),
+            include_str!("glossy.rs"),
+        ),
+        (
+            "seams",
+            include_str!("../shade/seams.wgsl"),
+            include_str!("seams.rs"),
+        ),
+        (
+            "background",
+            include_str!("../shade/background.wgsl"),
+            include_str!("background.rs"),
+        ),
+        (
+            "pixel",
+            include_str!("../shade/pixel.wgsl"),
+            include_str!("pixel.rs"),
+        ),
+    ];
+    // The names of the functions a source defines, in order.
+    let fns = |src: &str| -> Vec<String> {
+        src.lines()
+            .filter_map(|l| {
+                let l = l.trim_start();
+                let l = l
+                    .strip_prefix("pub(super) ")
+                    .or(l.strip_prefix("pub "))
+                    .unwrap_or(l);
+                let name = l.strip_prefix("fn ")?;
+                Some(name[..name.find(['(', '<'])?].to_string())
+            })
+            .collect()
+    };
+    for (name, wgsl, rust) in pairs {
+        let (w, r) = (fns(wgsl), fns(rust));
+        let shared_w: Vec<_> = w.iter().filter(|f| r.contains(f)).collect();
+        let shared_r: Vec<_> = r.iter().filter(|f| w.contains(f)).collect();
+        assert!(
+            !shared_w.is_empty() || name == "feedback",
+            "{name}: nothing shared"
+        );
+        assert_eq!(
+            shared_w, shared_r,
+            "{name}: shade/{name}.wgsl vs reference/{name}.rs"
+        );
+    }
+}

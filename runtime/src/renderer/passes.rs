@@ -1,0 +1,98 @@
+//! Encoding a frame's two passes: the G-buffer pass and the shading pass.
+
+use super::targets::SizedTargets;
+use super::timer::TimedPass;
+use super::Renderer;
+use crate::error::{Result, RuntimeError};
+use crate::pipelines::{DEPTH_CLEAR, WORKGROUP};
+
+impl Renderer {
+    /// Encodes the G-buffer pass: clears depth and rasterizes the mesh into the targets. The
+    /// colour targets are not cleared: the shading pass and `read_gbuffer` take a pixel as
+    /// covered where its depth is below [`DEPTH_CLEAR`] and ignore the colour elsewhere (an
+    /// NVIDIA H200 spent most of the pass clearing the two Rgba32Float targets:
+    /// docs/measurements.md).
+    pub(super) fn encode_gbuffer(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &SizedTargets,
+    ) {
+        let gp = targets.gb_position.create_view(&Default::default());
+        let gn = targets.gb_normal.create_view(&Default::default());
+        let dv = targets.depth.create_view(&Default::default());
+        let keep = wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer"),
+            color_attachments: &[
+                Some(wgpu::RenderPassColorAttachment {
+                    view: &gp,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: keep,
+                }),
+                Some(wgpu::RenderPassColorAttachment {
+                    view: &gn,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: keep,
+                }),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(DEPTH_CLEAR),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: self.timer.as_ref().map(|t| {
+                let (query_set, begin, end) = t.writes(TimedPass::GBuffer);
+                wgpu::RenderPassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.gbuffer.pipeline);
+        pass.set_bind_group(0, &self.gbuffer.group, &[]);
+        pass.set_index_buffer(self.buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.buffers.index_count, 0, 0..1);
+    }
+
+    /// Encodes the shading pass of the current frame's pipeline over every pixel.
+    pub(super) fn encode_shading(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &SizedTargets,
+    ) -> Result<()> {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("shade"),
+            timestamp_writes: self.timer.as_ref().map(|t| {
+                let (query_set, begin, end) = t.writes(TimedPass::Shade);
+                wgpu::ComputePassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
+        });
+        let pipeline = self
+            .shade
+            .get(&self.current)
+            .ok_or_else(|| RuntimeError::Gpu("no shading pipeline for this mode".into()))?;
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &targets.shade_group, &[]);
+        pass.dispatch_workgroups(
+            targets.width.div_ceil(WORKGROUP),
+            targets.height.div_ceil(WORKGROUP),
+            1,
+        );
+        Ok(())
+    }
+}

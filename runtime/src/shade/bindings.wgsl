@@ -1,0 +1,121 @@
+// ---- shade/bindings.wgsl ----
+// The uniform, the mode's switches, the bindings, the constants.
+//
+// OSLF shading: one compute invocation per pixel, reading the G-buffer written by gbuffer.wgsl.
+// The shader is the files of shade/ joined in the order of `SHADE_WGSL` (pipelines.rs), this
+// one first. Every function has a twin in the file of the same name under reference/ (the CPU
+// reference), in the same order and with the same operation order; the parity tests compare
+// the two. Bindings are declared in the order of `ShadePipelines::bind_group_layout`
+// (pipelines.rs).
+
+struct Params {
+    view_proj: mat4x4<f32>,
+    camera_pos: vec4<f32>,
+    size: vec2<u32>,
+    // Bit flags: 1 = F_recon, 2 = mirror F_refl, 4 = glossy (Ashikhmin–Shirley),
+    // 8 = scale the reflection term by C_s (Eq. 4.12).
+    terms: u32,
+    // 0 closest distance (4.3), 1 closest angle (4.4), 2 B^avg (4.9), 3 B^r (4.10), 4 B^n (4.11)
+    blend: u32,
+    blend_n: f32,
+    // 0 = the OSLF sample points, 1 = the environment-map baseline (one cube at the centre),
+    // 2 = that cube parallax-corrected against the proxy box
+    source: u32,
+    m: u32,
+    // 0 = integrate per sample point, then blend; 1 = blend per direction, then integrate (§5.2)
+    order: u32,
+    rs: f32,
+    rd: f32,
+    nu: f32,
+    nv: f32,
+    cos_phi_shader: f32,
+    seed: u32,
+    sample_count: u32,
+    env_cube: u32,
+    map_res: u32,
+    index16: u32,
+    cube_res: u32,
+    slots_per_texture: u32,
+    // The camera's basis for the rays through background pixels (oslf_geometry::Camera::
+    // direction); cam_right.w = tan(vfov/2).
+    cam_right: vec4<f32>,
+    cam_up: vec4<f32>,
+    cam_forward: vec4<f32>,
+    // Linear RGB of the colour background.
+    bg_color: vec4<f32>,
+    // 0 none (transparent black), 1 the environment cube, 2 bg_color (RenderOptions::background)
+    background: u32,
+    // Mip levels the glossy term filters over (1 = point sampling; FILTER).
+    mip_levels: u32,
+    // Most linear-search steps of a depth-corrected lookup (0 = off; DEPTH).
+    depth_steps: u32,
+    // How far behind the surface a refined hit may lie, as a fraction of its distance.
+    depth_thickness: f32,
+    // The environment cube's centre and the parallax proxy box (SOURCE 2), all in the shader's
+    // coordinates.
+    probe_pos: vec4<f32>,
+    box_min: vec4<f32>,
+    box_max: vec4<f32>,
+};
+
+// The mode's switches are pipeline-overridable constants (set from the same values as the
+// uniform's `terms`, `blend`, `source`, `order`): one pipeline per combination, so code a mode
+// does not use is not in its shader. On lavapipe every branch runs under an execution mask
+// whether or not any lane takes it, so unused code is not free (docs/measurements.md).
+override TERMS: u32 = 1u;
+override BLEND: u32 = 4u;
+override SOURCE: u32 = 0u;
+override ORDER: u32 = 0u;
+override POOLS: u32 = 4u;
+// 2^FACE_SHIFT faces lie side by side in each pool layer (pool.rs).
+override FACE_SHIFT: u32 = 0u;
+override DIFFUSE: bool = false;
+// The uniform's `background`: what pixels off the object show.
+override BACKGROUND: u32 = 0u;
+// Depth-corrected lookups (the uniform's depth_steps > 0; the pool has distance planes).
+override DEPTH: bool = false;
+// Filtered importance sampling for the glossy term (the uniform's mip_levels > 1).
+override FILTER: bool = false;
+
+struct PatchGpu {
+    cp: array<vec4<f32>, 16>,
+    color: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var gb_position: texture_2d<f32>;
+@group(0) @binding(2) var gb_normal: texture_2d<f32>;
+@group(0) @binding(3) var sample_maps: texture_2d_array<u32>;
+@group(0) @binding(4) var<storage, read> samples: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> patches: array<PatchGpu>;
+@group(0) @binding(6) var<storage, read> slots: array<u32>;
+@group(0) @binding(7) var<storage, read_write> feedback: array<atomic<u32>>;
+@group(0) @binding(8) var pool0: texture_2d_array<f32>;
+@group(0) @binding(9) var pool1: texture_2d_array<f32>;
+@group(0) @binding(10) var pool2: texture_2d_array<f32>;
+@group(0) @binding(11) var pool3: texture_2d_array<f32>;
+@group(0) @binding(12) var dpool0: texture_2d_array<f32>;
+@group(0) @binding(13) var dpool1: texture_2d_array<f32>;
+@group(0) @binding(14) var dpool2: texture_2d_array<f32>;
+@group(0) @binding(15) var dpool3: texture_2d_array<f32>;
+@group(0) @binding(16) var out_image: texture_storage_2d<rgba32float, write>;
+// The G-buffer pass's depth: below 1.0 (the clear) where a triangle covers the pixel; the
+// colour targets are not cleared, so only there do gb_position and gb_normal hold this frame.
+@group(0) @binding(17) var gb_depth: texture_depth_2d;
+
+const INVALID: u32 = 0xffffffffu;
+const PI: f32 = 3.14159265358979;
+// Distances at or above this mean "nothing this way" (face.rs FAR_DISTANCE, binary16's largest).
+const FAR: f32 = 65504.0;
+// Bisection steps that refine a depth-corrected hit (params.rs documents the search).
+const DEPTH_REFINE: u32 = 6u;
+// Steps of a glossy sample's depth correction (`depth_iterate`; reference/mod.rs
+// DEPTH_ITERATIONS).
+const DEPTH_ITERATIONS: u32 = 2u;
+// A texel of a depth-corrected lookup takes part in its bilinear tap when its distance lies
+// within this many depth_thickness of the hit's, at most half of it (`depth_lookup`;
+// reference/mod.rs LOOKUP_AGREE).
+const LOOKUP_AGREE: f32 = 1.0;
+// A candidate sees the blend's common hit when its distance toward it lies within this many
+// depth_thickness (one texel angle) of the hit's (`blend_read`; reference/mod.rs HIT_AGREE).
+const HIT_AGREE: f32 = 0.25;

@@ -1,0 +1,237 @@
+// ---- shade/glossy.wgsl ----
+// Ashikhmin–Shirley by Monte Carlo (chapter 5).
+// Its CPU twin: reference/glossy.rs.
+
+struct AsSample {
+    l: vec3<f32>,
+    // f_r ⟨n,l⟩ / p(l): the weight of L_i(l) in Eq. 5.12; 0 for samples below the surface.
+    weight: f32,
+    // log2(M p(l)), p the solid-angle density l was drawn with: the sample's mip level
+    // (`sample_lod`).
+    lpdf: f32,
+};
+
+fn fresnel(rs: f32, c: f32) -> f32 {
+    // Eq. 5.7 (Schlick)
+    let k = clamp(1.0 - c, 0.0, 1.0);
+    let k2 = k * k;
+    return rs + (1.0 - rs) * k2 * k2 * k;
+}
+
+// The specular lobe's sample at (ξ1, ξ2): ξ1 picks the quadrant and φ in it (Eq. 5.9 with the
+// exponent in φ, see NOTES.md), ξ2 the angle from n, reflected about h (5.10). With k = v the estimator
+// f_sr ⟨n,l⟩ / p(l) of 5.5, 5.8, 5.11 reduces to F(⟨v,h⟩) ⟨n,l⟩ / max(⟨n,v⟩, ⟨n,l⟩):
+// no exponent, no 0/0 at h = n, finite for any n_u, n_v.
+fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> AsSample {
+    var out: AsSample;
+    let q = min(u32(xi1 * 4.0), 3u);
+    let xq = xi1 * 4.0 - f32(q);
+    let half_angle = 0.5 * PI * xq;
+    var phi = atan2(sqrt(P.nu + 1.0) * sin(half_angle), sqrt(P.nv + 1.0) * cos(half_angle));
+    if (q == 1u) { phi = PI - phi; } else if (q == 2u) { phi = PI + phi; } else if (q == 3u) { phi = 2.0 * PI - phi; }
+    let cp = cos(phi);
+    let sp = sin(phi);
+    let e = P.nu * cp * cp + P.nv * sp * sp;
+    let cos_theta = pow(1.0 - xi2, 1.0 / (e + 1.0));
+    let sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    let h = t * (sin_theta * cp) + b * (sin_theta * sp) + n * cos_theta;
+    let vh = dot(v, h);
+    out.l = 2.0 * vh * h - v;
+    out.weight = 0.0;
+    // p(h) = √((n_u+1)(n_v+1)) / 2π · ⟨n,h⟩^e (5.8), with ⟨n,h⟩^e = (1 − ξ2)^(e/(e+1)) from the
+    // inversion above (finite for any exponent); p(l) = p(h) / 4⟨v,h⟩ (5.11).
+    out.lpdf = log2(f32(P.m)) + 0.5 * log2((P.nu + 1.0) * (P.nv + 1.0)) - log2(2.0 * PI)
+        + e / (e + 1.0) * log2(1.0 - xi2) - log2(4.0 * max(vh, 1e-30));
+    let nl = dot(n, out.l);
+    if (vh > 0.0 && nl > 0.0) {
+        out.weight = fresnel(P.rs, vh) * nl / max(nv, nl);
+    }
+    return out;
+}
+
+// Cosine-weighted sample for the diffuse term 5.4: f_dr ⟨n,l⟩ / p(l) = π f_dr.
+fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, nv: f32) -> AsSample {
+    var out: AsSample;
+    let phi = 2.0 * PI * xi1;
+    let rad = sqrt(r2);
+    let z = sqrt(max(0.0, 1.0 - r2));
+    out.l = t * (rad * cos(phi)) + b * (rad * sin(phi)) + n * z;
+    let nl = dot(n, out.l);
+    out.lpdf = log2(f32(P.m)) + log2(max(nl, 1e-30) / PI); // p(l) = ⟨n,l⟩ / π
+    let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
+    let fl = 1.0 - pow(1.0 - 0.5 * max(nl, 0.0), 5.0);
+    out.weight = select(0.0, 28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv * fl, nl > 0.0); // Eq. 5.4 × π
+    return out;
+}
+
+// The radiance of sample `s` for the shaded point x: cube `cube` (depth-corrected for a
+// sample point with DEPTH, parallax-corrected for the environment cube with SOURCE 2), or (per
+// direction, cube = INVALID) the blend of the candidates with the environment cube where none
+// is resident; filtered at mip level `lod` (`sample_lod`) with FILTER. `.w` = 0 when a cube's
+// face was not resident.
+fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) -> vec4<f32> {
+    let l = s.l;
+    if (ORDER == 1u && cube == INVALID) {
+        var w = wn;
+        if (BLEND != 4u) { w = blend_weights(l); }
+        let b = blend_read(w, x, l, lod);
+        if (b.w > 0.0) { return b; }
+        return vec4<f32>(env_read(x, l, lod), 1.0);
+    }
+    var d = l;
+    if (cube == P.env_cube) {
+        d = env_dir(x, l);
+    } else if (DEPTH) {
+        d = depth_iterate(cube, entry, o, l, fresh, seed);
+    }
+    // With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
+    // `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
+    // (docs/measurements.md).
+    if (FILTER) {
+        return lookup_levels(cube, entry, d, lod);
+    }
+    return lookup(cube, d);
+}
+
+// Per-cube sums of an integration (Eq. 5.12), by component: entry k belongs to `cubes[k]`.
+struct Sums {
+    r: vec4<f32>,
+    g: vec4<f32>,
+    b: vec4<f32>,
+    // 0 where a face that entry needed was not resident.
+    ok: vec4<f32>,
+};
+
+// Adds sample `s`'s radiance × weight to entry k of `sums` (`sample_radiance` of cube `cube`;
+// `fresh` and `seed` as `depth_iterate`).
+// A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
+// slower with even a one-pass loop around the read (docs/measurements.md).
+fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
+    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
+    if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
+    (*sums).r[k] += l.r * s.weight;
+    (*sums).g[k] += l.g * s.weight;
+    (*sums).b[k] += l.b * s.weight;
+}
+
+// The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
+// once: entry k integrates over `cubes[k]` where `used[k]`, with the random numbers of
+// integration j0 + k; cube INVALID is the blend of the candidates per direction. With FILTER
+// every source takes the same fixed samples, so each is drawn once for all of them. The
+// diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
+// call site: lavapipe pays for every inlined copy whether it runs or not.
+fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> Sums {
+    var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
+    var wn = vec4<f32>(0.0);
+    if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
+    var entries = vec4<u32>(0u);
+    var ox = vec4<f32>(0.0);
+    var oy = vec4<f32>(0.0);
+    var oz = vec4<f32>(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        if (used[k] && cubes[k] != INVALID) {
+            entries[k] = slots[cubes[k]];
+            let o = x - samples[cubes[k]].xyz;
+            ox[k] = o.x;
+            oy[k] = o.y;
+            oz[k] = o.z;
+        }
+    }
+    // Per candidate and kind of sample, the distance `depth_iterate`'s fresh sample of the row
+    // converged to, and whether the row has had its fresh sample yet.
+    var spec_seed = vec4<f32>(0.0);
+    var diff_seed = vec4<f32>(0.0);
+    var spec_fresh = true;
+    var diff_fresh = true;
+    let rows = filter_rows();
+    for (var i = 0u; i < P.m; i++) {
+        if (i % rows == 0u) {
+            spec_fresh = true;
+            diff_fresh = true;
+        }
+        var spec: AsSample;
+        var diff: AsSample;
+        var spec_lod = 0.0;
+        var diff_lod = 0.0;
+        if (FILTER) {
+            let xi = filter_xi(i);
+            spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
+            spec_lod = sample_lod(spec.l, spec.lpdf);
+            if (DIFFUSE) {
+                diff = sample_diffuse(xi.x, xi.y, n, t, b, nv);
+                diff_lod = sample_lod(diff.l, diff.lpdf);
+            }
+        }
+        for (var k = 0u; k < 4u; k++) {
+            if (!used[k]) { continue; }
+            if (!FILTER) {
+                let xi = sample_xi(pixel, i, j0 + k, 0u);
+                spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
+                if (DIFFUSE) {
+                    let xd = sample_xi(pixel, i, j0 + k, 2u);
+                    diff = sample_diffuse(xd.x, xd.y, n, t, b, nv);
+                }
+            }
+            if (spec.weight > 0.0) {
+                var seed = spec_seed[k];
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh, &seed);
+                spec_seed[k] = seed;
+            }
+            if (DIFFUSE && diff.weight > 0.0) {
+                var seed = diff_seed[k];
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh, &seed);
+                diff_seed[k] = seed;
+            }
+        }
+        // The weights do not depend on the candidate: a row's fresh sample is its first one
+        // above the surface.
+        spec_fresh = spec_fresh && !(spec.weight > 0.0);
+        diff_fresh = diff_fresh && !(DIFFUSE && diff.weight > 0.0);
+    }
+    return out;
+}
+
+// Entry k of `integrate`'s sums as the estimate (÷ M).
+fn estimate(s: Sums, k: u32) -> vec3<f32> {
+    return vec3<f32>(s.r[k], s.g[k], s.b[k]) / f32(max(P.m, 1u));
+}
+
+// Per point (order A): integrate at each candidate with its own random vectors, then blend
+// (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
+// (order B): one integration over the blend. Both passes through one `integrate` call.
+fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    let b = cross(n, t);
+    let nv = dot(n, v);
+    let use_env = SOURCE != 0u || cand.count == 0u;
+    let one = vec4<bool>(true, false, false, false);
+    if (ORDER == 1u && !use_env) {
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv), 0u);
+    }
+    var axis = r;
+    if (BLEND == 4u) { axis = n; }
+    var w = vec4<f32>(0.0);
+    if (!use_env) { w = blend_weights(axis); }
+    var acc = vec3<f32>(0.0);
+    var wsum = 0.0;
+    // Phase 0: the candidates; phase 1: the environment cube, when none was usable.
+    for (var phase = select(0u, 1u, use_env); phase < 2u; phase++) {
+        var cubes = cand.idx;
+        var used = (w > vec4<f32>(0.0)) & (cubes != vec4<u32>(INVALID));
+        var wp = w;
+        if (phase == 1u) {
+            if (wsum > 0.0 || P.env_cube == INVALID) { break; }
+            cubes = vec4<u32>(P.env_cube);
+            used = one;
+            wp = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+        }
+        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv);
+        for (var k = 0u; k < 4u; k++) {
+            if (used[k] && (sums.ok[k] > 0.0 || phase == 1u)) {
+                acc += estimate(sums, k) * wp[k];
+                wsum += wp[k];
+            }
+        }
+    }
+    if (wsum > 0.0) { return acc / wsum; }
+    return vec3<f32>(0.0);
+}

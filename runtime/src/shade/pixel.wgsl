@@ -1,0 +1,54 @@
+// ---- shade/pixel.wgsl ----
+// The entry point: one invocation per pixel.
+// Its CPU twin: reference/pixel.rs.
+
+// Replaces NaN and infinities by 0 so that nothing non-finite reaches a pixel.
+fn finite3(c: vec3<f32>) -> vec3<f32> {
+    var o = c;
+    for (var k = 0u; k < 3u; k++) {
+        let x = c[k];
+        if (!(x == x) || abs(x) > 3.0e38) { o[k] = 0.0; }
+    }
+    return o;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= P.size.x || gid.y >= P.size.y) { return; }
+    let px = vec2<i32>(i32(gid.x), i32(gid.y));
+    let g0 = textureLoad(gb_position, px, 0);
+    let g1 = textureLoad(gb_normal, px, 0);
+    if (!(textureLoad(gb_depth, px, 0) < 1.0) || g0.w < 0.5) {
+        textureStore(out_image, px, background(gid.xy));
+        return;
+    }
+    let pid = u32(g0.w - 0.5);
+    let x = g0.xyz;
+    let u = g1.z;
+    let v_param = g1.w;
+    let n = patch_normal(pid, u, v_param, oct_decode(g1.xy));
+    candidates(pid, u, v_param, x, n);
+    mark_cube = cand.idx;
+    mark_bits = vec4<u32>(0u);
+    mark_env = 0u;
+    let v = normalize(P.camera_pos.xyz - x);
+    let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
+    let pixel = pcg(gid.x + pcg(gid.y + pcg(P.seed)));
+
+    var spec = vec3<f32>(0.0);
+    if ((TERMS & 2u) != 0u) {
+        spec = mirror(x, n, r);
+    } else if ((TERMS & 4u) != 0u) {
+        let t = tangent_frame(n, patch_du(pid, u, v_param));
+        spec = glossy(pixel, x, n, t, v, r);
+    }
+    if ((TERMS & 8u) != 0u) {
+        spec *= patches[pid].color.rgb;
+    }
+    var color = spec;
+    if ((TERMS & 1u) != 0u) {
+        color += recon(x, n); // Eq. 3.12, 4.12
+    }
+    flush_marks();
+    textureStore(out_image, px, vec4<f32>(finite3(color), 1.0));
+}

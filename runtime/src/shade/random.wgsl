@@ -1,0 +1,68 @@
+// ---- shade/random.wgsl ----
+// Random numbers: PCG hash (Jarzynski & Olano 2020).
+// Its CPU twin: reference/random.rs.
+
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
+    let h = pcg(pixel + pcg(i + pcg(j * 8u + k)));
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+// (ξ1, ξ2) of Monte Carlo sample i of integration j at this pixel, numbers k and k + 1 of it
+// (k = 0: the specular sample, k = 2: the diffuse one); ξ1 is stratified, in [i/M, (i+1)/M).
+// Per-pixel random numbers for point sampling; with FILTER a fixed set, the same at every
+// pixel, as Křivánek & Colbert (2008) pair it with filtered lookups: the estimate is then
+// smooth instead of noisy (`filter_xi`).
+fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
+    if (FILTER) {
+        return filter_xi(i);
+    }
+    return vec2<f32>((f32(i) + rand(pixel, i, j, k)) / f32(P.m), rand(pixel, i, j, k + 1u));
+}
+
+// (ξ1, ξ2) of filtered sample i of M. For M = n² the centres of an n × n grid of strata mapped
+// to the disc by Shirley & Chiu's concentric map (1997), read as polar coordinates (ξ1 = φ/2π,
+// ξ2 = r²: the disc's area measure is uniform in both): every sample's cell is compact, so
+// the isotropic filtered lookup of its area covers it (Hammersley's cells near the lobe's
+// peak are thin wedges, and a wide lobe's peak is then read too often). Other M: the
+// Hammersley set ((i + ½)/M, radical inverse of i). reference/random.rs `filter_xi` computes
+// the same.
+fn filter_xi(i: u32) -> vec2<f32> {
+    let n = u32(round(sqrt(f32(P.m))));
+    if (n * n != P.m) {
+        return vec2<f32>((f32(i) + 0.5) / f32(P.m), f32(reverseBits(i)) * 2.3283064365386963e-10);
+    }
+    let a = 2.0 * (f32(i % n) + 0.5) / f32(n) - 1.0;
+    let b = 2.0 * (f32(i / n) + 0.5) / f32(n) - 1.0;
+    if (a == 0.0 && b == 0.0) {
+        return vec2<f32>(0.0); // the centre cell of an odd n
+    }
+    var r = b;
+    var phi = 0.5 * PI - 0.25 * PI * (a / b);
+    if (abs(a) > abs(b)) {
+        r = a;
+        phi = 0.25 * PI * (b / a);
+    }
+    if (r < 0.0) {
+        r = -r;
+        phi += PI;
+    }
+    let x1 = phi * (0.5 / PI);
+    return vec2<f32>(x1 - floor(x1), r * r);
+}
+
+// The samples per row of the filtered set: n for M = n² with FILTER (`filter_xi`'s grid, read
+// row by row), else 1 (every sample a row of its own). reference/random.rs `filter_rows`
+// likewise.
+fn filter_rows() -> u32 {
+    let n = u32(round(sqrt(f32(P.m))));
+    if (FILTER && n > 0u && n * n == P.m) {
+        return n;
+    }
+    return 1u;
+}
