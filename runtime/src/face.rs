@@ -27,6 +27,21 @@ use oslf_format::{Encoding, Store};
 /// price (docs/measurements.md, "Figures behind code comments").
 pub const MIP_QUALITY: Quality = Quality::VeryFast;
 
+/// The encoding the GPU pool holds the faces of a store of `store_encoding` in: the store's own,
+/// except BC6H on an adapter without BC texture compression (`adapter_has_bc`: the device's
+/// `TEXTURE_COMPRESSION_BC`, [`crate::Gpu::has_bc`]), which is decoded on the CPU and
+/// re-encoded as RGB9E5 (`Rgb9e5Ufloat`). [`FaceLayout::new`] also falls back to RGB9E5 for
+/// BC6H faces whose side is not a multiple of 4. The CPU reference must build its faces in
+/// the same layout, so that it sees the values the GPU samples (BC6H → f32, or BC6H → f32 →
+/// RGB9E5 → f32).
+pub fn upload_encoding(store_encoding: Encoding, adapter_has_bc: bool) -> Encoding {
+    match store_encoding {
+        Encoding::Bc6h if adapter_has_bc => Encoding::Bc6h,
+        Encoding::Bc6h => Encoding::Rgb9e5,
+        e => e,
+    }
+}
+
 /// Distances at or above this are stored as it: the largest finite binary16, and the value an
 /// escaped ray (`f32::MAX` on disk) reads as. Every lookup treats it as "nothing this way".
 pub const FAR_DISTANCE: f32 = 65504.0;
@@ -99,11 +114,11 @@ impl FaceLayout {
 
     /// The layout the GPU pool uses for `store` on an adapter with (`adapter_has_bc`) or
     /// without BC texture compression: the store's encoding where the pool can hold it
-    /// (BC6H where the adapter samples it, else RGB9E5; `pool::upload_encoding`).
+    /// (BC6H where the adapter samples it, else RGB9E5; [`upload_encoding`]).
     pub fn for_store(store: &Store, adapter_has_bc: bool) -> Self {
         Self::new(
             store,
-            crate::pool::upload_encoding(store.header().encoding, adapter_has_bc),
+            upload_encoding(store.header().encoding, adapter_has_bc),
         )
     }
 

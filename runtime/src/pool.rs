@@ -146,21 +146,6 @@ impl PoolLayout {
     }
 }
 
-/// The encoding the pool holds the faces of a store of `store_encoding` in: the store's own,
-/// except BC6H on an adapter without BC texture compression (`adapter_has_bc`: the device's
-/// `TEXTURE_COMPRESSION_BC`, [`crate::Gpu::has_bc`]), which is decoded on the CPU and
-/// re-encoded as RGB9E5 (`Rgb9e5Ufloat`). [`FaceLayout::new`] also falls back to RGB9E5 for
-/// BC6H faces whose side is not a multiple of 4. The CPU reference must build its faces in
-/// the same layout, so that it sees the values the GPU samples (BC6H → f32, or BC6H → f32 →
-/// RGB9E5 → f32).
-pub fn upload_encoding(store_encoding: Encoding, adapter_has_bc: bool) -> Encoding {
-    match store_encoding {
-        Encoding::Bc6h if adapter_has_bc => Encoding::Bc6h,
-        Encoding::Bc6h => Encoding::Rgb9e5,
-        e => e,
-    }
-}
-
 /// The texture format of a pool encoding.
 fn texture_format(e: Encoding) -> wgpu::TextureFormat {
     match e {

@@ -146,23 +146,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
     let store = open(&args.store)?;
     args.shading.check_store(&store, &args.store)?;
-    let sizes: Vec<CacheSize> = if args.cache_mb.is_empty() {
-        args.slots.clone()
-    } else {
-        args.cache_mb
-            .iter()
-            .map(|&mb| CacheSize::Megabytes(mb))
-            .collect()
-    };
-    if sizes.is_empty() {
-        bail!("--slots needs at least one size");
-    }
     let gpu = Gpu::headless_with_bc(!args.no_bc)?;
-    // Megabytes buy cube maps of the pool's real size (BC6H blocks where the GPU has BC).
-    let budgets = sizes
-        .iter()
-        .map(|s| Ok((s.label(), s.gpu_slots(&store, gpu.has_bc())?)))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    let budgets = budgets(&args, &store, gpu.has_bc())?;
     let shadings = shadings(&args)?;
 
     let (device, queue, adapter, bc) = (
@@ -265,15 +250,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seconds: elapsed,
     };
     report.print();
-    if let Some(path) = &args.csv {
-        std::fs::write(path, oslf_measure::cache_stats::to_csv(&rows))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+    report.write_files()
+}
+
+/// The GPU cache sizes to replay, as (label, slots): `--cache-mb` buys cube maps of the pool's
+/// real size (BC6H blocks where the GPU has BC), else the `--slots` list.
+fn budgets(args: &Args, store: &Store, has_bc: bool) -> anyhow::Result<Vec<(String, Option<u32>)>> {
+    let sizes: Vec<CacheSize> = if args.cache_mb.is_empty() {
+        args.slots.clone()
+    } else {
+        args.cache_mb
+            .iter()
+            .map(|&mb| CacheSize::Megabytes(mb))
+            .collect()
+    };
+    if sizes.is_empty() {
+        bail!("--slots needs at least one size");
     }
-    if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&report.json())?)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    Ok(())
+    sizes
+        .iter()
+        .map(|s| Ok((s.label(), s.gpu_slots(store, has_bc)?)))
+        .collect()
 }
 
 fn open(path: &Path) -> anyhow::Result<Store> {
@@ -396,6 +393,19 @@ impl Report<'_> {
             infos.iter().map(|i| i.setup_ms).fold(f64::INFINITY, f64::min),
             infos.iter().map(|i| i.setup_ms).fold(0.0, f64::max),
         );
+    }
+
+    /// `--csv FILE` (the rows) and `--json FILE` (rows and settings), where asked for.
+    fn write_files(&self) -> anyhow::Result<()> {
+        if let Some(path) = &self.args.csv {
+            std::fs::write(path, oslf_measure::cache_stats::to_csv(self.rows))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+        }
+        if let Some(path) = &self.args.json {
+            std::fs::write(path, serde_json::to_string_pretty(&self.json())?)
+                .with_context(|| format!("cannot write {}", path.display()))?;
+        }
+        Ok(())
     }
 
     /// The rows with every setting that produced them.
