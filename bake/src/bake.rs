@@ -11,32 +11,15 @@ use oslf_format::{
 use rayon::prelude::*;
 
 use crate::bvh::TriangleScene;
-use crate::capture::{capture_cube, strata_per_side, CaptureSettings};
+use crate::capture::{capture_cube, chunk_cubes, strata_per_side, CaptureSettings};
 use crate::error::{BakeError, Result};
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::EmptyScene;
 use crate::sample_map::{self, SampleMapStats};
 use crate::sample_points::{self, Surfaces};
 use crate::scene::Scene;
+use crate::tolerance::TESSELLATION_ERROR;
 use oslf_geometry::atlas::UvSource;
-
-/// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε.
-pub const TESSELLATION_ERROR: f32 = 1.0 / 50.0;
-
-/// Most cubes captured in parallel before they are appended in order.
-const CHUNK: usize = 32;
-
-/// Most bytes of captured (f32) cube maps in flight in one chunk: with large faces the chunk
-/// shrinks (to one cube from 1024² up: 6 × 1024² × 12 bytes = 72 MiB), and the capture runs its
-/// rows in parallel instead. At 2048² one cube is 288 MiB as f32; 32 of them would be 9 GiB.
-const CHUNK_BYTES: u64 = 64 << 20;
-
-/// Cubes per chunk for faces of `resolution`² (1 to `CHUNK` = 32).
-pub fn chunk_cubes(resolution: u32, distance_channel: bool) -> usize {
-    let texel_bytes = 12 + if distance_channel { 4 } else { 0 };
-    let cube_bytes = 6 * u64::from(resolution).pow(2) * texel_bytes;
-    (CHUNK_BYTES / cube_bytes.max(1)).clamp(1, CHUNK as u64) as usize
-}
 
 /// How to run a bake.
 #[derive(Clone, Debug)]

@@ -6,7 +6,6 @@ use glam::Vec3;
 use oslf_format::CubeImage;
 use rayon::prelude::*;
 
-use crate::bake::chunk_cubes;
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::{Intersector, Ray};
 use crate::sampling::{hash_u64, Rng};
@@ -18,6 +17,21 @@ pub fn strata_per_side(samples_per_texel: u32) -> u32 {
         k += 1;
     }
     k
+}
+
+/// Most cubes captured in parallel before they are appended in order.
+const CHUNK: usize = 32;
+
+/// Most bytes of captured (f32) cube maps in flight in one chunk: with large faces the chunk
+/// shrinks (to one cube from 1024² up: 6 × 1024² × 12 bytes = 72 MiB), and the capture runs its
+/// rows in parallel instead. At 2048² one cube is 288 MiB as f32; 32 of them would be 9 GiB.
+const CHUNK_BYTES: u64 = 64 << 20;
+
+/// Cubes per chunk for faces of `resolution`² (1 to `CHUNK` = 32).
+pub fn chunk_cubes(resolution: u32, distance_channel: bool) -> usize {
+    let texel_bytes = 12 + if distance_channel { 4 } else { 0 };
+    let cube_bytes = 6 * u64::from(resolution).pow(2) * texel_bytes;
+    (CHUNK_BYTES / cube_bytes.max(1)).clamp(1, CHUNK as u64) as usize
 }
 
 /// Texels per side of the tiles whose primary rays are traced as one packet (TILE² rays, at

@@ -43,13 +43,13 @@ use gltf::Semantic;
 
 use oslf_geometry::atlas::UvSource;
 
-use crate::camera::Camera;
 use crate::light::Light;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::scene::Shape;
 use crate::texture::{srgb_to_linear, ImageTexture, Texture};
 use crate::{BakeError, Result};
+use oslf_geometry::Camera;
 
 /// Watts per lumen at 555 nm, the peak of the photopic luminous efficiency: the default
 /// conversion of glTF's photometric light units to the scene's radiometric ones.

@@ -39,7 +39,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::ashikhmin_shirley::AsLobe;
-use crate::bake::{progress_bar, TESSELLATION_ERROR};
+use crate::bake::progress_bar;
 use crate::bezier::BezierPatch;
 use crate::bvh::{Instance, TriangleScene};
 use crate::camera::{primary_ray, Camera};
@@ -47,6 +47,7 @@ use crate::integrator::{offset_origin, Integrator, RayStats};
 use crate::ray::{Intersector, Ray, SurfaceHit};
 use crate::sampling::{hash_u64, stratified_2d, Frame, Rng};
 use crate::scene::Scene;
+use crate::tolerance::TESSELLATION_ERROR;
 use crate::{BakeError, Result};
 
 /// Which term a ground-truth image holds (see the module documentation).

@@ -49,6 +49,8 @@ pub mod preflight;
 pub mod sample_map;
 pub mod sample_points;
 pub mod scene;
+pub mod scene_file;
 pub mod surface;
+pub mod tolerance;
 
 pub use error::{BakeError, Result};

@@ -20,10 +20,10 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::bake::{chunk_cubes, TESSELLATION_ERROR};
-use crate::capture::strata_per_side;
+use crate::capture::{chunk_cubes, strata_per_side};
 use crate::error::BakeError;
 use crate::scene::{BakeSettings, SampleDensity, Scene};
+use crate::tolerance::TESSELLATION_ERROR;
 
 // --- memory ----------------------------------------------------------------------------------
 

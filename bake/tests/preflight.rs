@@ -9,12 +9,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use glam::Vec3;
-use oslf_bake::bake::{bake, BakeOptions, TESSELLATION_ERROR};
+use oslf_bake::bake::{bake, BakeOptions};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::light::Light;
 use oslf_bake::preflight::{self, check, estimate, Estimate, Limits, PreflightError};
 use oslf_bake::sample_points::{self, Surfaces};
 use oslf_bake::scene::Scene;
+use oslf_bake::tolerance::TESSELLATION_ERROR;
 
 // --- a counting allocator: current and peak heap bytes ---------------------------------------
 

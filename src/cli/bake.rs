@@ -4,14 +4,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use oslf_bake::bake::{
-    bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport, TESSELLATION_ERROR,
-};
+use oslf_bake::bake::{bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::camera;
 use oslf_bake::image_file;
 use oslf_bake::integrator::Integrator;
 use oslf_bake::scene::Scene;
+use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_format::ShardSpec;
 
 /// Bake an offset surface light field: sample points ε above the object's Bézier patches, a
