@@ -11,9 +11,9 @@
 //!
 //! | role | modules |
 //! | --- | --- |
-//! | geometry | [`bezier`] and [`mesh`] (re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`gltf`] (glTF 2.0 scenes: meshes, materials, lights, cameras), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
-//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`camera`] (the shared pinhole [`camera::Camera`], path-traced renders through it), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
-//! | the bake | [`scene`] (TOML scene files with located errors), [`sample_points`], [`sample_map`], [`capture`], [`bake`] (the pipeline, resumable, deterministic), [`image_file`] (EXR and tone-mapped PNG output) |
+//! | geometry | [`bezier`], [`mesh`] and [`camera`] (the shared pinhole camera; all three re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`gltf`] (glTF 2.0 files: meshes, materials, lights, cameras), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
+//! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`preview`] (path-traced images through a [`camera::Camera`]), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
+//! | the bake | [`scene`] (the scene model: objects, shapes, lights, settings), [`scene_file`] (reading scenes: TOML files with located errors, presets, glTF and OBJ includes), [`tolerance`] (tolerances the stages share), [`surface`] (the sample-map domains), [`sample_points`], [`sample_map`], [`capture`], [`preflight`] (the estimate checked against the machine), [`bake`] (the pipeline's stages, resumable, deterministic), [`image_file`] (EXR and tone-mapped PNG output) |
 //! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf truth` command) |
 //!
 //! Conventions: Z is up; radiance is linear RGB in `f32`; cube maps use the wgpu/Vulkan face
@@ -24,7 +24,7 @@ pub mod error;
 pub mod ray;
 
 // geometry
-pub use oslf_geometry::{bezier, mesh};
+pub use oslf_geometry::{bezier, camera, mesh};
 pub mod bvh;
 pub mod gltf;
 pub mod obj;
@@ -32,11 +32,12 @@ pub mod shapes;
 
 // radiance
 pub mod ashikhmin_shirley;
-pub mod camera;
 pub mod environment;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod preview;
+pub mod progress;
 pub mod sampling;
 pub mod texture;
 

@@ -121,7 +121,7 @@ fn compare_with_unit_scene(
             16,
             85.0,
             s.bake.epsilon,
-            &indicatif::ProgressBar::hidden(),
+            &oslf_bake::progress::Silent,
         );
         (placement, stats)
     };
@@ -262,7 +262,7 @@ fn bake_and_check(text: &str, name: &str) -> oslf_bake::bake::BakeReport {
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     let report = oslf_bake::bake::bake(&scene, &options).unwrap();

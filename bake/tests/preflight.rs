@@ -330,7 +330,7 @@ fn a_tiny_bake_lands_within_2x_of_its_estimate() {
     let options = BakeOptions {
         output: dir.join("tiny.oslf"),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()

@@ -6,7 +6,6 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use oslf_bake::bake::{bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport};
 use oslf_bake::bvh::TriangleScene;
-use oslf_bake::camera;
 use oslf_bake::image_file;
 use oslf_bake::integrator::Integrator;
 use oslf_bake::scene::Scene;
@@ -135,7 +134,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     let options = BakeOptions {
         output: output.clone(),
         resume: args.resume,
-        progress: !args.quiet,
+        progress: super::progress::bars(!args.quiet),
         cube_limit: args.max_cubes,
     };
     if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
@@ -151,7 +150,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     if !report.finished {
         println!(
             "stopped after --max-cubes; continue with --resume (the partial store is {})",
-            oslf_bake::bake::partial_path(&output).display()
+            oslf_format::writer::partial_path(&output).display()
         );
     }
     if let Some(path) = &args.report_json {
@@ -169,7 +168,8 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))?;
         let integrator = Integrator::for_scene(&scene, &geometry);
         let (w, h) = (655, 460); // the thesis's image size (§6.1)
-        let (pixels, _) = camera::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
+        let (pixels, _) =
+            oslf_bake::preview::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
         image_file::write_png(&png, w, h, &pixels, 1.0)?;
         let exr = png.with_extension("exr");
         image_file::write_exr(&exr, w, h, &pixels)?;

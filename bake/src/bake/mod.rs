@@ -15,17 +15,18 @@ mod stages;
 mod writable;
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Instant;
 
 use oslf_format::ShardSpec;
 
 use crate::capture::strata_per_side;
 use crate::error::Result;
 use crate::preflight::Limits;
+use crate::progress::{self, Progress};
 use crate::scene::Scene;
 pub use meta::{object_centre, store_meta};
 pub use report::{AtlasReport, BakeReport};
-pub use sink::partial_path;
 use sink::Sink;
 use stages::process_cpu_ns;
 pub use writable::{check_store_writable, check_writable};
@@ -37,8 +38,8 @@ pub struct BakeOptions {
     pub output: PathBuf,
     /// Continue from `<output>.partial` if it exists (and matches this scene and settings).
     pub resume: bool,
-    /// Show a progress bar on stderr.
-    pub progress: bool,
+    /// Where to report the progress of the sample-map and cube-map stages (`None`: nowhere).
+    pub progress: Option<Arc<dyn Progress>>,
     /// Capture at most this many cube maps in this run, then stop and leave `<output>.partial`
     /// for a later `resume` (a bake in slices). `None`: run to the end.
     pub cube_limit: Option<u32>,
@@ -66,6 +67,7 @@ pub fn bake_shard(
     let start = Instant::now();
     let bake_cpu_start = process_cpu_ns();
     let settings = &scene.bake;
+    let progress = progress::or_silent(&options.progress);
     let mut report = BakeReport {
         output: options.output.clone(),
         cube_resolution: settings.cube_resolution,
@@ -80,7 +82,7 @@ pub fn bake_shard(
         &surfaces,
         placement,
         &geometry,
-        options.progress,
+        progress,
         &mut report,
     );
     let meta = store_meta(scene, &surfaces);
@@ -100,7 +102,7 @@ pub fn bake_shard(
         &points,
         &mut sink,
         options.cube_limit,
-        options.progress,
+        progress,
         &mut report,
     )?;
     if sink.done() < sink.total() {
@@ -114,20 +116,4 @@ pub fn bake_shard(
         .zip(bake_cpu_start)
         .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9);
     Ok(report)
-}
-
-/// A progress bar with ETA on stderr (hidden when not `enabled`), counting `what`.
-pub(crate) fn progress_bar(enabled: bool, total: u64, what: &str) -> indicatif::ProgressBar {
-    if !enabled {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            &format!("{{spinner}} {what} {{bar:40}} {{pos}}/{{len}} [{{elapsed_precise}} < ETA {{eta_precise}}] {{per_sec}}"),
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar.enable_steady_tick(Duration::from_millis(200));
-    bar
 }

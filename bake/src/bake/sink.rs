@@ -1,8 +1,9 @@
 //! Where a bake's cubes go: the store, or one shard of it, created or resumed from its
 //! partial file.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use oslf_format::writer::partial_path;
 use oslf_format::{
     EncodedCube, SampleMaps, SamplePoint, ShardSpec, ShardWriter, StoreMeta, StoreWriter,
 };
@@ -97,11 +98,4 @@ impl Sink {
         }
         Ok(())
     }
-}
-
-/// Where the writer keeps an unfinished store.
-pub fn partial_path(output: &Path) -> PathBuf {
-    let mut name = output.as_os_str().to_os_string();
-    name.push(".partial");
-    PathBuf::from(name)
 }

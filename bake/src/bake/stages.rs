@@ -9,7 +9,6 @@ use oslf_format::{SampleMaps, SamplePoint, ShardSpec, StoreMeta};
 use rayon::prelude::*;
 
 use super::meta::object_centre;
-use super::progress_bar;
 use super::report::{atlas_reports, BakeReport};
 use super::sink::Sink;
 use super::writable::check_store_writable;
@@ -18,6 +17,7 @@ use crate::capture::{capture_cube, chunk_cubes, CaptureSettings};
 use crate::error::Result;
 use crate::integrator::{Integrator, RayStats};
 use crate::preflight::{self, Limits};
+use crate::progress::Progress;
 use crate::ray::EmptyScene;
 use crate::sample_map;
 use crate::sample_points::{self, Placement, Surfaces};
@@ -77,15 +77,15 @@ pub(super) fn build_maps(
     surfaces: &Surfaces,
     placement: Placement,
     geometry: &TriangleScene,
-    progress: bool,
+    progress: &dyn Progress,
     report: &mut BakeReport,
 ) -> (Vec<SamplePoint>, SampleMaps) {
     let t = Instant::now();
     let domains = surfaces.maps();
     let map_rows = domains.len() as u64 * u64::from(settings.sample_map_resolution);
     let build = |points: &[SamplePoint]| {
-        // One bar per build (refinement rebuilds the maps with the added points).
-        let bar = progress_bar(progress, map_rows, "sample-map rows");
+        // One stage per build (refinement rebuilds the maps with the added points).
+        progress.start("sample-map rows", map_rows, 0);
         let built = sample_map::build(
             &domains,
             points,
@@ -93,9 +93,9 @@ pub(super) fn build_maps(
             settings.sample_map_resolution,
             settings.phi_samplemap_deg,
             settings.epsilon,
-            &bar,
+            progress,
         );
-        bar.finish_and_clear();
+        progress.finish();
         built
     };
     let mut points = placement.points;
@@ -154,7 +154,7 @@ pub(super) fn capture(
     points: &[SamplePoint],
     sink: &mut Sink,
     cube_limit: Option<u32>,
-    progress: bool,
+    progress: &dyn Progress,
     report: &mut BakeReport,
 ) -> Result<Captured> {
     report.cubes_resumed = sink.done();
@@ -171,8 +171,7 @@ pub(super) fn capture(
     };
     let centre = object_centre(scene);
 
-    let bar = progress_bar(progress, sink.total() as u64, "cube maps");
-    bar.set_position(sink.done() as u64);
+    progress.start("cube maps", sink.total() as u64, sink.done() as u64);
     let t = Instant::now();
     let cpu_start = process_cpu_ns();
     let mut rays = RayStats::default();
@@ -211,7 +210,7 @@ pub(super) fn capture(
                 let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i as u32)?;
                 // Each cube as it finishes, not each chunk: one cube of a slow bake (many
                 // samples per texel, many lights) can take minutes.
-                bar.inc(1);
+                progress.advance(1);
                 Ok((enc, enc_stats, stats))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -224,7 +223,7 @@ pub(super) fn capture(
             sink.append(enc)?;
         }
     }
-    bar.finish_and_clear();
+    progress.finish();
     report.capture_seconds = t.elapsed().as_secs_f64();
     report.capture_cpu_seconds = process_cpu_ns()
         .zip(cpu_start)
