@@ -332,8 +332,8 @@ impl<I: Intersector> Integrator<'_, I> {
 /// stream so that the intersector's guess (the triangle that blocked the stream's last
 /// blocked ray) is often right. Streams 1–7: the rays towards one delta light from the first
 /// vertex (neighbouring texels' first hits lie close together and their rays towards the sun
-/// are parallel: 97 % of the blocked ones are blocked by the stream's last blocker in the
-/// example scene) or from a deeper vertex; 8–15 and 16–23: environment samples from the first
+/// are parallel, so the stream's last blocker usually blocks the next one too:
+/// docs/measurements.md, "Preflight constants") or from a deeper vertex; 8–15 and 16–23: environment samples from the first
 /// and from deeper vertices, 24–31: the last vertex's BSDF rays, each by the octant of the
 /// direction (rays up hit the roof, rays down the floor). Only the queries' speed depends on
 /// this, never their answers.

@@ -57,24 +57,7 @@ impl<'d> Loader<'d> {
                     continue;
                 }
             };
-            if prim.morph_targets().next().is_some() {
-                self.warn(format!(
-                    "{what}: morph targets are not supported: the base mesh is drawn"
-                ));
-            }
-            for (semantic, _) in prim.attributes() {
-                if let Semantic::Colors(n) = semantic {
-                    self.warn(format!(
-                        "{what}: vertex colours (COLOR_{n}) are not supported: ignored"
-                    ));
-                }
-            }
-            if let Some(ext) = prim.extensions() {
-                let names: Vec<String> = ext.keys().cloned().collect();
-                for e in names {
-                    self.warn(format!("{what}: extension {e} is not supported"));
-                }
-            }
+            self.warn_primitive(&prim, &what);
             let material = prim.material();
             let (material_index, uv_map) = self.material(&material, materials)?;
             let PrimitiveMesh {
@@ -143,6 +126,29 @@ impl<'d> Loader<'d> {
         Ok(())
     }
 
+    /// Warns about what the primitive uses and the import ignores: morph targets, vertex
+    /// colours, extensions.
+    fn warn_primitive(&mut self, prim: &gltf::Primitive, what: &str) {
+        if prim.morph_targets().next().is_some() {
+            self.warn(format!(
+                "{what}: morph targets are not supported: the base mesh is drawn"
+            ));
+        }
+        for (semantic, _) in prim.attributes() {
+            if let Semantic::Colors(n) = semantic {
+                self.warn(format!(
+                    "{what}: vertex colours (COLOR_{n}) are not supported: ignored"
+                ));
+            }
+        }
+        if let Some(ext) = prim.extensions() {
+            let names: Vec<String> = ext.keys().cloned().collect();
+            for e in names {
+                self.warn(format!("{what}: extension {e} is not supported"));
+            }
+        }
+    }
+
     /// The primitive's `TEXCOORD_{set}` as read (no texture transform), `None` if absent;
     /// `n` is its vertex count.
     pub(super) fn texcoords(
@@ -187,6 +193,9 @@ impl<'d> Loader<'d> {
         Ok(Some(uvs))
     }
 
+    /// One triangle primitive (`mode`: list, strip or fan) as a mesh: positions, indices,
+    /// texture coordinates mapped by `uv_map` (zero without one), normals (flat where absent
+    /// or unusable).
     pub(super) fn primitive_mesh(
         &mut self,
         prim: &gltf::Primitive,
@@ -195,6 +204,45 @@ impl<'d> Loader<'d> {
         mode: Mode,
         uv_map: Option<&UvMap>,
     ) -> Result<PrimitiveMesh> {
+        let positions = self.positions(prim, json_at)?;
+        let n = positions.len();
+        let indices: Vec<u32> = match prim.indices() {
+            Some(acc) => self.indices(&acc, json_at, n)?,
+            None => (0..n as u32).collect(),
+        };
+        let triangles = self.triangles(&indices, mode, what);
+        let uvs: Vec<Vec2> = match uv_map {
+            None => vec![Vec2::ZERO; n],
+            Some(map) => self.mapped_uvs(prim, map, json_at, what, n)?,
+        };
+        let normals = self.normals(prim, json_at, what, n)?;
+        let vertices = positions.len();
+        let (mesh, split) = match normals {
+            Some(normals) => (
+                Mesh {
+                    positions,
+                    normals,
+                    uvs,
+                    triangles,
+                },
+                None,
+            ),
+            None => {
+                let split = triangles.iter().flatten().copied().collect();
+                (flat_shaded(&positions, &uvs, &triangles), Some(split))
+            }
+        };
+        mesh.validate()
+            .map_err(|e| self.err(json_at.to_string(), e.to_string()))?;
+        Ok(PrimitiveMesh {
+            mesh,
+            vertices,
+            split,
+        })
+    }
+
+    /// The primitive's `POSITION`s, every one finite.
+    fn positions(&self, prim: &gltf::Primitive, json_at: &str) -> Result<Vec<Vec3>> {
         let pos_at = format!("{json_at}.attributes.POSITION");
         let accessor = prim
             .get(&Semantic::Positions)
@@ -217,24 +265,27 @@ impl<'d> Loader<'d> {
                 ),
             ));
         }
-        let n = positions.len();
-        let indices: Vec<u32> = match prim.indices() {
-            Some(acc) => {
-                let at = format!("{json_at}.indices");
-                let idx = self.read_indices(&acc, &at)?;
-                if let Some((e, v)) = idx.iter().enumerate().find(|(_, &v)| v as usize >= n) {
-                    return Err(self.err(
-                        at,
-                        format!(
-                            "accessor {}: index {v} (element {e}) is out of range: POSITION has {n} vertices",
-                            acc.index()
-                        ),
-                    ));
-                }
-                idx
-            }
-            None => (0..n as u32).collect(),
-        };
+        Ok(positions)
+    }
+
+    /// The indices of accessor `acc`, each below the `n` vertices.
+    fn indices(&self, acc: &gltf::Accessor, json_at: &str, n: usize) -> Result<Vec<u32>> {
+        let at = format!("{json_at}.indices");
+        let idx = self.read_indices(acc, &at)?;
+        if let Some((e, v)) = idx.iter().enumerate().find(|(_, &v)| v as usize >= n) {
+            return Err(self.err(
+                at,
+                format!(
+                    "accessor {}: index {v} (element {e}) is out of range: POSITION has {n} vertices",
+                    acc.index()
+                ),
+            ));
+        }
+        Ok(idx)
+    }
+
+    /// The triangles of `indices` read as a strip, a fan or a list (`mode`).
+    fn triangles(&mut self, indices: &[u32], mode: Mode, what: &str) -> Vec<[u32; 3]> {
         let mut triangles: Vec<[u32; 3]> = Vec::new();
         match mode {
             Mode::TriangleStrip => {
@@ -263,90 +314,84 @@ impl<'d> Loader<'d> {
                 triangles.extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
             }
         }
-        let uvs: Vec<Vec2> = match uv_map {
-            None => vec![Vec2::ZERO; n],
-            Some(map) => {
-                let semantic = Semantic::TexCoords(map.set);
-                match prim.get(&semantic) {
-                    None => {
-                        self.warn(format!(
-                            "{what}: the material's texture uses TEXCOORD_{}, which the primitive does not have: the texture is read at uv (0, 0)",
-                            map.set
-                        ));
-                        vec![map.apply(Vec2::ZERO); n]
-                    }
-                    Some(_) => {
-                        let uvs = self
-                            .texcoords(prim, map.set, json_at, n)?
-                            .expect("the attribute is present");
-                        if uvs.iter().any(|&uv| map.beyond_clamp(uv)) {
-                            self.warn(format!(
-                                "{what}: texture coordinates beyond [0, 1] along a CLAMP_TO_EDGE axis are not supported: the texture repeats there"
-                            ));
-                        }
-                        uvs.into_iter().map(|uv| map.apply(uv)).collect()
-                    }
-                }
-            }
-        };
-        let normals: Option<Vec<Vec3>> = match prim.get(&Semantic::Normals) {
-            None => None,
-            Some(acc) => {
-                let at = format!("{json_at}.attributes.NORMAL");
-                let flat = self.read_floats(
-                    &acc,
-                    &at,
-                    Dimensions::Vec3,
-                    &[(DataType::F32, true)],
-                    "f32 vec3",
-                )?;
-                if flat.len() != 3 * n {
-                    return Err(self.err(
-                        at,
-                        format!(
-                            "accessor {} has {} elements, POSITION has {n}",
-                            acc.index(),
-                            flat.len() / 3
-                        ),
-                    ));
-                }
-                let normals: Vec<Vec3> = flat.chunks_exact(3).map(Vec3::from_slice).collect();
-                if normals
-                    .iter()
-                    .all(|v| v.is_finite() && v.length_squared() > 0.0)
-                {
-                    Some(normals.into_iter().map(|v| v.normalize()).collect())
-                } else {
-                    self.warn(format!(
-                        "{what}: some normals are zero or not finite: flat normals are used"
-                    ));
-                    None
-                }
-            }
-        };
-        let vertices = positions.len();
-        let (mesh, split) = match normals {
-            Some(normals) => (
-                Mesh {
-                    positions,
-                    normals,
-                    uvs,
-                    triangles,
-                },
-                None,
-            ),
+        triangles
+    }
+
+    /// The texture coordinates `map` reads (its `TEXCOORD_n`), mapped into the texture; (0, 0)
+    /// where the primitive lacks the set.
+    fn mapped_uvs(
+        &mut self,
+        prim: &gltf::Primitive,
+        map: &UvMap,
+        json_at: &str,
+        what: &str,
+        n: usize,
+    ) -> Result<Vec<Vec2>> {
+        let semantic = Semantic::TexCoords(map.set);
+        Ok(match prim.get(&semantic) {
             None => {
-                let split = triangles.iter().flatten().copied().collect();
-                (flat_shaded(&positions, &uvs, &triangles), Some(split))
+                self.warn(format!(
+                    "{what}: the material's texture uses TEXCOORD_{}, which the primitive does not have: the texture is read at uv (0, 0)",
+                    map.set
+                ));
+                vec![map.apply(Vec2::ZERO); n]
             }
-        };
-        mesh.validate()
-            .map_err(|e| self.err(json_at.to_string(), e.to_string()))?;
-        Ok(PrimitiveMesh {
-            mesh,
-            vertices,
-            split,
+            Some(_) => {
+                let uvs = self
+                    .texcoords(prim, map.set, json_at, n)?
+                    .expect("the attribute is present");
+                if uvs.iter().any(|&uv| map.beyond_clamp(uv)) {
+                    self.warn(format!(
+                        "{what}: texture coordinates beyond [0, 1] along a CLAMP_TO_EDGE axis are not supported: the texture repeats there"
+                    ));
+                }
+                uvs.into_iter().map(|uv| map.apply(uv)).collect()
+            }
         })
+    }
+
+    /// The primitive's unit `NORMAL`s, `None` where it has none or some are zero or not
+    /// finite (then flat normals are used).
+    fn normals(
+        &mut self,
+        prim: &gltf::Primitive,
+        json_at: &str,
+        what: &str,
+        n: usize,
+    ) -> Result<Option<Vec<Vec3>>> {
+        let Some(acc) = prim.get(&Semantic::Normals) else {
+            return Ok(None);
+        };
+        let at = format!("{json_at}.attributes.NORMAL");
+        let flat = self.read_floats(
+            &acc,
+            &at,
+            Dimensions::Vec3,
+            &[(DataType::F32, true)],
+            "f32 vec3",
+        )?;
+        if flat.len() != 3 * n {
+            return Err(self.err(
+                at,
+                format!(
+                    "accessor {} has {} elements, POSITION has {n}",
+                    acc.index(),
+                    flat.len() / 3
+                ),
+            ));
+        }
+        let normals: Vec<Vec3> = flat.chunks_exact(3).map(Vec3::from_slice).collect();
+        if normals
+            .iter()
+            .all(|v| v.is_finite() && v.length_squared() > 0.0)
+        {
+            Ok(Some(normals.into_iter().map(|v| v.normalize()).collect()))
+        } else {
+            self.warn(format!(
+                "{what}: some normals are zero or not finite: flat normals are used"
+            ));
+            Ok(None)
+        }
     }
 }
 
