@@ -59,6 +59,33 @@ impl CaptureSettings {
     }
 }
 
+/// A band of [`TILE`] rows of one face: the face, its first row, its texels and (with the
+/// distance channel) their distances.
+type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
+
+/// The faces (and distance planes) of a `res`² cube cut into bands of [`TILE`] rows, face by
+/// face, top to bottom.
+fn bands<'a>(
+    faces: &'a mut [Vec<[f32; 3]>; 6],
+    distance: &'a mut [Vec<f32>; 6],
+    res: u32,
+    distance_channel: bool,
+) -> Vec<Band<'a>> {
+    let band = TILE * res as usize;
+    let mut bands: Vec<Band> = Vec::new();
+    for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
+        let dist_bands: Vec<Option<&mut [f32]>> = if distance_channel {
+            dist.chunks_mut(band).map(Some).collect()
+        } else {
+            out.chunks(band).map(|_| None).collect()
+        };
+        for (b, (rows, d)) in out.chunks_mut(band).zip(dist_bands).enumerate() {
+            bands.push((face, (b * TILE) as u32, rows, d));
+        }
+    }
+    bands
+}
+
 /// Captures the cube map seen from `origin`. `cube_index` selects the random streams, so a
 /// cube's texels are the same whichever thread renders them.
 pub fn capture_cube<I: Intersector>(
@@ -89,19 +116,7 @@ pub fn capture_cube<I: Intersector>(
     let parallel = threads > 1
         && (rayon::current_thread_index().is_some()
             || chunk_cubes(res, settings.distance_channel) < threads);
-    let band = TILE * res as usize;
-    type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
-    let mut bands: Vec<Band> = Vec::new();
-    for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
-        let dist_bands: Vec<Option<&mut [f32]>> = if settings.distance_channel {
-            dist.chunks_mut(band).map(Some).collect()
-        } else {
-            out.chunks(band).map(|_| None).collect()
-        };
-        for (b, (rows, d)) in out.chunks_mut(band).zip(dist_bands).enumerate() {
-            bands.push((face, (b * TILE) as u32, rows, d));
-        }
-    }
+    let bands = bands(&mut faces, &mut distance, res, settings.distance_channel);
     // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
     // traced as one packet (the texels' directions differ by at most a tile), then each path
     // goes on alone. Texel by texel the random numbers are drawn in the order of a texel-by-

@@ -380,21 +380,8 @@ impl TriangleScene {
         // is never tested only drops candidates that a closer hit replaces anyway, so the
         // hits are the same, ties between triangles at bit-identical `t` included
         // (`tests::packet_seeds_do_not_change_hits`).
-        let mut t_cull = [t_max; PACKET];
         let seeds = LAST_PACKET_HITS.with(|l| l.get());
-        let mut m = active;
-        while m != 0 {
-            let r = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let slot = seeds[r] as usize;
-            if slot < self.vertices.len() {
-                if let Some(h) =
-                    intersect_triangle(&self.vertices[slot], &self.planes[slot], &prs[r], t_max)
-                {
-                    t_cull[r] = (h.t * SEED_CULL_MARGIN).min(t_max);
-                }
-            }
-        }
+        let mut t_cull = self.seed_culls(&prs, active, t_max, &seeds);
         // Children in the octant order of the first ray (obvhs's single-ray order: the slot
         // `k ^ octant` k-th), so the nearer children of most rays come first.
         let d = prs[active.trailing_zeros() as usize].dir;
@@ -468,6 +455,34 @@ impl TriangleScene {
         for (hit, best) in hits[..n].iter_mut().zip(best) {
             *hit = best.map(|(slot, h)| self.surface_hit(slot, &h));
         }
+    }
+
+    /// The cull distance of each active ray of a packet: where it hits the triangle its
+    /// `seeds` entry names (the same ray's hit in this thread's last packet), times
+    /// `SEED_CULL_MARGIN`; else `t_max`.
+    #[inline(always)]
+    fn seed_culls(
+        &self,
+        prs: &[PreparedRay; PACKET],
+        active: u32,
+        t_max: f32,
+        seeds: &[u32; PACKET],
+    ) -> [f32; PACKET] {
+        let mut t_cull = [t_max; PACKET];
+        let mut m = active;
+        while m != 0 {
+            let r = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let slot = seeds[r] as usize;
+            if slot < self.vertices.len() {
+                if let Some(h) =
+                    intersect_triangle(&self.vertices[slot], &self.planes[slot], &prs[r], t_max)
+                {
+                    t_cull[r] = (h.t * SEED_CULL_MARGIN).min(t_max);
+                }
+            }
+        }
+        t_cull
     }
 
     /// The closest hit; `AVX2`: use [`node_lanes_avx2`] (only in an AVX2 function).
