@@ -1,7 +1,7 @@
 //! The bake pipeline: scene → BVH → sample points → sample maps → cube maps → store.
 
 //!
-//! Its stages, each a function of [`stages`] with its inputs and outputs: **prepare** (the
+//! Its stages, each a function of `stages` with its inputs and outputs: **prepare** (the
 //! output is writable, the preflight passes, the ray-tracing geometry is built), **place**
 //! (the sample-map domains and the sample points), **build maps** (the sample maps, with the
 //! points added where texels found fewer than four), **capture** (a cube map at each point,

@@ -14,7 +14,7 @@ pub fn check_writable(path: &Path, what: &'static str) -> Result<()> {
 }
 
 /// [`check_writable`] for the store `output`, which is written through `<output>.partial`
-/// and renamed: the partial file must be writable. [`bake`] runs it first.
+/// and renamed: the partial file must be writable. [`crate::bake::bake`] runs it first.
 pub fn check_store_writable(output: &Path) -> Result<()> {
     check_file_writable(output, &partial_path(output), "the store")
 }

@@ -8,7 +8,7 @@ use super::prepared_ray::{
     PreparedRay, CHILD_MAX_X, CHILD_MAX_Y, CHILD_MAX_Z, CHILD_MIN_X, CHILD_MIN_Y, CHILD_MIN_Z,
 };
 
-/// Most rays traversed together by [`super::TriangleScene::intersect_packet`] (bits of a
+/// Most rays traversed together by [`crate::ray::Intersector::intersect_packet`] (bits of a
 /// `u32` mask).
 pub const PACKET: usize = 16;
 

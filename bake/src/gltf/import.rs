@@ -69,14 +69,14 @@ pub struct ImportedObject {
     pub mesh: Mesh,
     /// Raw `TEXCOORD_1` (lightmap) and `TEXCOORD_0`, where every primitive has the set.
     pub uv_sets: Vec<(UvSource, Vec<Vec2>)>,
-    /// The first primitive's material (an index into the materials passed to [`load`]).
+    /// The first primitive's material (an index into the materials passed to [`crate::gltf::load`]).
     pub material: u32,
 }
 
 /// What a glTF file contributes to a scene.
 #[derive(Clone, Debug, Default)]
 pub struct Import {
-    /// Triangle meshes in scene space; `material` indexes the materials passed to [`load`].
+    /// Triangle meshes in scene space; `material` indexes the materials passed to [`crate::gltf::load`].
     pub shapes: Vec<Shape>,
     /// The nodes named in [`Options::objects`], in traversal order.
     pub objects: Vec<ImportedObject>,

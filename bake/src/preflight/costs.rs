@@ -101,7 +101,7 @@ pub const POINTS_MOST: f64 = 2.0;
 
 // --- time ------------------------------------------------------------------------------------
 
-/// Rays per second per core for the capture's ray count as [`Estimate::capture_rays`] counts
+/// Rays per second per core for the capture's ray count as [`crate::preflight::Estimate::capture_rays`] counts
 /// it (every path vertex's closest-hit ray plus one shadow ray per delta light and one for a
 /// non-black environment, cosine-culled ones included). The range brackets the gazebo's quick
 /// and thesis presets (docs/measurements.md, "Preflight constants"); heavier scenes (more
@@ -127,7 +127,7 @@ pub const SECONDS_PER_CANDIDATE: (f64, f64) = (1e-6, 6e-6);
 /// See [`SECONDS_PER_CANDIDATE`].
 pub const PROBE_RAYS_PER_POINT: u64 = 128;
 
-/// A bake whose *optimistic* time estimate exceeds this is refused by [`Limits::of_machine`]'s
+/// A bake whose *optimistic* time estimate exceeds this is refused by [`crate::preflight::Limits::of_machine`]'s
 /// default: 12 hours (a bake that needs longer on this machine is better run in slices,
 /// `--max-cubes` and `--resume`, or as shards).
 pub const DEFAULT_MAX_SECONDS: f64 = 12.0 * 3600.0;
