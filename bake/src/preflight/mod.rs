@@ -9,8 +9,8 @@
 //! [`Limits::of_machine`] ([`available_memory`], [`free_space`]) or given by the caller (tests) —
 //! and with hard limits that no machine lifts ([`hard_limits`]).
 //!
-//! Every constant below says where its figure comes from: the code it models (bake.rs,
-//! capture.rs, sample_map.rs, sample_points.rs, bvh.rs, oslf-format's writer) or a measurement
+//! Every constant below says where its figure comes from: the code it models (bake/stages.rs,
+//! capture.rs, sample_map.rs, sample_points.rs, bvh/, oslf-format's writer) or a measurement
 //! (docs/measurements.md, or the counting-allocator test in bake/tests/preflight.rs).
 //!
 //! What is only estimated: the number of sample points (placement removes some, §6.3 refinement

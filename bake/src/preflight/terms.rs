@@ -110,7 +110,7 @@ pub(super) fn requested_points(scene: &Scene) -> u64 {
 /// Triangles of the scene's BVH, and of the environment cube's second BVH (0 without one).
 pub(super) fn triangle_counts(scene: &Scene) -> (u64, u64) {
     let s = &scene.bake;
-    // Triangles (bake.rs: `scene.instances(true, epsilon × TESSELLATION_ERROR)`; scene.rs:
+    // Triangles (bake/stages.rs: `scene.instances(true, epsilon × TESSELLATION_ERROR)`; scene.rs:
     // each patch at its `tessellation_level`, two triangles a quad).
     let shape_triangles: u64 = scene
         .shapes
@@ -131,7 +131,7 @@ pub(super) fn triangle_counts(scene: &Scene) -> (u64, u64) {
             .map(|m| m.mesh.triangles.len() as u64)
             .sum::<u64>();
     let triangles = shape_triangles + object_triangles;
-    // The environment cube's second BVH (bake.rs: built when the store has an environment cube
+    // The environment cube's second BVH (bake/stages.rs: built when the store has an environment cube
     // and the scene has shapes), alive during the capture.
     let env_triangles = if s.env_cube { shape_triangles } else { 0 };
     (triangles, env_triangles)
@@ -251,7 +251,7 @@ pub(super) fn bvh_term(s: &BakeSettings, c: &Counts) -> Term {
 /// The memory term of the cubes being captured and encoded at once.
 pub(super) fn cubes_in_flight_term(s: &BakeSettings, c: &Counts) -> Term {
     let res = c.res;
-    // bake.rs: `chunk_cubes` cubes are captured in parallel and all of them, encoded, are
+    // bake/stages.rs: `chunk_cubes` cubes are captured in parallel and all of them, encoded, are
     // collected before they are appended; each holds its f32 faces until encoded
     // (capture.rs), and each encoder a raw and a filtered face (oslf-format cube.rs).
     let chunk = chunk_cubes(s.cube_resolution, s.distance_channel) as u64;
