@@ -1,4 +1,4 @@
-//! The stages of the bake pipeline, in the order [`super::bake_shard`] runs them: prepare,
+//! The stages of the bake pipeline, in the order [`crate::bake::bake_shard`] runs them: prepare,
 //! place, build maps, capture, write. Each fills in its part of the [`BakeReport`].
 
 use std::path::Path;
