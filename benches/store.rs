@@ -49,7 +49,7 @@ fn reference_store() -> PathBuf {
         let options = BakeOptions {
             output: path.clone(),
             resume: false,
-            progress: false,
+            progress: None,
             cube_limit: None,
         };
         bake(&scene, &options).expect("bake the example scene");

@@ -56,7 +56,7 @@ fn fixture() -> &'static Fixture {
                 &BakeOptions {
                     output: output.clone(),
                     resume: false,
-                    progress: false,
+                    progress: None,
                     cube_limit: None,
                 },
             )

@@ -46,7 +46,7 @@ fn bake_with_threads(
     let options = BakeOptions {
         output: output.to_path_buf(),
         resume,
-        progress: false,
+        progress: None,
         cube_limit: limit,
     };
     let report = pool.install(|| bake(scene, &options)).unwrap();
@@ -81,9 +81,9 @@ fn an_interrupted_bake_resumes_to_the_same_store() {
         !sliced.exists(),
         "an unfinished bake must not appear under the final name"
     );
-    assert!(oslf_bake::bake::partial_path(&sliced).exists());
+    assert!(oslf_format::writer::partial_path(&sliced).exists());
     bake_with_threads(&scene, &sliced, 2, None, true);
-    assert!(!oslf_bake::bake::partial_path(&sliced).exists());
+    assert!(!oslf_format::writer::partial_path(&sliced).exists());
     assert_eq!(
         std::fs::read(whole).unwrap(),
         std::fs::read(sliced).unwrap()

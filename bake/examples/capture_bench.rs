@@ -27,9 +27,10 @@ fn main() -> anyhow::Result<()> {
     let n: usize = args.get(2).map_or(Ok(16), |s| s.parse())?;
     let first: usize = args.get(3).map_or(Ok(0), |s| s.parse())?;
     let settings = &scene.bake;
-    let geometry = TriangleScene::build(
-        scene.instances(true, settings.epsilon * oslf_bake::bake::TESSELLATION_ERROR),
-    )?;
+    let geometry = TriangleScene::build(scene.instances(
+        true,
+        settings.epsilon * oslf_bake::tolerance::TESSELLATION_ERROR,
+    ))?;
     let placement = oslf_bake::sample_points::place(
         &oslf_bake::surface::Surfaces::new(&scene.objects, settings)?,
         settings,

@@ -6,7 +6,6 @@ use glam::Vec3;
 use oslf_format::CubeImage;
 use rayon::prelude::*;
 
-use crate::bake::chunk_cubes;
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::{Intersector, Ray};
 use crate::sampling::{hash_u64, Rng};
@@ -18,6 +17,21 @@ pub fn strata_per_side(samples_per_texel: u32) -> u32 {
         k += 1;
     }
     k
+}
+
+/// Most cubes captured in parallel before they are appended in order.
+const CHUNK: usize = 32;
+
+/// Most bytes of captured (f32) cube maps in flight in one chunk: with large faces the chunk
+/// shrinks (to one cube from 1024² up: 6 × 1024² × 12 bytes = 72 MiB), and the capture runs its
+/// rows in parallel instead. At 2048² one cube is 288 MiB as f32; 32 of them would be 9 GiB.
+const CHUNK_BYTES: u64 = 64 << 20;
+
+/// Cubes per chunk for faces of `resolution`² (1 to `CHUNK` = 32).
+pub fn chunk_cubes(resolution: u32, distance_channel: bool) -> usize {
+    let texel_bytes = 12 + if distance_channel { 4 } else { 0 };
+    let cube_bytes = 6 * u64::from(resolution).pow(2) * texel_bytes;
+    (CHUNK_BYTES / cube_bytes.max(1)).clamp(1, CHUNK as u64) as usize
 }
 
 /// Texels per side of the tiles whose primary rays are traced as one packet (TILE² rays, at
@@ -43,6 +57,33 @@ impl CaptureSettings {
             seed: settings.seed,
         }
     }
+}
+
+/// A band of [`TILE`] rows of one face: the face, its first row, its texels and (with the
+/// distance channel) their distances.
+type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
+
+/// The faces (and distance planes) of a `res`² cube cut into bands of [`TILE`] rows, face by
+/// face, top to bottom.
+fn bands<'a>(
+    faces: &'a mut [Vec<[f32; 3]>; 6],
+    distance: &'a mut [Vec<f32>; 6],
+    res: u32,
+    distance_channel: bool,
+) -> Vec<Band<'a>> {
+    let band = TILE * res as usize;
+    let mut bands: Vec<Band> = Vec::new();
+    for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
+        let dist_bands: Vec<Option<&mut [f32]>> = if distance_channel {
+            dist.chunks_mut(band).map(Some).collect()
+        } else {
+            out.chunks(band).map(|_| None).collect()
+        };
+        for (b, (rows, d)) in out.chunks_mut(band).zip(dist_bands).enumerate() {
+            bands.push((face, (b * TILE) as u32, rows, d));
+        }
+    }
+    bands
 }
 
 /// Captures the cube map seen from `origin`. `cube_index` selects the random streams, so a
@@ -75,19 +116,7 @@ pub fn capture_cube<I: Intersector>(
     let parallel = threads > 1
         && (rayon::current_thread_index().is_some()
             || chunk_cubes(res, settings.distance_channel) < threads);
-    let band = TILE * res as usize;
-    type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
-    let mut bands: Vec<Band> = Vec::new();
-    for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
-        let dist_bands: Vec<Option<&mut [f32]>> = if settings.distance_channel {
-            dist.chunks_mut(band).map(Some).collect()
-        } else {
-            out.chunks(band).map(|_| None).collect()
-        };
-        for (b, (rows, d)) in out.chunks_mut(band).zip(dist_bands).enumerate() {
-            bands.push((face, (b * TILE) as u32, rows, d));
-        }
-    }
+    let bands = bands(&mut faces, &mut distance, res, settings.distance_channel);
     // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
     // traced as one packet (the texels' directions differ by at most a tile), then each path
     // goes on alone. Texel by texel the random numbers are drawn in the order of a texel-by-

@@ -33,21 +33,24 @@
 //! runtime. Every pixel has its own random stream keyed by (seed, term, x, y): the image does
 //! not depend on the number of threads.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::ashikhmin_shirley::AsLobe;
-use crate::bake::{progress_bar, TESSELLATION_ERROR};
 use crate::bezier::BezierPatch;
 use crate::bvh::{Instance, TriangleScene};
-use crate::camera::{primary_ray, Camera};
 use crate::integrator::{offset_origin, Integrator, RayStats};
+use crate::preview::primary_ray;
+use crate::progress::{self, Progress};
 use crate::ray::{Intersector, Ray, SurfaceHit};
 use crate::sampling::{hash_u64, stratified_2d, Frame, Rng};
 use crate::scene::Scene;
+use crate::tolerance::TESSELLATION_ERROR;
 use crate::{BakeError, Result};
+use oslf_geometry::Camera;
 
 /// Which term a ground-truth image holds (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,8 +81,6 @@ pub struct TruthSettings {
     /// Samples per pixel (0 is treated as 1).
     pub spp: u32,
     pub seed: u64,
-    /// Show a progress bar with ETA on stderr.
-    pub progress: bool,
 }
 
 impl Default for TruthSettings {
@@ -90,7 +91,6 @@ impl Default for TruthSettings {
             height: 460,
             spp: 256,
             seed: 0,
-            progress: false,
         }
     }
 }
@@ -122,6 +122,8 @@ pub struct GroundTruth<'s> {
     patches: Vec<Option<BezierPatch>>,
     colors: Vec<Vec3>,
     camera: Camera,
+    /// Where the renders report their rows (`None`: nowhere).
+    progress: Option<Arc<dyn Progress>>,
 }
 
 impl<'s> GroundTruth<'s> {
@@ -161,7 +163,14 @@ impl<'s> GroundTruth<'s> {
             patches,
             colors,
             camera,
+            progress: None,
         })
+    }
+
+    /// Reports the rows of every render to `progress` (by default nowhere).
+    pub fn with_progress(mut self, progress: Option<Arc<dyn Progress>>) -> Self {
+        self.progress = progress;
+        self
     }
 
     fn integrator(&self) -> Integrator<'_, TriangleScene> {
@@ -185,7 +194,8 @@ impl<'s> GroundTruth<'s> {
             }
         }
         let start = Instant::now();
-        let bar = progress_bar(settings.progress, u64::from(h), "rows");
+        let progress = progress::or_silent(&self.progress);
+        progress.start("rows", u64::from(h), 0);
         let integrator = self.integrator();
         let rows: Vec<(Vec<[f32; 4]>, Vec<Vec3>, RayStats)> = (0..h)
             .into_par_iter()
@@ -203,11 +213,11 @@ impl<'s> GroundTruth<'s> {
                     row.push(px);
                     colors.push(c);
                 }
-                bar.inc(1);
+                progress.advance(1);
                 (row, colors, stats)
             })
             .collect();
-        bar.finish_and_clear();
+        progress.finish();
         let mut pixels = Vec::with_capacity(w as usize * h as usize);
         let mut base_color = Vec::with_capacity(pixels.capacity());
         let mut rays = RayStats::default();
@@ -242,7 +252,8 @@ impl<'s> GroundTruth<'s> {
             )));
         }
         let start = Instant::now();
-        let bar = progress_bar(settings.progress, u64::from(h), "rows");
+        let progress = progress::or_silent(&self.progress);
+        progress.start("rows", u64::from(h), 0);
         let integrator = self.integrator();
         let spp = settings.spp.max(1);
         let rows: Vec<(Vec<[f32; 4]>, RayStats)> = (0..h)
@@ -270,11 +281,11 @@ impl<'s> GroundTruth<'s> {
                     let c = if c.is_finite() { c } else { Vec3::ZERO };
                     row.push([c.x, c.y, c.z, 0.0]);
                 }
-                bar.inc(1);
+                progress.advance(1);
                 (row, stats)
             })
             .collect();
-        bar.finish_and_clear();
+        progress.finish();
         let mut pixels = Vec::with_capacity(w as usize * h as usize);
         let mut rays = RayStats::default();
         for (row, stats) in rows {

@@ -210,15 +210,7 @@ impl<I: Intersector> Integrator<'_, I> {
         let mut incoming = incoming;
         let mut bounce = 0u32;
         loop {
-            // Orient the normals towards the incoming ray (two-sided surfaces).
-            let mut ng = hit.geometric_normal.try_normalize().unwrap_or(-incoming);
-            if ng.dot(incoming) > 0.0 {
-                ng = -ng;
-            }
-            let mut ns = hit.shading_normal.try_normalize().unwrap_or(ng);
-            if ns.dot(ng) < 0.0 {
-                ns = -ns;
-            }
+            let (ng, ns) = oriented_normals(&hit, incoming);
             let albedo = self
                 .materials
                 .get(hit.material as usize)
@@ -314,12 +306,8 @@ impl<I: Intersector> Integrator<'_, I> {
                 break;
             };
             bounce += 1;
-            if bounce >= RUSSIAN_ROULETTE_START {
-                let q = throughput.max_element().min(0.95);
-                if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
-                    break;
-                }
-                throughput /= q;
+            if bounce >= RUSSIAN_ROULETTE_START && !russian_roulette(&mut throughput, rng) {
+                break;
             }
             hit = next;
             incoming = wi;
@@ -328,12 +316,39 @@ impl<I: Intersector> Integrator<'_, I> {
     }
 }
 
+/// The geometric and shading normals of `hit`, oriented towards the incoming ray
+/// (two-sided surfaces): `(ng, ns)`.
+#[inline(always)]
+fn oriented_normals(hit: &SurfaceHit, incoming: Vec3) -> (Vec3, Vec3) {
+    let mut ng = hit.geometric_normal.try_normalize().unwrap_or(-incoming);
+    if ng.dot(incoming) > 0.0 {
+        ng = -ng;
+    }
+    let mut ns = hit.shading_normal.try_normalize().unwrap_or(ng);
+    if ns.dot(ng) < 0.0 {
+        ns = -ns;
+    }
+    (ng, ns)
+}
+
+/// Russian roulette: whether the path survives (with probability `q`, the throughput's
+/// largest channel up to 0.95), its throughput then divided by `q`.
+#[inline(always)]
+fn russian_roulette(throughput: &mut Vec3, rng: &mut Rng) -> bool {
+    let q = throughput.max_element().min(0.95);
+    if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
+        return false;
+    }
+    *throughput /= q;
+    true
+}
+
 /// Shadow-ray streams ([`Intersector::occluded_in_stream`]): similar shadow rays share a
 /// stream so that the intersector's guess (the triangle that blocked the stream's last
 /// blocked ray) is often right. Streams 1–7: the rays towards one delta light from the first
 /// vertex (neighbouring texels' first hits lie close together and their rays towards the sun
-/// are parallel: 97 % of the blocked ones are blocked by the stream's last blocker in the
-/// example scene) or from a deeper vertex; 8–15 and 16–23: environment samples from the first
+/// are parallel, so the stream's last blocker usually blocks the next one too:
+/// docs/measurements.md, "Preflight constants") or from a deeper vertex; 8–15 and 16–23: environment samples from the first
 /// and from deeper vertices, 24–31: the last vertex's BSDF rays, each by the octant of the
 /// direction (rays up hit the roof, rays down the floor). Only the queries' speed depends on
 /// this, never their answers.

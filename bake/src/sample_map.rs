@@ -144,7 +144,7 @@ pub fn build(
     resolution: u32,
     phi_samplemap_deg: f32,
     epsilon: f32,
-    progress: &indicatif::ProgressBar,
+    progress: &dyn crate::progress::Progress,
 ) -> (SampleMaps, SampleMapStats) {
     let index = PointIndex::new(points);
     let cos_phi = phi_samplemap_deg.to_radians().cos();
@@ -169,7 +169,7 @@ pub fn build(
                 rays += r;
                 *out = ids;
             }
-            progress.inc(1);
+            progress.advance(1);
             (rays, unused)
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));

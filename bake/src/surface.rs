@@ -17,7 +17,6 @@
 
 use glam::{Vec2, Vec3};
 use oslf_geometry::atlas::{Atlas, AtlasOptions, UvSource};
-use oslf_geometry::Mesh;
 
 use crate::bezier::BezierPatch;
 use crate::error::{BakeError, Result};
@@ -34,17 +33,6 @@ pub const ATLAS_TEXELS_PER_SPACING: f32 = 8.0;
 
 /// The largest atlas grid side (pages) of one mesh object.
 pub const MAX_ATLAS_GRID: u32 = 64;
-
-/// A triangle-mesh OSLF object as the scene gives it.
-#[derive(Clone, Debug)]
-pub struct MeshSource {
-    /// World space. `uvs` are the material's texture coordinates (for the object's own
-    /// appearance in the scene), not the atlas.
-    pub mesh: Mesh,
-    /// Candidate atlas uv sets, most preferred first: the lightmap set (glTF `TEXCOORD_1`),
-    /// then the texture set (`TEXCOORD_0`, OBJ `vt`). Unusable sets are skipped by the atlas.
-    pub uv_sets: Vec<(UvSource, Vec<Vec2>)>,
-}
 
 /// One sample map's domain.
 #[derive(Clone, Copy, Debug)]

@@ -7,13 +7,13 @@
 use std::path::Path;
 
 use glam::{DVec3, Vec3};
-use oslf_bake::bake::TESSELLATION_ERROR;
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::capture::{capture_cube, CaptureSettings};
 use oslf_bake::integrator::Integrator;
 use oslf_bake::sample_map;
 use oslf_bake::sample_points::{self, Surfaces};
 use oslf_bake::scene::Scene;
+use oslf_bake::tolerance::TESSELLATION_ERROR;
 
 /// The teapot (28 patches) under a uniform sky and a point light, nothing else: radiance is
 /// invariant under translation and under scaling when the light's intensity scales with s².
@@ -121,7 +121,7 @@ fn compare_with_unit_scene(
             16,
             85.0,
             s.bake.epsilon,
-            &indicatif::ProgressBar::hidden(),
+            &oslf_bake::progress::Silent,
         );
         (placement, stats)
     };
@@ -262,7 +262,7 @@ fn bake_and_check(text: &str, name: &str) -> oslf_bake::bake::BakeReport {
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     let report = oslf_bake::bake::bake(&scene, &options).unwrap();
@@ -383,8 +383,8 @@ material = { color = [0.1, 0.42, 0.12] }
         distance_channel: false,
         seed: 9,
     };
-    assert_eq!(oslf_bake::bake::chunk_cubes(1024, false), 1);
-    assert_eq!(oslf_bake::bake::chunk_cubes(128, false), 32);
+    assert_eq!(oslf_bake::capture::chunk_cubes(1024, false), 1);
+    assert_eq!(oslf_bake::capture::chunk_cubes(128, false), 32);
     let capture = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -397,7 +397,7 @@ fn spot_light_shades_a_floor_in_a_path_traced_view() {
     scene.environment = Environment::Constant(Vec3::ZERO);
     let geometry = TriangleScene::build(scene.instances(false, 0.01)).unwrap();
     let integrator = Integrator::for_scene(&scene, &geometry);
-    let (pixels, _) = oslf_bake::camera::render(&integrator, &camera, 9, 9, 4, 1);
+    let (pixels, _) = oslf_bake::preview::render(&integrator, &camera, 9, 9, 4, 1);
     // Centre (inside the inner cone): E = 4 W/sr / 2² = 1 W/m², L = (0.5 / π) E, less
     // cos³ over the pixel's 0.11 half-width on the floor (under 0.5 %).
     let centre = pixels[4 * 9 + 4];

@@ -72,7 +72,6 @@ fn settings(spp: u32) -> TruthSettings {
         height: 12,
         spp,
         seed: 3,
-        progress: false,
     }
 }
 

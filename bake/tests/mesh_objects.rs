@@ -162,7 +162,7 @@ fn bake_to(scene: &Scene, output: &Path) -> BakeReport {
     let options = BakeOptions {
         output: output.to_path_buf(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     bake(scene, &options).unwrap()
@@ -1071,7 +1071,6 @@ epsilon = 0.01
         height: h,
         spp: 2,
         seed: 7,
-        progress: false,
     };
     let image = truth.render(Term::Mirror, &settings).unwrap();
     let mut covered = 0usize;

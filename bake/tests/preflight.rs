@@ -9,12 +9,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use glam::Vec3;
-use oslf_bake::bake::{bake, BakeOptions, TESSELLATION_ERROR};
+use oslf_bake::bake::{bake, BakeOptions};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::light::Light;
 use oslf_bake::preflight::{self, check, estimate, Estimate, Limits, PreflightError};
 use oslf_bake::sample_points::{self, Surfaces};
 use oslf_bake::scene::Scene;
+use oslf_bake::tolerance::TESSELLATION_ERROR;
 
 // --- a counting allocator: current and peak heap bytes ---------------------------------------
 
@@ -329,7 +330,7 @@ fn a_tiny_bake_lands_within_2x_of_its_estimate() {
     let options = BakeOptions {
         output: dir.path().join("tiny.oslf"),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
@@ -396,14 +397,6 @@ fn bvh_and_placement_constants_cover_the_allocations() {
     // Zero-area triangles are dropped, so the count can only be a little lower.
     let tri = e.triangles as f64 / geometry.triangle_count() as f64;
     assert!((1.0..=1.1).contains(&tri), "triangle ratio {tri}");
-}
-
-#[test]
-fn meminfo_is_parsed_in_bytes() {
-    let text =
-        "MemTotal:       32779900 kB\nMemFree:         1000000 kB\nMemAvailable:   18200000 kB\n";
-    assert_eq!(preflight::parse_meminfo(text), Some(18_200_000 * 1024));
-    assert_eq!(preflight::parse_meminfo("MemTotal: 1 kB\n"), None);
 }
 
 #[test]

@@ -33,7 +33,7 @@ fn bake_with(bits: u32, dir: &Path) -> Store {
     let options = BakeOptions {
         output: output.clone(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     let report = bake(&scene, &options).unwrap();

@@ -7,11 +7,12 @@ use std::f32::consts::{FRAC_1_PI, PI};
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
-use oslf_bake::camera::{render, Camera};
+use oslf_bake::camera::Camera;
 use oslf_bake::environment::{Environment, LatLongMap, Sky, SUN_ANGULAR_RADIUS};
 use oslf_bake::integrator::{Integrator, RayStats};
 use oslf_bake::light::Light;
 use oslf_bake::material::Material;
+use oslf_bake::preview::render;
 use oslf_bake::ray::{Intersector, Ray, SurfaceHit};
 use oslf_bake::sampling::*;
 use oslf_bake::texture::{
@@ -971,13 +972,13 @@ fn camera_rays() {
         vfov_deg: 90.0,
     };
     assert!(cam.validate().is_ok());
-    let centre = oslf_bake::camera::primary_ray(&cam, 50.0, 25.0, 100, 50);
+    let centre = oslf_bake::preview::primary_ray(&cam, 50.0, 25.0, 100, 50);
     assert!((centre.dir - Vec3::Y).length() < 1e-6);
     assert_eq!(centre.origin, cam.position);
     // Top edge centre: 45° up. Right edge centre: atan(2) to the right (aspect 2).
-    let top = oslf_bake::camera::primary_ray(&cam, 50.0, 0.0, 100, 50);
+    let top = oslf_bake::preview::primary_ray(&cam, 50.0, 0.0, 100, 50);
     assert!((top.dir - Vec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-6);
-    let right = oslf_bake::camera::primary_ray(&cam, 100.0, 25.0, 100, 50);
+    let right = oslf_bake::preview::primary_ray(&cam, 100.0, 25.0, 100, 50);
     assert!((right.dir - Vec3::new(2.0, 1.0, 0.0).normalize()).length() < 1e-6);
     // Degenerate cameras are reported but still produce unit rays.
     let bad = Camera {
@@ -987,7 +988,7 @@ fn camera_rays() {
     };
     assert!(bad.validate().is_err());
     assert!(
-        (oslf_bake::camera::primary_ray(&bad, 1.0, 1.0, 0, 0)
+        (oslf_bake::preview::primary_ray(&bad, 1.0, 1.0, 0, 0)
             .dir
             .length()
             - 1.0)

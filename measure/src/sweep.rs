@@ -8,10 +8,12 @@
 //! sensitivity analysis; all rows together give the Pareto front of error against frame time.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
 use oslf_bake::ground_truth::TruthImage;
+use oslf_bake::progress::Progress;
 use oslf_bake::scene::{BakeSettings, SampleDensity, Scene};
 use oslf_format::Store;
 use oslf_runtime::{Blend, CacheConfig, Gpu, Order, Renderer, ShadingParams, Source};
@@ -238,7 +240,8 @@ pub struct SweepConfig<'a> {
     /// match).
     pub store_dir: PathBuf,
     pub warm_frames: u32,
-    pub progress: bool,
+    /// Where the bakes report their progress; `Some` also prints a line per store.
+    pub progress: Option<Arc<dyn Progress>>,
 }
 
 /// One judged configuration.
@@ -301,7 +304,11 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 /// Bakes `scene` to `path` unless a store baked with the same settings is already there.
-fn bake_or_reuse(scene: &Scene, path: &Path, progress: bool) -> Result<StoreRecord> {
+fn bake_or_reuse(
+    scene: &Scene,
+    path: &Path,
+    progress: Option<Arc<dyn Progress>>,
+) -> Result<StoreRecord> {
     let settings = format!("{:?}", scene.bake);
     let hash = hex(&scene.hash);
     let record = record_path(path);
@@ -410,8 +417,8 @@ pub fn run_sweep(
     for (bc, scene, name) in variants {
         let path = config.store_dir.join(format!("{name}.oslf"));
         let t = Instant::now();
-        let record = bake_or_reuse(&scene, &path, config.progress)?;
-        if config.progress {
+        let record = bake_or_reuse(&scene, &path, config.progress.clone())?;
+        if config.progress.is_some() {
             eprintln!(
                 "store {} ({:.1} s{})",
                 path.display(),

@@ -45,7 +45,7 @@ fn store_path() -> PathBuf {
         let options = BakeOptions {
             output: out.clone(),
             resume: false,
-            progress: false,
+            progress: None,
             cube_limit: None,
         };
         bake(&scene, &options).unwrap();

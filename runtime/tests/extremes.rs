@@ -220,7 +220,7 @@ seed = {seed}
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     oslf_bake::bake::bake(&scene, &options).unwrap();
@@ -347,7 +347,7 @@ fn bake_text(name: &str, text: &str) -> (std::path::PathBuf, oslf_bake::bake::Ba
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     let report = oslf_bake::bake::bake(&scene, &options).unwrap();

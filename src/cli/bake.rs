@@ -4,13 +4,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
-use oslf_bake::bake::{
-    bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport, TESSELLATION_ERROR,
-};
+use oslf_bake::bake::{bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport};
 use oslf_bake::bvh::TriangleScene;
-use oslf_bake::camera;
 use oslf_bake::integrator::Integrator;
 use oslf_bake::scene::Scene;
+use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_format::ShardSpec;
 use oslf_util::image_file;
 
@@ -123,11 +121,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     }
     // What the bake will cost (the bake itself refuses what cannot fit, naming the setting).
     if !args.quiet {
-        let estimate = oslf_bake::preflight::estimate(&scene, rayon::current_num_threads());
-        let estimate = match args.shard {
-            Some(s) => estimate.for_shard(s.count()),
-            None => estimate,
-        };
+        let estimate = estimate(&scene, args.shard);
         eprintln!("{estimate}");
         for w in &estimate.warnings {
             eprintln!("warning: {w}");
@@ -136,7 +130,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     let options = BakeOptions {
         output: output.clone(),
         resume: args.resume,
-        progress: !args.quiet,
+        progress: super::progress::bars(!args.quiet),
         cube_limit: args.max_cubes,
     };
     if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
@@ -147,12 +141,22 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     }
     let mut limits = oslf_bake::preflight::Limits::of_machine(&output);
     limits.max_seconds = (args.max_hours > 0.0).then_some(args.max_hours * 3600.0);
+    // The bake checks the same limits itself; checked here first to name the flag that sets
+    // the time limit.
+    if let Err(e) = oslf_bake::preflight::check(&estimate(&scene, args.shard), &limits) {
+        match e {
+            oslf_bake::preflight::PreflightError::Time { .. } => {
+                bail!("{e} (or raise the limit: --max-hours, 0 for none)")
+            }
+            e => bail!("{e}"),
+        }
+    }
     let report = bake_shard(&scene, &options, args.shard, &limits).map_err(resume_flags)?;
     print_summary(&report);
     if !report.finished {
         println!(
             "stopped after --max-cubes; continue with --resume (the partial store is {})",
-            oslf_bake::bake::partial_path(&output).display()
+            oslf_format::writer::partial_path(&output).display()
         );
     }
     if let Some(path) = &args.report_json {
@@ -170,7 +174,8 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))?;
         let integrator = Integrator::for_scene(&scene, &geometry);
         let (w, h) = (655, 460); // the thesis's image size (§6.1)
-        let (pixels, _) = camera::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
+        let (pixels, _) =
+            oslf_bake::preview::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
         image_file::write_png(&png, w, h, &pixels, 1.0)?;
         let exr = png.with_extension("exr");
         image_file::write_exr(&exr, w, h, &pixels)?;
@@ -293,4 +298,13 @@ fn resume_flags(e: oslf_bake::BakeError) -> anyhow::Error {
         _ => return e.into(),
     };
     anyhow::anyhow!("{e}{hint}")
+}
+
+/// What baking `scene` (or one shard of it) will cost on this machine's threads.
+fn estimate(scene: &Scene, shard: Option<ShardSpec>) -> oslf_bake::preflight::Estimate {
+    let estimate = oslf_bake::preflight::estimate(scene, rayon::current_num_threads());
+    match shard {
+        Some(s) => estimate.for_shard(s.count()),
+        None => estimate,
+    }
 }

@@ -6,6 +6,7 @@ mod cache_stats;
 mod compare;
 mod completions;
 mod flags;
+mod progress;
 mod render;
 mod store;
 mod sweep;

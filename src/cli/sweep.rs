@@ -136,9 +136,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         height: args.height,
         spp: args.spp,
         seed: 1,
-        progress: !args.quiet,
     };
-    let gt = GroundTruth::new(&scene, camera)?;
+    let gt = GroundTruth::new(&scene, camera)?.with_progress(super::progress::bars(!args.quiet));
     let truth = render_truth(&gt, &params, &truth_settings)?;
     let truth_path = args.out.join(format!("truth-{}.exr", params.mode.name()));
     image_file::write_exr_rgba(&truth_path, truth.width, truth.height, &truth.pixels)?;
@@ -156,7 +155,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         changes,
         store_dir: args.out.join("stores"),
         warm_frames: args.frames,
-        progress: !args.quiet,
+        progress: super::progress::bars(!args.quiet),
     };
     let quiet = args.quiet;
     let rows = run_sweep(&config, &truth, |r| {

@@ -235,13 +235,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
     // Ground truth.
-    let gt = GroundTruth::new(&scene, camera)?;
+    let gt = GroundTruth::new(&scene, camera)?.with_progress(super::progress::bars(!args.quiet));
     let settings = TruthSettings {
         width: args.width,
         height: args.height,
         spp: args.spp,
         seed: 1,
-        progress: !args.quiet,
     };
     let truth_of = |mode: Mode, nu: f32, nv: f32, name: &str| -> anyhow::Result<TruthImage> {
         let p = ShadingParams {

@@ -113,13 +113,12 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
             args.scene.display()
         );
     };
-    let truth = GroundTruth::new(&scene, camera)?;
+    let truth = GroundTruth::new(&scene, camera)?.with_progress(super::progress::bars(!args.quiet));
     let settings = TruthSettings {
         width: args.width,
         height: args.height,
         spp: args.spp,
         seed: args.seed,
-        progress: !args.quiet,
     };
     let lobe = AsLobe {
         rs: args.rs,

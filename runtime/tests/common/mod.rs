@@ -82,7 +82,7 @@ fn bake_scene(scene: &str, name: &str) -> PathBuf {
     let options = BakeOptions {
         output: output.clone(),
         resume: false,
-        progress: false,
+        progress: None,
         cube_limit: None,
     };
     bake(&scene, &options).unwrap();

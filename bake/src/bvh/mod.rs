@@ -42,6 +42,16 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 
+mod node;
+mod prepared_ray;
+mod triangle;
+
+pub use node::PACKET;
+use node::*;
+use prepared_ray::PreparedRay;
+pub use prepared_ray::SELF_TOLERANCE;
+use triangle::*;
+
 use crate::mesh::Mesh;
 use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
 use crate::{BakeError, Result};
@@ -302,9 +312,6 @@ impl Intersector for TriangleScene {
 /// is hit (see [`TriangleScene::intersect_packet`]): far above the rounding of `t`.
 const SEED_CULL_MARGIN: f32 = 1.0 + 1.0 / 65536.0;
 
-/// Most rays traversed together by [`TriangleScene::intersect_packet`] (bits of a `u32` mask).
-pub const PACKET: usize = 16;
-
 impl TriangleScene {
     /// [`Intersector::intersect`] compiled for AVX2: the node test takes all 8 children in
     /// one 256-bit vector (the same operations per lane as the SSE test, so the same lanes).
@@ -373,21 +380,8 @@ impl TriangleScene {
         // is never tested only drops candidates that a closer hit replaces anyway, so the
         // hits are the same, ties between triangles at bit-identical `t` included
         // (`tests::packet_seeds_do_not_change_hits`).
-        let mut t_cull = [t_max; PACKET];
         let seeds = LAST_PACKET_HITS.with(|l| l.get());
-        let mut m = active;
-        while m != 0 {
-            let r = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let slot = seeds[r] as usize;
-            if slot < self.vertices.len() {
-                if let Some(h) =
-                    intersect_triangle(&self.vertices[slot], &self.planes[slot], &prs[r], t_max)
-                {
-                    t_cull[r] = (h.t * SEED_CULL_MARGIN).min(t_max);
-                }
-            }
-        }
+        let mut t_cull = self.seed_culls(&prs, active, t_max, &seeds);
         // Children in the octant order of the first ray (obvhs's single-ray order: the slot
         // `k ^ octant` k-th), so the nearer children of most rays come first.
         let d = prs[active.trailing_zeros() as usize].dir;
@@ -461,6 +455,34 @@ impl TriangleScene {
         for (hit, best) in hits[..n].iter_mut().zip(best) {
             *hit = best.map(|(slot, h)| self.surface_hit(slot, &h));
         }
+    }
+
+    /// The cull distance of each active ray of a packet: where it hits the triangle its
+    /// `seeds` entry names (the same ray's hit in this thread's last packet), times
+    /// `SEED_CULL_MARGIN`; else `t_max`.
+    #[inline(always)]
+    fn seed_culls(
+        &self,
+        prs: &[PreparedRay; PACKET],
+        active: u32,
+        t_max: f32,
+        seeds: &[u32; PACKET],
+    ) -> [f32; PACKET] {
+        let mut t_cull = [t_max; PACKET];
+        let mut m = active;
+        while m != 0 {
+            let r = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let slot = seeds[r] as usize;
+            if slot < self.vertices.len() {
+                if let Some(h) =
+                    intersect_triangle(&self.vertices[slot], &self.planes[slot], &prs[r], t_max)
+                {
+                    t_cull[r] = (h.t * SEED_CULL_MARGIN).min(t_max);
+                }
+            }
+        }
+        t_cull
     }
 
     /// The closest hit; `AVX2`: use [`node_lanes_avx2`] (only in an AVX2 function).
@@ -564,115 +586,6 @@ fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
     depth
 }
 
-/// A triangle's corners by coordinate (`x[i]` is corner `i`'s x; lane 3 is 0), so that the
-/// triangle test loads each coordinate of all three corners as one SSE vector.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
-struct Corners {
-    x: [f32; 4],
-    y: [f32; 4],
-    z: [f32; 4],
-}
-
-impl Corners {
-    fn new(v: &[Vec3; 3]) -> Self {
-        Corners {
-            x: [v[0].x, v[1].x, v[2].x, 0.0],
-            y: [v[0].y, v[1].y, v[2].y, 0.0],
-            z: [v[0].z, v[1].z, v[2].z, 0.0],
-        }
-    }
-
-    fn vertices(&self) -> [Vec3; 3] {
-        [0, 1, 2].map(|i| Vec3::new(self.x[i], self.y[i], self.z[i]))
-    }
-}
-
-/// Per-ray constants of the watertight test and the node test.
-#[derive(Clone, Copy)]
-struct PreparedRay {
-    origin: Vec3,
-    dir: Vec3,
-    /// Rows of the permute-and-shear transform: `x' = rx·p`, `y' = ry·p`, `z' = p[kz]`.
-    rx: Vec3,
-    ry: Vec3,
-    rz: Vec3,
-    /// `1 / d[kz]`.
-    sz: f32,
-    /// Reciprocal direction for the slab test (tiny components clamped to ±1e20).
-    inv_dir: Vec3A,
-    /// Distance from a triangle's plane within which the origin counts as on the triangle.
-    self_tolerance: f32,
-    /// Byte offsets of the near and far child planes per axis (see [`plane_offsets`]).
-    #[cfg_attr(
-        not(all(target_arch = "x86_64", target_feature = "sse2")),
-        allow(dead_code)
-    )]
-    planes: [[usize; 2]; 3],
-    /// The same choice as indices into `min x, max x, min y, max y, min z, max z`.
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    plane_index: [[usize; 2]; 3],
-}
-
-impl PreparedRay {
-    /// `None` for a ray that cannot hit anything (non-finite or zero direction, non-finite
-    /// origin, `t_max` not positive or NaN).
-    #[inline(always)]
-    fn new(ray: &Ray, t_max: f32) -> Option<Self> {
-        let (o, d) = (ray.origin, ray.dir);
-        if !o.is_finite() || !d.is_finite() || d == Vec3::ZERO || t_max.is_nan() || t_max <= 0.0 {
-            return None;
-        }
-        let a = d.abs();
-        // kz: the axis of the largest |d| component; kx = kz + 1, ky = kz + 2 (mod 3).
-        let kz = if a.x > a.y {
-            if a.x > a.z {
-                0
-            } else {
-                2
-            }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let (ex, ey, ez, dx, dy, dz) = match kz {
-            0 => (Vec3::Y, Vec3::Z, Vec3::X, d.y, d.z, d.x),
-            1 => (Vec3::Z, Vec3::X, Vec3::Y, d.z, d.x, d.y),
-            _ => (Vec3::X, Vec3::Y, Vec3::Z, d.x, d.y, d.z),
-        };
-        let sx = -dx / dz;
-        let sy = -dy / dz;
-        let inv = |c: f32| {
-            if c.abs() < 1e-20 {
-                if c < 0.0 {
-                    -1e20
-                } else {
-                    1e20
-                }
-            } else {
-                1.0 / c
-            }
-        };
-        Some(Self {
-            origin: o,
-            dir: d,
-            rx: ex + ez * sx,
-            ry: ey + ez * sy,
-            rz: ez,
-            sz: 1.0 / dz,
-            inv_dir: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
-            self_tolerance: SELF_TOLERANCE * o.abs().max_element(),
-            planes: plane_offsets(d),
-            plane_index: {
-                let neg = |c: f32| usize::from(c < 0.0);
-                let (nx, ny, nz) = (neg(d.x), neg(d.y), neg(d.z));
-                [[nx, 1 - nx], [2 + ny, 3 - ny], [4 + nz, 5 - nz]]
-            },
-        })
-    }
-}
-
 /// Asks the CPU to bring the cache line of `p` into L1: a hint, with no effect on results.
 #[inline(always)]
 fn prefetch<T>(p: *const T) {
@@ -684,528 +597,6 @@ fn prefetch<T>(p: *const T) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = p;
-}
-
-/// A ray–triangle hit: distance and barycentric weights of the three corners.
-#[derive(Clone, Copy, Debug)]
-struct TriHit {
-    t: f32,
-    barycentric: [f32; 3],
-}
-
-/// pbrt's γ(n) = nε / (1 − nε) for f32 (ε = 2⁻²⁴).
-const fn gamma(n: f32) -> f32 {
-    let e = f32::EPSILON * 0.5;
-    n * e / (1.0 - n * e)
-}
-
-/// Watertight ray–triangle intersection (Woop, Benthin, Wald 2013; pbrt-v3 §3.6.2) with
-/// `t` in `(δ_t, t_max)`, δ_t the conservative rounding-error bound of `t`.
-///
-/// SSE version of [`intersect_triangle_scalar`]: the three corners' sheared coordinates and
-/// edge functions in one vector each, every lane by the same operations in the same order as
-/// the scalar code (so the same bits: `tests::simd_triangle_test_is_the_scalar_one`); the
-/// rest, reached by few candidates, is the scalar code.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn intersect_triangle(
-    c: &Corners,
-    plane: &[f32; 4],
-    r: &PreparedRay,
-    t_max: f32,
-) -> Option<TriHit> {
-    use std::arch::x86_64::*;
-    // SAFETY: SSE2 is part of x86_64; the loads read the 16-byte-aligned `[f32; 4]` fields
-    // of `*c`.
-    let (xs, ys, e) = unsafe {
-        let px = _mm_sub_ps(_mm_load_ps(c.x.as_ptr()), _mm_set1_ps(r.origin.x));
-        let py = _mm_sub_ps(_mm_load_ps(c.y.as_ptr()), _mm_set1_ps(r.origin.y));
-        let pz = _mm_sub_ps(_mm_load_ps(c.z.as_ptr()), _mm_set1_ps(r.origin.z));
-        // `Vec3::dot`: (a.x·b.x + a.y·b.y) + a.z·b.z.
-        let dot = |a: Vec3| {
-            _mm_add_ps(
-                _mm_add_ps(
-                    _mm_mul_ps(_mm_set1_ps(a.x), px),
-                    _mm_mul_ps(_mm_set1_ps(a.y), py),
-                ),
-                _mm_mul_ps(_mm_set1_ps(a.z), pz),
-            )
-        };
-        let xs = dot(r.rx);
-        let ys = dot(r.ry);
-        // Lane i: x_{i+1}·y_{i+2} − y_{i+1}·x_{i+2} (indices mod 3).
-        let x12 = _mm_shuffle_ps::<0b11_00_10_01>(xs, xs);
-        let y20 = _mm_shuffle_ps::<0b11_01_00_10>(ys, ys);
-        let y12 = _mm_shuffle_ps::<0b11_00_10_01>(ys, ys);
-        let x20 = _mm_shuffle_ps::<0b11_01_00_10>(xs, xs);
-        let e = _mm_sub_ps(_mm_mul_ps(x12, y20), _mm_mul_ps(y12, x20));
-        let zero = _mm_setzero_ps();
-        let neg = _mm_movemask_ps(_mm_cmplt_ps(e, zero)) & 7;
-        let pos = _mm_movemask_ps(_mm_cmpgt_ps(e, zero)) & 7;
-        let on_edge = _mm_movemask_ps(_mm_cmpeq_ps(e, zero)) & 7;
-        if on_edge == 0 && neg != 0 && pos != 0 {
-            return None;
-        }
-        let mut out = [[0f32; 4]; 3];
-        _mm_storeu_ps(out[0].as_mut_ptr(), xs);
-        _mm_storeu_ps(out[1].as_mut_ptr(), ys);
-        _mm_storeu_ps(out[2].as_mut_ptr(), e);
-        (out[0], out[1], out[2])
-    };
-    let [x0, x1, x2, _] = xs;
-    let [y0, y1, y2, _] = ys;
-    let [e0, e1, e2, _] = e;
-    let p = c.vertices().map(|v| v - r.origin);
-    intersect_triangle_finish(p, [x0, x1, x2], [y0, y1, y2], [e0, e1, e2], plane, r, t_max)
-}
-
-/// Watertight ray–triangle intersection: the portable version of the SSE one.
-#[cfg(not(target_arch = "x86_64"))]
-#[inline(always)]
-fn intersect_triangle(
-    c: &Corners,
-    plane: &[f32; 4],
-    r: &PreparedRay,
-    t_max: f32,
-) -> Option<TriHit> {
-    intersect_triangle_scalar(&c.vertices(), plane, r, t_max)
-}
-
-/// Watertight ray–triangle intersection (Woop, Benthin, Wald 2013; pbrt-v3 §3.6.2) with
-/// `t` in `(δ_t, t_max)`, δ_t the conservative rounding-error bound of `t`.
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-#[inline(always)]
-fn intersect_triangle_scalar(
-    v: &[Vec3; 3],
-    plane: &[f32; 4],
-    r: &PreparedRay,
-    t_max: f32,
-) -> Option<TriHit> {
-    let p0 = v[0] - r.origin;
-    let p1 = v[1] - r.origin;
-    let p2 = v[2] - r.origin;
-    let (x0, x1, x2) = (r.rx.dot(p0), r.rx.dot(p1), r.rx.dot(p2));
-    let (y0, y1, y2) = (r.ry.dot(p0), r.ry.dot(p1), r.ry.dot(p2));
-    let e0 = x1 * y2 - y1 * x2;
-    let e1 = x2 * y0 - y2 * x0;
-    let e2 = x0 * y1 - y0 * x1;
-    intersect_triangle_finish(
-        [p0, p1, p2],
-        [x0, x1, x2],
-        [y0, y1, y2],
-        [e0, e1, e2],
-        plane,
-        r,
-        t_max,
-    )
-}
-
-/// The watertight test from the corners relative to the origin `p`, their sheared `x` and
-/// `y` and the edge functions `e` on.
-#[inline(always)]
-fn intersect_triangle_finish(
-    [p0, p1, p2]: [Vec3; 3],
-    [x0, x1, x2]: [f32; 3],
-    [y0, y1, y2]: [f32; 3],
-    [mut e0, mut e1, mut e2]: [f32; 3],
-    plane: &[f32; 4],
-    r: &PreparedRay,
-    t_max: f32,
-) -> Option<TriHit> {
-    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-        // Exact edge functions on (near) edges: what makes the test watertight.
-        let (x0, x1, x2) = (f64::from(x0), f64::from(x1), f64::from(x2));
-        let (y0, y1, y2) = (f64::from(y0), f64::from(y1), f64::from(y2));
-        e0 = (x1 * y2 - y1 * x2) as f32;
-        e1 = (x2 * y0 - y2 * x0) as f32;
-        e2 = (x0 * y1 - y0 * x1) as f32;
-    }
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-        return None;
-    }
-    let det = e0 + e1 + e2;
-    if det == 0.0 {
-        return None;
-    }
-    let z0 = r.rz.dot(p0) * r.sz;
-    let z1 = r.rz.dot(p1) * r.sz;
-    let z2 = r.rz.dot(p2) * r.sz;
-    let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
-    // t in (0, t_max), exclusive at both ends.
-    if det < 0.0 && (t_scaled >= 0.0 || t_scaled <= t_max * det) {
-        return None;
-    }
-    if det > 0.0 && (t_scaled <= 0.0 || t_scaled >= t_max * det) {
-        return None;
-    }
-    let inv_det = 1.0 / det;
-    let t = t_scaled * inv_det;
-    // Conservative bound on the rounding error of t (pbrt-v3, "Conservative Ray–Bounds
-    // Intersections" / triangle t error): reject hits not provably in front of the origin.
-    let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
-    let delta_z = gamma(3.0) * max_zt;
-    let max_xt = x0.abs().max(x1.abs()).max(x2.abs());
-    let max_yt = y0.abs().max(y1.abs()).max(y2.abs());
-    let delta_x = gamma(5.0) * (max_xt + max_zt);
-    let delta_y = gamma(5.0) * (max_yt + max_zt);
-    let delta_e = 2.0 * (gamma(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-    let delta_t =
-        3.0 * (gamma(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-    if t.is_nan() || t <= delta_t {
-        return None;
-    }
-    // Self-intersection guard: a ray whose origin lies on this triangle's plane up to the
-    // rounding of a computed surface point (a few ulps of the origin's coordinates) started
-    // on this surface and must not re-hit it.
-    let n = Vec3::new(plane[0], plane[1], plane[2]);
-    let plane_distance = t * r.dir.dot(n).abs();
-    if plane_distance <= r.self_tolerance * plane[3] {
-        return None;
-    }
-    Some(TriHit {
-        t,
-        barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det],
-    })
-}
-
-/// The unnormalised normal of a triangle and its length (see `TriangleScene::planes`).
-fn triangle_plane(v: &[Vec3; 3]) -> [f32; 4] {
-    let n = (v[1] - v[0]).cross(v[2] - v[0]);
-    [n.x, n.y, n.z, n.length()]
-}
-
-/// Relative self-intersection tolerance: 4 ulps (2⁻²¹) of the origin's largest coordinate
-/// (≈1.4e-6 for a teapot at the origin, so ε down to 1e-6 of its size still works).
-pub const SELF_TOLERANCE: f32 = 1.0 / (1u32 << 21) as f32;
-
-/// Relative rounding error allowed for in each slab distance (a few ulps).
-const SLAB_PAD: f32 = 1e-6;
-
-/// The CWBVH node test: which of the node's 8 children the ray enters within `[0, t_max]`.
-/// Same as obvhs's `CwBvhNode::intersect_ray_simd` except for the clip at 0 (not 1e-4), the
-/// exact reciprocal direction and the per-axis rounding pad.
-/// `AVX2`: use [`node_hits_avx2`]; only inside a function compiled with AVX2.
-#[inline(always)]
-fn intersect_node<const AVX2: bool>(
-    node: &CwBvhNode,
-    r: &PreparedRay,
-    t_max: f32,
-    oct_inv4: u32,
-) -> u32 {
-    let extent = node.compute_extent();
-    let adj_dir_inv = extent * r.inv_dir;
-    let adj_origin = (Vec3A::from(node.p) - Vec3A::from(r.origin)) * r.inv_dir;
-    let pad = (adj_origin.abs() + adj_dir_inv.abs() * 255.0) * SLAB_PAD;
-    #[cfg(target_arch = "x86_64")]
-    if AVX2 {
-        // SAFETY: `AVX2` is true only in `intersect_avx2` / `occluded_avx2`, AVX2 functions
-        // called only where the CPU has AVX2.
-        return unsafe { node_hits_avx2(node, adj_dir_inv, adj_origin, pad, r, t_max, oct_inv4) };
-    }
-    let mut lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, r, t_max);
-    if lanes == 0 {
-        return 0;
-    }
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let mut hit_mask = 0u32;
-    while lanes != 0 {
-        let child = lanes.trailing_zeros() as usize;
-        lanes &= lanes - 1;
-        let child_bits = obvhs::cwbvh::node::extract_byte64(child_bits8, child);
-        let bit_index = obvhs::cwbvh::node::extract_byte64(bit_index8, child);
-        hit_mask |= child_bits << bit_index;
-    }
-    hit_mask
-}
-
-/// Byte offsets in [`CwBvhNode`] of the quantised child planes.
-const CHILD_MIN_X: usize = std::mem::offset_of!(CwBvhNode, child_min_x);
-const CHILD_MAX_X: usize = std::mem::offset_of!(CwBvhNode, child_max_x);
-const CHILD_MIN_Y: usize = std::mem::offset_of!(CwBvhNode, child_min_y);
-const CHILD_MAX_Y: usize = std::mem::offset_of!(CwBvhNode, child_max_y);
-const CHILD_MIN_Z: usize = std::mem::offset_of!(CwBvhNode, child_min_z);
-const CHILD_MAX_Z: usize = std::mem::offset_of!(CwBvhNode, child_max_z);
-
-/// Offsets of the near and far planes per axis for a ray direction: `(near, far)` is
-/// `(min, max)` for a non-negative component and `(max, min)` for a negative one.
-fn plane_offsets(d: Vec3) -> [[usize; 2]; 3] {
-    let pick = |neg: bool, lo: usize, hi: usize| if neg { [hi, lo] } else { [lo, hi] };
-    [
-        pick(d.x < 0.0, CHILD_MIN_X, CHILD_MAX_X),
-        pick(d.y < 0.0, CHILD_MIN_Y, CHILD_MAX_Y),
-        pick(d.z < 0.0, CHILD_MIN_Z, CHILD_MAX_Z),
-    ]
-}
-
-/// The node test's per-ray constants, as in [`intersect_node`]: the reciprocal direction and
-/// the origin in the node's quantised frame, and the rounding pad of each slab.
-#[inline(always)]
-fn node_frame(node: &CwBvhNode, r: &PreparedRay) -> (Vec3A, Vec3A, Vec3A) {
-    let extent = node.compute_extent();
-    let adj_dir_inv = extent * r.inv_dir;
-    let adj_origin = (Vec3A::from(node.p) - Vec3A::from(r.origin)) * r.inv_dir;
-    let pad = (adj_origin.abs() + adj_dir_inv.abs() * 255.0) * SLAB_PAD;
-    (adj_dir_inv, adj_origin, pad)
-}
-
-/// A packet's node test (no AVX2): bit `r` of `child_rays[c]` set if ray `r` of `mask`
-/// enters child `c` within `[0, t_best[r]]`, by [`node_lanes`] per ray.
-#[cfg_attr(target_arch = "x86_64", inline)]
-fn packet_node(
-    node: &CwBvhNode,
-    prs: &[PreparedRay; PACKET],
-    mask: u32,
-    t_best: &[f32; PACKET],
-    child_rays: &mut [u32; 8],
-) {
-    let mut m = mask;
-    while m != 0 {
-        let r = m.trailing_zeros() as usize;
-        m &= m - 1;
-        let (adj_dir_inv, adj_origin, pad) = node_frame(node, &prs[r]);
-        let mut lanes = node_lanes(node, adj_dir_inv, adj_origin, pad, &prs[r], t_best[r]);
-        while lanes != 0 {
-            let c = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
-            child_rays[c] |= 1 << r;
-        }
-    }
-}
-
-/// [`packet_node`] with AVX2: the node's 48 quantised planes are converted to floats once,
-/// then each ray tests all 8 children in one vector, lane by lane the operations of
-/// [`node_hits_avx2`] (so the same entered children).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-fn packet_node_avx2(
-    node: &CwBvhNode,
-    prs: &[PreparedRay; PACKET],
-    mask: u32,
-    t_best: &[f32; PACKET],
-    child_rays: &mut [u32; 8],
-) {
-    use std::arch::x86_64::*;
-    let base = (node as *const CwBvhNode).cast::<u8>();
-    // Plane vectors indexed as `PreparedRay::planes` orders them: min x, max x, min y, ….
-    let offsets = [
-        CHILD_MIN_X,
-        CHILD_MAX_X,
-        CHILD_MIN_Y,
-        CHILD_MAX_Y,
-        CHILD_MIN_Z,
-        CHILD_MAX_Z,
-    ];
-    // SAFETY: every offset is that of an `[u8; 8]` field of `CwBvhNode`, so each 8-byte
-    // unaligned load stays inside `*node`.
-    let planes = offsets.map(|offset| {
-        _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(unsafe {
-            _mm_loadl_epi64(base.add(offset).cast::<__m128i>())
-        }))
-    });
-    let mut m = mask;
-    while m != 0 {
-        let r = m.trailing_zeros() as usize;
-        m &= m - 1;
-        let ray = &prs[r];
-        let (a, o, p) = node_frame(node, ray);
-        let axis = |axis: usize, a: f32, o: f32, p: f32| {
-            let (a, o, p) = (_mm256_set1_ps(a), _mm256_set1_ps(o), _mm256_set1_ps(p));
-            let near = planes[ray.plane_index[axis][0]];
-            let far = planes[ray.plane_index[axis][1]];
-            (
-                _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(near, a), o), p),
-                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(far, a), o), p),
-            )
-        };
-        let (x0, x1) = axis(0, a.x, o.x, p.x);
-        let (y0, y1) = axis(1, a.y, o.y, p.y);
-        let (z0, z1) = axis(2, a.z, o.z, p.z);
-        let tmin = _mm256_max_ps(
-            _mm256_max_ps(x0, y0),
-            _mm256_max_ps(z0, _mm256_setzero_ps()),
-        );
-        let tmax = _mm256_min_ps(
-            _mm256_min_ps(x1, y1),
-            _mm256_min_ps(z1, _mm256_set1_ps(t_best[r])),
-        );
-        let mut lanes = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
-        while lanes != 0 {
-            let c = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
-            child_rays[c] |= 1 << r;
-        }
-    }
-}
-
-/// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (SSE version).
-#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-#[inline(always)]
-fn node_lanes(
-    node: &CwBvhNode,
-    adj_dir_inv: Vec3A,
-    adj_origin: Vec3A,
-    pad: Vec3A,
-    r: &PreparedRay,
-    t_max: f32,
-) -> u32 {
-    use std::arch::x86_64::*;
-    let base = (node as *const CwBvhNode).cast::<u8>();
-    // SAFETY: SSE2 is enabled (cfg above). Every offset is that of an `[u8; 8]` field of
-    // `CwBvhNode` (see `plane_offsets`), so each 8-byte unaligned load stays inside `*node`.
-    unsafe {
-        let zero = _mm_setzero_si128();
-        // The 8 quantised planes at `offset` as two vectors of 4 floats (children 0–3, 4–7).
-        let planes = |offset: usize| {
-            let bytes = _mm_loadl_epi64(base.add(offset).cast::<__m128i>());
-            let words = _mm_unpacklo_epi8(bytes, zero);
-            (
-                _mm_cvtepi32_ps(_mm_unpacklo_epi16(words, zero)),
-                _mm_cvtepi32_ps(_mm_unpackhi_epi16(words, zero)),
-            )
-        };
-        let axis = |offsets: [usize; 2], a: f32, o: f32, p: f32| {
-            let (near0, near1) = planes(offsets[0]);
-            let (far0, far1) = planes(offsets[1]);
-            let (a, o, p) = (_mm_set1_ps(a), _mm_set1_ps(o), _mm_set1_ps(p));
-            let t0 = |q| _mm_sub_ps(_mm_add_ps(_mm_mul_ps(q, a), o), p);
-            let t1 = |q| _mm_add_ps(_mm_add_ps(_mm_mul_ps(q, a), o), p);
-            (t0(near0), t0(near1), t1(far0), t1(far1))
-        };
-        let (x00, x01, x10, x11) = axis(r.planes[0], adj_dir_inv.x, adj_origin.x, pad.x);
-        let (y00, y01, y10, y11) = axis(r.planes[1], adj_dir_inv.y, adj_origin.y, pad.y);
-        let (z00, z01, z10, z11) = axis(r.planes[2], adj_dir_inv.z, adj_origin.z, pad.z);
-        let lo = _mm_setzero_ps();
-        let hi = _mm_set1_ps(t_max);
-        let tmin0 = _mm_max_ps(_mm_max_ps(x00, y00), _mm_max_ps(z00, lo));
-        let tmax0 = _mm_min_ps(_mm_min_ps(x10, y10), _mm_min_ps(z10, hi));
-        let tmin1 = _mm_max_ps(_mm_max_ps(x01, y01), _mm_max_ps(z01, lo));
-        let tmax1 = _mm_min_ps(_mm_min_ps(x11, y11), _mm_min_ps(z11, hi));
-        let m0 = _mm_movemask_ps(_mm_cmple_ps(tmin0, tmax0)) as u32;
-        let m1 = _mm_movemask_ps(_mm_cmple_ps(tmin1, tmax1)) as u32;
-        m0 | (m1 << 4)
-    }
-}
-
-/// [`node_lanes`] and the hit mask of [`intersect_node`] with AVX2: all 8 children in one
-/// vector. Every lane computes exactly what the SSE version computes for it (`q · a + o ∓ p`
-/// in that order, then the same min / max and ordered `<=`), so the lanes are the same bits;
-/// the hit mask is obvhs's `get_child_and_index_bits` per lane, OR-ed over the entered ones.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-fn node_hits_avx2(
-    node: &CwBvhNode,
-    adj_dir_inv: Vec3A,
-    adj_origin: Vec3A,
-    pad: Vec3A,
-    r: &PreparedRay,
-    t_max: f32,
-    oct_inv4: u32,
-) -> u32 {
-    use std::arch::x86_64::*;
-    let base = (node as *const CwBvhNode).cast::<u8>();
-    // The 8 quantised planes at byte offset `$offset` of the node as 8 floats.
-    macro_rules! planes {
-        ($offset:expr) => {
-            // SAFETY: every offset is that of an `[u8; 8]` field of `CwBvhNode` (see
-            // `plane_offsets`), so the 8-byte unaligned load stays inside `*node`.
-            _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(unsafe {
-                _mm_loadl_epi64(base.add($offset).cast::<__m128i>())
-            }))
-        };
-    }
-    macro_rules! axis {
-        ($offsets:expr, $a:expr, $o:expr, $p:expr) => {{
-            let (a, o, p) = (_mm256_set1_ps($a), _mm256_set1_ps($o), _mm256_set1_ps($p));
-            let near = planes!($offsets[0]);
-            let far = planes!($offsets[1]);
-            (
-                _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(near, a), o), p),
-                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(far, a), o), p),
-            )
-        }};
-    }
-    let (x0, x1) = axis!(r.planes[0], adj_dir_inv.x, adj_origin.x, pad.x);
-    let (y0, y1) = axis!(r.planes[1], adj_dir_inv.y, adj_origin.y, pad.y);
-    let (z0, z1) = axis!(r.planes[2], adj_dir_inv.z, adj_origin.z, pad.z);
-    let tmin = _mm256_max_ps(
-        _mm256_max_ps(x0, y0),
-        _mm256_max_ps(z0, _mm256_setzero_ps()),
-    );
-    let tmax = _mm256_min_ps(
-        _mm256_min_ps(x1, y1),
-        _mm256_min_ps(z1, _mm256_set1_ps(t_max)),
-    );
-    let entered = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
-    if _mm256_testz_si256(entered, entered) != 0 {
-        return 0;
-    }
-    // Per child: meta = node.child_meta[c]; inner children have bits 3 and 4 of meta set, and
-    // their bit index is meta ^ (the ray's octant) (24 + slot, traversal order), a leaf's is
-    // meta's low 5 bits (its first triangle's offset); the bits are meta >> 5 (1 for an inner
-    // child, the unary triangle count for a leaf).
-    // SAFETY: `child_meta` is an `[u8; 8]`: the 8-byte unaligned load stays inside it.
-    let meta = _mm256_cvtepu8_epi32(unsafe {
-        _mm_loadl_epi64(node.child_meta.as_ptr().cast::<__m128i>())
-    });
-    let bit4 = _mm256_set1_epi32(0x10);
-    let inner = _mm256_cmpeq_epi32(
-        _mm256_and_si256(_mm256_and_si256(meta, _mm256_slli_epi32::<1>(meta)), bit4),
-        bit4,
-    );
-    let octant = _mm256_set1_epi32((oct_inv4 & 0xff) as i32);
-    let bit_index = _mm256_and_si256(
-        _mm256_xor_si256(meta, _mm256_and_si256(octant, inner)),
-        _mm256_set1_epi32(0x1f),
-    );
-    let bits = _mm256_and_si256(_mm256_srli_epi32::<5>(meta), _mm256_set1_epi32(7));
-    let hits = _mm256_and_si256(_mm256_sllv_epi32(bits, bit_index), entered);
-    let h = _mm_or_si128(
-        _mm256_castsi256_si128(hits),
-        _mm256_extracti128_si256::<1>(hits),
-    );
-    let h = _mm_or_si128(h, _mm_shuffle_epi32::<0b01_00_11_10>(h));
-    let h = _mm_or_si128(h, _mm_shuffle_epi32::<0b10_11_00_01>(h));
-    _mm_cvtsi128_si32(h) as u32
-}
-
-/// Bit `c` set if child `c`'s box is entered within `[0, t_max]` (portable version).
-#[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
-#[inline(always)]
-fn node_lanes(
-    node: &CwBvhNode,
-    adj_dir_inv: Vec3A,
-    adj_origin: Vec3A,
-    pad: Vec3A,
-    r: &PreparedRay,
-    t_max: f32,
-) -> u32 {
-    let neg = (r.dir.x < 0.0, r.dir.y < 0.0, r.dir.z < 0.0);
-    let mut mask = 0u32;
-    for c in 0..8 {
-        let lo = Vec3A::new(
-            node.child_min_x[c] as f32,
-            node.child_min_y[c] as f32,
-            node.child_min_z[c] as f32,
-        );
-        let hi = Vec3A::new(
-            node.child_max_x[c] as f32,
-            node.child_max_y[c] as f32,
-            node.child_max_z[c] as f32,
-        );
-        let pick = |n: bool, l: f32, h: f32| if n { (h, l) } else { (l, h) };
-        let (nx, fx) = pick(neg.0, lo.x, hi.x);
-        let (ny, fy) = pick(neg.1, lo.y, hi.y);
-        let (nz, fz) = pick(neg.2, lo.z, hi.z);
-        let near = Vec3A::new(nx, ny, nz) * adj_dir_inv + adj_origin - pad;
-        let far = Vec3A::new(fx, fy, fz) * adj_dir_inv + adj_origin + pad;
-        if near.max_element().max(0.0) <= far.min_element().min(t_max) {
-            mask |= 1 << c;
-        }
-    }
-    mask
 }
 
 #[cfg(test)]

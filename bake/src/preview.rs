@@ -1,4 +1,6 @@
-//! Path-traced renders through the shared pinhole [`Camera`], deterministic and parallel.
+//! The path-traced preview: images rendered through the shared pinhole [`Camera`] by the
+//! path tracer ([`crate::integrator`]), deterministic and parallel (`oslf bake --preview`,
+//! `oslf truth`'s references).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -7,7 +9,7 @@ use crate::integrator::{Integrator, RayStats};
 use crate::ray::{Intersector, Ray};
 use crate::sampling::{hash_u64, stratified_2d, Rng};
 
-pub use oslf_geometry::Camera;
+use oslf_geometry::Camera;
 
 /// The primary ray of `camera` through image position `(px, py)` (see [`Camera::direction`]).
 pub fn primary_ray(camera: &Camera, px: f32, py: f32, width: u32, height: u32) -> Ray {

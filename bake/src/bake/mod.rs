@@ -1,0 +1,119 @@
+//! The bake pipeline: scene → BVH → sample points → sample maps → cube maps → store.
+
+//!
+//! Its stages, each a function of `stages` with its inputs and outputs: **prepare** (the
+//! output is writable, the preflight passes, the ray-tracing geometry is built), **place**
+//! (the sample-map domains and the sample points), **build maps** (the sample maps, with the
+//! points added where texels found fewer than four), **capture** (a cube map at each point,
+//! encoded and appended in order) and **write** (the store or shard finished). [`bake_shard`]
+//! runs them in that order.
+
+mod meta;
+mod report;
+mod sink;
+mod stages;
+mod writable;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use oslf_format::ShardSpec;
+
+use crate::capture::strata_per_side;
+use crate::error::Result;
+use crate::preflight::Limits;
+use crate::progress::{self, Progress};
+use crate::scene::Scene;
+pub use meta::{object_centre, store_meta};
+pub use report::{AtlasReport, BakeReport};
+use sink::Sink;
+use stages::process_cpu_ns;
+pub use writable::{check_store_writable, check_writable};
+
+/// How to run a bake.
+#[derive(Clone, Debug)]
+pub struct BakeOptions {
+    /// The store to write.
+    pub output: PathBuf,
+    /// Continue from `<output>.partial` if it exists (and matches this scene and settings).
+    pub resume: bool,
+    /// Where to report the progress of the sample-map and cube-map stages (`None`: nowhere).
+    pub progress: Option<Arc<dyn Progress>>,
+    /// Capture at most this many cube maps in this run, then stop and leave `<output>.partial`
+    /// for a later `resume` (a bake in slices). `None`: run to the end.
+    pub cube_limit: Option<u32>,
+}
+
+/// Bakes `scene` into the store at `options.output`, after the preflight against this
+/// machine's limits ([`Limits::of_machine`]).
+pub fn bake(scene: &Scene, options: &BakeOptions) -> Result<BakeReport> {
+    let limits = Limits::of_machine(&options.output);
+    bake_shard(scene, options, None, &limits)
+}
+
+/// Bakes shard `shard` of `scene`'s store into a shard file at `options.output`: the sample
+/// points and maps as [`bake`] computes them, and the cubes `i` with `i % count == index`
+/// ([`oslf_format::shard`]); `oslf store merge` joins the shards into the store [`bake`]
+/// writes. `None`: the whole store, as [`bake`]. `resume` and `cube_limit` work as there.
+/// Before any slow work the bake's estimate ([`crate::preflight`], of this shard's share) is
+/// checked against `limits`.
+pub fn bake_shard(
+    scene: &Scene,
+    options: &BakeOptions,
+    shard: Option<ShardSpec>,
+    limits: &Limits,
+) -> Result<BakeReport> {
+    let start = Instant::now();
+    let bake_cpu_start = process_cpu_ns();
+    let settings = &scene.bake;
+    let progress = progress::or_silent(&options.progress);
+    let mut report = BakeReport {
+        output: options.output.clone(),
+        cube_resolution: settings.cube_resolution,
+        samples_per_texel: strata_per_side(settings.samples_per_texel).pow(2),
+        shard: shard.map(|s| s.to_string()),
+        ..Default::default()
+    };
+    let geometry = stages::prepare(scene, &options.output, shard, limits, &mut report)?;
+    let (surfaces, placement) = stages::place(scene, &geometry, &mut report)?;
+    let (points, maps) = stages::build_maps(
+        settings,
+        &surfaces,
+        placement,
+        &geometry,
+        progress,
+        &mut report,
+    );
+    let meta = store_meta(scene, &surfaces);
+    let mut sink = Sink::open(
+        &options.output,
+        options.resume,
+        shard,
+        &meta,
+        &points,
+        &maps,
+        &mut report.restarted,
+    )?;
+    let written = stages::capture(
+        scene,
+        &geometry,
+        &meta,
+        &points,
+        &mut sink,
+        options.cube_limit,
+        progress,
+        &mut report,
+    )?;
+    if sink.done() < sink.total() {
+        // Stopped by `cube_limit`: the partial file keeps every appended cube for `resume`.
+        drop(sink);
+    } else {
+        stages::write(sink, &written, &mut report)?;
+    }
+    report.total_seconds = start.elapsed().as_secs_f64();
+    report.cpu_seconds = process_cpu_ns()
+        .zip(bake_cpu_start)
+        .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9);
+    Ok(report)
+}

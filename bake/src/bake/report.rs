@@ -1,0 +1,102 @@
+//! What a bake did: the report the CLI summarizes and tools read (`--report-json`).
+
+use std::path::PathBuf;
+
+use oslf_geometry::atlas::UvSource;
+
+use crate::sample_map::SampleMapStats;
+use crate::sample_points::Surfaces;
+use crate::scene::Scene;
+
+/// What a bake did, for the summary and for tools (`--report-json`).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct BakeReport {
+    pub output: PathBuf,
+    /// Whether the store was completed (false when `cube_limit` stopped the run early).
+    pub finished: bool,
+    pub triangles: usize,
+    pub bvh_build_seconds: f64,
+    pub sample_points: usize,
+    pub points_placed: usize,
+    pub points_removed_close: usize,
+    pub points_removed_inside: usize,
+    /// Points added where sample-map texels found fewer than four (§6.3).
+    pub points_added: usize,
+    pub sample_maps: SampleMapStats,
+    /// The atlas of each mesh object, in object order.
+    pub atlases: Vec<AtlasReport>,
+    /// Cubes of this store (or, for a shard, of this shard).
+    pub cubes: u32,
+    /// `I/N` when this bake was shard `I` of `N`; `cubes` then counts the shard's cubes.
+    pub shard: Option<String>,
+    /// Cubes in the merged store (equal to `cubes` unless this is a shard).
+    pub store_cubes: u32,
+    /// Cubes recovered from an interrupted bake instead of being traced again.
+    pub cubes_resumed: u32,
+    /// Whether `resume` found a partial file that was never completely created and started
+    /// over (a line on stderr says so).
+    pub restarted: bool,
+    pub cube_resolution: u32,
+    pub samples_per_texel: u32,
+    pub rays_closest: u64,
+    pub rays_shadow: u64,
+    /// Capture rays per second, millions (closest + shadow, this run's cubes only).
+    pub mrays_per_second: f64,
+    pub placement_seconds: f64,
+    pub sample_map_seconds: f64,
+    pub capture_seconds: f64,
+    /// CPU time all of the process's threads spent during the capture, where the system
+    /// reports it (Linux). On a shared machine, capture rays per CPU-second do not depend on
+    /// what else runs; `mrays_per_second` (wall time) does.
+    pub capture_cpu_seconds: Option<f64>,
+    pub total_seconds: f64,
+    /// CPU time of the whole bake, all threads (Linux; see `capture_cpu_seconds`).
+    pub cpu_seconds: Option<f64>,
+    pub store_bytes: u64,
+    /// Compressed cube-map bytes per texel.
+    pub bytes_per_texel: f64,
+    /// Texels whose radiance exceeded the encoding's range and were clamped.
+    pub clamped_texels: u64,
+}
+
+/// How a mesh object's sample maps were laid out.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AtlasReport {
+    pub object: String,
+    /// Pages per side: the object has `grid²` sample maps.
+    pub grid: u32,
+    /// Texels per page side (the sample-map resolution).
+    pub page_resolution: u32,
+    /// `lightmap` (TEXCOORD_1), `texture` (TEXCOORD_0, OBJ `vt`) or `charts` (per triangle).
+    pub source: &'static str,
+    /// The uv sets tried and not used, each with why.
+    pub rejected: Vec<String>,
+}
+
+/// The atlases of `scene`'s mesh objects, for the report.
+pub(super) fn atlas_reports(scene: &Scene, surfaces: &Surfaces) -> Vec<AtlasReport> {
+    let name = |s: UvSource| match s {
+        UvSource::Lightmap => "lightmap",
+        UvSource::Texture => "texture",
+        UvSource::Charts => "charts",
+    };
+    scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| {
+            let atlas = surfaces.atlas(i)?;
+            Some(AtlasReport {
+                object: o.name.clone(),
+                grid: atlas.grid,
+                page_resolution: atlas.page_resolution,
+                source: name(atlas.source),
+                rejected: atlas
+                    .rejected
+                    .iter()
+                    .map(|(s, why)| format!("{}: {why}", name(*s)))
+                    .collect(),
+            })
+        })
+        .collect()
+}

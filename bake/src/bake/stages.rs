@@ -1,0 +1,277 @@
+//! The stages of the bake pipeline, in the order [`crate::bake::bake_shard`] runs them: prepare,
+//! place, build maps, capture, write. Each fills in its part of the [`BakeReport`].
+
+use std::path::Path;
+use std::time::Instant;
+
+use glam::Vec3;
+use oslf_format::{SampleMaps, SamplePoint, ShardSpec, StoreMeta};
+use rayon::prelude::*;
+
+use super::meta::object_centre;
+use super::report::{atlas_reports, BakeReport};
+use super::sink::Sink;
+use super::writable::check_store_writable;
+use crate::bvh::TriangleScene;
+use crate::capture::{capture_cube, chunk_cubes, CaptureSettings};
+use crate::error::Result;
+use crate::integrator::{Integrator, RayStats};
+use crate::preflight::{self, Limits};
+use crate::progress::Progress;
+use crate::ray::EmptyScene;
+use crate::sample_map;
+use crate::sample_points::{self, Placement, Surfaces};
+use crate::scene::{BakeSettings, Scene};
+use crate::tolerance::TESSELLATION_ERROR;
+
+/// Prepare: fails now, not after the sample maps, if the store at `output` cannot be
+/// written; refuses (the preflight) what cannot fit `limits`, naming the setting to change;
+/// then builds the ray-tracing geometry: every triangle of the scene, the OSLF objects
+/// tessellated within ε × [`TESSELLATION_ERROR`].
+pub(super) fn prepare(
+    scene: &Scene,
+    output: &Path,
+    shard: Option<ShardSpec>,
+    limits: &Limits,
+    report: &mut BakeReport,
+) -> Result<TriangleScene> {
+    check_store_writable(output)?;
+    let estimate = preflight::estimate(scene, rayon::current_num_threads());
+    let estimate = match shard {
+        Some(s) => estimate.for_shard(s.count()),
+        None => estimate,
+    };
+    preflight::check(&estimate, limits)?;
+    let settings = &scene.bake;
+    let geometry =
+        TriangleScene::build(scene.instances(true, settings.epsilon * TESSELLATION_ERROR))?;
+    report.triangles = geometry.triangle_count();
+    report.bvh_build_seconds = geometry.build_time().as_secs_f64();
+    Ok(geometry)
+}
+
+/// Place: the sample-map domains of the OSLF objects (with the atlases of mesh objects) and
+/// the sample points placed over them.
+pub(super) fn place<'s>(
+    scene: &'s Scene,
+    geometry: &TriangleScene,
+    report: &mut BakeReport,
+) -> Result<(Surfaces<'s>, Placement)> {
+    let t = Instant::now();
+    let settings = &scene.bake;
+    let surfaces = Surfaces::new(&scene.objects, settings)?;
+    report.atlases = atlas_reports(scene, &surfaces);
+    let placement = sample_points::place(&surfaces, settings, geometry)?;
+    report.placement_seconds = t.elapsed().as_secs_f64();
+    report.points_placed = placement.placed;
+    report.points_removed_close = placement.removed_close;
+    report.points_removed_inside = placement.removed_inside;
+    Ok((surfaces, placement))
+}
+
+/// Build maps: the sample maps of `placement`'s points; then (§6.3) points added where
+/// texels found fewer than four, at halving spacings, and the maps rebuilt, for at most
+/// [`sample_points::REFINE_ROUNDS`] rounds. Returns every point and the last maps.
+pub(super) fn build_maps(
+    settings: &BakeSettings,
+    surfaces: &Surfaces,
+    placement: Placement,
+    geometry: &TriangleScene,
+    progress: &dyn Progress,
+    report: &mut BakeReport,
+) -> (Vec<SamplePoint>, SampleMaps) {
+    let t = Instant::now();
+    let domains = surfaces.maps();
+    let map_rows = domains.len() as u64 * u64::from(settings.sample_map_resolution);
+    let build = |points: &[SamplePoint]| {
+        // One stage per build (refinement rebuilds the maps with the added points).
+        progress.start("sample-map rows", map_rows, 0);
+        let built = sample_map::build(
+            &domains,
+            points,
+            geometry,
+            settings.sample_map_resolution,
+            settings.phi_samplemap_deg,
+            settings.epsilon,
+            progress,
+        );
+        progress.finish();
+        built
+    };
+    let mut points = placement.points;
+    let (mut maps, mut map_stats) = build(&points);
+    let mut min_distance = placement.radius;
+    let mut rays = map_stats.rays;
+    for _ in 0..sample_points::REFINE_ROUNDS {
+        let short = sample_map::short_texels(&maps, &domains);
+        if short.is_empty() {
+            break;
+        }
+        let budget = report.points_placed.saturating_sub(report.points_added);
+        let added = sample_points::refine(
+            &mut points,
+            &short,
+            &domains,
+            settings.sample_map_resolution,
+            settings.epsilon,
+            min_distance,
+            budget,
+            geometry,
+        );
+        if added == 0 {
+            break;
+        }
+        report.points_added += added;
+        // Free the old maps first: at 4096² one patch's map is 256 MiB.
+        maps.indices = Vec::new();
+        (maps, map_stats) = build(&points);
+        rays += map_stats.rays;
+        min_distance *= 0.5;
+    }
+    map_stats.rays = rays;
+    report.sample_points = points.len();
+    report.sample_maps = map_stats;
+    report.sample_map_seconds = t.elapsed().as_secs_f64();
+    (points, maps)
+}
+
+/// What the capture appended: compressed bytes and texels of this run's cubes.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Captured {
+    bytes: u64,
+    texels: u64,
+}
+
+/// Capture: a cube map at each of `points` that `sink` still lacks (and, past the points,
+/// the environment-map baseline's cube at the objects' centre, which sees the scene without
+/// them), captured `chunk_cubes` at a time in parallel, encoded and appended in order; at
+/// most `cube_limit` cubes in this run.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn capture(
+    scene: &Scene,
+    geometry: &TriangleScene,
+    meta: &StoreMeta,
+    points: &[SamplePoint],
+    sink: &mut Sink,
+    cube_limit: Option<u32>,
+    progress: &dyn Progress,
+    report: &mut BakeReport,
+) -> Result<Captured> {
+    report.cubes_resumed = sink.done();
+    report.cubes = sink.total();
+    report.store_cubes = sink.store_cubes();
+
+    let capture = CaptureSettings::from_bake(&scene.bake);
+    let integrator = Integrator::for_scene(scene, geometry);
+    // The environment-map baseline sees the scene without the OSLF objects.
+    let env_geometry = if meta.has_env_cube && !scene.shapes.is_empty() {
+        Some(TriangleScene::build(scene.instances(false, 0.0))?)
+    } else {
+        None
+    };
+    let centre = object_centre(scene);
+
+    progress.start("cube maps", sink.total() as u64, sink.done() as u64);
+    let t = Instant::now();
+    let cpu_start = process_cpu_ns();
+    let mut rays = RayStats::default();
+    let mut captured = Captured::default();
+    let stop_at = cube_limit.map_or(sink.total(), |limit| {
+        sink.done().saturating_add(limit).min(sink.total())
+    });
+    let chunk = chunk_cubes(capture.resolution, capture.distance_channel);
+    while sink.done() < stop_at {
+        let first = sink.done() as usize;
+        let end = (first + chunk).min(stop_at as usize);
+        let order = &*sink;
+        let encoded: Vec<_> = (first..end)
+            .into_par_iter()
+            .map(|k| {
+                let i = order.cube(k as u32) as usize;
+                let (cube, stats) = match points.get(i) {
+                    Some(p) => capture_cube(
+                        &integrator,
+                        Vec3::from_array(p.position),
+                        i as u32,
+                        &capture,
+                    ),
+                    // The one cube past the sample points: the environment-map baseline.
+                    None => match &env_geometry {
+                        Some(geometry) => {
+                            let env = integrator.with_geometry(geometry);
+                            capture_cube(&env, centre, i as u32, &capture)
+                        }
+                        None => {
+                            let env = integrator.with_geometry(&EmptyScene);
+                            capture_cube(&env, centre, i as u32, &capture)
+                        }
+                    },
+                };
+                let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i as u32)?;
+                // Each cube as it finishes, not each chunk: one cube of a slow bake (many
+                // samples per texel, many lights) can take minutes.
+                progress.advance(1);
+                Ok((enc, enc_stats, stats))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        for (enc, enc_stats, stats) in encoded {
+            rays.closest += stats.closest;
+            rays.shadow += stats.shadow;
+            report.clamped_texels += enc_stats.clamped_texels;
+            captured.bytes += enc_stats.compressed_bytes;
+            captured.texels += 6 * (capture.resolution as u64).pow(2);
+            sink.append(enc)?;
+        }
+    }
+    progress.finish();
+    report.capture_seconds = t.elapsed().as_secs_f64();
+    report.capture_cpu_seconds = process_cpu_ns()
+        .zip(cpu_start)
+        .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9);
+    report.rays_closest = rays.closest;
+    report.rays_shadow = rays.shadow;
+    report.mrays_per_second =
+        (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
+    Ok(captured)
+}
+
+/// Write: finishes the store or shard (every cube in) and reports its size and compressed
+/// bytes per texel.
+pub(super) fn write(sink: Sink, captured: &Captured, report: &mut BakeReport) -> Result<()> {
+    let res = u64::from(report.cube_resolution);
+    let (file_size, cube_bytes, all_texels) = match sink {
+        Sink::Store(w) => {
+            let s = w.finish()?;
+            (s.file_size, s.cube_bytes, s.texels)
+        }
+        Sink::Shard(w) => {
+            let s = w.finish()?;
+            (
+                s.file_size,
+                s.cube_bytes,
+                u64::from(s.cubes) * 6 * res * res,
+            )
+        }
+    };
+    report.finished = true;
+    report.store_bytes = file_size;
+    report.bytes_per_texel = if all_texels > 0 {
+        cube_bytes as f64 / all_texels as f64
+    } else if captured.texels > 0 {
+        captured.bytes as f64 / captured.texels as f64
+    } else {
+        0.0
+    };
+    Ok(())
+}
+
+/// CPU nanoseconds run so far by the process's live threads (Linux `schedstat`), if known.
+/// The worker pool's threads live for the whole bake, so differences cover them all.
+pub(super) fn process_cpu_ns() -> Option<u64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        total = total.saturating_add(stat.split_whitespace().next()?.parse().ok()?);
+    }
+    Some(total)
+}

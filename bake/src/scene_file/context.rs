@@ -1,0 +1,84 @@
+//! The context of reading one scene file: its text and path (for located errors and
+//! relative paths) and the files it includes (for the scene's hash).
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use toml::Spanned;
+
+use super::location::line_column;
+use crate::error::{BakeError, Result};
+
+/// Reading one scene file.
+pub(super) struct Ctx<'a> {
+    pub(super) text: &'a str,
+    pub(super) path: &'a Path,
+    /// Every file the scene includes, in reading order (for [`crate::scene::Scene::hash`]).
+    pub(super) included: std::cell::RefCell<Vec<PathBuf>>,
+}
+
+impl Ctx<'_> {
+    /// An error at `span` of the text.
+    pub(super) fn error_at(&self, span: Range<usize>, message: impl Into<String>) -> BakeError {
+        let (line, column) = line_column(self.text, span.start);
+        BakeError::Parse {
+            path: self.path.to_path_buf(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
+    /// Located version of an error from a helper that does not know where it was called from.
+    pub(super) fn locate(&self, span: Range<usize>, error: BakeError) -> BakeError {
+        match error {
+            BakeError::Invalid(message) => self.error_at(span, message),
+            other => other,
+        }
+    }
+
+    /// `relative` resolved against the scene file's directory (an absolute path as it is).
+    pub(super) fn resolve(&self, relative: &str) -> PathBuf {
+        let p = Path::new(relative);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.path.parent().unwrap_or_else(|| Path::new(".")).join(p)
+        }
+    }
+
+    /// The file `path` names, which must exist; recorded as included.
+    pub(super) fn existing_file(&self, path: &Spanned<String>) -> Result<PathBuf> {
+        let resolved = self.resolve(path.get_ref());
+        if resolved.is_file() {
+            self.included.borrow_mut().push(resolved.clone());
+            Ok(resolved)
+        } else {
+            Err(self.error_at(
+                path.span(),
+                format!("file not found: {}", resolved.display()),
+            ))
+        }
+    }
+}
+
+/// [`crate::scene::Scene::hash`]: SHA-256 of `text` and of the SHA-256 of each of `files`, in
+/// order.
+pub(super) fn scene_hash(text: &[u8], files: &[PathBuf]) -> Result<[u8; 32]> {
+    use sha2::Digest;
+    let mut hasher = sha2::Sha256::new();
+    hasher.update(text);
+    for file in files {
+        let bytes = std::fs::read(file).map_err(|source| BakeError::Io {
+            path: file.clone(),
+            source,
+        })?;
+        hasher.update(sha256(&bytes));
+    }
+    Ok(hasher.finalize().into())
+}
+
+fn sha256(bytes: &[u8]) -> [u8; 32] {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes).into()
+}

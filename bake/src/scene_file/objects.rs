@@ -1,0 +1,261 @@
+//! The OSLF objects (`[[object]]`: Bézier patches or an OBJ mesh), the environment shapes
+//! (`[[plane]]`, `[[box]]`, `[[cylinder]]`, `[[sphere]]`, `[[revolution]]`, `[[mesh]]`) and
+//! their materials.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec2, Vec3};
+use oslf_geometry::atlas::UvSource;
+use toml::Spanned;
+
+use super::context::Ctx;
+use super::raw::{RawMaterial, RawObject, RawScene, RawTransform};
+use crate::bezier::{self, BezierPatch};
+use crate::error::{BakeError, Result};
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::scene::{epsilon_problem, MeshSource, OslfObject, Shape};
+use crate::texture::{ImageTexture, Texture};
+use crate::{obj, shapes};
+
+impl Ctx<'_> {
+    /// The `[[object]]`s, in order, each checked against ε (located at `epsilon_span`, or at
+    /// the object when ε is the default).
+    pub(super) fn objects(
+        &self,
+        raw: Vec<Spanned<RawObject>>,
+        epsilon: f32,
+        epsilon_span: &Option<Range<usize>>,
+        materials: &mut Vec<Material>,
+    ) -> Result<Vec<OslfObject>> {
+        let mut objects = Vec::new();
+        for spanned in raw {
+            let span = spanned.span();
+            let object =
+                self.object(spanned.into_inner(), span.clone(), objects.len(), materials)?;
+            self.check_epsilon(epsilon, epsilon_span.clone(), &object, span)?;
+            objects.push(object);
+        }
+        Ok(objects)
+    }
+
+    /// One `[[object]]` (at `span`), the `index`-th.
+    fn object(
+        &self,
+        o: RawObject,
+        span: Range<usize>,
+        index: usize,
+        materials: &mut Vec<Material>,
+    ) -> Result<OslfObject> {
+        let transform = o.transform.affine();
+        let (patches, mesh) = match (&o.patches, &o.mesh) {
+            (Some(patches), None) => (self.object_patches(patches, o.select.as_ref())?, None),
+            (None, Some(path)) => {
+                if let Some(select) = &o.select {
+                    return Err(self.error_at(
+                        select.span(),
+                        "`select` picks patches; a `mesh` object has none",
+                    ));
+                }
+                let file = self.existing_file(path)?;
+                let mut mesh = crate::obj::load_obj(&file)?;
+                mesh.transform(&transform);
+                // An OBJ without `vt` reads as all-zero uvs: no texture set then.
+                let uv_sets = if mesh.uvs.iter().any(|&uv| uv != Vec2::ZERO) {
+                    vec![(UvSource::Texture, mesh.uvs.clone())]
+                } else {
+                    Vec::new()
+                };
+                let source = MeshSource { mesh, uv_sets };
+                (Vec::new(), Some(source))
+            }
+            _ => {
+                return Err(self.error_at(
+                    span,
+                    "an [[object]] needs exactly one of `patches` (Bézier patches) or `mesh` (an OBJ file)",
+                ))
+            }
+        };
+        let (material, base_color) = self.material(&o.material, materials)?;
+        let world = patches.iter().map(|p| p.transformed(&transform)).collect();
+        Ok(OslfObject {
+            name: o.name.unwrap_or_else(|| format!("object{index}")),
+            object_patches: patches,
+            patches: world,
+            mesh,
+            transform,
+            material,
+            base_color,
+        })
+    }
+
+    /// The environment shapes, in the order plane, box, cylinder, sphere, revolution, mesh.
+    pub(super) fn shapes(
+        &self,
+        raw: &RawScene,
+        materials: &mut Vec<Material>,
+    ) -> Result<Vec<Shape>> {
+        let mut shapes_out = Vec::new();
+        let mut add = |mesh: Mesh,
+                       t: &RawTransform,
+                       m: &Spanned<RawMaterial>,
+                       materials: &mut Vec<Material>|
+         -> Result<()> {
+            let mut mesh = mesh;
+            mesh.transform(&t.affine());
+            let (material, _) = self.material(m, materials)?;
+            shapes_out.push(Shape { mesh, material });
+            Ok(())
+        };
+        for p in &raw.plane {
+            let mesh = shapes::plane(Vec2::new(p.size[0].0, p.size[1].0))
+                .map_err(|e| self.locate(p.material.span(), e))?;
+            add(mesh, &p.transform, &p.material, materials)?;
+        }
+        for b in &raw.boxes {
+            let mesh = shapes::cuboid(Vec3::new(b.size[0].0, b.size[1].0, b.size[2].0))
+                .map_err(|e| self.locate(b.material.span(), e))?;
+            add(mesh, &b.transform, &b.material, materials)?;
+        }
+        for c in &raw.cylinder {
+            let mesh = shapes::cylinder(c.radius.0, c.height.0, c.segments.0, c.capped)
+                .map_err(|e| self.locate(c.material.span(), e))?;
+            add(mesh, &c.transform, &c.material, materials)?;
+        }
+        for s in &raw.sphere {
+            let mesh = shapes::sphere(s.radius.0, s.segments.0)
+                .map_err(|e| self.locate(s.material.span(), e))?;
+            add(mesh, &s.transform, &s.material, materials)?;
+        }
+        for r in &raw.revolution {
+            let profile: Vec<Vec2> = r
+                .profile
+                .get_ref()
+                .iter()
+                .map(|[a, b]| Vec2::new(a.0, b.0))
+                .collect();
+            let mesh = shapes::revolution(&profile, r.segments.0)
+                .map_err(|e| self.locate(r.profile.span(), e))?;
+            add(mesh, &r.transform, &r.material, materials)?;
+        }
+        for m in &raw.mesh {
+            let file = self.existing_file(&m.path)?;
+            let mesh = obj::load_obj(&file)?;
+            add(mesh, &m.transform, &m.material, materials)?;
+        }
+        Ok(shapes_out)
+    }
+
+    /// Adds a material, returning its index and its mean albedo.
+    pub(super) fn material(
+        &self,
+        m: &Spanned<RawMaterial>,
+        materials: &mut Vec<Material>,
+    ) -> Result<(u32, Vec3)> {
+        let raw = m.get_ref();
+        let count = raw.color.is_some() as u32
+            + raw.checker.is_some() as u32
+            + raw.texture.is_some() as u32;
+        if count != 1 {
+            return Err(self.error_at(
+                m.span(),
+                "a material needs exactly one of `color`, `checker` or `texture`",
+            ));
+        }
+        let (albedo, mean) = if let Some(c) = raw.color {
+            (Texture::Constant(c.0), c.0)
+        } else if let Some(c) = &raw.checker {
+            (
+                Texture::Checker {
+                    a: c.a.0,
+                    b: c.b.0,
+                    scale: c.scale.0,
+                },
+                (c.a.0 + c.b.0) * 0.5,
+            )
+        } else {
+            let spanned = raw.texture.as_ref().expect("counted above");
+            let file = self.existing_file(spanned)?;
+            let image = ImageTexture::load(&file)?;
+            let mean =
+                image.pixels.iter().copied().sum::<Vec3>() / image.pixels.len().max(1) as f32;
+            (Texture::Image(Arc::new(image)), mean)
+        };
+        let material = Material { albedo };
+        materials.push(material);
+        Ok(((materials.len() - 1) as u32, mean))
+    }
+
+    /// The patches an `[[object]]` names: the built-in teapot or a patch file, cut to
+    /// `select`.
+    fn object_patches(
+        &self,
+        patches: &Spanned<String>,
+        select: Option<&Spanned<[u32; 2]>>,
+    ) -> Result<Vec<BezierPatch>> {
+        let mut out = if patches.get_ref() == "newell-teapot" {
+            bezier::newell_teapot()
+        } else {
+            let file = self.existing_file(patches)?;
+            let text = std::fs::read_to_string(&file).map_err(|source| BakeError::Io {
+                path: file.clone(),
+                source,
+            })?;
+            bezier::parse_patch_file(&text, &file)?
+        };
+        if let Some(select) = select {
+            let [first, end] = *select.get_ref();
+            if first >= end || end as usize > out.len() {
+                return Err(self.error_at(
+                    select.span(),
+                    format!(
+                        "select = [{first}, {end}] is not a non-empty range within the {} patches",
+                        out.len()
+                    ),
+                ));
+            }
+            out = out[first as usize..end as usize].to_vec();
+        }
+        Ok(out)
+    }
+
+    /// Refuses an ε that the bake cannot honour for `object` ([`epsilon_problem`]), located at
+    /// `epsilon_span`, or at the object when ε is the default.
+    pub(super) fn check_epsilon(
+        &self,
+        epsilon: f32,
+        epsilon_span: Option<Range<usize>>,
+        object: &OslfObject,
+        object_span: Range<usize>,
+    ) -> Result<()> {
+        let span = epsilon_span.unwrap_or(object_span);
+        match epsilon_problem(epsilon, object) {
+            Some(message) => Err(self.error_at(span, message)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// OSLF objects of the glTF nodes chosen as objects (world space, identity transform), their
+/// base colour the material's mean albedo.
+pub(super) fn mesh_objects(
+    imported: Vec<crate::gltf::ImportedObject>,
+    materials: &[Material],
+) -> Vec<OslfObject> {
+    imported
+        .into_iter()
+        .map(|o| OslfObject {
+            name: o.node,
+            object_patches: Vec::new(),
+            patches: Vec::new(),
+            mesh: Some(MeshSource {
+                mesh: o.mesh,
+                uv_sets: o.uv_sets,
+            }),
+            transform: Affine3A::IDENTITY,
+            material: o.material,
+            base_color: materials[o.material as usize].mean_albedo(),
+        })
+        .collect()
+}
