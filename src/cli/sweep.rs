@@ -206,6 +206,45 @@ fn write_outputs(
     frame_front: &[Option<bool>],
     bake_front: &[Option<bool>],
 ) -> anyhow::Result<()> {
+    let all = sweep_table(args, params, rows, frame_front, bake_front);
+    let sensitivity = sensitivity_table(rows);
+    print!("{}\n{}", all.to_text(), sensitivity.to_text());
+    print_fronts(rows, frame_front, bake_front);
+    write(&args.out.join("sweep.csv"), &all.to_csv())?;
+    write(
+        &args.out.join("sensitivity.md"),
+        &format!("{}\n{}", sensitivity.to_markdown(), all.to_markdown()),
+    )?;
+    let json = serde_json::json!({
+        "mode": params.mode.name(),
+        "scene": args.scene,
+        "width": args.width,
+        "height": args.height,
+        "truth_spp": args.spp,
+        "rows": rows.iter().zip(frame_front).zip(bake_front).map(|((r, f), b)| serde_json::json!({
+            "label": r.label(), "front_frame_time": f, "front_bake_time": b, "row": r,
+        })).collect::<Vec<_>>(),
+    });
+    write(
+        &args.out.join("sweep.json"),
+        &serde_json::to_string_pretty(&json)?,
+    )?;
+    plot_fronts(args, params, rows, frame_front, bake_front)?;
+    println!(
+        "wrote {}/sweep.csv, sweep.json, sensitivity.md, tradeoff.png, tradeoff.svg",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Every row with its times, errors and whether it is on each Pareto front.
+fn sweep_table(
+    args: &Args,
+    params: &ShadingParams,
+    rows: &[SweepRow],
+    frame_front: &[Option<bool>],
+    bake_front: &[Option<bool>],
+) -> Table {
     let mut all = Table::new(
         &format!(
             "Sweep: mode {}, defaults {} (blend {}, φ_shader {}°), {}x{}",
@@ -256,8 +295,11 @@ fn write_outputs(
             yes_no(*on_bake),
         ]);
     }
-    let sensitivity = sensitivity_table(rows);
-    print!("{}\n{}", all.to_text(), sensitivity.to_text());
+    all
+}
+
+/// The two Pareto fronts, and whether the defaults are on them.
+fn print_fronts(rows: &[SweepRow], frame_front: &[Option<bool>], bake_front: &[Option<bool>]) {
     for (name, front) in [
         ("frame time (runtime settings, default bake)", frame_front),
         ("bake CPU time (bake settings, default runtime)", bake_front),
@@ -278,25 +320,16 @@ fn write_outputs(
             if default_on { "" } else { "NOT " }
         );
     }
-    write(&args.out.join("sweep.csv"), &all.to_csv())?;
-    write(
-        &args.out.join("sensitivity.md"),
-        &format!("{}\n{}", sensitivity.to_markdown(), all.to_markdown()),
-    )?;
-    let json = serde_json::json!({
-        "mode": params.mode.name(),
-        "scene": args.scene,
-        "width": args.width,
-        "height": args.height,
-        "truth_spp": args.spp,
-        "rows": rows.iter().zip(frame_front).zip(bake_front).map(|((r, f), b)| serde_json::json!({
-            "label": r.label(), "front_frame_time": f, "front_bake_time": b, "row": r,
-        })).collect::<Vec<_>>(),
-    });
-    write(
-        &args.out.join("sweep.json"),
-        &serde_json::to_string_pretty(&json)?,
-    )?;
+}
+
+/// tradeoff.png and tradeoff.svg: error against frame time and against bake time.
+fn plot_fronts(
+    args: &Args,
+    params: &ShadingParams,
+    rows: &[SweepRow],
+    frame_front: &[Option<bool>],
+    bake_front: &[Option<bool>],
+) -> anyhow::Result<()> {
     let panel =
         |front: &[Option<bool>], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
             points: rows
@@ -337,10 +370,6 @@ fn write_outputs(
         &args.out.join("tradeoff.svg"),
         (1500, 640),
     )?;
-    println!(
-        "wrote {}/sweep.csv, sweep.json, sensitivity.md, tradeoff.png, tradeoff.svg",
-        args.out.display()
-    );
     Ok(())
 }
 
