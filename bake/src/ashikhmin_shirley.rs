@@ -2,7 +2,7 @@
 //! for the ground-truth renders ([`crate::ground_truth`]).
 //!
 //! This is written from the paper's formulas, in `f64`, independently of the runtime's shader
-//! (`runtime/src/shade.wgsl`), which uses the simplified estimator
+//! (`runtime/src/shade/glossy.wgsl`), which uses the simplified estimator
 //! F(⟨v,h⟩)⟨n,l⟩ / max(⟨n,v⟩, ⟨n,l⟩): the ground truth evaluates the BRDF and the density
 //! separately, so a mistake in one does not hide in the other.
 //!
