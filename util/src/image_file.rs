@@ -2,45 +2,55 @@
 
 use std::path::Path;
 
+use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableImage as _};
 use glam::Vec3;
 
 use crate::error::{Result, UtilError};
 
 /// Writes linear RGB as a 32-bit float OpenEXR file. `pixels` is row-major, top row first.
 pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
-    check_size(path, width, height, pixels)?;
+    check_size(path, width, height, pixels.len())?;
     let w = width as usize;
-    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
         let p = pixels[y * w + x];
         (p.x, p.y, p.z)
-    })
-    .map_err(|e| UtilError::Image {
-        path: path.to_path_buf(),
-        message: format!("cannot write OpenEXR: {e}"),
-    })
+    });
+    Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
+        .write()
+        .to_file(path)
+        .map_err(|e| exr_error(path, e))
 }
 
 /// Writes linear RGB and alpha (an object mask) as a 32-bit float OpenEXR file. `pixels` is
 /// row-major, top row first.
 pub fn write_exr_rgba(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]]) -> Result<()> {
-    if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
-        return Err(UtilError::Image {
-            path: path.to_path_buf(),
-            message: format!(
-                "{} pixels do not make a {width}x{height} image",
-                pixels.len()
-            ),
-        });
-    }
+    check_size(path, width, height, pixels.len())?;
     let w = width as usize;
-    exr::prelude::write_rgba_file(path, w, height as usize, |x, y| {
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
         let p = pixels[y * w + x];
         (p[0], p[1], p[2], p[3])
-    })
-    .map_err(|e| UtilError::Image {
+    });
+    Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
+        .write()
+        .to_file(path)
+        .map_err(|e| exr_error(path, e))
+}
+
+/// The exr crate's default encoding with scan lines in increasing order: it compresses blocks
+/// in parallel, and with the line order unspecified writes each as it finishes, so the same
+/// pixels would make different files from run to run.
+fn exr_encoding() -> Encoding {
+    Encoding {
+        line_order: LineOrder::Increasing,
+        ..Encoding::default()
+    }
+}
+
+fn exr_error(path: &Path, e: exr::error::Error) -> UtilError {
+    UtilError::Image {
         path: path.to_path_buf(),
         message: format!("cannot write OpenEXR: {e}"),
-    })
+    }
 }
 
 /// Tone maps linear RGB (exposure, then the ACES filmic fit of Narkowicz 2015, then the sRGB
@@ -52,7 +62,7 @@ pub fn write_png(
     pixels: &[Vec3],
     exposure: f32,
 ) -> Result<()> {
-    check_size(path, width, height, pixels)?;
+    check_size(path, width, height, pixels.len())?;
     let mut bytes = Vec::with_capacity(pixels.len() * 3);
     for p in pixels {
         for c in p.to_array() {
@@ -67,14 +77,11 @@ pub fn write_png(
     })
 }
 
-fn check_size(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
-    if width == 0 || height == 0 || pixels.len() != width as usize * height as usize {
+fn check_size(path: &Path, width: u32, height: u32, pixels: usize) -> Result<()> {
+    if width == 0 || height == 0 || pixels != width as usize * height as usize {
         return Err(UtilError::Image {
             path: path.to_path_buf(),
-            message: format!(
-                "{} pixels do not make a {width}x{height} image",
-                pixels.len()
-            ),
+            message: format!("{pixels} pixels do not make a {width}x{height} image"),
         });
     }
     Ok(())
@@ -122,5 +129,47 @@ mod tests {
         assert_eq!(to_srgb8(0.0), 0);
         assert_eq!(to_srgb8(1.0), 255);
         assert_eq!(to_srgb8(0.5), 188);
+    }
+
+    /// The same pixels give the same file, whatever order the blocks finish compressing in,
+    /// and read back exactly.
+    #[test]
+    fn exr_files_are_deterministic_and_exact() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        let (w, h) = (257u32, 601u32);
+        let pixels: Vec<[f32; 4]> = (0..w * h)
+            .map(|i| {
+                let v = (i as f32 * 0.618).sin().abs() * 1e4;
+                [v, v * 0.5, 1.0 / (1.0 + v), (i % 2) as f32]
+            })
+            .collect();
+        let files: Vec<Vec<u8>> = (0..8)
+            .map(|k| {
+                let path = dir.join(format!("{k}.exr"));
+                write_exr_rgba(&path, w, h, &pixels).unwrap();
+                std::fs::read(&path).unwrap()
+            })
+            .collect();
+        assert!(
+            files.iter().all(|f| *f == files[0]),
+            "EXR bytes differ between writes"
+        );
+        let back = exr::prelude::read_first_rgba_layer_from_file(
+            dir.join("0.exr"),
+            |res, _| vec![[0f32; 4]; res.width() * res.height()],
+            move |px, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                px[pos.y() * w as usize + pos.x()] = [r, g, b, a]
+            },
+        )
+        .unwrap();
+        assert_eq!(back.layer_data.channel_data.pixels, pixels);
+        let rgb: Vec<Vec3> = pixels.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        let a = dir.join("rgb-a.exr");
+        let b = dir.join("rgb-b.exr");
+        write_exr(&a, w, h, &rgb).unwrap();
+        write_exr(&b, w, h, &rgb).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+        assert!(write_exr(&a, w, h + 1, &rgb).is_err());
     }
 }
