@@ -205,6 +205,47 @@ fn a_store_without_an_environment_cube_gets_a_black_background_and_a_note() {
     assert!(!err.contains("note:"), "{err}");
 }
 
+/// `-o` ending in .png would make the EXR and the PNG one file, and an unwritable
+/// `--stats-json` would fail after the render: both are refused before any work, and nothing
+/// is written.
+#[test]
+fn outputs_are_checked_before_any_work() {
+    let store = runtime_fixture::store_path();
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("y.png");
+    let out = render(&[store.to_str().unwrap(), "-o", png.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("y.png") && err.contains("y.exr"), "{err}");
+    let exr = dir.path().join("x.exr");
+    let json = dir.path().join("missing").join("stats.json");
+    let out = render(&[
+        store.to_str().unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--stats-json",
+        json.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("--stats-json") && err.contains("missing"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    // A directory where the image would go is refused and left alone.
+    let sub = dir.path().join("sub.exr");
+    std::fs::create_dir(&sub).unwrap();
+    let out = render(&[store.to_str().unwrap(), "-o", sub.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("sub.exr") && err.contains("directory"),
+        "{err}"
+    );
+    assert!(sub.is_dir());
+}
+
 #[test]
 fn bad_inputs_give_clear_errors_and_a_failing_exit() {
     let dir = std::env::temp_dir().join(format!("oslf-render-cli-{}", std::process::id()));

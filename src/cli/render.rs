@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use glam::Vec3;
+use oslf_bake::bake::check_writable;
 use oslf_format::Store;
 use oslf_runtime::cache;
 use oslf_runtime::reference::StoreCubes;
@@ -83,6 +84,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    check_outputs(&args)?;
     let store = Store::open(&args.store)
         .with_context(|| format!("cannot open store {}", args.store.display()))?;
     let params = args.shading.params(args.mode, args.blend)?;
@@ -332,4 +334,24 @@ fn print_stats(label: &str, s: &CacheStats) {
             String::new()
         }
     );
+}
+
+/// Every output is checked before any work: `-o` names the OpenEXR file (the PNG goes beside
+/// it, so `-o` cannot end in `.png`), and each file can be written.
+fn check_outputs(args: &Args) -> anyhow::Result<()> {
+    let png = args.output.with_extension("png");
+    if png == args.output {
+        bail!(
+            "-o {}: the render is written as OpenEXR to -o and as a tone-mapped PNG beside it, \
+             which would be the same file; give an .exr path such as {}",
+            args.output.display(),
+            args.output.with_extension("exr").display()
+        );
+    }
+    check_writable(&args.output, "the image")?;
+    check_writable(&png, "the PNG")?;
+    if let Some(path) = &args.stats_json {
+        check_writable(path, "the --stats-json file")?;
+    }
+    Ok(())
 }

@@ -1,4 +1,9 @@
 //! Writing rendered images: OpenEXR (linear f32, for measurement) and tone-mapped PNG (for eyes).
+//!
+//! Every image is written to a temporary file beside its path and renamed into place, so a
+//! failed write leaves whatever was at the path as it was and removes only the temporary file
+//! it created. A path that exists and is not a regular file (a device, a FIFO, a directory) is
+//! refused before anything is written.
 
 use std::path::Path;
 
@@ -15,10 +20,12 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Resul
         let p = pixels[y * w + x];
         (p.x, p.y, p.z)
     });
-    Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
-        .write()
-        .to_file(path)
-        .map_err(|e| exr_error(path, e))
+    write_atomically(path, |tmp| {
+        Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
+            .write()
+            .to_file(tmp)
+            .map_err(|e| format!("cannot write OpenEXR: {e}"))
+    })
 }
 
 /// Writes linear RGB and alpha (an object mask) as a 32-bit float OpenEXR file. `pixels` is
@@ -30,10 +37,12 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]])
         let p = pixels[y * w + x];
         (p[0], p[1], p[2], p[3])
     });
-    Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
-        .write()
-        .to_file(path)
-        .map_err(|e| exr_error(path, e))
+    write_atomically(path, |tmp| {
+        Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
+            .write()
+            .to_file(tmp)
+            .map_err(|e| format!("cannot write OpenEXR: {e}"))
+    })
 }
 
 /// The exr crate's default encoding with scan lines in increasing order: it compresses blocks
@@ -43,13 +52,6 @@ fn exr_encoding() -> Encoding {
     Encoding {
         line_order: LineOrder::Increasing,
         ..Encoding::default()
-    }
-}
-
-fn exr_error(path: &Path, e: exr::error::Error) -> UtilError {
-    UtilError::Image {
-        path: path.to_path_buf(),
-        message: format!("cannot write OpenEXR: {e}"),
     }
 }
 
@@ -69,12 +71,51 @@ pub fn write_png(
             bytes.push(to_srgb8(aces(c * exposure)));
         }
     }
-    image::save_buffer(path, &bytes, width, height, image::ColorType::Rgb8).map_err(|e| {
-        UtilError::Image {
-            path: path.to_path_buf(),
-            message: format!("cannot write PNG: {e}"),
-        }
+    let format = image::ImageFormat::from_path(path).map_err(|e| UtilError::Image {
+        path: path.to_path_buf(),
+        message: format!("cannot write PNG: {e}"),
+    })?;
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(tmp, &bytes, width, height, image::ColorType::Rgb8, format)
+            .map_err(|e| format!("cannot write PNG: {e}"))
     })
+}
+
+/// Runs `write` on a temporary file beside `path` (in the same directory, so the rename stays
+/// on one volume), then renames it to `path`. On any failure the temporary file is removed and
+/// `path` is left as it was. Refuses a `path` that exists and is not a regular file; a symbolic
+/// link is followed, and the file it names replaced.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let fail = |message: String| UtilError::Image {
+        path: path.to_path_buf(),
+        message,
+    };
+    let target = match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => {
+            return Err(fail(
+                "exists and is not a regular file (a directory, device or FIFO); images are \
+                 written to regular files only"
+                    .into(),
+            ))
+        }
+        Ok(_) => std::fs::canonicalize(path).map_err(|e| fail(e.to_string()))?,
+        Err(_) => path.to_path_buf(),
+    };
+    let name = target
+        .file_name()
+        .ok_or_else(|| fail("names no file".into()))?
+        .to_string_lossy();
+    let tmp = target.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, &target).map_err(|e| format!("cannot rename into place: {e}"))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(fail)
 }
 
 fn check_size(path: &Path, width: u32, height: u32, pixels: usize) -> Result<()> {
@@ -171,5 +212,42 @@ mod tests {
         write_exr(&b, w, h, &rgb).unwrap();
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         assert!(write_exr(&a, w, h + 1, &rgb).is_err());
+    }
+
+    /// A path that is not a regular file is refused and left as it was; a failed write leaves
+    /// the file at the path as it was; no temporary file stays behind.
+    #[test]
+    fn images_replace_only_regular_files_and_never_half_written() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        let px = vec![Vec3::splat(0.5); 6];
+        let sub = dir.join("a-directory.png");
+        std::fs::create_dir(&sub).unwrap();
+        let e = write_png(&sub, 3, 2, &px, 1.0).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        assert!(sub.is_dir());
+        let e = write_exr(&sub, 3, 2, &px).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        assert!(sub.is_dir());
+        let null = Path::new("/dev/null");
+        if null.exists() {
+            let e = write_exr(null, 3, 2, &px).unwrap_err().to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
+
+        let png = dir.join("image.png");
+        write_png(&png, 3, 2, &px, 1.0).unwrap();
+        let before = std::fs::read(&png).unwrap();
+        assert!(write_png(&png, 3, 3, &px, 1.0).is_err());
+        assert_eq!(std::fs::read(&png).unwrap(), before);
+        // A format the image crate cannot write fails before anything is written.
+        assert!(write_png(&dir.join("image.unknown"), 3, 2, &px, 1.0).is_err());
+        write_png(&png, 3, 2, &px, 2.0).unwrap();
+        assert_ne!(std::fs::read(&png).unwrap(), before);
+        let names: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
     }
 }
