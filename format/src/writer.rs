@@ -296,30 +296,7 @@ impl StoreWriter {
                 got: index,
             });
         }
-        let h = &self.header;
-        if cube.encoding != h.encoding
-            || cube.filter != h.filter
-            || cube.resolution != h.cube_resolution
-            || cube.distance_channel != h.has_distance()
-            || cube.mantissa_bits != self.mantissa_bits
-        {
-            return Err(Error::CubeParamsMismatch {
-                cube: index,
-                detail: format!(
-                    "cube: {} filter {} {}² distance={} mantissa_bits={}, store: {} filter {} {}² distance={} mantissa_bits={}",
-                    cube.encoding,
-                    cube.filter,
-                    cube.resolution,
-                    cube.distance_channel,
-                    cube.mantissa_bits,
-                    h.encoding,
-                    h.filter,
-                    h.cube_resolution,
-                    h.has_distance(),
-                    self.mantissa_bits
-                ),
-            });
-        }
+        check_cube_params(&cube, &self.header, self.mantissa_bits)?;
         let faces = std::array::from_fn(|f| {
             (
                 cube.frames[f].len() as u64,
@@ -438,4 +415,36 @@ impl StoreWriter {
 
 fn raw_of(h: &Header) -> u64 {
     face_raw_size(h.encoding, h.cube_resolution, h.has_distance()).unwrap_or(0)
+}
+
+/// A cube's encoding, filter, resolution, distance channel and mantissa bits are the store's.
+pub(crate) fn check_cube_params(
+    cube: &EncodedCube,
+    h: &Header,
+    mantissa_bits: u32,
+) -> Result<(), Error> {
+    if cube.encoding != h.encoding
+        || cube.filter != h.filter
+        || cube.resolution != h.cube_resolution
+        || cube.distance_channel != h.has_distance()
+        || cube.mantissa_bits != mantissa_bits
+    {
+        return Err(Error::CubeParamsMismatch {
+            cube: cube.cube_index,
+            detail: format!(
+                "cube: {} filter {} {}² distance={} mantissa_bits={}, store: {} filter {} {}² distance={} mantissa_bits={}",
+                cube.encoding,
+                cube.filter,
+                cube.resolution,
+                cube.distance_channel,
+                cube.mantissa_bits,
+                h.encoding,
+                h.filter,
+                h.cube_resolution,
+                h.has_distance(),
+                mantissa_bits
+            ),
+        });
+    }
+    Ok(())
 }

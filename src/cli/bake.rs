@@ -120,8 +120,8 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         check_writable(&png.with_extension("exr"), "the preview")?;
     }
     // What the bake will cost (the bake itself refuses what cannot fit, naming the setting).
+    let estimate = estimate(&scene, args.shard);
     if !args.quiet {
-        let estimate = estimate(&scene, args.shard);
         eprintln!("{estimate}");
         for w in &estimate.warnings {
             eprintln!("warning: {w}");
@@ -143,7 +143,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     limits.max_seconds = (args.max_hours > 0.0).then_some(args.max_hours * 3600.0);
     // The bake checks the same limits itself; checked here first to name the flag that sets
     // the time limit.
-    if let Err(e) = oslf_bake::preflight::check(&estimate(&scene, args.shard), &limits) {
+    if let Err(e) = oslf_bake::preflight::check(&estimate, &limits) {
         match e {
             oslf_bake::preflight::PreflightError::Time { .. } => {
                 bail!("{e} (or raise the limit: --max-hours, 0 for none)")

@@ -172,7 +172,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // rows. Bake time is what the bake settings trade: over the default runtime settings' rows.
     let frame_front = front_of(&rows, |r| r.bake_change.is_none(), |r| r.judgement.frame_ms);
     let bake_front = front_of(&rows, |r| r.runtime_change.is_none(), bake_cost);
-    write_outputs(&args, &params, &rows, &frame_front, &bake_front)
+    Outputs {
+        args: &args,
+        params: &params,
+        rows: &rows,
+        frame_front: &frame_front,
+        bake_front: &bake_front,
+    }
+    .write()
 }
 
 /// Pareto membership (error against `cost`) among the rows `member` selects; `None` for the
@@ -199,178 +206,199 @@ fn bake_cost(r: &SweepRow) -> f64 {
     r.bake_cpu_seconds.unwrap_or(r.bake_seconds)
 }
 
-fn write_outputs(
-    args: &Args,
-    params: &ShadingParams,
-    rows: &[SweepRow],
-    frame_front: &[Option<bool>],
-    bake_front: &[Option<bool>],
-) -> anyhow::Result<()> {
-    let all = sweep_table(args, params, rows, frame_front, bake_front);
-    let sensitivity = sensitivity_table(rows);
-    print!("{}\n{}", all.to_text(), sensitivity.to_text());
-    print_fronts(rows, frame_front, bake_front);
-    write(&args.out.join("sweep.csv"), &all.to_csv())?;
-    write(
-        &args.out.join("sensitivity.md"),
-        &format!("{}\n{}", sensitivity.to_markdown(), all.to_markdown()),
-    )?;
-    let json = serde_json::json!({
-        "mode": params.mode.name(),
-        "scene": args.scene,
-        "width": args.width,
-        "height": args.height,
-        "truth_spp": args.spp,
-        "rows": rows.iter().zip(frame_front).zip(bake_front).map(|((r, f), b)| serde_json::json!({
-            "label": r.label(), "front_frame_time": f, "front_bake_time": b, "row": r,
-        })).collect::<Vec<_>>(),
-    });
-    write(
-        &args.out.join("sweep.json"),
-        &serde_json::to_string_pretty(&json)?,
-    )?;
-    plot_fronts(args, params, rows, frame_front, bake_front)?;
-    println!(
-        "wrote {}/sweep.csv, sweep.json, sensitivity.md, tradeoff.png, tradeoff.svg",
-        args.out.display()
-    );
-    Ok(())
+/// What `oslf sweep` writes: the rows with their places on the two Pareto fronts.
+#[derive(Clone, Copy)]
+struct Outputs<'a> {
+    args: &'a Args,
+    params: &'a ShadingParams,
+    rows: &'a [SweepRow],
+    frame_front: &'a [Option<bool>],
+    bake_front: &'a [Option<bool>],
 }
 
-/// Every row with its times, errors and whether it is on each Pareto front.
-fn sweep_table(
-    args: &Args,
-    params: &ShadingParams,
-    rows: &[SweepRow],
-    frame_front: &[Option<bool>],
-    bake_front: &[Option<bool>],
-) -> Table {
-    let mut all = Table::new(
-        &format!(
-            "Sweep: mode {}, defaults {} (blend {}, φ_shader {}°), {}x{}",
-            params.mode.name(),
-            args.scene.display(),
-            blend_label(params),
-            params.phi_shader_deg,
-            args.width,
-            args.height
-        ),
-        &[
-            "configuration",
-            "sample points",
-            "bake s",
-            "bake CPU-s",
-            "store MB",
-            "frame ms",
-            "RMSE L*",
-            "RMSE a*",
-            "RMSE b*",
-            "RMSE R",
-            "RMSE G",
-            "RMSE B",
-            "PSNR dB",
-            "pixels",
-            "front: frame",
-            "front: bake",
-        ],
-    );
-    for ((r, on), on_bake) in rows.iter().zip(frame_front).zip(bake_front) {
-        let m = &r.judgement.metrics;
-        all.push(vec![
-            r.label(),
-            r.sample_points.to_string(),
-            format!("{:.1}", r.bake_seconds),
-            r.bake_cpu_seconds.map_or("–".into(), |c| format!("{c:.1}")),
-            format!("{:.2}", r.store_bytes as f64 / 1e6),
-            format!("{:.1}", r.judgement.frame_ms),
-            format!("{:.3}", m.rmse_lab[0]),
-            format!("{:.3}", m.rmse_lab[1]),
-            format!("{:.3}", m.rmse_lab[2]),
-            format!("{:.4}", m.rmse_rgb[0]),
-            format!("{:.4}", m.rmse_rgb[1]),
-            format!("{:.4}", m.rmse_rgb[2]),
-            m.psnr_db.map_or("–".into(), |p| format!("{p:.2}")),
-            m.pixels.to_string(),
-            yes_no(*on),
-            yes_no(*on_bake),
-        ]);
-    }
-    all
-}
-
-/// The two Pareto fronts, and whether the defaults are on them.
-fn print_fronts(rows: &[SweepRow], frame_front: &[Option<bool>], bake_front: &[Option<bool>]) {
-    for (name, front) in [
-        ("frame time (runtime settings, default bake)", frame_front),
-        ("bake CPU time (bake settings, default runtime)", bake_front),
-    ] {
-        let labels: Vec<String> = rows
-            .iter()
-            .zip(front)
-            .filter(|(_, f)| **f == Some(true))
-            .map(|(r, _)| r.label())
-            .collect();
-        let default_on = rows
-            .iter()
-            .zip(front)
-            .any(|(r, f)| r.is_default() && *f == Some(true));
+impl Outputs<'_> {
+    fn write(&self) -> anyhow::Result<()> {
+        let Outputs {
+            args,
+            params,
+            rows,
+            frame_front,
+            bake_front,
+        } = *self;
+        let all = self.table();
+        let sensitivity = sensitivity_table(rows);
+        print!("{}\n{}", all.to_text(), sensitivity.to_text());
+        self.print_fronts();
+        write(&args.out.join("sweep.csv"), &all.to_csv())?;
+        write(
+            &args.out.join("sensitivity.md"),
+            &format!("{}\n{}", sensitivity.to_markdown(), all.to_markdown()),
+        )?;
+        let json = serde_json::json!({
+            "mode": params.mode.name(),
+            "scene": args.scene,
+            "width": args.width,
+            "height": args.height,
+            "truth_spp": args.spp,
+            "rows": rows.iter().zip(frame_front).zip(bake_front).map(|((r, f), b)| serde_json::json!({
+                "label": r.label(), "front_frame_time": f, "front_bake_time": b, "row": r,
+            })).collect::<Vec<_>>(),
+        });
+        write(
+            &args.out.join("sweep.json"),
+            &serde_json::to_string_pretty(&json)?,
+        )?;
+        self.plot_fronts()?;
         println!(
-            "\nPareto front of RMSE L* against {name}: {}\nthe defaults are {}on it",
-            labels.join("; "),
-            if default_on { "" } else { "NOT " }
+            "wrote {}/sweep.csv, sweep.json, sensitivity.md, tradeoff.png, tradeoff.svg",
+            args.out.display()
         );
+        Ok(())
     }
-}
 
-/// tradeoff.png and tradeoff.svg: error against frame time and against bake time.
-fn plot_fronts(
-    args: &Args,
-    params: &ShadingParams,
-    rows: &[SweepRow],
-    frame_front: &[Option<bool>],
-    bake_front: &[Option<bool>],
-) -> anyhow::Result<()> {
-    let panel =
-        |front: &[Option<bool>], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
-            points: rows
+    /// Every row with its times, errors and whether it is on each Pareto front.
+    fn table(&self) -> Table {
+        let Outputs {
+            args,
+            params,
+            rows,
+            frame_front,
+            bake_front,
+        } = *self;
+        let mut all = Table::new(
+            &format!(
+                "Sweep: mode {}, defaults {} (blend {}, φ_shader {}°), {}x{}",
+                params.mode.name(),
+                args.scene.display(),
+                blend_label(params),
+                params.phi_shader_deg,
+                args.width,
+                args.height
+            ),
+            &[
+                "configuration",
+                "sample points",
+                "bake s",
+                "bake CPU-s",
+                "store MB",
+                "frame ms",
+                "RMSE L*",
+                "RMSE a*",
+                "RMSE b*",
+                "RMSE R",
+                "RMSE G",
+                "RMSE B",
+                "PSNR dB",
+                "pixels",
+                "front: frame",
+                "front: bake",
+            ],
+        );
+        for ((r, on), on_bake) in rows.iter().zip(frame_front).zip(bake_front) {
+            let m = &r.judgement.metrics;
+            all.push(vec![
+                r.label(),
+                r.sample_points.to_string(),
+                format!("{:.1}", r.bake_seconds),
+                r.bake_cpu_seconds.map_or("–".into(), |c| format!("{c:.1}")),
+                format!("{:.2}", r.store_bytes as f64 / 1e6),
+                format!("{:.1}", r.judgement.frame_ms),
+                format!("{:.3}", m.rmse_lab[0]),
+                format!("{:.3}", m.rmse_lab[1]),
+                format!("{:.3}", m.rmse_lab[2]),
+                format!("{:.4}", m.rmse_rgb[0]),
+                format!("{:.4}", m.rmse_rgb[1]),
+                format!("{:.4}", m.rmse_rgb[2]),
+                m.psnr_db.map_or("–".into(), |p| format!("{p:.2}")),
+                m.pixels.to_string(),
+                yes_no(*on),
+                yes_no(*on_bake),
+            ]);
+        }
+        all
+    }
+
+    /// The two Pareto fronts, and whether the defaults are on them.
+    fn print_fronts(&self) {
+        let Outputs {
+            rows,
+            frame_front,
+            bake_front,
+            ..
+        } = *self;
+        for (name, front) in [
+            ("frame time (runtime settings, default bake)", frame_front),
+            ("bake CPU time (bake settings, default runtime)", bake_front),
+        ] {
+            let labels: Vec<String> = rows
                 .iter()
                 .zip(front)
-                .filter_map(|(r, f)| {
-                    f.map(|on| PlotPoint {
-                        label: r.label(),
-                        time_ms: time(r),
-                        error: r.judgement.metrics.rmse_lab[0],
-                        on_front: on,
-                        is_default: r.is_default(),
+                .filter(|(_, f)| **f == Some(true))
+                .map(|(r, _)| r.label())
+                .collect();
+            let default_on = rows
+                .iter()
+                .zip(front)
+                .any(|(r, f)| r.is_default() && *f == Some(true));
+            println!(
+                "\nPareto front of RMSE L* against {name}: {}\nthe defaults are {}on it",
+                labels.join("; "),
+                if default_on { "" } else { "NOT " }
+            );
+        }
+    }
+
+    /// tradeoff.png and tradeoff.svg: error against frame time and against bake time.
+    fn plot_fronts(&self) -> anyhow::Result<()> {
+        let Outputs {
+            args,
+            params,
+            rows,
+            frame_front,
+            bake_front,
+        } = *self;
+        let panel =
+            |front: &[Option<bool>], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
+                points: rows
+                    .iter()
+                    .zip(front)
+                    .filter_map(|(r, f)| {
+                        f.map(|on| PlotPoint {
+                            label: r.label(),
+                            time_ms: time(r),
+                            error: r.judgement.metrics.rmse_lab[0],
+                            on_front: on,
+                            is_default: r.is_default(),
+                        })
                     })
-                })
-                .collect(),
-            text: PlotText {
-                caption: format!("{}: {what}", params.mode.name()),
-                x: x.into(),
-                y: "RMSE of L* against the ground truth".into(),
-            },
-        };
-    plot_tradeoff(
-        &[
-            panel(
-                frame_front,
-                &|r| r.judgement.frame_ms,
-                "frame time, ms",
-                "runtime settings, default bake",
-            ),
-            panel(
-                bake_front,
-                &bake_cost,
-                "bake, CPU seconds",
-                "bake settings, default runtime",
-            ),
-        ],
-        &args.out.join("tradeoff.png"),
-        &args.out.join("tradeoff.svg"),
-        (1500, 640),
-    )?;
-    Ok(())
+                    .collect(),
+                text: PlotText {
+                    caption: format!("{}: {what}", params.mode.name()),
+                    x: x.into(),
+                    y: "RMSE of L* against the ground truth".into(),
+                },
+            };
+        plot_tradeoff(
+            &[
+                panel(
+                    frame_front,
+                    &|r| r.judgement.frame_ms,
+                    "frame time, ms",
+                    "runtime settings, default bake",
+                ),
+                panel(
+                    bake_front,
+                    &bake_cost,
+                    "bake, CPU seconds",
+                    "bake settings, default runtime",
+                ),
+            ],
+            &args.out.join("tradeoff.png"),
+            &args.out.join("tradeoff.svg"),
+            (1500, 640),
+        )?;
+        Ok(())
+    }
 }
 
 /// Rows with at most one change, grouped by the changed key: how the error moves around the

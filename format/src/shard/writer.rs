@@ -21,7 +21,7 @@ use crate::shard::file::{
 };
 use crate::shard::spec::ShardSpec;
 use crate::toc::RECORD_HEADER_BYTES;
-use crate::writer::{partial_path, sync_partial, SyncBatch};
+use crate::writer::{check_cube_params, partial_path, sync_partial, SyncBatch};
 use crate::{Error, Filter};
 
 /// What [`ShardWriter::finish`] wrote.
@@ -338,31 +338,4 @@ fn sync_dir(path: &Path) -> Result<(), Error> {
     File::open(&dir)
         .and_then(|d| d.sync_all())
         .map_err(io_at(&dir, "sync directory"))
-}
-
-fn check_cube_params(cube: &EncodedCube, h: &Header, mantissa_bits: u32) -> Result<(), Error> {
-    if cube.encoding != h.encoding
-        || cube.filter != h.filter
-        || cube.resolution != h.cube_resolution
-        || cube.distance_channel != h.has_distance()
-        || cube.mantissa_bits != mantissa_bits
-    {
-        return Err(Error::CubeParamsMismatch {
-            cube: cube.cube_index,
-            detail: format!(
-                "cube: {} filter {} {}² distance={} mantissa_bits={}, store: {} filter {} {}² distance={} mantissa_bits={}",
-                cube.encoding,
-                cube.filter,
-                cube.resolution,
-                cube.distance_channel,
-                cube.mantissa_bits,
-                h.encoding,
-                h.filter,
-                h.cube_resolution,
-                h.has_distance(),
-                mantissa_bits
-            ),
-        });
-    }
-    Ok(())
 }
