@@ -2,6 +2,9 @@
 
 mod common;
 
+use std::os::unix::fs::FileTypeExt;
+use std::path::Path;
+
 use common::{oslf, LID_SCENE as SCENE};
 
 #[test]
@@ -289,8 +292,19 @@ fn unwritable_outputs_fail_before_the_bake() {
     let err = run(&["-o", d]);
     assert_eq!(
         err.trim_end(),
-        format!("error: cannot write the store {d}: it is a directory")
+        format!("error: cannot write the store {d}: {d} exists and is not a regular file (a directory); give a path for a new or regular file")
     );
+    // A device is not replaced by the store (the rename would replace the device node).
+    let err = run(&["-o", "/dev/null"]);
+    assert_eq!(
+        err.trim_end(),
+        "error: cannot write the store /dev/null: /dev/null exists and is not a regular file (a character device); give a path for a new or regular file"
+    );
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    assert!(!Path::new("/dev/null.partial").exists());
     assert!(!out.exists());
     assert!(!dir.join("lid.oslf.partial").exists());
     assert_eq!(

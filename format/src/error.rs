@@ -233,6 +233,22 @@ pub enum Error {
     /// finished cube maps and the store must be created again.
     #[error("{path} was never completely created ({detail}), so it holds no finished cube maps")]
     PartialNeverCreated { path: PathBuf, detail: String },
+    /// Another writer holds the partial file `partial` of the output `path` (an exclusive
+    /// lock, held until it renames the file into place); `holder` names it where the system
+    /// says (`process 1234 (oslf bake …)`), else `another process`.
+    #[error("{path} is being written by {holder}, which holds {partial}; wait for it to finish, or write to another path")]
+    Busy {
+        path: PathBuf,
+        partial: PathBuf,
+        holder: String,
+    },
+    /// An output path (or its partial file) that exists and is not a regular file: renaming a
+    /// store over it would replace a device, a FIFO, a directory or a symbolic link.
+    #[error("{path} is {kind}, not a regular file; a store can only be written to a new path or over a regular file")]
+    NotRegularFile { path: PathBuf, kind: &'static str },
+    /// An output that is one of the inputs (the same device and inode, however it is spelled).
+    #[error("the output {output} is the input {input} (the same file); write to another path")]
+    SameFile { input: PathBuf, output: PathBuf },
     /// `resume()` found no partial file.
     #[error("no partial store to resume at {0}")]
     NoPartial(PathBuf),

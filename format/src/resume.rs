@@ -2,7 +2,7 @@
 //! partial file's header, metadata, sample points and maps are compared with what `create()`
 //! writes for the bake's inputs, and its complete cube records are kept.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
@@ -15,6 +15,7 @@ use crate::header::{
     HEADER_BYTES, SECTION_CHECKSUMS,
 };
 use crate::meta::{decode_meta, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
+use crate::output_file::{open_partial, Open};
 use crate::prefix::Prefix;
 use crate::sample_map::SampleMaps;
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES};
@@ -34,6 +35,7 @@ pub(crate) struct Reopened {
 /// Reopens the partial file `partial` for the bake of `meta`, `points` and `maps`, whose
 /// fixed sections `create()` writes as `prefix`; errors as [`crate::StoreWriter::resume`].
 pub(crate) fn reopen(
+    path: &Path,
     partial: &Path,
     meta: &StoreMeta,
     points: &[SamplePoint],
@@ -41,7 +43,7 @@ pub(crate) fn reopen(
     mut prefix: Prefix,
 ) -> Result<Reopened, Error> {
     let filter = prefix.header.filter;
-    let mut file = open_partial(partial)?;
+    let mut file = open_partial(path, partial, Open::Resume)?;
     let file_len = file.metadata().map_err(io_at(partial, "stat"))?.len();
     let mut rd = PartialReader {
         partial,
@@ -70,18 +72,6 @@ pub(crate) fn reopen(
         prefix,
         recovered,
     })
-}
-
-/// Opens the partial file `partial` for reading and writing; [`Error::NoPartial`] if there is
-/// none.
-fn open_partial(partial: &Path) -> Result<File, Error> {
-    match OpenOptions::new().read(true).write(true).open(partial) {
-        Ok(f) => Ok(f),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            Err(Error::NoPartial(partial.to_path_buf()))
-        }
-        Err(e) => Err(io_at(partial, "open")(e)),
-    }
 }
 
 /// The end of the errors that find a partial file's fixed sections differ from this bake's

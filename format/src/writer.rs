@@ -17,6 +17,8 @@ use crate::cube::{face_raw_size, EncodedCube, FACES};
 use crate::error::io_at;
 use crate::header::{Header, Section, FLAG_COMPLETE};
 use crate::meta::{SamplePoint, StoreMeta};
+pub use crate::output_file::partial_path;
+use crate::output_file::{open_partial, Open};
 use crate::prefix::Prefix;
 use crate::resume::{reopen, Reopened};
 use crate::sample_map::SampleMaps;
@@ -100,16 +102,6 @@ pub struct StoreWriter {
     failed: bool,
 }
 
-/// `<path>.partial`, beside `path`.
-pub fn partial_path(path: &Path) -> PathBuf {
-    let mut name = path
-        .file_name()
-        .map(|n| n.to_os_string())
-        .unwrap_or_default();
-    name.push(".partial");
-    path.with_file_name(name)
-}
-
 impl StoreWriter {
     /// Starts a new store: validates the inputs (metadata, every sample point, every
     /// sample-map index `< points.len()`), writes `<path>.partial` (replacing any old one)
@@ -139,7 +131,7 @@ impl StoreWriter {
     ) -> Result<Self, Error> {
         let prefix = Prefix::build(meta, points, maps, filter)?;
         let partial = partial_path(path);
-        let file = File::create(&partial).map_err(io_at(&partial, "create"))?;
+        let file = open_partial(path, &partial, Open::Create)?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
         let io = io_at(&partial, "write");
         let mut write = || -> std::io::Result<()> {
@@ -184,7 +176,7 @@ impl StoreWriter {
             max: u64::from(u32::MAX) - 1,
         })?;
         let partial = partial_path(path);
-        let file = File::create(&partial).map_err(io_at(&partial, "create"))?;
+        let file = open_partial(path, &partial, Open::Create)?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
         w.write_all(prefix)
             .and_then(|()| w.flush())
@@ -237,7 +229,7 @@ impl StoreWriter {
             file,
             prefix,
             recovered,
-        } = reopen(&partial, meta, points, maps, prefix)?;
+        } = reopen(path, &partial, meta, points, maps, prefix)?;
         Ok(StoreWriter {
             path: path.to_path_buf(),
             partial,
@@ -341,6 +333,12 @@ impl StoreWriter {
             self.sync()?;
         }
         Ok(())
+    }
+
+    /// Removes the partial file while still holding its lock (so no other writer's file is
+    /// removed), for a writer whose inputs turned out bad.
+    pub fn discard(self) {
+        let _ = std::fs::remove_file(&self.partial);
     }
 
     /// Flushes and syncs the partial file, so the cubes appended so far survive a kill.

@@ -190,10 +190,9 @@ fn sample_maps(s: &Store) -> Result<SampleMaps> {
 /// `oslf store convert`: `input`'s cube maps re-encoded as `encoding` into `output`.
 fn convert(input: &Path, output: &Path, encoding: Encoding) -> Result<()> {
     use rayon::prelude::*;
+    oslf_format::check_not_input(input, output)?;
+    oslf_format::check_output(output)?;
     let src = open(input)?;
-    if input == output {
-        bail!("the output must be another file than the input");
-    }
     let mut meta = src.meta().clone();
     let from = meta.bake.encoding;
     meta.bake.encoding = encoding;

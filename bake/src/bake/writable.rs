@@ -15,8 +15,11 @@ pub fn check_writable(path: &Path, what: &'static str) -> Result<()> {
 
 /// [`check_writable`] for the store `output`, which is written through `<output>.partial`
 /// and renamed: the partial file must be writable. [`crate::bake::bake`] runs it first.
+/// It must not be busy either: [`oslf_format::check_output`] refuses a store whose partial file
+/// another writer holds, naming that process, and a path that exists and is not a regular file.
 pub fn check_store_writable(output: &Path) -> Result<()> {
-    check_file_writable(output, &partial_path(output), "the store")
+    check_file_writable(output, &partial_path(output), "the store")?;
+    Ok(oslf_format::check_output(output)?)
 }
 
 /// [`check_writable`] for `file`, naming `named` in the error (the store is written through
@@ -42,8 +45,15 @@ fn check_file_writable(named: &Path, file: &Path, what: &'static str) -> Result<
         }
         Err(e) => return Err(fail(format!("{}: {e}", dir.display()))),
     }
-    if named.is_dir() {
-        return Err(fail("it is a directory".into()));
+    for path in [named, file] {
+        match std::fs::metadata(path) {
+            Ok(m) if !m.is_file() => return Err(fail(format!(
+                "{} exists and is not a regular file ({}); give a path for a new or regular file",
+                path.display(),
+                file_kind(&m)
+            ))),
+            _ => {}
+        }
     }
     if file.exists() {
         // Opening for writing without truncating changes nothing.
@@ -69,5 +79,24 @@ fn check_file_writable(named: &Path, file: &Path, what: &'static str) -> Result<
             "cannot create a file in {}: {e}",
             dir.display()
         ))),
+    }
+}
+
+/// What kind of file `m` describes, for messages.
+fn file_kind(m: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a special file"
     }
 }

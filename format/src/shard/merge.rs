@@ -11,6 +11,7 @@ use crate::differences::prefix_difference;
 use crate::error::io_at;
 use crate::header::{Header, Section, HEADER_BYTES};
 use crate::meta::{decode_meta, StoreMeta};
+use crate::output_file::check_not_input;
 use crate::shard::file::{read_record, ShardHeader, SHARD_COMPLETE, SHARD_HEADER_BYTES};
 use crate::{Error, StoreSummary, StoreWriter};
 
@@ -144,11 +145,14 @@ fn check_prefix(prefix: &[u8]) -> Result<(Header, StoreMeta), String> {
 /// are finished, undamaged, baked for the same shard count, each index exactly once, and
 /// from the same scene, settings and seed (naming what differs); then writes
 /// `<output>.partial`, syncs it and renames it over `output` ([`StoreWriter::finish`]).
-/// Every frame checksum and raw-face checksum record is checked on the way; a failure
-/// removes the partial file.
+/// Every frame checksum and raw-face checksum record is checked on the way; a damaged shard
+/// removes the partial file. The output must not be one of the shards ([`Error::SameFile`]).
 pub fn merge(shards: &[PathBuf], output: &Path) -> Result<StoreSummary, Error> {
     if shards.is_empty() {
         return Err(Error::ShardSet("no shard files given".into()));
+    }
+    for shard in shards {
+        check_not_input(shard, output)?;
     }
     let mut open = shards
         .iter()
@@ -197,8 +201,7 @@ pub fn merge(shards: &[PathBuf], output: &Path) -> Result<StoreSummary, Error> {
 
     let mut writer =
         StoreWriter::create_from_prefix(output, &prefix, header.clone(), meta.bake.mantissa_bits)?;
-    let partial = writer.partial_path().to_path_buf();
-    let result = (|| -> Result<StoreSummary, Error> {
+    let result = (|| -> Result<(), Error> {
         for i in 0..writer.total_cubes() {
             let s = &mut open[(i % count) as usize];
             let (mut cube, len) = read_record(&mut s.reader, s.pos, s.file_len, i, &header)
@@ -222,12 +225,15 @@ pub fn merge(shards: &[PathBuf], output: &Path) -> Result<StoreSummary, Error> {
                 });
             }
         }
-        writer.finish()
+        Ok(())
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&partial);
+    match result {
+        Ok(()) => writer.finish(),
+        Err(e) => {
+            writer.discard();
+            Err(e)
+        }
     }
-    result
 }
 
 /// Checks that the shards `open` (at least one) form one complete set: baked for the same

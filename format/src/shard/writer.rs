@@ -1,7 +1,7 @@
 //! Writing one shard's cubes to a shard file: streaming, crash-safe, resumable, like the
 //! store writer.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
@@ -13,6 +13,7 @@ use crate::differences::prefix_difference;
 use crate::error::io_at;
 use crate::header::Header;
 use crate::meta::{SamplePoint, StoreMeta};
+use crate::output_file::{open_partial, Open};
 use crate::prefix::Prefix;
 use crate::sample_map::SampleMaps;
 use crate::shard::file::{
@@ -75,7 +76,7 @@ impl ShardWriter {
             file_size: 0,
         };
         let partial = partial_path(path);
-        let file = File::create(&partial).map_err(io_at(&partial, "create"))?;
+        let file = open_partial(path, &partial, Open::Create)?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
         w.write_all(&header.to_bytes())
             .and_then(|()| w.write_all(&bytes))
@@ -115,13 +116,7 @@ impl ShardWriter {
         let partial = partial_path(path);
         let prefix = build_prefix(meta, points, maps)?;
         let bytes = prefix.to_bytes();
-        let mut file = match OpenOptions::new().read(true).write(true).open(&partial) {
-            Ok(f) => f,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                return Err(Error::NoPartial(partial))
-            }
-            Err(e) => return Err(io_at(&partial, "open")(e)),
-        };
+        let mut file = open_partial(path, &partial, Open::Resume)?;
         let file_len = file.metadata().map_err(io_at(&partial, "stat"))?.len();
         let mismatch = |what: String| Error::ResumeMismatch {
             path: partial.clone(),
