@@ -51,6 +51,7 @@ fn reference_store() -> PathBuf {
             resume: false,
             progress: None,
             cube_limit: None,
+            refuse_empty_texels: false,
         };
         bake(&scene, &options).expect("bake the example scene");
     }

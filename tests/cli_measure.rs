@@ -58,6 +58,7 @@ fn fixture() -> &'static Fixture {
                     resume: false,
                     progress: None,
                     cube_limit: None,
+                    refuse_empty_texels: false,
                 },
             )
             .unwrap();

@@ -48,6 +48,7 @@ fn bake_with_threads(
         resume,
         progress: None,
         cube_limit: limit,
+        refuse_empty_texels: false,
     };
     let report = pool.install(|| bake(scene, &options)).unwrap();
     assert_eq!(report.finished, limit.is_none() || resume);

@@ -45,6 +45,14 @@ pub enum BakeError {
     /// A scene that parsed but cannot be baked (no OSLF object, no sample points, ...).
     #[error("{0}")]
     Invalid(String),
+    /// Sample-map texels without any visible sample point, refused before the capture
+    /// ([`crate::bake::BakeOptions::refuse_empty_texels`]).
+    #[error("{empty} of {texels} sample-map texels have no visible sample point ({points} sample points in all), so the store could not reconstruct them; nothing was captured")]
+    EmptyTexels {
+        empty: u64,
+        texels: u64,
+        points: u64,
+    },
     /// An output file that cannot be created (checked before the bake starts).
     #[error("cannot write {what} {path}: {detail}")]
     Unwritable {

@@ -26,6 +26,11 @@ use crate::tolerance::TESSELLATION_ERROR;
 /// [`crate::bvh::SELF_TOLERANCE`]); see `check_epsilon`.
 pub const MIN_EPSILON_RELATIVE: f32 = 2.0 * crate::bvh::SELF_TOLERANCE;
 
+/// The largest ε, relative to the diagonal of the object's bounding box. Bakes at 10× the
+/// object's size still find points for every texel (bake/tests/extremes.rs); at 10³⁰ every
+/// texel is empty, as f32 sample positions no longer resolve the object.
+pub const MAX_EPSILON_RELATIVE: f32 = 100.0;
+
 /// An OSLF object: the Bézier patches or the triangle mesh a light field is baked around.
 #[derive(Clone, Debug)]
 pub struct OslfObject {
@@ -168,8 +173,9 @@ impl Scene {
     }
 }
 
-/// Why the bake cannot honour `epsilon` for `object`, if it cannot. Two limits, both reported
-/// with the smallest ε that works:
+/// Why the bake cannot honour `epsilon` for `object`, if it cannot. ε must be at most
+/// [`MAX_EPSILON_RELATIVE`] × the diagonal of the object's bounding box, and at least two
+/// limits, both reported with the smallest ε that works:
 /// - f32: a sample point must lie at least [`MIN_EPSILON_RELATIVE`] × the object's largest
 ///   coordinate magnitude above its surface, twice the ray–triangle test's self-intersection
 ///   tolerance ([`crate::bvh::SELF_TOLERANCE`]); below it, rays from a sample point pass
@@ -178,6 +184,22 @@ impl Scene {
 ///   ([`TESSELLATION_ERROR`]), which the finest grid ([`bezier::MAX_TESSELLATION_LEVEL`]²
 ///   quads per patch) must reach. (The Newell teapot at scale 1: ε ≥ 3.2·10⁻³.)
 pub fn epsilon_problem(epsilon: f32, object: &OslfObject) -> Option<String> {
+    let (lo, hi) = object
+        .points()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| {
+            (lo.min(c), hi.max(c))
+        });
+    let size = (hi - lo).length();
+    let max_epsilon = MAX_EPSILON_RELATIVE * size;
+    if size.is_finite() && epsilon > max_epsilon {
+        return Some(format!(
+            "epsilon = {epsilon} is too large for object {:?}: it is more than {MAX_EPSILON_RELATIVE} \
+             times the diagonal of its bounding box ({size:.4e}), so far out that f32 \
+             positions lose the object's shape; use epsilon <= {max_epsilon:.4e} (typically \
+             a hundredth of the object's size)",
+            object.name
+        ));
+    }
     let extent = object
         .points()
         .fold(0f32, |m, c| m.max(c.abs().max_element()));

@@ -164,6 +164,7 @@ fn bake_to(scene: &Scene, output: &Path) -> BakeReport {
         resume: false,
         progress: None,
         cube_limit: None,
+        refuse_empty_texels: false,
     };
     bake(scene, &options).unwrap()
 }

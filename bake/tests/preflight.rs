@@ -332,6 +332,7 @@ fn a_tiny_bake_lands_within_2x_of_its_estimate() {
         resume: false,
         progress: None,
         cube_limit: None,
+        refuse_empty_texels: false,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(THREADS)

@@ -35,6 +35,7 @@ fn bake_with(bits: u32, dir: &Path) -> Store {
         resume: false,
         progress: None,
         cube_limit: None,
+        refuse_empty_texels: false,
     };
     let report = bake(&scene, &options).unwrap();
     assert!(report.finished);

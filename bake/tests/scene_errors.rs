@@ -243,6 +243,6 @@ fn camera_target_at_its_position_and_bad_vfov() {
         &text,
         4,
         8,
-        "the camera's vfov 180 must be within (0, 180) degrees",
+        "the camera's vfov 180 must be within 0.1 to 179 degrees",
     );
 }

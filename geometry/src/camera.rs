@@ -5,6 +5,14 @@ use glam::Vec3;
 
 use crate::{GeometryError, Result};
 
+/// The narrowest vertical field of view a camera may have, in degrees: narrower, the image
+/// spans directions closer together than f32 rays resolve (a telephoto lens of 2 000 mm on
+/// full frame is still 0.7°).
+pub const VFOV_MIN_DEG: f32 = 0.1;
+/// The widest vertical field of view, in degrees (a pinhole camera reaches 180° only in the
+/// limit).
+pub const VFOV_MAX_DEG: f32 = 179.0;
+
 /// A pinhole camera looking from `position` at `target`, `up` giving the roll, `vfov_deg` the
 /// full vertical field of view in degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -17,7 +25,7 @@ pub struct Camera {
 
 impl Camera {
     /// Errors if a vector is not finite, `target == position`, `up` is parallel to the view
-    /// direction, or the field of view is outside `(0°, 180°)`.
+    /// direction, or the field of view is outside [`VFOV_MIN_DEG`] to [`VFOV_MAX_DEG`].
     pub fn validate(&self) -> Result<()> {
         if !(self.position.is_finite() && self.target.is_finite() && self.up.is_finite()) {
             return Err(GeometryError::Invalid(
@@ -34,9 +42,9 @@ impl Camera {
                 "camera up vector is parallel to the view direction".into(),
             ));
         }
-        if !(self.vfov_deg > 0.0 && self.vfov_deg < 180.0) {
+        if !(VFOV_MIN_DEG..=VFOV_MAX_DEG).contains(&self.vfov_deg) {
             return Err(GeometryError::Invalid(format!(
-                "camera vertical field of view {} must be in (0, 180) degrees",
+                "camera vertical field of view {} must be within {VFOV_MIN_DEG} to {VFOV_MAX_DEG} degrees",
                 self.vfov_deg
             )));
         }

@@ -328,6 +328,7 @@ fn bake_or_reuse(
             resume: false,
             progress,
             cube_limit: None,
+            refuse_empty_texels: false,
         },
     )?;
     let r = StoreRecord {

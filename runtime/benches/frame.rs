@@ -47,6 +47,7 @@ fn store_path() -> PathBuf {
             resume: false,
             progress: None,
             cube_limit: None,
+            refuse_empty_texels: false,
         };
         bake(&scene, &options).unwrap();
     }

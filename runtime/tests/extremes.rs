@@ -222,6 +222,7 @@ seed = {seed}
         resume: false,
         progress: None,
         cube_limit: None,
+        refuse_empty_texels: false,
     };
     oslf_bake::bake::bake(&scene, &options).unwrap();
     output
@@ -349,6 +350,7 @@ fn bake_text(name: &str, text: &str) -> (std::path::PathBuf, oslf_bake::bake::Ba
         resume: false,
         progress: None,
         cube_limit: None,
+        refuse_empty_texels: false,
     };
     let report = oslf_bake::bake::bake(&scene, &options).unwrap();
     assert!(report.finished);

@@ -248,6 +248,17 @@ pub fn parse_box(s: &str) -> std::result::Result<[[f32; 3]; 2], String> {
     }
 }
 
+/// An exposure multiplier: finite and positive (zero, negative or NaN would make every pixel
+/// black).
+pub fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "{s:?} is not a positive finite number (an exposure multiplies every pixel; 1 leaves them as they are)"
+        )),
+    }
+}
+
 /// Three finite numbers `x,y,z`.
 pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     let v = parse_numbers(s)?;
@@ -256,6 +267,9 @@ pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
         _ => Err(format!("{s:?} is not three finite numbers x,y,z")),
     }
 }
+
+/// The most worker threads `-j` starts per core this process may use.
+pub const THREADS_PER_CORE: usize = 4;
 
 /// Runs `f` in a worker pool of `threads` threads (`-j`; all cores when `None`). The results
 /// of the commands that take `-j` do not depend on it.
@@ -267,6 +281,13 @@ pub fn in_pool<T: Send>(
     if let Some(n) = threads {
         if n == 0 {
             anyhow::bail!("--threads must be at least 1");
+        }
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let max = THREADS_PER_CORE * cores;
+        if n > max {
+            anyhow::bail!(
+                "--threads {n} is more than {max} ({THREADS_PER_CORE} × the {cores} cores this process may use); more threads only add overhead, and the output is the same for any count"
+            );
         }
         pool = pool.num_threads(n);
     }

@@ -61,6 +61,10 @@ pub struct Args {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Fail, before the cube maps are captured, if a sample-map texel has no visible sample
+    /// point (without it: a warning, and the store is written).
+    #[arg(long)]
+    strict: bool,
 }
 
 fn parse_encoding(s: &str) -> Result<oslf_format::Encoding, String> {
@@ -132,6 +136,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         resume: args.resume,
         progress: super::progress::bars(!args.quiet),
         cube_limit: args.max_cubes,
+        refuse_empty_texels: args.strict,
     };
     if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
         bail!(
@@ -151,8 +156,17 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             e => bail!("{e}"),
         }
     }
-    let report = bake_shard(&scene, &options, args.shard, &limits).map_err(resume_flags)?;
+    let report = bake_shard(&scene, &options, args.shard, &limits).map_err(with_flag_hints)?;
     print_summary(&report);
+    let m = &report.sample_maps;
+    if m.empty > 0 {
+        eprintln!(
+            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; raise sample_count (or lower sample_spacing), or lower epsilon (--strict refuses such a bake)",
+            m.empty,
+            m.texels,
+            100.0 * m.empty as f64 / m.texels.max(1) as f64
+        );
+    }
     if !report.finished {
         println!(
             "stopped after --max-cubes; continue with --resume (the partial store is {})",
@@ -284,9 +298,9 @@ fn print_summary(r: &BakeReport) {
     );
 }
 
-/// `e`, where the store writer could not resume a partial store, with what to do in this
-/// command's flags.
-fn resume_flags(e: oslf_bake::BakeError) -> anyhow::Error {
+/// `e`, where the store writer could not resume a partial store or `--strict` refused the
+/// sample maps, with what to do in this command's flags.
+fn with_flag_hints(e: oslf_bake::BakeError) -> anyhow::Error {
     use oslf_format::Error::{ResumeMismatch, ResumeSettings};
     let hint = match &e {
         oslf_bake::BakeError::Format(ResumeSettings { .. }) => {
@@ -294,6 +308,9 @@ fn resume_flags(e: oslf_bake::BakeError) -> anyhow::Error {
         }
         oslf_bake::BakeError::Format(ResumeMismatch { .. }) => {
             "; bake without --resume to start over"
+        }
+        oslf_bake::BakeError::EmptyTexels { .. } => {
+            " (--strict); raise sample_count (or lower sample_spacing), or lower epsilon"
         }
         _ => return e.into(),
     };

@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, value_name = "PNG")]
     side_by_side: Option<PathBuf>,
     /// Exposure of --side-by-side.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
 }
 

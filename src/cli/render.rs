@@ -67,7 +67,7 @@ pub struct Args {
     #[arg(long)]
     cpu: bool,
     /// PNG exposure multiplier.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
     /// Fail (exit 1, no image written) when the image would be degraded: any sample point
     /// that fell back (a cube map that failed to decode, a budget too small for the frame's

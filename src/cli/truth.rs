@@ -48,7 +48,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Exposure of the PNG previews.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
     /// What pixels off the object show: `none` (black, the default) or `scene` (the scene
     /// behind the object, path traced from the camera with --spp paths per pixel). Alpha stays

@@ -21,7 +21,7 @@ use std::time::Instant;
 use oslf_format::ShardSpec;
 
 use crate::capture::strata_per_side;
-use crate::error::Result;
+use crate::error::{BakeError, Result};
 use crate::preflight::Limits;
 use crate::progress::{self, Progress};
 use crate::scene::Scene;
@@ -43,6 +43,10 @@ pub struct BakeOptions {
     /// Capture at most this many cube maps in this run, then stop and leave `<output>.partial`
     /// for a later `resume` (a bake in slices). `None`: run to the end.
     pub cube_limit: Option<u32>,
+    /// Fail with [`BakeError::EmptyTexels`] before the cube maps are captured if a sample-map
+    /// texel has no visible sample point at all (the runtime has nothing to reconstruct it
+    /// from). `false`: bake anyway; the report counts them.
+    pub refuse_empty_texels: bool,
 }
 
 /// Bakes `scene` into the store at `options.output`, after the preflight against this
@@ -85,6 +89,14 @@ pub fn bake_shard(
         progress,
         &mut report,
     );
+    let stats = report.sample_maps;
+    if options.refuse_empty_texels && stats.empty > 0 {
+        return Err(BakeError::EmptyTexels {
+            empty: stats.empty,
+            texels: stats.texels,
+            points: report.sample_points as u64,
+        });
+    }
     let meta = store_meta(scene, &surfaces);
     let mut sink = Sink::open(
         &options.output,

@@ -47,11 +47,13 @@ fn check_file_writable(named: &Path, file: &Path, what: &'static str) -> Result<
     }
     for path in [named, file] {
         match std::fs::metadata(path) {
-            Ok(m) if !m.is_file() => return Err(fail(format!(
+            Ok(m) if !m.is_file() => {
+                return Err(fail(format!(
                 "{} exists and is not a regular file ({}); give a path for a new or regular file",
                 path.display(),
                 file_kind(&m)
-            ))),
+            )))
+            }
             _ => {}
         }
     }

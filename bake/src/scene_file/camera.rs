@@ -2,6 +2,7 @@
 //! an included glTF file.
 
 use glam::Vec3;
+use oslf_geometry::camera::{VFOV_MAX_DEG, VFOV_MIN_DEG};
 use oslf_geometry::Camera;
 use toml::Spanned;
 
@@ -67,12 +68,12 @@ impl Ctx<'_> {
                 ),
             ));
         }
-        if !(camera.vfov_deg > 0.0 && camera.vfov_deg < 180.0) {
+        if !(VFOV_MIN_DEG..=VFOV_MAX_DEG).contains(&camera.vfov_deg) {
             let span = c.vfov.as_ref().map_or(table.clone(), |v| v.span());
             return Err(self.error_at(
                 span,
                 format!(
-                    "the camera's vfov {} must be within (0, 180) degrees",
+                    "the camera's vfov {} must be within {VFOV_MIN_DEG} to {VFOV_MAX_DEG} degrees",
                     camera.vfov_deg
                 ),
             ));

@@ -84,6 +84,7 @@ fn bake_scene(scene: &str, name: &str) -> PathBuf {
         resume: false,
         progress: None,
         cube_limit: None,
+        refuse_empty_texels: false,
     };
     bake(&scene, &options).unwrap();
     output
