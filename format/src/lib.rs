@@ -388,7 +388,7 @@ pub use meta::{BakeParams, CameraInfo, MeshInfo, ObjectInfo, Patch, SamplePoint,
 pub use output_file::{check_not_input, check_output, same_file};
 pub use sample_map::{IndexWidth, SampleMapView, SampleMaps, INVALID_INDEX};
 pub use shard::{ShardSpec, ShardSummary, ShardWriter};
-pub use store::{Store, VerifyReport};
+pub use store::{Store, StoreAccess, VerifyReport};
 pub use toc::FaceEntry;
 pub use writer::{StoreSummary, StoreWriter};
 

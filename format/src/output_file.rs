@@ -166,7 +166,7 @@ fn not_regular(path: &Path, meta: &Metadata) -> Error {
 
 /// The process holding a `flock` on the file of `meta`, as `process 1234 (oslf bake …)`, from
 /// Linux's `/proc/locks` and `/proc/PID/cmdline`; `None` where the system does not say.
-fn holder(meta: &Metadata) -> Option<String> {
+pub(crate) fn holder(meta: &Metadata) -> Option<String> {
     let locks = read_bounded(Path::new("/proc/locks"), 4 << 20)?;
     let (major, minor) = dev_numbers(meta.dev());
     let id = format!("{major:02x}:{minor:02x}:{}", meta.ino());

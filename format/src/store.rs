@@ -60,6 +60,13 @@ enum Backing {
         toc_offset: u64,
         toc: Vec<u8>,
     },
+    /// A memory-mapped file ([`Store::open_mapped`]): every section and frame is served from
+    /// the mapping. `file` stays open holding a shared advisory lock, so this project's writers
+    /// refuse to write it in place while it is mapped.
+    Mapped {
+        map: memmap2::Mmap,
+        _file: std::fs::File,
+    },
 }
 
 impl Backing {
@@ -69,6 +76,7 @@ impl Backing {
     fn read(&self, s: Section) -> Result<Cow<'_, [u8]>, Error> {
         match self {
             Backing::Owned(a) => Ok(Cow::Borrowed(slice(a.bytes(), s))),
+            Backing::Mapped { map, .. } => Ok(Cow::Borrowed(slice(map, s))),
             Backing::File {
                 file,
                 path,
@@ -106,6 +114,7 @@ impl Backing {
         match self {
             Backing::Owned(a) => a.len as u64,
             Backing::File { len, .. } => *len,
+            Backing::Mapped { map, .. } => map.len() as u64,
         }
     }
 
@@ -115,6 +124,7 @@ impl Backing {
         match self {
             Backing::Owned(a) => a.bytes(),
             Backing::File { prefix, .. } => prefix.bytes(),
+            Backing::Mapped { map, .. } => map,
         }
     }
 }
@@ -174,6 +184,17 @@ pub struct VerifyReport {
     /// Whether the decoded faces were checked against the store's checksum of them (format
     /// version 3 and later; older stores do not record it).
     pub decoded_checksum: bool,
+}
+
+/// How [`Store::open_with`] reads a store's file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StoreAccess {
+    /// [`Store::open`]: the fixed sections read into memory, frames by positioned reads; a
+    /// file changed while open gives errors, never SIGBUS. The default.
+    #[default]
+    Positioned,
+    /// [`Store::open_mapped`]: everything served from a memory map; see its risk.
+    Mapped,
 }
 
 /// An open store. `Send + Sync`: share it between threads.
@@ -268,6 +289,78 @@ impl Store {
             toc,
             file,
         })
+    }
+
+    /// Opens and validates a store through a memory map (memmap2): the same checks and errors
+    /// as [`Store::open`], but no section is read into memory: the sample points and maps are
+    /// served, zero-copy, from the page cache (a GPU upload reads them straight from the
+    /// mapping), and cube frames are read from the mapping when needed.
+    ///
+    /// # The risk of a mapping
+    ///
+    /// A file **truncated or overwritten in place** while mapped (e.g. `cp other.oslf` over
+    /// it, or a program writing into it) ends the process with SIGBUS on the next read of a
+    /// page that is gone; [`Store::open`] reports the same as [`Error::ChangedOnDisk`]. A store
+    /// **replaced by rename** (what every writer of this project does: `oslf bake`, `store
+    /// merge`, `store convert`) is safe: the mapping keeps the old file. While mapped the
+    /// store holds a shared advisory lock (`flock`), so this project's writers, which lock the
+    /// file they write exclusively, refuse to write it in place ([`Error::Busy`]); other
+    /// programs are not bound by the lock. Where the file system has no such locks the store is
+    /// mapped without one. Choose it for stores that only this project's tools replace.
+    pub fn open_mapped(path: &Path) -> Result<Self, Error> {
+        check_little_endian()?;
+        let file = std::fs::File::open(path).map_err(io_at(path, "open"))?;
+        let meta = file.metadata().map_err(io_at(path, "stat"))?;
+        if !meta.is_file() {
+            return Err(Error::NotRegularFile {
+                path: path.to_path_buf(),
+                kind: "not a regular file (only regular files are mapped)",
+            });
+        }
+        match file.try_lock_shared() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(Error::Busy {
+                    path: path.to_path_buf(),
+                    partial: path.to_path_buf(),
+                    holder: crate::output_file::holder(&meta)
+                        .unwrap_or_else(|| "another process".into()),
+                })
+            }
+            // No advisory locks on this file system: mapped without one (see above).
+            Err(std::fs::TryLockError::Error(_)) => {}
+        }
+        if meta.len() < HEADER_BYTES as u64 {
+            return Err(Error::Truncated {
+                section: "header",
+                offset: 0,
+                end: HEADER_BYTES as u64,
+                file_size: meta.len(),
+            });
+        }
+        // SAFETY: the mapping is read-only and lives as long as `Backing::Mapped`, which owns
+        // it. It is undefined behaviour only if the file changes while mapped; that is the
+        // documented risk of this function (a truncation raises SIGBUS), which the shared lock
+        // keeps this project's own writers from causing.
+        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io_at(path, "map"))?;
+        Self::parse(Backing::Mapped { map, _file: file })
+    }
+
+    /// [`Store::open`] or [`Store::open_mapped`], as `access` says.
+    pub fn open_with(path: &Path, access: StoreAccess) -> Result<Self, Error> {
+        match access {
+            StoreAccess::Positioned => Self::open(path),
+            StoreAccess::Mapped => Self::open_mapped(path),
+        }
+    }
+
+    /// How this store reads its file.
+    pub fn access(&self) -> Option<StoreAccess> {
+        match self.backing {
+            Backing::Owned(_) => None,
+            Backing::File { .. } => Some(StoreAccess::Positioned),
+            Backing::Mapped { .. } => Some(StoreAccess::Mapped),
+        }
     }
 
     /// Validates a store held in memory (copied into an 8-byte-aligned buffer). Same checks

@@ -120,6 +120,31 @@ impl ShadingArgs {
     }
 }
 
+/// How the commands that read a store open it (`--mmap`).
+#[derive(Args, Clone, Copy, Debug)]
+pub struct StoreAccessArgs {
+    /// Read the store through a memory map (sections and frames from the page cache, sample
+    /// maps uploaded from the mapping) instead of positioned reads. Only for stores nothing
+    /// overwrites in place while they are open: a store truncated or overwritten in place
+    /// under the mapping ends the process with SIGBUS; one replaced by rename (as oslf's
+    /// writers do) is safe. See docs/store.md.
+    #[arg(long, global = true)]
+    pub mmap: bool,
+}
+
+impl StoreAccessArgs {
+    /// Opens and validates the store at `path` as the flag says.
+    pub fn open(&self, path: &std::path::Path) -> anyhow::Result<oslf_format::Store> {
+        let access = if self.mmap {
+            oslf_format::StoreAccess::Mapped
+        } else {
+            oslf_format::StoreAccess::Positioned
+        };
+        oslf_format::Store::open_with(path, access)
+            .with_context(|| format!("cannot open store {}", path.display()))
+    }
+}
+
 /// The camera flags: each replaces one part of the store's camera.
 #[derive(Args, Clone, Debug)]
 pub struct CameraArgs {

@@ -3,7 +3,7 @@
 //! hits, misses, miss rate, loads, evictions, bytes decoded and times per phase, as an aligned
 //! table (thesis Tables 6.3–6.7) and as CSV and JSON. See `oslf_runtime::replay`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use super::args::{CameraArgs, ShadingArgs};
@@ -55,6 +55,8 @@ use oslf_runtime::{
 pub struct Args {
     /// The store (written by `oslf bake`).
     store: PathBuf,
+    #[command(flatten)]
+    access: super::args::StoreAccessArgs,
     /// Modes, comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy.
     #[arg(long, value_delimiter = ',', default_value = "recon,mirror,glossy")]
     modes: Vec<Mode>,
@@ -144,7 +146,7 @@ type Shading = (Mode, Option<Blend>, ShadingParams);
 pub fn run(args: Args) -> anyhow::Result<()> {
     check_args(&args)?;
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
-    let store = open(&args.store)?;
+    let store = args.access.open(&args.store)?;
     args.shading.check_store(&store, &args.store)?;
     let gpu = Gpu::headless_with_bc(!args.no_bc)?;
     let budgets = budgets(&args, &store, gpu.has_bc())?;
@@ -192,7 +194,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     let t = Instant::now();
                     let mut renderer = Renderer::new(
                         Gpu::from_device(device.clone(), queue.clone(), adapter.clone()),
-                        open(&args.store)?,
+                        args.access.open(&args.store)?,
                         config(granularity, *gpu_slots),
                     )
                     .with_context(|| format!("cache size {label}"))?;
@@ -271,10 +273,6 @@ fn budgets(args: &Args, store: &Store, has_bc: bool) -> anyhow::Result<Vec<(Stri
         .iter()
         .map(|s| Ok((s.label(), s.gpu_slots(store, has_bc)?)))
         .collect()
-}
-
-fn open(path: &Path) -> anyhow::Result<Store> {
-    Store::open(path).with_context(|| format!("cannot open store {}", path.display()))
 }
 
 /// Rejects empty lists and out-of-range counts before any GPU work.

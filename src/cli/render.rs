@@ -28,6 +28,8 @@ use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
 pub struct Args {
     /// The store (written by `oslf bake`).
     store: PathBuf,
+    #[command(flatten)]
+    access: super::args::StoreAccessArgs,
     /// Output OpenEXR (linear f32 RGBA, alpha = object mask); a PNG of the RGB, background
     /// included, is written beside it.
     #[arg(short, long, default_value = "render.exr")]
@@ -85,8 +87,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     check_outputs(&args)?;
-    let store = Store::open(&args.store)
-        .with_context(|| format!("cannot open store {}", args.store.display()))?;
+    let t = Instant::now();
+    let store = args.access.open(&args.store)?;
+    let open_seconds = t.elapsed().as_secs_f64();
     let params = args.shading.params(args.mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
     let (background, note) = args.background.resolve(&store, &args.store)?;
@@ -146,12 +149,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     println!("adapter        {adapter}");
     println!(
-        "store          {}: {} sample points, {}² cube maps, {} slots on the GPU ({})",
+        "store          {}: {} sample points, {}² cube maps, {} slots on the GPU ({}); opened in {:.1} ms ({})",
         args.store.display(),
         renderer.store().sample_points().len(),
         renderer.store().cube_resolution(),
         renderer.cache().slots(),
-        renderer.face_layout().encoding
+        renderer.face_layout().encoding,
+        open_seconds * 1e3,
+        if args.access.mmap { "memory-mapped" } else { "positioned reads" }
     );
     let gpu_time = match (frame.shade_gpu_seconds, frame.gbuffer_gpu_seconds) {
         (Some(s), Some(g)) => format!(
@@ -181,6 +186,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "frame": frame.stats,
             "cumulative": renderer.cache().cumulative,
             "passes": frame.passes,
+            "open_seconds": open_seconds,
+            "setup_seconds": setup,
+            "mmap": args.access.mmap,
             "render_seconds": render_seconds,
             "shade_gpu_seconds": frame.shade_gpu_seconds,
             "gbuffer_gpu_seconds": frame.gbuffer_gpu_seconds,

@@ -7,11 +7,15 @@ use clap::{Subcommand, ValueEnum};
 use oslf_format::cube::{FACES, FACE_NAMES};
 use oslf_format::{Encoding, SampleMaps, Store, StoreWriter, INVALID_INDEX};
 
+use super::args::StoreAccessArgs;
+
 /// Inspect, verify, convert and export OSLF stores.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(subcommand)]
     command: Command,
+    #[command(flatten)]
+    access: StoreAccessArgs,
 }
 
 #[derive(Subcommand, Debug)]
@@ -91,15 +95,12 @@ fn parse_encoding(s: &str) -> std::result::Result<Encoding, String> {
     s.parse().map_err(|e: oslf_format::Error| e.to_string())
 }
 
-fn open(path: &Path) -> Result<Store> {
-    Store::open(path).with_context(|| format!("cannot open {}", path.display()))
-}
-
 pub fn run(cli: Args) -> Result<()> {
+    let access = cli.access;
     match cli.command {
-        Command::Info { store, json } => info(&store, json),
+        Command::Info { store, json } => info(&store, &access.open(&store)?, json),
         Command::Verify { store } => {
-            let s = open(&store)?;
+            let s = access.open(&store)?;
             let r = s
                 .verify()
                 .with_context(|| format!("{} failed verification", store.display()))?;
@@ -146,20 +147,26 @@ pub fn run(cli: Args) -> Result<()> {
             output,
             encoding,
             threads,
-        } => super::args::in_pool(threads, || convert(&input, &output, encoding)),
+        } => super::args::in_pool(threads, || convert(&input, &output, encoding, access)),
         Command::ExportCube {
             store,
             index,
             output,
             layout,
-        } => export_cube(&open(&store)?, index, &output, layout),
+        } => export_cube(&access.open(&store)?, index, &output, layout),
         Command::ExportSampleMap {
             store,
             patch,
             output,
             channel,
             scale,
-        } => export_sample_map(&open(&store)?, patch, &output, channel as usize, scale),
+        } => export_sample_map(
+            &access.open(&store)?,
+            patch,
+            &output,
+            channel as usize,
+            scale,
+        ),
     }
 }
 
@@ -188,11 +195,11 @@ fn sample_maps(s: &Store) -> Result<SampleMaps> {
 }
 
 /// `oslf store convert`: `input`'s cube maps re-encoded as `encoding` into `output`.
-fn convert(input: &Path, output: &Path, encoding: Encoding) -> Result<()> {
+fn convert(input: &Path, output: &Path, encoding: Encoding, access: StoreAccessArgs) -> Result<()> {
     use rayon::prelude::*;
     oslf_format::check_not_input(input, output)?;
     oslf_format::check_output(output)?;
-    let src = open(input)?;
+    let src = access.open(input)?;
     let mut meta = src.meta().clone();
     let from = meta.bake.encoding;
     meta.bake.encoding = encoding;
@@ -232,7 +239,7 @@ fn convert(input: &Path, output: &Path, encoding: Encoding) -> Result<()> {
     }
     let summary = w.finish()?;
     // What the converted cubes decode to, against the input's texels.
-    let out = open(output)?;
+    let out = access.open(output)?;
     let error = (0..n)
         .into_par_iter()
         .map(|i| -> Result<_> {
@@ -266,16 +273,15 @@ fn convert(input: &Path, output: &Path, encoding: Encoding) -> Result<()> {
     Ok(())
 }
 
-fn info(path: &Path, json: bool) -> Result<()> {
-    let s = open(path)?;
-    let sizes = Sizes::of(&s);
+fn info(path: &Path, s: &Store, json: bool) -> Result<()> {
+    let sizes = Sizes::of(s);
     if json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&info_json(path, &s, &sizes))?
+            serde_json::to_string_pretty(&info_json(path, s, &sizes))?
         );
     } else {
-        print_info(path, &s, &sizes);
+        print_info(path, s, &sizes);
     }
     Ok(())
 }

@@ -101,6 +101,7 @@ struct State {
 
 struct App {
     store: PathBuf,
+    access: super::args::StoreAccessArgs,
     state: Option<State>,
     params: ShadingParams,
     background_flag: BackgroundArgs,
@@ -122,6 +123,8 @@ pub struct Args {
     /// The store (written by `oslf bake`).
     store: PathBuf,
     #[command(flatten)]
+    access: super::args::StoreAccessArgs,
+    #[command(flatten)]
     background: BackgroundArgs,
 }
 
@@ -130,6 +133,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let event_loop = EventLoop::new().context("cannot open a window (no display?)")?;
     let mut app = App {
         store,
+        access: args.access,
         state: None,
         params: ShadingParams::default(),
         background_flag: args.background,
@@ -151,8 +155,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 impl App {
     fn init(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
-        let store = oslf_format::Store::open(&self.store)
-            .with_context(|| format!("cannot open store {}", self.store.display()))?;
+        let store = self.access.open(&self.store)?;
         let (background, note) = self.background_flag.resolve(&store, &self.store)?;
         if let Some(note) = note {
             eprintln!("note: {note}");

@@ -1,0 +1,21 @@
+//! The damaged-store cases (damaged/cases.rs) against a store file opened with
+//! `Store::open_mapped`: everything from a memory map.
+
+#[path = "damaged/cases.rs"]
+mod cases;
+mod common;
+
+use oslf_format::{Error, Store, StoreAccess};
+
+/// `b` written to a file and opened from it (the file is unlinked at once: the open store
+/// keeps reading it).
+fn open(b: &[u8]) -> Result<Store, Error> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("damaged.oslf");
+    std::fs::write(&path, b).unwrap();
+    let store = Store::open_with(&path, StoreAccess::Mapped);
+    if let Ok(s) = &store {
+        assert_eq!(s.access(), Some(StoreAccess::Mapped));
+    }
+    store
+}

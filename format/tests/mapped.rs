@@ -1,0 +1,156 @@
+//! The mapped reader (`Store::open_mapped`) against the positioned one (`Store::open`): the same
+//! bytes for every section and frame of every kind of store, the old store kept when a new one
+//! is renamed over it, and this project's writers refused while it is mapped.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+use oslf_format::{Encoding, Error, Store, StoreAccess, StoreWriter};
+
+/// Every section and frame `a` and `b` serve are the same bytes.
+fn assert_same(a: &Store, b: &Store, what: &str) {
+    assert_eq!(a.header(), b.header(), "{what}: header");
+    assert_eq!(a.meta(), b.meta(), "{what}: metadata");
+    assert_eq!(
+        bytemuck::cast_slice::<_, u8>(a.sample_points()),
+        bytemuck::cast_slice::<_, u8>(b.sample_points()),
+        "{what}: sample points"
+    );
+    assert!(!a.sample_points().is_empty(), "{what}: no sample points");
+    for patch in 0..a.header().patch_count as u32 {
+        let (ma, mb) = (a.sample_map(patch).unwrap(), b.sample_map(patch).unwrap());
+        assert_eq!(ma.as_u16(), mb.as_u16(), "{what}: sample map {patch}");
+        assert_eq!(ma.as_u32(), mb.as_u32(), "{what}: sample map {patch}");
+        assert!(ma.as_u16().is_some() || ma.as_u32().is_some());
+    }
+    assert_eq!(a.cube_count(), b.cube_count());
+    assert_eq!(a.cube_bytes(), b.cube_bytes());
+    let mut fa = vec![0u8; a.face_raw_size()];
+    let mut fb = vec![1u8; b.face_raw_size()];
+    for cube in 0..a.cube_count() {
+        for face in 0..6 {
+            assert_eq!(
+                a.face_entry(cube, face).unwrap(),
+                b.face_entry(cube, face).unwrap()
+            );
+            a.read_face_raw(cube, face, &mut fa).unwrap();
+            b.read_face_raw(cube, face, &mut fb).unwrap();
+            assert_eq!(fa, fb, "{what}: cube {cube} face {face}");
+        }
+    }
+    assert_eq!(a.verify().unwrap(), b.verify().unwrap(), "{what}: verify");
+}
+
+fn both(path: &Path) -> (Store, Store) {
+    let positioned = Store::open(path).unwrap();
+    let mapped = Store::open_mapped(path).unwrap();
+    assert_eq!(positioned.access(), Some(StoreAccess::Positioned));
+    assert_eq!(mapped.access(), Some(StoreAccess::Mapped));
+    (positioned, mapped)
+}
+
+#[test]
+fn both_readers_serve_the_same_bytes_for_every_store_kind() {
+    for name in ["v1-rgb9e5", "v2-rgb9e5-5bits", "v3-rgba16f"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/{name}.oslf"));
+        let (p, m) = both(&path);
+        assert_same(&p, &m, name);
+    }
+    for encoding in [
+        Encoding::Rgb9e5,
+        Encoding::Rgba16f,
+        Encoding::Rgba32f,
+        Encoding::Bc6h,
+    ] {
+        for distance in [false, true] {
+            for mesh in [false, true] {
+                let spec = Spec {
+                    encoding,
+                    cube_res: 8,
+                    distance,
+                    ..Spec::default()
+                };
+                let f = if mesh {
+                    with_mesh(fixture(spec), spec)
+                } else {
+                    fixture(spec)
+                };
+                let (_dir, path) = temp_store("s.oslf");
+                write(&path, &f);
+                let (p, m) = both(&path);
+                assert_same(
+                    &p,
+                    &m,
+                    &format!("{encoding} distance {distance} mesh {mesh}"),
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_store_renamed_over_while_mapped_keeps_serving_the_old_one() {
+    let (dir, path) = temp_store("s.oslf");
+    let old = fixture(Spec {
+        seed: 1,
+        ..Spec::default()
+    });
+    write(&path, &old);
+    let copy = dir.path().join("copy.oslf");
+    std::fs::copy(&path, &copy).unwrap();
+    let mapped = Store::open_mapped(&path).unwrap();
+    // A new store written through the writer (partial file, rename over `path`).
+    let new = fixture(Spec {
+        seed: 2,
+        ..Spec::default()
+    });
+    write(&path, &new);
+    assert_ne!(std::fs::read(&path).unwrap(), std::fs::read(&copy).unwrap());
+    assert_same(&Store::open(&copy).unwrap(), &mapped, "old store, mapped");
+}
+
+#[test]
+fn a_mapped_store_is_not_written_in_place_by_a_writer() {
+    let (dir, path) = temp_store("s.oslf");
+    let f = fixture(Spec::default());
+    write(&path, &f);
+    let before = std::fs::read(&path).unwrap();
+    let mapped = Store::open_mapped(&path).unwrap();
+    // A writer whose partial file is the mapped store (a hard link) would empty it in place.
+    let other = dir.path().join("other.oslf");
+    std::fs::hard_link(&path, dir.path().join("other.oslf.partial")).unwrap();
+    match StoreWriter::create(&other, &f.meta, &f.points, &f.maps) {
+        Err(Error::Busy { holder, .. }) => assert!(
+            holder.contains(&format!("process {}", std::process::id())),
+            "{holder}"
+        ),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("the writer took a mapped store"),
+    }
+    assert_eq!(std::fs::read(&path).unwrap(), before);
+    assert_same(&Store::open(&path).unwrap(), &mapped, "after the refusal");
+    drop(mapped);
+    // Unmapped, the same writer may go ahead (and empties the linked file: that is what the
+    // lock protected).
+    assert!(StoreWriter::create(&other, &f.meta, &f.points, &f.maps).is_ok());
+}
+
+#[test]
+fn only_regular_files_are_mapped() {
+    let dir = tempfile::tempdir().unwrap();
+    for path in [dir.path(), Path::new("/dev/null")] {
+        let e = Store::open_mapped(path).err().unwrap();
+        assert!(
+            matches!(e, Error::NotRegularFile { .. } | Error::Io { .. }),
+            "{e}"
+        );
+    }
+    let empty = dir.path().join("empty.oslf");
+    std::fs::write(&empty, b"").unwrap();
+    assert!(matches!(
+        Store::open_mapped(&empty),
+        Err(Error::Truncated { .. })
+    ));
+}
