@@ -5,6 +5,7 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
+use crate::input::{read_input, InputKind};
 use crate::mesh::Mesh;
 use crate::{BakeError, Result};
 
@@ -53,10 +54,7 @@ impl CountingReader<'_> {
 /// Errors name the file; parse errors also give the line where the parser detected them
 /// (for index errors that can be the end of the object, as the parser checks them there).
 pub fn load_obj(path: &Path) -> Result<Mesh> {
-    let data = std::fs::read(path).map_err(|source| BakeError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let data = read_input(path, InputKind::Mesh)?;
     let mut reader = CountingReader {
         data: &data,
         pos: 0,
@@ -178,7 +176,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let missing = std::env::temp_dir().join("oslf-no-such-file.obj");
-        assert!(matches!(load_obj(&missing), Err(BakeError::Io { .. })));
+        assert!(matches!(load_obj(&missing), Err(BakeError::Input(oslf_util::UtilError::Input { .. }))));
         let p = write("empty.obj", "v 0 0 0\n");
         assert!(load_obj(&p).is_err());
         let p = write("oob.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");

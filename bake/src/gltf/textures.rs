@@ -8,6 +8,7 @@ use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 
 use super::loader::Loader;
+use crate::input::InputKind;
 use crate::texture::{srgb_to_linear, ImageTexture};
 use crate::Result;
 
@@ -69,7 +70,11 @@ impl<'d> Loader<'d> {
                 })?;
                 Cow::Borrowed(self.view_bytes(&view))
             }
-            (None, Some(uri)) => Cow::Owned(self.read_uri(uri, &format!("{at}.uri"))?),
+            (None, Some(uri)) => Cow::Owned(self.read_uri(
+                uri,
+                &format!("{at}.uri"),
+                &InputKind::Image.limit(),
+            )?),
             (None, None) => return Err(self.err(&at, "has neither a uri nor a bufferView")),
         };
         let decoded = image::load_from_memory(&bytes)

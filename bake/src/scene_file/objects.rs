@@ -13,6 +13,7 @@ use super::context::Ctx;
 use super::raw::{RawMaterial, RawObject, RawScene, RawTransform};
 use crate::bezier::{self, BezierPatch};
 use crate::error::{BakeError, Result};
+use crate::input::{read_input, InputKind};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::scene::{epsilon_problem, MeshSource, OslfObject, Shape};
@@ -198,9 +199,13 @@ impl Ctx<'_> {
             bezier::newell_teapot()
         } else {
             let file = self.existing_file(patches)?;
-            let text = std::fs::read_to_string(&file).map_err(|source| BakeError::Io {
-                path: file.clone(),
-                source,
+            let bytes = read_input(&file, InputKind::Text)?;
+            let text = String::from_utf8(bytes).map_err(|e| {
+                BakeError::Invalid(format!(
+                    "{}: not valid UTF-8 (byte {})",
+                    file.display(),
+                    e.utf8_error().valid_up_to()
+                ))
             })?;
             bezier::parse_patch_file(&text, &file)?
         };
