@@ -134,9 +134,20 @@ pub(super) fn parse_document<'b>(
             ));
         }
     }
+    // gltf-json asks every accessor without sparse values for a bufferView, but glTF 2.0
+    // (3.6.2.1) makes it optional: an accessor without one is all zeros (read_raw reads it so).
+    let optional_views: Vec<String> = (root.accessors.iter().enumerate())
+        .filter(|(_, a)| a.buffer_view.is_none())
+        .map(|(i, _)| format!("accessors[{i}].bufferView"))
+        .collect();
     let mut problems: Vec<(String, String)> = Vec::new();
     root.validate(&root, gltf::json::Path::new, &mut |at, e| {
-        problems.push((at().to_string(), e.to_string()))
+        let at = at().to_string();
+        let optional = matches!(e, gltf::json::validation::Error::Missing)
+            && optional_views.contains(&at);
+        if !optional {
+            problems.push((at, e.to_string()))
+        }
     });
     if let Some((at, what)) = problems.first() {
         let more = match problems.len() {
