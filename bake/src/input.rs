@@ -51,7 +51,10 @@ impl InputKind {
                 "a file a scene includes",
             ),
         };
-        Limit::new(bytes, format!("the {} allowed for {what}", byte_size(bytes)))
+        Limit::new(
+            bytes,
+            format!("the {} allowed for {what}", byte_size(bytes)),
+        )
     }
 }
 

@@ -200,15 +200,33 @@ mod tests {
     #[test]
     fn non_finite_positions_and_texture_coordinates_are_located_errors() {
         for (text, line, column, what) in [
-            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n", 5, 4, "texture coordinate component nan"),
-            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0  inf\nf 1/1 2/2 3/3\n", 6, 7, "texture coordinate component inf"),
-            ("v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n", 2, 5, "position component 1e39"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+                5,
+                4,
+                "texture coordinate component nan",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0  inf\nf 1/1 2/2 3/3\n",
+                6,
+                7,
+                "texture coordinate component inf",
+            ),
+            (
+                "v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n",
+                2,
+                5,
+                "position component 1e39",
+            ),
         ] {
             let p = write("nan.obj", text);
             match load_obj(&p) {
                 Err(e @ BakeError::Parse { .. }) => {
                     let e = e.to_string();
-                    assert!(e.contains(&format!("nan.obj:{line}:{column}: {what} is not finite")), "{e}");
+                    assert!(
+                        e.contains(&format!("nan.obj:{line}:{column}: {what} is not finite")),
+                        "{e}"
+                    );
                 }
                 other => panic!("{other:?}"),
             }
@@ -226,7 +244,10 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let missing = std::env::temp_dir().join("oslf-no-such-file.obj");
-        assert!(matches!(load_obj(&missing), Err(BakeError::Input(oslf_util::UtilError::Input { .. }))));
+        assert!(matches!(
+            load_obj(&missing),
+            Err(BakeError::Input(oslf_util::UtilError::Input { .. }))
+        ));
         let p = write("empty.obj", "v 0 0 0\n");
         assert!(load_obj(&p).is_err());
         let p = write("oob.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");

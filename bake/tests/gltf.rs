@@ -929,5 +929,9 @@ fn accessors_without_a_buffer_view_are_zeros() {
     let path = write(&d, "z.glb", &b.glb(doc));
     let (import, _) = import(&path, &Options::default());
     let s = &import.shapes[0];
-    assert!(s.mesh.uvs.iter().all(|&uv| uv == Vec2::new(0.0, 1.0)), "{:?}", s.mesh.uvs);
+    assert!(
+        s.mesh.uvs.iter().all(|&uv| uv == Vec2::new(0.0, 1.0)),
+        "{:?}",
+        s.mesh.uvs
+    );
 }

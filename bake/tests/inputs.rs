@@ -78,14 +78,24 @@ fn gltf_buffers_are_regular_files_within_their_declared_length() {
     let e = gltf_err(&path);
     assert_has(
         &e,
-        &["fifo.gltf", "buffers[0].uri", "not a regular file", "pipe.bin", "(a FIFO)"],
+        &[
+            "fifo.gltf",
+            "buffers[0].uri",
+            "not a regular file",
+            "pipe.bin",
+            "(a FIFO)",
+        ],
     );
     // A link to /dev/zero (a relative reference, so only the file type stops it).
     std::os::unix::fs::symlink("/dev/zero", d.join("zero.bin")).unwrap();
     let (path, _) = triangle_gltf(d, "zero.gltf", "zero.bin");
     assert_has(
         &gltf_err(&path),
-        &["zero.gltf", "buffers[0].uri", "zero.bin (a character device)"],
+        &[
+            "zero.gltf",
+            "buffers[0].uri",
+            "zero.bin (a character device)",
+        ],
     );
     // A directory.
     std::fs::create_dir(d.join("dir.bin")).unwrap();
@@ -118,7 +128,11 @@ fn gltf_buffers_are_regular_files_within_their_declared_length() {
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     assert_has(
         &gltf_err(&path),
-        &["huge.gltf", "buffers[0].byteLength", "3221225472 is more than the 1 GiB"],
+        &[
+            "huge.gltf",
+            "buffers[0].byteLength",
+            "3221225472 is more than the 1 GiB",
+        ],
     );
 }
 
@@ -209,16 +223,18 @@ fn scene_inputs_that_are_not_regular_files_are_named_as_such() {
         ("dir.obj", "(a directory)"),
         ("/dev/zero", "(a character device)"),
     ] {
-        let e = scene_err(d, &format!("{SCENE}\n[[mesh]]\npath = {name:?}\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n"));
+        let e = scene_err(
+            d,
+            &format!(
+                "{SCENE}\n[[mesh]]\npath = {name:?}\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n"
+            ),
+        );
         assert_has(&e, &["scene.toml:10:", "not a regular file", name, kind]);
         assert!(!e.contains("file not found"), "{e}");
     }
     let e = scene_err(
         d,
-        &SCENE.replace(
-            "uniform = [1, 1, 1]",
-            "map = { path = \"/dev/zero\" }",
-        ),
+        &SCENE.replace("uniform = [1, 1, 1]", "map = { path = \"/dev/zero\" }"),
     );
     assert_has(&e, &["scene.toml:3:", "/dev/zero (a character device)"]);
     // The scene itself.
@@ -254,5 +270,28 @@ fn inputs_larger_than_their_limit_are_refused_before_reading() {
         d,
         &SCENE.replace("uniform = [1, 1, 1]", "map = { path = \"big.png\" }"),
     );
-    assert_has(&e, &["big.png is larger than the 512 MiB allowed for an image"]);
+    assert_has(
+        &e,
+        &["big.png is larger than the 512 MiB allowed for an image"],
+    );
+}
+
+/// Shapes carry names for messages (the zero-area error names them).
+#[test]
+fn shapes_are_named_by_table_and_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let text = format!(
+        "{SCENE}\n[[box]]\nsize = [1, 1, 1]\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n\
+         [[box]]\nsize = [1, 1, 1]\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n\
+         [[mesh]]\npath = \"tri.obj\"\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n"
+    );
+    let path = d.join("named.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path, None).unwrap();
+    let names: Vec<&str> = scene.shapes.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["[[box]] 0", "[[box]] 1", "[[mesh]] \"tri.obj\""]);
+    let instances = scene.instances(true, 0.01);
+    assert_eq!(instances.last().unwrap().name, "object \"object0\"");
 }

@@ -155,7 +155,10 @@ mod tests {
         std::fs::write(&path, b"hello").unwrap();
         assert_eq!(read(&path, &limit(5)).unwrap(), b"hello");
         let e = read(&path, &limit(4)).unwrap_err().to_string();
-        assert!(e.contains("a.txt is larger than the 4 bytes allowed"), "{e}");
+        assert!(
+            e.contains("a.txt is larger than the 4 bytes allowed"),
+            "{e}"
+        );
         assert!(e.contains("5 bytes"), "{e}");
     }
 
@@ -188,8 +191,12 @@ mod tests {
     fn refuses_a_fifo_without_blocking() {
         let dir = tempfile::tempdir().unwrap();
         let fifo = dir.path().join("pipe");
-        rustix::fs::mkfifoat(rustix::fs::CWD, &fifo, rustix::fs::Mode::from_raw_mode(0o600))
-            .unwrap();
+        rustix::fs::mkfifoat(
+            rustix::fs::CWD,
+            &fifo,
+            rustix::fs::Mode::from_raw_mode(0o600),
+        )
+        .unwrap();
         let (tx, rx) = std::sync::mpsc::channel();
         let path = fifo.clone();
         std::thread::spawn(move || {

@@ -143,8 +143,8 @@ pub(super) fn parse_document<'b>(
     let mut problems: Vec<(String, String)> = Vec::new();
     root.validate(&root, gltf::json::Path::new, &mut |at, e| {
         let at = at().to_string();
-        let optional = matches!(e, gltf::json::validation::Error::Missing)
-            && optional_views.contains(&at);
+        let optional =
+            matches!(e, gltf::json::validation::Error::Missing) && optional_views.contains(&at);
         if !optional {
             problems.push((at, e.to_string()))
         }
@@ -247,8 +247,8 @@ impl<'d> Loader<'d> {
             ));
         }
         let file = self.dir.join(relative);
-        let bytes = oslf_util::input_file::read(&file, limit)
-            .map_err(|e| self.err(at, e.to_string()))?;
+        let bytes =
+            oslf_util::input_file::read(&file, limit).map_err(|e| self.err(at, e.to_string()))?;
         self.files.borrow_mut().push(file);
         Ok(bytes)
     }
@@ -413,7 +413,13 @@ mod tests {
 
     #[test]
     fn references_stay_in_the_directory() {
-        for ok in ["a.bin", "sub/a%20b.bin", "./a.bin", "sub/../a.bin", "./a:b.bin"] {
+        for ok in [
+            "a.bin",
+            "sub/a%20b.bin",
+            "./a.bin",
+            "sub/../a.bin",
+            "./a:b.bin",
+        ] {
             let decoded = percent_decode(ok).unwrap();
             assert_eq!(reference_problem(ok, &decoded), None, "{ok}");
         }

@@ -70,11 +70,9 @@ impl<'d> Loader<'d> {
                 })?;
                 Cow::Borrowed(self.view_bytes(&view))
             }
-            (None, Some(uri)) => Cow::Owned(self.read_uri(
-                uri,
-                &format!("{at}.uri"),
-                &InputKind::Image.limit(),
-            )?),
+            (None, Some(uri)) => {
+                Cow::Owned(self.read_uri(uri, &format!("{at}.uri"), &InputKind::Image.limit())?)
+            }
             (None, None) => return Err(self.err(&at, "has neither a uri nor a bufferView")),
         };
         let decoded = image::load_from_memory(&bytes)

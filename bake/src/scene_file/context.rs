@@ -59,9 +59,7 @@ impl Ctx<'_> {
                 self.included.borrow_mut().push(resolved.clone());
                 Ok(resolved)
             }
-            Err(UtilError::Input { error, .. })
-                if error.kind() == std::io::ErrorKind::NotFound =>
-            {
+            Err(UtilError::Input { error, .. }) if error.kind() == std::io::ErrorKind::NotFound => {
                 Err(self.error_at(
                     path.span(),
                     format!("file not found: {}", resolved.display()),
