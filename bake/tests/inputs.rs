@@ -168,11 +168,8 @@ fn gltf_references_are_relative_and_stay_in_the_directory() {
     }
 }
 
-#[test]
-fn gltf_images_are_regular_files() {
-    let tmp = tempfile::tempdir().unwrap();
-    let d = tmp.path();
-    mkfifo(&d.join("pipe.png"));
+/// A textured one-triangle `.gltf` in `dir` whose image is the file `uri`.
+fn textured_gltf(dir: &Path, name: &str, uri: &str) -> PathBuf {
     let mut b = Builder::new();
     let pos = b.positions(&TRIANGLE);
     let uv = b.vec2(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
@@ -181,15 +178,34 @@ fn gltf_images_are_regular_files() {
         "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv}, "material": 0}]}],
         "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
         "textures": [{"source": 0}],
-        "images": [{"uri": "pipe.png"}],
+        "images": [{"uri": uri}],
     });
-    let (text, bin) = b.gltf_external(doc, "tex.bin");
-    std::fs::write(d.join("tex.bin"), bin).unwrap();
-    let path = d.join("tex.gltf");
+    let (text, bin) = b.gltf_external(doc, &format!("{name}.bin"));
+    std::fs::write(dir.join(format!("{name}.bin")), bin).unwrap();
+    let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn gltf_images_are_regular_files_of_bounded_size() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    mkfifo(&d.join("pipe.png"));
+    let path = textured_gltf(d, "tex.gltf", "pipe.png");
     assert_has(
         &gltf_err(&path),
         &["tex.gltf", "images[0].uri", "pipe.png (a FIFO)"],
+    );
+    std::fs::write(d.join("huge.png"), png_header(20000, 20000)).unwrap();
+    let path = textured_gltf(d, "huge.gltf", "huge.png");
+    assert_has(
+        &gltf_err(&path),
+        &[
+            "huge.gltf",
+            "images[0]",
+            "20000 × 20000 pixels are more than the 268435456",
+        ],
     );
 }
 
@@ -237,11 +253,11 @@ fn scene_inputs_that_are_not_regular_files_are_named_as_such() {
         &SCENE.replace("uniform = [1, 1, 1]", "map = { path = \"/dev/zero\" }"),
     );
     assert_has(&e, &["scene.toml:3:", "/dev/zero (a character device)"]);
-    // The scene itself.
-    for path in ["/dev/zero", "/dev/zero.glb"] {
-        let path = PathBuf::from(path);
+    // The scene itself, TOML or glTF.
+    std::os::unix::fs::symlink("/dev/zero", d.join("zero.glb")).unwrap();
+    for path in [PathBuf::from("/dev/zero"), d.join("zero.glb")] {
         let e = within_deadline(move || Scene::load(&path, None).unwrap_err().to_string());
-        assert!(e.contains("/dev/zero"), "{e}");
+        assert!(e.contains("(a character device)"), "{e}");
     }
     let fifo = d.join("scene-pipe.toml");
     mkfifo(&fifo);
@@ -294,4 +310,59 @@ fn shapes_are_named_by_table_and_file() {
     assert_eq!(names, ["[[box]] 0", "[[box]] 1", "[[mesh]] \"tri.obj\""]);
     let instances = scene.instances(true, 0.01);
     assert_eq!(instances.last().unwrap().name, "object \"object0\"");
+}
+
+/// CRC-32 (ISO 3309, as PNG uses it).
+fn crc32(data: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in data {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// The start of a PNG whose header declares `width` × `height` RGB8 pixels (and no pixels).
+fn png_header(width: u32, height: u32) -> Vec<u8> {
+    let mut png = vec![137, 80, 78, 71, 13, 10, 26, 10];
+    let mut chunk = |kind: &[u8], data: &[u8]| {
+        png.extend((data.len() as u32).to_be_bytes());
+        let start = png.len();
+        png.extend(kind);
+        png.extend(data);
+        let crc = crc32(&png[start..]);
+        png.extend(crc.to_be_bytes());
+    };
+    let mut ihdr = Vec::new();
+    ihdr.extend(width.to_be_bytes());
+    ihdr.extend(height.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    chunk(b"IHDR", &ihdr);
+    chunk(b"IDAT", &[]);
+    chunk(b"IEND", &[]);
+    png
+}
+
+#[test]
+fn images_declaring_too_many_pixels_are_refused_before_decoding() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("huge.png"), png_header(20000, 20000)).unwrap();
+    let e = scene_err(
+        d,
+        &SCENE.replace("uniform = [1, 1, 1]", "map = { path = \"huge.png\" }"),
+    );
+    assert_has(
+        &e,
+        &[
+            "huge.png",
+            "20000 × 20000 pixels are more than the 268435456 an image may have",
+        ],
+    );
 }

@@ -8,7 +8,7 @@ use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 
 use super::loader::Loader;
-use crate::input::InputKind;
+use crate::input::{InputKind, MAX_IMAGE_PIXELS};
 use crate::texture::{srgb_to_linear, ImageTexture};
 use crate::Result;
 
@@ -75,6 +75,21 @@ impl<'d> Loader<'d> {
             }
             (None, None) => return Err(self.err(&at, "has neither a uri nor a bufferView")),
         };
+        // The pixel count its header declares, checked before decoding (crate::input).
+        let declared = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+            .with_guessed_format()
+            .ok()
+            .and_then(|r| r.into_dimensions().ok());
+        if let Some((w, h)) = declared {
+            if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
+                return Err(self.err(
+                    &at,
+                    format!(
+                        "{w} × {h} pixels are more than the {MAX_IMAGE_PIXELS} an image may have"
+                    ),
+                ));
+            }
+        }
         let decoded = image::load_from_memory(&bytes)
             .map_err(|e| self.err(&at, format!("cannot decode the image: {e}")))?;
         let rgb = decoded.to_rgb32f();
