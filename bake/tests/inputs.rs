@@ -366,3 +366,41 @@ fn images_declaring_too_many_pixels_are_refused_before_decoding() {
         ],
     );
 }
+
+/// An OpenEXR file whose header declares 300000000 × 1 pixels (an uncompressed 1 × 1 image,
+/// its data window widened; still one chunk, so the file is consistent up to the pixels):
+/// refused from the header, before 3.6 GB of pixels are allocated.
+#[test]
+fn exr_headers_declaring_too_many_pixels_are_refused_before_decoding() {
+    use exr::prelude::{Encoding, Image, SpecificChannels, WritableImage as _};
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let path = d.join("huge.exr");
+    let channels = SpecificChannels::rgb(|_| (1f32, 1f32, 1f32));
+    Image::from_encoded_channels((1, 1), Encoding::UNCOMPRESSED, channels)
+        .write()
+        .to_file(&path)
+        .unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("a dataWindow attribute")
+        + key.len()
+        + 4; // the attribute's size
+             // xMax (xMin, yMin and yMax stay 0).
+    bytes[at + 8..at + 12].copy_from_slice(&299_999_999i32.to_le_bytes());
+    std::fs::write(&path, bytes).unwrap();
+    let e = scene_err(
+        d,
+        &SCENE.replace("uniform = [1, 1, 1]", "map = { path = \"huge.exr\" }"),
+    );
+    assert_has(
+        &e,
+        &[
+            "huge.exr",
+            "300000000 × 1 pixels are more than the 268435456",
+        ],
+    );
+}
