@@ -264,6 +264,7 @@ mod tests {
     #[test]
     fn tiled_packet_capture_is_the_texel_by_texel_one() {
         let mut instances = vec![Instance {
+            name: String::new(),
             mesh: shapes::sphere(1.0, 32).unwrap(),
             material: 0,
             object: 0,
@@ -273,6 +274,7 @@ mod tests {
             p.z -= 1.1;
         }
         instances.push(Instance {
+            name: String::new(),
             mesh: ground,
             material: 1,
             object: crate::ray::ENVIRONMENT_OBJECT,

@@ -8,13 +8,10 @@ use std::path::PathBuf;
 /// sample index.
 #[derive(Debug, thiserror::Error)]
 pub enum BakeError {
-    /// An I/O error on a named file.
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// An input file that is missing, unreadable, not a regular file or larger than its limit
+    /// ([`crate::input`]); the message names the file.
+    #[error(transparent)]
+    Input(#[from] oslf_util::UtilError),
     /// A located problem in a text input (scene file, patch file, OBJ file).
     #[error("{path}:{line}:{column}: {message}")]
     Parse {

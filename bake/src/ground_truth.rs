@@ -138,6 +138,7 @@ impl<'s> GroundTruth<'s> {
         for object in &scene.objects {
             for patch in &object.patches {
                 instances.push(Instance {
+                    name: format!("object {:?}", object.name),
                     mesh: patch.tessellate(patch.tessellation_level(max_error)),
                     material: object.material,
                     object: patches.len() as u32,
@@ -147,6 +148,7 @@ impl<'s> GroundTruth<'s> {
             }
             if let Some(source) = &object.mesh {
                 instances.push(Instance {
+                    name: format!("object {:?}", object.name),
                     mesh: source.mesh.clone(),
                     material: object.material,
                     object: patches.len() as u32,

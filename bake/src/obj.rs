@@ -5,6 +5,7 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
+use crate::input::{read_input, InputKind};
 use crate::mesh::Mesh;
 use crate::{BakeError, Result};
 
@@ -46,17 +47,43 @@ impl CountingReader<'_> {
     }
 }
 
+/// Refuses a position (`v`) or texture coordinate (`vt`) with a NaN or infinite component
+/// (`nan`, `inf`, `1e39`), at its line and column: the same rule as glTF's `POSITION` and
+/// `TEXCOORD_n`. (Normals that are not finite are replaced by computed ones instead.)
+fn check_finite(path: &Path, data: &[u8]) -> Result<()> {
+    for (i, line) in data.split(|&b| b == b'\n').enumerate() {
+        let text = String::from_utf8_lossy(line);
+        let mut words = text.split_whitespace();
+        let what = match words.next() {
+            Some("v") => "position",
+            Some("vt") => "texture coordinate",
+            _ => continue,
+        };
+        for word in words {
+            if word.parse::<f32>().is_ok_and(|x| !x.is_finite()) {
+                let column = word.as_ptr() as usize - text.as_ptr() as usize + 1;
+                return Err(BakeError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    column,
+                    message: format!("{what} component {word} is not finite"),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Loads all objects of an OBJ file into one mesh: polygons triangulated, one index per
 /// vertex. Missing normals are computed (smooth, area weighted; also when the file's normals
-/// are zero or non-finite), missing uvs are 0. Materials and `mtllib` files are ignored.
+/// are zero or non-finite), missing uvs are 0; a NaN or infinite position or texture
+/// coordinate is an error at its line. Materials and `mtllib` files are ignored.
 ///
 /// Errors name the file; parse errors also give the line where the parser detected them
 /// (for index errors that can be the end of the object, as the parser checks them there).
 pub fn load_obj(path: &Path) -> Result<Mesh> {
-    let data = std::fs::read(path).map_err(|source| BakeError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let data = read_input(path, InputKind::Mesh)?;
+    check_finite(path, &data)?;
     let mut reader = CountingReader {
         data: &data,
         pos: 0,
@@ -123,10 +150,13 @@ pub fn load_obj(path: &Path) -> Result<Mesh> {
         } else {
             part.compute_smooth_normals();
         }
-        for uv in &mut part.uvs {
-            if !uv.is_finite() {
-                *uv = Vec2::ZERO;
-            }
+        if let Some(i) = part.uvs.iter().position(|uv| !uv.is_finite()) {
+            return Err(BakeError::Invalid(format!(
+                "{}: object {:?}: vertex {} has a non-finite texture coordinate",
+                path.display(),
+                model.name,
+                i + 1
+            )));
         }
         part.validate().map_err(|e| {
             BakeError::Invalid(format!("{}: object {:?}: {e}", path.display(), model.name))
@@ -168,6 +198,42 @@ mod tests {
     }
 
     #[test]
+    fn non_finite_positions_and_texture_coordinates_are_located_errors() {
+        for (text, line, column, what) in [
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+                5,
+                4,
+                "texture coordinate component nan",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0  inf\nf 1/1 2/2 3/3\n",
+                6,
+                7,
+                "texture coordinate component inf",
+            ),
+            (
+                "v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n",
+                2,
+                5,
+                "position component 1e39",
+            ),
+        ] {
+            let p = write("nan.obj", text);
+            match load_obj(&p) {
+                Err(e @ BakeError::Parse { .. }) => {
+                    let e = e.to_string();
+                    assert!(
+                        e.contains(&format!("nan.obj:{line}:{column}: {what} is not finite")),
+                        "{e}"
+                    );
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+
+    #[test]
     fn errors_are_located() {
         let p = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n");
         match load_obj(&p) {
@@ -178,7 +244,10 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let missing = std::env::temp_dir().join("oslf-no-such-file.obj");
-        assert!(matches!(load_obj(&missing), Err(BakeError::Io { .. })));
+        assert!(matches!(
+            load_obj(&missing),
+            Err(BakeError::Input(oslf_util::UtilError::Input { .. }))
+        ));
         let p = write("empty.obj", "v 0 0 0\n");
         assert!(load_obj(&p).is_err());
         let p = write("oob.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");

@@ -64,6 +64,9 @@ impl OslfObject {
 /// A piece of environment geometry (everything that is not an OSLF object), in world space.
 #[derive(Clone, Debug)]
 pub struct Shape {
+    /// What the shape is, for messages: `[[box]] 2` (the third box of the scene file),
+    /// `[[mesh]] "table.obj"`, `room.glb: nodes[3] "Table": meshes[1] "Top" primitive 0`.
+    pub name: String,
     pub mesh: Mesh,
     pub material: u32,
 }
@@ -148,6 +151,7 @@ impl Scene {
             .shapes
             .iter()
             .map(|s| Instance {
+                name: s.name.clone(),
                 mesh: s.mesh.clone(),
                 material: s.material,
                 object: ENVIRONMENT_OBJECT,
@@ -163,6 +167,7 @@ impl Scene {
                     mesh.append(&source.mesh);
                 }
                 out.push(Instance {
+                    name: format!("object {:?}", object.name),
                     mesh,
                     material: object.material,
                     object: i as u32,

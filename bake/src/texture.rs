@@ -4,11 +4,13 @@
 //! *bottom* (the OBJ / OpenGL convention), so texel `(x, y)` has its centre at
 //! `uv = ((x + ½)/w, 1 − (y + ½)/h)`. Lookups are bilinear and wrap (repeat) in both directions.
 
+use std::io::Cursor;
 use std::path::Path;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use crate::input::{read_input, InputKind, MAX_IMAGE_PIXELS};
 use crate::{BakeError, Result};
 
 /// sRGB transfer function (IEC 61966-2-1), encoded `[0,1]` → linear `[0,1]`.
@@ -167,55 +169,62 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
 /// Loads an image as linear RGB: `(width, height, pixels)`, row-major, row 0 at the top.
 ///
-/// The format is recognised from the file's content, not its name:
+/// The file is read with the image limits of [`crate::input`] (a regular file of at most
+/// [`crate::input::MAX_IMAGE_BYTES`], at most [`crate::input::MAX_IMAGE_PIXELS`] pixels as its
+/// header declares them) and decoded from memory. The format is recognised from the file's
+/// content, not its name:
 /// - OpenEXR (via the `exr` crate; the first layer with R, G and B channels, alpha ignored) and
 ///   Radiance HDR (`.hdr`, RGBE) are linear already;
 /// - PNG and JPEG (8 or 16 bit, grey or colour, alpha ignored) are sRGB-encoded and are
 ///   converted to linear with [`srgb_to_linear`].
 ///
-/// Errors: [`BakeError::Io`] if the file cannot be opened or read, [`BakeError::Image`] if it
-/// cannot be decoded or is empty, [`BakeError::BadPixel`] for the first NaN, infinite or
-/// negative component (scanning rows from the top).
+/// Errors: [`BakeError::Input`] if the file cannot be read, is not a regular file or is too
+/// large, [`BakeError::Image`] if it cannot be decoded, is empty or declares too many pixels,
+/// [`BakeError::BadPixel`] for the first NaN, infinite or negative component (scanning rows
+/// from the top).
 pub fn load_linear_rgb(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
-    let io_err = |source: std::io::Error| BakeError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let image_err = |message: String| BakeError::Image {
         path: path.to_path_buf(),
         message,
     };
-    let mut magic = [0u8; 4];
-    {
-        use std::io::Read;
-        let mut f = std::fs::File::open(path).map_err(io_err)?;
-        let mut n = 0;
-        while n < 4 {
-            let k = f.read(&mut magic[n..]).map_err(io_err)?;
-            if k == 0 {
-                break;
-            }
-            n += k;
-        }
-        if n < 4 {
-            return Err(image_err(format!(
-                "file is too short to be an image ({n} bytes)"
-            )));
-        }
+    let bytes = read_input(path, InputKind::Image)?;
+    if bytes.len() < 4 {
+        return Err(image_err(format!(
+            "file is too short to be an image ({} bytes)",
+            bytes.len()
+        )));
     }
-
-    let (width, height, pixels) = if magic == EXR_MAGIC {
-        load_exr(path).map_err(|e| image_err(format!("cannot read OpenEXR: {e}")))?
+    let check_pixel_count = |w: u64, h: u64| {
+        if w.saturating_mul(h) > MAX_IMAGE_PIXELS {
+            Err(image_err(format!(
+                "{w} × {h} pixels are more than the {MAX_IMAGE_PIXELS} an image may have"
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    let (width, height, pixels) = if bytes[..4] == EXR_MAGIC {
+        let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes[..]), false)
+            .map_err(|e| image_err(format!("cannot read OpenEXR: {e}")))?;
+        for header in &meta.headers {
+            check_pixel_count(header.layer_size.0 as u64, header.layer_size.1 as u64)?;
+        }
+        load_exr(&bytes).map_err(|e| image_err(format!("cannot read OpenEXR: {e}")))?
     } else {
-        let reader = image::ImageReader::open(path)
-            .map_err(io_err)?
-            .with_guessed_format()
-            .map_err(io_err)?;
+        let reader = || {
+            image::ImageReader::new(Cursor::new(&bytes[..]))
+                .with_guessed_format()
+                .expect("reading from memory cannot fail")
+        };
+        let (w, h) = reader()
+            .into_dimensions()
+            .map_err(|e| image_err(format!("cannot decode image: {e}")))?;
+        check_pixel_count(u64::from(w), u64::from(h))?;
+        let reader = reader();
         let format = reader.format();
-        let img = reader.decode().map_err(|e| match e {
-            image::ImageError::IoError(source) => io_err(source),
-            other => image_err(format!("cannot decode image: {other}")),
-        })?;
+        let img = reader
+            .decode()
+            .map_err(|e| image_err(format!("cannot decode image: {e}")))?;
         let linear = matches!(
             img,
             image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
@@ -243,20 +252,26 @@ pub fn load_linear_rgb(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
     Ok((width, height, pixels))
 }
 
-fn load_exr(path: &Path) -> std::result::Result<(u32, u32, Vec<Vec3>), exr::error::Error> {
+/// The first RGB layer of the OpenEXR file in `bytes`.
+fn load_exr(bytes: &[u8]) -> std::result::Result<(u32, u32, Vec<Vec3>), exr::error::Error> {
     use exr::prelude::*;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _channels| {
-            (
-                resolution.width(),
-                vec![Vec3::ZERO; resolution.width() * resolution.height()],
-            )
-        },
-        |(w, pixels): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            pixels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
-        },
-    )?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |resolution, _channels: &RgbaChannels| {
+                (
+                    resolution.width(),
+                    vec![Vec3::ZERO; resolution.width() * resolution.height()],
+                )
+            },
+            |(w, pixels): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                pixels[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))?;
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
     Ok((size.width() as u32, size.height() as u32, pixels))

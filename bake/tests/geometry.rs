@@ -473,6 +473,7 @@ fn test_scene(offset: Vec3, max_error: f32) -> (TriangleScene, Mesh) {
         m.transform(&t);
     }
     let inst = |mesh: &Mesh, material, object| Instance {
+        name: String::new(),
         mesh: mesh.clone(),
         material,
         object,
@@ -663,12 +664,14 @@ fn bvh_throughput() {
     use std::time::Instant;
     let teapot = teapot_mesh(0.1 / 50.0);
     let mut instances = vec![Instance {
+        name: String::new(),
         mesh: teapot.clone(),
         material: 0,
         object: 0,
     }];
     let floor = shapes::plane(Vec2::new(40.0, 40.0)).unwrap();
     instances.push(Instance {
+        name: String::new(),
         mesh: floor,
         material: 1,
         object: ENVIRONMENT_OBJECT,
@@ -696,6 +699,7 @@ fn bvh_throughput() {
         )));
         for mesh in [col, b, s] {
             instances.push(Instance {
+                name: String::new(),
                 mesh,
                 material: 2,
                 object: ENVIRONMENT_OBJECT,
@@ -705,6 +709,7 @@ fn bvh_throughput() {
     let mut roof = shapes::cuboid(Vec3::new(18.0, 18.0, 0.3)).unwrap();
     roof.transform(&Affine3A::from_translation(Vec3::new(0.0, 0.0, 8.2)));
     instances.push(Instance {
+        name: String::new(),
         mesh: roof,
         material: 3,
         object: ENVIRONMENT_OBJECT,

@@ -905,3 +905,33 @@ fn damaged_files_give_errors_not_panics() {
     }
     assert!(ok > 0 && failed > 0, "{ok} {failed}");
 }
+
+#[test]
+fn accessors_without_a_buffer_view_are_zeros() {
+    // TEXCOORD_0 with no bufferView and no sparse values: every coordinate (0, 0), which
+    // reads the texture's bottom-left texel (glTF's v = 0 is the image's top).
+    let mut b = Builder::new();
+    let png = b.png(2, 2, &TEXELS);
+    let pos = b.positions(&TRIANGLE);
+    b.accessors
+        .push(json!({"componentType": 5126, "count": 3, "type": "VEC2"}));
+    let uv = b.accessors.len() - 1;
+    let doc = json!({
+        "nodes": [{"mesh": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}],
+        "textures": [{"source": 0}],
+        "materials": [{"pbrMetallicRoughness": {"metallicFactor": 0,
+            "baseColorTexture": {"index": 0}}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+            "material": 0}]}],
+    });
+    let d = dir("zeros");
+    let path = write(&d, "z.glb", &b.glb(doc));
+    let (import, _) = import(&path, &Options::default());
+    let s = &import.shapes[0];
+    assert!(
+        s.mesh.uvs.iter().all(|&uv| uv == Vec2::new(0.0, 1.0)),
+        "{:?}",
+        s.mesh.uvs
+    );
+}

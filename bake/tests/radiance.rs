@@ -487,7 +487,7 @@ fn image_loading() {
     let missing = temp_path("missing.png");
     assert!(matches!(
         load_linear_rgb(&missing),
-        Err(BakeError::Io { .. })
+        Err(BakeError::Input(oslf_util::UtilError::Input { .. }))
     ));
     let garbage = temp_path("garbage.png");
     std::fs::write(&garbage, b"this is not an image at all").unwrap();

@@ -101,7 +101,7 @@ fn semantic_errors_are_located() {
     );
     assert!(matches!(
         parse(&text),
-        Err(BakeError::Parse { .. }) | Err(BakeError::Io { .. })
+        Err(BakeError::Parse { .. }) | Err(BakeError::Input(_))
     ));
     // A patch range outside the data.
     let text = GOOD.replace(

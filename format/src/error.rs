@@ -8,12 +8,12 @@ use std::path::PathBuf;
 /// the byte offset in the file.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// An I/O error; `context` names the file and the operation.
-    #[error("{context}: {source}")]
+    /// An I/O error; `context` names the file and the operation. The I/O error is part of the
+    /// message and not a source, so that a chain of causes (`{:#}`) prints it once.
+    #[error("{context}: {error}")]
     Io {
         context: String,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A store's file no longer holds bytes it held when it was opened: it was changed,
     /// truncated or overwritten (e.g. `cp` over it) while open.
@@ -334,10 +334,10 @@ pub enum Error {
 }
 
 impl Error {
-    pub(crate) fn io(context: impl Into<String>, source: std::io::Error) -> Self {
+    pub(crate) fn io(context: impl Into<String>, error: std::io::Error) -> Self {
         Error::Io {
             context: context.into(),
-            source,
+            error,
         }
     }
 }
@@ -345,5 +345,5 @@ impl Error {
 /// An [`Error`] for a file path and an operation.
 pub(crate) fn io_at(path: &std::path::Path, op: &str) -> impl FnOnce(std::io::Error) -> Error {
     let context = format!("{} ({op})", path.display());
-    move |source| Error::Io { context, source }
+    move |error| Error::Io { context, error }
 }

@@ -163,9 +163,9 @@ pub(crate) fn upload_sample_maps(gpu: &Gpu, store: &Store) -> Result<wgpu::Textu
     for patch in 0..patch_count {
         let view = store
             .sample_map(patch)
-            .map_err(|source| RuntimeError::Store {
+            .map_err(|error| RuntimeError::Store {
                 path: "sample maps".into(),
-                source,
+                error,
             })?;
         let bytes: &[u8] = match (view.as_u16(), view.as_u32()) {
             (Some(d), _) => bytemuck::cast_slice(d),

@@ -7,19 +7,20 @@ use std::path::PathBuf;
 pub enum RuntimeError {
     /// The store could not be opened or a read from it failed (missing, foreign, other
     /// version, damaged: the format crate's error says what and where).
-    #[error("{path}: {source}")]
+    ///
+    /// The format error is part of the message and not a source, so that a chain of causes
+    /// (`{:#}`) prints it once.
+    #[error("{}: {error}", .path.display())]
     Store {
         path: PathBuf,
-        #[source]
-        source: oslf_format::Error,
+        error: oslf_format::Error,
     },
     /// A cube map that failed to decode while streaming (checksum, damaged frame). The sample
     /// point falls back; the render goes on and reports this.
-    #[error("cube map {cube}: {source}")]
+    #[error("cube map {cube}: {error}")]
     Cube {
         cube: u32,
-        #[source]
-        source: oslf_format::Error,
+        error: oslf_format::Error,
     },
     /// No GPU adapter could be found.
     #[error(

@@ -26,7 +26,7 @@ pub fn fit_proxy_box(store: &Store, centre: Vec3) -> crate::Result<Option<[[f32;
     }
     let image = store
         .read_cube(env)
-        .map_err(|source| crate::RuntimeError::Cube { cube: env, source })?;
+        .map_err(|error| crate::RuntimeError::Cube { cube: env, error })?;
     let Some(distance) = &image.distance else {
         return Ok(None);
     };

@@ -65,7 +65,9 @@ fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
             px[pos.y() * *w + pos.x()] = [r, g, b, a]
         },
     )
-    .with_context(|| format!("cannot read OpenEXR {}", path.display()))?;
+    // The exr crate's I/O error prints its cause and also gives it as its source: flattened to
+    // its message, so the cause prints once.
+    .map_err(|e| anyhow::anyhow!("cannot read OpenEXR {}: {e}", path.display()))?;
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
     Ok((size.width(), size.height(), pixels))

@@ -6,12 +6,14 @@
 //! | module | what |
 //! | --- | --- |
 //! | [`image_file`] | writing images: linear 32-bit float OpenEXR (RGB, or RGBA with an object mask) for measurement, tone-mapped 8-bit sRGB PNG for eyes |
+//! | [`input_file`] | reading inputs with bounds: regular files only (never a FIFO, device or directory), at most a given number of bytes |
 //! | [`machine`] | what the machine offers: memory available for new allocations, free space on a volume |
 //!
 //! It depends on no other oslf crate, so any of them can use it.
 
 pub mod error;
 pub mod image_file;
+pub mod input_file;
 pub mod machine;
 
 pub use error::{Result, UtilError};

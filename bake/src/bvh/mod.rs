@@ -59,6 +59,8 @@ use crate::{BakeError, Result};
 /// A world-space mesh with the material and OSLF object its triangles belong to.
 #[derive(Clone, Debug, Default)]
 pub struct Instance {
+    /// What the triangles are, for messages: the shape's name, or `object "NAME"`.
+    pub name: String,
     /// Geometry, already in world space.
     pub mesh: Mesh,
     /// Index into the scene's material list.
@@ -98,6 +100,29 @@ pub struct TriangleScene {
     avx2: bool,
 }
 
+/// The instances that have triangles, named with their triangle counts (the first eight, then
+/// how many more), for the error when all of them have zero area.
+fn zero_area_meshes(instances: &[Instance]) -> String {
+    const SHOWN: usize = 8;
+    let named: Vec<String> = instances
+        .iter()
+        .filter(|i| !i.mesh.triangles.is_empty())
+        .map(|i| {
+            let name = if i.name.is_empty() {
+                "unnamed"
+            } else {
+                &i.name
+            };
+            format!("{name} ({} triangles)", i.mesh.triangles.len())
+        })
+        .collect();
+    let mut text = named[..named.len().min(SHOWN)].join(", ");
+    if named.len() > SHOWN {
+        text.push_str(&format!(" and {} more", named.len() - SHOWN));
+    }
+    text
+}
+
 /// Traversal stack depth of obvhs's `traverse!` (its `TRAVERSAL_STACK_SIZE`).
 const MAX_BVH_DEPTH: usize = 32;
 
@@ -111,7 +136,7 @@ impl TriangleScene {
         for (k, inst) in instances.iter().enumerate() {
             inst.mesh
                 .validate()
-                .map_err(|e| BakeError::Invalid(format!("instance {k}: {e}")))?;
+                .map_err(|e| BakeError::Invalid(format!("instance {k} ({}): {e}", inst.name)))?;
             for t in &inst.mesh.triangles {
                 let g = global;
                 global += 1;
@@ -136,7 +161,10 @@ impl TriangleScene {
             return Err(BakeError::Invalid(if global == 0 {
                 "scene has no triangles".into()
             } else {
-                format!("all {global} triangles of the scene have zero area")
+                format!(
+                    "all {global} triangles of the scene have zero area: {}",
+                    zero_area_meshes(&instances)
+                )
             }));
         }
         if vertices.len() >= (u32::MAX / 2) as usize {
@@ -695,12 +723,14 @@ mod tests {
                 *q += Vec3::new(k as f32 * 0.7, 0.2, -0.1 * k as f32);
             }
             instances.push(Instance {
+                name: String::new(),
                 mesh,
                 material: 0,
                 object: 0,
             });
         }
         instances.push(Instance {
+            name: String::new(),
             mesh: shapes::cuboid(Vec3::splat(6.0)).unwrap(),
             material: 1,
             object: 0,
@@ -811,6 +841,7 @@ mod tests {
         // same `t`: the diagonals and edges of a box's faces, and the coplanar triangles of
         // the floor under the spheres.
         let mut instances = vec![Instance {
+            name: String::new(),
             mesh: shapes::cuboid(Vec3::ONE).unwrap(),
             material: 0,
             object: 0,
@@ -820,6 +851,7 @@ mod tests {
             q.z -= 2.0;
         }
         instances.push(Instance {
+            name: String::new(),
             mesh: floor,
             material: 1,
             object: 0,
@@ -830,6 +862,7 @@ mod tests {
                 *q += Vec3::new(1.2 - 2.4 * k as f32, 0.5, -1.2);
             }
             instances.push(Instance {
+                name: String::new(),
                 mesh,
                 material: 0,
                 object: 0,
@@ -902,6 +935,7 @@ mod tests {
     fn packet_traversal_edge_cases() {
         let s = test_scene();
         let box_scene = TriangleScene::build(vec![Instance {
+            name: String::new(),
             mesh: shapes::cuboid(Vec3::ONE).unwrap(),
             material: 0,
             object: 0,
@@ -975,6 +1009,7 @@ mod tests {
             triangles: vec![[0, 1, 2]],
         };
         let s = TriangleScene::build(vec![Instance {
+            name: String::new(),
             mesh,
             material: 3,
             object: 7,
@@ -1000,16 +1035,40 @@ mod tests {
             triangles: vec![[0, 1, 2]],
         };
         assert!(TriangleScene::build(vec![Instance {
-            mesh,
+            name: String::new(),
+            mesh: mesh.clone(),
             material: 0,
             object: 0
         }])
         .is_err());
+        // The message names the meshes whose triangles these are.
+        let named = |name: &str| Instance {
+            name: name.into(),
+            mesh: mesh.clone(),
+            material: 0,
+            object: 0,
+        };
+        let e = TriangleScene::build(vec![
+            named("[[mesh]] \"flat.obj\""),
+            named("object \"lid\""),
+        ])
+        .err()
+        .unwrap()
+        .to_string();
+        assert_eq!(
+            e,
+            "all 2 triangles of the scene have zero area: [[mesh]] \"flat.obj\" (1 triangles), \
+             object \"lid\" (1 triangles)"
+        );
+        let many = (0..10).map(|i| named(&format!("[[box]] {i}"))).collect();
+        let e = TriangleScene::build(many).err().unwrap().to_string();
+        assert!(e.ends_with("[[box]] 7 (1 triangles) and 2 more"), "{e}");
     }
 
     #[test]
     fn bad_rays_miss() {
         let s = TriangleScene::build(vec![Instance {
+            name: String::new(),
             mesh: shapes::cuboid(Vec3::ONE).unwrap(),
             material: 0,
             object: 0,

@@ -7,8 +7,11 @@ use std::path::Path;
 
 use gltf::json::validation::Validate;
 
+use oslf_util::input_file::{byte_size, Limit};
+
 use super::import::SUPPORTED_EXTENSIONS;
 use super::loader::{error, label, Loader};
+use crate::input::{gltf_buffer_limit, MAX_MESH_BYTES};
 use crate::Result;
 
 pub(super) const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -131,9 +134,20 @@ pub(super) fn parse_document<'b>(
             ));
         }
     }
+    // gltf-json asks every accessor without sparse values for a bufferView, but glTF 2.0
+    // (3.6.2.1) makes it optional: an accessor without one is all zeros (read_raw reads it so).
+    let optional_views: Vec<String> = (root.accessors.iter().enumerate())
+        .filter(|(_, a)| a.buffer_view.is_none())
+        .map(|(i, _)| format!("accessors[{i}].bufferView"))
+        .collect();
     let mut problems: Vec<(String, String)> = Vec::new();
     root.validate(&root, gltf::json::Path::new, &mut |at, e| {
-        problems.push((at().to_string(), e.to_string()))
+        let at = at().to_string();
+        let optional =
+            matches!(e, gltf::json::validation::Error::Missing) && optional_views.contains(&at);
+        if !optional {
+            problems.push((at, e.to_string()))
+        }
     });
     if let Some((at, what)) = problems.first() {
         let more = match problems.len() {
@@ -180,7 +194,18 @@ impl<'d> Loader<'d> {
                     )),
                 },
                 gltf::buffer::Source::Uri(uri) => {
-                    Cow::Owned(self.read_uri(uri, &format!("buffers[{i}].uri"))?)
+                    let declared = buffer.length() as u64;
+                    if declared > MAX_MESH_BYTES {
+                        return Err(self.err(
+                            format!("buffers[{i}].byteLength"),
+                            format!(
+                                "{declared} is more than the {} a buffer may have",
+                                byte_size(MAX_MESH_BYTES)
+                            ),
+                        ));
+                    }
+                    let limit = gltf_buffer_limit(declared);
+                    Cow::Owned(self.read_uri(uri, &format!("buffers[{i}].uri"), &limit)?)
                 }
             };
             if data.len() < buffer.length() {
@@ -198,8 +223,11 @@ impl<'d> Loader<'d> {
         Ok(())
     }
 
-    /// The bytes of a data URI or of a file relative to the glTF file.
-    pub(super) fn read_uri(&self, uri: &str, at: &str) -> Result<Vec<u8>> {
+    /// The bytes of a data URI or of a file relative to the glTF file, a regular file of at
+    /// most `limit` bytes ([`crate::input`]). A reference with a scheme (`file:`, `http://`),
+    /// an absolute path or one that leaves the glTF file's directory (`../x.bin`) is refused
+    /// (docs/scene-format.md, "glTF scenes").
+    pub(super) fn read_uri(&self, uri: &str, at: &str, limit: &Limit) -> Result<Vec<u8>> {
         if let Some(rest) = uri.strip_prefix("data:") {
             let Some((_, data)) = rest.split_once(";base64,") else {
                 return Err(self.err(at, "a data URI must be base64-encoded (\";base64,\")"));
@@ -207,17 +235,20 @@ impl<'d> Loader<'d> {
             return base64_decode(data)
                 .ok_or_else(|| self.err(at, "the data URI is not valid base64"));
         }
-        if uri.contains("://") {
-            return Err(self.err(
-                at,
-                format!("{uri:?}: only relative file references and data URIs are supported"),
-            ));
-        }
         let relative = percent_decode(uri)
             .ok_or_else(|| self.err(at, format!("{uri:?} is not a valid percent-encoded URI")))?;
+        if let Some(problem) = reference_problem(uri, &relative) {
+            return Err(self.err(
+                at,
+                format!(
+                    "{uri:?} {problem}: only data URIs and relative references to files in \
+                     the glTF file's directory or below it are read"
+                ),
+            ));
+        }
         let file = self.dir.join(relative);
-        let bytes = std::fs::read(&file)
-            .map_err(|e| self.err(at, format!("cannot read {}: {e}", file.display())))?;
+        let bytes =
+            oslf_util::input_file::read(&file, limit).map_err(|e| self.err(at, e.to_string()))?;
         self.files.borrow_mut().push(file);
         Ok(bytes)
     }
@@ -280,6 +311,38 @@ impl<'d> Loader<'d> {
             ));
         }
     }
+}
+
+/// Why a URI (`uri` as written, `decoded` its percent-decoded path) is not a relative
+/// reference within the glTF file's directory, if it is not: it has a scheme (`file:`,
+/// `https:`, a drive letter `C:`), is an absolute path (`/dev/zero`, `\\server\share`) or
+/// climbs above the directory with `..`.
+pub(super) fn reference_problem(uri: &str, decoded: &str) -> Option<&'static str> {
+    // RFC 3986: scheme = ALPHA *( ALPHA / DIGIT / "+" / "-" / "." ) ":", before any "/".
+    let head = uri.split(['/', '?', '#']).next().unwrap_or("");
+    if let Some((scheme, _)) = head.split_once(':') {
+        let mut chars = scheme.chars();
+        if chars.next().is_some_and(|c| c.is_ascii_alphabetic())
+            && chars.all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+        {
+            return Some("has a scheme");
+        }
+    }
+    if decoded.starts_with(['/', '\\']) || Path::new(decoded).is_absolute() {
+        return Some("is an absolute path");
+    }
+    let mut depth = 0i32;
+    for part in decoded.split(['/', '\\']) {
+        match part {
+            "" | "." => {}
+            ".." => depth -= 1,
+            _ => depth += 1,
+        }
+        if depth < 0 {
+            return Some("leaves the glTF file's directory");
+        }
+    }
+    None
 }
 
 /// Standard base64 (RFC 4648, `+/`, padding optional, whitespace ignored).
@@ -346,6 +409,35 @@ mod tests {
         assert!(base64_decode("a*b").is_none());
         assert!(base64_decode("aG==VsbG8").is_none());
         assert_eq!(base64_decode("").unwrap(), b"");
+    }
+
+    #[test]
+    fn references_stay_in_the_directory() {
+        for ok in [
+            "a.bin",
+            "sub/a%20b.bin",
+            "./a.bin",
+            "sub/../a.bin",
+            "./a:b.bin",
+        ] {
+            let decoded = percent_decode(ok).unwrap();
+            assert_eq!(reference_problem(ok, &decoded), None, "{ok}");
+        }
+        for (bad, problem) in [
+            ("/dev/zero", "is an absolute path"),
+            ("%2Fdev%2Fzero", "is an absolute path"),
+            ("\\\\server\\share\\a.bin", "is an absolute path"),
+            ("file:///etc/passwd", "has a scheme"),
+            ("file:a.bin", "has a scheme"),
+            ("https://example.com/a.bin", "has a scheme"),
+            ("C:/a.bin", "has a scheme"),
+            ("../a.bin", "leaves the glTF file's directory"),
+            ("sub/../../a.bin", "leaves the glTF file's directory"),
+            ("%2E%2E/a.bin", "leaves the glTF file's directory"),
+        ] {
+            let decoded = percent_decode(bad).unwrap();
+            assert_eq!(reference_problem(bad, &decoded), Some(problem), "{bad}");
+        }
     }
 
     #[test]

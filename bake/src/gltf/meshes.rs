@@ -78,7 +78,9 @@ impl<'d> Loader<'d> {
                 ));
             }
             if !object {
+                let file = self.path.file_name().unwrap_or(self.path.as_os_str());
                 import.shapes.push(Shape {
+                    name: format!("{}: {at}: {what}", file.to_string_lossy()),
                     mesh: m,
                     material: material_index,
                 });

@@ -47,8 +47,9 @@ mod textures;
 
 use std::path::Path;
 
+use crate::input::{read_input, InputKind};
 use crate::material::Material;
-use crate::{BakeError, Result};
+use crate::Result;
 pub use import::{
     GltfCamera, Import, ImportedObject, Options, SUPPORTED_EXTENSIONS, WATTS_PER_LUMEN,
 };
@@ -58,10 +59,7 @@ pub use textures::texture_transform;
 /// Reads a `.gltf` or `.glb` file (recognised by content: GLB starts with `glTF`). New
 /// materials are appended to `materials`; the shapes index into it.
 pub fn load(path: &Path, options: &Options, materials: &mut Vec<Material>) -> Result<Import> {
-    let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_input(path, InputKind::Mesh)?;
     // The checks below are meant to leave the crate nothing to panic on; should one slip
     // through, it is still an error naming the file, not a crash.
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {

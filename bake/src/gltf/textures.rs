@@ -8,6 +8,7 @@ use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 
 use super::loader::Loader;
+use crate::input::{InputKind, MAX_IMAGE_PIXELS};
 use crate::texture::{srgb_to_linear, ImageTexture};
 use crate::Result;
 
@@ -69,9 +70,26 @@ impl<'d> Loader<'d> {
                 })?;
                 Cow::Borrowed(self.view_bytes(&view))
             }
-            (None, Some(uri)) => Cow::Owned(self.read_uri(uri, &format!("{at}.uri"))?),
+            (None, Some(uri)) => {
+                Cow::Owned(self.read_uri(uri, &format!("{at}.uri"), &InputKind::Image.limit())?)
+            }
             (None, None) => return Err(self.err(&at, "has neither a uri nor a bufferView")),
         };
+        // The pixel count its header declares, checked before decoding (crate::input).
+        let declared = image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+            .with_guessed_format()
+            .ok()
+            .and_then(|r| r.into_dimensions().ok());
+        if let Some((w, h)) = declared {
+            if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
+                return Err(self.err(
+                    &at,
+                    format!(
+                        "{w} × {h} pixels are more than the {MAX_IMAGE_PIXELS} an image may have"
+                    ),
+                ));
+            }
+        }
         let decoded = image::load_from_memory(&bytes)
             .map_err(|e| self.err(&at, format!("cannot decode the image: {e}")))?;
         let rgb = decoded.to_rgb32f();

@@ -6,8 +6,11 @@ use std::path::{Path, PathBuf};
 
 use toml::Spanned;
 
+use oslf_util::UtilError;
+
 use super::location::line_column;
 use crate::error::{BakeError, Result};
+use crate::input::{read_input, InputKind};
 
 /// Reading one scene file.
 pub(super) struct Ctx<'a> {
@@ -47,17 +50,22 @@ impl Ctx<'_> {
         }
     }
 
-    /// The file `path` names, which must exist; recorded as included.
+    /// The file `path` names, which must exist and be a regular file (a directory, FIFO or
+    /// device is refused as such, not as missing); recorded as included.
     pub(super) fn existing_file(&self, path: &Spanned<String>) -> Result<PathBuf> {
         let resolved = self.resolve(path.get_ref());
-        if resolved.is_file() {
-            self.included.borrow_mut().push(resolved.clone());
-            Ok(resolved)
-        } else {
-            Err(self.error_at(
-                path.span(),
-                format!("file not found: {}", resolved.display()),
-            ))
+        match oslf_util::input_file::open(&resolved) {
+            Ok(_) => {
+                self.included.borrow_mut().push(resolved.clone());
+                Ok(resolved)
+            }
+            Err(UtilError::Input { error, .. }) if error.kind() == std::io::ErrorKind::NotFound => {
+                Err(self.error_at(
+                    path.span(),
+                    format!("file not found: {}", resolved.display()),
+                ))
+            }
+            Err(e) => Err(self.error_at(path.span(), e.to_string())),
         }
     }
 }
@@ -69,10 +77,8 @@ pub(super) fn scene_hash(text: &[u8], files: &[PathBuf]) -> Result<[u8; 32]> {
     let mut hasher = sha2::Sha256::new();
     hasher.update(text);
     for file in files {
-        let bytes = std::fs::read(file).map_err(|source| BakeError::Io {
-            path: file.clone(),
-            source,
-        })?;
+        // Every file here was read with the limit of its kind while the scene was built.
+        let bytes = read_input(file, InputKind::Included)?;
         hasher.update(sha256(&bytes));
     }
     Ok(hasher.finalize().into())

@@ -30,6 +30,7 @@ use oslf_geometry::Camera;
 
 use crate::environment::Environment;
 use crate::error::{BakeError, Result};
+use crate::input::{read_input, InputKind};
 use crate::scene::{epsilon_problem, Scene};
 use context::{scene_hash, Ctx};
 pub use location::line_column;
@@ -82,10 +83,7 @@ impl Scene {
             }
             return Ok(scene);
         }
-        let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = read_input(path, InputKind::Text)?;
         let text = String::from_utf8(bytes).map_err(|e| {
             let (line, column) = line_column(
                 &String::from_utf8_lossy(e.as_bytes()),
@@ -134,10 +132,7 @@ impl Scene {
     /// - the environment: uniform, radiance [`GLTF_SCENE_ENVIRONMENT`] (white);
     /// - the bake settings: the `[bake]` defaults.
     pub fn from_gltf(path: &Path) -> Result<Scene> {
-        let bytes = std::fs::read(path).map_err(|source| BakeError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = read_input(path, InputKind::Mesh)?;
         let options = crate::gltf::Options {
             transform: Affine3A::from_rotation_x(90f32.to_radians()),
             objects_from_extras: true,

@@ -13,6 +13,7 @@ use super::context::Ctx;
 use super::raw::{RawMaterial, RawObject, RawScene, RawTransform};
 use crate::bezier::{self, BezierPatch};
 use crate::error::{BakeError, Result};
+use crate::input::{read_input, InputKind};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::scene::{epsilon_problem, MeshSource, OslfObject, Shape};
@@ -97,7 +98,8 @@ impl Ctx<'_> {
         materials: &mut Vec<Material>,
     ) -> Result<Vec<Shape>> {
         let mut shapes_out = Vec::new();
-        let mut add = |mesh: Mesh,
+        let mut add = |name: String,
+                       mesh: Mesh,
                        t: &RawTransform,
                        m: &Spanned<RawMaterial>,
                        materials: &mut Vec<Material>|
@@ -105,30 +107,38 @@ impl Ctx<'_> {
             let mut mesh = mesh;
             mesh.transform(&t.affine());
             let (material, _) = self.material(m, materials)?;
-            shapes_out.push(Shape { mesh, material });
+            shapes_out.push(Shape {
+                name,
+                mesh,
+                material,
+            });
             Ok(())
         };
-        for p in &raw.plane {
+        for (p_index, p) in raw.plane.iter().enumerate() {
             let mesh = shapes::plane(Vec2::new(p.size[0].0, p.size[1].0))
                 .map_err(|e| self.locate(p.material.span(), e))?;
-            add(mesh, &p.transform, &p.material, materials)?;
+            let name = format!("[[plane]] {p_index}");
+            add(name, mesh, &p.transform, &p.material, materials)?;
         }
-        for b in &raw.boxes {
+        for (b_index, b) in raw.boxes.iter().enumerate() {
             let mesh = shapes::cuboid(Vec3::new(b.size[0].0, b.size[1].0, b.size[2].0))
                 .map_err(|e| self.locate(b.material.span(), e))?;
-            add(mesh, &b.transform, &b.material, materials)?;
+            let name = format!("[[box]] {b_index}");
+            add(name, mesh, &b.transform, &b.material, materials)?;
         }
-        for c in &raw.cylinder {
+        for (c_index, c) in raw.cylinder.iter().enumerate() {
             let mesh = shapes::cylinder(c.radius.0, c.height.0, c.segments.0, c.capped)
                 .map_err(|e| self.locate(c.material.span(), e))?;
-            add(mesh, &c.transform, &c.material, materials)?;
+            let name = format!("[[cylinder]] {c_index}");
+            add(name, mesh, &c.transform, &c.material, materials)?;
         }
-        for s in &raw.sphere {
+        for (s_index, s) in raw.sphere.iter().enumerate() {
             let mesh = shapes::sphere(s.radius.0, s.segments.0)
                 .map_err(|e| self.locate(s.material.span(), e))?;
-            add(mesh, &s.transform, &s.material, materials)?;
+            let name = format!("[[sphere]] {s_index}");
+            add(name, mesh, &s.transform, &s.material, materials)?;
         }
-        for r in &raw.revolution {
+        for (r_index, r) in raw.revolution.iter().enumerate() {
             let profile: Vec<Vec2> = r
                 .profile
                 .get_ref()
@@ -137,12 +147,14 @@ impl Ctx<'_> {
                 .collect();
             let mesh = shapes::revolution(&profile, r.segments.0)
                 .map_err(|e| self.locate(r.profile.span(), e))?;
-            add(mesh, &r.transform, &r.material, materials)?;
+            let name = format!("[[revolution]] {r_index}");
+            add(name, mesh, &r.transform, &r.material, materials)?;
         }
         for m in &raw.mesh {
             let file = self.existing_file(&m.path)?;
             let mesh = obj::load_obj(&file)?;
-            add(mesh, &m.transform, &m.material, materials)?;
+            let name = format!("[[mesh]] {:?}", m.path.get_ref());
+            add(name, mesh, &m.transform, &m.material, materials)?;
         }
         Ok(shapes_out)
     }
@@ -198,9 +210,13 @@ impl Ctx<'_> {
             bezier::newell_teapot()
         } else {
             let file = self.existing_file(patches)?;
-            let text = std::fs::read_to_string(&file).map_err(|source| BakeError::Io {
-                path: file.clone(),
-                source,
+            let bytes = read_input(&file, InputKind::Text)?;
+            let text = String::from_utf8(bytes).map_err(|e| {
+                BakeError::Invalid(format!(
+                    "{}: not valid UTF-8 (byte {})",
+                    file.display(),
+                    e.utf8_error().valid_up_to()
+                ))
             })?;
             bezier::parse_patch_file(&text, &file)?
         };

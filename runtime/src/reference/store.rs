@@ -35,7 +35,7 @@ impl StoreCubes {
         let cubes = (0..store.cube_count())
             .into_par_iter()
             .map(|cube| -> crate::Result<Cube> {
-                let err = |source| crate::RuntimeError::Cube { cube, source };
+                let err = |error| crate::RuntimeError::Cube { cube, error };
                 let mut levels = vec![Vec::new(); layout.levels as usize];
                 let mut depth = Vec::new();
                 for face in 0..6u8 {

@@ -121,9 +121,9 @@ impl Renderer {
         let maps = (0..self.store.meta().map_count() as u32)
             .map(|p| self.store.sample_map(p))
             .collect::<Result<Vec<_>, _>>()
-            .map_err(|source| RuntimeError::Store {
+            .map_err(|error| RuntimeError::Store {
                 path: "sample maps".into(),
-                source,
+                error,
             })?;
         let feedback: Vec<AtomicU32> = (0..self.cube_count).map(|_| AtomicU32::new(0)).collect();
         let shader = crate::reference::Shader {
