@@ -158,15 +158,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     }
     let report = bake_shard(&scene, &options, args.shard, &limits).map_err(with_flag_hints)?;
     print_summary(&report);
-    let m = &report.sample_maps;
-    if m.empty > 0 {
-        eprintln!(
-            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; raise sample_count (or lower sample_spacing), or lower epsilon (--strict refuses such a bake)",
-            m.empty,
-            m.texels,
-            100.0 * m.empty as f64 / m.texels.max(1) as f64
-        );
-    }
+    warn_empty_texels(&report);
     if !report.finished {
         println!(
             "stopped after --max-cubes; continue with --resume (the partial store is {})",
@@ -202,6 +194,20 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The warning for sample-map texels without any visible sample point (`--strict` refuses
+/// them before the capture).
+fn warn_empty_texels(report: &BakeReport) {
+    let m = &report.sample_maps;
+    if m.empty > 0 {
+        eprintln!(
+            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; raise sample_count (or lower sample_spacing), or lower epsilon (--strict refuses such a bake)",
+            m.empty,
+            m.texels,
+            100.0 * m.empty as f64 / m.texels.max(1) as f64
+        );
+    }
 }
 
 fn print_summary(r: &BakeReport) {
