@@ -87,6 +87,9 @@ pub struct StoreWriter {
     header: Header,
     /// RGB9E5 mantissa bits of the store (the metadata's); appended cubes must match.
     mantissa_bits: u32,
+    /// The metadata's zstd level, for refiltering cubes' distance planes
+    /// ([`EncodedCube::with_distance_plane`]).
+    zstd_level: i32,
     /// The TOC entries so far (192 bytes per cube).
     toc: Vec<u8>,
     pos: u64,
@@ -159,6 +162,7 @@ impl StoreWriter {
             pos: prefix.header.payload.offset,
             header: prefix.header,
             mantissa_bits: meta.bake.mantissa_bits,
+            zstd_level: meta.bake.zstd_level,
             toc: Vec::new(),
             next: 0,
             total: prefix.total,
@@ -176,7 +180,7 @@ impl StoreWriter {
         path: &Path,
         prefix: &[u8],
         header: Header,
-        mantissa_bits: u32,
+        bake: &crate::BakeParams,
     ) -> Result<Self, Error> {
         let total = u32::try_from(header.cube_count).map_err(|_| Error::Limit {
             what: "cube count",
@@ -196,7 +200,8 @@ impl StoreWriter {
             file: w,
             pos: header.payload.offset,
             header,
-            mantissa_bits,
+            mantissa_bits: bake.mantissa_bits,
+            zstd_level: bake.zstd_level,
             toc: Vec::new(),
             next: 0,
             total,
@@ -244,6 +249,7 @@ impl StoreWriter {
             file: BufWriter::with_capacity(1 << 20, file),
             header: prefix.header,
             mantissa_bits: meta.bake.mantissa_bits,
+            zstd_level: meta.bake.zstd_level,
             toc: recovered.toc,
             pos: recovered.pos,
             next: recovered.next,
@@ -296,6 +302,8 @@ impl StoreWriter {
                 got: index,
             });
         }
+        // A version-5 (or older) partial file continued by resume() holds f32 planes.
+        let cube = cube.with_distance_plane(self.header.distance_plane(), self.zstd_level)?;
         check_cube_params(&cube, &self.header, self.mantissa_bits)?;
         let faces = std::array::from_fn(|f| {
             (
@@ -426,22 +434,22 @@ pub(crate) fn check_cube_params(
     if cube.encoding != h.encoding
         || cube.filter != h.filter
         || cube.resolution != h.cube_resolution
-        || cube.distance_channel != h.has_distance()
+        || cube.distance != h.distance_plane()
         || cube.mantissa_bits != mantissa_bits
     {
         return Err(Error::CubeParamsMismatch {
             cube: cube.cube_index,
             detail: format!(
-                "cube: {} filter {} {}² distance={} mantissa_bits={}, store: {} filter {} {}² distance={} mantissa_bits={}",
+                "cube: {} filter {} {}² distance {} mantissa_bits={}, store: {} filter {} {}² distance {} mantissa_bits={}",
                 cube.encoding,
                 cube.filter,
                 cube.resolution,
-                cube.distance_channel,
+                cube.distance,
                 cube.mantissa_bits,
                 h.encoding,
                 h.filter,
                 h.cube_resolution,
-                h.has_distance(),
+                h.distance_plane(),
                 mantissa_bits
             ),
         });

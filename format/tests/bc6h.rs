@@ -288,7 +288,9 @@ fn bc6h_stores_round_trip() {
             assert_eq!(&raw[..blocks.len()], blocks.as_slice());
             assert_eq!(got.faces[face], decode(&blocks, 8));
         }
-        assert_eq!(got.distance, c.distance);
+        let plane = store.header().distance_plane();
+        assert_eq!(plane, DistancePlane::Lattice { bits: 3 });
+        assert_eq!(got.distance, stored_distances(plane, &c.distance));
     }
     // Every filter round-trips a BC6H store too.
     for filter in Filter::ALL {
@@ -331,12 +333,15 @@ fn with_reserved_block(bytes: &[u8], cube: u32, face: usize, block: usize) -> Ve
         for mode in [0b10011u8, 0b10111, 0b11011, 0b11111] {
             let mut r = raw.clone();
             r[block * BLOCK_BYTES] = mode | (hi << 5);
-            let mut filtered = vec![0u8; r.len()];
+            let plane = h.distance_plane();
+            let size =
+                filter::filtered_face_size(h.filter, h.encoding, h.cube_resolution, plane, 9);
+            let mut filtered = vec![0u8; size.unwrap()];
             filter::filter_face(
                 h.filter,
                 h.encoding,
                 h.cube_resolution,
-                h.has_distance(),
+                plane,
                 &r,
                 &mut filtered,
             )
@@ -486,10 +491,12 @@ fn a_version_3_store_still_opens_and_verifies() {
     write(&new, &f);
     let (old, now) = (std::fs::read(&path).unwrap(), std::fs::read(&new).unwrap());
     assert_eq!(u32::from_le_bytes(now[8..12].try_into().unwrap()), VERSION);
-    // Version 5 adds a `u32` kind (0) after each object record: the same metadata, and the
-    // same sample points, maps and cube records.
+    // Version 5 adds a `u32` kind (0) after each object record, version 6 the distance
+    // lattice: the same metadata, sample points, maps and texels, and the distances rounded
+    // to the lattice.
     assert_eq!(Store::open(&new).unwrap().meta(), store.meta());
-    assert_same_sections(&old, &now);
+    assert_same_sections(&old, &now, false);
+    assert_same_faces(&store, &Store::open(&new).unwrap());
 }
 
 /// `face_error` on known values.

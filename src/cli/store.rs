@@ -393,9 +393,9 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
         b.encoding,
         b.encoding.bytes_per_texel(),
         if b.distance_channel {
-            " + f32 distance"
+            format!(" + distance ({})", h.distance_plane())
         } else {
-            ""
+            String::new()
         }
     );
     println!(

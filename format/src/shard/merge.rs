@@ -195,8 +195,7 @@ pub fn merge(shards: &[PathBuf], output: &Path) -> Result<StoreSummary, Error> {
         }
     }
 
-    let mut writer =
-        StoreWriter::create_from_prefix(output, &prefix, header.clone(), meta.bake.mantissa_bits)?;
+    let mut writer = StoreWriter::create_from_prefix(output, &prefix, header.clone(), &meta.bake)?;
     let partial = writer.partial_path().to_path_buf();
     let result = (|| -> Result<StoreSummary, Error> {
         for i in 0..writer.total_cubes() {
