@@ -548,3 +548,43 @@ fn bc6h_shards_merge_byte_for_byte() {
         Encoding::Bc6h
     );
 }
+
+/// A store written by the version-5 writer (commit b59f778, before the distance lattice:
+/// `oslf bake v5-bc6h.toml -o v5-bc6h.oslf`, both in tests/data) still opens and verifies,
+/// with its decoded-faces checksum, and reads its f32 distances as they are: the old
+/// filter (four byte planes of the f32 patterns), not the lattice codes.
+#[test]
+fn a_version_5_store_with_f32_distances_still_opens_and_verifies() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v5-bc6h.oslf");
+    let store = Store::open(&path).unwrap();
+    let h = store.header();
+    assert_eq!(h.version, 5);
+    assert_eq!(h.encoding, Encoding::Bc6h);
+    assert_eq!(h.filter, Filter::PredictRows);
+    assert_eq!(h.distance_plane(), DistancePlane::F32);
+    assert!(store.verify().unwrap().decoded_checksum);
+    let n = store.cube_resolution() as usize;
+    // The frames decompress to the f32 plane's four bytes per texel.
+    let e = store.face_entry(0, 0).unwrap();
+    let b = std::fs::read(&path).unwrap();
+    let frame = &b[e.offset as usize..(e.offset + e.compressed_size) as usize];
+    let filtered = zstd::bulk::decompress(frame, 1 << 20).unwrap();
+    assert_eq!(filtered.len(), BLOCK_BYTES * (n / 4).pow(2) + 4 * n * n);
+    let (mut hits, mut misses, mut off_lattice) = (0, 0, 0);
+    for c in 0..store.cube_count() {
+        let cube = store.read_cube(c).unwrap();
+        for d in cube.distance.unwrap().iter().flatten() {
+            assert!(d.is_finite() && *d >= 0.0);
+            if *d == f32::MAX {
+                misses += 1;
+            } else {
+                hits += 1;
+                off_lattice += usize::from(d.to_bits() & 0x7fff != 0);
+            }
+        }
+    }
+    assert!(
+        hits > 0 && misses > 0 && off_lattice > hits / 2,
+        "{hits} {misses} {off_lattice}"
+    );
+}
