@@ -74,6 +74,12 @@ pub struct Args {
     /// working set), or a default background the store cannot give.
     #[arg(long)]
     strict: bool,
+    /// Before rendering, decode every face and check them against the store's checksum of
+    /// its decoded faces (as `oslf store verify`), so that a damaged store resealed with new
+    /// frame checksums cannot render silently wrong: a mismatch is a warning, an error
+    /// under --strict.
+    #[arg(long)]
+    verify: bool,
     /// Write the frame's and the cumulative cache statistics as JSON to this file.
     #[arg(long)]
     stats_json: Option<PathBuf>,
@@ -87,6 +93,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     check_outputs(&args)?;
     let store = Store::open(&args.store)
         .with_context(|| format!("cannot open store {}", args.store.display()))?;
+    if args.verify {
+        super::store::verify_for_render(&store, &args.store, args.strict)?;
+    }
     let params = args.shading.params(args.mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
     let (background, note) = args.background.resolve(&store, &args.store)?;

@@ -95,6 +95,32 @@ fn open(path: &Path) -> Result<Store> {
     Store::open(path).with_context(|| format!("cannot open {}", path.display()))
 }
 
+/// `oslf render --verify`: [`Store::verify`] (every frame, padding byte and the checksum of
+/// the decoded faces) before the render. A failure is an error under `strict`, else a
+/// warning on stderr; a store of format version 1 or 2, which records no checksum of its
+/// decoded faces, gets a note.
+pub(super) fn verify_for_render(store: &Store, path: &Path, strict: bool) -> Result<()> {
+    match store.verify() {
+        Ok(r) if !r.decoded_checksum => eprintln!(
+            "note: {}: format version {} records no checksum of the decoded faces; only the frames were checked",
+            path.display(),
+            store.header().version
+        ),
+        Ok(_) => {}
+        Err(e) if strict => {
+            bail!(
+                "{} failed verification (--verify --strict; nothing rendered): {e}",
+                path.display()
+            )
+        }
+        Err(e) => eprintln!(
+            "warning: {} failed verification, the image may be wrong: {e}",
+            path.display()
+        ),
+    }
+    Ok(())
+}
+
 pub fn run(cli: Args) -> Result<()> {
     match cli.command {
         Command::Info { store, json } => info(&store, json),
