@@ -203,9 +203,15 @@ impl EncodedCube {
         zstd_level: i32,
     ) -> Result<Self, Error> {
         if !(matches!(self.distance, DistancePlane::Lattice { .. }) && plane == DistancePlane::F32)
-            || self.filter == Filter::None
         {
             return Ok(self);
+        }
+        if self.filter == Filter::None {
+            // Filter 0 stores the raw face as it is: the same bytes for both planes.
+            return Ok(EncodedCube {
+                distance: plane,
+                ..self
+            });
         }
         let (enc, res, bits) = (self.encoding, self.resolution, self.mantissa_bits);
         let fail = |face: usize, detail: String| Error::Compress {
