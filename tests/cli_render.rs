@@ -388,3 +388,98 @@ fn gl_backend_renders_or_names_the_missing_capability_and_the_fix() {
         assert!(!stderr.contains("Validation Error"), "{stderr}");
     }
 }
+
+/// `store` with one RGB9E5 texel of cube `cube`, face 0 changed and every checksum but that of
+/// the decoded faces resealed (frame checksum in the table of contents and the cube record,
+/// their own checksums, the header's): every frame reads, only the decoded faces differ from
+/// what the header's checksum of them says. The face is re-encoded with `encode_cube`, trying
+/// texels until the frame keeps its compressed size, so no offset moves.
+fn resealed_with_an_altered_face(store: &std::path::Path, cube: u32) -> Vec<u8> {
+    use xxhash_rust::xxh3::xxh3_64;
+    let bytes = std::fs::read(store).unwrap();
+    let s = oslf_format::Store::from_bytes(&bytes).unwrap();
+    let e = s.face_entry(cube, 0).unwrap();
+    let image = s.read_cube(cube).unwrap();
+    let put = |b: &mut Vec<u8>, at: u64, v: u64| {
+        b[at as usize..at as usize + 8].copy_from_slice(&v.to_le_bytes())
+    };
+    for texel in 0..image.faces[0].len() {
+        let mut altered = image.clone();
+        let t = &mut altered.faces[0][texel];
+        *t = [t[0] * 4.0 + 1.0, t[1], t[2] * 0.25];
+        let (enc, _) = oslf_format::encode_cube(&altered, &s.meta().bake, cube).unwrap();
+        let frame = &enc.frames()[0];
+        if frame.len() as u64 != e.compressed_size {
+            continue;
+        }
+        let mut b = bytes.clone();
+        b[e.offset as usize..(e.offset + e.compressed_size) as usize].copy_from_slice(frame);
+        let sum = xxh3_64(frame);
+        // The table of contents: face entry (offset, sizes, checksum), then its checksum.
+        let toc = s.header().toc;
+        put(&mut b, toc.offset + (u64::from(cube) * 6) * 32 + 24, sum);
+        let toc_end = toc.offset + toc.size - 8;
+        let toc_sum = xxh3_64(&b[toc.offset as usize..toc_end as usize]);
+        put(&mut b, toc_end, toc_sum);
+        // The cube record: magic, index, per face (compressed, raw, checksum), checksum.
+        let rec = e.offset - 160;
+        put(&mut b, rec + 8 + 16, sum);
+        let rec_sum = xxh3_64(&b[rec as usize..rec as usize + 152]);
+        put(&mut b, rec + 152, rec_sum);
+        let header_sum = xxh3_64(&b[..248]);
+        put(&mut b, 248, header_sum);
+        return b;
+    }
+    panic!("no altered texel keeps the frame's size");
+}
+
+/// `--verify` checks the store's checksum of its decoded faces before rendering: a store
+/// with a face altered and resealed renders (silently wrong) without it, with a warning with
+/// it, and not at all with `--verify --strict` (exit 1, the store and the checksum named, no
+/// image written). An intact store renders with `--verify --strict`.
+#[test]
+fn verify_catches_a_resealed_store_before_rendering() {
+    let store = runtime_fixture::store_path();
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("resealed.oslf");
+    std::fs::write(&bad, resealed_with_an_altered_face(&store, 7)).unwrap();
+    let e = oslf_format::Store::open(&bad)
+        .unwrap()
+        .verify()
+        .unwrap_err();
+    assert!(
+        matches!(e, oslf_format::Error::DecodedChecksum { .. }),
+        "{e}"
+    );
+    let exr = dir.path().join("x.exr");
+    let run = |path: &std::path::Path, flags: &[&str]| {
+        let mut args = vec![path.to_str().unwrap(), "-o", exr.to_str().unwrap()];
+        args.extend_from_slice(&["--width", "32", "--height", "24"]);
+        args.extend_from_slice(flags);
+        let out = render(&args);
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (ok, err) = run(&bad, &[]);
+    assert!(ok && !err.contains("verification"), "{err}");
+    let (ok, err) = run(&bad, &["--verify"]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("warning")
+            && err.contains("resealed.oslf")
+            && err.contains("header byte offset 180"),
+        "{err}"
+    );
+    std::fs::remove_file(&exr).unwrap();
+    let (ok, err) = run(&bad, &["--verify", "--strict"]);
+    assert!(!ok);
+    assert!(
+        err.contains("resealed.oslf failed verification") && err.contains("header byte offset 180"),
+        "{err}"
+    );
+    assert!(!exr.exists(), "nothing written under --strict");
+    let (ok, err) = run(&store, &["--verify", "--strict"]);
+    assert!(ok && exr.exists(), "{err}");
+}

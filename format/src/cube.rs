@@ -18,9 +18,10 @@
 //! `s = (x + 0.5) / n`, `t = (y + 0.5) / n`. When two components tie for the largest magnitude
 //! the face is chosen in the order x, y, z.
 
+use crate::distance::DistancePlane;
 use crate::encoding::{encode_distances, encode_face_texels, quantize_rgb9e5_bytes, Encoding};
 use crate::filter::{filter_face_quantized, Filter};
-use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
+use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION, VERSION};
 
 /// Number of faces of a cube map.
 pub const FACES: usize = 6;
@@ -157,7 +158,9 @@ pub struct EncodedCube {
     pub(crate) encoding: Encoding,
     pub(crate) filter: Filter,
     pub(crate) resolution: u32,
-    pub(crate) distance_channel: bool,
+    /// How the frames hold the distance plane (the lattice of [`VERSION`] for
+    /// [`encode_cube`]'s cubes).
+    pub(crate) distance: DistancePlane,
     pub(crate) mantissa_bits: u32,
     pub(crate) raw_size: u64,
     pub(crate) frames: [Vec<u8>; FACES],
@@ -186,6 +189,71 @@ impl EncodedCube {
     /// Compressed bytes of all six faces.
     pub fn compressed_bytes(&self) -> u64 {
         self.frames.iter().map(|f| f.len() as u64).sum()
+    }
+
+    /// The cube with its distance planes filtered as `plane` holds them, its frames
+    /// recompressed at `zstd_level`: for continuing a partial file of format version 2 to 5
+    /// ([`crate::StoreWriter::resume`]), whose faces hold `f32` planes, with cubes that
+    /// [`encode_cube`] put on the distance lattice. The raw faces (and so their checksums)
+    /// stay the same: a lattice distance is an `f32`. Any other change of plane is returned
+    /// unchanged, for the writer to refuse.
+    pub(crate) fn with_distance_plane(
+        self,
+        plane: DistancePlane,
+        zstd_level: i32,
+    ) -> Result<Self, Error> {
+        if !(matches!(self.distance, DistancePlane::Lattice { .. }) && plane == DistancePlane::F32)
+        {
+            return Ok(self);
+        }
+        if self.filter == Filter::None {
+            // Filter 0 stores the raw face as it is: the same bytes for both planes.
+            return Ok(EncodedCube {
+                distance: plane,
+                ..self
+            });
+        }
+        let (enc, res, bits) = (self.encoding, self.resolution, self.mantissa_bits);
+        let fail = |face: usize, detail: String| Error::Compress {
+            cube: self.cube_index,
+            face,
+            detail,
+        };
+        let size = |p: DistancePlane| {
+            crate::filter::filtered_face_size(self.filter, enc, res, p, bits).ok_or(Error::Limit {
+                what: "cube resolution",
+                value: u64::from(res),
+                max: u64::from(MAX_CUBE_RESOLUTION),
+            })
+        };
+        let mut from = vec![0u8; size(self.distance)?];
+        let mut raw = vec![0u8; self.raw_size as usize];
+        let mut to = vec![0u8; size(plane)?];
+        let mut frames: [Vec<u8>; FACES] = Default::default();
+        let mut checksums = [0u64; FACES];
+        for (face, frame) in self.frames.iter().enumerate() {
+            zstd::bulk::decompress_to_buffer(frame, &mut from)
+                .map_err(|e| fail(face, e.to_string()))?;
+            crate::filter::unfilter_face_quantized(
+                self.filter,
+                enc,
+                res,
+                self.distance,
+                bits,
+                &from,
+                &mut raw,
+            )?;
+            filter_face_quantized(self.filter, enc, res, plane, bits, &raw, &mut to)?;
+            frames[face] =
+                zstd::bulk::compress(&to, zstd_level).map_err(|e| fail(face, e.to_string()))?;
+            checksums[face] = xxhash_rust::xxh3::xxh3_64(&frames[face]);
+        }
+        Ok(EncodedCube {
+            distance: plane,
+            frames,
+            checksums,
+            ..self
+        })
     }
 }
 
@@ -228,18 +296,15 @@ pub fn encode_cube_with_filter(
     })?;
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
-    let filtered_size = crate::filter::filtered_face_size(
-        filter,
-        enc,
-        res,
-        params.distance_channel,
-        params.mantissa_bits,
-    )
-    .ok_or(Error::Limit {
-        what: "cube resolution",
-        value: u64::from(res),
-        max: u64::from(crate::MAX_CUBE_RESOLUTION),
-    })?;
+    let plane = DistancePlane::for_store(VERSION, res, params.distance_channel);
+    let filtered_size =
+        crate::filter::filtered_face_size(filter, enc, res, plane, params.mantissa_bits).ok_or(
+            Error::Limit {
+                what: "cube resolution",
+                value: u64::from(res),
+                max: u64::from(crate::MAX_CUBE_RESOLUTION),
+            },
+        )?;
     let mut filtered = vec![0u8; filtered_size];
     let mut compressor =
         zstd::bulk::Compressor::new(params.zstd_level).map_err(|e| Error::Compress {
@@ -252,13 +317,13 @@ pub fn encode_cube_with_filter(
     let mut checksums = [0u64; FACES];
     let mut raw_checksums = [0u64; FACES];
     for face in 0..FACES {
-        stats.clamped_texels += encode_raw_face(cube, params, cube_index, face, &mut raw)?;
+        stats.clamped_texels += encode_raw_face(cube, params, plane, cube_index, face, &mut raw)?;
         raw_checksums[face] = xxhash_rust::xxh3::xxh3_64(&raw);
         filter_face_quantized(
             filter,
             enc,
             res,
-            params.distance_channel,
+            plane,
             params.mantissa_bits,
             &raw,
             &mut filtered,
@@ -281,7 +346,7 @@ pub fn encode_cube_with_filter(
             encoding: enc,
             filter,
             resolution: res,
-            distance_channel: params.distance_channel,
+            distance: plane,
             mantissa_bits: params.mantissa_bits,
             raw_size,
             frames,
@@ -331,10 +396,11 @@ fn check_cube_shape(cube: &CubeImage, params: &BakeParams, cube_index: u32) -> R
 
 /// Encodes face `face` of `cube` (cube `cube_index` of a bake with `params`) into `raw`, the
 /// face's raw bytes: its texels (RGB9E5 ones quantized to the bake's mantissa bits), then its
-/// distance plane if any. Returns the count of clamped texels.
+/// distance plane if any, rounded to `plane`'s lattice. Returns the count of clamped texels.
 fn encode_raw_face(
     cube: &CubeImage,
     params: &BakeParams,
+    plane: DistancePlane,
     cube_index: u32,
     face: usize,
     raw: &mut [u8],
@@ -387,7 +453,12 @@ fn encode_raw_face(
                 value: d.get(i).copied().unwrap_or(f32::NAN),
             });
         }
-        encode_distances(d, dist_out)?;
+        if plane == DistancePlane::F32 {
+            encode_distances(d, dist_out)?;
+        } else {
+            let q: Vec<f32> = d.iter().map(|v| plane.quantize(*v)).collect();
+            encode_distances(&q, dist_out)?;
+        }
     }
     Ok(clamped)
 }

@@ -177,6 +177,11 @@ pub enum Error {
     /// lattice (multiples of `2^(9 − mantissa_bits)`).
     #[error("texel {texel}: RGB9E5 mantissas are not quantized to {mantissa_bits} bits, as filter 3 (predict-packed) requires")]
     Unquantized { texel: usize, mantissa_bits: u32 },
+    /// A distance that is not on the distance lattice of `bits` mantissa bits (nor the no-hit
+    /// value `f32::MAX`), given to filters 1 to 3 of a version-6 distance plane
+    /// ([`crate::distance::quantize_distance`] puts it there).
+    #[error("texel {texel}: distance {value} is not on the {bits}-bit distance lattice that format version 6 stores")]
+    UnquantizedDistance { texel: usize, value: f32, bits: u32 },
     /// A cube image whose shape does not match the bake parameters.
     #[error("cube {cube}: {detail}")]
     CubeShape { cube: u32, detail: String },

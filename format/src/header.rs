@@ -90,6 +90,11 @@ impl Header {
     pub fn has_distance(&self) -> bool {
         self.flags & FLAG_DISTANCE != 0
     }
+    /// How the faces hold their distance plane: none, `f32` (versions 1 to 5) or on the
+    /// distance lattice of the cube resolution (version 6 and later).
+    pub fn distance_plane(&self) -> crate::DistancePlane {
+        crate::DistancePlane::for_store(self.version, self.cube_resolution, self.has_distance())
+    }
     pub fn has_env_cube(&self) -> bool {
         self.flags & FLAG_ENV_CUBE != 0
     }

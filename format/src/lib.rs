@@ -31,7 +31,7 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (5); readers also accept [`MIN_VERSION`] (1) to 4, see "Versions" |
+//! | 8      | `u32`     | version = [`VERSION`] (6); readers also accept [`MIN_VERSION`] (1) to 5, see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
 //! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F, 3 BC6H (version 4 and later: in an older store 3 is [`Error::EncodingVersion`]) |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
@@ -132,12 +132,15 @@
 //! Each face is one independent zstd frame that decompresses to exactly the *filtered size*:
 //! the *raw size* `T (+ n² × 4 with the distance channel)`, where the texel part `T` is `n² ×
 //! bytes_per_texel` (4, 8, 16) for RGB9E5, RGBA16F, RGBA32F and `⌈n/4⌉² × 16` for BC6H,
-//! except with filter 3 on RGB9E5, where it is `n² × ⌈(5 + 3k) / 8⌉ (+ n² × 4)` for the
-//! metadata's `mantissa_bits` k. The *raw face* is the `n²` encoded texels (row 0 first,
+//! except with filter 3 on RGB9E5, where `T` is `n² × ⌈(5 + 3k) / 8⌉` for the metadata's
+//! `mantissa_bits` k, and, from version 6, with filters 1 to 3, where the distance part is
+//! `n² × 2` (see "Distance lattice"). The *raw face* is the `n²` encoded texels (row 0 first,
 //! column 0 first; see [`cube`] for the orientation) — for BC6H the `⌈n/4⌉²` 16-byte blocks,
 //! block row 0 first, each covering 4×4 texels (see "BC6H") — then, with the distance
-//! channel, `n²` `f32` distances to the first hit (`f32::MAX` where the ray escaped). With filter 0 the frame holds the raw face itself; with filter 1, 2 or 3 it holds the
-//! raw face transformed as "Face filters" describes, and readers undo the filter. The records make
+//! channel, `n²` `f32` distances to the first hit (`f32::MAX` where the ray escaped; from
+//! version 6 every distance lies on the distance lattice). With filter 0 the frame holds the
+//! raw face itself; with filter 1, 2 or 3 it holds the raw face transformed as "Face
+//! filters" describes, and readers undo the filter. The records make
 //! a partial file recoverable without its table of contents ([`StoreWriter::resume`]). Cube
 //! `sample_count`, if the environment flag is set, is an environment map captured at the
 //! object's centre.
@@ -193,9 +196,19 @@
 //! A, each channel's residual as `W` planes, least significant byte first: plane `k·W + j`,
 //! byte `i` = byte `j` of texel `i`'s residual of the `k`-th channel of that order.
 //!
-//! **Distance plane** (`u32` bit patterns `D` of the `f32` distances, mod 2³²): `pD = D_a` (0
-//! for texel (0, 0)); `z = zigzag(D − pD)` as above with `W = 4`; four byte planes of `t`
-//! bytes, plane `j` = byte `j` of `z` (least significant first).
+//! **Distance plane, versions 1 to 5** (`u32` bit patterns `D` of the `f32` distances, mod
+//! 2³²): `pD = D_a` (0 for texel (0, 0)); `z = zigzag(D − pD)` as above with `W = 4`; four
+//! byte planes of `t` bytes, plane `j` = byte `j` of `z` (least significant first).
+//!
+//! **Distance plane, version 6 and later** (filters 1, 2 and 3 alike): each distance's
+//! lattice code `c` (see "Distance lattice"), predicted from the codes of its left `a`, upper
+//! `b` and upper-left `d` neighbours by the median edge detector: `p = min(a, b)` if `d ≥
+//! max(a, b)`, `max(a, b)` if `d ≤ min(a, b)`, else `a + b − d`; in row 0 `p = a`, in column 0
+//! `p = b`, at texel (0, 0) `p = 0`. `z = zigzag((c − p) mod 2¹⁶)` with `W = 2`; two byte
+//! planes of `t` bytes, plane 0 the low bytes of `z`, plane 1 the high bytes. Decoding: `c =
+//! (p + unzigzag(z)) mod 2¹⁶`, predictions from the codes so decoded, each code to its
+//! distance as "Distance lattice" says. A distance off the lattice cannot be filtered
+//! ([`Error::UnquantizedDistance`]).
 //!
 //! **Filter 2 (predict-rows)** is filter 1 except for RGB9E5 texels: RGBA16F, RGBA32F and
 //! the distance plane are transformed exactly as filter 1 does, and the RGB9E5 output planes,
@@ -299,7 +312,32 @@
 //! decoder needs k, see "Face filters"; the texels need nothing): every mantissa is a
 //! multiple of `s`, 0 stays 0, and the
 //! per-channel error is below `2^−k · 2^(e − 15)` (`2^−k` of the exponent's scale, on top of
-//! the RGB9E5 rounding). The distance plane is never quantized.
+//! the RGB9E5 rounding). `mantissa_bits` does not touch the distance plane (see "Distance
+//! lattice").
+//!
+//! ## Distance lattice
+//!
+//! From version 6 every distance of the distance plane lies on the *distance lattice* of `k =
+//! clamp(⌈log2 n⌉, 1, 8)` mantissa bits, `n` the cube resolution (n = 32 → 5, 64 → 6, 128 →
+//! 7, ≥ 256 → 8; [`distance::distance_bits`]): its `f32` bit pattern `D` has its low `23 − k`
+//! bits zero, or it is the no-hit value `f32::MAX`. Its *code* is `D >> (23 − k)` (an `(8 +
+//! k)`-bit number: exponent and the top `k` mantissa bits), and `0xFF << k` (the code of +∞)
+//! for `f32::MAX`. Decoding a code `c`: take `c mod 2^(8 + k)`; codes `≥ 0xFF << k` (only
+//! `0xFF << k` is written) are `f32::MAX`, the others `c << (23 − k)`, so every code decodes
+//! to a finite non-negative distance. The raw face keeps `f32` distances, so a reader decodes
+//! the plane as in every version and the checksum of the decoded faces covers the lattice
+//! values.
+//!
+//! Writers put each distance on the lattice by rounding its pattern to the nearest multiple
+//! of `2^(23 − k)` (ties to even; [`distance::quantize_distance`]); zero and `f32::MAX` stay
+//! exact, a finite value that would round to +∞ takes the largest finite lattice value. The
+//! relative error is at most `2^−(k+1) ≤ 1 / (2n)` for normal values: a texel at the face
+//! centre subtends about `2 / n` radians, so the rounding moves a lookup (from a point no
+//! farther from the sample point than the hit) by at most a quarter of a texel. The runtime
+//! samples distances as binary16 (`2^−11` relative), finer than any lattice. Measured in
+//! docs/measurements.md ("Compact distances"): 2.35 bytes per texel for the `f32` planes
+//! before, 0.45 on the lattice at 32², with the renders' error against the truth unchanged
+//! within 0.05 L*.
 //!
 //! ## Checksum of the decoded faces
 //!
@@ -327,15 +365,20 @@
 //! header, [`Error::InvalidMetadata`] from the metadata); version 5 triangle-mesh objects: a
 //! `u32` kind after each object record (and, for a mesh, its mesh record), the header's and
 //! metadata's patch_count counting sample maps (patches plus atlas pages), and control points
-//! for the Bézier objects' patches only. Readers accept versions
-//! [`MIN_VERSION`] (1) to [`VERSION`] (5) and refuse others ([`Error::UnsupportedVersion`]); a
+//! for the Bézier objects' patches only; version 6 the distance lattice (distances rounded to
+//! it, and filters 1 to 3 storing their codes in two byte planes instead of the `f32`
+//! patterns in four; see "Distance lattice"). Readers accept versions
+//! [`MIN_VERSION`] (1) to [`VERSION`] (6) and refuse others ([`Error::UnsupportedVersion`]); a
 //! version-1 metadata section has no `mantissa_bits` and reads as 9; versions 1 and 2 have no
 //! checksum of the decoded faces, so [`Store::verify`] checks their frames but not what they
 //! decode to; before version 5 every object is Bézier (no kind field). Every other byte of the
 //! layout is the same in all versions: a version-3 store is a version-4 store that holds no
-//! BC6H. Writers write version 5; [`StoreWriter::resume`] continues partial files of versions
-//! 2 to 4 as version 4 (their shared layout; such a bake cannot hold mesh objects) and of
-//! version 5 as version 5.
+//! BC6H, and a version-6 store without a distance channel is laid out as a version-5 one.
+//! Writers write version 6; [`StoreWriter::resume`] continues partial files of versions 2 to
+//! 4 as version 4 (their shared layout; such a bake cannot hold mesh objects), of version 5
+//! as version 5 and of version 6 as version 6. A continued version-2 to version-5 file keeps
+//! `f32` distance planes: the cubes appended to it have their distances on the lattice (as
+//! [`encode_cube`] makes them) but filtered as `f32` patterns.
 //!
 //! ## Shards
 //!
@@ -365,6 +408,7 @@ pub mod bc6h;
 pub(crate) mod bytes;
 pub mod cube;
 mod differences;
+pub mod distance;
 pub mod encoding;
 mod encoding_kind;
 mod error;
@@ -381,6 +425,7 @@ pub mod toc;
 pub mod writer;
 
 pub use cube::{encode_cube, encode_cube_with_filter, CubeImage, EncodeStats, EncodedCube};
+pub use distance::DistancePlane;
 pub use encoding_kind::Encoding;
 pub use error::Error;
 pub use filter::Filter;
@@ -395,7 +440,7 @@ pub use writer::{StoreSummary, StoreWriter};
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
 /// metadata, read as 9).
 pub const MIN_VERSION: u32 = 1;

@@ -31,8 +31,8 @@ impl Prefix {
         Self::build_version(meta, points, maps, filter, VERSION)
     }
 
-    /// [`Prefix::build`] in the layout of format `version` (4 or [`VERSION`]: a version-4
-    /// layout, for continuing older partial files, cannot hold mesh objects).
+    /// [`Prefix::build`] in the layout of format `version` (4, 5 or [`VERSION`], the older
+    /// ones for continuing older partial files; a version-4 layout cannot hold mesh objects).
     pub(crate) fn build_version(
         meta: &StoreMeta,
         points: &[SamplePoint],

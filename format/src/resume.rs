@@ -51,9 +51,13 @@ pub(crate) fn reopen(
         file_len,
     };
     let (got, old) = rd.header()?;
-    if old.version < 5 {
-        // Versions 2 to 4 share version 4's metadata layout: continue as version 4.
-        prefix = Prefix::build_version(meta, points, maps, filter, 4).map_err(|e| {
+    if old.version < VERSION {
+        // Versions 2 to 4 share version 4's metadata layout: continue as version 4. Version 5
+        // differs from version 6 only in its distance planes (f32 rather than on the distance
+        // lattice): continue as version 5 (StoreWriter::append refilters the new cubes'
+        // planes as f32).
+        let version = old.version.max(4);
+        prefix = Prefix::build_version(meta, points, maps, filter, version).map_err(|e| {
             rd.mismatch(format!(
                 "it is format version {}, which this bake cannot continue ({e})",
                 old.version
@@ -188,7 +192,7 @@ impl PartialReader<'_> {
         // finish() may have patched the header before a crash: compare without those fields.
         // The section checksums are left out too: the sections themselves are compared next.
         // A version-2 or version-3 partial file is continued as version 4, the layout it
-        // shares.
+        // shares; a version-5 one as version 5.
         let mut want = prefix.header.to_bytes();
         got[8..12].copy_from_slice(&prefix.header.version.to_le_bytes());
         let normalise = |b: &mut [u8; HEADER_BYTES]| {
@@ -365,7 +369,7 @@ impl<'h> FaceDecoder<'h> {
             h.filter,
             h.encoding,
             h.cube_resolution,
-            h.has_distance(),
+            h.distance_plane(),
             mantissa_bits,
         )
         .unwrap_or(usize::MAX);
@@ -403,7 +407,7 @@ impl<'h> FaceDecoder<'h> {
                 h.filter,
                 h.encoding,
                 h.cube_resolution,
-                h.has_distance(),
+                h.distance_plane(),
                 self.mantissa_bits,
                 &self.filtered,
                 &mut self.raw_face,

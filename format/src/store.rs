@@ -632,7 +632,7 @@ impl Store {
                 h.filter,
                 h.encoding,
                 h.cube_resolution,
-                h.has_distance(),
+                h.distance_plane(),
                 self.meta.bake.mantissa_bits,
             )
             .ok_or_else(|| fail("filtered face size overflows".into()))?;
@@ -660,7 +660,7 @@ impl Store {
                     h.filter,
                     h.encoding,
                     h.cube_resolution,
-                    h.has_distance(),
+                    h.distance_plane(),
                     self.meta.bake.mantissa_bits,
                     &state.scratch,
                     out,

@@ -89,6 +89,9 @@ pub struct StoreWriter {
     header: Header,
     /// RGB9E5 mantissa bits of the store (the metadata's); appended cubes must match.
     mantissa_bits: u32,
+    /// The metadata's zstd level, for refiltering cubes' distance planes
+    /// ([`EncodedCube::with_distance_plane`]).
+    zstd_level: i32,
     /// The TOC entries so far (192 bytes per cube).
     toc: Vec<u8>,
     pos: u64,
@@ -151,6 +154,7 @@ impl StoreWriter {
             pos: prefix.header.payload.offset,
             header: prefix.header,
             mantissa_bits: meta.bake.mantissa_bits,
+            zstd_level: meta.bake.zstd_level,
             toc: Vec::new(),
             next: 0,
             total: prefix.total,
@@ -168,7 +172,7 @@ impl StoreWriter {
         path: &Path,
         prefix: &[u8],
         header: Header,
-        mantissa_bits: u32,
+        bake: &crate::BakeParams,
     ) -> Result<Self, Error> {
         let total = u32::try_from(header.cube_count).map_err(|_| Error::Limit {
             what: "cube count",
@@ -188,7 +192,8 @@ impl StoreWriter {
             file: w,
             pos: header.payload.offset,
             header,
-            mantissa_bits,
+            mantissa_bits: bake.mantissa_bits,
+            zstd_level: bake.zstd_level,
             toc: Vec::new(),
             next: 0,
             total,
@@ -214,7 +219,10 @@ impl StoreWriter {
     /// finished as version 4 (version 2's layout differs from version 4's only in the header's
     /// decoded-faces checksum, which `finish()` writes; version 3's only in the version number,
     /// version 4 adding the BC6H encoding), so they cannot take mesh objects, whose object
-    /// records need version 5; version-5 partial files are finished as version 5.
+    /// records need version 5; version-5 partial files are finished as version 5, version-6
+    /// ones as version 6. Files before version 6 keep `f32` distance planes: [`Self::append`]
+    /// refilters the planes of the cubes [`crate::encode_cube`] put on the distance lattice
+    /// (their raw faces, and so the checksum of the decoded faces, stay the same).
     pub fn resume(
         path: &Path,
         meta: &StoreMeta,
@@ -236,6 +244,7 @@ impl StoreWriter {
             file: BufWriter::with_capacity(1 << 20, file),
             header: prefix.header,
             mantissa_bits: meta.bake.mantissa_bits,
+            zstd_level: meta.bake.zstd_level,
             toc: recovered.toc,
             pos: recovered.pos,
             next: recovered.next,
@@ -288,6 +297,8 @@ impl StoreWriter {
                 got: index,
             });
         }
+        // A version-5 (or older) partial file continued by resume() holds f32 planes.
+        let cube = cube.with_distance_plane(self.header.distance_plane(), self.zstd_level)?;
         check_cube_params(&cube, &self.header, self.mantissa_bits)?;
         let faces = std::array::from_fn(|f| {
             (
@@ -424,22 +435,22 @@ pub(crate) fn check_cube_params(
     if cube.encoding != h.encoding
         || cube.filter != h.filter
         || cube.resolution != h.cube_resolution
-        || cube.distance_channel != h.has_distance()
+        || cube.distance != h.distance_plane()
         || cube.mantissa_bits != mantissa_bits
     {
         return Err(Error::CubeParamsMismatch {
             cube: cube.cube_index,
             detail: format!(
-                "cube: {} filter {} {}² distance={} mantissa_bits={}, store: {} filter {} {}² distance={} mantissa_bits={}",
+                "cube: {} filter {} {}² distance {} mantissa_bits={}, store: {} filter {} {}² distance {} mantissa_bits={}",
                 cube.encoding,
                 cube.filter,
                 cube.resolution,
-                cube.distance_channel,
+                cube.distance,
                 cube.mantissa_bits,
                 h.encoding,
                 h.filter,
                 h.cube_resolution,
-                h.has_distance(),
+                h.distance_plane(),
                 mantissa_bits
             ),
         });

@@ -288,7 +288,9 @@ fn bc6h_stores_round_trip() {
             assert_eq!(&raw[..blocks.len()], blocks.as_slice());
             assert_eq!(got.faces[face], decode(&blocks, 8));
         }
-        assert_eq!(got.distance, c.distance);
+        let plane = store.header().distance_plane();
+        assert_eq!(plane, DistancePlane::Lattice { bits: 3 });
+        assert_eq!(got.distance, stored_distances(plane, &c.distance));
     }
     // Every filter round-trips a BC6H store too.
     for filter in Filter::ALL {
@@ -331,12 +333,15 @@ fn with_reserved_block(bytes: &[u8], cube: u32, face: usize, block: usize) -> Ve
         for mode in [0b10011u8, 0b10111, 0b11011, 0b11111] {
             let mut r = raw.clone();
             r[block * BLOCK_BYTES] = mode | (hi << 5);
-            let mut filtered = vec![0u8; r.len()];
+            let plane = h.distance_plane();
+            let size =
+                filter::filtered_face_size(h.filter, h.encoding, h.cube_resolution, plane, 9);
+            let mut filtered = vec![0u8; size.unwrap()];
             filter::filter_face(
                 h.filter,
                 h.encoding,
                 h.cube_resolution,
-                h.has_distance(),
+                plane,
                 &r,
                 &mut filtered,
             )
@@ -486,10 +491,12 @@ fn a_version_3_store_still_opens_and_verifies() {
     write(&new, &f);
     let (old, now) = (std::fs::read(&path).unwrap(), std::fs::read(&new).unwrap());
     assert_eq!(u32::from_le_bytes(now[8..12].try_into().unwrap()), VERSION);
-    // Version 5 adds a `u32` kind (0) after each object record: the same metadata, and the
-    // same sample points, maps and cube records.
+    // Version 5 adds a `u32` kind (0) after each object record, version 6 the distance
+    // lattice: the same metadata, sample points, maps and texels, and the distances rounded
+    // to the lattice.
     assert_eq!(Store::open(&new).unwrap().meta(), store.meta());
-    assert_same_sections(&old, &now);
+    assert_same_sections(&old, &now, false);
+    assert_same_faces(&store, &Store::open(&new).unwrap());
 }
 
 /// `face_error` on known values.
@@ -539,5 +546,45 @@ fn bc6h_shards_merge_byte_for_byte() {
     assert_eq!(
         Store::open(&merged).unwrap().header().encoding,
         Encoding::Bc6h
+    );
+}
+
+/// A store written by the version-5 writer (commit b59f778, before the distance lattice:
+/// `oslf bake v5-bc6h.toml -o v5-bc6h.oslf`, both in tests/data) still opens and verifies,
+/// with its decoded-faces checksum, and reads its f32 distances as they are: the old
+/// filter (four byte planes of the f32 patterns), not the lattice codes.
+#[test]
+fn a_version_5_store_with_f32_distances_still_opens_and_verifies() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v5-bc6h.oslf");
+    let store = Store::open(&path).unwrap();
+    let h = store.header();
+    assert_eq!(h.version, 5);
+    assert_eq!(h.encoding, Encoding::Bc6h);
+    assert_eq!(h.filter, Filter::PredictRows);
+    assert_eq!(h.distance_plane(), DistancePlane::F32);
+    assert!(store.verify().unwrap().decoded_checksum);
+    let n = store.cube_resolution() as usize;
+    // The frames decompress to the f32 plane's four bytes per texel.
+    let e = store.face_entry(0, 0).unwrap();
+    let b = std::fs::read(&path).unwrap();
+    let frame = &b[e.offset as usize..(e.offset + e.compressed_size) as usize];
+    let filtered = zstd::bulk::decompress(frame, 1 << 20).unwrap();
+    assert_eq!(filtered.len(), BLOCK_BYTES * (n / 4).pow(2) + 4 * n * n);
+    let (mut hits, mut misses, mut off_lattice) = (0, 0, 0);
+    for c in 0..store.cube_count() {
+        let cube = store.read_cube(c).unwrap();
+        for d in cube.distance.unwrap().iter().flatten() {
+            assert!(d.is_finite() && *d >= 0.0);
+            if *d == f32::MAX {
+                misses += 1;
+            } else {
+                hits += 1;
+                off_lattice += usize::from(d.to_bits() & 0x7fff != 0);
+            }
+        }
+    }
+    assert!(
+        hits > 0 && misses > 0 && off_lattice > hits / 2,
+        "{hits} {misses} {off_lattice}"
     );
 }

@@ -3,6 +3,7 @@
 mod common;
 
 use common::*;
+use oslf_format::distance::quantize_distance;
 use oslf_format::*;
 use proptest::prelude::*;
 
@@ -61,7 +62,8 @@ fn check_store(store: &Store, f: &Fixture, spec: Spec) {
                 );
             }
         }
-        assert_eq!(got.distance, want.distance);
+        let plane = store.header().distance_plane();
+        assert_eq!(got.distance, stored_distances(plane, &want.distance));
         let mut raw = vec![0u8; store.face_raw_size() * 6];
         store.read_cube_raw(i as u32, &mut raw).unwrap();
     }
@@ -215,7 +217,10 @@ fn both_filters_round_trip_and_are_recorded() {
                 filter.id()
             );
             check_store(&store, &f, spec);
-            // The raw bytes read back are exactly the encoded texels and distances.
+            // The raw bytes read back are exactly the encoded texels and the distances on
+            // the 4-bit lattice of 9² faces, whatever the filter.
+            let plane = store.header().distance_plane();
+            assert_eq!(plane, DistancePlane::Lattice { bits: 4 });
             for (i, c) in f.cubes.iter().enumerate() {
                 let mut raw = vec![0u8; store.face_raw_size()];
                 for face in 0..6 {
@@ -224,7 +229,10 @@ fn both_filters_round_trip_and_are_recorded() {
                     encoding::encode_face_texels(encoding, 9, &c.faces[face], &mut want).unwrap();
                     assert_eq!(&raw[..want.len()], want.as_slice());
                     let d = c.distance.as_ref().unwrap();
-                    let dist: Vec<u8> = d[face].iter().flat_map(|v| v.to_le_bytes()).collect();
+                    let dist: Vec<u8> = d[face]
+                        .iter()
+                        .flat_map(|v| plane.quantize(*v).to_le_bytes())
+                        .collect();
                     assert_eq!(&raw[want.len()..], dist.as_slice());
                 }
             }
@@ -288,11 +296,12 @@ fn quantized_stores_hold_exactly_the_quantized_texels() {
                         assert_eq!((got >> (9 * ch)) & 0x1ff & (step - 1), 0);
                     }
                 }
-                // The distance plane is never quantized.
+                // The distance plane is on the distance lattice of 16² faces, whatever the
+                // mantissa bits.
                 let d = &raw[4 * n..];
                 let want: Vec<u8> = cube.distance.as_ref().unwrap()[face]
                     .iter()
-                    .flat_map(|v| v.to_le_bytes())
+                    .flat_map(|v| quantize_distance(*v, 4).to_le_bytes())
                     .collect();
                 assert_eq!(d, want.as_slice());
             }
@@ -340,22 +349,14 @@ fn a_version_1_store_still_opens() {
         ..Spec::default()
     };
     check_store(&store, &fixture(spec), spec);
-    // The same inputs written today: version 2, and the same cube payload bytes.
+    // The same inputs written today: the same texels, and the distances on the lattice.
     let f = fixture(spec);
     let (_dir, new) = temp_store("v2.oslf");
     write(&new, &f);
     let v2 = Store::open(&new).unwrap();
     assert_eq!(v2.header().version, VERSION);
     assert_eq!(v2.meta(), store.meta());
-    let mut a = vec![0u8; store.face_raw_size()];
-    let mut b = a.clone();
-    for c in 0..store.cube_count() {
-        for face in 0..6 {
-            store.read_face_raw(c, face, &mut a).unwrap();
-            v2.read_face_raw(c, face, &mut b).unwrap();
-            assert_eq!(a, b);
-        }
-    }
+    assert_same_faces(&store, &v2);
 }
 
 /// A store written by the version-2 writer (before the checksum of the decoded faces; the
@@ -387,17 +388,9 @@ fn a_version_2_store_still_opens_and_verifies() {
     assert_eq!(v3.header().version, VERSION);
     assert!(v3.verify().unwrap().decoded_checksum);
     assert_eq!(v3.meta(), store.meta());
-    let mut a = vec![0u8; store.face_raw_size()];
-    let mut b = a.clone();
-    for c in 0..store.cube_count() {
-        for face in 0..6 {
-            store.read_face_raw(c, face, &mut a).unwrap();
-            v3.read_face_raw(c, face, &mut b).unwrap();
-            assert_eq!(a, b);
-        }
-    }
-    // It holds the same sample points, maps and cube records as today's store (whose metadata
-    // adds version 5's object kinds).
+    assert_same_faces(&store, &v3);
+    // It holds the same sample points and maps as today's store (whose metadata adds version
+    // 5's object kinds, and whose distance planes version 6's lattice).
     let (old, now) = (std::fs::read(&path).unwrap(), std::fs::read(&new).unwrap());
-    assert_same_sections(&old, &now);
+    assert_same_sections(&old, &now, false);
 }

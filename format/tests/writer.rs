@@ -520,9 +520,11 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     b[..8].copy_from_slice(b"NOTOSLF!");
     assert!(refused(&b).starts_with("it is not an OSLF store"));
     let mut b = good.clone();
-    b[8..12].copy_from_slice(&7u32.to_le_bytes());
-    assert!(refused(&b)
-        .starts_with("it is format version 7, and this writer continues only versions 2 to 5"));
+    b[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
+    assert!(refused(&b).starts_with(&format!(
+        "it is format version {}, and this writer continues only versions 2 to {VERSION}",
+        VERSION + 1
+    )));
     let mut b = good.clone();
     b[30] ^= 1;
     assert!(refused(&b).starts_with("its header is damaged: header checksum mismatch"));
@@ -605,4 +607,141 @@ fn merging_an_unfinished_shard_names_it() {
         "{e}"
     );
     assert!(!e.to_string().contains("--"), "{e}");
+}
+
+/// Format version 6's distance lattice at the extremes, through a whole store: zero, the
+/// smallest subnormal, tiny and huge values, the largest finite `f32` below the no-hit value,
+/// and no hit (`f32::MAX`) read back as [`DistancePlane::quantize`] says (no hit and zero
+/// exactly); NaN, infinite and negative distances are refused at encode, naming the texel.
+#[test]
+fn distance_extremes_round_trip_and_bad_distances_are_refused() {
+    let f = fixture(spec());
+    let extremes = [
+        0.0,
+        f32::from_bits(1),
+        f32::MIN_POSITIVE,
+        1e-30,
+        0.1,
+        1.0,
+        3.3,
+        1e30,
+        3.39e38,
+        f32::from_bits(f32::MAX.to_bits() - 1),
+        f32::MAX,
+    ];
+    let mut cubes = f.cubes.clone();
+    for (face, plane) in cubes[0].distance.as_mut().unwrap().iter_mut().enumerate() {
+        for (i, d) in plane.iter_mut().enumerate() {
+            *d = extremes[(i + face) % extremes.len()];
+        }
+    }
+    let (_dir, path) = temp_store("extremes.oslf");
+    let mut w = StoreWriter::create(&path, &f.meta, &f.points, &f.maps).unwrap();
+    for (i, c) in cubes.iter().enumerate() {
+        w.append(encode_cube(c, &f.meta.bake, i as u32).unwrap().0)
+            .unwrap();
+    }
+    w.finish().unwrap();
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().version, VERSION);
+    let plane = store.header().distance_plane();
+    assert_eq!(plane, DistancePlane::Lattice { bits: 3 }); // 8² faces
+    assert!(store.verify().unwrap().decoded_checksum);
+    let got = store.read_cube(0).unwrap().distance.unwrap();
+    for (face, plane_got) in got.iter().enumerate() {
+        for (i, g) in plane_got.iter().enumerate() {
+            let want = extremes[(i + face) % extremes.len()];
+            assert_eq!(*g, plane.quantize(want), "face {face} texel {i}: {want}");
+            assert!(g.is_finite() && *g >= 0.0);
+            if want == 0.0 || want == f32::MAX {
+                assert_eq!(*g, want);
+            } else if want < 3.39e38 {
+                // Below the last lattice step: within half a step (2^-4 relative), or at most
+                // the subnormal's own size.
+                assert!(
+                    (g - want).abs() <= want / 16.0 + f32::from_bits(1),
+                    "{want} → {g}"
+                );
+            } else {
+                assert!(
+                    *g < f32::MAX && (g - want).abs() <= want / 8.0,
+                    "{want} → {g}"
+                );
+            }
+        }
+    }
+    for (bad, name) in [
+        (f32::NAN, "NaN"),
+        (f32::NEG_INFINITY, "-inf"),
+        (-1e-3, "negative"),
+    ] {
+        let mut c = f.cubes[0].clone();
+        c.distance.as_mut().unwrap()[2][8 * 6 + 7] = bad;
+        let e = encode_cube(&c, &f.meta.bake, 4).err().unwrap();
+        assert!(
+            matches!(
+                e,
+                Error::InvalidDistance {
+                    cube: 4,
+                    face: 2,
+                    x: 7,
+                    y: 6,
+                    ..
+                }
+            ),
+            "{name}: {e}"
+        );
+    }
+}
+
+/// A partial file of format version 3 with distance planes (f32 in its records) is continued
+/// as version 4: the appended cubes, which `encode_cube` puts on the distance lattice, are
+/// written with f32 planes (refiltered), the store verifies, the recovered cubes are those
+/// of the partial file byte for byte and the appended ones hold the lattice's distances.
+#[test]
+fn an_old_partial_with_distances_is_continued_with_f32_planes() {
+    let spec3 = Spec {
+        encoding: Encoding::Rgba16f,
+        distance: true,
+        seed: 4,
+        ..Spec::default()
+    };
+    let f = fixture(spec3);
+    let fixture_path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v3-rgba16f.oslf");
+    let old_store = Store::open(&fixture_path).unwrap();
+    // Cut the partial file inside cube 2's record: cubes 0 and 1 are recovered.
+    let cut = old_store.face_entry(2, 3).unwrap().offset as usize;
+    let old = std::fs::read(&fixture_path).unwrap();
+    let (_dir, path) = temp_store("v3.oslf");
+    std::fs::write(partial_path(&path), &old[..cut]).unwrap();
+    let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
+    assert_eq!(w.next_cube(), 2);
+    drop(w);
+    complete(&path, &f);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().version, 4);
+    assert_eq!(store.header().distance_plane(), DistancePlane::F32);
+    assert!(store.verify().unwrap().decoded_checksum);
+    let (mut a, mut b) = (
+        vec![0u8; store.face_raw_size()],
+        vec![0u8; store.face_raw_size()],
+    );
+    for c in 0..store.cube_count() {
+        for face in 0..6 {
+            store.read_face_raw(c, face, &mut a).unwrap();
+            old_store.read_face_raw(c, face, &mut b).unwrap();
+            if c < 2 {
+                assert_eq!(a, b, "recovered cube {c} face {face}");
+            }
+        }
+        let got = store.read_cube(c).unwrap().distance;
+        let lattice = DistancePlane::Lattice { bits: 2 }; // what encode_cube gives 4² faces
+        let want = if c < 2 {
+            old_store.read_cube(c).unwrap().distance
+        } else {
+            stored_distances(lattice, &f.cubes[c as usize].distance)
+        };
+        assert_eq!(got, want, "cube {c}");
+    }
 }

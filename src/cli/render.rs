@@ -76,6 +76,12 @@ pub struct Args {
     /// working set), or a default background the store cannot give.
     #[arg(long)]
     strict: bool,
+    /// Before rendering, decode every face and check them against the store's checksum of
+    /// its decoded faces (as `oslf store verify`), so that a damaged store resealed with new
+    /// frame checksums cannot render silently wrong: a mismatch is a warning, an error
+    /// under --strict.
+    #[arg(long)]
+    verify: bool,
     /// Write the frame's and the cumulative cache statistics as JSON to this file.
     #[arg(long)]
     stats_json: Option<PathBuf>,
@@ -90,6 +96,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let store = args.access.open(&args.store)?;
     let open_seconds = t.elapsed().as_secs_f64();
+    if args.verify {
+        super::store::verify_for_render(&store, &args.store, args.strict)?;
+    }
     let params = args.shading.params(args.mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
     let (background, note) = args.background.resolve(&store, &args.store)?;

@@ -95,6 +95,32 @@ fn parse_encoding(s: &str) -> std::result::Result<Encoding, String> {
     s.parse().map_err(|e: oslf_format::Error| e.to_string())
 }
 
+/// `oslf render --verify`: [`Store::verify`] (every frame, padding byte and the checksum of
+/// the decoded faces) before the render. A failure is an error under `strict`, else a
+/// warning on stderr; a store of format version 1 or 2, which records no checksum of its
+/// decoded faces, gets a note.
+pub(super) fn verify_for_render(store: &Store, path: &Path, strict: bool) -> Result<()> {
+    match store.verify() {
+        Ok(r) if !r.decoded_checksum => eprintln!(
+            "note: {}: format version {} records no checksum of the decoded faces; only the frames were checked",
+            path.display(),
+            store.header().version
+        ),
+        Ok(_) => {}
+        Err(e) if strict => {
+            bail!(
+                "{} failed verification (--verify --strict; nothing rendered): {e}",
+                path.display()
+            )
+        }
+        Err(e) => eprintln!(
+            "warning: {} failed verification, the image may be wrong: {e}",
+            path.display()
+        ),
+    }
+    Ok(())
+}
+
 pub fn run(cli: Args) -> Result<()> {
     let access = cli.access;
     match cli.command {
@@ -398,9 +424,9 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
         b.encoding,
         b.encoding.bytes_per_texel(),
         if b.distance_channel {
-            " + f32 distance"
+            format!(" + distance ({})", h.distance_plane())
         } else {
-            ""
+            String::new()
         }
     );
     println!(

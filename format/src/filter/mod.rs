@@ -6,13 +6,16 @@
 //! some output (wrapping arithmetic throughout), and [`filter_face`] followed by
 //! [`unfilter_face`] is the identity on every input, canonical or not.
 
+mod distance;
 mod ints;
 mod predict;
 mod residual;
 mod rows;
 
+use crate::distance::DistancePlane;
 use crate::encoding::Encoding;
 use crate::Error;
+use distance::{lattice_forward, lattice_inverse};
 use ints::{distance_forward, distance_inverse, ints_forward, ints_inverse};
 use predict::{rgb9e5_forward, rgb9e5_inverse};
 pub use rows::packed_planes;
@@ -103,15 +106,18 @@ impl std::fmt::Display for Filter {
 
 /// Size in bytes of one face after `filter`, i.e. what its zstd frame decompresses to: the
 /// raw face size ([`crate::Store::face_raw_size`]), except filter 3 on RGB9E5, whose texel
-/// part is `n² × ⌈(5 + 3k) / 8⌉` bytes for `k = mantissa_bits` (the distance plane, if any,
-/// keeps `n² × 4`). `None` if the size overflows `usize`.
+/// part is `n² × ⌈(5 + 3k) / 8⌉` bytes for `k = mantissa_bits`, and filters 1 to 3 on a
+/// distance plane on the distance lattice ([`DistancePlane::Lattice`], format version 6),
+/// which takes `n² × 2` bytes instead of `n² × 4`. `distance` is the face's distance plane
+/// (`true` / `false`: [`DistancePlane::F32`] / none). `None` if the size overflows `usize`.
 pub fn filtered_face_size(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: bool,
+    distance: impl Into<DistancePlane>,
     mantissa_bits: u32,
 ) -> Option<usize> {
+    let distance = distance.into();
     let texels = (resolution as usize).checked_mul(resolution as usize)?;
     let color = match (filter, encoding) {
         (Filter::PredictPacked, Encoding::Rgb9e5) => {
@@ -119,7 +125,11 @@ pub fn filtered_face_size(
         }
         _ => encoding.face_bytes(resolution)?,
     };
-    color.checked_add(if distance { texels.checked_mul(4)? } else { 0 })
+    let per_texel = match filter {
+        Filter::None if distance.is_present() => 4,
+        _ => distance.filtered_bytes_per_texel(),
+    };
+    color.checked_add(texels.checked_mul(per_texel)?)
 }
 
 /// Checks the lengths of a filter's input `raw` (the raw face) and output `filtered`;
@@ -129,7 +139,7 @@ fn check_sizes(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: bool,
+    distance: DistancePlane,
     mantissa_bits: u32,
     raw: usize,
     filtered: usize,
@@ -158,8 +168,12 @@ fn check_sizes(
             });
         }
     }
-    let dist = if distance { texels * 4 } else { 0 };
-    Ok((texels, raw_size - dist, filtered_size - dist))
+    let raw_dist = if distance.is_present() { texels * 4 } else { 0 };
+    let filtered_dist = match filter {
+        Filter::None => raw_dist,
+        _ => texels * distance.filtered_bytes_per_texel(),
+    };
+    Ok((texels, raw_size - raw_dist, filtered_size - filtered_dist))
 }
 
 /// Filters one face's raw bytes (`raw`, exactly the face raw size) into `out` (same size).
@@ -168,7 +182,7 @@ pub fn filter_face(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: bool,
+    distance: impl Into<DistancePlane>,
     raw: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
@@ -187,11 +201,12 @@ pub fn filter_face_quantized(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: bool,
+    distance: impl Into<DistancePlane>,
     mantissa_bits: u32,
     raw: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
+    let distance = distance.into();
     let (t, rc_len, oc_len) = check_sizes(
         filter,
         encoding,
@@ -222,8 +237,10 @@ pub fn filter_face_quantized(
         // BC6H blocks are left as they are (byte planes of them compress worse).
         (_, Encoding::Bc6h) => oc.copy_from_slice(rc),
     }
-    if distance {
-        distance_forward(n, t, rd, od);
+    match distance {
+        DistancePlane::Absent => {}
+        DistancePlane::F32 => distance_forward(n, t, rd, od),
+        DistancePlane::Lattice { bits } => lattice_forward(n, t, bits, rd, od)?,
     }
     Ok(())
 }
@@ -251,7 +268,7 @@ pub fn unfilter_face(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: bool,
+    distance: impl Into<DistancePlane>,
     filtered: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
@@ -264,11 +281,12 @@ pub fn unfilter_face_quantized(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: bool,
+    distance: impl Into<DistancePlane>,
     mantissa_bits: u32,
     filtered: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
+    let distance = distance.into();
     let (t, oc_len, fc_len) = check_sizes(
         filter,
         encoding,
@@ -297,8 +315,10 @@ pub fn unfilter_face_quantized(
         (_, Encoding::Rgba32f) => ints_inverse::<4>(n, t, fc, oc),
         (_, Encoding::Bc6h) => oc.copy_from_slice(fc),
     }
-    if distance {
-        distance_inverse(n, t, fd, od);
+    match distance {
+        DistancePlane::Absent => {}
+        DistancePlane::F32 => distance_inverse(n, t, fd, od),
+        DistancePlane::Lattice { bits } => lattice_inverse(n, t, bits, fd, od),
     }
     Ok(())
 }

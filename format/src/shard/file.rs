@@ -244,7 +244,7 @@ pub(crate) fn read_record(
         encoding: h.encoding,
         filter: h.filter,
         resolution: h.cube_resolution,
-        distance_channel: h.has_distance(),
+        distance: h.distance_plane(),
         mantissa_bits: 0, // set by the caller, which knows the metadata
         raw_size: raw,
         checksums: std::array::from_fn(|f| r.faces[f].2),

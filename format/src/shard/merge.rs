@@ -199,8 +199,7 @@ pub fn merge(shards: &[PathBuf], output: &Path) -> Result<StoreSummary, Error> {
         }
     }
 
-    let mut writer =
-        StoreWriter::create_from_prefix(output, &prefix, header.clone(), meta.bake.mantissa_bits)?;
+    let mut writer = StoreWriter::create_from_prefix(output, &prefix, header.clone(), &meta.bake)?;
     let result = (|| -> Result<(), Error> {
         for i in 0..writer.total_cubes() {
             let s = &mut open[(i % count) as usize];

@@ -924,6 +924,14 @@ fn a_changed_filter_id_or_mantissa_bits_fails_verify() {
         reseal(&mut c);
         let store = open(&c).unwrap();
         let mut raw = vec![0u8; store.face_raw_size()];
+        if header(b).has_distance() && other == Filter::None {
+            // Format version 6: filters 1 to 3 store a distance in 2 bytes, filter 0 in 4, so
+            // the frame decompresses to the wrong size, a typed error naming the face.
+            let e = store.read_face_raw(0, 0, &mut raw).unwrap_err();
+            assert!(e.to_string().contains("decompressed to"), "{e}");
+            assert!(store.verify().is_err());
+            continue;
+        }
         store.read_face_raw(0, 0, &mut raw).unwrap();
         let e = store.verify().unwrap_err();
         assert!(
