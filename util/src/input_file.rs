@@ -89,8 +89,8 @@ fn check_regular(path: &Path, metadata: &std::fs::Metadata) -> Result<()> {
     })
 }
 
-/// What a file that is not a regular file is, in words.
-fn kind(t: &std::fs::FileType) -> &'static str {
+/// What a file that is not a regular file is, in words (`a FIFO`, `a directory`, ...).
+pub fn kind(t: &std::fs::FileType) -> &'static str {
     if t.is_dir() {
         return "a directory";
     }

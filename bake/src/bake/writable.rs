@@ -51,7 +51,7 @@ fn check_file_writable(named: &Path, file: &Path, what: &'static str) -> Result<
                 return Err(fail(format!(
                 "{} exists and is not a regular file ({}); give a path for a new or regular file",
                 path.display(),
-                file_kind(&m)
+                oslf_util::input_file::kind(&m.file_type())
             )))
             }
             _ => {}
@@ -81,24 +81,5 @@ fn check_file_writable(named: &Path, file: &Path, what: &'static str) -> Result<
             "cannot create a file in {}: {e}",
             dir.display()
         ))),
-    }
-}
-
-/// What kind of file `m` describes, for messages.
-fn file_kind(m: &std::fs::Metadata) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    let t = m.file_type();
-    if t.is_dir() {
-        "a directory"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "a special file"
     }
 }
