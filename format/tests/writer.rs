@@ -745,3 +745,47 @@ fn an_old_partial_with_distances_is_continued_with_f32_planes() {
         assert_eq!(got, want, "cube {c}");
     }
 }
+
+/// One writer per output: while a store writer, a shard writer or a merge holds a path's partial
+/// file, every other writer of that path is refused with [`Error::Busy`] and the first one's
+/// file is left as it was; once the first has finished, the path is free again.
+#[test]
+fn a_second_writer_of_any_kind_is_busy() {
+    let f = fixture(spec());
+    let (dir, path) = temp_store("one.oslf");
+    let busy = |r: Result<(), Error>| match r {
+        Err(Error::Busy { holder, .. }) => {
+            assert!(
+                holder.contains(&format!("process {}", std::process::id())),
+                "{holder}"
+            )
+        }
+        Err(e) => panic!("{e}"),
+        Ok(()) => panic!("a second writer was let in"),
+    };
+    let first = StoreWriter::create(&path, &f.meta, &f.points, &f.maps).unwrap();
+    let held = std::fs::read(partial_path(&path)).unwrap();
+    busy(StoreWriter::create(&path, &f.meta, &f.points, &f.maps).map(drop));
+    busy(StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).map(drop));
+    assert_eq!(std::fs::read(partial_path(&path)).unwrap(), held);
+
+    // Shards: two writers of one shard file; a merge into a path another writer holds.
+    let total = f.cubes.len() as u32;
+    let mut shards = Vec::new();
+    for index in 0..2 {
+        let s = ShardSpec::new(index, 2).unwrap();
+        let shard = dir.path().join(format!("s.shard-{index}"));
+        let mut w = ShardWriter::create(&shard, s, &f.meta, &f.points, &f.maps).unwrap();
+        busy(ShardWriter::create(&shard, s, &f.meta, &f.points, &f.maps).map(drop));
+        busy(ShardWriter::resume(&shard, s, &f.meta, &f.points, &f.maps).map(drop));
+        for k in 0..s.cubes_of(total) {
+            w.append(encoded(&f, s.cube(k) as usize)).unwrap();
+        }
+        w.finish().unwrap();
+        shards.push(shard);
+    }
+    busy(shard::merge(&shards, &path).map(drop));
+    drop(first);
+    shard::merge(&shards, &path).unwrap();
+    Store::open(&path).unwrap().verify().unwrap();
+}
