@@ -27,6 +27,7 @@ pub mod ray;
 pub use oslf_geometry::{bezier, camera, mesh};
 pub mod bvh;
 pub mod gltf;
+pub mod normals;
 pub mod obj;
 pub mod shapes;
 

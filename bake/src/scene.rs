@@ -19,6 +19,7 @@ use crate::error::{BakeError, Result};
 use crate::light::Light;
 use crate::material::Material;
 use crate::mesh::Mesh;
+use crate::normals::NormalsUsed;
 use crate::ray::ENVIRONMENT_OBJECT;
 use crate::tolerance::TESSELLATION_ERROR;
 
@@ -47,6 +48,9 @@ pub struct OslfObject {
     pub material: u32,
     /// The material's mean albedo: the C_s of Eq. 4.12 that the store carries.
     pub base_color: Vec3,
+    /// A mesh object's normals: the file's or computed by which rule, and why (`None` for
+    /// patches, whose normals are exact).
+    pub normals: Option<NormalsUsed>,
 }
 
 impl OslfObject {

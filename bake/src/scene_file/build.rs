@@ -135,6 +135,7 @@ impl Ctx<'_> {
                 lights: g.lights,
                 objects: g.objects.clone(),
                 objects_from_extras: false,
+                normals: g.normals.map(|n| n.0),
             };
             let import = crate::gltf::load(&file, &options, materials)?;
             self.included
