@@ -166,7 +166,11 @@ pub fn shade(
     let mut by_bits: HashMap<[u32; 3], u32> = HashMap::new();
     for p in positions {
         let next = by_bits.len() as u32;
-        weld.push(*by_bits.entry(p.to_array().map(f32::to_bits)).or_insert(next));
+        weld.push(
+            *by_bits
+                .entry(p.to_array().map(f32::to_bits))
+                .or_insert(next),
+        );
     }
     let (face_normals, angles) = faces(positions, triangles);
     let mut groups = smoothing_groups(&weld, triangles, &face_normals, rule);
@@ -250,7 +254,12 @@ mod tests {
         let (mut p, _) = hinge(20.0);
         p.extend([Vec3::ZERO, Vec3::X]);
         let t = vec![[0, 1, 2], [5, 4, 3]];
-        let (m, _) = shade(&p, &[Vec2::ZERO; 6], &t, NormalRule::Crease { crease_deg: 30.0 });
+        let (m, _) = shade(
+            &p,
+            &[Vec2::ZERO; 6],
+            &t,
+            NormalRule::Crease { crease_deg: 30.0 },
+        );
         assert_eq!(m.positions.len(), 6);
         let n0 = m.normals[m.triangles[0][0] as usize];
         let n1 = m.normals[m.triangles[1][1] as usize];

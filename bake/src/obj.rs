@@ -201,9 +201,10 @@ fn normals_used(
     with_normals: usize,
     objects: usize,
 ) -> NormalsUsed {
-    let file = path
-        .file_name()
-        .map_or_else(|| path.display().to_string(), |f| f.to_string_lossy().into_owned());
+    let file = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
     let default = NormalRule::Crease {
         crease_deg: DEFAULT_CREASE_DEG,
     };
@@ -212,7 +213,10 @@ fn normals_used(
             Some(rule),
             format!("asked for in the scene file; replaces {file}'s vn normals"),
         ),
-        Some(rule) => (Some(rule), format!("asked for in the scene file; {file} has no normals")),
+        Some(rule) => (
+            Some(rule),
+            format!("asked for in the scene file; {file} has no normals"),
+        ),
         None if with_normals == objects => (None, format!("{file}'s vn normals")),
         None if with_normals == 0 => (
             Some(default),

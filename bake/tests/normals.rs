@@ -77,11 +77,10 @@ fn box_obj(with_normals: bool) -> String {
         ([1, 5, 7, 3], [-1, 0, 0]),
         ([2, 4, 8, 6], [1, 0, 0]),
     ];
-    for (k, (_, n)) in faces.iter().enumerate() {
-        if with_normals {
+    if with_normals {
+        for (_, n) in &faces {
             writeln!(text, "vn {} {} {}", n[0], n[1], n[2]).unwrap();
         }
-        let _ = k;
     }
     for (k, (corners, _)) in faces.iter().enumerate() {
         let refs: Vec<String> = corners
@@ -104,7 +103,11 @@ fn assert_flat(m: &Mesh) {
     for t in &m.triangles {
         let n = face_normal(m, t);
         for &v in t {
-            assert!(close(m.normals[v as usize], n), "{} vs face {n}", m.normals[v as usize]);
+            assert!(
+                close(m.normals[v as usize], n),
+                "{} vs face {n}",
+                m.normals[v as usize]
+            );
         }
     }
 }
@@ -202,17 +205,15 @@ fn cylinder_obj(segments: u32) -> String {
             writeln!(text, "v {} {} {z}", phi.cos(), phi.sin()).unwrap();
         }
     }
-    let (bottom, top) = (|s: u32| s % segments + 1, |s: u32| s % segments + 1 + segments);
+    let (bottom, top) = (
+        |s: u32| s % segments + 1,
+        |s: u32| s % segments + 1 + segments,
+    );
     for s in 0..segments {
         let (a, b, c, d) = (bottom(s), bottom(s + 1), top(s + 1), top(s));
         writeln!(text, "f {a} {b} {c} {d}").unwrap();
     }
-    let cap = |ids: Vec<u32>| {
-        ids.iter()
-            .map(u32::to_string)
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
+    let cap = |ids: Vec<u32>| ids.iter().map(u32::to_string).collect::<Vec<_>>().join(" ");
     writeln!(text, "f {}", cap((0..segments).rev().map(bottom).collect())).unwrap();
     writeln!(text, "f {}", cap((0..segments).map(top).collect())).unwrap();
     text
@@ -257,10 +258,13 @@ fn a_cylinder_obj_gets_smooth_sides_and_sharp_caps_by_default() {
 fn an_environment_mesh_follows_the_same_rule() {
     let d = dir("env-mesh");
     std::fs::write(d.join("box.obj"), box_obj(false)).unwrap();
-    let object = "[[object]]\npatches = \"newell-teapot\"\nmaterial = { color = [0.5, 0.5, 0.5] }\n";
+    let object =
+        "[[object]]\npatches = \"newell-teapot\"\nmaterial = { color = [0.5, 0.5, 0.5] }\n";
     let scene = scene_in(
         &d,
-        &format!("{object}[[mesh]]\npath = \"box.obj\"\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n"),
+        &format!(
+            "{object}[[mesh]]\npath = \"box.obj\"\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n"
+        ),
     )
     .unwrap();
     assert_flat(&scene.shapes[0].mesh);
@@ -295,7 +299,11 @@ fn box_glb(with_normals: bool) -> Vec<u8> {
     if with_normals {
         let normals: Vec<[f32; 3]> = positions
             .iter()
-            .map(|p| (Vec3::from_array(*p) - Vec3::splat(0.5)).normalize().to_array())
+            .map(|p| {
+                (Vec3::from_array(*p) - Vec3::splat(0.5))
+                    .normalize()
+                    .to_array()
+            })
             .collect();
         attributes["NORMAL"] = json!(b.vec3(&normals));
     }
@@ -412,11 +420,18 @@ fn bad_normals_keys_are_located_errors() {
         11,
         "unknown normals \"smoth\" (expected \"smooth\", \"flat\" or { crease_deg = DEGREES })",
     );
-    assert_located(&d, &object("{ crease = 30 }"), 3, 13, "unknown field `crease`");
+    assert_located(
+        &d,
+        &object("{ crease = 30 }"),
+        3,
+        13,
+        "unknown field `crease`",
+    );
     assert_located(&d, &object("30"), 3, 11, "normals = \"smooth\"");
     let patches = "[[object]]\npatches = \"newell-teapot\"\nnormals = \"flat\"\nmaterial = { color = [0.5, 0.5, 0.5] }\n";
     assert_located(&d, patches, 3, 11, "Bézier patches have exact ones");
-    let gltf = "[[gltf]]\npath = \"box.glb\"\nobjects = [\"Box\"]\nnormals = { crease_deg = 181 }\n";
+    let gltf =
+        "[[gltf]]\npath = \"box.glb\"\nobjects = [\"Box\"]\nnormals = { crease_deg = 181 }\n";
     assert_located(&d, gltf, 4, 26, "within [0, 180]");
     let mesh = "[[object]]\npatches = \"newell-teapot\"\nmaterial = { color = [0.5, 0.5, 0.5] }\n[[mesh]]\npath = \"box.obj\"\nnormals = \"round\"\nmaterial = { color = [0.5, 0.5, 0.5] }\n";
     assert_located(&d, mesh, 6, 11, "unknown normals \"round\"");

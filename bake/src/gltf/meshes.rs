@@ -148,7 +148,11 @@ impl<'d> Loader<'d> {
             } else {
                 ("primitives", verb.1)
             };
-            format!("{} {mesh_label} {noun} {} {verb}", self.file, numbers.join(", "))
+            format!(
+                "{} {mesh_label} {noun} {} {verb}",
+                self.file,
+                numbers.join(", ")
+            )
         };
         let [without, with] = with_normals;
         let (rule, reason) = match self.normal_rule {
@@ -286,8 +290,12 @@ impl<'d> Loader<'d> {
                 None,
             ),
             (_, rule) => {
-                let (mesh, source) =
-                    shade(&positions, &uvs, &triangles, rule.unwrap_or(NormalRule::Flat));
+                let (mesh, source) = shade(
+                    &positions,
+                    &uvs,
+                    &triangles,
+                    rule.unwrap_or(NormalRule::Flat),
+                );
                 (mesh, Some(source))
             }
         };
