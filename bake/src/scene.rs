@@ -51,6 +51,9 @@ pub struct OslfObject {
     /// A mesh object's normals: the file's or computed by which rule, and why (`None` for
     /// patches, whose normals are exact).
     pub normals: Option<NormalsUsed>,
+    /// The object's own sample spacing (scene units), overriding the bake's density for it:
+    /// a small object beside a large one gets points of its own scale.
+    pub sample_spacing: Option<f32>,
 }
 
 impl OslfObject {

@@ -99,6 +99,7 @@ impl Ctx<'_> {
             material,
             base_color,
             normals,
+            sample_spacing: o.sample_spacing.map(|s| s.0),
         })
     }
 
@@ -284,6 +285,7 @@ pub(super) fn mesh_objects(
             material: o.material,
             base_color: materials[o.material as usize].mean_albedo(),
             normals: Some(o.normals),
+            sample_spacing: None,
         })
         .collect()
 }

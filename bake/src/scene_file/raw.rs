@@ -139,6 +139,8 @@ pub(super) struct RawObject {
     pub(super) select: Option<Spanned<[u32; 2]>>,
     /// How a `mesh` object's normals are computed (`"smooth"`, `"flat"`, `{ crease_deg }`).
     pub(super) normals: Option<Spanned<RawNormals>>,
+    /// The object's own sample spacing, overriding `[bake]`'s density for it.
+    pub(super) sample_spacing: Option<Positive>,
     #[serde(default)]
     pub(super) transform: RawTransform,
     pub(super) material: Spanned<RawMaterial>,
