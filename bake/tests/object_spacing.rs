@@ -1,6 +1,10 @@
 //! Per-object sample density: `[[object]] sample_spacing` gives a small object beside a large
 //! one sample points (and atlas texels) at its own scale, while `[bake]`'s density keeps
-//! covering the other objects; the preflight counts the same points.
+//! covering the other objects; the preflight counts the same points. `[[gltf]] sample_spacing`
+//! does the same for the include's objects.
+
+#[path = "data/gltf_builder.rs"]
+mod gltf_builder;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -11,6 +15,7 @@ use oslf_bake::sample_points::{self, Surfaces};
 use oslf_bake::scene::Scene;
 use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_bake::BakeError;
+use serde_json::json;
 
 fn dir(test: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("oslf-object-spacing-{}-{test}", std::process::id()));
@@ -125,4 +130,49 @@ fn a_bad_object_spacing_is_a_located_error() {
         }
         other => panic!("{:?}", other.map(|_| ())),
     }
+}
+
+/// A `.glb` of one node "Small": the small ball of [`sphere_obj`] (flat normals).
+fn small_glb() -> Vec<u8> {
+    let m = oslf_bake::mesh::Mesh::icosphere(2);
+    let positions: Vec<[f32; 3]> = m
+        .positions
+        .iter()
+        .map(|p| [0.1 * p.x + 3.0, 0.1 * p.y, 0.1 * p.z])
+        .collect();
+    let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+    let mut b = gltf_builder::Builder::new();
+    let pos = b.positions(&positions);
+    let idx = b.indices_u32(&indices);
+    b.glb(json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "Small", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}],
+    }))
+}
+
+#[test]
+fn a_gltf_include_gives_its_objects_their_spacing() {
+    let d = dir("gltf");
+    std::fs::write(d.join("big.obj"), sphere_obj(1.0, 0.0)).unwrap();
+    std::fs::write(d.join("small.glb"), small_glb()).unwrap();
+    let text = |extra: &str| {
+        format!(
+            "[[object]]\nname = \"big\"\nmesh = \"big.obj\"\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n\n\
+             [[gltf]]\npath = \"small.glb\"\nobjects = [\"Small\"]\n{extra}\n\n\
+             [bake]\nepsilon = 0.005\nsample_count = 200\nsample_map_resolution = 64\n"
+        )
+    };
+    let path = d.join("scene.toml");
+    std::fs::write(&path, text("")).unwrap();
+    let shared = Scene::load(&path, None).unwrap();
+    assert_eq!(shared.objects[1].sample_spacing, None);
+    assert!(points_per_object(&shared)[1] <= 6);
+    std::fs::write(&path, text("sample_spacing = 0.04")).unwrap();
+    let own = Scene::load(&path, None).unwrap();
+    assert_eq!(own.objects[1].sample_spacing, Some(0.04));
+    let [big, small] = points_per_object(&own);
+    assert!(small >= 70, "{small}");
+    assert!((180..=200).contains(&big), "{big}");
 }

@@ -141,7 +141,8 @@ impl Ctx<'_> {
             self.included
                 .borrow_mut()
                 .extend(import.files.iter().cloned());
-            for object in mesh_objects(import.objects, materials) {
+            for mut object in mesh_objects(import.objects, materials) {
+                object.sample_spacing = g.sample_spacing.map(|s| s.0);
                 self.check_epsilon(epsilon, epsilon_span.clone(), &object, g.path.span())?;
                 out.objects.push(object);
             }

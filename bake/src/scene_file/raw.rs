@@ -262,6 +262,8 @@ pub(super) struct RawGltf {
     /// How the normals of every primitive are computed (the default: the file's `NORMAL`,
     /// else flat, as glTF specifies).
     pub(super) normals: Option<RawNormals>,
+    /// The sample spacing of each of its `objects`, overriding `[bake]`'s density for them.
+    pub(super) sample_spacing: Option<Positive>,
 }
 
 /// `normals = "smooth" | "flat" | { crease_deg = 30.0 }`.
