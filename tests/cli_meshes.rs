@@ -196,3 +196,68 @@ fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
         "mirror RMSE: OSLF {e_oslf:.4}, environment map {e_env:.4}"
     );
 }
+
+/// The unit cube as OBJ text without normals: 8 vertices, 6 quads wound outwards.
+const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
+f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+
+#[test]
+fn the_bake_summary_says_which_normals_each_mesh_object_got() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(dir.join("box.obj"), BOX_OBJ).unwrap();
+    let scene = dir.join("box.toml");
+    let text = |normals: &str| {
+        format!(
+            r#"
+[environment]
+uniform = [1.0, 1.0, 1.0]
+
+[[object]]
+name = "box"
+mesh = "box.obj"
+{normals}
+material = {{ color = [0.5, 0.5, 0.5] }}
+
+[bake]
+epsilon = 0.02
+sample_count = 12
+cube_resolution = 2
+sample_map_resolution = 4
+samples_per_texel = 1
+"#
+        )
+    };
+    for (i, (normals, line, rule)) in [
+        (
+            "",
+            "normals        object \"box\": crease 30° (box.obj has no normals; the default for OBJ)",
+            serde_json::json!({"crease": {"crease_deg": 30.0}}),
+        ),
+        (
+            "normals = \"smooth\"",
+            "normals        object \"box\": smooth (asked for in the scene file; box.obj has no normals)",
+            serde_json::json!("smooth"),
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        std::fs::write(&scene, text(normals)).unwrap();
+        let report = dir.join("report.json");
+        let summary = run(oslf("bake")
+            .arg(&scene)
+            .arg("-o")
+            .arg(dir.join(format!("box{i}.oslf")))
+            .args(["--preview", "none", "-q", "--report-json"])
+            .arg(&report));
+        assert!(
+            summary.lines().any(|l| l == line),
+            "no line {line:?} in:\n{summary}"
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        assert_eq!(json["normals"][0]["object"], "box", "{json}");
+        assert_eq!(json["normals"][0]["rule"], rule, "{json}");
+    }
+}

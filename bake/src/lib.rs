@@ -11,7 +11,7 @@
 //!
 //! | role | modules |
 //! | --- | --- |
-//! | geometry | [`bezier`], [`mesh`] and [`camera`] (the shared pinhole camera; all three re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`gltf`] (glTF 2.0 files: meshes, materials, lights, cameras), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
+//! | geometry | [`bezier`], [`mesh`] and [`camera`] (the shared pinhole camera; all three re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`normals`] (vertex normals where a file has none: flat, smooth, crease angle), [`gltf`] (glTF 2.0 files: meshes, materials, lights, cameras), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
 //! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`preview`] (path-traced images through a [`camera::Camera`]), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
 //! | the bake | [`scene`] (the scene model: objects, shapes, lights, settings), [`scene_file`] (reading scenes: TOML files with located errors, presets, glTF and OBJ includes), [`input`] (every input file read with bounds: regular files only, size limits), [`tolerance`] (tolerances the stages share), [`surface`] (the sample-map domains), [`sample_points`], [`sample_map`], [`capture`], [`preflight`] (the estimate checked against the machine), [`bake`] (the pipeline's stages, resumable, deterministic), [`progress`] (the `Progress` trait the long stages report to; tools draw it) |
 //! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf truth` command) |
@@ -27,6 +27,7 @@ pub mod ray;
 pub use oslf_geometry::{bezier, camera, mesh};
 pub mod bvh;
 pub mod gltf;
+pub mod normals;
 pub mod obj;
 pub mod shapes;
 

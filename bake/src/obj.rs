@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 
 use crate::input::{read_input, InputKind};
 use crate::mesh::Mesh;
+use crate::normals::{shade, NormalRule, NormalsUsed, DEFAULT_CREASE_DEG};
 use crate::{BakeError, Result};
 
 /// A `BufRead` over a byte slice that remembers how far the parser has read, so a parse error
@@ -74,14 +75,24 @@ fn check_finite(path: &Path, data: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Loads all objects of an OBJ file into one mesh with [`load_obj_with`]'s default normals:
+/// the file's `vn`, else computed with a crease angle of [`DEFAULT_CREASE_DEG`].
+pub fn load_obj(path: &Path) -> Result<Mesh> {
+    load_obj_with(path, None).map(|(mesh, _)| mesh)
+}
+
 /// Loads all objects of an OBJ file into one mesh: polygons triangulated, one index per
-/// vertex. Missing normals are computed (smooth, area weighted; also when the file's normals
-/// are zero or non-finite), missing uvs are 0; a NaN or infinite position or texture
-/// coordinate is an error at its line. Materials and `mtllib` files are ignored.
+/// vertex; missing uvs are 0; a NaN or infinite position or texture coordinate is an error at
+/// its line. Materials and `mtllib` files are ignored.
+///
+/// Normals: with `requested` (the scene file's `normals` key), computed by that rule for every
+/// OBJ object of the file, replacing its `vn`s; without, the file's `vn`s where an OBJ object
+/// has usable ones (one per vertex, non-zero and finite), else computed with a crease angle of
+/// [`DEFAULT_CREASE_DEG`]. The second value says which rule the mesh got and why.
 ///
 /// Errors name the file; parse errors also give the line where the parser detected them
 /// (for index errors that can be the end of the object, as the parser checks them there).
-pub fn load_obj(path: &Path) -> Result<Mesh> {
+pub fn load_obj_with(path: &Path, requested: Option<NormalRule>) -> Result<(Mesh, NormalsUsed)> {
     let data = read_input(path, InputKind::Mesh)?;
     check_finite(path, &data)?;
     let mut reader = CountingReader {
@@ -104,6 +115,8 @@ pub fn load_obj(path: &Path) -> Result<Mesh> {
         message: format!("OBJ {e}"),
     })?;
     let mut mesh = Mesh::new();
+    // OBJ objects with usable `vn` normals.
+    let mut with_normals = 0;
     for model in &models {
         let m = &model.mesh;
         let n = m.positions.len() / 3;
@@ -141,14 +154,21 @@ pub fn load_obj(path: &Path) -> Result<Mesh> {
             .chunks_exact(3)
             .map(|p| Vec3::new(p[0], p[1], p[2]))
             .collect();
-        if given.len() == n
+        let usable = given.len() == n
             && given
                 .iter()
-                .all(|v| v.is_finite() && v.length_squared() > 0.0)
-        {
-            part.normals = given.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
-        } else {
-            part.compute_smooth_normals();
+                .all(|v| v.is_finite() && v.length_squared() > 0.0);
+        with_normals += usable as usize;
+        match (usable, requested) {
+            (true, None) => {
+                part.normals = given.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
+            }
+            (_, rule) => {
+                let rule = rule.unwrap_or(NormalRule::Crease {
+                    crease_deg: DEFAULT_CREASE_DEG,
+                });
+                part = shade(&part.positions, &part.uvs, &part.triangles, rule).0;
+            }
         }
         if let Some(i) = part.uvs.iter().position(|uv| !uv.is_finite()) {
             return Err(BakeError::Invalid(format!(
@@ -169,7 +189,49 @@ pub fn load_obj(path: &Path) -> Result<Mesh> {
             path.display()
         )));
     }
-    Ok(mesh)
+    let used = normals_used(path, requested, with_normals, models.len());
+    Ok((mesh, used))
+}
+
+/// Which normals an OBJ file's mesh got and why: `requested` (the scene file's key) or the
+/// default, where `with_normals` of its `objects` OBJ objects had usable `vn`s.
+fn normals_used(
+    path: &Path,
+    requested: Option<NormalRule>,
+    with_normals: usize,
+    objects: usize,
+) -> NormalsUsed {
+    let file = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
+    let default = NormalRule::Crease {
+        crease_deg: DEFAULT_CREASE_DEG,
+    };
+    let (rule, reason) = match requested {
+        Some(rule) if with_normals > 0 => (
+            Some(rule),
+            format!("asked for in the scene file; replaces {file}'s vn normals"),
+        ),
+        Some(rule) => (
+            Some(rule),
+            format!("asked for in the scene file; {file} has no normals"),
+        ),
+        None if with_normals == objects => (None, format!("{file}'s vn normals")),
+        None if with_normals == 0 => (
+            Some(default),
+            format!("{file} has no normals; the default for OBJ"),
+        ),
+        None => (
+            Some(default),
+            format!(
+                "{} of {file}'s {objects} OBJ objects have no normals; the default for OBJ \
+                 (the others keep their vn normals)",
+                objects - with_normals
+            ),
+        ),
+    };
+    NormalsUsed { rule, reason }
 }
 
 #[cfg(test)]

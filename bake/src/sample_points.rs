@@ -66,35 +66,43 @@ pub fn place(
             "the OSLF objects have zero surface area: no sample points can be placed".into(),
         ));
     }
-    let count = match settings.sample_count {
-        SampleDensity::Count(n) => n as usize,
-        // Hexagonal packing: each point covers (√3/2)·h².
-        SampleDensity::Spacing(h) => {
-            let n = (area / (0.866_025_4 * h * h)).ceil();
-            if !(1.0..=16e6).contains(&n) {
-                return Err(BakeError::Invalid(format!(
-                    "sample_spacing {h} gives {n} points over an area of {area} (allowed: 1 to 16 million)"
-                )));
-            }
-            n as usize
-        }
-    };
-
     let mut rng = Rng::new(settings.seed, PLACEMENT_STREAM);
-    let candidates: Vec<SurfacePoint> = (0..count * CANDIDATES_PER_POINT)
-        .map(|_| surfaces.sample(&mut rng))
-        .collect();
-    let kept = eliminate(&candidates, count, area);
+    let mut radius = f32::INFINITY;
+    let mut chosen: Vec<SurfacePoint> = Vec::new();
+    for group in groups(surfaces, settings)? {
+        let draw = |rng: &mut Rng| match group.objects.as_slice() {
+            [] => surfaces.sample(rng),
+            [o] => surfaces.sample_object(*o, rng),
+            several => {
+                // An object by area, then a point on it.
+                let mut target = rng.next_f32() * group.area;
+                let o = several
+                    .iter()
+                    .copied()
+                    .find(|&o| {
+                        target -= surfaces.object_area(o);
+                        target < 0.0
+                    })
+                    .unwrap_or(several[several.len() - 1]);
+                surfaces.sample_object(o, rng)
+            }
+        };
+        let candidates: Vec<SurfacePoint> = (0..group.count * CANDIDATES_PER_POINT)
+            .map(|_| draw(&mut rng))
+            .collect();
+        let kept = eliminate(&candidates, group.count, group.area);
+        chosen.extend(kept.iter().map(|&i| candidates[i]));
+        radius = radius.min(poisson_radius(group.area, group.count));
+    }
 
     let mut placement = Placement {
-        placed: kept.len(),
+        placed: chosen.len(),
         area,
-        radius: poisson_radius(area, count),
+        radius,
         ..Default::default()
     };
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
-    for &i in &kept {
-        let c = &candidates[i];
+    for c in &chosen {
         let position = c.position + c.normal * settings.epsilon;
         match free_space(geometry, position, settings.epsilon, &directions) {
             FreeSpace::Ok => placement.points.push(SamplePoint {
@@ -108,17 +116,84 @@ pub fn place(
             FreeSpace::Inside => placement.removed_inside += 1,
         }
     }
-    placement.rays = (kept.len() * PROBE_DIRECTIONS * 2) as u64;
+    placement.rays = (chosen.len() * PROBE_DIRECTIONS * 2) as u64;
     if placement.points.is_empty() {
         return Err(BakeError::Invalid(format!(
             "all {} sample points were removed ({} closer than ε = {} to a surface, {} inside geometry)",
-            kept.len(),
+            chosen.len(),
             placement.removed_close,
             settings.epsilon,
             placement.removed_inside
         )));
     }
     Ok(placement)
+}
+
+/// Points placed together by one weighted sample elimination, drawn over `objects` (all of
+/// them where it is empty): the objects at the bake's density, or one object at its own
+/// `sample_spacing`.
+struct Group {
+    objects: Vec<usize>,
+    count: usize,
+    area: f32,
+}
+
+/// Points for `area` at spacing `h` (hexagonal packing: each point covers (√3/2)·h²), within
+/// 1 to 16 million; `what` names the key in the error.
+fn spacing_count(area: f32, h: f32, what: &str) -> Result<usize> {
+    let n = (area / (0.866_025_4 * h * h)).ceil();
+    if !(1.0..=16e6).contains(&n) {
+        return Err(BakeError::Invalid(format!(
+            "{what} {h} gives {n} points over an area of {area} (allowed: 1 to 16 million)"
+        )));
+    }
+    Ok(n as usize)
+}
+
+/// The placement groups: one for the bake's density, then one per object with a
+/// `sample_spacing` of its own, in object order. Without such objects, one group over all
+/// of them (the placement is then what it was before per-object spacings existed).
+fn groups(surfaces: &Surfaces, settings: &BakeSettings) -> Result<Vec<Group>> {
+    let objects = surfaces.objects();
+    let own: Vec<usize> = (0..objects.len())
+        .filter(|&o| objects[o].sample_spacing.is_some())
+        .collect();
+    let shared_area = if own.is_empty() {
+        surfaces.area()
+    } else {
+        (0..objects.len())
+            .filter(|o| !own.contains(o))
+            .map(|o| surfaces.object_area(o))
+            .sum()
+    };
+    let mut groups = Vec::new();
+    if own.len() < objects.len() {
+        let count = match settings.sample_count {
+            SampleDensity::Count(n) => n as usize,
+            SampleDensity::Spacing(h) => spacing_count(shared_area, h, "sample_spacing")?,
+        };
+        let shared = if own.is_empty() {
+            Vec::new()
+        } else {
+            (0..objects.len()).filter(|o| !own.contains(o)).collect()
+        };
+        groups.push(Group {
+            objects: shared,
+            count,
+            area: shared_area,
+        });
+    }
+    for o in own {
+        let area = surfaces.object_area(o);
+        let what = format!("object {:?}: sample_spacing", objects[o].name);
+        let count = spacing_count(area, surfaces.spacing(o), &what)?;
+        groups.push(Group {
+            objects: vec![o],
+            count,
+            area,
+        });
+    }
+    Ok(groups)
 }
 
 /// The placement RNG's stream id (cube-map texels use hashed streams of their own).

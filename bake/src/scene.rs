@@ -19,6 +19,7 @@ use crate::error::{BakeError, Result};
 use crate::light::Light;
 use crate::material::Material;
 use crate::mesh::Mesh;
+use crate::normals::NormalsUsed;
 use crate::ray::ENVIRONMENT_OBJECT;
 use crate::tolerance::TESSELLATION_ERROR;
 
@@ -47,6 +48,12 @@ pub struct OslfObject {
     pub material: u32,
     /// The material's mean albedo: the C_s of Eq. 4.12 that the store carries.
     pub base_color: Vec3,
+    /// A mesh object's normals: the file's or computed by which rule, and why (`None` for
+    /// patches, whose normals are exact).
+    pub normals: Option<NormalsUsed>,
+    /// The object's own sample spacing (scene units), overriding the bake's density for it:
+    /// a small object beside a large one gets points of its own scale.
+    pub sample_spacing: Option<f32>,
 }
 
 impl OslfObject {

@@ -12,7 +12,8 @@
 //! G-buffer and in `oslf truth`; the geometric normal only offsets rays and tells sides apart.
 //!
 //! Sample points are drawn over all domains with density proportional to area
-//! ([`Surfaces::sample`]): a patch's area is tabulated on a grid of (u, v) cells, a mesh's per
+//! ([`Surfaces::sample`], or over one object with [`Surfaces::sample_object`] where objects have
+//! spacings of their own): a patch's area is tabulated on a grid of (u, v) cells, a mesh's per
 //! triangle.
 
 use glam::{Vec2, Vec3};
@@ -119,6 +120,11 @@ pub struct Surfaces<'s> {
     /// Running area sums (accumulated in f64, stored as f32), one per cell.
     cdf: Vec<f32>,
     area: f32,
+    /// Per object: its cells (a range of `cells` and `cdf`) and its area.
+    object_cells: Vec<(std::ops::Range<usize>, f32)>,
+    /// Per object: the sample spacing its atlas texel and its sample points follow (its own
+    /// `sample_spacing`, else the bake's).
+    spacing: Vec<f32>,
 }
 
 impl<'s> Surfaces<'s> {
@@ -140,7 +146,9 @@ impl<'s> Surfaces<'s> {
         };
         let n = AREA_GRID;
         let cell = 1.0 / n as f32;
+        let mut object_cells = Vec::with_capacity(objects.len());
         for (o, object) in objects.iter().enumerate() {
+            let (first, before) = (cells.len(), cdf.last().copied().unwrap_or(0.0));
             for (p, patch) in object.patches.iter().enumerate() {
                 for j in 0..n {
                     for i in 0..n {
@@ -170,17 +178,34 @@ impl<'s> Surfaces<'s> {
                     push(c, area, &mut cells, &mut cdf);
                 }
             }
+            let after = cdf.last().copied().unwrap_or(0.0);
+            object_cells.push((first..cells.len(), after - before));
         }
         let area = total as f32;
-        let spacing = match settings.sample_count {
+        // `sample_count` spreads over the objects without a spacing of their own.
+        let shared_area: f32 = if objects.iter().all(|o| o.sample_spacing.is_none()) {
+            area
+        } else {
+            objects
+                .iter()
+                .zip(&object_cells)
+                .filter(|(o, _)| o.sample_spacing.is_none())
+                .map(|(_, (_, a))| a)
+                .sum()
+        };
+        let shared = match settings.sample_count {
             SampleDensity::Spacing(h) => h,
             // Hexagonal packing: each point covers (√3/2)·h².
-            SampleDensity::Count(c) => (area / (0.866_025_4 * c.max(1) as f32)).sqrt(),
+            SampleDensity::Count(c) => (shared_area / (0.866_025_4 * c.max(1) as f32)).sqrt(),
         };
+        let spacing: Vec<f32> = objects
+            .iter()
+            .map(|o| o.sample_spacing.unwrap_or(shared))
+            .collect();
         let mut atlases = Vec::with_capacity(objects.len());
         let mut first_map = Vec::with_capacity(objects.len());
         let mut next = 0u32;
-        for object in objects {
+        for (object, &spacing) in objects.iter().zip(&spacing) {
             first_map.push(next);
             next += object.patches.len() as u32;
             let atlas = match &object.mesh {
@@ -218,7 +243,38 @@ impl<'s> Surfaces<'s> {
             cells,
             cdf,
             area,
+            object_cells,
+            spacing,
         })
+    }
+
+    /// The OSLF objects, in order.
+    pub fn objects(&self) -> &'s [OslfObject] {
+        self.objects
+    }
+
+    /// The surface area of object `o`.
+    pub fn object_area(&self, o: usize) -> f32 {
+        self.object_cells[o].1
+    }
+
+    /// The sample spacing of object `o`: its own `sample_spacing`, else the bake's
+    /// (`sample_spacing`, or the spacing `sample_count` points give over the objects without
+    /// one).
+    pub fn spacing(&self, o: usize) -> f32 {
+        self.spacing[o]
+    }
+
+    /// A point drawn on object `o` alone, with density proportional to area.
+    pub fn sample_object(&self, o: usize, rng: &mut Rng) -> SurfacePoint {
+        let (range, area) = self.object_cells[o].clone();
+        let before = range.start.checked_sub(1).map_or(0.0, |i| self.cdf[i]);
+        let target = before + rng.next_f32() * area;
+        let k = range.start
+            + self.cdf[range.clone()]
+                .partition_point(|&c| c <= target)
+                .min(range.len().saturating_sub(1));
+        self.sample_cell(k, rng)
     }
 
     /// Total surface area of the OSLF objects.
@@ -269,6 +325,11 @@ impl<'s> Surfaces<'s> {
             .cdf
             .partition_point(|&c| c <= target)
             .min(self.cells.len().saturating_sub(1));
+        self.sample_cell(k, rng)
+    }
+
+    /// A point drawn uniformly by area within cell `k`.
+    fn sample_cell(&self, k: usize, rng: &mut Rng) -> SurfacePoint {
         let (a, b) = (rng.next_f32(), rng.next_f32());
         match self.cells[k] {
             Cell::Patch {

@@ -251,6 +251,9 @@ fn print_summary(r: &BakeReport) {
             println!("               not used: {why}");
         }
     }
+    for n in &r.normals {
+        println!("normals        {n}");
+    }
     println!(
         "cube maps      {} of {}² texels, {} samples per texel{}",
         r.cubes,

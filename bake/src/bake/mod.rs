@@ -26,7 +26,7 @@ use crate::preflight::Limits;
 use crate::progress::{self, Progress};
 use crate::scene::Scene;
 pub use meta::{object_centre, store_meta};
-pub use report::{AtlasReport, BakeReport};
+pub use report::{AtlasReport, BakeReport, NormalsReport};
 use sink::Sink;
 use stages::process_cpu_ns;
 pub use writable::{check_store_writable, check_writable};

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use oslf_geometry::atlas::UvSource;
 
+use crate::normals::{NormalRule, NormalsUsed};
 use crate::sample_map::SampleMapStats;
 use crate::sample_points::Surfaces;
 use crate::scene::Scene;
@@ -25,6 +26,8 @@ pub struct BakeReport {
     pub sample_maps: SampleMapStats,
     /// The atlas of each mesh object, in object order.
     pub atlases: Vec<AtlasReport>,
+    /// The normals of each mesh object, in object order.
+    pub normals: Vec<NormalsReport>,
     /// Cubes of this store (or, for a shard, of this shard).
     pub cubes: u32,
     /// `I/N` when this bake was shard `I` of `N`; `cubes` then counts the shard's cubes.
@@ -71,6 +74,44 @@ pub struct AtlasReport {
     pub source: &'static str,
     /// The uv sets tried and not used, each with why.
     pub rejected: Vec<String>,
+}
+
+/// Which normals a mesh object got and why.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct NormalsReport {
+    pub object: String,
+    /// The rule they were computed by (`"flat"`, `"smooth"`, `{"crease": {"crease_deg": 30}}`);
+    /// `null` where the file's normals are used.
+    pub rule: Option<NormalRule>,
+    /// Why, naming the file: `box.obj has no normals; the default for OBJ`.
+    pub reason: String,
+}
+
+/// `object "box": crease 30° (box.obj has no normals; the default for OBJ)`.
+impl std::fmt::Display for NormalsReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let used = NormalsUsed {
+            rule: self.rule,
+            reason: self.reason.clone(),
+        };
+        write!(f, "object {:?}: {used}", self.object)
+    }
+}
+
+/// The normals of `scene`'s mesh objects, for the report.
+pub(super) fn normals_reports(scene: &Scene) -> Vec<NormalsReport> {
+    scene
+        .objects
+        .iter()
+        .filter_map(|o| {
+            let used = o.normals.as_ref()?;
+            Some(NormalsReport {
+                object: o.name.clone(),
+                rule: used.rule,
+                reason: used.reason.clone(),
+            })
+        })
+        .collect()
 }
 
 /// The atlases of `scene`'s mesh objects, for the report.

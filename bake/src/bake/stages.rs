@@ -9,7 +9,7 @@ use oslf_format::{SampleMaps, SamplePoint, ShardSpec, StoreMeta};
 use rayon::prelude::*;
 
 use super::meta::object_centre;
-use super::report::{atlas_reports, BakeReport};
+use super::report::{atlas_reports, normals_reports, BakeReport};
 use super::sink::Sink;
 use super::writable::check_store_writable;
 use crate::bvh::TriangleScene;
@@ -61,6 +61,7 @@ pub(super) fn place<'s>(
     let settings = &scene.bake;
     let surfaces = Surfaces::new(&scene.objects, settings)?;
     report.atlases = atlas_reports(scene, &surfaces);
+    report.normals = normals_reports(scene);
     let placement = sample_points::place(&surfaces, settings, geometry)?;
     report.placement_seconds = t.elapsed().as_secs_f64();
     report.points_placed = placement.placed;

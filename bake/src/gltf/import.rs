@@ -8,6 +8,7 @@ use oslf_geometry::Camera;
 
 use crate::light::Light;
 use crate::mesh::Mesh;
+use crate::normals::{NormalRule, NormalsUsed};
 use crate::scene::Shape;
 
 /// Watts per lumen at 555 nm, the peak of the photopic luminous efficiency: the default
@@ -33,6 +34,9 @@ pub struct Options {
     /// Also make OSLF objects of the nodes whose `extras` hold `"oslf": true` (how a `.glb`
     /// given as the whole scene names its objects).
     pub objects_from_extras: bool,
+    /// How every primitive's normals are computed, replacing its `NORMAL`; `None`: the
+    /// file's `NORMAL`, else flat normals (the glTF specification's rule).
+    pub normals: Option<NormalRule>,
 }
 
 impl Default for Options {
@@ -43,6 +47,7 @@ impl Default for Options {
             lights: true,
             objects: Vec::new(),
             objects_from_extras: false,
+            normals: None,
         }
     }
 }
@@ -71,6 +76,8 @@ pub struct ImportedObject {
     pub uv_sets: Vec<(UvSource, Vec<Vec2>)>,
     /// The first primitive's material (an index into the materials passed to [`crate::gltf::load`]).
     pub material: u32,
+    /// Which normals the primitives got and why.
+    pub normals: NormalsUsed,
 }
 
 /// What a glTF file contributes to a scene.

@@ -6,6 +6,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::normals::NormalRule;
 use crate::texture::ImageTexture;
 use crate::BakeError;
 
@@ -31,6 +32,8 @@ pub(super) struct Loader<'d> {
     pub(super) file: String,
     /// External files read (buffers, images), in reading order.
     pub(super) files: std::cell::RefCell<Vec<PathBuf>>,
+    /// [`super::Options::normals`]: how every primitive's normals are computed.
+    pub(super) normal_rule: Option<NormalRule>,
 }
 
 /// `nodes[3] "Arm"` or `nodes[3]`.
@@ -67,6 +70,7 @@ impl<'d> Loader<'d> {
                 |n| n.to_string_lossy().into_owned(),
             ),
             files: Default::default(),
+            normal_rule: None,
         }
     }
 

@@ -1,5 +1,5 @@
 //! Meshes: triangle primitives read into meshes (strips and fans as lists, flat normals
-//! where absent), as environment shapes or OSLF objects.
+//! where absent, or the scene's rule), as environment shapes or OSLF objects.
 
 use glam::{Affine3A, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -12,6 +12,7 @@ use super::loader::{label, Loader};
 use super::textures::UvMap;
 use crate::material::Material;
 use crate::mesh::Mesh;
+use crate::normals::{shade, NormalRule, NormalsUsed};
 use crate::scene::Shape;
 use crate::Result;
 
@@ -34,6 +35,8 @@ impl<'d> Loader<'d> {
         let (mut lightmap, mut texture): (Option<Vec<Vec2>>, Option<Vec<Vec2>>) =
             (Some(Vec::new()), Some(Vec::new()));
         let mesh_label = label("meshes", mesh.index(), mesh.name());
+        // The primitives read without and with usable `NORMAL`s.
+        let mut with_normals: [Vec<usize>; 2] = Default::default();
         if node.weights().is_some() || mesh.weights().is_some() {
             self.warn(format!(
                 "{at}: {mesh_label}: morph target weights are not supported: the base mesh is drawn"
@@ -64,10 +67,12 @@ impl<'d> Loader<'d> {
                 mesh: mut m,
                 vertices,
                 split,
+                had_normals,
             } = self.primitive_mesh(&prim, &json_at, &what, triangles_from, uv_map.as_ref())?;
             if m.triangles.is_empty() {
                 continue;
             }
+            with_normals[usize::from(had_normals)].push(prim.index());
             m.transform(world);
             if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
                 return Err(self.err(
@@ -106,6 +111,10 @@ impl<'d> Loader<'d> {
                         mesh: m,
                         uv_sets: Vec::new(),
                         material: material_index,
+                        normals: NormalsUsed {
+                            rule: None,
+                            reason: String::new(),
+                        },
                     })
                 }
                 Some(o) => {
@@ -123,9 +132,59 @@ impl<'d> Loader<'d> {
                 .into_iter()
                 .filter_map(|(s, uvs)| Some((s, uvs?)))
                 .collect();
+            o.normals = self.normals_used(&mesh_label, &with_normals);
             import.objects.push(o);
         }
         Ok(())
+    }
+
+    /// Which normals an object made of `mesh_label`'s primitives got and why, given the
+    /// primitives without (`with_normals[0]`) and with (`[1]`) usable `NORMAL`s.
+    fn normals_used(&self, mesh_label: &str, with_normals: &[Vec<usize>; 2]) -> NormalsUsed {
+        let prims = |list: &[usize], verb: (&str, &str)| {
+            let numbers: Vec<String> = list.iter().map(usize::to_string).collect();
+            let (noun, verb) = if list.len() == 1 {
+                ("primitive", verb.0)
+            } else {
+                ("primitives", verb.1)
+            };
+            format!(
+                "{} {mesh_label} {noun} {} {verb}",
+                self.file,
+                numbers.join(", ")
+            )
+        };
+        let [without, with] = with_normals;
+        let (rule, reason) = match self.normal_rule {
+            Some(rule) if !with.is_empty() => (
+                Some(rule),
+                format!(
+                    "asked for in the scene file; replaces the NORMAL {}",
+                    prims(with, ("has", "have"))
+                ),
+            ),
+            Some(rule) => (
+                Some(rule),
+                format!(
+                    "asked for in the scene file; {} no NORMAL",
+                    prims(without, ("has", "have"))
+                ),
+            ),
+            None if without.is_empty() => (None, prims(with, ("has NORMAL", "have NORMAL"))),
+            None => (
+                Some(NormalRule::Flat),
+                format!(
+                    "{} no NORMAL; the glTF default{}",
+                    prims(without, ("has", "have")),
+                    if with.is_empty() {
+                        ""
+                    } else {
+                        " (the others keep their NORMAL)"
+                    }
+                ),
+            ),
+        };
+        NormalsUsed { rule, reason }
     }
 
     /// Warns about what the primitive uses and the import ignores: morph targets, vertex
@@ -217,10 +276,11 @@ impl<'d> Loader<'d> {
             None => vec![Vec2::ZERO; n],
             Some(map) => self.mapped_uvs(prim, map, json_at, what, n)?,
         };
-        let normals = self.normals(prim, json_at, what, n)?;
+        let given = self.normals(prim, json_at, what, n)?;
+        let had_normals = given.is_some();
         let vertices = positions.len();
-        let (mesh, split) = match normals {
-            Some(normals) => (
+        let (mesh, split) = match (given, self.normal_rule) {
+            (Some(normals), None) => (
                 Mesh {
                     positions,
                     normals,
@@ -229,9 +289,14 @@ impl<'d> Loader<'d> {
                 },
                 None,
             ),
-            None => {
-                let split = triangles.iter().flatten().copied().collect();
-                (flat_shaded(&positions, &uvs, &triangles), Some(split))
+            (_, rule) => {
+                let (mesh, source) = shade(
+                    &positions,
+                    &uvs,
+                    &triangles,
+                    rule.unwrap_or(NormalRule::Flat),
+                );
+                (mesh, Some(source))
             }
         };
         mesh.validate()
@@ -240,6 +305,7 @@ impl<'d> Loader<'d> {
             mesh,
             vertices,
             split,
+            had_normals,
         })
     }
 
@@ -390,7 +456,7 @@ impl<'d> Loader<'d> {
             Ok(Some(normals.into_iter().map(|v| v.normalize()).collect()))
         } else {
             self.warn(format!(
-                "{what}: some normals are zero or not finite: flat normals are used"
+                "{what}: some normals are zero or not finite: computed ones are used (flat unless the scene asks otherwise)"
             ));
             Ok(None)
         }
@@ -402,25 +468,9 @@ pub(super) struct PrimitiveMesh {
     mesh: Mesh,
     /// Elements of the primitive's `POSITION` accessor.
     vertices: usize,
-    /// Where the mesh was flat-shaded (split per triangle corner): the accessor element of
-    /// each mesh vertex.
+    /// Where the normals were computed (vertices split where normals differ): the accessor
+    /// element of each mesh vertex.
     split: Option<Vec<u32>>,
-}
-
-/// A mesh with one vertex per triangle corner and the face normal at each (glTF's rule for
-/// primitives without normals). Degenerate triangles get +z.
-pub(super) fn flat_shaded(positions: &[Vec3], uvs: &[Vec2], triangles: &[[u32; 3]]) -> Mesh {
-    let mut m = Mesh::new();
-    for t in triangles {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        let n = (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Z);
-        let base = m.positions.len() as u32;
-        for &i in t {
-            m.positions.push(positions[i as usize]);
-            m.uvs.push(uvs[i as usize]);
-            m.normals.push(n);
-        }
-        m.triangles.push([base, base + 1, base + 2]);
-    }
-    m
+    /// Whether the primitive has usable `NORMAL`s (used or not).
+    had_normals: bool,
 }

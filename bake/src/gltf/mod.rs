@@ -11,7 +11,8 @@
 //! - the default scene (else the first; else every root node), its node hierarchy with TRS or
 //!   matrix transforms, composed with the include's own transform ([`Options::transform`]);
 //! - triangle primitives (`TRIANGLES`, and `TRIANGLE_STRIP` / `TRIANGLE_FAN` converted to
-//!   lists), indexed or not: `POSITION`, `NORMAL` (flat normals where absent), the
+//!   lists), indexed or not: `POSITION`, `NORMAL` (flat normals where absent, or computed by
+//!   [`Options::normals`] where the scene asks), the
 //!   `TEXCOORD_n` set the material's base-colour texture uses;
 //! - materials: `baseColorFactor` and `baseColorTexture` (sRGB decoded to linear), with
 //!   `KHR_texture_transform` and the sampler's wrap modes, as a Lambertian albedo;
@@ -83,6 +84,7 @@ fn load_bytes(
 ) -> Result<Import> {
     let (doc, bin) = container::parse_document(path, bytes)?;
     let mut loader = Loader::new(path, &doc);
+    loader.normal_rule = options.normals;
     loader.load_buffers(bin)?;
     loader.check_views()?;
     loader.warn_document();

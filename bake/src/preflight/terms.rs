@@ -83,28 +83,31 @@ pub(super) struct Counts {
     pub(super) stored_texel: f64,
 }
 
-/// Sample points the settings ask for: `sample_count`, or the patches' area over
-/// `sample_spacing`.
+/// Sample points the settings ask for: `sample_count`, or the area over `sample_spacing`, of
+/// the objects without a `sample_spacing` of their own, plus each other object's area over
+/// its own spacing.
 pub(super) fn requested_points(scene: &Scene) -> u64 {
-    match scene.bake.sample_count {
+    let area = |o: &crate::scene::OslfObject| {
+        o.patches.iter().map(patch_area).sum::<f64>()
+            + o.mesh.as_ref().map_or(0.0, |m| m.mesh.area())
+    };
+    let at = |area: f64, h: f32| (area / (0.866_025_4 * f64::from(h) * f64::from(h))).ceil() as u64;
+    let shared: Vec<_> = scene
+        .objects
+        .iter()
+        .filter(|o| o.sample_spacing.is_none())
+        .collect();
+    let own: u64 = scene
+        .objects
+        .iter()
+        .filter_map(|o| Some(at(area(o), o.sample_spacing?)))
+        .sum();
+    let base = match scene.bake.sample_count {
+        _ if shared.is_empty() => 0,
         SampleDensity::Count(n) => u64::from(n),
-        SampleDensity::Spacing(h) => {
-            let mesh_area: f64 = scene
-                .objects
-                .iter()
-                .filter_map(|o| o.mesh.as_ref())
-                .map(|m| m.mesh.area())
-                .sum();
-            let area: f64 = scene
-                .objects
-                .iter()
-                .flat_map(|o| &o.patches)
-                .map(patch_area)
-                .sum::<f64>()
-                + mesh_area;
-            (area / (0.866_025_4 * f64::from(h) * f64::from(h))).ceil() as u64
-        }
-    }
+        SampleDensity::Spacing(h) => at(shared.iter().map(|o| area(o)).sum(), h),
+    };
+    base + own
 }
 
 /// Triangles of the scene's BVH, and of the environment cube's second BVH (0 without one).

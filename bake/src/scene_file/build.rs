@@ -135,12 +135,14 @@ impl Ctx<'_> {
                 lights: g.lights,
                 objects: g.objects.clone(),
                 objects_from_extras: false,
+                normals: g.normals.map(|n| n.0),
             };
             let import = crate::gltf::load(&file, &options, materials)?;
             self.included
                 .borrow_mut()
                 .extend(import.files.iter().cloned());
-            for object in mesh_objects(import.objects, materials) {
+            for mut object in mesh_objects(import.objects, materials) {
+                object.sample_spacing = g.sample_spacing.map(|s| s.0);
                 self.check_epsilon(epsilon, epsilon_span.clone(), &object, g.path.span())?;
                 out.objects.push(object);
             }

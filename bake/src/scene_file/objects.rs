@@ -50,8 +50,17 @@ impl Ctx<'_> {
         materials: &mut Vec<Material>,
     ) -> Result<OslfObject> {
         let transform = o.transform.affine();
-        let (patches, mesh) = match (&o.patches, &o.mesh) {
-            (Some(patches), None) => (self.object_patches(patches, o.select.as_ref())?, None),
+        let (patches, mesh, normals) = match (&o.patches, &o.mesh) {
+            (Some(patches), None) => {
+                if let Some(normals) = &o.normals {
+                    return Err(self.error_at(
+                        normals.span(),
+                        "`normals` sets how a `mesh` object's normals are computed; Bézier patches have exact ones",
+                    ));
+                }
+                let patches = self.object_patches(patches, o.select.as_ref())?;
+                (patches, None, None)
+            }
             (None, Some(path)) => {
                 if let Some(select) = &o.select {
                     return Err(self.error_at(
@@ -60,7 +69,8 @@ impl Ctx<'_> {
                     ));
                 }
                 let file = self.existing_file(path)?;
-                let mut mesh = crate::obj::load_obj(&file)?;
+                let requested = o.normals.as_ref().map(|n| n.get_ref().0);
+                let (mut mesh, normals) = obj::load_obj_with(&file, requested)?;
                 mesh.transform(&transform);
                 // An OBJ without `vt` reads as all-zero uvs: no texture set then.
                 let uv_sets = if mesh.uvs.iter().any(|&uv| uv != Vec2::ZERO) {
@@ -69,7 +79,7 @@ impl Ctx<'_> {
                     Vec::new()
                 };
                 let source = MeshSource { mesh, uv_sets };
-                (Vec::new(), Some(source))
+                (Vec::new(), Some(source), Some(normals))
             }
             _ => {
                 return Err(self.error_at(
@@ -88,6 +98,8 @@ impl Ctx<'_> {
             transform,
             material,
             base_color,
+            normals,
+            sample_spacing: o.sample_spacing.map(|s| s.0),
         })
     }
 
@@ -152,7 +164,7 @@ impl Ctx<'_> {
         }
         for m in &raw.mesh {
             let file = self.existing_file(&m.path)?;
-            let mesh = obj::load_obj(&file)?;
+            let (mesh, _) = obj::load_obj_with(&file, m.normals.map(|n| n.0))?;
             let name = format!("[[mesh]] {:?}", m.path.get_ref());
             add(name, mesh, &m.transform, &m.material, materials)?;
         }
@@ -272,6 +284,8 @@ pub(super) fn mesh_objects(
             transform: Affine3A::IDENTITY,
             material: o.material,
             base_color: materials[o.material as usize].mean_albedo(),
+            normals: Some(o.normals),
+            sample_spacing: None,
         })
         .collect()
 }

@@ -9,6 +9,8 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 use toml::Spanned;
 
+use crate::normals::NormalRule;
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawScene {
@@ -135,6 +137,10 @@ pub(super) struct RawObject {
     pub(super) mesh: Option<Spanned<String>>,
     /// Which patches to use, `[first, end)`; all by default.
     pub(super) select: Option<Spanned<[u32; 2]>>,
+    /// How a `mesh` object's normals are computed (`"smooth"`, `"flat"`, `{ crease_deg }`).
+    pub(super) normals: Option<Spanned<RawNormals>>,
+    /// The object's own sample spacing, overriding `[bake]`'s density for it.
+    pub(super) sample_spacing: Option<Positive>,
     #[serde(default)]
     pub(super) transform: RawTransform,
     pub(super) material: Spanned<RawMaterial>,
@@ -229,6 +235,8 @@ pub(super) struct RawRevolution {
 pub(super) struct RawMesh {
     /// A Wavefront OBJ file.
     pub(super) path: Spanned<String>,
+    /// How its normals are computed (the default: the file's, else a 30° crease).
+    pub(super) normals: Option<RawNormals>,
     #[serde(default)]
     pub(super) transform: RawTransform,
     pub(super) material: Spanned<RawMaterial>,
@@ -251,6 +259,52 @@ pub(super) struct RawGltf {
     /// maps in a UV atlas) instead of environment geometry.
     #[serde(default)]
     pub(super) objects: Vec<String>,
+    /// How the normals of every primitive are computed (the default: the file's `NORMAL`,
+    /// else flat, as glTF specifies).
+    pub(super) normals: Option<RawNormals>,
+    /// The sample spacing of each of its `objects`, overriding `[bake]`'s density for them.
+    pub(super) sample_spacing: Option<Positive>,
+}
+
+/// `normals = "smooth" | "flat" | { crease_deg = 30.0 }`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct RawNormals(pub(super) NormalRule);
+
+impl<'de> Deserialize<'de> for RawNormals {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Visitor;
+        const EXPECTED: &str = "\"smooth\", \"flat\" or { crease_deg = DEGREES }";
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = RawNormals;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "normals = {EXPECTED}")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<RawNormals, E> {
+                match v {
+                    "smooth" => Ok(RawNormals(NormalRule::Smooth)),
+                    "flat" => Ok(RawNormals(NormalRule::Flat)),
+                    other => Err(E::custom(format!(
+                        "unknown normals {other:?} (expected {EXPECTED})"
+                    ))),
+                }
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<RawNormals, A::Error> {
+                #[derive(Deserialize)]
+                #[serde(deny_unknown_fields)]
+                struct Crease {
+                    crease_deg: Angle,
+                }
+                let c = Crease::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(RawNormals(NormalRule::Crease {
+                    crease_deg: c.crease_deg.0,
+                }))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 fn default_segments() -> Segments {
