@@ -98,6 +98,9 @@ impl Groups {
     }
 }
 
+/// A triangle meeting an edge: (triangle, its corner at the edge's first end, at its second).
+type EdgeCorners = (usize, usize, usize);
+
 /// The smoothing groups of the corners: corners at one welded position are joined when their
 /// faces share an edge (through that position) that the rule smooths across, or, for
 /// [`NormalRule::Smooth`], always.
@@ -121,9 +124,8 @@ fn smoothing_groups(
         // A little slack so that coplanar faces with rounding in their normals join at 0°.
         NormalRule::Crease { crease_deg } => crease_deg.to_radians().cos() - 1e-5,
     };
-    // The corners of each edge (welded positions, smaller first): (triangle, corner at a,
-    // corner at b).
-    let mut edges: HashMap<(u32, u32), Vec<(usize, usize, usize)>> = HashMap::new();
+    // The corners of each edge (welded positions, smaller first).
+    let mut edges: HashMap<(u32, u32), Vec<EdgeCorners>> = HashMap::new();
     for (t, tri) in triangles.iter().enumerate() {
         for k in 0..3 {
             let (ka, kb) = (k, (k + 1) % 3);
