@@ -196,13 +196,17 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// What to change when sample-map texels see no sample point (the warning and `--strict`'s
+/// error say it alike).
+const EMPTY_TEXELS_REMEDY: &str = "raise sample_count (or lower sample_spacing), or lower epsilon";
+
 /// The warning for sample-map texels without any visible sample point (`--strict` refuses
 /// them before the capture).
 fn warn_empty_texels(report: &BakeReport) {
     let m = &report.sample_maps;
     if m.empty > 0 {
         eprintln!(
-            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; raise sample_count (or lower sample_spacing), or lower epsilon (--strict refuses such a bake)",
+            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake)",
             m.empty,
             m.texels,
             100.0 * m.empty as f64 / m.texels.max(1) as f64
@@ -319,7 +323,7 @@ fn with_flag_hints(e: oslf_bake::BakeError) -> anyhow::Error {
             "; bake without --resume to start over"
         }
         oslf_bake::BakeError::EmptyTexels { .. } => {
-            " (--strict); raise sample_count (or lower sample_spacing), or lower epsilon"
+            return anyhow::anyhow!("{e} (--strict); {EMPTY_TEXELS_REMEDY}")
         }
         _ => return e.into(),
     };
