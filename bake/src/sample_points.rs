@@ -1,5 +1,7 @@
 //! OSLF sample points: spread over the objects' surfaces (Bézier patches and mesh triangles,
-//! [`crate::surface`]) with controlled coverage, offset by ε along the normal (thesis §3.1),
+//! [`crate::surface`]) with controlled coverage, offset by ε along the geometric normal of the
+//! face each lies on (thesis §3.1; a mesh's smooth shading normal would tilt points near a hard
+//! edge towards the neighbouring face and closer than ε to it),
 //! and culled where the free-space condition fails (§3.3).
 //!
 //! Placement is *weighted sample elimination* (Yuksel 2015, "Sample Elimination for Generating
@@ -103,11 +105,12 @@ pub fn place(
     };
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
     for c in &chosen {
-        let position = c.position + c.normal * settings.epsilon;
+        // Along the face's own normal, so the point lies ε from its face (§3.1).
+        let position = c.position + c.offset * settings.epsilon;
         match free_space(geometry, position, settings.epsilon, &directions) {
             FreeSpace::Ok => placement.points.push(SamplePoint {
                 position: position.to_array(),
-                normal: c.normal.to_array(),
+                normal: c.offset.to_array(),
                 uv: c.uv.to_array(),
                 patch: c.map,
                 object: c.object,
@@ -301,12 +304,12 @@ pub fn refine(
         let Some(map) = maps.get(patch_index as usize) else {
             continue;
         };
-        let Some((base, normal)) = map.texel(x, y, resolution) else {
+        let Some((base, _, offset)) = map.texel_offset(x, y, resolution) else {
             continue;
         };
         let u = (x as f32 + 0.5) / resolution as f32;
         let v = (y as f32 + 0.5) / resolution as f32;
-        let position = base + normal * epsilon;
+        let position = base + offset * epsilon;
         let q = position.to_array();
         let near_existing =
             !existing.is_empty() && tree.nearest_one::<SquaredEuclidean>(&q).distance < min_sq;
@@ -319,7 +322,7 @@ pub fn refine(
         if let FreeSpace::Ok = free_space(geometry, position, epsilon, &directions) {
             added.push(SamplePoint {
                 position: q,
-                normal: normal.to_array(),
+                normal: offset.to_array(),
                 uv: [u, v],
                 patch: patch_index,
                 object: map.object(),

@@ -9,7 +9,8 @@
 //!
 //! Normals: on a mesh the shading normal is the *interpolated* vertex normal (barycentric,
 //! renormalized), in the bake (sample points, texel normals of Eq. 3.10), in the runtime's
-//! G-buffer and in `oslf truth`; the geometric normal only offsets rays and tells sides apart.
+//! G-buffer and in `oslf truth`; the geometric normal offsets sample points and rays and tells
+//! sides apart.
 //!
 //! Sample points are drawn over all domains with density proportional to area
 //! ([`Surfaces::sample`], or over one object with [`Surfaces::sample_object`] where objects have
@@ -80,6 +81,22 @@ impl MapDomain<'_> {
             }
         }
     }
+
+    /// Surface point, unit shading normal and unit offset direction ([`SurfacePoint::offset`])
+    /// of texel `(x, y)`, as [`MapDomain::texel`].
+    pub fn texel_offset(&self, x: u32, y: u32, resolution: u32) -> Option<(Vec3, Vec3, Vec3)> {
+        match *self {
+            MapDomain::Patch { .. } => {
+                let (p, n) = self.texel(x, y, resolution)?;
+                Some((p, n, n))
+            }
+            MapDomain::Page { atlas, page, .. } => {
+                let t = atlas.texel(page, x, y)?;
+                let (p, n) = atlas.sample_surface(t.triangle, t.bary);
+                Some((p, n, atlas.offset_normal(t.triangle, n)))
+            }
+        }
+    }
 }
 
 /// One area cell: a patch's (u, v) cell or a mesh triangle.
@@ -102,6 +119,9 @@ pub struct SurfacePoint {
     pub position: Vec3,
     /// Unit shading normal.
     pub normal: Vec3,
+    /// Unit direction of the ε offset: the geometric normal of the face the point lies on
+    /// (on a patch, its normal; on a mesh, the triangle's, on the shading normal's side).
+    pub offset: Vec3,
     /// Parameter on its map, in `[0, 1]²` (patch (u, v), or local page uv).
     pub uv: Vec2,
     /// Global map index.
@@ -342,9 +362,11 @@ impl<'s> Surfaces<'s> {
                 let u = (f32::from(i) + a) / n;
                 let v = (f32::from(j) + b) / n;
                 let bezier = &self.objects[object as usize].patches[patch as usize];
+                let normal = bezier.normal(u, v);
                 SurfacePoint {
                     position: bezier.eval(u, v),
-                    normal: bezier.normal(u, v),
+                    normal,
+                    offset: normal,
                     uv: Vec2::new(u, v),
                     map: self.first_map[object as usize] + patch,
                     object,
@@ -369,6 +391,7 @@ impl<'s> Surfaces<'s> {
         SurfacePoint {
             position,
             normal,
+            offset: atlas.offset_normal(triangle, normal),
             uv: Vec2::from_array(uv),
             map: self.first_map[object as usize] + page,
             object,

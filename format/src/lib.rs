@@ -97,13 +97,15 @@
 //! sample map: texel `(x, y)` is centred at local `((x + ½)/m, (y + ½)/m)`, atlas texel
 //! `(px·m + x, py·m + y)`. A sample point on a mesh records the page's map index as `patch`
 //! and the local page uv as `uv`. The shading normal of a mesh is the interpolated vertex
-//! normal (barycentric, renormalized); the geometric (face) normal serves only ray offsets and
-//! side tests.
+//! normal (barycentric, renormalized); the geometric (face) normal serves sample-point and ray
+//! offsets and side tests.
 //!
 //! ## Sample points section
 //!
 //! sample_count records of 40 bytes ([`SamplePoint`], `#[repr(C)]`): `f32`×3 position (the
-//! offset point, world space), `f32`×3 normal (unit surface normal at the base point), `f32`×2
+//! offset point, world space), `f32`×3 normal (the unit direction of the offset: the position
+//! is base point + ε·normal; a patch's normal, or a mesh triangle's geometric normal on the side
+//! of its shading normal; bakes before 2026-11-26 stored a mesh's interpolated normal here), `f32`×2
 //! uv on the patch, or local uv on the atlas page (each in `[0, 1]`), `u32` patch (global map
 //! index), `u32` object. Floats finite;
 //! `object < object_count`; `patch` inside that object's patch range.

@@ -11,7 +11,8 @@ use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTIO
 pub struct SamplePoint {
     /// The offset point (world space) where the cube was captured.
     pub position: [f32; 3],
-    /// Unit surface normal at the base point (world space; a mesh's interpolated normal).
+    /// Unit direction of the ε offset from the base point (world space): a patch's normal, or
+    /// a mesh triangle's geometric normal on its shading normal's side.
     pub normal: [f32; 3],
     /// Parameter of the base point on its sample map, in `[0, 1]²`: the patch's (u, v), or
     /// the local uv on a mesh's atlas page.

@@ -254,6 +254,25 @@ impl Atlas {
             .unwrap_or(Vec3::Z);
         (position, normal)
     }
+
+    /// The unit direction along which a point of `triangle` is offset by ε: the triangle's
+    /// geometric normal `(p1 − p0) × (p2 − p0)`, turned to the side of `shading` (the shading
+    /// normal decides which side is outside); for a degenerate triangle, `shading` itself.
+    /// Offsetting along the face's own normal keeps a point exactly ε from its face, so points
+    /// near a hard edge do not tilt towards the neighbouring face (issue 28).
+    ///
+    /// # Panics
+    ///
+    /// If `triangle` is not a triangle of [`Atlas::mesh`].
+    pub fn offset_normal(&self, triangle: u32, shading: Vec3) -> Vec3 {
+        let t = self.mesh.triangles[triangle as usize];
+        let p = t.map(|v| self.mesh.positions[v as usize]);
+        match (p[1] - p[0]).cross(p[2] - p[0]).try_normalize() {
+            Some(g) if g.dot(shading) < 0.0 => -g,
+            Some(g) => g,
+            None => shading,
+        }
+    }
 }
 
 fn page_of(grid: u32, uv: DVec2) -> (u32, [f32; 2]) {
