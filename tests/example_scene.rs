@@ -44,7 +44,7 @@ fn the_gltf_room_example_loads() {
 
 /// `examples/meshes.toml` includes `examples/room.glb` and `examples/blob.glb` (both generators'
 /// outputs are committed) and makes two of their nodes mesh OSLF objects: the blob, without
-/// texture coordinates, gets an atlas of per-triangle charts; the ball keeps its TEXCOORD_0.
+/// texture coordinates, gets an atlas of charts of its own; the ball keeps its TEXCOORD_0.
 #[test]
 fn the_mesh_objects_example_loads_and_lays_out_its_atlases() {
     use oslf_bake::surface::Surfaces;

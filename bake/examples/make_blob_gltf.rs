@@ -2,7 +2,7 @@
 //! lumpy blob (an icosahedron subdivided three times, 1 280 triangles, pushed out along its
 //! normals by a sum of three low-frequency waves) standing on the table of `examples/room.glb`.
 //! It has positions, smooth normals and indices but **no texture coordinates**, so the bake
-//! lays out its sample maps in an atlas of per-triangle charts.
+//! lays out its sample maps in an atlas of charts of its own.
 //!
 //! ```sh
 //! cargo run -p oslf-bake --example make_blob_gltf [-- OUTPUT.glb]

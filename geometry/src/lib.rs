@@ -9,7 +9,7 @@
 //!   an error bound, the Newell teapot and the patch-file parser;
 //! - [`mesh`]: indexed triangle meshes, the common currency of tessellation, shapes and the BVH;
 //! - [`atlas`]: the uv atlas of a triangle-mesh object (a `k × k` grid of sample-map pages), from
-//!   the mesh's own uvs or per-triangle charts, and the surface point of every atlas texel;
+//!   the mesh's own uvs or charts of adjacent triangles laid flat, and the surface point of every atlas texel;
 //! - [`camera`]: the pinhole camera and the direction through each pixel.
 //!
 //! It depends on `glam` and `thiserror` only. Image files, the store and the GPU live in the

@@ -243,13 +243,17 @@ fn print_summary(r: &BakeReport) {
     );
     for a in &r.atlases {
         let uvs = match a.source {
-            "lightmap" => "its TEXCOORD_1",
-            "texture" => "its TEXCOORD_0",
-            _ => "per-triangle charts",
+            "lightmap" => "its TEXCOORD_1".to_string(),
+            "texture" => "its TEXCOORD_0".to_string(),
+            _ => format!("{} charts of its own", a.charts),
         };
         println!(
-            "atlas          {:?}: {}x{} pages of {}², from {uvs}",
-            a.object, a.grid, a.grid, a.page_resolution
+            "atlas          {:?}: {}x{} pages of {}², from {uvs}, {:.0}% of texels used",
+            a.object,
+            a.grid,
+            a.grid,
+            a.page_resolution,
+            100.0 * a.fill
         );
         for why in &a.rejected {
             println!("               not used: {why}");

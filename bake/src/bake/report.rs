@@ -70,8 +70,12 @@ pub struct AtlasReport {
     pub grid: u32,
     /// Texels per page side (the sample-map resolution).
     pub page_resolution: u32,
-    /// `lightmap` (TEXCOORD_1), `texture` (TEXCOORD_0, OBJ `vt`) or `charts` (per triangle).
+    /// `lightmap` (TEXCOORD_1), `texture` (TEXCOORD_0, OBJ `vt`) or `charts` (our own).
     pub source: &'static str,
+    /// Charts of our own (0 for a uv set of the mesh).
+    pub charts: u32,
+    /// The fraction of the atlas's texels that stand for a surface point.
+    pub fill: f64,
     /// The uv sets tried and not used, each with why.
     pub rejected: Vec<String>,
 }
@@ -132,6 +136,8 @@ pub(super) fn atlas_reports(scene: &Scene, surfaces: &Surfaces) -> Vec<AtlasRepo
                 grid: atlas.grid,
                 page_resolution: atlas.page_resolution,
                 source: name(atlas.source),
+                charts: atlas.chart_count(),
+                fill: atlas.fill(),
                 rejected: atlas
                     .rejected
                     .iter()

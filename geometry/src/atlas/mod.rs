@@ -50,6 +50,12 @@ use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use crate::{GeometryError, Mesh, Result};
 
+mod flatten;
+mod pack;
+mod segment;
+
+pub use segment::{MAX_CHART_ANGLE_DEG, MAX_CHART_TRIANGLES};
+
 /// Largest atlas side `k·m` in texels. The grid of an atlas is lowered below `max_grid` where
 /// needed to stay within it (the texel table holds `(k·m)²` entries).
 pub const MAX_ATLAS_RESOLUTION: u32 = 16384;
@@ -71,7 +77,7 @@ pub enum UvSource {
     Lightmap,
     /// The mesh's texture uv set (glTF `TEXCOORD_0`).
     Texture,
-    /// Our own per-triangle charts.
+    /// Our own charts: adjacent triangles merged, laid flat and packed.
     Charts,
 }
 
@@ -112,6 +118,8 @@ pub struct Atlas {
     pub source: UvSource,
     /// The uv sets tried before [`Atlas::source`] and why each was not used, in order.
     pub rejected: Vec<(UvSource, String)>,
+    /// Per triangle, the index of its chart ([`UvSource::Charts`]; empty for a user uv set).
+    pub chart_of: Vec<u32>,
     /// `(k·m)²` entries, row-major over the whole atlas (row `t`, column `s`).
     texels: Vec<Option<TexelSurface>>,
 }
@@ -154,13 +162,14 @@ impl Atlas {
                         page_resolution: m,
                         source,
                         rejected,
+                        chart_of: Vec::new(),
                         texels,
                     });
                 }
                 Err(why) => rejected.push((source, why)),
             }
         }
-        let (out, grid) = charts(mesh, options, limit)?;
+        let (out, grid, chart_of) = charts(mesh, options, limit)?;
         let texels = texel_table(&out, grid * m);
         Ok(Atlas {
             mesh: out,
@@ -168,6 +177,7 @@ impl Atlas {
             page_resolution: m,
             source: UvSource::Charts,
             rejected,
+            chart_of,
             texels,
         })
     }
@@ -180,6 +190,18 @@ impl Atlas {
     /// Atlas texels per side, `k·m`.
     pub fn resolution(&self) -> u32 {
         self.grid * self.page_resolution
+    }
+
+    /// Number of charts ([`UvSource::Charts`]; 0 for a user uv set).
+    pub fn chart_count(&self) -> u32 {
+        self.chart_of.iter().max().map_or(0, |&c| c + 1)
+    }
+
+    /// The fraction of the atlas's texels that stand for a surface point (footprints and
+    /// gutters); the rest of its pages is empty.
+    pub fn fill(&self) -> f64 {
+        let used = self.texels.iter().filter(|t| t.is_some()).count();
+        used as f64 / self.texels.len().max(1) as f64
     }
 
     /// The surface point of texel `(x, y)` of page `page = py·k + px`; `None` for a texel no
@@ -471,21 +493,12 @@ fn bbox(p: &[DVec2; 3]) -> (DVec2, DVec2) {
     (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
 }
 
-/// One triangle laid flat, in texels, with its rectangle of atlas cells.
-struct Chart {
-    /// Corners relative to the chart's bounding-box minimum.
-    corners: [DVec2; 3],
-    /// Offset of the bounding-box minimum inside the cell rectangle.
-    offset: DVec2,
-    /// Cell rectangle (footprint cells plus a one-texel gutter each side).
-    cells: [u32; 2],
-}
-
-/// Lays out and packs per-triangle charts; returns the split mesh and the grid.
-fn charts(mesh: &Mesh, o: &AtlasOptions, limit: u32) -> Result<(Mesh, u32)> {
+/// Lays out, packs and places the charts of `mesh` (see the [module documentation](self));
+/// returns the split mesh, the grid and each triangle's chart.
+fn charts(mesh: &Mesh, o: &AtlasOptions, limit: u32) -> Result<(Mesh, u32, Vec<u32>)> {
     let ts = f64::from(o.texel_size);
     let m = o.page_resolution;
-    let max_side = f64::from(limit) * f64::from(m);
+    let max_side = limit * m;
     let too_large = |needed: u64| GeometryError::AtlasTooLarge {
         triangles: mesh.triangles.len(),
         area: mesh.area(),
@@ -496,110 +509,100 @@ fn charts(mesh: &Mesh, o: &AtlasOptions, limit: u32) -> Result<(Mesh, u32)> {
         max_grid: o.max_grid,
         max_resolution: MAX_ATLAS_RESOLUTION,
     };
-    let mut charts = Vec::with_capacity(mesh.triangles.len());
-    let mut cell_area = 0.0f64;
-    let mut widest = 0.0f64;
-    for t in &mesh.triangles {
-        let p = corners3(mesh, t);
-        let len = [0, 1, 2].map(|e| (p[(e + 1) % 3] - p[e]).length());
-        // Longest edge (first on ties) along +x, the third corner above it.
-        let e = (0..3).fold(0, |b, e| if len[e] > len[b] { e } else { b });
-        let (i, j, k) = (e, (e + 1) % 3, (e + 2) % 3);
-        let l = len[e];
-        let mut corners = [DVec2::ZERO; 3];
-        if l > 0.0 {
-            let dir = (p[j] - p[i]) / l;
-            let r = p[k] - p[i];
-            let d = r.dot(dir).clamp(0.0, l);
-            let h = r.cross(dir).length();
-            corners[j] = DVec2::new(l / ts, 0.0);
-            corners[k] = DVec2::new(d / ts, h / ts);
-        }
-        let size = bbox(&corners).1;
-        let footprint = |w: f64| (w + 2.0 * CHART_MARGIN).ceil().max(1.0);
-        let (fx, fy) = (footprint(size.x), footprint(size.y));
-        let side = fx.max(fy) + 2.0;
-        // `side` may be infinite or NaN for absurd coordinates: NaN must fail too.
-        if side.is_nan() || side > max_side {
-            let needed = if side.is_finite() {
-                (side / f64::from(m)).ceil() as u64
-            } else {
-                u64::MAX
-            };
-            return Err(too_large(needed.max(u64::from(limit) + 1)));
-        }
-        cell_area += (fx + 2.0) * (fy + 2.0);
-        widest = widest.max(side);
-        charts.push(Chart {
-            corners,
-            offset: DVec2::new(1.0 + (fx - size.x) / 2.0, 1.0 + (fy - size.y) / 2.0),
-            cells: [fx as u32 + 2, fy as u32 + 2],
-        });
+    let charts = segment::segment(mesh, ts, f64::from(m));
+    let flats: Vec<flatten::Flat> = charts
+        .iter()
+        .map(|c| flatten::flatten(mesh, c, ts))
+        .collect();
+    let masks = |scale: f64| -> Option<Vec<[Option<pack::Mask>; pack::TURNS]>> {
+        flats
+            .iter()
+            .map(|f| {
+                let all = [0, 1, 2, 3].map(|t| pack::mask(f, scale, t, max_side));
+                all.iter().any(Option::is_some).then_some(all)
+            })
+            .collect()
+    };
+    // The smallest grid that holds the charts at the asked density...
+    let Some(unit) = masks(1.0) else {
+        let widest = flats
+            .iter()
+            .map(|f| f.size.max_element())
+            .fold(0.0, f64::max);
+        let needed = (widest + 2.0 * CHART_MARGIN + 2.0) / f64::from(m);
+        return Err(too_large(if needed.is_finite() {
+            (needed.ceil() as u64).max(u64::from(limit) + 1)
+        } else {
+            u64::MAX
+        }));
+    };
+    let area: u64 = unit
+        .iter()
+        .map(|p| p[0].as_ref().map_or(0, |k| k.count))
+        .sum();
+    let mut grid = ((area as f64).sqrt() / f64::from(m)).ceil().max(1.0) as u32;
+    if grid > limit {
+        return Err(too_large(u64::from(grid)));
     }
-    let lower = (cell_area.sqrt().max(widest) / f64::from(m))
-        .ceil()
-        .max(1.0);
-    if lower > f64::from(limit) {
-        return Err(too_large(lower as u64));
-    }
-    let mut order: Vec<usize> = (0..charts.len()).collect();
-    order.sort_by(|&a, &b| {
-        let (ca, cb) = (charts[a].cells, charts[b].cells);
-        cb[1].cmp(&ca[1]).then(cb[0].cmp(&ca[0])).then(a.cmp(&b))
-    });
-    let mut grid = lower as u32;
-    let places = loop {
-        if let Some(places) = shelf_pack(&charts, &order, grid * m) {
-            break places;
+    let mut best = loop {
+        if let Some(places) = pack::pack(&unit, grid * m) {
+            break (1.0, unit, places);
         }
         if grid >= limit {
             return Err(too_large(u64::from(limit) + 1));
         }
         grid += 1;
     };
-    let af = f64::from(grid * m);
+    // ...then the charts grown to fill it: a finer density costs no page more.
+    let a = grid * m;
+    let top = (f64::from(a).powi(2) / area as f64).sqrt();
+    for step in 0..FILL_STEPS {
+        let scale = top * FILL_RATIO.powi(step as i32);
+        if scale <= 1.0 {
+            break;
+        }
+        if let Some((k, p)) = masks(scale).and_then(|k| pack::pack(&k, a).map(|p| (k, p))) {
+            best = (scale, k, p);
+            break;
+        }
+    }
+    let (scale, masks, places) = best;
+    let af = f64::from(a);
     let mut out = Mesh {
-        positions: Vec::with_capacity(3 * charts.len()),
-        normals: Vec::with_capacity(3 * charts.len()),
-        uvs: Vec::with_capacity(3 * charts.len()),
-        triangles: Vec::with_capacity(charts.len()),
+        positions: Vec::with_capacity(3 * mesh.triangles.len()),
+        normals: Vec::with_capacity(3 * mesh.triangles.len()),
+        uvs: vec![Vec2::ZERO; 3 * mesh.triangles.len()],
+        triangles: Vec::with_capacity(mesh.triangles.len()),
     };
-    for (i, (t, chart)) in mesh.triangles.iter().zip(&charts).enumerate() {
-        let origin = DVec2::new(f64::from(places[i][0]), f64::from(places[i][1])) + chart.offset;
-        for (&v, corner) in t.iter().zip(chart.corners) {
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        for &v in t {
             out.positions.push(mesh.positions[v as usize]);
             out.normals.push(mesh.normals[v as usize]);
-            let uv = ((origin + corner) / af).as_vec2();
-            out.uvs.push(uv.clamp(Vec2::ZERO, Vec2::ONE));
         }
         let v = 3 * i as u32;
         out.triangles.push([v, v + 1, v + 2]);
     }
-    Ok((out, grid))
+    let mut chart_of = vec![0u32; mesh.triangles.len()];
+    for (c, chart) in charts.iter().enumerate() {
+        let place = places[c];
+        let mask = masks[c][usize::from(place.turns)]
+            .as_ref()
+            .expect("a placed orientation has a mask");
+        for (k, &t) in chart.triangles.iter().enumerate() {
+            chart_of[t as usize] = c as u32;
+            for (corner, &c2) in flats[c].corners[k].iter().enumerate() {
+                let uv = place.map(c2, &flats[c], scale, mask.origin) / af;
+                out.uvs[3 * t as usize + corner] = uv.as_vec2().clamp(Vec2::ZERO, Vec2::ONE);
+            }
+        }
+    }
+    Ok((out, grid, chart_of))
 }
 
-/// Shelf packing of the charts' cell rectangles, in `order`, into an `a × a` square: the lower
-/// left cell of each chart, or `None` if they do not fit.
-fn shelf_pack(charts: &[Chart], order: &[usize], a: u32) -> Option<Vec<[u32; 2]>> {
-    let a = u64::from(a);
-    let mut places = vec![[0u32; 2]; charts.len()];
-    let (mut x, mut y, mut shelf) = (0u64, 0u64, 0u64);
-    for &i in order {
-        let [w, h] = charts[i].cells.map(u64::from);
-        if x + w > a {
-            y += shelf;
-            x = 0;
-            shelf = 0;
-        }
-        if w > a || y + h > a {
-            return None;
-        }
-        places[i] = [x as u32, y as u32];
-        x += w;
-        shelf = shelf.max(h);
-    }
-    Some(places)
-}
+/// Chart scales tried to fill the grid: from the largest the grid's area allows down, by
+/// [`FILL_RATIO`] each, until one packs.
+const FILL_STEPS: usize = 24;
+const FILL_RATIO: f64 = 0.98;
 
 /// Whether the closed texel square `[x, x+1] × [y, y+1]` (grown by [`TOUCH_EPSILON`]) meets the
 /// triangle `p` (texel units; any orientation, degenerate ones included): separating axes
@@ -801,6 +804,21 @@ mod tests {
         mesh
     }
 
+    /// The lumpy blob of `examples/blob.glb` (`make_blob_gltf`): a subdivided icosahedron
+    /// (1 280 triangles) with smooth waves on its radius.
+    fn lumpy() -> Mesh {
+        let mut mesh = Mesh::icosphere(3);
+        for p in &mut mesh.positions {
+            let d = *p;
+            let wave = 0.16 * (3.0 * d.x).sin() * (2.0 * d.z + 0.5).cos()
+                + 0.10 * (4.0 * d.y + 1.0).sin()
+                + 0.08 * (5.0 * d.z).cos() * d.x;
+            *p = d * (1.0 + wave);
+        }
+        mesh.compute_smooth_normals();
+        mesh
+    }
+
     /// An n×n grid of quads on [0, 1]² (z = 0), two triangles each; uvs = (x, y).
     fn plane(n: u32) -> Mesh {
         let mut mesh = Mesh::new();
@@ -905,62 +923,156 @@ mod tests {
         for i in 0..mesh.triangle_count() {
             let texels = footprint(&atlas, i);
             assert!(!texels.is_empty(), "triangle {i} has no texel");
+            // Each texel of its footprint stands for a point of its chart (the triangle
+            // nearest the texel centre, which may be a neighbour across a chart edge).
+            let chart = atlas.chart_of[i];
+            let same = |s: TexelSurface| atlas.chart_of[s.triangle as usize] == chart;
             for (x, y) in texels {
                 let s = atlas.atlas_texel(x, y).unwrap();
-                assert_eq!(s.triangle, i as u32, "texel ({x}, {y})");
+                assert!(same(s), "texel ({x}, {y}) of triangle {i}: {s:?}");
             }
             for _ in 0..20 {
                 let b = rng.bary();
                 let s = texel_of(&atlas, i as u32, b).expect("sampled point on an empty texel");
-                assert_eq!(s.triangle, i as u32);
+                assert!(same(s), "triangle {i} at {b:?}: {s:?}");
             }
             // Corners too (uv extremes of the chart).
             for b in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
-                assert_eq!(texel_of(&atlas, i as u32, b).unwrap().triangle, i as u32);
+                assert!(same(texel_of(&atlas, i as u32, b).unwrap()), "triangle {i}");
             }
         }
+    }
+
+    /// Per chart, its mask: the footprints of its triangles and a one-texel gutter round them.
+    /// Asserts that masks are disjoint, that every masked texel stands for a point of its chart
+    /// and that nothing else is filled.
+    fn assert_masks_disjoint(atlas: &Atlas) {
+        let a = atlas.resolution();
+        let mut owner = vec![u32::MAX; (a * a) as usize];
+        for i in 0..atlas.mesh.triangle_count() {
+            let chart = atlas.chart_of[i];
+            for (x, y) in footprint(atlas, i) {
+                for dy in -1i64..=1 {
+                    for dx in -1i64..=1 {
+                        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                        assert!(nx >= 0 && ny >= 0 && nx < a as i64 && ny < a as i64);
+                        let o = &mut owner[(ny * a as i64 + nx) as usize];
+                        assert!(
+                            *o == u32::MAX || *o == chart,
+                            "texel ({nx}, {ny}): charts {} and {chart}",
+                            *o
+                        );
+                        *o = chart;
+                    }
+                }
+            }
+        }
+        for y in 0..a {
+            for x in 0..a {
+                let o = owner[(y * a + x) as usize];
+                match atlas.atlas_texel(x, y) {
+                    Some(s) => assert_eq!(atlas.chart_of[s.triangle as usize], o, "({x}, {y})"),
+                    None => assert_eq!(o, u32::MAX, "texel ({x}, {y}) is masked but empty"),
+                }
+            }
+        }
+        // Within a chart, no texel centre lies inside two triangles.
+        check_overlap(&atlas.mesh, &atlas.mesh.uvs, a).unwrap();
     }
 
     #[test]
     fn charts_do_not_share_texels() {
         let mesh = blob(2);
         let atlas = Atlas::build(&mesh, &[], &options(32, 0.05, 16)).unwrap();
-        let a = atlas.resolution();
-        let mut owner = vec![u32::MAX; (a * a) as usize];
-        for i in 0..mesh.triangle_count() {
-            // Footprint plus its one-texel gutter.
-            let mut texels = Vec::new();
-            for (x, y) in footprint(&atlas, i) {
-                for dy in -1i64..=1 {
-                    for dx in -1i64..=1 {
-                        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-                        assert!(nx >= 0 && ny >= 0 && nx < a as i64 && ny < a as i64);
-                        texels.push((nx as u32, ny as u32));
-                    }
-                }
-            }
-            for (x, y) in texels {
-                let o = &mut owner[(y * a + x) as usize];
+        assert_masks_disjoint(&atlas);
+    }
+
+    #[test]
+    fn adjacent_triangles_merge_into_charts_that_fill_the_atlas() {
+        // (mesh, charts at most, fill at least, pages at most). Measured: 23 charts at a fill
+        // of 0.765 and 42 at 0.792, 16 pages each; per-triangle charts needed 49 pages for
+        // the icosphere, at a fill of 0.714.
+        for (name, mesh, charts, fill, pages) in [
+            ("lumpy", lumpy(), 40, 0.75, 16),
+            ("icosphere", Mesh::icosphere(3), 60, 0.75, 16),
+        ] {
+            let atlas = Atlas::build(&mesh, &[], &options(32, 0.05, 16)).unwrap();
+            assert_masks_disjoint(&atlas);
+            let (n, f) = (atlas.chart_count(), atlas.fill());
+            assert!(n <= charts, "{name}: {n} charts");
+            assert!(f >= fill, "{name}: fill {f:.3}");
+            assert!(
+                atlas.page_count() <= pages,
+                "{name}: {} pages",
+                atlas.page_count()
+            );
+            // Every triangle keeps at least the asked density.
+            let a = f64::from(atlas.resolution());
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                let uv = 0.5 * signed_area2(&tri_uv(&atlas, t)).abs();
+                let asked = area3(&corners3(&mesh, tri)) / 0.05f64.powi(2);
                 assert!(
-                    *o == u32::MAX || *o == i as u32,
-                    "texel ({x}, {y}): {} and {i}",
-                    *o
-                );
-                *o = i as u32;
-                // Gutter texels belong to their chart.
-                assert_eq!(atlas.atlas_texel(x, y).unwrap().triangle, i as u32);
-            }
-        }
-        // Nothing else is filled.
-        for y in 0..a {
-            for x in 0..a {
-                assert_eq!(
-                    atlas.atlas_texel(x, y).is_some(),
-                    owner[(y * a + x) as usize] != u32::MAX,
-                    "texel ({x}, {y})"
+                    uv >= asked * 0.999,
+                    "{name}: triangle {t}: {uv} < {asked} ({a})"
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_box_gets_one_chart_per_face() {
+        let mut mesh = Mesh::new();
+        for i in 0..8u32 {
+            mesh.positions.push(Vec3::new(
+                (i & 1) as f32,
+                ((i >> 1) & 1) as f32,
+                (i >> 2) as f32,
+            ));
+            mesh.normals.push(Vec3::Z);
+        }
+        for q in [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ] {
+            mesh.triangles.push([q[0], q[1], q[2]]);
+            mesh.triangles.push([q[0], q[2], q[3]]);
+        }
+        let atlas = Atlas::build(&mesh, &[], &options(32, 0.05, 16)).unwrap();
+        assert_eq!(atlas.chart_count(), 6);
+        for face in 0..6 {
+            assert_eq!(atlas.chart_of[2 * face], atlas.chart_of[2 * face + 1]);
+        }
+        assert_masks_disjoint(&atlas);
+        // Six equal squares fill at most six of a square's nine cells.
+        assert!(atlas.fill() >= 0.6, "fill {}", atlas.fill());
+    }
+
+    #[test]
+    fn a_surface_that_turns_over_itself_is_cut_where_it_would_overlap() {
+        // A spiral ramp of two turns, rising slowly: its normals stay within a few degrees of
+        // +z, so only the overlap test keeps a chart from covering itself.
+        let mut mesh = Mesh::new();
+        let (steps, turns) = (96u32, 2.0f32);
+        for i in 0..=steps {
+            let a = std::f32::consts::TAU * turns * i as f32 / steps as f32;
+            for r in [0.5f32, 1.0] {
+                mesh.positions
+                    .push(Vec3::new(r * a.cos(), r * a.sin(), 0.02 * a));
+                mesh.normals.push(Vec3::Z);
+            }
+        }
+        for i in 0..steps {
+            let v = 2 * i;
+            mesh.triangles.push([v, v + 2, v + 3]);
+            mesh.triangles.push([v, v + 3, v + 1]);
+        }
+        let atlas = Atlas::build(&mesh, &[], &options(64, 0.02, 16)).unwrap();
+        assert!(atlas.chart_count() >= 2, "{} charts", atlas.chart_count());
+        assert_masks_disjoint(&atlas);
     }
 
     #[test]
@@ -1005,13 +1117,14 @@ mod tests {
         for (t, count) in centres_inside.iter().enumerate() {
             let area = area3(&corners3(&mesh, &mesh.triangles[t]));
             let expected = area / f64::from(ts * ts);
-            // uv area × A² per unit area is exactly 1/texel_size².
+            // uv area × A² per unit area is at least 1/texel_size² (more where the charts
+            // were grown to fill the grid).
             let uv_area = 0.5 * signed_area2(&tri_uv(&atlas, t)).abs();
             assert!(
-                (uv_area / expected - 1.0).abs() < 1e-3,
+                uv_area / expected > 1.0 - 1e-3,
                 "triangle {t}: {uv_area} vs {expected}"
             );
-            let ratio = *count as f64 / expected;
+            let ratio = *count as f64 / uv_area;
             assert!(
                 (0.5..=2.0).contains(&ratio),
                 "triangle {t}: {count} texels, expected {expected}"

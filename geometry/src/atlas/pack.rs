@@ -1,0 +1,244 @@
+//! Chart packing: flat charts placed in the atlas by their texel masks.
+//!
+//! A chart at scale `s` occupies a *mask*: its conservative footprint (every texel whose square
+//! meets one of its triangles, the chart kept [`CHART_MARGIN`] texel inside its footprint
+//! cells) grown by a one-texel gutter all round. Masks never overlap, so no texel is shared by
+//! two charts and every chart has its own gutter.
+//!
+//! Masks are placed one by one (tallest first; ties: larger, then lower chart index) on a
+//! *skyline*: per atlas column, the lowest row above everything placed so far. A mask goes
+//! where its lowest resting position is lowest (then leftmost), upright or turned a quarter,
+//! each of its columns resting on the skyline from its own lowest texel, so irregular charts
+//! interlock. This is the bitmap variant of skyline bin packing; it never tests one mask
+//! against another, since everything placed lies below the skyline.
+
+use glam::DVec2;
+
+use super::flatten::Flat;
+use super::{touches, CHART_MARGIN};
+
+/// A chart's mask at one scale and orientation.
+pub(super) struct Mask {
+    /// Width and height in texels.
+    pub w: u32,
+    pub h: u32,
+    /// Per row, bottom to top: the masked texels as bits (bit `x % 64` of word `x / 64`).
+    rows: Vec<Vec<u64>>,
+    /// The first masked texel of the lowest masked row: `(column, row)`.
+    anchor: (u32, u32),
+    /// Texels in the mask.
+    pub count: u64,
+    /// Where the chart's origin lies in the mask, in texels.
+    pub origin: DVec2,
+    /// Quarter turns (counter-clockwise) of the chart in it, 0 to 3.
+    pub turns: u8,
+}
+
+/// Where a chart went: the mask's lower-left texel and orientation.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Place {
+    pub x: u32,
+    pub y: u32,
+    pub turns: u8,
+}
+
+impl Place {
+    /// A chart point `c` (texels at scale 1) in atlas texels, for a chart placed with `mask`
+    /// geometry at `scale`.
+    pub fn map(&self, c: DVec2, flat: &Flat, scale: f64, origin: DVec2) -> DVec2 {
+        let q = turn(c * scale, flat.size * scale, self.turns);
+        DVec2::new(f64::from(self.x), f64::from(self.y)) + origin + q
+    }
+}
+
+/// A point `c` of a chart of `size` turned `turns` quarters counter-clockwise, kept in the
+/// first quadrant.
+fn turn(c: DVec2, size: DVec2, turns: u8) -> DVec2 {
+    match turns % 4 {
+        0 => c,
+        1 => DVec2::new(size.y - c.y, c.x),
+        2 => size - c,
+        _ => DVec2::new(c.y, size.x - c.x),
+    }
+}
+
+/// The mask of `flat` at `scale`, turned `turns` quarters; `None` when it would be wider or
+/// taller than `max_side` texels (or not finite).
+pub(super) fn mask(flat: &Flat, scale: f64, turns: u8, max_side: u32) -> Option<Mask> {
+    let size = flat.size * scale;
+    let size = if turns % 2 == 1 {
+        DVec2::new(size.y, size.x)
+    } else {
+        size
+    };
+    let cells = |w: f64| (w + 2.0 * CHART_MARGIN).ceil().max(1.0);
+    let (fx, fy) = (cells(size.x), cells(size.y));
+    if !(fx + 2.0 <= f64::from(max_side) && fy + 2.0 <= f64::from(max_side)) {
+        return None;
+    }
+    let (w, h) = (fx as u32 + 2, fy as u32 + 2);
+    let origin = DVec2::new(1.0 + (fx - size.x) / 2.0, 1.0 + (fy - size.y) / 2.0);
+    let (wu, hu) = (w as usize, h as usize);
+    let mut foot = vec![false; wu * hu];
+    for tri in &flat.corners {
+        let p = tri.map(|c| origin + turn(c * scale, flat.size * scale, turns));
+        let (lo, hi) = super::bbox(&p);
+        let x0 = (lo.x.floor() as i64 - 1).max(0) as usize;
+        let y0 = (lo.y.floor() as i64 - 1).max(0) as usize;
+        let x1 = (hi.x.floor() as usize + 1).min(wu - 1);
+        let y1 = (hi.y.floor() as usize + 1).min(hu - 1);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                if !foot[y * wu + x] && touches(&p, x as f64, y as f64) {
+                    foot[y * wu + x] = true;
+                }
+            }
+        }
+    }
+    // The gutter: every texel next to the footprint (8-neighbourhood).
+    let words = wu.div_ceil(64);
+    let mut rows = vec![vec![0u64; words]; hu];
+    let mut count = 0u64;
+    let mut anchor = None;
+    for (y, row) in rows.iter_mut().enumerate() {
+        for x in 0..wu {
+            let near = (y.saturating_sub(1)..=(y + 1).min(hu - 1))
+                .any(|ny| (x.saturating_sub(1)..=(x + 1).min(wu - 1)).any(|nx| foot[ny * wu + nx]));
+            if near {
+                row[x / 64] |= 1 << (x % 64);
+                count += 1;
+                anchor.get_or_insert((x as u32, y as u32));
+            }
+        }
+    }
+    Some(Mask {
+        w,
+        h,
+        rows,
+        anchor: anchor.unwrap_or((0, 0)),
+        count,
+        origin,
+        turns,
+    })
+}
+
+/// Places `masks` (per chart, one per quarter turn, `None` where too large) into an `a × a`
+/// atlas; `None` if they do not fit.
+pub(super) fn pack(masks: &[[Option<Mask>; TURNS]], a: u32) -> Option<Vec<Place>> {
+    let mut order: Vec<usize> = (0..masks.len()).collect();
+    let height = |i: usize| {
+        masks[i]
+            .iter()
+            .flatten()
+            .map(|m| (m.h.min(m.w), m.count))
+            .max()
+            .unwrap_or((0, 0))
+    };
+    order.sort_by(|&i, &j| height(j).cmp(&height(i)).then(i.cmp(&j)));
+    let mut atlas = Occupancy::new(a);
+    let mut places = vec![
+        Place {
+            x: 0,
+            y: 0,
+            turns: 0
+        };
+        masks.len()
+    ];
+    for i in order {
+        // Lowest, then leftmost, over the orientations.
+        let mut best: Option<((u32, u32), usize)> = None;
+        for (o, m) in masks[i].iter().enumerate() {
+            let Some(m) = m else { continue };
+            if let Some((x, y)) = atlas.first_fit(m, best.map(|b| b.0 .0)) {
+                if best.is_none_or(|(b, _)| (y, x) < b) {
+                    best = Some(((y, x), o));
+                }
+            }
+        }
+        let ((y, x), o) = best?;
+        let m = masks[i][o].as_ref().expect("chosen orientation exists");
+        atlas.mark(m, x, y);
+        places[i] = Place {
+            x,
+            y,
+            turns: m.turns,
+        };
+    }
+    Some(places)
+}
+
+/// The atlas's taken texels, one bit each, row by row.
+struct Occupancy {
+    a: u32,
+    words: usize,
+    rows: Vec<Vec<u64>>,
+}
+
+impl Occupancy {
+    fn new(a: u32) -> Self {
+        let words = (a as usize).div_ceil(64) + 1;
+        Self {
+            a,
+            words,
+            rows: vec![vec![0; words]; a as usize],
+        }
+    }
+
+    /// Whether `m` at `(x, y)` meets a taken texel.
+    fn collides(&self, m: &Mask, x: u32, y: u32) -> bool {
+        let (w0, s) = ((x / 64) as usize, x % 64);
+        m.rows.iter().enumerate().any(|(r, bits)| {
+            let row = &self.rows[y as usize + r];
+            bits.iter().enumerate().any(|(j, &b)| {
+                b != 0
+                    && (row[w0 + j] & (b << s) != 0
+                        || (s > 0 && row[w0 + j + 1] & (b >> (64 - s)) != 0))
+            })
+        })
+    }
+
+    /// The lowest, then leftmost, free place for `m` below row `below` (exclusive; all rows
+    /// when `None`): only columns where the mask's anchor texel falls on a free texel are tried.
+    fn first_fit(&self, m: &Mask, below: Option<u32>) -> Option<(u32, u32)> {
+        if m.w > self.a || m.h > self.a {
+            return None;
+        }
+        let (ax, ay) = m.anchor;
+        let last_y = (self.a - m.h).min(below.unwrap_or(u32::MAX));
+        for y in 0..=last_y {
+            let row = &self.rows[(y + ay) as usize];
+            for (j, &word) in row.iter().enumerate().take(self.words - 1) {
+                let mut free = !word;
+                while free != 0 {
+                    let bit = free.trailing_zeros();
+                    free &= free - 1;
+                    let column = j as u32 * 64 + bit;
+                    if column < ax || column - ax > self.a - m.w {
+                        continue;
+                    }
+                    let x = column - ax;
+                    if !self.collides(m, x, y) {
+                        return Some((x, y));
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    fn mark(&mut self, m: &Mask, x: u32, y: u32) {
+        let (w0, s) = ((x / 64) as usize, x % 64);
+        for (r, bits) in m.rows.iter().enumerate() {
+            let row = &mut self.rows[y as usize + r];
+            for (j, &b) in bits.iter().enumerate() {
+                row[w0 + j] |= b << s;
+                if s > 0 {
+                    row[w0 + j + 1] |= b >> (64 - s);
+                }
+            }
+        }
+    }
+}
+
+/// Orientations tried per chart: quarter turns 0 to 3.
+pub(super) const TURNS: usize = 4;
