@@ -22,16 +22,23 @@
 //! that `k·m ≤` [`MAX_ATLAS_RESOLUTION`]. A user set never fails for its size: the grid is
 //! capped and the set kept.
 //!
-//! When no set is usable the atlas is built from *per-triangle charts*
-//! ([`UvSource::Charts`]): each triangle is laid flat with its shape preserved (its longest edge
-//! along `+s`, the third corner above it), scaled by `1/texel_size` so that every chart has the
-//! same texel density, and given its own rectangle of texels: the chart's conservative footprint
-//! (every texel whose square meets the triangle) plus a gutter of one texel all round. The
-//! rectangles are packed on shelves (tallest first) into the smallest grid `k ≥ 1` that holds
-//! them; more than `limit` is an [`GeometryError::AtlasTooLarge`] error. No texel is shared by
-//! two charts, so vertices are split: the returned mesh has three vertices per triangle
-//! (positions and normals copied). A triangle of zero area still gets a chart: a segment along
-//! `+s`, or for three coincident corners a single texel, so that every triangle has a place.
+//! When no set is usable the atlas is built from *charts* of our own ([`UvSource::Charts`]):
+//!
+//! 1. adjacent triangles are merged into charts ([`segment`]: by normal deviation, size and
+//!    overlap in projection);
+//! 2. each chart is laid flat ([`flatten`]): projected on its plane, scaled so that every
+//!    triangle gets at least `1/texel_size²` texels per unit area, turned to its smallest
+//!    bounding rectangle;
+//! 3. the charts are packed ([`pack`]) by their texel masks (conservative footprint plus a
+//!    one-texel gutter) into the smallest grid `k ≥ 1` that holds them (more than `limit` is
+//!    an [`GeometryError::AtlasTooLarge`] error), then grown together to the largest scale
+//!    that still packs (bisection between 1 and the largest the grid's area allows): finer
+//!    texels cost no page more.
+//!
+//! No texel is shared by two charts, so vertices are split: the returned mesh has three
+//! vertices per triangle (positions and normals copied). A triangle of zero area gets a chart of
+//! its own: a segment along `+s`, or for three coincident corners a single texel, so that every
+//! triangle has a place.
 //!
 //! The texel table ([`Atlas::texel`]) says which surface point each texel stands for: a texel
 //! touched by a triangle's footprint, or in the one-texel gutter around footprints, gets that
@@ -555,15 +562,15 @@ fn charts(mesh: &Mesh, o: &AtlasOptions, limit: u32) -> Result<(Mesh, u32, Vec<u
     };
     // ...then the charts grown to fill it: a finer density costs no page more.
     let a = grid * m;
-    let top = (f64::from(a).powi(2) / area as f64).sqrt();
-    for step in 0..FILL_STEPS {
-        let scale = top * FILL_RATIO.powi(step as i32);
-        if scale <= 1.0 {
-            break;
-        }
-        if let Some((k, p)) = masks(scale).and_then(|k| pack::pack(&k, a).map(|p| (k, p))) {
-            best = (scale, k, p);
-            break;
+    let (mut lo, mut hi) = (1.0f64, (f64::from(a).powi(2) / area as f64).sqrt());
+    for _ in 0..FILL_STEPS {
+        let scale = (lo + hi) / 2.0;
+        match masks(scale).and_then(|k| pack::pack(&k, a).map(|p| (k, p))) {
+            Some((k, p)) => {
+                lo = scale;
+                best = (scale, k, p);
+            }
+            None => hi = scale,
         }
     }
     let (scale, masks, places) = best;
@@ -599,10 +606,8 @@ fn charts(mesh: &Mesh, o: &AtlasOptions, limit: u32) -> Result<(Mesh, u32, Vec<u
     Ok((out, grid, chart_of))
 }
 
-/// Chart scales tried to fill the grid: from the largest the grid's area allows down, by
-/// [`FILL_RATIO`] each, until one packs.
-const FILL_STEPS: usize = 24;
-const FILL_RATIO: f64 = 0.98;
+/// Bisection steps of the chart scale that fills the grid.
+const FILL_STEPS: usize = 10;
 
 /// Whether the closed texel square `[x, x+1] × [y, y+1]` (grown by [`TOUCH_EPSILON`]) meets the
 /// triangle `p` (texel units; any orientation, degenerate ones included): separating axes
