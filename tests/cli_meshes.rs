@@ -141,7 +141,8 @@ fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
             .args(["--preview", "none", "-q"]));
     // The OBJ has no texture coordinates: the summary says how the atlas was laid out.
     assert!(
-        summary.contains("atlas          \"ball\": ") && summary.contains(" charts of its own, "),
+        summary.contains("atlas          \"ball\": ")
+            && summary.contains(" charts of its own; the surface covers "),
         "{summary}"
     );
 

@@ -248,12 +248,14 @@ fn print_summary(r: &BakeReport) {
             _ => format!("{} charts of its own", a.charts),
         };
         println!(
-            "atlas          {:?}: {}x{} pages of {}², from {uvs}, {:.0}% of texels used",
+            "atlas          {:?}: {}x{} pages of {}², from {uvs}; the surface covers {:.0}% of \
+             its texels ({:.0}% with gutters)",
             a.object,
             a.grid,
             a.grid,
             a.page_resolution,
-            100.0 * a.fill
+            100.0 * a.fill,
+            100.0 * a.used
         );
         for why in &a.rejected {
             println!("               not used: {why}");

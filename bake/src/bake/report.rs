@@ -74,8 +74,10 @@ pub struct AtlasReport {
     pub source: &'static str,
     /// Charts of our own (0 for a uv set of the mesh).
     pub charts: u32,
-    /// The fraction of the atlas's texels that stand for a surface point.
+    /// The fraction of the atlas's texels that the surface's triangles touch.
     pub fill: f64,
+    /// The fraction that stand for a surface point: those and the gutters round the charts.
+    pub used: f64,
     /// The uv sets tried and not used, each with why.
     pub rejected: Vec<String>,
 }
@@ -138,6 +140,7 @@ pub(super) fn atlas_reports(scene: &Scene, surfaces: &Surfaces) -> Vec<AtlasRepo
                 source: name(atlas.source),
                 charts: atlas.chart_count(),
                 fill: atlas.fill(),
+                used: atlas.used_texels() as f64 / f64::from(atlas.resolution()).powi(2),
                 rejected: atlas
                     .rejected
                     .iter()

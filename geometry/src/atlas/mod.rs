@@ -129,6 +129,8 @@ pub struct Atlas {
     pub chart_of: Vec<u32>,
     /// `(k·m)²` entries, row-major over the whole atlas (row `t`, column `s`).
     texels: Vec<Option<TexelSurface>>,
+    /// How many of them are gutter texels (next to a footprint, touched by no triangle).
+    gutters: usize,
 }
 
 impl Atlas {
@@ -162,7 +164,7 @@ impl Atlas {
                 Ok(grid) => {
                     let mut out = mesh.clone();
                     out.uvs = uvs.to_vec();
-                    let texels = texel_table(&out, grid * m);
+                    let (texels, gutters) = texel_table(&out, grid * m);
                     return Ok(Atlas {
                         mesh: out,
                         grid,
@@ -171,13 +173,14 @@ impl Atlas {
                         rejected,
                         chart_of: Vec::new(),
                         texels,
+                        gutters,
                     });
                 }
                 Err(why) => rejected.push((source, why)),
             }
         }
         let (out, grid, chart_of) = charts(mesh, options, limit)?;
-        let texels = texel_table(&out, grid * m);
+        let (texels, gutters) = texel_table(&out, grid * m);
         Ok(Atlas {
             mesh: out,
             grid,
@@ -186,6 +189,7 @@ impl Atlas {
             rejected,
             chart_of,
             texels,
+            gutters,
         })
     }
 
@@ -204,11 +208,15 @@ impl Atlas {
         self.chart_of.iter().max().map_or(0, |&c| c + 1)
     }
 
-    /// The fraction of the atlas's texels that stand for a surface point (footprints and
-    /// gutters); the rest of its pages is empty.
+    /// The fraction of the atlas's texels that a triangle touches (its footprints, gutters
+    /// not counted): how much of the atlas the surface itself fills.
     pub fn fill(&self) -> f64 {
-        let used = self.texels.iter().filter(|t| t.is_some()).count();
-        used as f64 / self.texels.len().max(1) as f64
+        (self.used_texels() - self.gutters) as f64 / self.texels.len().max(1) as f64
+    }
+
+    /// Texels that stand for a surface point: footprints and gutters (the rest is empty).
+    pub fn used_texels(&self) -> usize {
+        self.texels.iter().filter(|t| t.is_some()).count()
     }
 
     /// The surface point of texel `(x, y)` of page `page = py·k + px`; `None` for a texel no
@@ -684,7 +692,7 @@ fn to_f32_bary(b: [f64; 3]) -> [f32; 3] {
 
 /// The texel table of `mesh` (atlas uvs) at `a × a` texels: footprints, then a one-texel
 /// gutter.
-fn texel_table(mesh: &Mesh, a: u32) -> Vec<Option<TexelSurface>> {
+fn texel_table(mesh: &Mesh, a: u32) -> (Vec<Option<TexelSurface>>, usize) {
     let af = f64::from(a);
     let au = a as usize;
     let tri_uv = |t: u32| mesh.triangles[t as usize].map(|v| mesh.uvs[v as usize].as_dvec2() * af);
@@ -747,13 +755,14 @@ fn texel_table(mesh: &Mesh, a: u32) -> Vec<Option<TexelSurface>> {
             }
         }
     }
+    let gutters = gutter.len();
     for (idx, triangle, b) in gutter {
         table[idx] = Some(TexelSurface {
             triangle,
             bary: to_f32_bary(b),
         });
     }
-    table
+    (table, gutters)
 }
 
 #[cfg(test)]
@@ -995,11 +1004,11 @@ mod tests {
     #[test]
     fn adjacent_triangles_merge_into_charts_that_fill_the_atlas() {
         // (mesh, charts at most, fill at least, pages at most). Measured: 23 charts at a fill
-        // of 0.765 and 42 at 0.792, 16 pages each; per-triangle charts needed 49 pages for
-        // the icosphere, at a fill of 0.714.
+        // of 0.628 and 42 at 0.639, 16 pages each; per-triangle charts needed 49 pages for
+        // each, at fills of 0.247 and 0.255.
         for (name, mesh, charts, fill, pages) in [
-            ("lumpy", lumpy(), 40, 0.75, 16),
-            ("icosphere", Mesh::icosphere(3), 60, 0.75, 16),
+            ("lumpy", lumpy(), 40, 0.6, 16),
+            ("icosphere", Mesh::icosphere(3), 60, 0.6, 16),
         ] {
             let atlas = Atlas::build(&mesh, &[], &options(32, 0.05, 16)).unwrap();
             assert_masks_disjoint(&atlas);
@@ -1052,8 +1061,8 @@ mod tests {
             assert_eq!(atlas.chart_of[2 * face], atlas.chart_of[2 * face + 1]);
         }
         assert_masks_disjoint(&atlas);
-        // Six equal squares fill at most six of a square's nine cells.
-        assert!(atlas.fill() >= 0.6, "fill {}", atlas.fill());
+        // Six equal squares fill at most six of a square's nine cells (0.586 measured).
+        assert!(atlas.fill() >= 0.55, "fill {}", atlas.fill());
     }
 
     #[test]

@@ -5,12 +5,11 @@
 //! cells) grown by a one-texel gutter all round. Masks never overlap, so no texel is shared by
 //! two charts and every chart has its own gutter.
 //!
-//! Masks are placed one by one (tallest first; ties: larger, then lower chart index) on a
-//! *skyline*: per atlas column, the lowest row above everything placed so far. A mask goes
-//! where its lowest resting position is lowest (then leftmost), upright or turned a quarter,
-//! each of its columns resting on the skyline from its own lowest texel, so irregular charts
-//! interlock. This is the bitmap variant of skyline bin packing; it never tests one mask
-//! against another, since everything placed lies below the skyline.
+//! Masks are placed one by one, the chart whose mask has the largest smaller side first
+//! (ties: more texels, then the lower chart index), each at the lowest, then leftmost, place
+//! where it meets no taken texel, over its four quarter turns (bottom-left first fit on a bitmap
+//! of the atlas: holes left beside earlier charts are filled). Only places where the mask's
+//! first texel falls on a free texel are tested, a 64-texel word at a time.
 
 use glam::DVec2;
 
@@ -43,8 +42,8 @@ pub(super) struct Place {
 }
 
 impl Place {
-    /// A chart point `c` (texels at scale 1) in atlas texels, for a chart placed with `mask`
-    /// geometry at `scale`.
+    /// A chart point `c` (texels at scale 1) in atlas texels, for a chart placed at `scale`
+    /// whose mask has its origin at `origin`.
     pub fn map(&self, c: DVec2, flat: &Flat, scale: f64, origin: DVec2) -> DVec2 {
         let q = turn(c * scale, flat.size * scale, self.turns);
         DVec2::new(f64::from(self.x), f64::from(self.y)) + origin + q
