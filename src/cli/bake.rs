@@ -206,7 +206,7 @@ fn warn_empty_texels(report: &BakeReport) {
     let m = &report.sample_maps;
     if m.empty > 0 {
         eprintln!(
-            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake)",
+            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake; the coverage lines say where and why)",
             m.empty,
             m.texels,
             100.0 * m.empty as f64 / m.texels.max(1) as f64
@@ -241,6 +241,7 @@ fn print_summary(r: &BakeReport) {
         100.0 * m.short as f64 / m.texels.max(1) as f64,
         m.empty
     );
+    print_coverage(r);
     for a in &r.atlases {
         let uvs = match a.source {
             "lightmap" => "its TEXCOORD_1",
@@ -309,6 +310,18 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+}
+
+/// Per object with short texels: a `coverage` line (how many) and a line per place (where,
+/// why, what to do).
+fn print_coverage(r: &BakeReport) {
+    let decimals = oslf_bake::coverage::decimals_for(r.epsilon);
+    for c in r.coverage.iter().filter(|c| c.short > 0) {
+        println!("coverage       {c}");
+        for place in &c.places {
+            println!("               {}", place.describe(decimals));
+        }
+    }
 }
 
 /// `e`, where the store writer could not resume a partial store or `--strict` refused the

@@ -74,18 +74,20 @@ pub fn bake_shard(
     let progress = progress::or_silent(&options.progress);
     let mut report = BakeReport {
         output: options.output.clone(),
+        epsilon: settings.epsilon,
         cube_resolution: settings.cube_resolution,
         samples_per_texel: strata_per_side(settings.samples_per_texel).pow(2),
         shard: shard.map(|s| s.to_string()),
         ..Default::default()
     };
-    let geometry = stages::prepare(scene, &options.output, shard, limits, &mut report)?;
+    let (geometry, names) = stages::prepare(scene, &options.output, shard, limits, &mut report)?;
     let (surfaces, placement) = stages::place(scene, &geometry, &mut report)?;
     let (points, maps) = stages::build_maps(
         settings,
         &surfaces,
         placement,
         &geometry,
+        &names,
         progress,
         &mut report,
     );

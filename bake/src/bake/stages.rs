@@ -14,6 +14,7 @@ use super::sink::Sink;
 use super::writable::check_store_writable;
 use crate::bvh::TriangleScene;
 use crate::capture::{capture_cube, chunk_cubes, CaptureSettings};
+use crate::coverage::{self, SurfaceNames};
 use crate::error::Result;
 use crate::integrator::{Integrator, RayStats};
 use crate::preflight::{self, Limits};
@@ -27,14 +28,15 @@ use crate::tolerance::TESSELLATION_ERROR;
 /// Prepare: fails now, not after the sample maps, if the store at `output` cannot be
 /// written; refuses (the preflight) what cannot fit `limits`, naming the setting to change;
 /// then builds the ray-tracing geometry: every triangle of the scene, the OSLF objects
-/// tessellated within ε × [`TESSELLATION_ERROR`].
+/// tessellated within ε × [`TESSELLATION_ERROR`], and the names of its triangles (for the
+/// coverage report, [`crate::coverage`]).
 pub(super) fn prepare(
     scene: &Scene,
     output: &Path,
     shard: Option<ShardSpec>,
     limits: &Limits,
     report: &mut BakeReport,
-) -> Result<TriangleScene> {
+) -> Result<(TriangleScene, SurfaceNames)> {
     check_store_writable(output)?;
     let estimate = preflight::estimate(scene, rayon::current_num_threads());
     let estimate = match shard {
@@ -43,11 +45,12 @@ pub(super) fn prepare(
     };
     preflight::check(&estimate, limits)?;
     let settings = &scene.bake;
-    let geometry =
-        TriangleScene::build(scene.instances(true, settings.epsilon * TESSELLATION_ERROR))?;
+    let instances = scene.instances(true, settings.epsilon * TESSELLATION_ERROR);
+    let names = SurfaceNames::of(&instances);
+    let geometry = TriangleScene::build(instances)?;
     report.triangles = geometry.triangle_count();
     report.bvh_build_seconds = geometry.build_time().as_secs_f64();
-    Ok(geometry)
+    Ok((geometry, names))
 }
 
 /// Place: the sample-map domains of the OSLF objects (with the atlases of mesh objects) and
@@ -72,12 +75,14 @@ pub(super) fn place<'s>(
 
 /// Build maps: the sample maps of `placement`'s points; then (§6.3) points added where
 /// texels found fewer than four, at halving spacings, and the maps rebuilt, for at most
-/// [`sample_points::REFINE_ROUNDS`] rounds. Returns every point and the last maps.
+/// [`sample_points::REFINE_ROUNDS`] rounds. Returns every point and the last maps; the
+/// report says per object where and why texels are still short ([`coverage::diagnose`]).
 pub(super) fn build_maps(
     settings: &BakeSettings,
     surfaces: &Surfaces,
     placement: Placement,
     geometry: &TriangleScene,
+    names: &SurfaceNames,
     progress: &dyn Progress,
     report: &mut BakeReport,
 ) -> (Vec<SamplePoint>, SampleMaps) {
@@ -130,6 +135,14 @@ pub(super) fn build_maps(
         min_distance *= 0.5;
     }
     map_stats.rays = rays;
+    let object_names: Vec<String> = surfaces.objects().iter().map(|o| o.name.clone()).collect();
+    let probe = coverage::Probe {
+        geometry,
+        names,
+        epsilon: settings.epsilon,
+        phi_samplemap_deg: settings.phi_samplemap_deg,
+    };
+    report.coverage = coverage::diagnose(&maps, &domains, &points, &object_names, &probe);
     report.sample_points = points.len();
     report.sample_maps = map_stats;
     report.sample_map_seconds = t.elapsed().as_secs_f64();

@@ -1,0 +1,426 @@
+//! Why sample-map texels are short (issue 28): each texel that found fewer than four sample
+//! points ([`crate::sample_map`]) is given a cause and a place, per object, in words a user
+//! can act on.
+//!
+//! Causes, tested in this order at the texel's surface point `x`:
+//! - **contact**: the sample point that would serve the texel, ε out along its face's normal,
+//!   fails the free-space test of placement (§3.3): a surface lies closer than ε
+//!   ([`FREE_SPACE_TOLERANCE`]) or encloses it. The object rests on or touches that surface
+//!   (a box on a table: its bottom), or folds onto itself. Harmless where the side cannot be
+//!   seen; the surface is named as the scene names it.
+//! - **hidden**: four or more of the texel's nearest points lie within φ_samplemap of its
+//!   normal, but geometry hides enough of them (a crevice, a nearby surface).
+//! - **sparse**: fewer than four of its [`MAX_CANDIDATES`] nearest points lie within
+//!   φ_samplemap of its normal: the points are too far apart there.
+//!
+//! Texels of one cause are grouped by the surface they touch and the axis they face, and each
+//! group located by the box its texels span. Only short texels are examined (at most 2 × 64
+//! probe rays and [`MAX_CANDIDATES`] visibility rays each, as many as the map build cast for
+//! them), and the maps are only read: the store does not change.
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+use oslf_format::{SampleMaps, SamplePoint, INVALID_INDEX};
+use rayon::prelude::*;
+
+use crate::bvh::Instance;
+use crate::ray::{Intersector, Ray};
+use crate::sample_map::{self, PointIndex, VISIBILITY_LIFT};
+use crate::sample_points::{fibonacci_sphere, FREE_SPACE_TOLERANCE};
+use crate::surface::MapDomain;
+
+/// Places shown per object, largest first; the others are summed in
+/// [`ObjectCoverage::other_short`].
+pub const PLACES_SHOWN: usize = 3;
+
+/// Directions probed around a texel's would-be sample point by the contact test (as many as
+/// placement's free-space test probes).
+const PROBE_DIRECTIONS: usize = 64;
+
+/// Why a texel found fewer than four sample points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cause {
+    /// Its sample point would lie closer than ε to a surface, or inside one.
+    Contact,
+    /// Enough points in its cone, but hidden behind geometry.
+    Hidden,
+    /// Too few points within φ_samplemap of its normal.
+    Sparse,
+}
+
+impl Cause {
+    /// What to do about it.
+    pub fn remedy(self) -> &'static str {
+        match self {
+            Cause::Contact => {
+                "harmless where unseen (the object rests on or touches it), otherwise move them \
+                 more than epsilon apart or lower epsilon"
+            }
+            Cause::Hidden => {
+                "lower epsilon, or raise sample_count (or lower sample_spacing) so points land \
+                 in the gap"
+            }
+            Cause::Sparse => "raise sample_count (or lower sample_spacing)",
+        }
+    }
+}
+
+/// The names of the scene's triangles: which instance a global triangle index
+/// ([`crate::ray::SurfaceHit::triangle`]) belongs to, as the scene names it.
+#[derive(Clone, Debug, Default)]
+pub struct SurfaceNames {
+    /// Per instance: one past its last global triangle index, and its name.
+    ends: Vec<(u64, String)>,
+}
+
+impl SurfaceNames {
+    /// The names of `instances`, in the order [`crate::bvh::TriangleScene::build`] numbers
+    /// their triangles.
+    pub fn of(instances: &[Instance]) -> Self {
+        let mut end = 0u64;
+        let ends = instances
+            .iter()
+            .map(|i| {
+                end += i.mesh.triangles.len() as u64;
+                (end, i.name.clone())
+            })
+            .collect();
+        SurfaceNames { ends }
+    }
+
+    /// The name of the instance holding global triangle `triangle` (`None`: unknown or
+    /// unnamed).
+    pub fn name(&self, triangle: u32) -> Option<&str> {
+        let k = self
+            .ends
+            .partition_point(|(end, _)| *end <= u64::from(triangle));
+        self.ends
+            .get(k)
+            .map(|(_, name)| name.as_str())
+            .filter(|n| !n.is_empty())
+    }
+}
+
+/// One place where an object's texels are short for one cause.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ShortPlace {
+    pub cause: Cause,
+    /// The surface closer than ε (contact only), as the scene names it: a shape
+    /// (`[[box]] 0`, `room.glb: nodes[3] "Table": …`) or `object "NAME"` (itself or another
+    /// OSLF object). `None`: not contact, or the surface has no name.
+    pub surface: Option<String>,
+    /// The axis the texels' surface faces most: `+x`, `-x`, `+y`, `-y`, `+z` (up), `-z` (down).
+    pub facing: &'static str,
+    /// Short texels here (fewer than four points), of which `empty` have none.
+    pub short: u64,
+    pub empty: u64,
+    /// World-space box of the texels' surface points.
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+    /// What to do about it ([`Cause::remedy`]).
+    pub remedy: &'static str,
+}
+
+/// One object's short texels: how many, and where and why.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ObjectCoverage {
+    pub object: String,
+    /// Used sample-map texels of the object.
+    pub texels: u64,
+    /// Of them, with fewer than four points, and with none.
+    pub short: u64,
+    pub empty: u64,
+    /// The largest places ([`PLACES_SHOWN`] at most), most short texels first.
+    pub places: Vec<ShortPlace>,
+    /// Short texels in places not shown.
+    pub other_short: u64,
+}
+
+/// What [`diagnose`] needs besides the maps.
+pub struct Probe<'a, G: Intersector> {
+    pub geometry: &'a G,
+    pub names: &'a SurfaceNames,
+    pub epsilon: f32,
+    pub phi_samplemap_deg: f32,
+}
+
+/// Group of short texels: cause, surface name, facing axis (0..6).
+type Key = (Cause, Option<String>, u8);
+
+/// A short texel's verdict: object, group, surface point, whether empty.
+type Verdict = (u32, Key, Vec3, bool);
+
+/// Per object (names from `object_names`, in object order), its used texels, short texels
+/// and the places they lie, for the sample maps `maps` of `domains` built from `points`.
+/// Objects without any used texel are left out.
+pub fn diagnose<G: Intersector>(
+    maps: &SampleMaps,
+    domains: &[MapDomain],
+    points: &[SamplePoint],
+    object_names: &[String],
+    probe: &Probe<G>,
+) -> Vec<ObjectCoverage> {
+    let res = maps.resolution;
+    let page = (res as usize) * (res as usize);
+    let mut texels = vec![0u64; object_names.len()];
+    for d in domains {
+        let used = (0..res)
+            .flat_map(|y| (0..res).map(move |x| (x, y)))
+            .filter(|&(x, y)| d.covers(x, y))
+            .count() as u64;
+        if let Some(t) = texels.get_mut(d.object() as usize) {
+            *t += used;
+        }
+    }
+    let short = sample_map::short_texels(maps, domains);
+    let index = PointIndex::new(points);
+    let directions = fibonacci_sphere(PROBE_DIRECTIONS);
+    let verdicts: Vec<Verdict> = short
+        .par_iter()
+        .filter_map(|&(map, x, y)| {
+            let domain = domains.get(map as usize)?;
+            let (p, n, offset) = domain.texel_offset(x, y, res)?;
+            let empty = maps
+                .indices
+                .get(map as usize * page + (y * res + x) as usize)
+                .is_some_and(|t| t[0] == INVALID_INDEX);
+            let object = domain.object();
+            let (cause, surface) = classify(probe, &index, &directions, object, (p, n, offset));
+            Some((object, (cause, surface, facing_axis(n)), p, empty))
+        })
+        .collect();
+    summarize(verdicts, &texels, object_names)
+}
+
+/// The cause of one short texel of `object` at `p` (unit normal `n`, offset direction
+/// `offset`), and for contact the name of the surface.
+fn classify<G: Intersector>(
+    probe: &Probe<G>,
+    index: &PointIndex,
+    directions: &[Vec3],
+    object: u32,
+    (p, n, offset): (Vec3, Vec3, Vec3),
+) -> (Cause, Option<String>) {
+    let point = p + offset * probe.epsilon;
+    if let Some(triangle) = contact(probe.geometry, point, probe.epsilon, object, directions) {
+        return (
+            Cause::Contact,
+            probe.names.name(triangle).map(str::to_string),
+        );
+    }
+    let cos_phi = probe.phi_samplemap_deg.to_radians().cos();
+    let lift = probe.epsilon * VISIBILITY_LIFT;
+    let (in_cone, _) = sample_map::texel_candidates(index, probe.geometry, p, n, cos_phi, lift);
+    if in_cone >= 4 {
+        (Cause::Hidden, None)
+    } else {
+        (Cause::Sparse, None)
+    }
+}
+
+/// Placement's free-space test at `point` (§3.3), naming what fails it: the triangle of the
+/// nearest hit closer than ε × [`FREE_SPACE_TOLERANCE`], or, where most probes hit back faces
+/// (the point is enclosed), the nearest back face hit. Surfaces of other objects and shapes
+/// come before `object`'s own (a box resting on a table: the table, not the box's bottom in
+/// the same plane). `None`: the point is free.
+fn contact(
+    geometry: &impl Intersector,
+    point: Vec3,
+    epsilon: f32,
+    object: u32,
+    directions: &[Vec3],
+) -> Option<u32> {
+    let near = epsilon * FREE_SPACE_TOLERANCE;
+    let mut back_faces = 0;
+    // (own object, distance, triangle): the smallest wins.
+    let mut nearest: Option<(bool, f32, u32)> = None;
+    let mut nearest_back: Option<(bool, f32, u32)> = None;
+    let closer = |best: Option<(bool, f32, u32)>, candidate: (bool, f32, u32)| match best {
+        Some(b) if (b.0, b.1) <= (candidate.0, candidate.1) => best,
+        _ => Some(candidate),
+    };
+    for &dir in directions {
+        let Some(hit) = geometry.intersect(&Ray::new(point, dir), f32::MAX) else {
+            continue;
+        };
+        let candidate = (hit.object == object, hit.t, hit.triangle);
+        if hit.t < near {
+            nearest = closer(nearest, candidate);
+        }
+        if hit.geometric_normal.dot(dir) > 0.0 {
+            back_faces += 1;
+            nearest_back = closer(nearest_back, candidate);
+        }
+    }
+    if let Some((_, _, triangle)) = nearest {
+        return Some(triangle);
+    }
+    (back_faces * 2 > directions.len())
+        .then_some(nearest_back)
+        .flatten()
+        .map(|(_, _, t)| t)
+}
+
+/// The axis `n` is closest to: 0 `+x`, 1 `-x`, 2 `+y`, 3 `-y`, 4 `+z`, 5 `-z`.
+fn facing_axis(n: Vec3) -> u8 {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    2 * axis + u8::from(n[axis as usize] < 0.0)
+}
+
+/// The name of [`facing_axis`]'s axis.
+fn axis_name(axis: u8) -> &'static str {
+    ["+x", "-x", "+y", "-y", "+z", "-z"]
+        .get(axis as usize)
+        .copied()
+        .unwrap_or("?")
+}
+
+/// One group's totals while summing.
+struct Group {
+    short: u64,
+    empty: u64,
+    min: Vec3,
+    max: Vec3,
+}
+
+/// Sums `verdicts` per object and group into the report, objects in order.
+fn summarize(
+    verdicts: Vec<Verdict>,
+    texels: &[u64],
+    object_names: &[String],
+) -> Vec<ObjectCoverage> {
+    let mut groups: BTreeMap<u32, BTreeMap<Key, Group>> = BTreeMap::new();
+    for (object, key, p, empty) in verdicts {
+        let g = groups
+            .entry(object)
+            .or_default()
+            .entry(key)
+            .or_insert(Group {
+                short: 0,
+                empty: 0,
+                min: p,
+                max: p,
+            });
+        g.short += 1;
+        g.empty += u64::from(empty);
+        g.min = g.min.min(p);
+        g.max = g.max.max(p);
+    }
+    object_names
+        .iter()
+        .enumerate()
+        .filter(|(o, _)| texels.get(*o).is_some_and(|&t| t > 0))
+        .map(|(o, name)| {
+            let mut places: Vec<ShortPlace> = groups
+                .remove(&(o as u32))
+                .unwrap_or_default()
+                .into_iter()
+                .map(|((cause, surface, axis), g)| ShortPlace {
+                    cause,
+                    surface,
+                    facing: axis_name(axis),
+                    short: g.short,
+                    empty: g.empty,
+                    min: g.min.to_array(),
+                    max: g.max.to_array(),
+                    remedy: cause.remedy(),
+                })
+                .collect();
+            // Most short texels first; the sort is stable, so ties keep the key order.
+            places.sort_by(|a, b| b.short.cmp(&a.short));
+            let short: u64 = places.iter().map(|p| p.short).sum();
+            let empty: u64 = places.iter().map(|p| p.empty).sum();
+            let other_short = places.iter().skip(PLACES_SHOWN).map(|p| p.short).sum();
+            places.truncate(PLACES_SHOWN);
+            ObjectCoverage {
+                object: name.clone(),
+                texels: texels[o],
+                short,
+                empty,
+                places,
+                other_short,
+            }
+        })
+        .collect()
+}
+
+/// `3496 of 20976 texels (16.7%) short, 3496 empty` for an object.
+impl std::fmt::Display for ObjectCoverage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "object {:?}: {} of {} texels ({:.1}%) with fewer than four points, {} with none",
+            self.object,
+            self.short,
+            self.texels,
+            100.0 * self.short as f64 / self.texels.max(1) as f64,
+            self.empty
+        )?;
+        if self.other_short > 0 {
+            write!(f, " ({} in smaller places not listed)", self.other_short)?;
+        }
+        Ok(())
+    }
+}
+
+impl ShortPlace {
+    /// One line: how many, where, why, and what to do; coordinates to `decimals` places.
+    /// `1983 texels facing down (−z) at x 1.00…2.00, y −0.50…0.50, z = 0.00, 1889 of them
+    /// empty: within ε of [[box]] 0; harmless where …`.
+    pub fn describe(&self, decimals: usize) -> String {
+        let why = match (self.cause, &self.surface) {
+            (Cause::Contact, Some(s)) => format!("within ε of {s}"),
+            (Cause::Contact, None) => "within ε of another surface".to_string(),
+            (Cause::Hidden, _) => "their nearest points are hidden behind geometry".to_string(),
+            (Cause::Sparse, _) => "too few points within phi_samplemap of their normal".to_string(),
+        };
+        let facing = match self.facing {
+            "+z" => "up (+z)",
+            "-z" => "down (−z)",
+            "-x" => "−x",
+            "-y" => "−y",
+            other => other,
+        };
+        let number = |v: f32| format!("{v:.*}", decimals).replace('-', "−");
+        let tol = 0.5 * 10f32.powi(-(decimals as i32));
+        let span = ["x", "y", "z"]
+            .iter()
+            .enumerate()
+            .map(|(i, axis)| {
+                let (lo, hi) = (self.min[i], self.max[i]);
+                if hi - lo <= tol {
+                    format!("{axis} = {}", number(0.5 * (lo + hi)))
+                } else {
+                    format!("{axis} {}…{}", number(lo), number(hi))
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let empty = match self.empty {
+            0 => String::new(),
+            e if e == self.short => ", all empty".to_string(),
+            e => format!(", {e} of them empty"),
+        };
+        format!(
+            "{} texels facing {facing} at {span}{empty}: {why}; {}",
+            self.short, self.remedy
+        )
+    }
+}
+
+/// Decimal places that resolve `epsilon` (at least 1, at most 6): coordinates in the summary.
+pub fn decimals_for(epsilon: f32) -> usize {
+    if !(epsilon.is_finite() && epsilon > 0.0) {
+        return 3;
+    }
+    (-epsilon.log10()).ceil().clamp(1.0, 6.0) as usize
+}
