@@ -270,6 +270,7 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+    print_noise(r);
     let rays = (r.rays_closest + r.rays_shadow) as f64;
     println!(
         "rays           {} closest + {} shadow = {:.1} M, {:.2} Mrays/s{}",
@@ -309,6 +310,54 @@ fn print_summary(r: &BakeReport) {
         } else {
             String::new()
         }
+    );
+}
+
+/// The noise of the cubes (a `noise` line) and, when it shows, a `hint` line: what to raise
+/// and what it costs, by the preflight's estimate and by this bake's capture time.
+fn print_noise(r: &BakeReport) {
+    use oslf_bake::preflight::duration;
+    let Some(n) = &r.noise else {
+        return;
+    };
+    let percent = |e: f64| format!("{:.1}%", 100.0 * e);
+    let Some(error) = n.relative_error else {
+        println!(
+            "noise          {}",
+            if n.samples_per_texel < 2 {
+                "not estimated: one sample per texel has no variance to measure (samples_per_texel = 4 or more gives an estimate)"
+            } else {
+                "none measured: no cube texel saw a lit surface"
+            }
+        );
+        return;
+    };
+    let level = format!(
+        "±{} relative standard error of the cube texels that see a surface ({} samples per texel)",
+        percent(error),
+        n.samples_per_texel,
+    );
+    let Some(s) = &n.suggestion else {
+        println!(
+            "noise          {level}: below the {} that shows",
+            percent(n.visible_above)
+        );
+        return;
+    };
+    println!(
+        "noise          {level}: above {}, it shows as speckle in reflections",
+        percent(n.visible_above)
+    );
+    let factor = f64::from(s.samples_per_texel) / f64::from(n.samples_per_texel.max(1));
+    let range = |(a, b): (f64, f64)| format!("{}–{}", duration(a), duration(b));
+    println!(
+        "hint           raise samples_per_texel to {} for about ±{} (4× the samples halve the noise): the cube maps take {factor:.0}× as long, {} on {} threads by the preflight's estimate (now {}; this bake's took {:.1} s)",
+        s.samples_per_texel,
+        percent(s.expected_relative_error),
+        range(s.capture_seconds),
+        s.threads,
+        range(s.capture_seconds_now),
+        r.capture_seconds
     );
 }
 

@@ -9,6 +9,7 @@
 //! runs them in that order.
 
 mod meta;
+mod noise_report;
 mod report;
 mod sink;
 mod stages;
@@ -26,6 +27,7 @@ use crate::preflight::Limits;
 use crate::progress::{self, Progress};
 use crate::scene::Scene;
 pub use meta::{object_centre, store_meta};
+pub use noise_report::{NoiseReport, NoiseSuggestion};
 pub use report::{AtlasReport, BakeReport, NormalsReport};
 use sink::Sink;
 use stages::process_cpu_ns;
@@ -119,6 +121,18 @@ pub fn bake_shard(
         progress,
         &mut report,
     )?;
+    if written.texels > 0 {
+        let estimate = crate::preflight::estimate(scene, rayon::current_num_threads());
+        let estimate = match shard {
+            Some(s) => estimate.for_shard(s.count()),
+            None => estimate,
+        };
+        report.noise = Some(noise_report::noise_report(
+            &written.noise,
+            settings.samples_per_texel,
+            &estimate,
+        ));
+    }
     if sink.done() < sink.total() {
         // Stopped by `cube_limit`: the partial file keeps every appended cube for `resume`.
         drop(sink);

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use oslf_geometry::atlas::UvSource;
 
+use super::noise_report::NoiseReport;
 use crate::coverage::ObjectCoverage;
 use crate::normals::{NormalRule, NormalsUsed};
 use crate::sample_map::SampleMapStats;
@@ -47,6 +48,9 @@ pub struct BakeReport {
     pub restarted: bool,
     pub cube_resolution: u32,
     pub samples_per_texel: u32,
+    /// The Monte Carlo noise of this run's cubes, and what to raise when it shows (`None`
+    /// when this run captured no cube).
+    pub noise: Option<NoiseReport>,
     pub rays_closest: u64,
     pub rays_shadow: u64,
     /// Capture rays per second, millions (closest + shadow, this run's cubes only).

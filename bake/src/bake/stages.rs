@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::Vec3;
-use oslf_format::{SampleMaps, SamplePoint, ShardSpec, StoreMeta};
+use oslf_format::{CubeImage, SampleMaps, SamplePoint, ShardSpec, StoreMeta};
 use rayon::prelude::*;
 
 use super::meta::object_centre;
@@ -13,10 +13,11 @@ use super::report::{atlas_reports, normals_reports, BakeReport};
 use super::sink::Sink;
 use super::writable::check_store_writable;
 use crate::bvh::TriangleScene;
-use crate::capture::{capture_cube, chunk_cubes, CaptureSettings};
+use crate::capture::{capture_cube, capture_cube_with_noise, chunk_cubes, CaptureSettings};
 use crate::coverage::{self, SurfaceNames};
 use crate::error::Result;
 use crate::integrator::{Integrator, RayStats};
+use crate::noise::NoiseStats;
 use crate::preflight::{self, Limits};
 use crate::progress::Progress;
 use crate::ray::EmptyScene;
@@ -149,11 +150,13 @@ pub(super) fn build_maps(
     (points, maps)
 }
 
-/// What the capture appended: compressed bytes and texels of this run's cubes.
-#[derive(Clone, Copy, Debug, Default)]
+/// What the capture appended: compressed bytes and texels of this run's cubes, and the noise
+/// of this run's sample-point cubes ([`crate::noise`]).
+#[derive(Clone, Debug, Default)]
 pub(super) struct Captured {
     bytes: u64,
-    texels: u64,
+    pub(super) texels: u64,
+    pub(super) noise: NoiseStats,
 }
 
 /// Capture: a cube map at each of `points` that `sink` still lacks (and, past the points,
@@ -202,8 +205,8 @@ pub(super) fn capture(
             .into_par_iter()
             .map(|k| {
                 let i = order.cube(k as u32) as usize;
-                let (cube, stats) = match points.get(i) {
-                    Some(p) => capture_cube(
+                let (cube, stats, noise) = match points.get(i) {
+                    Some(p) => capture_cube_with_noise(
                         &integrator,
                         Vec3::from_array(p.position),
                         i as u32,
@@ -213,11 +216,11 @@ pub(super) fn capture(
                     None => match &env_geometry {
                         Some(geometry) => {
                             let env = integrator.with_geometry(geometry);
-                            capture_cube(&env, centre, i as u32, &capture)
+                            with_no_noise(capture_cube(&env, centre, i as u32, &capture))
                         }
                         None => {
                             let env = integrator.with_geometry(&EmptyScene);
-                            capture_cube(&env, centre, i as u32, &capture)
+                            with_no_noise(capture_cube(&env, centre, i as u32, &capture))
                         }
                     },
                 };
@@ -225,10 +228,11 @@ pub(super) fn capture(
                 // Each cube as it finishes, not each chunk: one cube of a slow bake (many
                 // samples per texel, many lights) can take minutes.
                 progress.advance(1);
-                Ok((enc, enc_stats, stats))
+                Ok((enc, enc_stats, stats, noise))
             })
             .collect::<Result<Vec<_>>>()?;
-        for (enc, enc_stats, stats) in encoded {
+        for (enc, enc_stats, stats, noise) in encoded {
+            captured.noise.merge(&noise);
             rays.closest += stats.closest;
             rays.shadow += stats.shadow;
             report.clamped_texels += enc_stats.clamped_texels;
@@ -247,6 +251,12 @@ pub(super) fn capture(
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
     Ok(captured)
+}
+
+/// A capture without a noise estimate: the environment-map baseline's cube is no sample
+/// point's and does not count towards the noise of the store's cubes.
+fn with_no_noise((cube, stats): (CubeImage, RayStats)) -> (CubeImage, RayStats, NoiseStats) {
+    (cube, stats, NoiseStats::default())
 }
 
 /// Write: finishes the store or shard (every cube in) and reports its size and compressed
