@@ -1,5 +1,6 @@
 //! The bake summary explains itself (issue 28): per object, where and why sample-map texels
-//! are short, and (JSON) the same in `--report-json`.
+//! are short; how noisy the cube maps are and, when it shows, what to raise at what cost; and
+//! (JSON) the same in `--report-json`.
 
 mod common;
 
@@ -11,13 +12,18 @@ use common::oslf;
 const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
 f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
 
-/// The box resting on a slab (its bottom in the slab's top plane), with `bake` settings.
+/// The box resting on a slab (its bottom in the slab's top plane) under a low sun, with
+/// `bake` settings.
 fn scene(dir: &Path, bake: &str) -> std::path::PathBuf {
     std::fs::write(dir.join("box.obj"), BOX_OBJ).unwrap();
     let text = format!(
         r#"
 [environment]
-uniform = [1.0, 1.0, 1.0]
+uniform = [0.3, 0.4, 0.6]
+
+[[directional_light]]
+direction = [0.5, -0.3, 0.4]
+irradiance = [4.0, 4.0, 4.0]
 
 [[box]]
 size = [6.0, 6.0, 0.2]
@@ -103,4 +109,53 @@ fn the_summary_says_where_and_why_an_objects_texels_are_short() {
     assert_eq!(p["facing"], "-z", "{json}");
     assert_eq!(p["min"][2], 0.0, "{json}");
     assert!(p["remedy"].as_str().unwrap().contains("epsilon"), "{json}");
+}
+
+#[test]
+fn the_summary_says_how_noisy_the_cubes_are_and_what_to_raise_at_what_cost() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let settings = |spp: u32| {
+        format!(
+            "sample_count = 24\nsample_map_resolution = 8\ncube_resolution = 8\nsamples_per_texel = {spp}\nbounces = 1"
+        )
+    };
+    let (stdout, json) = bake(&scene(dir, &settings(4)), dir);
+    let noise = stdout
+        .lines()
+        .find(|l| l.starts_with("noise          ±"))
+        .unwrap_or_else(|| panic!("no noise line:\n{stdout}"));
+    assert!(
+        noise.contains("(4 samples per texel): above 5.0%, it shows"),
+        "{stdout}"
+    );
+    let hint = stdout
+        .lines()
+        .find(|l| l.starts_with("hint           raise samples_per_texel to "))
+        .unwrap_or_else(|| panic!("no hint line:\n{stdout}"));
+    assert!(
+        hint.contains("by the preflight's estimate") && hint.contains("× as long"),
+        "{hint}"
+    );
+    let n = &json["noise"];
+    assert_eq!(n["samples_per_texel"], 4, "{json}");
+    assert!(n["relative_error"].as_f64().unwrap() > 0.05, "{json}");
+    let more = n["suggestion"]["samples_per_texel"].as_u64().unwrap();
+    assert!(more >= 16, "{json}");
+    assert!(hint.contains(&format!("to {more} ")), "{hint}");
+    assert!(
+        n["suggestion"]["capture_seconds"][1].as_f64().unwrap() > 0.0,
+        "{json}"
+    );
+
+    // Enough samples: a noise line without a hint.
+    let (stdout, json) = bake(&scene(dir, &settings(256)), dir);
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("noise          ±") && l.contains("below the 5.0% that shows")),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("hint "), "{stdout}");
+    assert!(json["noise"]["suggestion"].is_null(), "{json}");
 }
