@@ -424,3 +424,130 @@ pub fn decimals_for(epsilon: f32) -> usize {
     }
     (-epsilon.log10()).ceil().clamp(1.0, 6.0) as usize
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bezier::BezierPatch;
+    use crate::bvh::TriangleScene;
+    use crate::shapes;
+
+    /// A flat patch over [0, 1]² at z = 0 facing +z; a thin wall standing on it at x = 0.5;
+    /// sample points ε above it only beyond the wall (x ≥ 0.52). Beside the wall, texels are in
+    /// contact with it; a little farther, their nearest points in the cone are behind it
+    /// (hidden); farther still, none are in reach (sparse).
+    #[test]
+    fn each_cause_is_found_where_it_holds() {
+        let eps = 0.02;
+        let mut cp = [Vec3::ZERO; 16];
+        for i in 0..4 {
+            for j in 0..4 {
+                cp[4 * i + j] = Vec3::new(j as f32 / 3.0, i as f32 / 3.0, 0.0);
+            }
+        }
+        let mut patch = BezierPatch::new(cp);
+        if patch.normal(0.5, 0.5).z < 0.0 {
+            for i in 0..4 {
+                for j in 0..4 {
+                    cp[4 * i + j] = Vec3::new(i as f32 / 3.0, j as f32 / 3.0, 0.0);
+                }
+            }
+            patch = BezierPatch::new(cp);
+        }
+        assert!(patch.normal(0.5, 0.5).z > 0.99);
+        let mut wall = shapes::cuboid(Vec3::new(0.01, 2.0, 0.2)).unwrap();
+        for p in &mut wall.positions {
+            *p += Vec3::new(0.5, 0.5, 0.1);
+        }
+        let instances = vec![
+            Instance {
+                name: "object \"flat\"".into(),
+                mesh: patch.tessellate(8),
+                material: 0,
+                object: 0,
+            },
+            Instance {
+                name: "wall".into(),
+                mesh: wall,
+                material: 0,
+                object: crate::ray::ENVIRONMENT_OBJECT,
+            },
+        ];
+        let names = SurfaceNames::of(&instances);
+        let geometry = TriangleScene::build(instances).unwrap();
+        let points: Vec<SamplePoint> = (0..49)
+            .flat_map(|i| (0..=50).map(move |j| (0.52 + 0.01 * i as f32, 0.02 * j as f32)))
+            .map(|(x, y)| SamplePoint {
+                position: [x, y, eps],
+                normal: [0.0, 0.0, 1.0],
+                uv: [x, y],
+                patch: 0,
+                object: 0,
+            })
+            .collect();
+        let domains = [MapDomain::Patch {
+            object: 0,
+            patch: &patch,
+        }];
+        let phi = 80.0;
+        let silent = crate::progress::or_silent(&None);
+        let (maps, stats) = sample_map::build(&domains, &points, &geometry, 64, phi, eps, silent);
+        let probe = Probe {
+            geometry: &geometry,
+            names: &names,
+            epsilon: eps,
+            phi_samplemap_deg: phi,
+        };
+        let report = diagnose(&maps, &domains, &points, &["flat".into()], &probe);
+        assert_eq!(report.len(), 1);
+        let c = &report[0];
+        assert_eq!(
+            (c.texels, c.short, c.empty),
+            (stats.texels, stats.short, stats.empty)
+        );
+        assert_eq!(c.other_short, 0, "{c:#?}");
+        let place = |cause: Cause| {
+            c.places
+                .iter()
+                .find(|p| p.cause == cause)
+                .unwrap_or_else(|| panic!("no {cause:?} in {c:#?}"))
+        };
+        // Sparse: everything well short of the wall.
+        let sparse = place(Cause::Sparse);
+        assert!(sparse.min[0] < 0.05 && sparse.max[0] < 0.45, "{sparse:?}");
+        assert_eq!(sparse.surface, None);
+        // Hidden: the band between, within reach of the points behind the wall.
+        let hidden = place(Cause::Hidden);
+        assert!(hidden.min[0] > 0.38 && hidden.max[0] < 0.49, "{hidden:?}");
+        // Contact: beside the wall (its would-be points are closer than ε to it), named.
+        let contact = place(Cause::Contact);
+        assert_eq!(contact.surface.as_deref(), Some("wall"), "{contact:?}");
+        assert!(
+            contact.min[0] > 0.45 && contact.max[0] < 0.55,
+            "{contact:?}"
+        );
+        for p in &c.places {
+            assert_eq!(p.facing, "+z", "{p:?}");
+        }
+    }
+
+    #[test]
+    fn a_triangle_is_named_by_the_instance_that_holds_it() {
+        let mesh = |n: usize| crate::mesh::Mesh {
+            triangles: vec![[0, 1, 2]; n],
+            ..Default::default()
+        };
+        let named = |name: &str, n| Instance {
+            name: name.into(),
+            mesh: mesh(n),
+            material: 0,
+            object: 0,
+        };
+        let names = SurfaceNames::of(&[named("a", 2), named("", 3), named("c", 1)]);
+        let got: Vec<Option<&str>> = (0..7).map(|t| names.name(t)).collect();
+        assert_eq!(
+            got,
+            [Some("a"), Some("a"), None, None, None, Some("c"), None]
+        );
+    }
+}
