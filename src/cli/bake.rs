@@ -350,8 +350,19 @@ fn print_noise(r: &BakeReport) {
     );
     let factor = f64::from(s.samples_per_texel) / f64::from(n.samples_per_texel.max(1));
     let range = |(a, b): (f64, f64)| format!("{}–{}", duration(a), duration(b));
+    let further = if s.samples_per_texel_below_visible > s.samples_per_texel {
+        let times =
+            f64::from(s.samples_per_texel_below_visible) / f64::from(n.samples_per_texel.max(1));
+        format!(
+            "; {} bring it under {}, at {times:.0}× the time",
+            s.samples_per_texel_below_visible,
+            percent(n.visible_above)
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "hint           raise samples_per_texel to {} for about ±{} (4× the samples halve the noise): the cube maps take {factor:.0}× as long, {} on {} threads by the preflight's estimate (now {}; this bake's took {:.1} s)",
+        "hint           raise samples_per_texel to {} to halve the noise (to ±{}): the cube maps take {factor:.0}× as long, {} on {} threads by the preflight's estimate (now {}; this bake's took {:.1} s){further}",
         s.samples_per_texel,
         percent(s.expected_relative_error),
         range(s.capture_seconds),

@@ -25,11 +25,14 @@ pub struct NoiseReport {
 /// More samples per texel, and what they cost.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct NoiseSuggestion {
-    /// `samples_per_texel` to set: at least 4× (half the noise), enough to bring the error
-    /// to [`VISIBLE_RELATIVE_ERROR`].
+    /// `samples_per_texel` to set: 4× the samples, which halve the noise (it falls as
+    /// 1/√samples).
     pub samples_per_texel: u32,
-    /// The relative error expected then (it falls as 1/√samples).
+    /// The relative error expected then.
     pub expected_relative_error: f64,
+    /// The samples per texel (a power of 4 times the present) that bring it to
+    /// [`VISIBLE_RELATIVE_ERROR`] or below.
+    pub samples_per_texel_below_visible: u32,
     /// The preflight's cube-map time, (optimistic, pessimistic) seconds on `threads`, now
     /// and with the suggested samples (it grows with them linearly).
     pub capture_seconds_now: (f64, f64),
@@ -49,7 +52,7 @@ pub(super) fn noise_report(
     let samples = strata_per_side(samples_per_texel).pow(2);
     let error = noise.relative_error();
     let suggestion = error.filter(|&m| m > VISIBLE_RELATIVE_ERROR).map(|m| {
-        let more = strata_per_side(samples_for(m, samples)).pow(2);
+        let more = samples.saturating_mul(4);
         let factor = f64::from(more) / f64::from(samples.max(1));
         let now = estimate
             .time
@@ -60,6 +63,7 @@ pub(super) fn noise_report(
         NoiseSuggestion {
             samples_per_texel: more,
             expected_relative_error: m / factor.sqrt(),
+            samples_per_texel_below_visible: strata_per_side(samples_for(m, samples)).pow(2),
             capture_seconds_now: now,
             capture_seconds: then,
             total_seconds: (
