@@ -161,3 +161,31 @@ fn the_summary_says_how_noisy_the_cubes_are_and_what_to_raise_at_what_cost() {
     assert!(!stdout.contains("hint "), "{stdout}");
     assert!(json["noise"]["suggestion"].is_null(), "{json}");
 }
+
+#[test]
+fn strict_refusal_says_where_the_empty_texels_are_and_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let path = scene(
+        dir,
+        "sample_count = 400\nsample_map_resolution = 32\ncube_resolution = 2\nsamples_per_texel = 1",
+    );
+    let out = oslf("bake")
+        .arg(&path)
+        .arg("-o")
+        .arg(dir.join("strict.oslf"))
+        .args(["--preview", "none", "-q", "--strict"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    for part in [
+        "have no visible sample point",
+        "; where: object \"box\": ",
+        "texels facing down (−z) at x ",
+        "within ε of [[box]] 0",
+        "(--strict)",
+    ] {
+        assert!(err.contains(part), "{part:?} not in {err}");
+    }
+}

@@ -362,13 +362,18 @@ fn print_noise(r: &BakeReport) {
         String::new()
     };
     println!(
-        "hint           raise samples_per_texel to {} to halve the noise (to ±{}): the cube maps take {factor:.0}× as long, {} on {} threads by the preflight's estimate (now {}; this bake's took {:.1} s){further}",
+        "hint           raise samples_per_texel to {} to halve the noise (to ±{}): the cube maps take {factor:.0}× as long, {} on {} threads by the preflight's estimate (now {}{}){further}",
         s.samples_per_texel,
         percent(s.expected_relative_error),
         range(s.capture_seconds),
         s.threads,
         range(s.capture_seconds_now),
-        r.capture_seconds
+        // This run's capture time compares only when it captured the whole store.
+        if r.finished && r.cubes_resumed == 0 {
+            format!("; this bake's took {:.1} s", r.capture_seconds)
+        } else {
+            String::new()
+        }
     );
 }
 

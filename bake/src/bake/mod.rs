@@ -22,6 +22,7 @@ use std::time::Instant;
 use oslf_format::ShardSpec;
 
 use crate::capture::strata_per_side;
+use crate::coverage::{decimals_for, ObjectCoverage};
 use crate::error::{BakeError, Result};
 use crate::preflight::Limits;
 use crate::progress::{self, Progress};
@@ -49,6 +50,24 @@ pub struct BakeOptions {
     /// texel has no visible sample point at all (the runtime has nothing to reconstruct it
     /// from). `false`: bake anyway; the report counts them.
     pub refuse_empty_texels: bool,
+}
+
+/// The largest place of each object's empty texels, for [`BakeError::EmptyTexels`]:
+/// `; where: object "box": 3496 texels facing down (−z) at …` (empty without any).
+fn empty_places(coverage: &[ObjectCoverage], epsilon: f32) -> String {
+    let decimals = decimals_for(epsilon);
+    let places: Vec<String> = coverage
+        .iter()
+        .filter_map(|c| {
+            let p = c.places.iter().find(|p| p.empty > 0)?;
+            Some(format!("object {:?}: {}", c.object, p.describe(decimals)))
+        })
+        .collect();
+    if places.is_empty() {
+        String::new()
+    } else {
+        format!("; where: {}", places.join("; "))
+    }
 }
 
 /// Bakes `scene` into the store at `options.output`, after the preflight against this
@@ -99,6 +118,7 @@ pub fn bake_shard(
             empty: stats.empty,
             texels: stats.texels,
             points: report.sample_points as u64,
+            where_: empty_places(&report.coverage, settings.epsilon),
         });
     }
     let meta = store_meta(scene, &surfaces);
