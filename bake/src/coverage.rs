@@ -10,14 +10,15 @@
 //!   seen; the surface is named as the scene names it.
 //! - **hidden**: four or more of the texel's nearest points lie within φ_samplemap of its
 //!   normal, but geometry hides enough of them (a crevice, a nearby surface).
-//! - **sparse**: fewer than four of its [`MAX_CANDIDATES`](crate::sample_map::MAX_CANDIDATES) nearest points lie within
-//!   φ_samplemap of its normal: the points are too far apart there.
+//! - **sparse**: fewer than four of its nearest points
+//!   ([`MAX_CANDIDATES`](crate::sample_map::MAX_CANDIDATES)) lie within φ_samplemap of its
+//!   normal: the points are too far apart there.
 //!
 //! Texels of one cause are grouped by the surface they touch and the axis they face, and each
 //! group located by the box its texels span. Only short texels are examined (64 probe rays and
-//! at most [`MAX_CANDIDATES`](crate::sample_map::MAX_CANDIDATES) visibility rays each: about twice what the map build cast for
-//! them; examples/meshes.toml: 0.06 s beside the maps' 1.4 s), and the maps are only read:
-//! the store does not change.
+//! at most [`MAX_CANDIDATES`](crate::sample_map::MAX_CANDIDATES) visibility rays each: about
+//! twice what the map build cast for them; examples/meshes.toml: 0.06 s beside the maps'
+//! 1.4 s), and the maps are only read: the store does not change.
 
 use std::collections::BTreeMap;
 
