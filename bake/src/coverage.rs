@@ -95,11 +95,21 @@ impl SurfaceNames {
     /// The name of the instance holding global triangle `triangle` (`None`: unknown or
     /// unnamed).
     pub fn name(&self, triangle: u32) -> Option<&str> {
+        self.instance_name(self.instance(triangle)?)
+    }
+
+    /// The index of the instance holding global triangle `triangle`.
+    fn instance(&self, triangle: u32) -> Option<u32> {
         let k = self
             .ends
             .partition_point(|(end, _)| *end <= u64::from(triangle));
+        (k < self.ends.len()).then_some(k as u32)
+    }
+
+    /// The name of instance `k` (`None`: unknown or unnamed).
+    fn instance_name(&self, k: u32) -> Option<&str> {
         self.ends
-            .get(k)
+            .get(k as usize)
             .map(|(_, name)| name.as_str())
             .filter(|n| !n.is_empty())
     }
@@ -148,11 +158,11 @@ pub struct Probe<'a, G: Intersector> {
     pub phi_samplemap_deg: f32,
 }
 
-/// Group of short texels: cause, surface name, facing axis (0..6).
-type Key = (Cause, Option<String>, u8);
+/// Group of short texels: object, cause, instance touched (contact), facing axis (0..6).
+type Key = (u32, Cause, Option<u32>, u8);
 
-/// A short texel's verdict: object, group, surface point, whether empty.
-type Verdict = (u32, Key, Vec3, bool);
+/// Groups of short texels, in key order.
+type Groups = BTreeMap<Key, Group>;
 
 /// Per object (names from `object_names`, in object order), its used texels, short texels
 /// and the places they lie, for the sample maps `maps` of `domains` built from `points`.
@@ -179,38 +189,51 @@ pub fn diagnose<G: Intersector>(
     let short = sample_map::short_texels(maps, domains);
     let index = PointIndex::new(points);
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
-    let verdicts: Vec<Verdict> = short
+    // Folded into groups as they come (memory per group, not per texel): counts and bounds
+    // do not depend on the order.
+    let groups = short
         .par_iter()
-        .filter_map(|&(map, x, y)| {
-            let domain = domains.get(map as usize)?;
-            let (p, n, offset) = domain.texel_offset(x, y, res)?;
+        .fold(Groups::new, |mut groups, &(map, x, y)| {
+            let Some(domain) = domains.get(map as usize) else {
+                return groups;
+            };
+            let Some((p, n, offset)) = domain.texel_offset(x, y, res) else {
+                return groups;
+            };
             let empty = maps
                 .indices
                 .get(map as usize * page + (y * res + x) as usize)
                 .is_some_and(|t| t[0] == INVALID_INDEX);
             let object = domain.object();
-            let (cause, surface) = classify(probe, &index, &directions, object, (p, n, offset));
-            Some((object, (cause, surface, facing_axis(n)), p, empty))
+            let (cause, instance) = classify(probe, &index, &directions, object, (p, n, offset));
+            let key = (object, cause, instance, facing_axis(n));
+            groups
+                .entry(key)
+                .or_insert_with(|| Group::at(p))
+                .add(p, empty);
+            groups
         })
-        .collect();
-    summarize(verdicts, &texels, object_names)
+        .reduce(Groups::new, |mut a, b| {
+            for (key, g) in b {
+                a.entry(key).or_insert_with(|| Group::at(g.min)).merge(&g);
+            }
+            a
+        });
+    summarize(groups, &texels, object_names, probe.names)
 }
 
 /// The cause of one short texel of `object` at `p` (unit normal `n`, offset direction
-/// `offset`), and for contact the name of the surface.
+/// `offset`), and for contact the instance of the surface ([`SurfaceNames`]).
 fn classify<G: Intersector>(
     probe: &Probe<G>,
     index: &PointIndex,
     directions: &[Vec3],
     object: u32,
     (p, n, offset): (Vec3, Vec3, Vec3),
-) -> (Cause, Option<String>) {
+) -> (Cause, Option<u32>) {
     let point = p + offset * probe.epsilon;
     if let Some(triangle) = contact(probe.geometry, point, probe.epsilon, object, directions) {
-        return (
-            Cause::Contact,
-            probe.names.name(triangle).map(str::to_string),
-        );
+        return (Cause::Contact, probe.names.instance(triangle));
     }
     let cos_phi = probe.phi_samplemap_deg.to_radians().cos();
     let lift = probe.epsilon * VISIBILITY_LIFT;
@@ -294,49 +317,62 @@ struct Group {
     max: Vec3,
 }
 
-/// Sums `verdicts` per object and group into the report, objects in order.
+impl Group {
+    /// No texel yet, its box starting at `p`.
+    fn at(p: Vec3) -> Self {
+        Group {
+            short: 0,
+            empty: 0,
+            min: p,
+            max: p,
+        }
+    }
+
+    /// Adds a texel at `p`.
+    fn add(&mut self, p: Vec3, empty: bool) {
+        self.short += 1;
+        self.empty += u64::from(empty);
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Adds `other`'s texels.
+    fn merge(&mut self, other: &Group) {
+        self.short += other.short;
+        self.empty += other.empty;
+        self.min = self.min.min(other.min);
+        self.max = self.max.max(other.max);
+    }
+}
+
+/// The report of `groups`, objects in order, surfaces named by `names`.
 fn summarize(
-    verdicts: Vec<Verdict>,
+    groups: Groups,
     texels: &[u64],
     object_names: &[String],
+    names: &SurfaceNames,
 ) -> Vec<ObjectCoverage> {
-    let mut groups: BTreeMap<u32, BTreeMap<Key, Group>> = BTreeMap::new();
-    for (object, key, p, empty) in verdicts {
-        let g = groups
-            .entry(object)
-            .or_default()
-            .entry(key)
-            .or_insert(Group {
-                short: 0,
-                empty: 0,
-                min: p,
-                max: p,
-            });
-        g.short += 1;
-        g.empty += u64::from(empty);
-        g.min = g.min.min(p);
-        g.max = g.max.max(p);
+    let mut per_object: BTreeMap<u32, Vec<ShortPlace>> = BTreeMap::new();
+    for ((object, cause, instance, axis), g) in groups {
+        per_object.entry(object).or_default().push(ShortPlace {
+            cause,
+            surface: instance
+                .and_then(|k| names.instance_name(k))
+                .map(str::to_string),
+            facing: axis_name(axis),
+            short: g.short,
+            empty: g.empty,
+            min: g.min.to_array(),
+            max: g.max.to_array(),
+            remedy: cause.remedy(),
+        });
     }
     object_names
         .iter()
         .enumerate()
         .filter(|(o, _)| texels.get(*o).is_some_and(|&t| t > 0))
         .map(|(o, name)| {
-            let mut places: Vec<ShortPlace> = groups
-                .remove(&(o as u32))
-                .unwrap_or_default()
-                .into_iter()
-                .map(|((cause, surface, axis), g)| ShortPlace {
-                    cause,
-                    surface,
-                    facing: axis_name(axis),
-                    short: g.short,
-                    empty: g.empty,
-                    min: g.min.to_array(),
-                    max: g.max.to_array(),
-                    remedy: cause.remedy(),
-                })
-                .collect();
+            let mut places = per_object.remove(&(o as u32)).unwrap_or_default();
             // Most short texels first; the sort is stable, so ties keep the key order.
             places.sort_by(|a, b| b.short.cmp(&a.short));
             let short: u64 = places.iter().map(|p| p.short).sum();
