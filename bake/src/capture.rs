@@ -7,6 +7,7 @@ use oslf_format::CubeImage;
 use rayon::prelude::*;
 
 use crate::integrator::{Integrator, RayStats};
+use crate::noise::{luminance, NoiseStats};
 use crate::ray::{Intersector, Ray};
 use crate::sampling::{hash_u64, Rng};
 
@@ -94,6 +95,18 @@ pub fn capture_cube<I: Intersector>(
     cube_index: u32,
     settings: &CaptureSettings,
 ) -> (CubeImage, RayStats) {
+    let (cube, stats, _) = capture_cube_with_noise(integrator, origin, cube_index, settings);
+    (cube, stats)
+}
+
+/// [`capture_cube`], and the relative standard errors of its texels ([`crate::noise`]),
+/// gathered from its samples' luminance alongside (the texels are the same bits).
+pub fn capture_cube_with_noise<I: Intersector>(
+    integrator: &Integrator<I>,
+    origin: Vec3,
+    cube_index: u32,
+    settings: &CaptureSettings,
+) -> (CubeImage, RayStats, NoiseStats) {
     let res = settings.resolution;
     let k = strata_per_side(settings.samples_per_texel);
     let inv_spp = 1.0 / (k * k) as f32;
@@ -123,6 +136,7 @@ pub fn capture_cube<I: Intersector>(
     // texel capture (stratum j's jitter, then path j's numbers), so the result is the same.
     let trace_band = |(face, y0, out, mut dist_out): Band| {
         let mut stats = RayStats::default();
+        let mut noise = NoiseStats::default();
         let rows = out.len() / res as usize;
         for x0 in (0..res).step_by(TILE) {
             let cols = (res - x0).min(TILE as u32);
@@ -143,6 +157,9 @@ pub fn capture_cube<I: Intersector>(
                 })
                 .collect();
             let mut sums = vec![Vec3::ZERO; texels.len()];
+            // Luminance sum and sum of squares per texel, and whether a sample hit a surface,
+            // for the noise estimate.
+            let mut moments = vec![(0f64, 0f64, false); texels.len()];
             let mut rays = vec![Ray::new(origin, Vec3::X); texels.len()];
             let mut hits = vec![None; texels.len()];
             for j in 0..k * k {
@@ -158,14 +175,18 @@ pub fn capture_cube<I: Intersector>(
                 integrator
                     .geometry
                     .intersect_packet(&rays, f32::MAX, &mut hits);
-                for (((ray, hit), rng), sum) in rays.iter().zip(&hits).zip(&mut rngs).zip(&mut sums)
-                {
-                    *sum += integrator
+                let samples = rays.iter().zip(&hits).zip(&mut rngs);
+                for ((((ray, hit), rng), sum), m) in samples.zip(&mut sums).zip(&mut moments) {
+                    let radiance = integrator
                         .radiance_from(ray, hit.as_ref(), rng, &mut stats)
                         .radiance;
+                    *sum += radiance;
+                    let y = luminance(radiance.to_array());
+                    *m = (m.0 + y, m.1 + y * y, m.2 || hit.is_some());
                 }
             }
-            for (&(x, y, i), sum) in texels.iter().zip(&sums) {
+            for ((&(x, y, i), sum), m) in texels.iter().zip(&sums).zip(&moments) {
+                noise.add_texel(m.0, m.1, k * k, m.2);
                 out[i] = (*sum * inv_spp).to_array();
                 if let Some(d_out) = dist_out.as_deref_mut() {
                     let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
@@ -177,29 +198,26 @@ pub fn capture_cube<I: Intersector>(
                 }
             }
         }
-        stats
+        (stats, noise)
     };
-    let sum = |mut a: RayStats, b: RayStats| {
-        a.add(&b);
+    let sum = |mut a: (RayStats, NoiseStats), b: (RayStats, NoiseStats)| {
+        a.0.add(&b.0);
+        a.1.merge(&b.1);
         a
     };
-    let stats = if parallel {
-        bands
-            .into_par_iter()
-            .map(trace_band)
-            .reduce(RayStats::default, sum)
+    // Summed in band order whatever the split: the noise sums are floating point.
+    let traced: Vec<(RayStats, NoiseStats)> = if parallel {
+        bands.into_par_iter().map(trace_band).collect()
     } else {
-        bands
-            .into_iter()
-            .map(trace_band)
-            .fold(RayStats::default(), sum)
+        bands.into_iter().map(trace_band).collect()
     };
+    let (stats, noise) = traced.into_iter().fold(Default::default(), sum);
     let cube = CubeImage {
         resolution: res,
         faces,
         distance: settings.distance_channel.then_some(distance),
     };
-    (cube, stats)
+    (cube, stats, noise)
 }
 
 #[cfg(test)]

@@ -44,11 +44,14 @@ pub enum BakeError {
     Invalid(String),
     /// Sample-map texels without any visible sample point, refused before the capture
     /// ([`crate::bake::BakeOptions::refuse_empty_texels`]).
-    #[error("{empty} of {texels} sample-map texels have no visible sample point ({points} sample points in all), so the store could not reconstruct them; nothing was captured")]
+    #[error("{empty} of {texels} sample-map texels have no visible sample point ({points} sample points in all), so the store could not reconstruct them; nothing was captured{where_}")]
     EmptyTexels {
         empty: u64,
         texels: u64,
         points: u64,
+        /// Where they lie and why, per object ([`crate::coverage`]): `; where: object "box":
+        /// 3496 texels facing down (−z) at …`, or empty.
+        where_: String,
     },
     /// An output file that cannot be created (checked before the bake starts).
     #[error("cannot write {what} {path}: {detail}")]

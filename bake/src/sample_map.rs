@@ -90,19 +90,8 @@ pub fn texel_indices(
         let candidates = index.nearest(x, k);
         for &(_, i) in &candidates[tried..] {
             let s = Vec3::from_array(index.points[i as usize].position);
-            let to_s = s - x;
-            let len = to_s.length();
-            // Eq. 3.10: in the upper hemisphere, away from the horizon.
-            if len.is_nan() || len <= 0.0 || n.dot(to_s / len) <= cos_phi {
+            if candidate(geometry, x, n, origin, s, cos_phi, &mut rays) != Some(true) {
                 continue;
-            }
-            let d = s - origin;
-            let dist = d.length();
-            if dist > 0.0 {
-                rays += 1;
-                if geometry.occluded(&Ray::new(origin, d / dist), dist * (1.0 - 1e-4)) {
-                    continue;
-                }
             }
             found[count] = i;
             count += 1;
@@ -116,6 +105,61 @@ pub fn texel_indices(
         }
     }
     (found, rays)
+}
+
+/// Whether sample point `s` can serve the texel at `x` (unit normal `n`): `None` outside the
+/// cone of Eq. 3.10 (in the upper hemisphere, away from the horizon), else whether it is
+/// visible from `origin` (the texel's point lifted off the surface). Counts the ray it casts.
+fn candidate(
+    geometry: &impl Intersector,
+    x: Vec3,
+    n: Vec3,
+    origin: Vec3,
+    s: Vec3,
+    cos_phi: f32,
+    rays: &mut u64,
+) -> Option<bool> {
+    let to_s = s - x;
+    let len = to_s.length();
+    if len.is_nan() || len <= 0.0 || n.dot(to_s / len) <= cos_phi {
+        return None;
+    }
+    let d = s - origin;
+    let dist = d.length();
+    if dist > 0.0 {
+        *rays += 1;
+        if geometry.occluded(&Ray::new(origin, d / dist), dist * (1.0 - 1e-4)) {
+            return Some(false);
+        }
+    }
+    Some(true)
+}
+
+/// Of the [`MAX_CANDIDATES`] sample points nearest the texel at `x` (unit normal `n`), how many
+/// lie within the cone of Eq. 3.10 and how many of those are visible, as [`texel_indices`]
+/// judges them: why a texel found fewer than four ([`crate::coverage`]).
+pub fn texel_candidates(
+    index: &PointIndex,
+    geometry: &impl Intersector,
+    x: Vec3,
+    n: Vec3,
+    cos_phi: f32,
+    lift: f32,
+) -> (usize, usize) {
+    let origin = x + n * lift;
+    let mut rays = 0;
+    let (mut in_cone, mut visible) = (0, 0);
+    for (_, i) in index.nearest(x, MAX_CANDIDATES) {
+        let s = Vec3::from_array(index.points[i as usize].position);
+        match candidate(geometry, x, n, origin, s, cos_phi, &mut rays) {
+            None => {}
+            Some(seen) => {
+                in_cone += 1;
+                visible += usize::from(seen);
+            }
+        }
+    }
+    (in_cone, visible)
 }
 
 /// Used texels with fewer than four indices, as (map, x, y), in storage order.

@@ -206,7 +206,7 @@ fn warn_empty_texels(report: &BakeReport) {
     let m = &report.sample_maps;
     if m.empty > 0 {
         eprintln!(
-            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake)",
+            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake; the coverage lines say where and why)",
             m.empty,
             m.texels,
             100.0 * m.empty as f64 / m.texels.max(1) as f64
@@ -241,6 +241,7 @@ fn print_summary(r: &BakeReport) {
         100.0 * m.short as f64 / m.texels.max(1) as f64,
         m.empty
     );
+    print_coverage(r);
     for a in &r.atlases {
         let uvs = match a.source {
             "lightmap" => "its TEXCOORD_1".to_string(),
@@ -275,6 +276,7 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+    print_noise(r);
     let rays = (r.rays_closest + r.rays_shadow) as f64;
     println!(
         "rays           {} closest + {} shadow = {:.1} M, {:.2} Mrays/s{}",
@@ -315,6 +317,82 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+}
+
+/// The noise of the cubes (a `noise` line) and, when it shows, a `hint` line: what to raise
+/// and what it costs, by the preflight's estimate and by this bake's capture time.
+fn print_noise(r: &BakeReport) {
+    use oslf_bake::preflight::duration;
+    let Some(n) = &r.noise else {
+        return;
+    };
+    let percent = |e: f64| format!("{:.1}%", 100.0 * e);
+    let Some(error) = n.relative_error else {
+        println!(
+            "noise          {}",
+            if n.samples_per_texel < 2 {
+                "not estimated: one sample per texel has no variance to measure (samples_per_texel = 4 or more gives an estimate)"
+            } else {
+                "none measured: no cube texel saw a lit surface"
+            }
+        );
+        return;
+    };
+    let level = format!(
+        "±{} relative standard error of the cube texels that see a surface ({} samples per texel)",
+        percent(error),
+        n.samples_per_texel,
+    );
+    let Some(s) = &n.suggestion else {
+        println!(
+            "noise          {level}: below the {} that shows",
+            percent(n.visible_above)
+        );
+        return;
+    };
+    println!(
+        "noise          {level}: above {}, it shows as speckle in reflections",
+        percent(n.visible_above)
+    );
+    let factor = f64::from(s.samples_per_texel) / f64::from(n.samples_per_texel.max(1));
+    let range = |(a, b): (f64, f64)| format!("{}–{}", duration(a), duration(b));
+    let further = if s.samples_per_texel_below_visible > s.samples_per_texel {
+        let times =
+            f64::from(s.samples_per_texel_below_visible) / f64::from(n.samples_per_texel.max(1));
+        format!(
+            "; {} bring it under {}, at {times:.0}× the time",
+            s.samples_per_texel_below_visible,
+            percent(n.visible_above)
+        )
+    } else {
+        String::new()
+    };
+    println!(
+        "hint           raise samples_per_texel to {} to halve the noise (to ±{}): the cube maps take {factor:.0}× as long, {} on {} threads by the preflight's estimate (now {}{}){further}",
+        s.samples_per_texel,
+        percent(s.expected_relative_error),
+        range(s.capture_seconds),
+        s.threads,
+        range(s.capture_seconds_now),
+        // This run's capture time compares only when it captured the whole store.
+        if r.finished && r.cubes_resumed == 0 {
+            format!("; this bake's took {:.1} s", r.capture_seconds)
+        } else {
+            String::new()
+        }
+    );
+}
+
+/// Per object with short texels: a `coverage` line (how many) and a line per place (where,
+/// why, what to do).
+fn print_coverage(r: &BakeReport) {
+    let decimals = oslf_bake::coverage::decimals_for(r.epsilon);
+    for c in r.coverage.iter().filter(|c| c.short > 0) {
+        println!("coverage       {c}");
+        for place in &c.places {
+            println!("               {}", place.describe(decimals));
+        }
+    }
 }
 
 /// `e`, where the store writer could not resume a partial store or `--strict` refused the

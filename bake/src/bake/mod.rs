@@ -9,6 +9,7 @@
 //! runs them in that order.
 
 mod meta;
+mod noise_report;
 mod report;
 mod sink;
 mod stages;
@@ -21,11 +22,13 @@ use std::time::Instant;
 use oslf_format::ShardSpec;
 
 use crate::capture::strata_per_side;
+use crate::coverage::{decimals_for, ObjectCoverage};
 use crate::error::{BakeError, Result};
 use crate::preflight::Limits;
 use crate::progress::{self, Progress};
 use crate::scene::Scene;
 pub use meta::{object_centre, store_meta};
+pub use noise_report::{NoiseReport, NoiseSuggestion};
 pub use report::{AtlasReport, BakeReport, NormalsReport};
 use sink::Sink;
 use stages::process_cpu_ns;
@@ -47,6 +50,24 @@ pub struct BakeOptions {
     /// texel has no visible sample point at all (the runtime has nothing to reconstruct it
     /// from). `false`: bake anyway; the report counts them.
     pub refuse_empty_texels: bool,
+}
+
+/// The largest place of each object's empty texels, for [`BakeError::EmptyTexels`]:
+/// `; where: object "box": 3496 texels facing down (−z) at …` (empty without any).
+fn empty_places(coverage: &[ObjectCoverage], epsilon: f32) -> String {
+    let decimals = decimals_for(epsilon);
+    let places: Vec<String> = coverage
+        .iter()
+        .filter_map(|c| {
+            let p = c.places.iter().find(|p| p.empty > 0)?;
+            Some(format!("object {:?}: {}", c.object, p.describe(decimals)))
+        })
+        .collect();
+    if places.is_empty() {
+        String::new()
+    } else {
+        format!("; where: {}", places.join("; "))
+    }
 }
 
 /// Bakes `scene` into the store at `options.output`, after the preflight against this
@@ -74,18 +95,20 @@ pub fn bake_shard(
     let progress = progress::or_silent(&options.progress);
     let mut report = BakeReport {
         output: options.output.clone(),
+        epsilon: settings.epsilon,
         cube_resolution: settings.cube_resolution,
         samples_per_texel: strata_per_side(settings.samples_per_texel).pow(2),
         shard: shard.map(|s| s.to_string()),
         ..Default::default()
     };
-    let geometry = stages::prepare(scene, &options.output, shard, limits, &mut report)?;
+    let (geometry, names) = stages::prepare(scene, &options.output, shard, limits, &mut report)?;
     let (surfaces, placement) = stages::place(scene, &geometry, &mut report)?;
     let (points, maps) = stages::build_maps(
         settings,
         &surfaces,
         placement,
         &geometry,
+        &names,
         progress,
         &mut report,
     );
@@ -95,6 +118,7 @@ pub fn bake_shard(
             empty: stats.empty,
             texels: stats.texels,
             points: report.sample_points as u64,
+            where_: empty_places(&report.coverage, settings.epsilon),
         });
     }
     let meta = store_meta(scene, &surfaces);
@@ -117,6 +141,18 @@ pub fn bake_shard(
         progress,
         &mut report,
     )?;
+    if written.texels > 0 {
+        let estimate = crate::preflight::estimate(scene, rayon::current_num_threads());
+        let estimate = match shard {
+            Some(s) => estimate.for_shard(s.count()),
+            None => estimate,
+        };
+        report.noise = Some(noise_report::noise_report(
+            &written.noise,
+            settings.samples_per_texel,
+            &estimate,
+        ));
+    }
     if sink.done() < sink.total() {
         // Stopped by `cube_limit`: the partial file keeps every appended cube for `resume`.
         drop(sink);

@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use oslf_geometry::atlas::UvSource;
 
+use super::noise_report::NoiseReport;
+use crate::coverage::ObjectCoverage;
 use crate::normals::{NormalRule, NormalsUsed};
 use crate::sample_map::SampleMapStats;
 use crate::sample_points::Surfaces;
@@ -23,7 +25,12 @@ pub struct BakeReport {
     pub points_removed_inside: usize,
     /// Points added where sample-map texels found fewer than four (§6.3).
     pub points_added: usize,
+    /// The bake's ε (scene units): the sample points' offset.
+    pub epsilon: f32,
     pub sample_maps: SampleMapStats,
+    /// Per OSLF object with sample-map texels, in object order: its short and empty texels,
+    /// where they lie and why ([`crate::coverage`]).
+    pub coverage: Vec<ObjectCoverage>,
     /// The atlas of each mesh object, in object order.
     pub atlases: Vec<AtlasReport>,
     /// The normals of each mesh object, in object order.
@@ -41,6 +48,9 @@ pub struct BakeReport {
     pub restarted: bool,
     pub cube_resolution: u32,
     pub samples_per_texel: u32,
+    /// The Monte Carlo noise of this run's cubes, and what to raise when it shows (`None`
+    /// when this run captured no cube).
+    pub noise: Option<NoiseReport>,
     pub rays_closest: u64,
     pub rays_shadow: u64,
     /// Capture rays per second, millions (closest + shadow, this run's cubes only).

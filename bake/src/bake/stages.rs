@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::Vec3;
-use oslf_format::{SampleMaps, SamplePoint, ShardSpec, StoreMeta};
+use oslf_format::{CubeImage, SampleMaps, SamplePoint, ShardSpec, StoreMeta};
 use rayon::prelude::*;
 
 use super::meta::object_centre;
@@ -13,9 +13,11 @@ use super::report::{atlas_reports, normals_reports, BakeReport};
 use super::sink::Sink;
 use super::writable::check_store_writable;
 use crate::bvh::TriangleScene;
-use crate::capture::{capture_cube, chunk_cubes, CaptureSettings};
+use crate::capture::{capture_cube, capture_cube_with_noise, chunk_cubes, CaptureSettings};
+use crate::coverage::{self, SurfaceNames};
 use crate::error::Result;
 use crate::integrator::{Integrator, RayStats};
+use crate::noise::NoiseStats;
 use crate::preflight::{self, Limits};
 use crate::progress::Progress;
 use crate::ray::EmptyScene;
@@ -27,14 +29,15 @@ use crate::tolerance::TESSELLATION_ERROR;
 /// Prepare: fails now, not after the sample maps, if the store at `output` cannot be
 /// written; refuses (the preflight) what cannot fit `limits`, naming the setting to change;
 /// then builds the ray-tracing geometry: every triangle of the scene, the OSLF objects
-/// tessellated within ε × [`TESSELLATION_ERROR`].
+/// tessellated within ε × [`TESSELLATION_ERROR`], and the names of its triangles (for the
+/// coverage report, [`crate::coverage`]).
 pub(super) fn prepare(
     scene: &Scene,
     output: &Path,
     shard: Option<ShardSpec>,
     limits: &Limits,
     report: &mut BakeReport,
-) -> Result<TriangleScene> {
+) -> Result<(TriangleScene, SurfaceNames)> {
     check_store_writable(output)?;
     let estimate = preflight::estimate(scene, rayon::current_num_threads());
     let estimate = match shard {
@@ -43,11 +46,12 @@ pub(super) fn prepare(
     };
     preflight::check(&estimate, limits)?;
     let settings = &scene.bake;
-    let geometry =
-        TriangleScene::build(scene.instances(true, settings.epsilon * TESSELLATION_ERROR))?;
+    let instances = scene.instances(true, settings.epsilon * TESSELLATION_ERROR);
+    let names = SurfaceNames::of(&instances);
+    let geometry = TriangleScene::build(instances)?;
     report.triangles = geometry.triangle_count();
     report.bvh_build_seconds = geometry.build_time().as_secs_f64();
-    Ok(geometry)
+    Ok((geometry, names))
 }
 
 /// Place: the sample-map domains of the OSLF objects (with the atlases of mesh objects) and
@@ -72,12 +76,14 @@ pub(super) fn place<'s>(
 
 /// Build maps: the sample maps of `placement`'s points; then (§6.3) points added where
 /// texels found fewer than four, at halving spacings, and the maps rebuilt, for at most
-/// [`sample_points::REFINE_ROUNDS`] rounds. Returns every point and the last maps.
+/// [`sample_points::REFINE_ROUNDS`] rounds. Returns every point and the last maps; the
+/// report says per object where and why texels are still short ([`coverage::diagnose`]).
 pub(super) fn build_maps(
     settings: &BakeSettings,
     surfaces: &Surfaces,
     placement: Placement,
     geometry: &TriangleScene,
+    names: &SurfaceNames,
     progress: &dyn Progress,
     report: &mut BakeReport,
 ) -> (Vec<SamplePoint>, SampleMaps) {
@@ -130,17 +136,27 @@ pub(super) fn build_maps(
         min_distance *= 0.5;
     }
     map_stats.rays = rays;
+    let object_names: Vec<String> = surfaces.objects().iter().map(|o| o.name.clone()).collect();
+    let probe = coverage::Probe {
+        geometry,
+        names,
+        epsilon: settings.epsilon,
+        phi_samplemap_deg: settings.phi_samplemap_deg,
+    };
+    report.coverage = coverage::diagnose(&maps, &domains, &points, &object_names, &probe);
     report.sample_points = points.len();
     report.sample_maps = map_stats;
     report.sample_map_seconds = t.elapsed().as_secs_f64();
     (points, maps)
 }
 
-/// What the capture appended: compressed bytes and texels of this run's cubes.
-#[derive(Clone, Copy, Debug, Default)]
+/// What the capture appended: compressed bytes and texels of this run's cubes, and the noise
+/// of this run's sample-point cubes ([`crate::noise`]).
+#[derive(Clone, Debug, Default)]
 pub(super) struct Captured {
     bytes: u64,
-    texels: u64,
+    pub(super) texels: u64,
+    pub(super) noise: NoiseStats,
 }
 
 /// Capture: a cube map at each of `points` that `sink` still lacks (and, past the points,
@@ -189,8 +205,8 @@ pub(super) fn capture(
             .into_par_iter()
             .map(|k| {
                 let i = order.cube(k as u32) as usize;
-                let (cube, stats) = match points.get(i) {
-                    Some(p) => capture_cube(
+                let (cube, stats, noise) = match points.get(i) {
+                    Some(p) => capture_cube_with_noise(
                         &integrator,
                         Vec3::from_array(p.position),
                         i as u32,
@@ -200,11 +216,11 @@ pub(super) fn capture(
                     None => match &env_geometry {
                         Some(geometry) => {
                             let env = integrator.with_geometry(geometry);
-                            capture_cube(&env, centre, i as u32, &capture)
+                            with_no_noise(capture_cube(&env, centre, i as u32, &capture))
                         }
                         None => {
                             let env = integrator.with_geometry(&EmptyScene);
-                            capture_cube(&env, centre, i as u32, &capture)
+                            with_no_noise(capture_cube(&env, centre, i as u32, &capture))
                         }
                     },
                 };
@@ -212,10 +228,11 @@ pub(super) fn capture(
                 // Each cube as it finishes, not each chunk: one cube of a slow bake (many
                 // samples per texel, many lights) can take minutes.
                 progress.advance(1);
-                Ok((enc, enc_stats, stats))
+                Ok((enc, enc_stats, stats, noise))
             })
             .collect::<Result<Vec<_>>>()?;
-        for (enc, enc_stats, stats) in encoded {
+        for (enc, enc_stats, stats, noise) in encoded {
+            captured.noise.merge(&noise);
             rays.closest += stats.closest;
             rays.shadow += stats.shadow;
             report.clamped_texels += enc_stats.clamped_texels;
@@ -234,6 +251,12 @@ pub(super) fn capture(
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
     Ok(captured)
+}
+
+/// A capture without a noise estimate: the environment-map baseline's cube is no sample
+/// point's and does not count towards the noise of the store's cubes.
+fn with_no_noise((cube, stats): (CubeImage, RayStats)) -> (CubeImage, RayStats, NoiseStats) {
+    (cube, stats, NoiseStats::default())
 }
 
 /// Write: finishes the store or shard (every cube in) and reports its size and compressed

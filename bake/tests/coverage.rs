@@ -1,0 +1,122 @@
+//! The bake's coverage report (issue 28, "a summary that explains itself"): per object, its
+//! short and empty sample-map texels, each group with its cause, the surface it touches and
+//! where it lies.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use oslf_bake::bake::{bake, BakeOptions, BakeReport};
+use oslf_bake::coverage::{Cause, ObjectCoverage};
+use oslf_bake::scene::Scene;
+
+/// A fresh directory for one test.
+fn dir(test: &str) -> PathBuf {
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    let d = std::env::temp_dir().join(format!(
+        "oslf-coverage-{}-{test}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The unit cube [0, 1]³ without normals: 8 vertices, 6 quads wound outwards.
+const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
+f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+
+/// Bakes the box at `translate` (a tiny capture: coverage is decided before it) with
+/// `sample_count` points, plus the scene text `more`.
+fn bake_box(d: &Path, translate: [f32; 3], sample_count: u32, more: &str) -> BakeReport {
+    std::fs::write(d.join("box.obj"), BOX_OBJ).unwrap();
+    let text = format!(
+        "[environment]\nuniform = [0.5, 0.5, 0.5]\n\n[[object]]\nname = \"box\"\nmesh = \"box.obj\"\n\
+         transform = {{ translate = {translate:?} }}\nnormals = \"flat\"\n\
+         material = {{ color = [0.5, 0.5, 0.5] }}\n{more}\n[bake]\nepsilon = 0.05\n\
+         sample_count = {sample_count}\nsample_map_resolution = 32\ncube_resolution = 4\n\
+         samples_per_texel = 1\nbounces = 0\n"
+    );
+    let path = d.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path, None).unwrap_or_else(|e| panic!("{e}"));
+    let options = BakeOptions {
+        output: d.join("box.oslf"),
+        resume: false,
+        progress: None,
+        cube_limit: None,
+        refuse_empty_texels: false,
+    };
+    bake(&scene, &options).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The report's one object, checked against the global counts.
+fn the_box(report: &BakeReport) -> &ObjectCoverage {
+    assert_eq!(report.coverage.len(), 1, "{:?}", report.coverage);
+    let c = &report.coverage[0];
+    assert_eq!(c.object, "box");
+    let m = &report.sample_maps;
+    assert_eq!((c.texels, c.short, c.empty), (m.texels, m.short, m.empty));
+    let listed: u64 = c.places.iter().map(|p| p.short).sum();
+    assert_eq!(listed + c.other_short, c.short, "{c:?}");
+    c
+}
+
+#[test]
+fn a_box_resting_on_a_slab_has_its_bottom_short_for_contact_with_the_slab_named_and_located() {
+    let d = dir("slab");
+    // A solid slab whose top is the box's bottom plane, z = 0.
+    let slab = "[[box]]\nsize = [6.0, 6.0, 0.2]\ntransform = { translate = [0.0, 0.0, -0.1] }\n\
+                material = { color = [0.5, 0.5, 0.5] }\n";
+    let report = bake_box(&d, [1.0, -0.5, 0.0], 400, slab);
+    let c = the_box(&report);
+    assert!(c.empty > 0, "{c:?}");
+    // The largest place: the bottom, facing down, at z = 0, over the box's footprint.
+    let bottom = &c.places[0];
+    assert_eq!(bottom.cause, Cause::Contact, "{c:?}");
+    assert_eq!(bottom.facing, "-z", "{c:?}");
+    assert_eq!(bottom.surface.as_deref(), Some("[[box]] 0"), "{c:?}");
+    assert!(
+        bottom.min[2].abs() < 1e-4 && bottom.max[2].abs() < 1e-4,
+        "{bottom:?}"
+    );
+    assert!(bottom.min[0] > 0.95 && bottom.max[0] < 2.05, "{c:#?}");
+    assert!(bottom.min[1] > -0.55 && bottom.max[1] < 0.55, "{c:#?}");
+    assert!(bottom.max[0] - bottom.min[0] > 0.8, "{c:#?}");
+    // The bottom is a sixth of the surface: every one of its texels is empty.
+    assert!(
+        bottom.empty as f64 > 0.1 * c.texels as f64,
+        "{} of {} texels",
+        bottom.empty,
+        c.texels
+    );
+    assert!(bottom.remedy.contains("harmless"), "{bottom:?}");
+    // Nothing facing up is in contact with anything.
+    assert!(
+        c.places
+            .iter()
+            .all(|p| p.cause != Cause::Contact || p.facing != "+z"),
+        "{c:?}"
+    );
+}
+
+#[test]
+fn a_floating_box_with_few_points_is_short_for_too_few_points_not_contact() {
+    let d = dir("sparse");
+    let report = bake_box(&d, [0.0, 0.0, 1.0], 6, "");
+    let c = the_box(&report);
+    assert!(c.short > 0, "{c:?}");
+    assert!(!c.places.is_empty());
+    assert!(c.places.iter().all(|p| p.cause == Cause::Sparse), "{c:?}");
+    assert!(c.places[0].remedy.contains("sample_count"), "{c:?}");
+    assert_eq!(c.places[0].surface, None);
+}
+
+#[test]
+fn a_well_covered_floating_box_reports_no_short_place() {
+    let d = dir("covered");
+    let report = bake_box(&d, [0.0, 0.0, 1.0], 400, "");
+    let c = the_box(&report);
+    assert_eq!((c.short, c.empty), (0, 0), "{c:?}");
+    assert!(c.places.is_empty());
+    assert!(c.texels > 0);
+}
