@@ -374,7 +374,7 @@ fn summarize(
         .map(|(o, name)| {
             let mut places = per_object.remove(&(o as u32)).unwrap_or_default();
             // Most short texels first; the sort is stable, so ties keep the key order.
-            places.sort_by(|a, b| b.short.cmp(&a.short));
+            places.sort_by_key(|p| std::cmp::Reverse(p.short));
             let short: u64 = places.iter().map(|p| p.short).sum();
             let empty: u64 = places.iter().map(|p| p.empty).sum();
             let other_short = places.iter().skip(PLACES_SHOWN).map(|p| p.short).sum();
