@@ -371,10 +371,12 @@ fn free_space(
     let near = epsilon * FREE_SPACE_TOLERANCE;
     let mut back_faces = 0;
     for &dir in directions {
-        let ray = Ray::new(position, dir);
-        if geometry.occluded(&ray, near) {
+        // A segment through the point, `near` each side: a surface through the point itself
+        // crosses it too (a ray from the point would skip it as a self-hit).
+        if geometry.occluded(&Ray::new(position - dir * near, dir), 2.0 * near) {
             return FreeSpace::TooClose;
         }
+        let ray = Ray::new(position, dir);
         if let Some(hit) = geometry.intersect(&ray, f32::MAX) {
             if hit.geometric_normal.dot(dir) > 0.0 {
                 back_faces += 1;

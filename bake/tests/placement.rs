@@ -111,3 +111,34 @@ fn a_box_on_a_slab_loses_only_its_bottom_and_the_rim_within_epsilon_of_the_slab(
         p.placed
     );
 }
+
+#[test]
+fn a_point_lying_on_another_surface_is_too_close() {
+    // A plate at z = 0 and a floor plane at z = ε: every offset point lies on the floor. A
+    // probe ray from the point itself skips the floor as a self-hit; the free-space test must
+    // not.
+    let d = dir("on-surface");
+    std::fs::write(
+        d.join("plate.obj"),
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    let text = "[environment]\nuniform = [0.5, 0.5, 0.5]\n\n[[object]]\nname = \"plate\"\n\
+                mesh = \"plate.obj\"\nmaterial = { color = [0.5, 0.5, 0.5] }\n\n[[plane]]\n\
+                size = [4.0, 4.0]\ntransform = { translate = [0.5, 0.5, 0.05] }\n\
+                material = { color = [0.5, 0.5, 0.5] }\n\n[bake]\nepsilon = 0.05\n\
+                sample_count = 50\nsample_map_resolution = 16\n";
+    let path = d.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path, None).unwrap_or_else(|e| panic!("{e}"));
+    let geometry =
+        TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))
+            .unwrap();
+    let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
+    let e = place(&surfaces, &scene.bake, &geometry).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("all 50 sample points were removed (50 closer than ε"),
+        "{e}"
+    );
+}
