@@ -262,3 +262,85 @@ fn convert_re_encodes_and_keeps_the_rest() {
         .unwrap();
     assert!(!out.status.success());
 }
+
+#[test]
+fn a_cube_exports_as_a_ktx2_cube_map_that_a_ktx2_reader_opens() {
+    let f = fixture(Spec::default());
+    let (dir, path) = temp_store("ktx2.oslf");
+    write(&path, &f);
+    let out_path = dir.path().join("env.ktx2");
+    let out = bin()
+        .arg("export-cube")
+        .arg(&path)
+        .args(["5", "--format", "ktx2", "-o"])
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!oslf_format::writer::partial_path(&out_path).exists());
+
+    // An independent reader (the `ktx2` crate, which Bevy's loader uses) validates it.
+    let bytes = std::fs::read(&out_path).unwrap();
+    let reader = ktx2::Reader::new(&bytes[..]).unwrap();
+    let header = reader.header();
+    let cube = oslf_format::Store::open(&path)
+        .unwrap()
+        .read_cube(5)
+        .unwrap();
+    let n = cube.resolution;
+    assert_eq!(header.format, Some(ktx2::Format::R16G16B16A16_SFLOAT));
+    assert_eq!(
+        (header.pixel_width, header.pixel_height, header.pixel_depth),
+        (n, n, 0)
+    );
+    assert_eq!(
+        (header.layer_count, header.face_count, header.level_count),
+        (0, 6, 1)
+    );
+    assert_eq!(
+        reader.transfer_function(),
+        Some(ktx2::TransferFunction::Linear)
+    );
+    assert_eq!(reader.color_primaries(), Some(ktx2::ColorPrimaries::BT709));
+    // The data format descriptor is the one the Khronos rules give for the format.
+    let (expected, type_size) =
+        ktx2::dfd::Basic::from_format(ktx2::Format::R16G16B16A16_SFLOAT).unwrap();
+    assert_eq!(type_size, header.type_size);
+    assert_eq!(reader.basic_dfd(), Some(&expected));
+    let orientation = reader
+        .key_value_data()
+        .find(|(k, _)| *k == "KTXorientation")
+        .map(|(_, v)| v.to_vec());
+    assert_eq!(orientation.as_deref(), Some(&b"rd\0"[..]));
+
+    // Faces +X −X +Y −Y +Z −Z, rows from the top: every texel is the store's, as half floats.
+    let level = reader.levels().next().unwrap();
+    let texels = (n * n) as usize;
+    assert_eq!(level.data.len(), 6 * texels * 8);
+    for face in 0..6 {
+        for (i, rgb) in cube.faces[face].iter().enumerate() {
+            let at = (face * texels + i) * 8;
+            let h = |k: usize| {
+                half::f16::from_le_bytes([level.data[at + 2 * k], level.data[at + 2 * k + 1]])
+            };
+            for (k, &v) in rgb.iter().enumerate() {
+                assert_eq!(h(k), half::f16::from_f32(v), "face {face}, texel {i}");
+            }
+            assert_eq!(h(3), half::f16::ONE);
+        }
+    }
+    // --layout is for OpenEXR output only.
+    let out = bin()
+        .arg("export-cube")
+        .arg(&path)
+        .args(["5", "--format", "ktx2", "--layout", "faces", "-o"])
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--layout applies to OpenEXR output"));
+}

@@ -55,14 +55,22 @@ enum Command {
         #[arg(short = 'j', long)]
         threads: Option<usize>,
     },
-    /// Export one cube as OpenEXR (f32 RGB).
+    /// Export one cube as OpenEXR (f32 RGB) or as a KTX2 cube map (RGBA16F), the container
+    /// engines load environment maps from. The last cube of a store with an environment cube
+    /// is that cube (`oslf store info` says which)
     ExportCube {
         store: PathBuf,
         index: u32,
         #[arg(short, long)]
         output: PathBuf,
-        #[arg(long, value_enum, default_value_t = Layout::Cross)]
-        layout: Layout,
+        /// exr, or ktx2: one cube-map texture (faces +X −X +Y −Y +Z −Z in Vulkan's cube-map
+        /// convention, the scene's axes: a Y-up engine turns it by −90° about x for a scene
+        /// that turned a Y-up file by +90°)
+        #[arg(long, value_enum, default_value_t = CubeFormat::Exr)]
+        format: CubeFormat,
+        /// The layout of OpenEXR output [default: cross]
+        #[arg(long, value_enum)]
+        layout: Option<Layout>,
     },
     /// Export one sample map as a false-colour PNG (colour from a hash of the index; missing
     /// entries black)
@@ -81,6 +89,12 @@ enum Command {
         #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
         scale: u32,
     },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
+enum CubeFormat {
+    Exr,
+    Ktx2,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -178,8 +192,22 @@ pub fn run(cli: Args) -> Result<()> {
             store,
             index,
             output,
+            format,
             layout,
-        } => export_cube(&access.open(&store)?, index, &output, layout),
+        } => {
+            match (format, layout) {
+                (CubeFormat::Ktx2, Some(_)) => {
+                    bail!("--layout applies to OpenEXR output; a KTX2 file holds the cube as a cube map")
+                }
+                (CubeFormat::Ktx2, None) => export_cube_ktx2(&access.open(&store)?, index, &output),
+                (CubeFormat::Exr, layout) => export_cube(
+                    &access.open(&store)?,
+                    index,
+                    &output,
+                    layout.unwrap_or(Layout::Cross),
+                ),
+            }
+        }
         Command::ExportSampleMap {
             store,
             patch,
@@ -537,6 +565,40 @@ fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> 
             .with_context(|| format!("cannot write {}", out.display()))?;
             println!("wrote {}", out.display());
         }
+    }
+    Ok(())
+}
+
+/// `export-cube --format ktx2`: the cube as a KTX2 cube map, written to OUT.partial and renamed.
+fn export_cube_ktx2(s: &Store, index: u32, out: &Path) -> Result<()> {
+    let cube = s.read_cube(index)?;
+    let partial = oslf_format::writer::partial_path(out);
+    let write = || -> std::io::Result<u64> {
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&partial)?);
+        let clamped = oslf_util::ktx2::write_cube(
+            &mut file,
+            cube.resolution,
+            &cube.faces,
+            concat!("oslf ", env!("CARGO_PKG_VERSION")),
+        )?;
+        file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&partial, out)?;
+        Ok(clamped)
+    };
+    let clamped = write().map_err(|e| {
+        let _ = std::fs::remove_file(&partial);
+        anyhow::anyhow!("cannot write {}: {e}", out.display())
+    })?;
+    println!(
+        "wrote {} ({}² × 6 faces, RGBA16F)",
+        out.display(),
+        cube.resolution
+    );
+    if clamped > 0 {
+        eprintln!(
+            "warning: {clamped} channel values above {} (the largest half float) were written as it",
+            oslf_util::ktx2::F16_MAX
+        );
     }
     Ok(())
 }
