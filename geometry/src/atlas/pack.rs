@@ -9,7 +9,8 @@
 //! (ties: more texels, then the lower chart index), each at the lowest, then leftmost, place
 //! where it meets no taken texel, over its four quarter turns (bottom-left first fit on a bitmap
 //! of the atlas: holes left beside earlier charts are filled). Only places where the mask's
-//! first texel falls on a free texel are tested, a 64-texel word at a time.
+//! first texel falls on a free texel are tested, a 64-texel word at a time. Once all are placed
+//! at one scale, [`grow`] enlarges charts one by one into the space left free.
 
 use glam::DVec2;
 
@@ -41,12 +42,63 @@ pub(super) struct Place {
     pub turns: u8,
 }
 
-impl Place {
-    /// A chart point `c` (texels at scale 1) in atlas texels, for a chart placed at `scale`
-    /// whose mask has its origin at `origin`.
-    pub fn map(&self, c: DVec2, flat: &Flat, scale: f64, origin: DVec2) -> DVec2 {
-        let q = turn(c * scale, flat.size * scale, self.turns);
-        DVec2::new(f64::from(self.x), f64::from(self.y)) + origin + q
+/// A chart in its final place: its mask's lower-left texel, the mask and the chart's scale.
+pub(super) struct Placed {
+    pub x: u32,
+    pub y: u32,
+    pub mask: Mask,
+    pub scale: f64,
+}
+
+impl Placed {
+    /// A chart point `c` (texels at scale 1) in atlas texels.
+    pub fn map(&self, c: DVec2, flat: &Flat) -> DVec2 {
+        let q = turn(c * self.scale, flat.size * self.scale, self.mask.turns);
+        DVec2::new(f64::from(self.x), f64::from(self.y)) + self.mask.origin + q
+    }
+}
+
+/// Factors by which [`grow`] tries to enlarge a chart, largest first.
+const GROWTH: [f64; 4] = [2.0, 1.6, 1.3, 1.15];
+
+/// Grows charts one by one, smallest first, into the space the packing left free: each is
+/// taken out and put back at the largest of [`GROWTH`] × its scale that fits anywhere (lowest,
+/// then leftmost, over its four turns), or where it was. Small charts fill the holes between
+/// large ones at a finer texel; no chart gets coarser.
+pub(super) fn grow(flats: &[Flat], placed: &mut [Placed], a: u32) {
+    let mut atlas = Occupancy::new(a);
+    for p in placed.iter() {
+        atlas.mark(&p.mask, p.x, p.y, true);
+    }
+    let mut order: Vec<usize> = (0..placed.len()).collect();
+    order.sort_by_key(|&i| (placed[i].mask.count, i));
+    for i in order {
+        let p = &mut placed[i];
+        atlas.mark(&p.mask, p.x, p.y, false);
+        'factors: for factor in GROWTH {
+            let scale = p.scale * factor;
+            let mut best: Option<((u32, u32), Mask)> = None;
+            for turns in 0..TURNS as u8 {
+                let Some(m) = mask(&flats[i], scale, turns, a) else {
+                    continue;
+                };
+                if let Some((x, y)) = atlas.first_fit(&m, best.as_ref().map(|b| b.0 .0)) {
+                    if best.as_ref().is_none_or(|(b, _)| (y, x) < *b) {
+                        best = Some(((y, x), m));
+                    }
+                }
+            }
+            if let Some(((y, x), m)) = best {
+                *p = Placed {
+                    x,
+                    y,
+                    mask: m,
+                    scale,
+                };
+                break 'factors;
+            }
+        }
+        atlas.mark(&p.mask, p.x, p.y, true);
     }
 }
 
@@ -156,7 +208,7 @@ pub(super) fn pack(masks: &[[Option<Mask>; TURNS]], a: u32) -> Option<Vec<Place>
         }
         let ((y, x), o) = best?;
         let m = masks[i][o].as_ref().expect("chosen orientation exists");
-        atlas.mark(m, x, y);
+        atlas.mark(m, x, y, true);
         places[i] = Place {
             x,
             y,
@@ -225,14 +277,22 @@ impl Occupancy {
         None
     }
 
-    fn mark(&mut self, m: &Mask, x: u32, y: u32) {
+    /// Takes (`taken`) or frees the texels of `m` at `(x, y)`.
+    fn mark(&mut self, m: &Mask, x: u32, y: u32, taken: bool) {
         let (w0, s) = ((x / 64) as usize, x % 64);
+        let mut set = |word: &mut u64, bits: u64| {
+            if taken {
+                *word |= bits;
+            } else {
+                *word &= !bits;
+            }
+        };
         for (r, bits) in m.rows.iter().enumerate() {
             let row = &mut self.rows[y as usize + r];
             for (j, &b) in bits.iter().enumerate() {
-                row[w0 + j] |= b << s;
+                set(&mut row[w0 + j], b << s);
                 if s > 0 {
-                    row[w0 + j + 1] |= b >> (64 - s);
+                    set(&mut row[w0 + j + 1], b >> (64 - s));
                 }
             }
         }
