@@ -280,7 +280,7 @@ impl Occupancy {
     /// Takes (`taken`) or frees the texels of `m` at `(x, y)`.
     fn mark(&mut self, m: &Mask, x: u32, y: u32, taken: bool) {
         let (w0, s) = ((x / 64) as usize, x % 64);
-        let mut set = |word: &mut u64, bits: u64| {
+        let set = |word: &mut u64, bits: u64| {
             if taken {
                 *word |= bits;
             } else {
