@@ -267,13 +267,16 @@ fn contact(
         _ => Some(candidate),
     };
     for &dir in directions {
+        // A segment through the point, as placement probes (a surface through the point
+        // itself counts).
+        if let Some(hit) = geometry.intersect(&Ray::new(point - dir * near, dir), 2.0 * near) {
+            let d = (hit.t - near).abs();
+            nearest = closer(nearest, (hit.object == object, d, hit.triangle));
+        }
         let Some(hit) = geometry.intersect(&Ray::new(point, dir), f32::MAX) else {
             continue;
         };
         let candidate = (hit.object == object, hit.t, hit.triangle);
-        if hit.t < near {
-            nearest = closer(nearest, candidate);
-        }
         if hit.geometric_normal.dot(dir) > 0.0 {
             back_faces += 1;
             nearest_back = closer(nearest_back, candidate);

@@ -120,3 +120,23 @@ fn a_well_covered_floating_box_reports_no_short_place() {
     assert!(c.places.is_empty());
     assert!(c.texels > 0);
 }
+
+#[test]
+fn a_surface_through_the_would_be_points_is_contact() {
+    // A plane exactly ε above the box's top: every point of the top would lie on it. A probe
+    // ray from the point skips such a surface as a self-hit; the contact test, like
+    // placement's, probes segments through the point.
+    let d = dir("through");
+    let plane = "[[plane]]\nsize = [4.0, 4.0]\ntransform = { translate = [0.5, 0.5, 2.05] }\n\
+                 material = { color = [0.5, 0.5, 0.5] }\n";
+    let report = bake_box(&d, [0.0, 0.0, 1.0], 400, plane);
+    let c = the_box(&report);
+    let top = c
+        .places
+        .iter()
+        .find(|p| p.facing == "+z")
+        .unwrap_or_else(|| panic!("no place facing +z: {c:?}"));
+    assert_eq!(top.cause, Cause::Contact, "{c:?}");
+    assert_eq!(top.surface.as_deref(), Some("[[plane]] 0"), "{c:?}");
+    assert!((top.min[2] - 2.0).abs() < 1e-4, "{top:?}");
+}
