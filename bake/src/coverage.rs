@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use crate::bvh::Instance;
 use crate::ray::{Intersector, Ray};
 use crate::sample_map::{self, PointIndex, VISIBILITY_LIFT};
-use crate::sample_points::{fibonacci_sphere, FREE_SPACE_TOLERANCE};
+use crate::sample_points::{fibonacci_sphere, through_point, FREE_SPACE_TOLERANCE};
 use crate::surface::MapDomain;
 
 /// Places shown per object, largest first; the others are summed in
@@ -267,16 +267,17 @@ fn contact(
         _ => Some(candidate),
     };
     for &dir in directions {
-        // A segment through the point, as placement probes (a surface through the point
-        // itself counts).
-        if let Some(hit) = geometry.intersect(&Ray::new(point - dir * near, dir), 2.0 * near) {
-            let d = (hit.t - near).abs();
-            nearest = closer(nearest, (hit.object == object, d, hit.triangle));
+        // A surface through the point itself, as placement tests it.
+        if let Some(hit) = through_point(geometry, point, dir, near) {
+            nearest = closer(nearest, (hit.object == object, 0.0, hit.triangle));
         }
         let Some(hit) = geometry.intersect(&Ray::new(point, dir), f32::MAX) else {
             continue;
         };
         let candidate = (hit.object == object, hit.t, hit.triangle);
+        if hit.t < near {
+            nearest = closer(nearest, candidate);
+        }
         if hit.geometric_normal.dot(dir) > 0.0 {
             back_faces += 1;
             nearest_back = closer(nearest_back, candidate);

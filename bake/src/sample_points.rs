@@ -371,12 +371,10 @@ fn free_space(
     let near = epsilon * FREE_SPACE_TOLERANCE;
     let mut back_faces = 0;
     for &dir in directions {
-        // A segment through the point, `near` each side: a surface through the point itself
-        // crosses it too (a ray from the point would skip it as a self-hit).
-        if geometry.occluded(&Ray::new(position - dir * near, dir), 2.0 * near) {
+        let ray = Ray::new(position, dir);
+        if geometry.occluded(&ray, near) || through_point(geometry, position, dir, near).is_some() {
             return FreeSpace::TooClose;
         }
-        let ray = Ray::new(position, dir);
         if let Some(hit) = geometry.intersect(&ray, f32::MAX) {
             if hit.geometric_normal.dot(dir) > 0.0 {
                 back_faces += 1;
@@ -389,6 +387,26 @@ fn free_space(
         FreeSpace::Ok
     }
 }
+
+/// A surface passing through `position` (within [`THROUGH_POINT`] × `near` of it along `dir`),
+/// which a ray from the point skips as a self-hit: its hit, from a segment through the point.
+/// The distance is measured from the hit point, so the segment origin's rounding (far from
+/// the scene's origin) does not move the threshold.
+pub fn through_point(
+    geometry: &impl Intersector,
+    position: Vec3,
+    dir: Vec3,
+    near: f32,
+) -> Option<crate::ray::SurfaceHit> {
+    let origin = position - dir * near;
+    geometry
+        .intersect(&Ray::new(origin, dir), 2.0 * near)
+        .filter(|hit| (origin + dir * hit.t - position).dot(dir).abs() <= near * THROUGH_POINT)
+}
+
+/// How close to a probed point (a fraction of the free-space distance) a surface counts as
+/// passing through it.
+pub const THROUGH_POINT: f32 = 1.0 / 64.0;
 
 /// `n` directions spread evenly over the unit sphere (Fibonacci lattice).
 pub fn fibonacci_sphere(n: usize) -> Vec<Vec3> {
