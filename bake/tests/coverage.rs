@@ -2,24 +2,11 @@
 //! short and empty sample-map texels, each group with its cause, the surface it touches and
 //! where it lies.
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::path::Path;
 
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
 use oslf_bake::coverage::{Cause, ObjectCoverage};
 use oslf_bake::scene::Scene;
-
-/// A fresh directory for one test.
-fn dir(test: &str) -> PathBuf {
-    static NEXT: AtomicU32 = AtomicU32::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "oslf-coverage-{}-{test}-{}",
-        std::process::id(),
-        NEXT.fetch_add(1, Ordering::Relaxed)
-    ));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The unit cube [0, 1]³ without normals: 8 vertices, 6 quads wound outwards.
 const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
@@ -63,11 +50,12 @@ fn the_box(report: &BakeReport) -> &ObjectCoverage {
 
 #[test]
 fn a_box_resting_on_a_slab_has_its_bottom_short_for_contact_with_the_slab_named_and_located() {
-    let d = dir("slab");
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
     // A solid slab whose top is the box's bottom plane, z = 0.
     let slab = "[[box]]\nsize = [6.0, 6.0, 0.2]\ntransform = { translate = [0.0, 0.0, -0.1] }\n\
                 material = { color = [0.5, 0.5, 0.5] }\n";
-    let report = bake_box(&d, [1.0, -0.5, 0.0], 400, slab);
+    let report = bake_box(d, [1.0, -0.5, 0.0], 400, slab);
     let c = the_box(&report);
     assert!(c.empty > 0, "{c:?}");
     // The largest place: the bottom, facing down, at z = 0, over the box's footprint.
@@ -101,8 +89,9 @@ fn a_box_resting_on_a_slab_has_its_bottom_short_for_contact_with_the_slab_named_
 
 #[test]
 fn a_floating_box_with_few_points_is_short_for_too_few_points_not_contact() {
-    let d = dir("sparse");
-    let report = bake_box(&d, [0.0, 0.0, 1.0], 6, "");
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let report = bake_box(d, [0.0, 0.0, 1.0], 6, "");
     let c = the_box(&report);
     assert!(c.short > 0, "{c:?}");
     assert!(!c.places.is_empty());
@@ -113,8 +102,9 @@ fn a_floating_box_with_few_points_is_short_for_too_few_points_not_contact() {
 
 #[test]
 fn a_well_covered_floating_box_reports_no_short_place() {
-    let d = dir("covered");
-    let report = bake_box(&d, [0.0, 0.0, 1.0], 400, "");
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let report = bake_box(d, [0.0, 0.0, 1.0], 400, "");
     let c = the_box(&report);
     assert_eq!((c.short, c.empty), (0, 0), "{c:?}");
     assert!(c.places.is_empty());
@@ -126,10 +116,11 @@ fn a_surface_through_the_would_be_points_is_contact() {
     // A plane exactly ε above the box's top: every point of the top would lie on it. A probe
     // ray from the point skips such a surface as a self-hit; the contact test, like
     // placement's, probes segments through the point.
-    let d = dir("through");
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
     let plane = "[[plane]]\nsize = [4.0, 4.0]\ntransform = { translate = [0.5, 0.5, 2.05] }\n\
                  material = { color = [0.5, 0.5, 0.5] }\n";
-    let report = bake_box(&d, [0.0, 0.0, 1.0], 400, plane);
+    let report = bake_box(d, [0.0, 0.0, 1.0], 400, plane);
     let c = the_box(&report);
     let top = c
         .places

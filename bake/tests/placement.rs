@@ -2,26 +2,13 @@
 //! along the face's geometric normal, whatever the shading normals), so a box keeps its points
 //! at the edges and corners; only points that truly face another surface closer than ε go.
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::path::Path;
 
 use glam::Vec3;
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::sample_points::{place, Placement, Surfaces};
 use oslf_bake::scene::Scene;
 use oslf_bake::tolerance::TESSELLATION_ERROR;
-
-/// A fresh directory for one test.
-fn dir(test: &str) -> PathBuf {
-    static NEXT: AtomicU32 = AtomicU32::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "oslf-placement-{}-{test}-{}",
-        std::process::id(),
-        NEXT.fetch_add(1, Ordering::Relaxed)
-    ));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The unit cube [0, 1]³ without normals: 8 vertices, 6 quads wound outwards.
 const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
@@ -59,9 +46,10 @@ fn a_floating_box_keeps_every_point_whatever_its_normals() {
     // Smooth normals tilt by up to 54.7° at the corners: offset along them, points near the
     // edges landed closer than ε to the neighbouring face (84 of 100 in issue 28's report).
     for normals in ["", "normals = \"smooth\"", "normals = \"flat\""] {
-        let d = dir("floating");
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
         let lo = Vec3::new(0.0, 0.0, 1.0);
-        let scene = box_scene(&d, lo.to_array(), normals, "");
+        let scene = box_scene(d, lo.to_array(), normals, "");
         let p = placement(&scene);
         assert_eq!(p.placed, 400, "{normals}");
         assert_eq!(
@@ -89,12 +77,13 @@ fn a_floating_box_keeps_every_point_whatever_its_normals() {
 
 #[test]
 fn a_box_on_a_slab_loses_only_its_bottom_and_the_rim_within_epsilon_of_the_slab() {
-    let d = dir("resting");
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
     let lo = Vec3::ZERO;
     // A solid slab (a plane has no inside: points under it would be in free space).
     let floor = "[[box]]\nsize = [6.0, 6.0, 0.2]\ntransform = { translate = [0.0, 0.0, -0.1] }\n\
                  material = { color = [0.5, 0.5, 0.5] }\n";
-    let scene = box_scene(&d, lo.to_array(), "normals = \"smooth\"", floor);
+    let scene = box_scene(d, lo.to_array(), "normals = \"smooth\"", floor);
     let p = placement(&scene);
     let eps = scene.bake.epsilon;
     // The free-space test probes 64 directions: within their spacing, a point 0.95ε above the
@@ -117,7 +106,8 @@ fn a_point_lying_on_another_surface_is_too_close() {
     // A plate at z = 0 and a floor plane at z = ε: every offset point lies on the floor. A
     // probe ray from the point itself skips the floor as a self-hit; the free-space test must
     // not.
-    let d = dir("on-surface");
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
     std::fs::write(
         d.join("plate.obj"),
         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",

@@ -569,26 +569,11 @@ fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> 
     Ok(())
 }
 
-/// `export-cube --format ktx2`: the cube as a KTX2 cube map, written to OUT.partial and renamed.
+/// `export-cube --format ktx2`: the cube as a KTX2 cube map, written atomically.
 fn export_cube_ktx2(s: &Store, index: u32, out: &Path) -> Result<()> {
     let cube = s.read_cube(index)?;
-    let partial = oslf_format::writer::partial_path(out);
-    let write = || -> std::io::Result<u64> {
-        let mut file = std::io::BufWriter::new(std::fs::File::create(&partial)?);
-        let clamped = oslf_util::ktx2::write_cube(
-            &mut file,
-            cube.resolution,
-            &cube.faces,
-            concat!("oslf ", env!("CARGO_PKG_VERSION")),
-        )?;
-        file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&partial, out)?;
-        Ok(clamped)
-    };
-    let clamped = write().map_err(|e| {
-        let _ = std::fs::remove_file(&partial);
-        anyhow::anyhow!("cannot write {}: {e}", out.display())
-    })?;
+    let writer = concat!("oslf ", env!("CARGO_PKG_VERSION"));
+    let clamped = oslf_util::ktx2::write_cube_file(out, cube.resolution, &cube.faces, writer)?;
     println!(
         "wrote {} ({}² × 6 faces, RGBA16F)",
         out.display(),

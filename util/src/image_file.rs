@@ -85,7 +85,7 @@ pub fn write_png(
 /// on one volume), then renames it to `path`. On any failure the temporary file is removed and
 /// `path` is left as it was. Refuses a `path` that exists and is not a regular file; a symbolic
 /// link is followed, and the file it names replaced.
-fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
 ) -> Result<()> {

@@ -19,8 +19,12 @@
 //! Half floats reach 65504: larger values are written as 65504 and counted, never as infinity.
 
 use std::io::Write;
+use std::path::Path;
 
 use half::f16;
+
+use crate::image_file::write_atomically;
+use crate::Result;
 
 /// The largest finite half float.
 pub const F16_MAX: f32 = 65504.0;
@@ -107,6 +111,33 @@ pub fn write_cube(
             out.write_all(&row)?;
         }
     }
+    Ok(clamped)
+}
+
+/// [`write_cube`] to the file `path`, through a temporary file beside it renamed into place
+/// (as the images of [`crate::image_file`]): on failure `path` is left as it was.
+///
+/// # Errors
+///
+/// [`crate::UtilError::Image`] naming `path`: a target that is not a regular file, or any
+/// write or rename error.
+pub fn write_cube_file(
+    path: &Path,
+    n: u32,
+    faces: &[Vec<[f32; 3]>; 6],
+    writer: &str,
+) -> Result<u64> {
+    let mut clamped = 0;
+    write_atomically(path, |tmp| {
+        let write = || -> std::io::Result<u64> {
+            let mut file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+            let clamped = write_cube(&mut file, n, faces, writer)?;
+            file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+            Ok(clamped)
+        };
+        clamped = write().map_err(|e| e.to_string())?;
+        Ok(())
+    })?;
     Ok(clamped)
 }
 

@@ -150,7 +150,7 @@ pub(super) fn atlas_reports(scene: &Scene, surfaces: &Surfaces) -> Vec<AtlasRepo
                 source: name(atlas.source),
                 charts: atlas.chart_count(),
                 fill: atlas.fill(),
-                used: atlas.used_texels() as f64 / f64::from(atlas.resolution()).powi(2),
+                used: atlas.used(),
                 rejected: atlas
                     .rejected
                     .iter()

@@ -13,8 +13,8 @@
 
 use glam::{DVec2, DVec3};
 
+use super::corners3;
 use super::segment::{basis, Chart};
-use super::{bbox, corners3};
 use crate::Mesh;
 
 /// A chart laid flat: per chart triangle (in [`Chart::triangles`] order) its corners, in
@@ -51,16 +51,10 @@ pub(super) fn flatten(mesh: &Mesh, chart: &Chart, texel_size: f64) -> Flat {
             .collect()
     };
     let direction = best_direction(&corners);
-    let (lo, hi) = corners
-        .iter_mut()
-        .map(|tri| {
-            *tri = tri.map(|c| direction.rotate(c));
-            bbox(tri)
-        })
-        .fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
-        );
+    for tri in &mut corners {
+        *tri = tri.map(|c| direction.rotate(c));
+    }
+    let (lo, hi) = bounds(corners.iter().flatten().copied());
     for tri in &mut corners {
         *tri = tri.map(|c| (c - lo).max(DVec2::ZERO));
     }
@@ -97,19 +91,21 @@ fn best_direction(corners: &[[DVec2; 3]]) -> DVec2 {
         };
         // Rotating by conj(edge) lays the edge along +x.
         let r = DVec2::new(edge.x, -edge.y);
-        let (lo, hi) = hull.iter().fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| {
-                let q = r.rotate(p);
-                (lo.min(q), hi.max(q))
-            },
-        );
+        let (lo, hi) = bounds(hull.iter().map(|&p| r.rotate(p)));
         let area = (hi - lo).x * (hi - lo).y;
         if area < best.0 {
             best = (area, r);
         }
     }
     best.1
+}
+
+/// The smallest and largest coordinates of `points` (infinities for none).
+fn bounds(points: impl Iterator<Item = DVec2>) -> (DVec2, DVec2) {
+    points.fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
 }
 
 /// The convex hull of `points`, counter-clockwise (Andrew's monotone chain); collinear points
@@ -174,11 +170,7 @@ mod tests {
         let (a, b) = (d * 4.0, d.perp());
         let tris = [[DVec2::ZERO, a, a + b], [DVec2::ZERO, a + b, b]];
         let r = best_direction(&tris);
-        let turned: Vec<DVec2> = tris.iter().flatten().map(|&p| r.rotate(p)).collect();
-        let (lo, hi) = turned.iter().fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
+        let (lo, hi) = bounds(tris.iter().flatten().map(|&p| r.rotate(p)));
         assert!(((hi - lo).x * (hi - lo).y - 4.0).abs() < 1e-9, "{lo} {hi}");
     }
 }

@@ -215,8 +215,13 @@ impl Atlas {
         (self.used_texels() - self.gutters) as f64 / self.texels.len().max(1) as f64
     }
 
-    /// Texels that stand for a surface point: footprints and gutters (the rest is empty).
-    pub fn used_texels(&self) -> usize {
+    /// The fraction of the atlas's texels that stand for a surface point: footprints and
+    /// gutters (the rest is empty).
+    pub fn used(&self) -> f64 {
+        self.used_texels() as f64 / self.texels.len().max(1) as f64
+    }
+
+    fn used_texels(&self) -> usize {
         self.texels.iter().filter(|t| t.is_some()).count()
     }
 

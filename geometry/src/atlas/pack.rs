@@ -75,27 +75,13 @@ pub(super) fn grow(flats: &[Flat], placed: &mut [Placed], a: u32) {
     for i in order {
         let p = &mut placed[i];
         atlas.mark(&p.mask, p.x, p.y, false);
-        'factors: for factor in GROWTH {
+        for factor in GROWTH {
             let scale = p.scale * factor;
-            let mut best: Option<((u32, u32), Mask)> = None;
-            for turns in 0..TURNS as u8 {
-                let Some(m) = mask(&flats[i], scale, turns, a) else {
-                    continue;
-                };
-                if let Some((x, y)) = atlas.first_fit(&m, best.as_ref().map(|b| b.0 .0)) {
-                    if best.as_ref().is_none_or(|(b, _)| (y, x) < *b) {
-                        best = Some(((y, x), m));
-                    }
-                }
-            }
-            if let Some(((y, x), m)) = best {
-                *p = Placed {
-                    x,
-                    y,
-                    mask: m,
-                    scale,
-                };
-                break 'factors;
+            let mut turned = [0, 1, 2, 3].map(|t| mask(&flats[i], scale, t, a));
+            if let Some((x, y, o)) = atlas.lowest_fit(&turned) {
+                let mask = turned[o].take().expect("the chosen turn has a mask");
+                *p = Placed { x, y, mask, scale };
+                break;
             }
         }
         atlas.mark(&p.mask, p.x, p.y, true);
@@ -196,18 +182,8 @@ pub(super) fn pack(masks: &[[Option<Mask>; TURNS]], a: u32) -> Option<Vec<Place>
         masks.len()
     ];
     for i in order {
-        // Lowest, then leftmost, over the orientations.
-        let mut best: Option<((u32, u32), usize)> = None;
-        for (o, m) in masks[i].iter().enumerate() {
-            let Some(m) = m else { continue };
-            if let Some((x, y)) = atlas.first_fit(m, best.map(|b| b.0 .0)) {
-                if best.is_none_or(|(b, _)| (y, x) < b) {
-                    best = Some(((y, x), o));
-                }
-            }
-        }
-        let ((y, x), o) = best?;
-        let m = masks[i][o].as_ref().expect("chosen orientation exists");
+        let (x, y, o) = atlas.lowest_fit(&masks[i])?;
+        let m = masks[i][o].as_ref().expect("the chosen turn has a mask");
         atlas.mark(m, x, y, true);
         places[i] = Place {
             x,
@@ -248,8 +224,23 @@ impl Occupancy {
         })
     }
 
-    /// The lowest, then leftmost, free place for `m` below row `below` (exclusive; all rows
-    /// when `None`): only columns where the mask's anchor texel falls on a free texel are tried.
+    /// The lowest, then leftmost, free place over the turns of a chart (`None` where a turn is
+    /// too large): `(x, y, turn)`.
+    fn lowest_fit(&self, turned: &[Option<Mask>; TURNS]) -> Option<(u32, u32, usize)> {
+        let mut best: Option<(u32, u32, usize)> = None;
+        for (o, m) in turned.iter().enumerate() {
+            let Some(m) = m else { continue };
+            if let Some((x, y)) = self.first_fit(m, best.map(|b| b.1)) {
+                if best.is_none_or(|(bx, by, _)| (y, x) < (by, bx)) {
+                    best = Some((x, y, o));
+                }
+            }
+        }
+        best
+    }
+
+    /// The lowest, then leftmost, free place for `m` at or below row `below` (all rows when
+    /// `None`): only columns where the mask's anchor texel falls on a free texel are tried.
     fn first_fit(&self, m: &Mask, below: Option<u32>) -> Option<(u32, u32)> {
         if m.w > self.a || m.h > self.a {
             return None;
