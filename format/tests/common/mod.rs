@@ -377,3 +377,15 @@ pub fn with_mesh(mut f: Fixture, spec: Spec) -> Fixture {
     f.cubes.splice(old_points..old_points, extra);
     f
 }
+
+/// Whether Linux's `/proc/locks` lists a `flock` held by process `pid` (it does not in every
+/// sandbox): where it does, a busy writer's message must name that process.
+pub fn system_lists_flocks_of(pid: u32) -> bool {
+    let pid = pid.to_string();
+    std::fs::read_to_string("/proc/locks").is_ok_and(|locks| {
+        locks.lines().any(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            f.get(1) == Some(&"FLOCK") && f.get(4) == Some(&pid.as_str())
+        })
+    })
+}
