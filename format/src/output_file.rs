@@ -164,13 +164,25 @@ fn not_regular(path: &Path, meta: &Metadata) -> Error {
     }
 }
 
+/// Reads of `/proc/locks` [`holder`] makes before it gives up.
+const LOCKS_READS: u32 = 8;
+
 /// The process holding a `flock` on the file of `meta`, as `process 1234 (oslf bake …)`, from
 /// Linux's `/proc/locks` and `/proc/PID/cmdline`; `None` where the system does not say.
 pub(crate) fn holder(meta: &Metadata) -> Option<String> {
-    let locks = read_bounded(Path::new("/proc/locks"), 4 << 20)?;
     let (major, minor) = dev_numbers(meta.dev());
     let id = format!("{major:02x}:{minor:02x}:{}", meta.ino());
-    let pid = flock_pid(&String::from_utf8_lossy(&locks), &id, meta.ino())?;
+    // A lock taken or released elsewhere while `/proc/locks` is read can hide other locks
+    // from that read (seen with tests locking in parallel): read it again before giving up.
+    let mut tries = 0;
+    let pid = loop {
+        let locks = read_bounded(Path::new("/proc/locks"), 4 << 20)?;
+        match flock_pid(&String::from_utf8_lossy(&locks), &id, meta.ino()) {
+            Some(pid) => break pid,
+            None if tries < LOCKS_READS => tries += 1,
+            None => return None,
+        }
+    };
     let command = read_bounded(Path::new(&format!("/proc/{pid}/cmdline")), 4096)
         .map(|c| {
             let words: Vec<String> = c
