@@ -1,12 +1,14 @@
-//! A unidirectional path tracer with next-event estimation for Lambertian scenes.
+//! A unidirectional path tracer with next-event estimation.
 //!
 //! # Estimator
-//! At every surface vertex (two-sided Lambertian, BRDF `albedo / π`):
+//! At every surface vertex (two-sided; Lambertian, BRDF `albedo / π`, or glTF's
+//! metallic-roughness, [`crate::metallic_roughness`], whose BRDF and sampling density replace
+//! the Lambertian ones below):
 //! - **Delta lights** (point, sun): one shadow ray each, contribution `f · E · cos θ`.
 //!   Delta lights cannot be hit by scattered rays, so this is their only path.
 //! - **Environment**: one light sample from [`Environment::sample_environment`] plus the
-//!   cosine-weighted BSDF sample that also continues the path, combined by multiple importance
-//!   sampling with the power heuristic (Veach 1997).
+//!   BSDF sample (cosine-weighted for a Lambertian surface) that also continues the path,
+//!   combined by multiple importance sampling with the power heuristic (Veach 1997).
 //! - **Continuation**: the BSDF sample. If it escapes, it contributes the environment with its
 //!   MIS weight and the path ends. If it hits a surface, that surface's direct lighting is
 //!   gathered only while the bounce budget lasts (below).
@@ -15,7 +17,7 @@
 //! escapes, never to scattered rays (it is already counted by the sun's shadow rays).
 //!
 //! # `max_bounces`
-//! The number of diffuse bounces *after the first hit* whose light is gathered. With 0, only
+//! The number of bounces *after the first hit* whose light is gathered. With 0, only
 //! direct lighting at the first hit is computed (delta lights + environment). With `k`, direct
 //! lighting is gathered at the first `k + 1` surface vertices of the path: radiance that has
 //! been reflected up to `k` times before the reflection towards the ray. In a closed sphere of
@@ -60,6 +62,7 @@ use glam::Vec3;
 use crate::environment::Environment;
 use crate::light::Light;
 use crate::material::Material;
+use crate::metallic_roughness::MetallicRoughness;
 use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
 use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame, Rng};
 
@@ -211,14 +214,14 @@ impl<I: Intersector> Integrator<'_, I> {
         let mut bounce = 0u32;
         loop {
             let (ng, ns) = oriented_normals(&hit, incoming);
-            let albedo = self
+            let wo = -incoming;
+            let Some(lobe) = self
                 .materials
                 .get(hit.material as usize)
-                .map_or(Vec3::ZERO, |m| m.eval(hit.uv));
-            if albedo == Vec3::ZERO {
+                .and_then(|m| Lobe::at(m, hit.uv))
+            else {
                 break;
-            }
-            let f = albedo * FRAC_1_PI;
+            };
             let p = hit.position;
             let origin = offset_origin(p, ng, hit.extent);
 
@@ -244,7 +247,7 @@ impl<I: Intersector> Integrator<'_, I> {
                     .geometry
                     .occluded_in_stream(&Ray::new(origin, ls.dir), t_max, stream)
                 {
-                    radiance += throughput * f * ls.irradiance * cos;
+                    radiance += throughput * lobe.f(ns, wo, ls.dir) * ls.irradiance * cos;
                 }
             }
 
@@ -260,8 +263,8 @@ impl<I: Intersector> Integrator<'_, I> {
                         stream::environment(wi, bounce),
                     ) {
                         let le = self.environment.eval(wi);
-                        let w = power_heuristic(pdf_light, cosine_hemisphere_pdf(cos));
-                        radiance += throughput * f * le * (cos * w / pdf_light);
+                        let w = power_heuristic(pdf_light, lobe.pdf(ns, wo, wi, cos));
+                        radiance += throughput * lobe.f(ns, wo, wi) * le * (cos * w / pdf_light);
                     }
                 }
             }
@@ -271,15 +274,13 @@ impl<I: Intersector> Integrator<'_, I> {
             if !env_active && !gather_next {
                 break;
             }
-            let frame = Frame::from_normal(ns);
-            let wi = frame.to_world(sample_cosine_hemisphere(rng.next_vec2()));
-            let cos = ns.dot(wi);
-            let pdf_bsdf = cosine_hemisphere_pdf(cos);
+            let Some((wi, weight, pdf_bsdf)) = lobe.sample(ns, wo, rng) else {
+                break;
+            };
             if pdf_bsdf <= 0.0 || ng.dot(wi) <= 0.0 {
                 break;
             }
-            // f · cos / pdf = albedo for cosine-weighted sampling.
-            throughput *= albedo;
+            throughput *= weight;
             let next_ray = Ray::new(origin, wi);
             if !gather_next {
                 // The last vertex: only whether the BSDF sample escapes matters (a surface
@@ -313,6 +314,64 @@ impl<I: Intersector> Integrator<'_, I> {
             incoming = wi;
         }
         finite_or_zero(radiance)
+    }
+}
+
+/// The BRDF at one path vertex.
+enum Lobe {
+    /// A Lambertian albedo (not black).
+    Lambertian(Vec3),
+    MetallicRoughness(MetallicRoughness),
+}
+
+impl Lobe {
+    /// The lobe of `material` at `uv`; `None` for a black Lambertian surface (nothing to
+    /// gather; the path ends).
+    #[inline(always)]
+    fn at(material: &Material, uv: glam::Vec2) -> Option<Self> {
+        match material.metallic_roughness(uv) {
+            Some(mr) => Some(Lobe::MetallicRoughness(mr)),
+            None => {
+                let albedo = material.eval(uv);
+                (albedo != Vec3::ZERO).then_some(Lobe::Lambertian(albedo))
+            }
+        }
+    }
+
+    /// The BRDF for `wo` and `wi` (unit, away from the surface) about `ns`. The Lambertian
+    /// lobe's callers check that `wi` is above the surface.
+    #[inline(always)]
+    fn f(&self, ns: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+        match self {
+            Lobe::Lambertian(albedo) => *albedo * FRAC_1_PI,
+            Lobe::MetallicRoughness(mr) => mr.eval(ns, wo, wi),
+        }
+    }
+
+    /// The density of [`Lobe::sample`] drawing `wi`; `cos = ns·wi`.
+    #[inline(always)]
+    fn pdf(&self, ns: Vec3, wo: Vec3, wi: Vec3, cos: f32) -> f32 {
+        match self {
+            Lobe::Lambertian(_) => cosine_hemisphere_pdf(cos),
+            Lobe::MetallicRoughness(mr) => mr.pdf(ns, wo, wi),
+        }
+    }
+
+    /// A direction `wi` with its weight `f · cos / pdf` and density `pdf`: cosine-weighted
+    /// for the Lambertian lobe (weight = albedo), [`MetallicRoughness::sample`] otherwise.
+    #[inline(always)]
+    fn sample(&self, ns: Vec3, wo: Vec3, rng: &mut Rng) -> Option<(Vec3, Vec3, f32)> {
+        match self {
+            Lobe::Lambertian(albedo) => {
+                let wi = Frame::from_normal(ns).to_world(sample_cosine_hemisphere(rng.next_vec2()));
+                Some((wi, *albedo, cosine_hemisphere_pdf(ns.dot(wi))))
+            }
+            Lobe::MetallicRoughness(mr) => {
+                let lobe = rng.next_f32();
+                let s = mr.sample(ns, wo, lobe, rng.next_vec2())?;
+                Some((s.wi, s.weight, s.pdf))
+            }
+        }
     }
 }
 

@@ -37,6 +37,7 @@ pub mod environment;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod metallic_roughness;
 pub mod preview;
 pub mod sampling;
 pub mod texture;

@@ -1,12 +1,14 @@
-//! Materials: two-sided Lambertian reflectors.
+//! Materials: two-sided reflectors, Lambertian or glTF metallic-roughness.
 
 use glam::{Vec2, Vec3};
 
+use crate::metallic_roughness::MetallicRoughness;
 use crate::texture::Texture;
 use crate::{BakeError, Result};
 
-/// A Lambertian (perfectly diffuse) material, BRDF `albedo / π`, reflecting on both sides of
-/// the surface.
+/// A material reflecting on both sides of the surface: Lambertian (perfectly diffuse, BRDF
+/// `albedo / π`) or glTF's metallic-roughness model with `albedo` as its base colour
+/// ([`crate::metallic_roughness`]).
 ///
 /// Albedo components must lie in `[0, 1]` for energy conservation. Constant and checker
 /// albedos are checked by [`Material::validate`]; image albedos (an EXR may legitimately hold
@@ -14,20 +16,59 @@ use crate::{BakeError, Result};
 /// [`Material::clamped_texels`] counts the texels affected so the scene loader can warn.
 #[derive(Clone, Debug)]
 pub struct Material {
+    /// The Lambertian albedo, or the metallic-roughness base colour.
     pub albedo: Texture,
+    pub model: Model,
+}
+
+/// How a [`Material`] reflects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Model {
+    /// BRDF `albedo / π`.
+    Lambertian,
+    /// glTF's metallic-roughness BRDF with the albedo as base colour; factors in `[0, 1]`.
+    MetallicRoughness { metallic: f32, roughness: f32 },
 }
 
 impl Material {
-    /// A constant-albedo material.
+    /// A constant-albedo Lambertian material.
     pub fn lambertian(albedo: Vec3) -> Self {
         Material {
             albedo: Texture::Constant(albedo),
+            model: Model::Lambertian,
         }
     }
 
-    /// Errors if a constant or checker albedo component is outside `[0, 1]` or not finite, or
-    /// a checker scale is not finite and positive.
+    /// The metallic-roughness BRDF at `uv` (`None` for a Lambertian material).
+    pub fn metallic_roughness(&self, uv: Vec2) -> Option<MetallicRoughness> {
+        match self.model {
+            Model::Lambertian => None,
+            Model::MetallicRoughness {
+                metallic,
+                roughness,
+            } => Some(MetallicRoughness {
+                base_color: self.eval(uv),
+                metallic,
+                roughness,
+            }),
+        }
+    }
+
+    /// Errors if a constant or checker albedo component is outside `[0, 1]` or not finite, a
+    /// checker scale is not finite and positive, or a metallic or roughness factor is outside
+    /// `[0, 1]`.
     pub fn validate(&self) -> Result<()> {
+        if let Model::MetallicRoughness {
+            metallic,
+            roughness,
+        } = self.model
+        {
+            for (name, v) in [("metallic", metallic), ("roughness", roughness)] {
+                if !(0.0..=1.0).contains(&v) {
+                    return Err(BakeError::Invalid(format!("{name} {v} must be in [0, 1]")));
+                }
+            }
+        }
         let check = |c: Vec3, what: &str| -> Result<()> {
             if c.is_finite() && c.min_element() >= 0.0 && c.max_element() <= 1.0 {
                 Ok(())

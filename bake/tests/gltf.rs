@@ -398,10 +398,13 @@ fn spot_light_shades_a_floor_in_a_path_traced_view() {
     let geometry = TriangleScene::build(scene.instances(false, 0.01)).unwrap();
     let integrator = Integrator::for_scene(&scene, &geometry);
     let (pixels, _) = oslf_bake::preview::render(&integrator, &camera, 9, 9, 4, 1);
-    // Centre (inside the inner cone): E = 4 W/sr / 2² = 1 W/m², L = (0.5 / π) E, less
-    // cos³ over the pixel's 0.11 half-width on the floor (under 0.5 %).
+    // Centre (inside the inner cone): E = 4 W/sr / 2² = 1 W/m², L = f E, less cos³ over the
+    // pixel's 0.11 half-width on the floor (under 0.5 %). The material is glTF's dielectric
+    // at roughness 1 (the default): at normal incidence Fresnel is 0.04, D = 1/π, V = 1/4, so
+    // f = 0.96 · 0.5/π + 0.04 / (4π).
     let centre = pixels[4 * 9 + 4];
-    let expect = 0.5 / std::f32::consts::PI;
+    let pi = std::f32::consts::PI;
+    let expect = 0.96 * 0.5 / pi + 0.04 / (4.0 * pi);
     assert!((centre.x - expect).abs() < 5e-3 * expect, "{centre}");
     // The corners see the floor 1.4 from the axis, 0.62 rad off the spot's axis: beyond its
     // 0.5 rad cone, dark. Nothing is brighter than the centre.
@@ -933,5 +936,46 @@ fn accessors_without_a_buffer_view_are_zeros() {
         s.mesh.uvs.iter().all(|&uv| uv == Vec2::new(0.0, 1.0)),
         "{:?}",
         s.mesh.uvs
+    );
+}
+
+#[test]
+fn metallic_roughness_factors_become_the_material() {
+    use oslf_bake::material::Model;
+    let doc = |metallic: f32| {
+        let mut b = Builder::new();
+        let pos = b.positions(&TRIANGLE);
+        let doc = json!({
+            "nodes": [{"mesh": 0}, {"mesh": 1}],
+            "materials": [
+                {"name": "Brass", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.7, 0.3, 1],
+                    "metallicFactor": metallic, "roughnessFactor": 0.25}},
+            ],
+            "meshes": [
+                {"primitives": [{"attributes": {"POSITION": pos}, "material": 0}]},
+                {"primitives": [{"attributes": {"POSITION": pos}}]},
+            ],
+        });
+        b.glb(doc)
+    };
+    let d = dir("metallic-roughness");
+    let path = write(&d, "m.glb", &doc(1.0));
+    let (import, materials) = import(&path, &Options::default());
+    assert!(import.warnings.is_empty(), "{:?}", import.warnings);
+    let model = |s: usize| materials[import.shapes[s].material as usize].model;
+    assert_eq!(
+        model(0),
+        Model::MetallicRoughness {
+            metallic: 1.0,
+            roughness: 0.25
+        }
+    );
+    // No material: glTF's default, drawn white Lambertian.
+    assert_eq!(model(1), Model::Lambertian);
+    let path = write(&d, "bad.glb", &doc(1.5));
+    let err = load_err(&path);
+    assert!(
+        err.contains("materials[0].pbrMetallicRoughness.metallicFactor"),
+        "{err}"
     );
 }

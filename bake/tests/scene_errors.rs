@@ -246,3 +246,35 @@ fn camera_target_at_its_position_and_bad_vfov() {
         "the camera's vfov 180 must be within 0.1 to 179 degrees",
     );
 }
+
+#[test]
+fn metallic_roughness_materials_parse_and_are_checked() {
+    use oslf_bake::material::Model;
+    let floor = "\n[[plane]]\nsize = [4.0, 4.0]\nmaterial = { color = [0.9, 0.7, 0.4], metallic = 1.0, roughness = 0.3 }\n";
+    let scene = parse(&format!("{GOOD}{floor}")).unwrap();
+    let models: Vec<Model> = scene.materials.iter().map(|m| m.model).collect();
+    assert!(
+        models.contains(&Model::MetallicRoughness {
+            metallic: 1.0,
+            roughness: 0.3
+        }),
+        "{models:?}"
+    );
+    assert!(models.contains(&Model::Lambertian));
+    // GOOD has 10 lines; the plane's material is on line 14, its table at column 12.
+    let one = floor.replace(", metallic = 1.0", "");
+    assert_located(
+        &format!("{GOOD}{one}"),
+        14,
+        12,
+        "both `metallic` and `roughness`",
+    );
+    let out = floor.replace("roughness = 0.3", "roughness = 1.5");
+    assert_located(&format!("{GOOD}{out}"), 14, 67, "within [0, 1]");
+    // The OSLF object's material is its base colour only.
+    let text = GOOD.replace(
+        "material = { color = [0.1, 0.4, 0.1] }",
+        "material = { color = [0.1, 0.4, 0.1], metallic = 1.0, roughness = 0.2 }",
+    );
+    assert_located(&text, 7, 12, "environment shapes");
+}

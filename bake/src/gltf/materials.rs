@@ -1,5 +1,5 @@
-//! Materials: the base colour factor and texture as a Lambertian albedo; what else a
-//! material uses is warned about.
+//! Materials: glTF's metallic-roughness model from its base colour (factor and texture) and
+//! its metallic and roughness factors; what else a material uses is warned about.
 
 use std::sync::Arc;
 
@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::loader::{label, material_label, Loader};
 use super::textures::{wrapped_image, UvMap};
-use crate::material::Material;
+use crate::material::{Material, Model};
 use crate::texture::Texture;
 use crate::Result;
 
@@ -71,7 +71,26 @@ impl<'d> Loader<'d> {
                 Texture::Image(Arc::new(wrapped_image(&image, ws, wt, rgb)))
             }
         };
-        materials.push(Material { albedo });
+        let model = match m.index() {
+            // glTF's default material: drawn white Lambertian, as documented.
+            None => Model::Lambertian,
+            Some(_) => {
+                let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
+                for (name, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
+                    if !(0.0..=1.0).contains(&v) {
+                        return Err(self.err(
+                            format!("{at}.pbrMetallicRoughness.{name}"),
+                            format!("{v}: must be in [0, 1]"),
+                        ));
+                    }
+                }
+                Model::MetallicRoughness {
+                    metallic,
+                    roughness,
+                }
+            }
+        };
+        materials.push(Material { albedo, model });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);
         Ok((index, uv_map))
@@ -80,13 +99,12 @@ impl<'d> Loader<'d> {
     pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str) {
         let pbr = m.pbr_metallic_roughness();
         let mut ignored = Vec::new();
-        // The default material (no `material`) is metallic by the specification's defaults,
-        // which no one asked for: no warning for it.
-        let metallic = m.index().is_some() && pbr.metallic_factor() > 0.0;
-        if metallic || pbr.metallic_roughness_texture().is_some() {
+        if pbr.metallic_roughness_texture().is_some() {
             ignored.push(format!(
-                "metallic-roughness (metallicFactor {}; drawn as Lambertian with the base colour)",
-                pbr.metallic_factor()
+                "metallicRoughnessTexture (drawn with metallicFactor {} and roughnessFactor {} \
+                 alone)",
+                pbr.metallic_factor(),
+                pbr.roughness_factor()
             ));
         }
         if m.emissive_factor().iter().any(|&c| c != 0.0) || m.emissive_texture().is_some() {

@@ -14,7 +14,7 @@ use super::raw::{RawMaterial, RawObject, RawScene, RawTransform};
 use crate::bezier::{self, BezierPatch};
 use crate::error::{BakeError, Result};
 use crate::input::{read_input, InputKind};
-use crate::material::Material;
+use crate::material::{Material, Model};
 use crate::mesh::Mesh;
 use crate::scene::{epsilon_problem, MeshSource, OslfObject, Shape};
 use crate::texture::{ImageTexture, Texture};
@@ -88,6 +88,14 @@ impl Ctx<'_> {
                 ))
             }
         };
+        let raw_material = o.material.get_ref();
+        if raw_material.metallic.is_some() || raw_material.roughness.is_some() {
+            return Err(self.error_at(
+                o.material.span(),
+                "an [[object]]'s material is its base colour only (the runtime shades it with \
+                 its own lobe): `metallic` and `roughness` apply to environment shapes",
+            ));
+        }
         let (material, base_color) = self.material(&o.material, materials)?;
         let world = patches.iter().map(|p| p.transformed(&transform)).collect();
         Ok(OslfObject {
@@ -206,7 +214,20 @@ impl Ctx<'_> {
                 image.pixels.iter().copied().sum::<Vec3>() / image.pixels.len().max(1) as f32;
             (Texture::Image(Arc::new(image)), mean)
         };
-        let material = Material { albedo };
+        let model = match (raw.metallic, raw.roughness) {
+            (None, None) => Model::Lambertian,
+            (Some(metallic), Some(roughness)) => Model::MetallicRoughness {
+                metallic: metallic.0,
+                roughness: roughness.0,
+            },
+            _ => {
+                return Err(self.error_at(
+                    m.span(),
+                    "a metallic-roughness material needs both `metallic` and `roughness`",
+                ))
+            }
+        };
+        let material = Material { albedo, model };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))
     }

@@ -164,6 +164,9 @@ pub(super) struct RawMaterial {
     pub(super) color: Option<Albedo>,
     pub(super) checker: Option<RawChecker>,
     pub(super) texture: Option<Spanned<String>>,
+    /// glTF's metallic-roughness model (both or neither).
+    pub(super) metallic: Option<Unit>,
+    pub(super) roughness: Option<Unit>,
 }
 
 #[derive(Deserialize)]
