@@ -9,6 +9,7 @@
 //! | `Recon` | radiance leaving the (Lambertian) object towards the camera: the scene as baked | `recon` (Table 6.1) |
 //! | `Mirror` | radiance arriving at the object's surface along the mirror direction r = 2⟨n,v⟩n − v (Eq. 2.4, thesis Figure 1.1a) | `mirror` (Table 6.2) |
 //! | `Glossy` | the Ashikhmin–Shirley specular term ∫ ρ_s(v,l) L_i(l) ⟨n,l⟩ dl (Eq. 5.3), integrated by importance sampling the lobe ([`AsLobe`]) | `glossy` with R_d = 0 |
+//! | `Pbr` | glTF's metallic-roughness reflection ∫ f(v,l) L_i(l) ⟨n,l⟩ dl with the object's base colour C_s, by the bake's own sampling of that BRDF ([`MetallicRoughness::sample`]) | `pbr` |
 //!
 //! [`compose`] adds a term to the reconstruction as the runtime does: F_recon + C_s · term
 //! (Eq. 4.12), giving the full images of `recon-mirror` and `recon-glossy` (Figure 6.3a).
@@ -43,6 +44,7 @@ use crate::ashikhmin_shirley::AsLobe;
 use crate::bezier::BezierPatch;
 use crate::bvh::{Instance, TriangleScene};
 use crate::integrator::{offset_origin, Integrator, RayStats};
+use crate::metallic_roughness::MetallicRoughness;
 use crate::preview::primary_ray;
 use crate::progress::{self, Progress};
 use crate::ray::{Intersector, Ray, SurfaceHit};
@@ -58,6 +60,12 @@ pub enum Term {
     Recon,
     Mirror,
     Glossy(AsLobe),
+    /// glTF's metallic-roughness BRDF with the object's base colour C_s: `metallic` and
+    /// `roughness`, each in [0, 1].
+    Pbr {
+        metallic: f32,
+        roughness: f32,
+    },
 }
 
 impl Term {
@@ -66,11 +74,13 @@ impl Term {
             Term::Recon => 1,
             Term::Mirror => 2,
             Term::Glossy(_) => 3,
+            Term::Pbr { .. } => 5,
         }
     }
 }
 
-/// The random-stream tag of [`GroundTruth::render_background`] (after the terms' 1, 2, 3).
+/// The random-stream tag of [`GroundTruth::render_background`] (between the terms' 1, 2, 3
+/// and 5).
 const BACKGROUND_TAG: u64 = 4;
 
 /// Image size and sampling of a ground-truth render.
@@ -186,6 +196,17 @@ impl<'s> GroundTruth<'s> {
             return Err(BakeError::Invalid(format!(
                 "ground-truth image size {w}x{h} must be at least 1x1"
             )));
+        }
+        if let Term::Pbr {
+            metallic,
+            roughness,
+        } = term
+        {
+            if !((0.0..=1.0).contains(&metallic) && (0.0..=1.0).contains(&roughness)) {
+                return Err(BakeError::Invalid(format!(
+                    "metallic {metallic} and roughness {roughness} must be in [0, 1]"
+                )));
+            }
         }
         if let Term::Glossy(lobe) = term {
             let exponent_ok = |n: f64| n.is_finite() && n >= 0.0;
@@ -360,6 +381,25 @@ impl<'s> GroundTruth<'s> {
                     sum += integrator
                         .radiance(&Ray::new(origin, r), rng, stats)
                         .radiance;
+                }
+            }
+            Term::Pbr {
+                metallic,
+                roughness,
+            } => {
+                let brdf = MetallicRoughness {
+                    base_color: color,
+                    metallic,
+                    roughness,
+                };
+                for s in 0..spp {
+                    let xi = stratified_2d(s, spp, rng);
+                    let lobe = rng.next_f32();
+                    let Some(sample) = brdf.sample(n, view, lobe, xi) else {
+                        continue;
+                    };
+                    let li = integrator.radiance(&Ray::new(origin, sample.wi), rng, stats);
+                    sum += li.radiance * sample.weight;
                 }
             }
             Term::Glossy(lobe) => {

@@ -174,5 +174,24 @@ pub fn render_truth(
             &truth.render(Term::Recon, settings)?,
             &truth.render(lobe, settings)?,
         )?,
+        Mode::Pbr => truth.render(
+            Term::Pbr {
+                metallic: params.metallic,
+                roughness: params.roughness,
+            },
+            settings,
+        )?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    /// The runtime's pbr mode and the truth draw the same GGX lobe: the same floor on α.
+    #[test]
+    fn runtime_and_truth_floor_alpha_alike() {
+        assert_eq!(
+            oslf_runtime::params::MIN_ALPHA,
+            oslf_bake::metallic_roughness::MIN_ALPHA
+        );
+    }
 }

@@ -20,6 +20,9 @@
 //!   - Ashikhmin–Shirley by Monte Carlo (5.3–5.12) with R_s, R_d, n_u, n_v, M, in both
 //!     integration orders of §5.2, stratified over the four quadrants, tangent frames from
 //!     ∂x/∂u so anisotropy follows the surface;
+//!   - glTF's metallic-roughness BRDF with the object's base colour (the `pbr` mode): its GGX
+//!     lobe by visible-normal sampling and its diffuse base by cosine sampling, read from the
+//!     cube maps as the Ashikhmin–Shirley samples are, so the truth's and the bake's BRDF;
 //!   - the environment-map baseline: one cube at the object's centre, by direction alone;
 //!     and the baseline engines use, that cube parallax-corrected against a proxy box fitted
 //!     to its distances ([`probe`]). See [`params`].

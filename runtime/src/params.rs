@@ -21,16 +21,21 @@ pub enum Mode {
     Glossy,
     /// P = F_recon + C_s · (Ashikhmin–Shirley) (4.12 with the BRDF of chapter 5).
     ReconGlossy,
+    /// glTF's metallic-roughness BRDF with the object's base colour C_s, by Monte Carlo over
+    /// the light field: its GGX specular lobe (visible normals) and, for `metallic` < 1, its
+    /// diffuse base (cosine-weighted), both from the cube maps as the glossy mode reads them.
+    Pbr,
 }
 
 impl Mode {
     /// Every mode, in CLI order.
-    pub const ALL: [Mode; 5] = [
+    pub const ALL: [Mode; 6] = [
         Mode::Recon,
         Mode::Mirror,
         Mode::ReconMirror,
         Mode::Glossy,
         Mode::ReconGlossy,
+        Mode::Pbr,
     ];
 
     /// The CLI name.
@@ -41,10 +46,12 @@ impl Mode {
             Mode::ReconMirror => "recon-mirror",
             Mode::Glossy => "glossy",
             Mode::ReconGlossy => "recon-glossy",
+            Mode::Pbr => "pbr",
         }
     }
 
-    /// The shader's term flags: 1 recon, 2 mirror, 4 glossy, 8 scale by C_s.
+    /// The shader's term flags: 1 recon, 2 mirror, 4 glossy, 8 scale by C_s, 16 the glossy
+    /// term is glTF's metallic-roughness BRDF (else Ashikhmin–Shirley).
     pub fn terms(self) -> u32 {
         match self {
             Mode::Recon => 1,
@@ -52,6 +59,7 @@ impl Mode {
             Mode::ReconMirror => 1 | 2 | 8,
             Mode::Glossy => 4,
             Mode::ReconGlossy => 1 | 4 | 8,
+            Mode::Pbr => 4 | 16,
         }
     }
 }
@@ -239,6 +247,12 @@ pub struct ShadingParams {
     pub nu: f32,
     /// See `nu`.
     pub nv: f32,
+    /// `metallic` of [`Mode::Pbr`] (glTF's metallic factor), in [0, 1].
+    #[serde(default = "default_metallic")]
+    pub metallic: f32,
+    /// `roughness` of [`Mode::Pbr`] (glTF's perceptual roughness; α = roughness²), in [0, 1].
+    #[serde(default = "default_roughness")]
+    pub roughness: f32,
     /// Seed of the per-pixel random numbers.
     pub seed: u32,
     /// Depth-corrected lookups (needs a store with a distance channel): each sample point's
@@ -252,6 +266,14 @@ pub struct ShadingParams {
     /// The proxy box of [`Source::Parallax`] in world space, `[min, max]`; `None` fits it to the
     /// environment cube's distances.
     pub proxy_box: Option<[[f32; 3]; 2]>,
+}
+
+fn default_metallic() -> f32 {
+    1.0
+}
+
+fn default_roughness() -> f32 {
+    0.3
 }
 
 impl Default for ShadingParams {
@@ -271,6 +293,8 @@ impl Default for ShadingParams {
             rd: 0.0,
             nu: 100.0,
             nv: 100.0,
+            metallic: default_metallic(),
+            roughness: default_roughness(),
             seed: 0,
             depth: true,
             glossy_filter: GlossyFilter::Mip,
@@ -297,6 +321,8 @@ impl ShadingParams {
         check("R_d", self.rd, 0.0, 1.0)?;
         check("n_u", self.nu, 0.0, 1e7)?;
         check("n_v", self.nv, 0.0, 1e7)?;
+        check("metallic", self.metallic, 0.0, 1.0)?;
+        check("roughness", self.roughness, 0.0, 1.0)?;
         if let Some([lo, hi]) = self.proxy_box {
             let ok = (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] < hi[k]);
             if !ok {
@@ -425,7 +451,17 @@ pub struct ShadeUniform {
     pub box_min: [f32; 4],
     /// See `box_min`.
     pub box_max: [f32; 4],
+    /// [`ShadingParams::metallic`].
+    pub metallic: f32,
+    /// GGX α = roughness², at least [`MIN_ALPHA`].
+    pub alpha: f32,
+    /// Unused: the struct's size is a multiple of 16 bytes, as WGSL's is.
+    pub pad: [f32; 2],
 }
+
+/// The smallest GGX α the pbr mode draws (roughness below 0.03 is drawn at it): the bake's
+/// `oslf_bake::metallic_roughness::MIN_ALPHA`, so the runtime and the truth draw the same lobe.
+pub const MIN_ALPHA: f32 = 1e-3;
 
 /// What the uniform needs from the store and the cache besides the parameters.
 #[derive(Clone, Copy, Debug)]
@@ -509,6 +545,9 @@ impl ShadeUniform {
             probe_pos: [0.0; 4],
             box_min: [0.0; 4],
             box_max: [0.0; 4],
+            metallic: p.metallic,
+            alpha: (p.roughness * p.roughness).max(MIN_ALPHA),
+            pad: [0.0; 2],
         }
         .with_proxy_box(p.proxy_box.or(k.fitted_box), k.origin)
     }

@@ -195,7 +195,8 @@ pub(crate) struct ShadeKey {
     pub source: u32,
     /// ORDER: the uniform's `order`.
     pub order: u32,
-    /// DIFFUSE: R_d > 0.
+    /// DIFFUSE: the glossy term has a diffuse part (R_d > 0, or a pbr material not wholly
+    /// metallic).
     pub diffuse: bool,
     /// BACKGROUND: the uniform's `background`.
     pub background: u32,
@@ -213,7 +214,11 @@ impl ShadeKey {
             blend: u.blend,
             source: u.source,
             order: u.order,
-            diffuse: u.rd > 0.0,
+            diffuse: if u.terms & 16 != 0 {
+                u.metallic < 1.0
+            } else {
+                u.rd > 0.0
+            },
             background: u.background,
             depth: u.depth_steps > 0,
             filter: u.mip_levels > 1,

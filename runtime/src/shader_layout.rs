@@ -173,6 +173,9 @@ fn shade_fields() -> Vec<Field> {
         probe_pos,
         box_min,
         box_max,
+        metallic,
+        alpha,
+        pad,
     })
 }
 

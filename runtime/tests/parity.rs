@@ -318,6 +318,27 @@ fn extreme_parameters_stay_finite_and_agree() {
             },
         ),
         (
+            "pbr roughness 0",
+            ShadingParams {
+                mode: Mode::Pbr,
+                metallic: 1.0,
+                roughness: 0.0,
+                m: 4,
+                ..base
+            },
+        ),
+        (
+            "pbr roughness 1 dielectric per direction",
+            ShadingParams {
+                mode: Mode::Pbr,
+                metallic: 0.0,
+                roughness: 1.0,
+                m: 4,
+                order: Order::PerDirection,
+                ..base
+            },
+        ),
+        (
             "phi_shader=0",
             ShadingParams {
                 mode: Mode::Recon,

@@ -59,6 +59,12 @@ pub struct ShadingArgs {
     /// Exponent n_v.
     #[arg(long, default_value_t = 100.0)]
     pub nv: f32,
+    /// glTF metallic factor of the pbr mode (its base colour is the object's C_s).
+    #[arg(long, default_value_t = 1.0)]
+    pub metallic: f32,
+    /// glTF roughness of the pbr mode (α = roughness²).
+    #[arg(long, default_value_t = 0.3)]
+    pub roughness: f32,
     /// Seed of the Monte Carlo random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
@@ -79,6 +85,8 @@ impl ShadingArgs {
             rd: self.rd,
             nu: self.nu,
             nv: self.nv,
+            metallic: self.metallic,
+            roughness: self.roughness,
             seed: self.seed,
             depth: !self.no_depth,
             glossy_filter: self.glossy_filter,

@@ -46,7 +46,7 @@ pub struct Args {
     /// Default φ_shader (degrees).
     #[arg(long, default_value_t = 65.0)]
     phi_shader: f32,
-    /// Glossy modes: samples M, R_s, n_u, n_v, order.
+    /// Glossy and pbr modes: samples M, R_s, n_u, n_v, order.
     #[arg(short = 'M', long, default_value_t = 16)]
     m: u32,
     #[arg(long, default_value_t = 1.0)]
@@ -57,6 +57,11 @@ pub struct Args {
     nv: f32,
     #[arg(long, default_value = "per-point")]
     order: String,
+    /// The pbr mode's glTF metallic factor and roughness.
+    #[arg(long, default_value_t = 1.0)]
+    metallic: f32,
+    #[arg(long, default_value_t = 0.3)]
+    roughness: f32,
     /// Samples per pixel of the ground truth.
     #[arg(long, default_value_t = 256)]
     spp: u32,
@@ -100,6 +105,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rs: args.rs,
         nu: args.nu,
         nv: args.nv,
+        metallic: args.metallic,
+        roughness: args.roughness,
         order: match args.order.as_str() {
             "per-point" => Order::PerPoint,
             "per-direction" => Order::PerDirection,

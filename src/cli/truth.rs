@@ -23,7 +23,7 @@ pub struct Args {
     /// Check that this store was baked from this scene (scene hash and bounces).
     #[arg(long)]
     store: Option<PathBuf>,
-    /// Comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy (the runtime's modes).
+    /// Comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy, pbr (the runtime's modes).
     #[arg(short, long, default_value = "recon,mirror,recon-mirror")]
     modes: String,
     /// Output prefix: writes PREFIX-MODE.exr and PREFIX-MODE.png.
@@ -45,6 +45,12 @@ pub struct Args {
     /// Ashikhmin–Shirley exponent along the bitangent.
     #[arg(long, default_value_t = 100.0)]
     nv: f64,
+    /// glTF metallic factor of the pbr mode's material (base colour: the object's C_s).
+    #[arg(long, default_value_t = 1.0)]
+    metallic: f32,
+    /// glTF roughness of the pbr mode's material.
+    #[arg(long, default_value_t = 0.3)]
+    roughness: f32,
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Exposure of the PNG previews.
@@ -70,7 +76,14 @@ enum TruthBackground {
     Scene,
 }
 
-const MODES: [&str; 5] = ["recon", "mirror", "recon-mirror", "glossy", "recon-glossy"];
+const MODES: [&str; 6] = [
+    "recon",
+    "mirror",
+    "recon-mirror",
+    "glossy",
+    "recon-glossy",
+    "pbr",
+];
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     super::args::in_pool(args.threads, || render_all(&args))
@@ -143,6 +156,15 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
     } else {
         None
     };
+    let pbr = if wants("pbr") {
+        let term = Term::Pbr {
+            metallic: args.metallic,
+            roughness: args.roughness,
+        };
+        Some(timed("pbr", || truth.render(term, &settings))?)
+    } else {
+        None
+    };
     let background = match args.background {
         TruthBackground::None => None,
         TruthBackground::Scene => Some(timed("background", || truth.render_background(&settings))?),
@@ -152,6 +174,7 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
             "recon" => recon.clone(),
             "mirror" => mirror.clone(),
             "glossy" => glossy.clone(),
+            "pbr" => pbr.clone(),
             "recon-mirror" => recon
                 .as_ref()
                 .zip(mirror.as_ref())

@@ -386,7 +386,7 @@ impl App {
             Key::Named(NamedKey::ArrowUp) => p.blend_n = (p.blend_n * 2.0).clamp(1.0, 1e6),
             Key::Named(NamedKey::ArrowDown) => p.blend_n = (p.blend_n / 2.0).max(0.0),
             Key::Character(c) => match c.as_str() {
-                "1" | "2" | "3" | "4" | "5" => {
+                "1" | "2" | "3" | "4" | "5" | "6" => {
                     p.mode = Mode::ALL[c.parse::<usize>().unwrap_or(1) - 1];
                 }
                 "b" => {

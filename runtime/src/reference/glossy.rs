@@ -1,4 +1,5 @@
-//! Ashikhmin–Shirley by Monte Carlo (chapter 5). As shade/glossy.wgsl, function for function.
+//! Ashikhmin–Shirley (chapter 5) and glTF's metallic-roughness BRDF by Monte Carlo. As
+//! shade/glossy.wgsl, function for function.
 
 use std::f32::consts::PI;
 
@@ -11,7 +12,7 @@ use super::{CubeTexels, Shader};
 
 pub(super) struct AsSample {
     pub(super) l: Vec3,
-    pub(super) weight: f32,
+    pub(super) weight: Vec3,
     /// log2(M p(l)).
     pub(super) lpdf: f32,
 }
@@ -66,6 +67,99 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
+        AsSample {
+            l,
+            weight: Vec3::splat(weight),
+            lpdf,
+        }
+    }
+
+    /// glTF's GGX lobe: a visible normal drawn at (ξ1, ξ2) (Heitz 2018), `v` reflected about
+    /// it.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sample_ggx(
+        &self,
+        xi1: f32,
+        xi2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+        base: Vec3,
+    ) -> AsSample {
+        let u = &self.uniform;
+        let a = u.alpha;
+        let a2 = a * a;
+        let vl = Vec3::new(v.dot(t), v.dot(b), nv);
+        let vs = Vec3::new(a * vl.x, a * vl.y, vl.z).normalize();
+        let len2 = vs.x * vs.x + vs.y * vs.y;
+        let t1 = if len2 > 0.0 {
+            Vec3::new(-vs.y, vs.x, 0.0) / len2.sqrt()
+        } else {
+            Vec3::X
+        };
+        let t2 = vs.cross(t1);
+        // (ξ1, ξ2) = (φ/2π, r²) on the disc, as `filter_xi` lays its strata out.
+        let r = xi2.sqrt();
+        let phi = 2.0 * PI * xi1;
+        let p1 = r * phi.cos();
+        let s = 0.5 * (1.0 + vs.z);
+        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+        let hs = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vs;
+        let hl = Vec3::new(a * hs.x, a * hs.y, hs.z.max(0.0)).normalize();
+        let h = t * hl.x + b * hl.y + n * hl.z;
+        let vh = v.dot(h);
+        let l = 2.0 * vh * h - v;
+        let nl = n.dot(l);
+        // D(h) with its denominator as α²(n·h)² + |n × h|² (exact at a narrow lobe's peak).
+        let d = a2 * hl.z * hl.z + (hl.x * hl.x + hl.y * hl.y);
+        let g1v = 2.0 * nv / (nv + (a2 + (1.0 - a2) * nv * nv).sqrt());
+        // p(l) = G₁(v) D(h) / (4 n·v).
+        let lpdf = (u.m as f32).log2() + g1v.max(1e-30).log2() + a2.log2()
+            - (PI * d * d).max(1e-30).log2()
+            - (4.0 * nv.max(1e-30)).log2();
+        let mut weight = Vec3::ZERO;
+        if vh > 0.0 && nl > 0.0 && nv > 0.0 {
+            // f ⟨n,l⟩ / p(l) = F(⟨v,h⟩) G₁(l): separable Smith, G = G₁(l) G₁(v).
+            let g1l = 2.0 * nl / (nl + (a2 + (1.0 - a2) * nl * nl).sqrt());
+            let k = (1.0 - vh).clamp(0.0, 1.0);
+            let k5 = k * k * k * k * k;
+            let metal = base + (Vec3::ONE - base) * k5;
+            let dielectric = Vec3::splat(0.04 + 0.96 * k5);
+            weight = dielectric.lerp(metal, u.metallic) * g1l;
+        }
+        AsSample { l, weight, lpdf }
+    }
+
+    /// glTF's diffuse base of a dielectric, cosine-weighted: f ⟨n,l⟩ / p(l) =
+    /// (1 − metallic)(1 − F(⟨v,h⟩)) C.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sample_pbr_diffuse(
+        &self,
+        xi1: f32,
+        r2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        base: Vec3,
+    ) -> AsSample {
+        let u = &self.uniform;
+        let phi = 2.0 * PI * xi1;
+        let rad = r2.sqrt();
+        let z = (1.0 - r2).max(0.0).sqrt();
+        let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
+        let nl = n.dot(l);
+        let lpdf = (u.m as f32).log2() + (nl.max(1e-30) / PI).log2();
+        let h = (v + l).normalize_or(n);
+        let k = (1.0 - v.dot(h).abs()).clamp(0.0, 1.0);
+        let fr = 0.04 + 0.96 * (k * k * k * k * k);
+        let weight = if nl > 0.0 && n.dot(v) > 0.0 {
+            base * ((1.0 - u.metallic) * (1.0 - fr))
+        } else {
+            Vec3::ZERO
+        };
         AsSample { l, weight, lpdf }
     }
 
@@ -93,7 +187,11 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             0.0
         };
-        AsSample { l, weight, lpdf }
+        AsSample {
+            l,
+            weight: Vec3::splat(weight),
+            lpdf,
+        }
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
@@ -137,6 +235,44 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
     }
 
+    /// The specular sample of the mode: Ashikhmin–Shirley, or glTF's GGX with terms & 16.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_spec(
+        &self,
+        xi1: f32,
+        xi2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+        base: Vec3,
+    ) -> AsSample {
+        if self.uniform.terms & 16 != 0 {
+            return self.sample_ggx(xi1, xi2, n, t, b, v, nv, base);
+        }
+        self.sample_as(xi1, xi2, n, t, b, v, nv)
+    }
+
+    /// The diffuse sample of the mode: the term 5.4, or glTF's diffuse base with terms & 16.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_diff(
+        &self,
+        xi1: f32,
+        xi2: f32,
+        n: Vec3,
+        t: Vec3,
+        b: Vec3,
+        v: Vec3,
+        nv: f32,
+        base: Vec3,
+    ) -> AsSample {
+        if self.uniform.terms & 16 != 0 {
+            return self.sample_pbr_diffuse(xi1, xi2, n, t, b, v, base);
+        }
+        self.sample_diffuse(xi1, xi2, n, t, b, nv)
+    }
+
     #[allow(clippy::too_many_arguments)]
     pub(super) fn integrate(
         &self,
@@ -150,8 +286,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         b: Vec3,
         v: Vec3,
         nv: f32,
+        base: Vec3,
     ) -> (Vec3, bool) {
         let u = &self.uniform;
+        let diffuse = if u.terms & 16 != 0 {
+            u.metallic < 1.0
+        } else {
+            u.rd > 0.0
+        };
         let mut acc = Vec3::ZERO;
         let mut ok = true;
         let wn = self.blend_weights(c, n);
@@ -165,16 +307,16 @@ impl<C: CubeTexels> Shader<'_, C> {
                 fresh = [true; 2];
             }
             for k in 0..2 {
-                if k == 1 && u.rd <= 0.0 {
+                if k == 1 && !diffuse {
                     continue;
                 }
                 let [x1, x2] = self.sample_xi(pixel, i, j, 2 * k);
                 let s = if k == 0 {
-                    self.sample_as(x1, x2, n, t, b, v, nv)
+                    self.sample_spec(x1, x2, n, t, b, v, nv, base)
                 } else {
-                    self.sample_diffuse(x1, x2, n, t, b, nv)
+                    self.sample_diff(x1, x2, n, t, b, v, nv, base)
                 };
-                if s.weight <= 0.0 {
+                if !(s.weight.max_element() > 0.0) {
                     continue;
                 }
                 let li = self
@@ -200,6 +342,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         t: Vec3,
         v: Vec3,
         r: Vec3,
+        base: Vec3,
     ) -> Vec3 {
         let u = &self.uniform;
         let b = n.cross(t);
@@ -208,11 +351,13 @@ impl<C: CubeTexels> Shader<'_, C> {
             if u.env_cube == INVALID_INDEX {
                 return Vec3::ZERO;
             }
-            return self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0;
+            return self
+                .integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base)
+                .0;
         }
         if u.order == 1 {
             return self
-                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv)
+                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv, base)
                 .0;
         }
         let axis = if u.blend == 4 { n } else { r };
@@ -221,7 +366,8 @@ impl<C: CubeTexels> Shader<'_, C> {
         let mut wsum = 0.0;
         for j in 0..4 {
             if w[j] > 0.0 {
-                let (est, ok) = self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv);
+                let (est, ok) =
+                    self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv, base);
                 if ok {
                     acc += est * w[j];
                     wsum += w[j];
@@ -234,6 +380,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         if u.env_cube == INVALID_INDEX {
             return Vec3::ZERO;
         }
-        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv).0
+        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base)
+            .0
     }
 }

@@ -36,6 +36,11 @@ impl<C: CubeTexels> Shader<'_, C> {
         let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
         let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
         let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
+        let base = self
+            .colors
+            .get(patch as usize)
+            .copied()
+            .unwrap_or(Vec3::ONE);
         let mut spec = Vec3::ZERO;
         if u.terms & 2 != 0 {
             spec = self.mirror(&c, x, n, r);
@@ -45,14 +50,10 @@ impl<C: CubeTexels> Shader<'_, C> {
                 .get(patch as usize)
                 .map_or(Vec3::ZERO, |p| patch_du(p, pu, pv));
             let t = tangent_frame(n, du);
-            spec = self.glossy(&c, pixel, x, n, t, v, r);
+            spec = self.glossy(&c, pixel, x, n, t, v, r, base);
         }
         if u.terms & 8 != 0 {
-            spec *= self
-                .colors
-                .get(patch as usize)
-                .copied()
-                .unwrap_or(Vec3::ONE);
+            spec *= base;
         }
         let mut color = spec;
         if u.terms & 1 != 0 {

@@ -741,3 +741,121 @@ fn reference_files_follow_the_shader_files_order() {
         );
     }
 }
+
+/// A uniform environment of radiance 1, every face resident, no distances.
+struct Uniform;
+
+impl CubeTexels for Uniform {
+    fn depth(&self, _: u32, _: usize, _: u32, _: u32) -> Option<f32> {
+        None
+    }
+    fn texel(&self, _: u32, _: usize, _: u32, _: u32, _: u32) -> Option<Vec3> {
+        Some(Vec3::ONE)
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
+/// glTF 2.0 Appendix B's BRDF times ⟨n,l⟩ (n = +z), written out here in f64.
+fn gltf_brdf_cos(
+    base: [f64; 3],
+    metallic: f64,
+    roughness: f64,
+    v: [f64; 3],
+    l: [f64; 3],
+) -> [f64; 3] {
+    let (nv, nl) = (v[2], l[2]);
+    if nv <= 0.0 || nl <= 0.0 {
+        return [0.0; 3];
+    }
+    let h = [v[0] + l[0], v[1] + l[1], v[2] + l[2]];
+    let len = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+    let h = h.map(|c| c / len);
+    let a2 = (roughness * roughness)
+        .max(crate::params::MIN_ALPHA as f64)
+        .powi(2);
+    let nh = h[2];
+    let vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
+    let d = a2 / (std::f64::consts::PI * (nh * nh * (a2 - 1.0) + 1.0).powi(2));
+    let vis = 1.0
+        / ((nl + (a2 + (1.0 - a2) * nl * nl).sqrt()) * (nv + (a2 + (1.0 - a2) * nv * nv).sqrt()));
+    let k5 = (1.0 - vh.abs()).powi(5);
+    base.map(|c| {
+        let metal = vis * d * (c + (1.0 - c) * k5);
+        let fr = 0.04 + 0.96 * k5;
+        let dielectric = (1.0 - fr) * c / std::f64::consts::PI + fr * vis * d;
+        ((1.0 - metallic) * dielectric + metallic * metal) * nl
+    })
+}
+
+/// The pbr mode under a uniform environment of radiance 1 gives the directional albedo of
+/// glTF's BRDF with the object's base colour: its samples' weights and densities are that
+/// BRDF's (midpoint quadrature of the formulas above, not the shader's sampling).
+#[test]
+fn pbr_under_a_uniform_environment_is_the_gltf_albedo() {
+    use crate::params::{Background, Mode, ShadeUniform, ShadingParams};
+    let base = [0.9f64, 0.6, 0.2];
+    let camera = oslf_geometry::Camera {
+        position: Vec3::new(0.0, -5.0, 1.0),
+        target: Vec3::ZERO,
+        up: Vec3::Z,
+        vfov_deg: 40.0,
+    };
+    let empty = Candidates {
+        idx: [INVALID_INDEX; 4],
+        s: [Vec3::ZERO; 4],
+        count: 0,
+    };
+    for (metallic, roughness) in [(1.0f32, 0.3f32), (0.0, 0.5), (0.5, 0.8)] {
+        let params = ShadingParams {
+            mode: Mode::Pbr,
+            metallic,
+            roughness,
+            m: 4096,
+            ..ShadingParams::default()
+        };
+        let u = ShadeUniform::new(
+            &params,
+            glam::Mat4::IDENTITY,
+            &camera,
+            [4, 4],
+            &store_constants(0, 8),
+            Background::Env,
+        );
+        let shader = bare_shader(u, &[], &Uniform);
+        for vz in [0.9f32, 0.5] {
+            let v = Vec3::new((1.0 - vz * vz).sqrt(), 0.0, vz);
+            let (n, t) = (Vec3::Z, Vec3::X);
+            let r = 2.0 * n.dot(v) * n - v;
+            let base32 = Vec3::new(base[0] as f32, base[1] as f32, base[2] as f32);
+            let got = shader.glossy(&empty, 7, Vec3::ZERO, n, t, v, r, base32);
+            let (nt, np) = (400, 400);
+            let mut want = [0.0f64; 3];
+            let vd = [v.x as f64, v.y as f64, v.z as f64];
+            for i in 0..nt {
+                let mu = (i as f64 + 0.5) / nt as f64;
+                let s = (1.0 - mu * mu).sqrt();
+                for j in 0..np {
+                    let phi = std::f64::consts::TAU * (j as f64 + 0.5) / np as f64;
+                    let f = gltf_brdf_cos(
+                        base,
+                        metallic.into(),
+                        roughness.into(),
+                        vd,
+                        [s * phi.cos(), s * phi.sin(), mu],
+                    );
+                    for k in 0..3 {
+                        want[k] += f[k] * std::f64::consts::TAU / (nt * np) as f64;
+                    }
+                }
+            }
+            for k in 0..3 {
+                assert!(
+                    (f64::from(got[k]) - want[k]).abs() < 0.02 * want[k] + 1e-3,
+                    "metallic {metallic} roughness {roughness} v·n {vz}: {got} vs {want:?}"
+                );
+            }
+        }
+    }
+}

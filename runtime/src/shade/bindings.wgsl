@@ -56,6 +56,10 @@ struct Params {
     probe_pos: vec4<f32>,
     box_min: vec4<f32>,
     box_max: vec4<f32>,
+    // pbr: glTF's metallic factor, and GGX α = roughness² (at least MIN_ALPHA).
+    metallic: f32,
+    alpha: f32,
+    pad: vec2<f32>,
 };
 
 // The mode's switches are pipeline-overridable constants (set from the same values as the

@@ -1,11 +1,11 @@
 // ---- shade/glossy.wgsl ----
-// Ashikhmin–Shirley by Monte Carlo (chapter 5).
+// Ashikhmin–Shirley (chapter 5) and glTF's metallic-roughness BRDF by Monte Carlo.
 // Its CPU twin: reference/glossy.rs.
 
 struct AsSample {
     l: vec3<f32>,
     // f_r ⟨n,l⟩ / p(l): the weight of L_i(l) in Eq. 5.12; 0 for samples below the surface.
-    weight: f32,
+    weight: vec3<f32>,
     // log2(M p(l)), p the solid-angle density l was drawn with: the sample's mip level
     // (`sample_lod`).
     lpdf: f32,
@@ -37,14 +37,79 @@ fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: ve
     let h = t * (sin_theta * cp) + b * (sin_theta * sp) + n * cos_theta;
     let vh = dot(v, h);
     out.l = 2.0 * vh * h - v;
-    out.weight = 0.0;
+    out.weight = vec3<f32>(0.0);
     // p(h) = √((n_u+1)(n_v+1)) / 2π · ⟨n,h⟩^e (5.8), with ⟨n,h⟩^e = (1 − ξ2)^(e/(e+1)) from the
     // inversion above (finite for any exponent); p(l) = p(h) / 4⟨v,h⟩ (5.11).
     out.lpdf = log2(f32(P.m)) + 0.5 * log2((P.nu + 1.0) * (P.nv + 1.0)) - log2(2.0 * PI)
         + e / (e + 1.0) * log2(1.0 - xi2) - log2(4.0 * max(vh, 1e-30));
     let nl = dot(n, out.l);
     if (vh > 0.0 && nl > 0.0) {
-        out.weight = fresnel(P.rs, vh) * nl / max(nv, nl);
+        out.weight = vec3<f32>(fresnel(P.rs, vh) * nl / max(nv, nl));
+    }
+    return out;
+}
+
+// glTF's GGX lobe: a visible normal drawn at (ξ1, ξ2) (Heitz 2018), v reflected about it.
+fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> AsSample {
+    var out: AsSample;
+    let a = P.alpha;
+    let a2 = a * a;
+    let vl = vec3<f32>(dot(v, t), dot(v, b), nv);
+    let vs = normalize(vec3<f32>(a * vl.x, a * vl.y, vl.z));
+    let len2 = vs.x * vs.x + vs.y * vs.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if (len2 > 0.0) { t1 = vec3<f32>(-vs.y, vs.x, 0.0) / sqrt(len2); }
+    let t2 = cross(vs, t1);
+    // (ξ1, ξ2) = (φ/2π, r²) on the disc, as `filter_xi` lays its strata out.
+    let r = sqrt(xi2);
+    let phi = 2.0 * PI * xi1;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vs.z);
+    let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
+    let hs = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vs;
+    let hl = normalize(vec3<f32>(a * hs.x, a * hs.y, max(hs.z, 0.0)));
+    let h = t * hl.x + b * hl.y + n * hl.z;
+    let vh = dot(v, h);
+    out.l = 2.0 * vh * h - v;
+    let nl = dot(n, out.l);
+    // D(h) with its denominator as α²(n·h)² + |n × h|² (exact at a narrow lobe's peak).
+    let d = a2 * hl.z * hl.z + (hl.x * hl.x + hl.y * hl.y);
+    let g1v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
+    // p(l) = G₁(v) D(h) / (4 n·v).
+    out.lpdf = log2(f32(P.m)) + log2(max(g1v, 1e-30)) + log2(a2)
+        - log2(max(PI * d * d, 1e-30))
+        - log2(4.0 * max(nv, 1e-30));
+    out.weight = vec3<f32>(0.0);
+    if (vh > 0.0 && nl > 0.0 && nv > 0.0) {
+        // f ⟨n,l⟩ / p(l) = F(⟨v,h⟩) G₁(l): separable Smith, G = G₁(l) G₁(v).
+        let g1l = 2.0 * nl / (nl + sqrt(a2 + (1.0 - a2) * nl * nl));
+        let k = clamp(1.0 - vh, 0.0, 1.0);
+        let k5 = k * k * k * k * k;
+        let metal = base + (vec3<f32>(1.0) - base) * k5;
+        let dielectric = vec3<f32>(0.04 + 0.96 * k5);
+        out.weight = mix(dielectric, metal, P.metallic) * g1l;
+    }
+    return out;
+}
+
+// glTF's diffuse base of a dielectric, cosine-weighted: f ⟨n,l⟩ / p(l) =
+// (1 − metallic)(1 − F(⟨v,h⟩)) C.
+fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, base: vec3<f32>) -> AsSample {
+    var out: AsSample;
+    let phi = 2.0 * PI * xi1;
+    let rad = sqrt(r2);
+    let z = sqrt(max(0.0, 1.0 - r2));
+    out.l = t * (rad * cos(phi)) + b * (rad * sin(phi)) + n * z;
+    let nl = dot(n, out.l);
+    out.lpdf = log2(f32(P.m)) + log2(max(nl, 1e-30) / PI);
+    var h = n;
+    let hv = v + out.l;
+    if (dot(hv, hv) > 0.0) { h = normalize(hv); }
+    let k = clamp(1.0 - abs(dot(v, h)), 0.0, 1.0);
+    let fr = 0.04 + 0.96 * (k * k * k * k * k);
+    out.weight = vec3<f32>(0.0);
+    if (nl > 0.0 && dot(n, v) > 0.0) {
+        out.weight = base * ((1.0 - P.metallic) * (1.0 - fr));
     }
     return out;
 }
@@ -60,7 +125,7 @@ fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n
     out.lpdf = log2(f32(P.m)) + log2(max(nl, 1e-30) / PI); // p(l) = ⟨n,l⟩ / π
     let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
     let fl = 1.0 - pow(1.0 - 0.5 * max(nl, 0.0), 5.0);
-    out.weight = select(0.0, 28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv * fl, nl > 0.0); // Eq. 5.4 × π
+    out.weight = vec3<f32>(select(0.0, 28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv * fl, nl > 0.0)); // Eq. 5.4 × π
     return out;
 }
 
@@ -93,6 +158,23 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
     return lookup(cube, d);
 }
 
+// The largest component of `w`: a sample with none above 0 adds nothing.
+fn max3(w: vec3<f32>) -> f32 {
+    return max(w.x, max(w.y, w.z));
+}
+
+// The specular sample of the mode: Ashikhmin–Shirley, or glTF's GGX with TERMS & 16.
+fn sample_spec(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> AsSample {
+    if ((TERMS & 16u) != 0u) { return sample_ggx(xi1, xi2, n, t, b, v, nv, base); }
+    return sample_as(xi1, xi2, n, t, b, v, nv);
+}
+
+// The diffuse sample of the mode: the term 5.4, or glTF's diffuse base with TERMS & 16.
+fn sample_diff(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> AsSample {
+    if ((TERMS & 16u) != 0u) { return sample_pbr_diffuse(xi1, xi2, n, t, b, v, base); }
+    return sample_diffuse(xi1, xi2, n, t, b, nv);
+}
+
 // Per-cube sums of an integration (Eq. 5.12), by component: entry k belongs to `cubes[k]`.
 struct Sums {
     r: vec4<f32>,
@@ -109,9 +191,9 @@ struct Sums {
 fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
     let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
     if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
-    (*sums).r[k] += l.r * s.weight;
-    (*sums).g[k] += l.g * s.weight;
-    (*sums).b[k] += l.b * s.weight;
+    (*sums).r[k] += l.r * s.weight.r;
+    (*sums).g[k] += l.g * s.weight.g;
+    (*sums).b[k] += l.b * s.weight.b;
 }
 
 // The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
@@ -120,7 +202,7 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<
 // every source takes the same fixed samples, so each is drawn once for all of them. The
 // diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
 // call site: lavapipe pays for every inlined copy whether it runs or not.
-fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> Sums {
+fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
@@ -155,10 +237,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
         var diff_lod = 0.0;
         if (FILTER) {
             let xi = filter_xi(i);
-            spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
+            spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base);
             spec_lod = sample_lod(spec.l, spec.lpdf);
             if (DIFFUSE) {
-                diff = sample_diffuse(xi.x, xi.y, n, t, b, nv);
+                diff = sample_diff(xi.x, xi.y, n, t, b, v, nv, base);
                 diff_lod = sample_lod(diff.l, diff.lpdf);
             }
         }
@@ -166,18 +248,18 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             if (!used[k]) { continue; }
             if (!FILTER) {
                 let xi = sample_xi(pixel, i, j0 + k, 0u);
-                spec = sample_as(xi.x, xi.y, n, t, b, v, nv);
+                spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base);
                 if (DIFFUSE) {
                     let xd = sample_xi(pixel, i, j0 + k, 2u);
-                    diff = sample_diffuse(xd.x, xd.y, n, t, b, nv);
+                    diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base);
                 }
             }
-            if (spec.weight > 0.0) {
+            if (max3(spec.weight) > 0.0) {
                 var seed = spec_seed[k];
                 accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh, &seed);
                 spec_seed[k] = seed;
             }
-            if (DIFFUSE && diff.weight > 0.0) {
+            if (DIFFUSE && max3(diff.weight) > 0.0) {
                 var seed = diff_seed[k];
                 accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh, &seed);
                 diff_seed[k] = seed;
@@ -185,8 +267,8 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
         }
         // The weights do not depend on the candidate: a row's fresh sample is its first one
         // above the surface.
-        spec_fresh = spec_fresh && !(spec.weight > 0.0);
-        diff_fresh = diff_fresh && !(DIFFUSE && diff.weight > 0.0);
+        spec_fresh = spec_fresh && !(max3(spec.weight) > 0.0);
+        diff_fresh = diff_fresh && !(DIFFUSE && max3(diff.weight) > 0.0);
     }
     return out;
 }
@@ -199,13 +281,13 @@ fn estimate(s: Sums, k: u32) -> vec3<f32> {
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
 // (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
 // (order B): one integration over the blend. Both passes through one `integrate` call.
-fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>) -> vec3<f32> {
     let b = cross(n, t);
     let nv = dot(n, v);
     let use_env = SOURCE != 0u || cand.count == 0u;
     let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv), 0u);
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base), 0u);
     }
     var axis = r;
     if (BLEND == 4u) { axis = n; }
@@ -224,7 +306,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
             used = one;
             wp = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         }
-        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv);
+        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base);
         for (var k = 0u; k < 4u; k++) {
             if (used[k] && (sums.ok[k] > 0.0 || phase == 1u)) {
                 acc += estimate(sums, k) * wp[k];

@@ -35,15 +35,16 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
     let pixel = pcg(gid.x + pcg(gid.y + pcg(P.seed)));
 
+    let base = patches[pid].color.rgb;
     var spec = vec3<f32>(0.0);
     if ((TERMS & 2u) != 0u) {
         spec = mirror(x, n, r);
     } else if ((TERMS & 4u) != 0u) {
         let t = tangent_frame(n, patch_du(pid, u, v_param));
-        spec = glossy(pixel, x, n, t, v, r);
+        spec = glossy(pixel, x, n, t, v, r, base);
     }
     if ((TERMS & 8u) != 0u) {
-        spec *= patches[pid].color.rgb;
+        spec *= base;
     }
     var color = spec;
     if ((TERMS & 1u) != 0u) {

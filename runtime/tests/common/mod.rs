@@ -213,5 +213,25 @@ pub fn glossy_cases(
         ..base
     };
     cases.push((p, "recon + C_s glossy with diffuse term".into()));
+    // glTF's metallic-roughness: a metal (specular only), a dielectric (with its diffuse
+    // base) per direction, and a near-mirror blend of the two.
+    for (metallic, roughness, order) in [
+        (1.0, 0.3, Order::PerPoint),
+        (0.0, 0.6, Order::PerDirection),
+        (0.5, 0.05, Order::PerPoint),
+    ] {
+        let p = ShadingParams {
+            mode: Mode::Pbr,
+            order,
+            metallic,
+            roughness,
+            m: 8,
+            ..base
+        };
+        cases.push((
+            p,
+            format!("pbr {order:?} metallic {metallic} roughness {roughness}"),
+        ));
+    }
     cases
 }
