@@ -132,6 +132,22 @@ impl<C: CubeTexels> Shader<'_, C> {
         AsSample { l, weight, lpdf }
     }
 
+    /// A cosine-weighted direction at (ξ1, r²) = (φ/2π, r²) on the disc, with weight 0:
+    /// p(l) = ⟨n,l⟩ / π.
+    fn cosine_sample(&self, xi1: f32, r2: f32, n: Vec3, t: Vec3, b: Vec3) -> AsSample {
+        let phi = 2.0 * PI * xi1;
+        let rad = r2.sqrt();
+        let z = (1.0 - r2).max(0.0).sqrt();
+        let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
+        let nl = n.dot(l);
+        let lpdf = (self.uniform.m as f32).log2() + (nl.max(1e-30) / PI).log2();
+        AsSample {
+            l,
+            weight: Vec3::ZERO,
+            lpdf,
+        }
+    }
+
     /// glTF's diffuse base of a dielectric, cosine-weighted: f ⟨n,l⟩ / p(l) =
     /// (1 − metallic)(1 − F(⟨v,h⟩)) C.
     #[allow(clippy::too_many_arguments)]
@@ -145,22 +161,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         v: Vec3,
         base: Vec3,
     ) -> AsSample {
-        let u = &self.uniform;
-        let phi = 2.0 * PI * xi1;
-        let rad = r2.sqrt();
-        let z = (1.0 - r2).max(0.0).sqrt();
-        let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
-        let nl = n.dot(l);
-        let lpdf = (u.m as f32).log2() + (nl.max(1e-30) / PI).log2();
-        let h = (v + l).normalize_or(n);
+        let mut out = self.cosine_sample(xi1, r2, n, t, b);
+        let h = (v + out.l).normalize_or(n);
         let k = (1.0 - v.dot(h).abs()).clamp(0.0, 1.0);
         let fr = 0.04 + 0.96 * (k * k * k * k * k);
-        let weight = if nl > 0.0 && n.dot(v) > 0.0 {
-            base * ((1.0 - u.metallic) * (1.0 - fr))
-        } else {
-            Vec3::ZERO
-        };
-        AsSample { l, weight, lpdf }
+        if n.dot(out.l) > 0.0 && n.dot(v) > 0.0 {
+            out.weight = base * ((1.0 - self.uniform.metallic) * (1.0 - fr));
+        }
+        out
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -174,24 +182,15 @@ impl<C: CubeTexels> Shader<'_, C> {
         nv: f32,
     ) -> AsSample {
         let u = &self.uniform;
-        let phi = 2.0 * PI * xi1;
-        let rad = r2.sqrt();
-        let z = (1.0 - r2).max(0.0).sqrt();
-        let l = t * (rad * phi.cos()) + b * (rad * phi.sin()) + n * z;
-        let nl = n.dot(l);
-        let lpdf = (u.m as f32).log2() + (nl.max(1e-30) / PI).log2();
+        let mut out = self.cosine_sample(xi1, r2, n, t, b);
+        let nl = n.dot(out.l);
         let fv = 1.0 - (1.0 - 0.5 * nv.max(0.0)).powf(5.0);
         let fl = 1.0 - (1.0 - 0.5 * nl.max(0.0)).powf(5.0);
-        let weight = if nl > 0.0 {
-            28.0 / 23.0 * u.rd * (1.0 - u.rs) * fv * fl // Eq. 5.4 × π
-        } else {
-            0.0
-        };
-        AsSample {
-            l,
-            weight: Vec3::splat(weight),
-            lpdf,
+        if nl > 0.0 {
+            out.weight = Vec3::splat(28.0 / 23.0 * u.rd * (1.0 - u.rs) * fv * fl);
+            // Eq. 5.4 × π
         }
+        out
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,

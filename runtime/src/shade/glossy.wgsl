@@ -92,9 +92,9 @@ fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: v
     return out;
 }
 
-// glTF's diffuse base of a dielectric, cosine-weighted: f ⟨n,l⟩ / p(l) =
-// (1 − metallic)(1 − F(⟨v,h⟩)) C.
-fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, base: vec3<f32>) -> AsSample {
+// A cosine-weighted direction at (ξ1, r²) = (φ/2π, r²) on the disc, with weight 0:
+// p(l) = ⟨n,l⟩ / π.
+fn cosine_sample(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) -> AsSample {
     var out: AsSample;
     let phi = 2.0 * PI * xi1;
     let rad = sqrt(r2);
@@ -102,12 +102,20 @@ fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32
     out.l = t * (rad * cos(phi)) + b * (rad * sin(phi)) + n * z;
     let nl = dot(n, out.l);
     out.lpdf = log2(f32(P.m)) + log2(max(nl, 1e-30) / PI);
+    out.weight = vec3<f32>(0.0);
+    return out;
+}
+
+// glTF's diffuse base of a dielectric, cosine-weighted: f ⟨n,l⟩ / p(l) =
+// (1 − metallic)(1 − F(⟨v,h⟩)) C.
+fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, base: vec3<f32>) -> AsSample {
+    var out = cosine_sample(xi1, r2, n, t, b);
+    let nl = dot(n, out.l);
     var h = n;
     let hv = v + out.l;
     if (dot(hv, hv) > 0.0) { h = normalize(hv); }
     let k = clamp(1.0 - abs(dot(v, h)), 0.0, 1.0);
     let fr = 0.04 + 0.96 * (k * k * k * k * k);
-    out.weight = vec3<f32>(0.0);
     if (nl > 0.0 && dot(n, v) > 0.0) {
         out.weight = base * ((1.0 - P.metallic) * (1.0 - fr));
     }
@@ -116,13 +124,8 @@ fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32
 
 // Cosine-weighted sample for the diffuse term 5.4: f_dr ⟨n,l⟩ / p(l) = π f_dr.
 fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, nv: f32) -> AsSample {
-    var out: AsSample;
-    let phi = 2.0 * PI * xi1;
-    let rad = sqrt(r2);
-    let z = sqrt(max(0.0, 1.0 - r2));
-    out.l = t * (rad * cos(phi)) + b * (rad * sin(phi)) + n * z;
+    var out = cosine_sample(xi1, r2, n, t, b);
     let nl = dot(n, out.l);
-    out.lpdf = log2(f32(P.m)) + log2(max(nl, 1e-30) / PI); // p(l) = ⟨n,l⟩ / π
     let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
     let fl = 1.0 - pow(1.0 - 0.5 * max(nl, 0.0), 5.0);
     out.weight = vec3<f32>(select(0.0, 28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv * fl, nl > 0.0)); // Eq. 5.4 × π
