@@ -9,6 +9,10 @@
 //! - **Environment**: one light sample from [`Environment::sample_environment`] plus the
 //!   BSDF sample (cosine-weighted for a Lambertian surface) that also continues the path,
 //!   combined by multiple importance sampling with the power heuristic (Veach 1997).
+//! - **Emission**: a surface's emission ([`Material::emission`]) is added with the path's
+//!   throughput wherever the path meets it: the primary hit and every BSDF sample's hit, the
+//!   last vertex's too (whose sample is then a closest-hit query, in scenes with emitters).
+//!   Emitters are not light-sampled, so this is their only estimator (no MIS weight).
 //! - **Continuation**: the BSDF sample. If it escapes, it contributes the environment with its
 //!   MIS weight and the path ends. If it hits a surface, that surface's direct lighting is
 //!   gathered only while the bounce budget lasts (below).
@@ -207,6 +211,9 @@ impl<I: Intersector> Integrator<'_, I> {
         stats: &mut RayStats,
     ) -> Vec3 {
         let env_active = !self.environment.is_black();
+        // Emitting surfaces are found by the BSDF samples alone (no light samples aim at
+        // them), so the last vertex's sample must learn what it hits, not only whether.
+        let emitters = self.materials.iter().any(|m| m.emission != Vec3::ZERO);
         let mut radiance = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
         let mut hit: SurfaceHit = *first;
@@ -215,11 +222,11 @@ impl<I: Intersector> Integrator<'_, I> {
         loop {
             let (ng, ns) = oriented_normals(&hit, incoming);
             let wo = -incoming;
-            let Some(lobe) = self
-                .materials
-                .get(hit.material as usize)
-                .and_then(|m| Lobe::at(m, hit.uv))
-            else {
+            let material = self.materials.get(hit.material as usize);
+            if let Some(m) = material {
+                radiance += throughput * m.emission;
+            }
+            let Some(lobe) = material.and_then(|m| Lobe::at(m, hit.uv)) else {
                 break;
             };
             let p = hit.position;
@@ -271,7 +278,7 @@ impl<I: Intersector> Integrator<'_, I> {
 
             // BSDF sample: environment MIS partner and path continuation.
             let gather_next = bounce < self.max_bounces;
-            if !env_active && !gather_next {
+            if !env_active && !gather_next && !emitters {
                 break;
             }
             let Some((wi, weight, pdf_bsdf)) = lobe.sample(ns, wo, rng) else {
@@ -282,6 +289,25 @@ impl<I: Intersector> Integrator<'_, I> {
             }
             throughput *= weight;
             let next_ray = Ray::new(origin, wi);
+            if !gather_next && emitters {
+                // The last vertex in a scene with emitters: the surface the BSDF sample hits
+                // adds its emission (and nothing else), an escape the environment.
+                stats.closest += 1;
+                match self.geometry.intersect(&next_ray, f32::MAX) {
+                    Some(h) => {
+                        if let Some(m) = self.materials.get(h.material as usize) {
+                            radiance += throughput * m.emission;
+                        }
+                    }
+                    None if env_active => {
+                        let le = self.environment.eval(wi);
+                        let w = power_heuristic(pdf_bsdf, self.environment.environment_pdf(wi));
+                        radiance += throughput * le * w;
+                    }
+                    None => {}
+                }
+                break;
+            }
             if !gather_next {
                 // The last vertex: only whether the BSDF sample escapes matters (a surface
                 // hit adds nothing and ends the path), so an any-hit query answers it. It is

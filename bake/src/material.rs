@@ -19,6 +19,9 @@ pub struct Material {
     /// The Lambertian albedo, or the metallic-roughness base colour.
     pub albedo: Texture,
     pub model: Model,
+    /// Radiance the surface emits, on both sides (linear RGB, finite, ≥ 0): glTF's
+    /// `emissiveFactor` × `KHR_materials_emissive_strength`.
+    pub emission: Vec3,
 }
 
 /// How a [`Material`] reflects.
@@ -36,6 +39,7 @@ impl Material {
         Material {
             albedo: Texture::Constant(albedo),
             model: Model::Lambertian,
+            emission: Vec3::ZERO,
         }
     }
 
@@ -55,9 +59,15 @@ impl Material {
     }
 
     /// Errors if a constant or checker albedo component is outside `[0, 1]` or not finite, a
-    /// checker scale is not finite and positive, or a metallic or roughness factor is outside
-    /// `[0, 1]`.
+    /// checker scale is not finite and positive, a metallic or roughness factor is outside
+    /// `[0, 1]`, or the emission is negative or not finite.
     pub fn validate(&self) -> Result<()> {
+        if !(self.emission.is_finite() && self.emission.min_element() >= 0.0) {
+            return Err(BakeError::Invalid(format!(
+                "emission {} must be finite and ≥ 0",
+                self.emission
+            )));
+        }
         if let Model::MetallicRoughness {
             metallic,
             roughness,

@@ -560,7 +560,7 @@ fn unsupported_features_warn_naming_what_uses_them() {
     let mut b = Builder::new();
     let pos = b.positions(&TRIANGLE);
     let doc = json!({
-        "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_lights_punctual"],
+        "extensionsUsed": ["KHR_materials_variants", "KHR_lights_punctual"],
         "extensions": {"KHR_lights_punctual": {"lights": [
             {"type": "point", "intensity": 1, "range": 4}]}},
         "nodes": [
@@ -587,12 +587,9 @@ fn unsupported_features_warn_naming_what_uses_them() {
             .iter()
             .any(|w| w.starts_with("w.glb: ") && w.contains(a) && w.contains(b))
     };
-    assert!(
-        has("KHR_materials_emissive_strength", "not supported"),
-        "{all}"
-    );
+    assert!(has("KHR_materials_variants", "not supported"), "{all}");
+    assert!(!all.contains("KHR_materials_emissive_strength"), "{all}");
     assert!(has("nodes[0] \"Body\"", "skins"), "{all}");
-    assert!(has("materials[0] \"Glow\"", "emission"), "{all}");
     assert!(has("materials[0] \"Glow\"", "alphaMode"), "{all}");
     assert!(has("meshes[0] \"Wire\" primitive 1", "Lines"), "{all}");
     assert!(has("nodes[2] \"Lamp\"", "range"), "{all}");
@@ -978,4 +975,23 @@ fn metallic_roughness_factors_become_the_material() {
         err.contains("materials[0].pbrMetallicRoughness.metallicFactor"),
         "{err}"
     );
+}
+
+#[test]
+fn emissive_factor_and_strength_make_the_emission() {
+    let mut b = Builder::new();
+    let pos = b.positions(&TRIANGLE);
+    let doc = json!({
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "nodes": [{"mesh": 0}],
+        "materials": [{"name": "Lamp", "emissiveFactor": [1.0, 0.5, 0.25],
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "material": 0}]}],
+    });
+    let d = dir("emissive");
+    let path = write(&d, "lamp.glb", &b.glb(doc));
+    let (import, materials) = import(&path, &Options::default());
+    assert!(import.warnings.is_empty(), "{:?}", import.warnings);
+    let m = &materials[import.shapes[0].material as usize];
+    assert_eq!(m.emission, Vec3::new(4.0, 2.0, 1.0));
 }

@@ -929,6 +929,7 @@ fn degenerate_hits_stay_finite() {
         }
     }
     let materials = vec![Material {
+        emission: Vec3::ZERO,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::splat(0.5),
@@ -1013,6 +1014,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
     ]);
     let materials = vec![
         Material {
+            emission: Vec3::ZERO,
             model: Model::Lambertian,
             albedo: Texture::Checker {
                 a: Vec3::splat(0.8),
@@ -1126,6 +1128,7 @@ fn validation_rejects_bad_inputs() {
         .validate()
         .is_err());
     let checker = |scale: f32| Material {
+        emission: Vec3::ZERO,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::ZERO,
@@ -1138,6 +1141,7 @@ fn validation_rejects_bad_inputs() {
     // Image albedos above 1 are clamped in eval and counted.
     let img = ImageTexture::from_pixels(2, 1, vec![Vec3::splat(1.5), Vec3::splat(0.25)]).unwrap();
     let m = Material {
+        emission: Vec3::ZERO,
         model: Model::Lambertian,
         albedo: Texture::Image(Arc::new(img)),
     };
@@ -1196,6 +1200,7 @@ fn metallic_roughness_floor_under_a_uniform_sky() {
     let base = Vec3::new(0.9, 0.7, 0.4);
     for (metallic, roughness) in [(1.0, 0.5), (0.0, 0.4), (0.5, 0.8)] {
         let materials = vec![Material {
+            emission: Vec3::ZERO,
             albedo: Texture::Constant(base),
             model: Model::MetallicRoughness {
                 metallic,
@@ -1269,6 +1274,7 @@ fn point_light_over_a_metallic_roughness_floor() {
     let base = Vec3::new(0.9, 0.6, 0.3);
     let (metallic, roughness) = (0.7, 0.35);
     let materials = vec![Material {
+        emission: Vec3::ZERO,
         albedo: Texture::Constant(base),
         model: Model::MetallicRoughness {
             metallic,
@@ -1319,4 +1325,70 @@ fn point_light_over_a_metallic_roughness_floor() {
             s.radiance
         );
     }
+}
+
+/// Emitting surfaces: a ray that meets one sees its emission, and a Lambertian floor under an
+/// infinite emitting ceiling (black, radiance Le) reflects a·Le exactly, at any bounce count
+/// (every cosine-weighted sample meets the ceiling; its black surface reflects nothing back).
+#[test]
+fn an_emitting_ceiling_lights_the_floor() {
+    let (a, le) = (0.6, Vec3::new(2.0, 1.0, 0.5));
+    let scene = Scene(vec![
+        Shape::Plane(Plane {
+            point: Vec3::ZERO,
+            normal: Vec3::Z,
+            material: 0,
+        }),
+        Shape::Plane(Plane {
+            point: Vec3::new(0.0, 0.0, 3.0),
+            normal: -Vec3::Z,
+            material: 1,
+        }),
+    ]);
+    let materials = vec![
+        Material::lambertian(Vec3::splat(a)),
+        Material {
+            emission: le,
+            ..Material::lambertian(Vec3::ZERO)
+        },
+    ];
+    let env = Environment::Constant(Vec3::ZERO);
+    for max_bounces in [0, 1, 3] {
+        let integ = Integrator {
+            geometry: &scene,
+            materials: &materials,
+            lights: &[],
+            environment: &env,
+            max_bounces,
+        };
+        let mut rng = Rng::new(4, 0);
+        let mut stats = RayStats::default();
+        let up = Ray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::Z);
+        let s = integ.radiance(&up, &mut rng, &mut stats);
+        assert_eq!(s.radiance, le, "bounces {max_bounces}");
+        for omega in [Vec3::Z, Vec3::new(0.5, -0.3, 0.7).normalize()] {
+            let (mean, stats) = mean_radiance(&integ, &ray_to(Vec3::ZERO, omega, 0.5), 1000, 9);
+            assert!(
+                (mean - a * le).abs().max_element() < 1e-5,
+                "bounces {max_bounces}: {mean} vs {}",
+                a * le
+            );
+            // Primary + the sample that finds the ceiling, both closest-hit queries.
+            assert_eq!(stats.closest, 2000, "bounces {max_bounces}");
+        }
+    }
+    // Without emitters the last vertex keeps its any-hit query, and the floor is black.
+    let dark = vec![
+        Material::lambertian(Vec3::splat(a)),
+        Material::lambertian(Vec3::ZERO),
+    ];
+    let integ = Integrator {
+        geometry: &scene,
+        materials: &dark,
+        lights: &[],
+        environment: &env,
+        max_bounces: 0,
+    };
+    let (mean, stats) = mean_radiance(&integ, &ray_to(Vec3::ZERO, Vec3::Z, 0.5), 100, 9);
+    assert_eq!((mean, stats.closest), (Vec3::ZERO, 100));
 }

@@ -261,6 +261,17 @@ fn metallic_roughness_materials_parse_and_are_checked() {
         "{models:?}"
     );
     assert!(models.contains(&Model::Lambertian));
+    let lamp = floor.replace(
+        "metallic = 1.0, roughness = 0.3",
+        "emission = [4.0, 3.0, 2.0]",
+    );
+    let scene = parse(&format!("{GOOD}{lamp}")).unwrap();
+    assert!(scene
+        .materials
+        .iter()
+        .any(|m| m.emission == glam::Vec3::new(4.0, 3.0, 2.0)));
+    let bad = lamp.replace("emission = [4.0, 3.0, 2.0]", "emission = [4.0, -3.0, 2.0]");
+    assert_located(&format!("{GOOD}{bad}"), 14, 50, ">= 0");
     // GOOD has 10 lines; the plane's material is on line 14, its table at column 12.
     let one = floor.replace(", metallic = 1.0", "");
     assert_located(
@@ -275,6 +286,11 @@ fn metallic_roughness_materials_parse_and_are_checked() {
     let text = GOOD.replace(
         "material = { color = [0.1, 0.4, 0.1] }",
         "material = { color = [0.1, 0.4, 0.1], metallic = 1.0, roughness = 0.2 }",
+    );
+    assert_located(&text, 7, 12, "environment shapes");
+    let text = GOOD.replace(
+        "material = { color = [0.1, 0.4, 0.1] }",
+        "material = { color = [0.1, 0.4, 0.1], emission = [1.0, 1.0, 1.0] }",
     );
     assert_located(&text, 7, 12, "environment shapes");
 }

@@ -16,7 +16,11 @@ use crate::scene::Shape;
 pub const WATTS_PER_LUMEN: f32 = 1.0 / 683.0;
 
 /// The extensions this importer understands; any other in `extensionsUsed` is warned about.
-pub const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_texture_transform"];
+pub const SUPPORTED_EXTENSIONS: [&str; 3] = [
+    "KHR_lights_punctual",
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+];
 
 /// How a glTF file is placed into a scene.
 #[derive(Clone, Debug, PartialEq)]

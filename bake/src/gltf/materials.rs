@@ -90,7 +90,22 @@ impl<'d> Loader<'d> {
                 }
             }
         };
-        materials.push(Material { albedo, model });
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let emission = Vec3::from(m.emissive_factor()) * strength;
+        if !(emission.is_finite() && emission.min_element() >= 0.0) {
+            return Err(self.err(
+                format!("{at}.emissiveFactor"),
+                format!(
+                    "{:?} × emissive strength {strength}: must be finite and ≥ 0",
+                    m.emissive_factor()
+                ),
+            ));
+        }
+        materials.push(Material {
+            albedo,
+            model,
+            emission,
+        });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);
         Ok((index, uv_map))
@@ -107,8 +122,8 @@ impl<'d> Loader<'d> {
                 pbr.roughness_factor()
             ));
         }
-        if m.emissive_factor().iter().any(|&c| c != 0.0) || m.emissive_texture().is_some() {
-            ignored.push("emission (the surface does not glow)".into());
+        if m.emissive_texture().is_some() {
+            ignored.push("emissiveTexture (drawn with emissiveFactor alone)".into());
         }
         if m.normal_texture().is_some() {
             ignored.push("normalTexture".into());

@@ -89,11 +89,15 @@ impl Ctx<'_> {
             }
         };
         let raw_material = o.material.get_ref();
-        if raw_material.metallic.is_some() || raw_material.roughness.is_some() {
+        if raw_material.metallic.is_some()
+            || raw_material.roughness.is_some()
+            || raw_material.emission.is_some()
+        {
             return Err(self.error_at(
                 o.material.span(),
                 "an [[object]]'s material is its base colour only (the runtime shades it with \
-                 its own lobe): `metallic` and `roughness` apply to environment shapes",
+                 its own lobe): `metallic`, `roughness` and `emission` apply to environment \
+                 shapes",
             ));
         }
         let (material, base_color) = self.material(&o.material, materials)?;
@@ -227,7 +231,12 @@ impl Ctx<'_> {
                 ))
             }
         };
-        let material = Material { albedo, model };
+        let emission = raw.emission.map_or(Vec3::ZERO, |e| e.0);
+        let material = Material {
+            albedo,
+            model,
+            emission,
+        };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))
     }

@@ -167,6 +167,8 @@ pub(super) struct RawMaterial {
     /// glTF's metallic-roughness model (both or neither).
     pub(super) metallic: Option<Unit>,
     pub(super) roughness: Option<Unit>,
+    /// Emitted radiance, linear RGB.
+    pub(super) emission: Option<Rgb>,
 }
 
 #[derive(Deserialize)]
