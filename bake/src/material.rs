@@ -22,6 +22,10 @@ pub struct Material {
     /// Radiance the surface emits, on both sides (linear RGB, finite, ≥ 0): glTF's
     /// `emissiveFactor` × `KHR_materials_emissive_strength`.
     pub emission: Vec3,
+    /// A metallic-roughness model's texture, as glTF's `metallicRoughnessTexture` times the
+    /// factors: roughness in green, metallic in blue (each clamped to [0, 1] where read). With
+    /// it, the model's factors are not used again.
+    pub metallic_roughness: Option<Texture>,
 }
 
 /// How a [`Material`] reflects.
@@ -40,6 +44,7 @@ impl Material {
             albedo: Texture::Constant(albedo),
             model: Model::Lambertian,
             emission: Vec3::ZERO,
+            metallic_roughness: None,
         }
     }
 
@@ -50,11 +55,20 @@ impl Material {
             Model::MetallicRoughness {
                 metallic,
                 roughness,
-            } => Some(MetallicRoughness {
-                base_color: self.eval(uv),
-                metallic,
-                roughness,
-            }),
+            } => {
+                let (metallic, roughness) = match &self.metallic_roughness {
+                    Some(t) => {
+                        let c = t.eval(uv);
+                        (clamp01(c.z), clamp01(c.y))
+                    }
+                    None => (metallic, roughness),
+                };
+                Some(MetallicRoughness {
+                    base_color: self.eval(uv),
+                    metallic,
+                    roughness,
+                })
+            }
         }
     }
 

@@ -995,3 +995,60 @@ fn emissive_factor_and_strength_make_the_emission() {
     let m = &materials[import.shapes[0].material as usize];
     assert_eq!(m.emission, Vec3::new(4.0, 2.0, 1.0));
 }
+
+/// A metallic-roughness texture is drawn (roughness in green, metallic in blue, times the
+/// factors, read as data, not sRGB) where it maps texture coordinates as the base colour
+/// does, or alone; one that reads another TEXCOORD set than the base colour texture is
+/// warned about by name and its factors drawn.
+#[test]
+fn metallic_roughness_textures_are_drawn_where_they_map_alike() {
+    let mut b = Builder::new();
+    let pos = b.positions(&TRIANGLE);
+    let uv = b.vec2(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+    // Texel 0: roughness 1, metallic 0; texel 1: roughness 0.2, metallic 1 (data values).
+    let png = b.png(2, 1, &[0, 255, 0, 0, 51, 255]);
+    let doc = json!({
+        "nodes": [{"mesh": 0}, {"mesh": 1}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}],
+        "samplers": [{"wrapS": 10497, "wrapT": 10497}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "materials": [
+            {"name": "Worn", "pbrMetallicRoughness": {"metallicFactor": 1.0,
+                "roughnessFactor": 0.5, "metallicRoughnessTexture": {"index": 0}}},
+            {"name": "Elsewhere", "pbrMetallicRoughness": {"metallicFactor": 0.7,
+                "roughnessFactor": 0.4, "baseColorTexture": {"index": 0},
+                "metallicRoughnessTexture": {"index": 0, "texCoord": 1}}},
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv}, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv,
+                "TEXCOORD_1": uv}, "material": 1}]},
+        ],
+    });
+    let d = dir("metallic-roughness-texture");
+    let path = write(&d, "worn.glb", &b.glb(doc));
+    let (import, materials) = import(&path, &Options::default());
+    let worn = &materials[import.shapes[0].material as usize];
+    let at = |u: f32| {
+        let mr = worn.metallic_roughness(Vec2::new(u, 0.5)).unwrap();
+        (mr.metallic, mr.roughness)
+    };
+    let close2 =
+        |a: (f32, f32), b: (f32, f32)| (a.0 - b.0).abs() < 1e-3 && (a.1 - b.1).abs() < 1e-3;
+    assert!(close2(at(0.25), (0.0, 0.5)), "{:?}", at(0.25));
+    assert!(close2(at(0.75), (1.0, 0.1)), "{:?}", at(0.75));
+    // The mesh's texture coordinates were read for the texture (v flipped).
+    let uvs = &import.shapes[0].mesh.uvs;
+    assert!(uvs.contains(&Vec2::new(1.0, 1.0)), "{uvs:?}");
+    // The second material's texture reads TEXCOORD_1: its factors are drawn, with a warning.
+    let elsewhere = &materials[import.shapes[1].material as usize];
+    let mr = elsewhere.metallic_roughness(Vec2::new(0.75, 0.5)).unwrap();
+    assert_eq!((mr.metallic, mr.roughness), (0.7, 0.4));
+    assert_eq!(import.warnings.len(), 1, "{:?}", import.warnings);
+    assert!(
+        import.warnings[0].contains("\"Elsewhere\"")
+            && import.warnings[0].contains("metallicRoughnessTexture"),
+        "{:?}",
+        import.warnings
+    );
+}

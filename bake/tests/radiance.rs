@@ -930,6 +930,7 @@ fn degenerate_hits_stay_finite() {
     }
     let materials = vec![Material {
         emission: Vec3::ZERO,
+        metallic_roughness: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::splat(0.5),
@@ -1015,6 +1016,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
     let materials = vec![
         Material {
             emission: Vec3::ZERO,
+            metallic_roughness: None,
             model: Model::Lambertian,
             albedo: Texture::Checker {
                 a: Vec3::splat(0.8),
@@ -1129,6 +1131,7 @@ fn validation_rejects_bad_inputs() {
         .is_err());
     let checker = |scale: f32| Material {
         emission: Vec3::ZERO,
+        metallic_roughness: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::ZERO,
@@ -1142,6 +1145,7 @@ fn validation_rejects_bad_inputs() {
     let img = ImageTexture::from_pixels(2, 1, vec![Vec3::splat(1.5), Vec3::splat(0.25)]).unwrap();
     let m = Material {
         emission: Vec3::ZERO,
+        metallic_roughness: None,
         model: Model::Lambertian,
         albedo: Texture::Image(Arc::new(img)),
     };
@@ -1201,6 +1205,7 @@ fn metallic_roughness_floor_under_a_uniform_sky() {
     for (metallic, roughness) in [(1.0, 0.5), (0.0, 0.4), (0.5, 0.8)] {
         let materials = vec![Material {
             emission: Vec3::ZERO,
+            metallic_roughness: None,
             albedo: Texture::Constant(base),
             model: Model::MetallicRoughness {
                 metallic,
@@ -1275,6 +1280,7 @@ fn point_light_over_a_metallic_roughness_floor() {
     let (metallic, roughness) = (0.7, 0.35);
     let materials = vec![Material {
         emission: Vec3::ZERO,
+        metallic_roughness: None,
         albedo: Texture::Constant(base),
         model: Model::MetallicRoughness {
             metallic,

@@ -24,7 +24,8 @@ pub(super) struct Loader<'d> {
     pub(super) doc: &'d gltf::Document,
     pub(super) buffers: Vec<Cow<'d, [u8]>>,
     /// Decoded images (linear RGB), by image index.
-    pub(super) images: HashMap<usize, Arc<ImageTexture>>,
+    /// Decoded images by index and whether decoded from sRGB.
+    pub(super) images: HashMap<(usize, bool), Arc<ImageTexture>>,
     /// Scene material index, by (glTF material index, texture coordinate set).
     pub(super) materials: HashMap<(Option<usize>, u32), u32>,
     pub(super) warnings: Vec<String>,

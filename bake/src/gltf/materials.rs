@@ -22,16 +22,32 @@ impl<'d> Loader<'d> {
         let pbr = m.pbr_metallic_roughness();
         let info = pbr.base_color_texture();
         let transform = info.as_ref().and_then(|i| i.texture_transform());
-        let set = match (&info, &transform) {
-            (Some(i), Some(t)) => t.tex_coord().unwrap_or(i.tex_coord()),
-            (Some(i), None) => i.tex_coord(),
-            _ => 0,
-        };
-        let key = (m.index(), set);
-        let uv_map = match &info {
+        let color_map = match &info {
             None => None,
-            Some(info) => Some(self.uv_map(m, info, transform.as_ref(), set)?),
+            Some(i) => {
+                let set = tex_coord(i, transform.as_ref());
+                Some(self.uv_map(m, "baseColorTexture", true, i, transform.as_ref(), set)?)
+            }
         };
+        // The metallic-roughness texture (of a material of the file's own) is drawn where it
+        // maps texture coordinates as the base colour texture does, or where that is absent.
+        let mr_info = pbr
+            .metallic_roughness_texture()
+            .filter(|_| m.index().is_some());
+        let mr_transform = mr_info.as_ref().and_then(|i| i.texture_transform());
+        let mr_map = match &mr_info {
+            None => None,
+            Some(i) => {
+                let set = tex_coord(i, mr_transform.as_ref());
+                let map = "metallicRoughnessTexture";
+                Some(self.uv_map(m, map, false, i, mr_transform.as_ref(), set)?)
+            }
+        };
+        let mr_drawn = mr_map
+            .as_ref()
+            .is_some_and(|mr| color_map.as_ref().is_none_or(|c| c == mr));
+        let uv_map = color_map.or(if mr_drawn { mr_map } else { None });
+        let key = (m.index(), uv_map.as_ref().map_or(0, |u| u.set));
         if let Some(&index) = self.materials.get(&key) {
             return Ok((index, uv_map));
         }
@@ -51,12 +67,12 @@ impl<'d> Loader<'d> {
                 format!("{factor:?}: components must be in [0, 1]"),
             ));
         }
-        self.warn_material(m, &name);
+        self.warn_material(m, &name, mr_drawn);
         let albedo = match &info {
             None => Texture::Constant(rgb),
             Some(info) => {
                 let texture = info.texture();
-                let image = self.image(&texture.source())?;
+                let image = self.image(&texture.source(), true)?;
                 let sampler = texture.sampler();
                 let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
                 if let Some(ext) = texture.extensions() {
@@ -69,6 +85,20 @@ impl<'d> Loader<'d> {
                     }
                 }
                 Texture::Image(Arc::new(wrapped_image(&image, ws, wt, rgb)))
+            }
+        };
+        let metallic_roughness = match mr_info.filter(|_| mr_drawn) {
+            None => None,
+            Some(info) => {
+                let texture = info.texture();
+                let image = self.image(&texture.source(), false)?;
+                let sampler = texture.sampler();
+                let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
+                // glTF: roughness in green, metallic in blue, each times its factor.
+                let factor = Vec3::new(1.0, pbr.roughness_factor(), pbr.metallic_factor());
+                Some(Texture::Image(Arc::new(wrapped_image(
+                    &image, ws, wt, factor,
+                ))))
             }
         };
         let model = match m.index() {
@@ -105,19 +135,23 @@ impl<'d> Loader<'d> {
             albedo,
             model,
             emission,
+            metallic_roughness,
         });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);
         Ok((index, uv_map))
     }
 
-    pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str) {
+    /// Warns about what material `m` uses that is not drawn; `mr_drawn`: its
+    /// metallic-roughness texture is.
+    pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str, mr_drawn: bool) {
         let pbr = m.pbr_metallic_roughness();
         let mut ignored = Vec::new();
-        if pbr.metallic_roughness_texture().is_some() {
+        if pbr.metallic_roughness_texture().is_some() && m.index().is_some() && !mr_drawn {
             ignored.push(format!(
-                "metallicRoughnessTexture (drawn with metallicFactor {} and roughnessFactor {} \
-                 alone)",
+                "metallicRoughnessTexture, which maps texture coordinates unlike \
+                 baseColorTexture (its TEXCOORD set, KHR_texture_transform or sampler wrap \
+                 differs; drawn with metallicFactor {} and roughnessFactor {} alone)",
                 pbr.metallic_factor(),
                 pbr.roughness_factor()
             ));
@@ -146,4 +180,14 @@ impl<'d> Loader<'d> {
             ));
         }
     }
+}
+
+/// The texture coordinate set `info` reads: `KHR_texture_transform`'s `texCoord` where given.
+fn tex_coord(
+    info: &gltf::texture::Info,
+    transform: Option<&gltf::texture::TextureTransform>,
+) -> u32 {
+    transform
+        .and_then(|t| t.tex_coord())
+        .unwrap_or(info.tex_coord())
 }

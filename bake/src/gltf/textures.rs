@@ -13,15 +13,21 @@ use crate::texture::{srgb_to_linear, ImageTexture};
 use crate::Result;
 
 impl<'d> Loader<'d> {
+    /// How a primitive's texture coordinates map into the texture of `info`, the material's
+    /// `slot` (`baseColorTexture`, `metallicRoughnessTexture`), whose image holds colours
+    /// (`srgb`) or data.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn uv_map(
         &mut self,
         m: &gltf::Material,
+        slot: &str,
+        srgb: bool,
         info: &gltf::texture::Info,
         transform: Option<&gltf::texture::TextureTransform>,
         set: u32,
     ) -> Result<UvMap> {
         let texture = info.texture();
-        let image = self.image(&texture.source())?;
+        let image = self.image(&texture.source(), srgb)?;
         let sampler = texture.sampler();
         let (offset, rotation, scale) = match transform {
             Some(t) => (Vec2::from(t.offset()), t.rotation(), Vec2::from(t.scale())),
@@ -33,9 +39,7 @@ impl<'d> Loader<'d> {
                 None => "materials".into(),
             };
             return Err(self.err(
-                format!(
-                    "{at}.pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform"
-                ),
+                format!("{at}.pbrMetallicRoughness.{slot}.extensions.KHR_texture_transform"),
                 "offset, rotation and scale must be finite",
             ));
         }
@@ -51,9 +55,10 @@ impl<'d> Loader<'d> {
         })
     }
 
-    /// An image decoded to linear RGB (sRGB-encoded PNG or JPEG), cached by index.
-    pub(super) fn image(&mut self, image: &gltf::Image) -> Result<Arc<ImageTexture>> {
-        if let Some(img) = self.images.get(&image.index()) {
+    /// An image decoded to linear RGB, from sRGB where `srgb` (colours) or as stored (data such
+    /// as metallic-roughness), cached by index and decoding.
+    pub(super) fn image(&mut self, image: &gltf::Image, srgb: bool) -> Result<Arc<ImageTexture>> {
+        if let Some(img) = self.images.get(&(image.index(), srgb)) {
             return Ok(img.clone());
         }
         let i = image.index();
@@ -97,17 +102,18 @@ impl<'d> Loader<'d> {
         let pixels: Vec<Vec3> = rgb
             .pixels()
             .map(|p| {
-                Vec3::new(
-                    srgb_to_linear(p.0[0]),
-                    srgb_to_linear(p.0[1]),
-                    srgb_to_linear(p.0[2]),
-                )
+                let c = Vec3::from(p.0);
+                if srgb {
+                    c.map(srgb_to_linear)
+                } else {
+                    c
+                }
             })
             .collect();
         let img = ImageTexture::from_pixels(w, h, pixels)
             .map_err(|e| self.err(&at, format!("unusable image: {e}")))?;
         let img = Arc::new(img);
-        self.images.insert(i, img.clone());
+        self.images.insert((i, srgb), img.clone());
         Ok(img)
     }
 }

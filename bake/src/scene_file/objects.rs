@@ -236,6 +236,7 @@ impl Ctx<'_> {
             albedo,
             model,
             emission,
+            metallic_roughness: None,
         };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))
