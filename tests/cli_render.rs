@@ -282,6 +282,8 @@ fn bad_inputs_give_clear_errors_and_a_failing_exit() {
         ("--mode", "shiny", "shiny"),
         ("-M", "0", "M = 0"),
         ("--cache-slots", "0", "at least one slot"),
+        ("--roughness", "1.5", "roughness = 1.5"),
+        ("--metallic", "-0.1", "metallic = -0.1"),
     ] {
         let out = render(&[
             store.to_str().unwrap(),

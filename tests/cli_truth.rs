@@ -97,3 +97,49 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("possible values: none, scene"));
 }
+
+/// `oslf truth -m pbr` renders glTF's metallic-roughness reflection of the object: finite,
+/// lit where the object is, and not the same for a near-mirror metal as for a rough
+/// dielectric; a metallic factor out of range is an error naming it.
+#[test]
+fn the_pbr_truth_renders_and_checks_its_material() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, scene_text()).unwrap();
+    let truth = |metallic: &str, roughness: &str, prefix: &str| {
+        oslf("truth")
+            .arg(&scene)
+            .args([
+                "-m", "pbr", "--spp", "16", "--width", "40", "--height", "30", "-q",
+            ])
+            .args(["--metallic", metallic, "--roughness", roughness, "-o"])
+            .arg(dir.join(prefix))
+            .output()
+            .unwrap()
+    };
+    let mut means = Vec::new();
+    for (metallic, roughness, prefix) in [("1", "0.1", "metal"), ("0", "0.9", "rough")] {
+        let out = truth(metallic, roughness, prefix);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let pixels = read_exr(&dir.join(format!("{prefix}-pbr.exr"))).1;
+        let object: Vec<_> = pixels.iter().filter(|p| p[3] == 1.0).collect();
+        assert!(object.len() > 20, "{} object pixels", object.len());
+        assert!(pixels.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        let mean = object.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / object.len() as f32;
+        assert!(mean > 0.0, "{prefix}: the object is black");
+        means.push(mean);
+    }
+    assert!(
+        means[0] != means[1],
+        "the material changes nothing: {means:?}"
+    );
+    let out = truth("2", "0.5", "bad");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("metallic 2"), "{err}");
+}
