@@ -4,7 +4,7 @@
 //!
 //! | key | does |
 //! | --- | --- |
-//! | 1 … 5 | mode: recon, mirror, recon + mirror, glossy, recon + glossy |
+//! | 1 … 6 | mode: recon, mirror, recon + mirror, glossy, recon + glossy, pbr |
 //! | B | next blend: distance, angle, avg, r, n |
 //! | E | next source: OSLF, environment-map baseline, parallax-corrected baseline (when the store has a proxy box to fit) |
 //! | D | depth-corrected lookups on ↔ off |
@@ -14,6 +14,8 @@
 //! | Up / Down | blend power N × 2 / ÷ 2 |
 //! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
 //! | ] / [ | M × 2 / ÷ 2 |
+//! | R / T | pbr roughness + 0.05 / − 0.05 (within [0, 1]) |
+//! | M | pbr metallic 1 ↔ 0 |
 //! | + / - | exposure × 1.25 / ÷ 1.25 |
 //! | Esc | quit |
 //!
@@ -345,7 +347,7 @@ impl App {
         let p = &self.params;
         let st = &frame.stats;
         let title = format!(
-            "oslf — {} {}{} N={} n_u={} n_v={} M={} {:?} background {} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
+            "oslf — {} {}{} N={} {} M={} {:?} background {} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
             p.mode.name(),
             p.blend.name(),
             match (p.source, p.depth) {
@@ -354,8 +356,11 @@ impl App {
                 (s, _) => format!(" {}", s.name()),
             },
             p.blend_n,
-            p.nu,
-            p.nv,
+            if p.mode == Mode::Pbr {
+                format!("metallic={} roughness={:.2}", p.metallic, p.roughness)
+            } else {
+                format!("n_u={} n_v={}", p.nu, p.nv)
+            },
             p.m,
             p.order,
             background_name(opts.background),
@@ -420,6 +425,9 @@ impl App {
                 "k" => p.nv /= 2.0,
                 "]" => p.m = (p.m * 2).min(65536),
                 "[" => p.m = (p.m / 2).max(1),
+                "r" => p.roughness = (p.roughness + 0.05).min(1.0),
+                "t" => p.roughness = (p.roughness - 0.05).max(0.0),
+                "m" => p.metallic = if p.metallic < 1.0 { 1.0 } else { 0.0 },
                 "+" | "=" => self.exposure *= 1.25,
                 "-" => self.exposure /= 1.25,
                 _ => {}
