@@ -25,7 +25,7 @@ pub struct Material {
     /// A metallic-roughness model's texture, as glTF's `metallicRoughnessTexture` times the
     /// factors: roughness in green, metallic in blue (each clamped to [0, 1] where read). With
     /// it, the model's factors are not used again.
-    pub metallic_roughness: Option<Texture>,
+    pub metallic_roughness_texture: Option<Texture>,
 }
 
 /// How a [`Material`] reflects.
@@ -44,7 +44,7 @@ impl Material {
             albedo: Texture::Constant(albedo),
             model: Model::Lambertian,
             emission: Vec3::ZERO,
-            metallic_roughness: None,
+            metallic_roughness_texture: None,
         }
     }
 
@@ -56,7 +56,7 @@ impl Material {
                 metallic,
                 roughness,
             } => {
-                let (metallic, roughness) = match &self.metallic_roughness {
+                let (metallic, roughness) = match &self.metallic_roughness_texture {
                     Some(t) => {
                         let c = t.eval(uv);
                         (clamp01(c.z), clamp01(c.y))

@@ -930,7 +930,7 @@ fn degenerate_hits_stay_finite() {
     }
     let materials = vec![Material {
         emission: Vec3::ZERO,
-        metallic_roughness: None,
+        metallic_roughness_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::splat(0.5),
@@ -1016,7 +1016,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
     let materials = vec![
         Material {
             emission: Vec3::ZERO,
-            metallic_roughness: None,
+            metallic_roughness_texture: None,
             model: Model::Lambertian,
             albedo: Texture::Checker {
                 a: Vec3::splat(0.8),
@@ -1131,7 +1131,7 @@ fn validation_rejects_bad_inputs() {
         .is_err());
     let checker = |scale: f32| Material {
         emission: Vec3::ZERO,
-        metallic_roughness: None,
+        metallic_roughness_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::ZERO,
@@ -1145,7 +1145,7 @@ fn validation_rejects_bad_inputs() {
     let img = ImageTexture::from_pixels(2, 1, vec![Vec3::splat(1.5), Vec3::splat(0.25)]).unwrap();
     let m = Material {
         emission: Vec3::ZERO,
-        metallic_roughness: None,
+        metallic_roughness_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Image(Arc::new(img)),
     };
@@ -1205,7 +1205,7 @@ fn metallic_roughness_floor_under_a_uniform_sky() {
     for (metallic, roughness) in [(1.0, 0.5), (0.0, 0.4), (0.5, 0.8)] {
         let materials = vec![Material {
             emission: Vec3::ZERO,
-            metallic_roughness: None,
+            metallic_roughness_texture: None,
             albedo: Texture::Constant(base),
             model: Model::MetallicRoughness {
                 metallic,
@@ -1280,7 +1280,7 @@ fn point_light_over_a_metallic_roughness_floor() {
     let (metallic, roughness) = (0.7, 0.35);
     let materials = vec![Material {
         emission: Vec3::ZERO,
-        metallic_roughness: None,
+        metallic_roughness_texture: None,
         albedo: Texture::Constant(base),
         model: Model::MetallicRoughness {
             metallic,

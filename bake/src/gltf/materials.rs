@@ -87,7 +87,7 @@ impl<'d> Loader<'d> {
                 Texture::Image(Arc::new(wrapped_image(&image, ws, wt, rgb)))
             }
         };
-        let metallic_roughness = match mr_info.filter(|_| mr_drawn) {
+        let metallic_roughness_texture = match mr_info.filter(|_| mr_drawn) {
             None => None,
             Some(info) => {
                 let texture = info.texture();
@@ -135,7 +135,7 @@ impl<'d> Loader<'d> {
             albedo,
             model,
             emission,
-            metallic_roughness,
+            metallic_roughness_texture,
         });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);

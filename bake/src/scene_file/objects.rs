@@ -236,7 +236,7 @@ impl Ctx<'_> {
             albedo,
             model,
             emission,
-            metallic_roughness: None,
+            metallic_roughness_texture: None,
         };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))
