@@ -289,46 +289,14 @@ impl<I: Intersector> Integrator<'_, I> {
             }
             throughput *= weight;
             let next_ray = Ray::new(origin, wi);
-            if !gather_next && emitters {
-                // The last vertex in a scene with emitters: the surface the BSDF sample hits
-                // adds its emission (and nothing else), an escape the environment.
-                stats.closest += 1;
-                match self.geometry.intersect(&next_ray, f32::MAX) {
-                    Some(h) => {
-                        if let Some(m) = self.materials.get(h.material as usize) {
-                            radiance += throughput * m.emission;
-                        }
-                    }
-                    None if env_active => {
-                        let le = self.environment.eval(wi);
-                        let w = power_heuristic(pdf_bsdf, self.environment.environment_pdf(wi));
-                        radiance += throughput * le * w;
-                    }
-                    None => {}
-                }
-                break;
-            }
             if !gather_next {
-                // The last vertex: only whether the BSDF sample escapes matters (a surface
-                // hit adds nothing and ends the path), so an any-hit query answers it. It is
-                // counted as what it is, an any-hit ray; the result is the same bit for bit.
-                stats.shadow += 1;
-                if !self
-                    .geometry
-                    .occluded_in_stream(&next_ray, f32::MAX, stream::last_bsdf(wi))
-                {
-                    let le = self.environment.eval(wi);
-                    let w = power_heuristic(pdf_bsdf, self.environment.environment_pdf(wi));
-                    radiance += throughput * le * w;
-                }
+                radiance += self.last_sample(&next_ray, wi, pdf_bsdf, throughput, emitters, stats);
                 break;
             }
             stats.closest += 1;
             let Some(next) = self.geometry.intersect(&next_ray, f32::MAX) else {
                 if env_active {
-                    let le = self.environment.eval(wi);
-                    let w = power_heuristic(pdf_bsdf, self.environment.environment_pdf(wi));
-                    radiance += throughput * le * w;
+                    radiance += self.escaped(wi, pdf_bsdf, throughput);
                 }
                 break;
             };
@@ -340,6 +308,52 @@ impl<I: Intersector> Integrator<'_, I> {
             incoming = wi;
         }
         finite_or_zero(radiance)
+    }
+}
+
+impl<I: Intersector> Integrator<'_, I> {
+    /// The environment's light along `wi`, reached by a BSDF sample of density `pdf` with
+    /// `throughput`, MIS-weighted against the environment's own samples.
+    #[inline(always)]
+    fn escaped(&self, wi: Vec3, pdf: f32, throughput: Vec3) -> Vec3 {
+        let le = self.environment.eval(wi);
+        let w = power_heuristic(pdf, self.environment.environment_pdf(wi));
+        throughput * le * w
+    }
+
+    /// What the last vertex's BSDF sample `ray` (towards `wi`, density `pdf`) adds with
+    /// `throughput`. Without emitters only whether it escapes matters (a surface hit adds
+    /// nothing and ends the path), so an any-hit query answers it, counted as what it is; with
+    /// emitters the surface it hits adds its emission, so it is a closest-hit query.
+    fn last_sample(
+        &self,
+        ray: &Ray,
+        wi: Vec3,
+        pdf: f32,
+        throughput: Vec3,
+        emitters: bool,
+        stats: &mut RayStats,
+    ) -> Vec3 {
+        if emitters {
+            stats.closest += 1;
+            return match self.geometry.intersect(ray, f32::MAX) {
+                Some(h) => self
+                    .materials
+                    .get(h.material as usize)
+                    .map_or(Vec3::ZERO, |m| throughput * m.emission),
+                None if !self.environment.is_black() => self.escaped(wi, pdf, throughput),
+                None => Vec3::ZERO,
+            };
+        }
+        stats.shadow += 1;
+        if self
+            .geometry
+            .occluded_in_stream(ray, f32::MAX, stream::last_bsdf(wi))
+        {
+            Vec3::ZERO
+        } else {
+            self.escaped(wi, pdf, throughput)
+        }
     }
 }
 

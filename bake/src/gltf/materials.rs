@@ -89,37 +89,63 @@ impl<'d> Loader<'d> {
         };
         let metallic_roughness_texture = match mr_info.filter(|_| mr_drawn) {
             None => None,
-            Some(info) => {
-                let texture = info.texture();
-                let image = self.image(&texture.source(), false)?;
-                let sampler = texture.sampler();
-                let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
-                // glTF: roughness in green, metallic in blue, each times its factor.
-                let factor = Vec3::new(1.0, pbr.roughness_factor(), pbr.metallic_factor());
-                Some(Texture::Image(Arc::new(wrapped_image(
-                    &image, ws, wt, factor,
-                ))))
-            }
+            Some(info) => Some(self.metallic_roughness_texture(&info, &pbr)?),
         };
-        let model = match m.index() {
-            // glTF's default material: drawn white Lambertian, as documented.
-            None => Model::Lambertian,
-            Some(_) => {
-                let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
-                for (name, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
-                    if !(0.0..=1.0).contains(&v) {
-                        return Err(self.err(
-                            format!("{at}.pbrMetallicRoughness.{name}"),
-                            format!("{v}: must be in [0, 1]"),
-                        ));
-                    }
-                }
-                Model::MetallicRoughness {
-                    metallic,
-                    roughness,
-                }
+        let model = self.model(m, &at)?;
+        let emission = self.emission(m, &at)?;
+        materials.push(Material {
+            albedo,
+            model,
+            emission,
+            metallic_roughness_texture,
+        });
+        let index = (materials.len() - 1) as u32;
+        self.materials.insert(key, index);
+        Ok((index, uv_map))
+    }
+
+    /// glTF's `metallicRoughnessTexture` `info` as data (roughness in green, metallic in
+    /// blue), each times its factor, resampled for its wraps.
+    fn metallic_roughness_texture(
+        &mut self,
+        info: &gltf::texture::Info,
+        pbr: &gltf::material::PbrMetallicRoughness,
+    ) -> Result<Texture> {
+        let texture = info.texture();
+        let image = self.image(&texture.source(), false)?;
+        let sampler = texture.sampler();
+        let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
+        let factor = Vec3::new(1.0, pbr.roughness_factor(), pbr.metallic_factor());
+        Ok(Texture::Image(Arc::new(wrapped_image(
+            &image, ws, wt, factor,
+        ))))
+    }
+
+    /// The reflection model of `m` (at JSON path `at`): its metallic and roughness factors,
+    /// each in [0, 1]; glTF's default material (no index) is drawn white Lambertian.
+    fn model(&self, m: &gltf::Material, at: &str) -> Result<Model> {
+        if m.index().is_none() {
+            return Ok(Model::Lambertian);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
+        for (name, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(self.err(
+                    format!("{at}.pbrMetallicRoughness.{name}"),
+                    format!("{v}: must be in [0, 1]"),
+                ));
             }
-        };
+        }
+        Ok(Model::MetallicRoughness {
+            metallic,
+            roughness,
+        })
+    }
+
+    /// The radiance `m` (at JSON path `at`) emits: `emissiveFactor` ×
+    /// `KHR_materials_emissive_strength`, finite and ≥ 0.
+    fn emission(&self, m: &gltf::Material, at: &str) -> Result<Vec3> {
         let strength = m.emissive_strength().unwrap_or(1.0);
         let emission = Vec3::from(m.emissive_factor()) * strength;
         if !(emission.is_finite() && emission.min_element() >= 0.0) {
@@ -131,15 +157,7 @@ impl<'d> Loader<'d> {
                 ),
             ));
         }
-        materials.push(Material {
-            albedo,
-            model,
-            emission,
-            metallic_roughness_texture,
-        });
-        let index = (materials.len() - 1) as u32;
-        self.materials.insert(key, index);
-        Ok((index, uv_map))
+        Ok(emission)
     }
 
     /// Warns about what material `m` uses that is not drawn; `mr_drawn`: its

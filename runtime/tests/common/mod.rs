@@ -233,5 +233,16 @@ pub fn glossy_cases(
             format!("pbr {order:?} metallic {metallic} roughness {roughness}"),
         ));
     }
+    // Plain lookups (no depth correction) blended by B^r.
+    let p = ShadingParams {
+        mode: Mode::Pbr,
+        metallic: 0.5,
+        roughness: 0.3,
+        depth: false,
+        blend: oslf_runtime::Blend::Reflection,
+        m: 8,
+        ..base
+    };
+    cases.push((p, "pbr plain, B^r".into()));
     cases
 }
