@@ -1193,30 +1193,42 @@ fn validation_rejects_bad_inputs() {
     assert_eq!(stats.closest, 24); // primary + BSDF ray per pixel
 }
 
+/// A glTF metallic-roughness material of constant base colour, and its BRDF.
+fn metallic_roughness(
+    base: Vec3,
+    metallic: f32,
+    roughness: f32,
+) -> (
+    Vec<Material>,
+    oslf_bake::metallic_roughness::MetallicRoughness,
+) {
+    let materials = vec![Material {
+        emission: Vec3::ZERO,
+        metallic_roughness_texture: None,
+        albedo: Texture::Constant(base),
+        model: Model::MetallicRoughness {
+            metallic,
+            roughness,
+        },
+    }];
+    let brdf = oslf_bake::metallic_roughness::MetallicRoughness {
+        base_color: base,
+        metallic,
+        roughness,
+    };
+    (materials, brdf)
+}
+
 /// A metallic-roughness floor under a uniform sky L reflects `L · ∫ f cos dωᵢ` towards every
 /// view (nothing else to see, so at any bounce count). The integral is a midpoint quadrature
 /// of the BRDF over the hemisphere, independent of the integrator's sampling; the path tracer's
 /// mean agrees with it within four standard errors estimated from its samples.
 #[test]
 fn metallic_roughness_floor_under_a_uniform_sky() {
-    use oslf_bake::metallic_roughness::MetallicRoughness;
     let l = Vec3::new(1.0, 0.8, 0.5);
     let base = Vec3::new(0.9, 0.7, 0.4);
     for (metallic, roughness) in [(1.0, 0.5), (0.0, 0.4), (0.5, 0.8)] {
-        let materials = vec![Material {
-            emission: Vec3::ZERO,
-            metallic_roughness_texture: None,
-            albedo: Texture::Constant(base),
-            model: Model::MetallicRoughness {
-                metallic,
-                roughness,
-            },
-        }];
-        let brdf = MetallicRoughness {
-            base_color: base,
-            metallic,
-            roughness,
-        };
+        let (materials, brdf) = metallic_roughness(base, metallic, roughness);
         let scene = ground(0.0);
         let env = Environment::Constant(l);
         for omega in [Vec3::Z, Vec3::new(0.6, 0.2, 0.5).normalize()] {
@@ -1275,23 +1287,9 @@ fn metallic_roughness_floor_under_a_uniform_sky() {
 /// exactly (no Monte Carlo), with `f` the glTF BRDF.
 #[test]
 fn point_light_over_a_metallic_roughness_floor() {
-    use oslf_bake::metallic_roughness::MetallicRoughness;
     let base = Vec3::new(0.9, 0.6, 0.3);
     let (metallic, roughness) = (0.7, 0.35);
-    let materials = vec![Material {
-        emission: Vec3::ZERO,
-        metallic_roughness_texture: None,
-        albedo: Texture::Constant(base),
-        model: Model::MetallicRoughness {
-            metallic,
-            roughness,
-        },
-    }];
-    let brdf = MetallicRoughness {
-        base_color: base,
-        metallic,
-        roughness,
-    };
+    let (materials, brdf) = metallic_roughness(base, metallic, roughness);
     let intensity = Vec3::new(10.0, 5.0, 2.0);
     let light_pos = Vec3::new(0.3, -0.2, 2.0);
     let lights = [Light::Point {
