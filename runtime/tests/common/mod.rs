@@ -233,16 +233,18 @@ pub fn glossy_cases(
             format!("pbr {order:?} metallic {metallic} roughness {roughness}"),
         ));
     }
-    // Plain lookups (no depth correction) blended by B^r.
-    let p = ShadingParams {
-        mode: Mode::Pbr,
-        metallic: 0.5,
-        roughness: 0.3,
-        depth: false,
-        blend: oslf_runtime::Blend::Reflection,
-        m: 8,
-        ..base
-    };
-    cases.push((p, "pbr plain, B^r".into()));
+    // Every blend, with depth-corrected and with plain lookups.
+    for (i, blend) in oslf_runtime::Blend::ALL.into_iter().enumerate() {
+        let p = ShadingParams {
+            mode: Mode::Pbr,
+            metallic: 0.5,
+            roughness: 0.3,
+            depth: i % 2 == 0,
+            blend,
+            m: 4,
+            ..base
+        };
+        cases.push((p, format!("pbr {blend:?}, depth {}", p.depth)));
+    }
     cases
 }
