@@ -315,21 +315,9 @@ mod tests {
                 distance_channel: true,
                 seed: 17,
             };
-            let packets = Integrator {
-                geometry: &scene,
-                materials: &materials,
-                lights: &lights,
-                environment: &environment,
-                max_bounces: 1,
-            };
+            let packets = Integrator::new(&scene, &materials, &lights, &environment, 1);
             let single = SingleRays(&scene);
-            let singles = Integrator {
-                geometry: &single,
-                materials: &materials,
-                lights: &lights,
-                environment: &environment,
-                max_bounces: 1,
-            };
+            let singles = Integrator::new(&single, &materials, &lights, &environment, 1);
             // Just above the sphere (a sample point) and away from everything.
             for (i, origin) in [Vec3::new(0.3, 0.2, 0.96), Vec3::new(2.0, -3.0, 2.0)]
                 .into_iter()

@@ -116,6 +116,8 @@ pub struct Integrator<'a, I: Intersector> {
     pub environment: &'a Environment,
     /// See the module documentation.
     pub max_bounces: u32,
+    /// Whether a material emits: then the last vertex's BSDF sample must learn what it hits.
+    emitters: bool,
 }
 
 /// The origin for a ray leaving the hit point `p` on the side of `n` (unit); `extent` is the
@@ -143,12 +145,31 @@ impl<'a, I: Intersector> Integrator<'a, I> {
     /// The integrator of `scene` (its materials, lights, environment and bounces) over
     /// `geometry`.
     pub fn for_scene(scene: &'a crate::scene::Scene, geometry: &'a I) -> Self {
+        Self::new(
+            geometry,
+            &scene.materials,
+            &scene.lights,
+            &scene.environment,
+            scene.bake.bounces,
+        )
+    }
+
+    /// The light transport of `materials` (indexed by [`SurfaceHit::material`]), `lights`
+    /// and `environment` over `geometry`, gathering `max_bounces` bounces.
+    pub fn new(
+        geometry: &'a I,
+        materials: &'a [Material],
+        lights: &'a [Light],
+        environment: &'a Environment,
+        max_bounces: u32,
+    ) -> Self {
         Integrator {
             geometry,
-            materials: &scene.materials,
-            lights: &scene.lights,
-            environment: &scene.environment,
-            max_bounces: scene.bake.bounces,
+            materials,
+            lights,
+            environment,
+            max_bounces,
+            emitters: materials.iter().any(|m| m.emission != Vec3::ZERO),
         }
     }
 
@@ -160,6 +181,7 @@ impl<'a, I: Intersector> Integrator<'a, I> {
             lights: self.lights,
             environment: self.environment,
             max_bounces: self.max_bounces,
+            emitters: self.emitters,
         }
     }
 }
@@ -213,7 +235,7 @@ impl<I: Intersector> Integrator<'_, I> {
         let env_active = !self.environment.is_black();
         // Emitting surfaces are found by the BSDF samples alone (no light samples aim at
         // them), so the last vertex's sample must learn what it hits, not only whether.
-        let emitters = self.materials.iter().any(|m| m.emission != Vec3::ZERO);
+        let emitters = self.emitters;
         let mut radiance = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
         let mut hit: SurfaceHit = *first;

@@ -371,13 +371,13 @@ material = { color = [0.1, 0.42, 0.12] }
     .unwrap();
     // The sky alone (no geometry): radiance varies with direction and with each texel's
     // stratified sample, and tracing it is cheap.
-    let integrator = Integrator {
-        geometry: &oslf_bake::ray::EmptyScene,
-        materials: &scene.materials,
-        lights: &scene.lights,
-        environment: &scene.environment,
-        max_bounces: 0,
-    };
+    let integrator = Integrator::new(
+        &oslf_bake::ray::EmptyScene,
+        &scene.materials,
+        &scene.lights,
+        &scene.environment,
+        0,
+    );
     let settings = CaptureSettings {
         resolution: 1024,
         samples_per_texel: 1,

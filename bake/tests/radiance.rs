@@ -523,13 +523,7 @@ fn point_light_over_lambertian_plane() {
         intensity,
     }];
     let env = Environment::Constant(Vec3::ZERO);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 0,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 0);
     let mut rng = Rng::new(0, 0);
     for (q, omega) in [
         (Vec3::new(0.0, 0.0, 0.0), Vec3::Z),
@@ -592,13 +586,7 @@ fn point_light_shadowed_by_sphere() {
         intensity: Vec3::ONE,
     }];
     let env = Environment::Constant(Vec3::ZERO);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 0,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 0);
     let mut stats = RayStats::default();
     let s = integ.radiance(
         &Ray::new(Vec3::new(0.1, 0.0, 0.1), -Vec3::Z),
@@ -623,13 +611,7 @@ fn sun_over_lambertian_plane_and_visible_disc() {
         angular_radius: alpha,
     }];
     let env = Environment::Constant(Vec3::ZERO);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 3,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 3);
     let mut rng = Rng::new(0, 0);
     let expected = a * FRAC_1_PI * e * sun_dir.z;
     for (q, omega) in [
@@ -693,13 +675,7 @@ fn convex_furnace_sphere_under_uniform_environment() {
     let materials = lambert(a);
     let env = Environment::Constant(l);
     for max_bounces in [0, 1, 5] {
-        let integ = Integrator {
-            geometry: &scene,
-            materials: &materials,
-            lights: &[],
-            environment: &env,
-            max_bounces,
-        };
+        let integ = Integrator::new(&scene, &materials, &[], &env, max_bounces);
         for dir in [Vec3::X, Vec3::new(0.3, -0.4, 0.5).normalize()] {
             let ray = Ray::new(dir * 3.0 + Vec3::new(0.0, 0.1, 0.0), -dir);
             let (mean, stats) = mean_radiance(&integ, &ray, 20_000, 11);
@@ -742,13 +718,7 @@ fn plane_under_latlong_sky() {
     let env = Environment::LatLong(Arc::new(map));
     let scene = ground(0.0);
     let materials = lambert(a);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &[],
-        environment: &env,
-        max_bounces: 2,
-    };
+    let integ = Integrator::new(&scene, &materials, &[], &env, 2);
     let ray = ray_to(
         Vec3::new(0.2, 0.3, 0.0),
         Vec3::new(0.1, 0.2, 0.9).normalize(),
@@ -769,10 +739,13 @@ fn plane_under_latlong_sky() {
     let env = Environment::LatLong(Arc::new(
         LatLongMap::from_pixels(64, 32, pixels, 1.0, 0.0).unwrap(),
     ));
-    let integ = Integrator {
-        environment: &env,
-        ..integ
-    };
+    let integ = Integrator::new(
+        integ.geometry,
+        integ.materials,
+        integ.lights,
+        &env,
+        integ.max_bounces,
+    );
     let (mean, _) = mean_radiance(&integ, &ray, 20_000, 13);
     assert!(
         (mean - a * l).abs().max_element() < 0.01 * (a * l).max_element(),
@@ -811,13 +784,7 @@ fn closed_sphere_bounce_series() {
         Vec3::new(0.2, 0.9, -0.3).normalize(),
     );
     for k in [0u32, 1, 2, 3, 6, 60] {
-        let integ = Integrator {
-            geometry: &scene,
-            materials: &materials,
-            lights: &lights,
-            environment: &env,
-            max_bounces: k,
-        };
+        let integ = Integrator::new(&scene, &materials, &lights, &env, k);
         let series: f32 = (0..=k.min(200)).map(|j| a.powi(j as i32)).sum();
         let expected = l0 * series;
         let (mean, stats) = mean_radiance(&integ, &ray, 40_000, 20 + k as u64);
@@ -861,13 +828,7 @@ fn robust_far_from_origin() {
         intensity: Vec3::splat(50.0),
     }];
     let env = Environment::Constant(Vec3::ZERO);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 0,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 0);
     let mut rng = Rng::new(0, 0);
     for i in 0..200 {
         let mut r = Rng::new(99, i);
@@ -894,13 +855,7 @@ fn robust_far_from_origin() {
         material: 0,
     })]);
     let env = Environment::Constant(Vec3::ONE);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &[],
-        environment: &env,
-        max_bounces: 2,
-    };
+    let integ = Integrator::new(&scene, &materials, &[], &env, 2);
     let ray = Ray::new(base + Vec3::new(2.05, 0.0, 0.0), -Vec3::X);
     let (mean, _) = mean_radiance(&integ, &ray, 20_000, 5);
     assert!(rel_err(mean.x, a) < 0.01, "{mean}");
@@ -950,13 +905,7 @@ fn degenerate_hits_stay_finite() {
         },
     ];
     let env = Environment::Sky(Arc::new(Sky::new(Vec3::Z, 2.5, 1.0).unwrap()));
-    let integ = Integrator {
-        geometry: &Broken,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 8,
-    };
+    let integ = Integrator::new(&Broken, &materials, &lights, &env, 8);
     for dir in [Vec3::Z, -Vec3::Z, Vec3::X] {
         let (mean, _) = mean_radiance(&integ, &Ray::new(Vec3::ZERO, dir), 100, 1);
         assert!(mean.is_finite());
@@ -1041,13 +990,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
 #[test]
 fn render_is_deterministic_across_thread_counts() {
     let (scene, materials, lights, env) = test_scene();
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 3,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 3);
     let cam = Camera {
         position: Vec3::new(0.0, -6.0, 2.0),
         target: Vec3::new(0.0, 0.0, 0.8),
@@ -1082,13 +1025,7 @@ fn render_is_deterministic_across_thread_counts() {
 #[test]
 fn render_preview_and_throughput() {
     let (scene, materials, lights, env) = test_scene();
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 3,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 3);
     let cam = Camera {
         position: Vec3::new(0.0, -6.0, 2.0),
         target: Vec3::new(0.0, 0.0, 0.8),
@@ -1175,13 +1112,7 @@ fn validation_rejects_bad_inputs() {
     let scene = ground(0.0);
     let materials = lambert(0.5);
     let env = Environment::Constant(Vec3::ONE);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &[],
-        environment: &env,
-        max_bounces: 1,
-    };
+    let integ = Integrator::new(&scene, &materials, &[], &env, 1);
     let cam = Camera {
         position: Vec3::new(0.0, 0.0, 1.0),
         target: Vec3::ZERO,
@@ -1247,13 +1178,7 @@ fn metallic_roughness_floor_under_a_uniform_sky() {
             albedo *= 2.0 * std::f64::consts::PI / (nt * np) as f64;
             let expected = l.as_dvec3() * albedo;
             for max_bounces in [0, 2] {
-                let integ = Integrator {
-                    geometry: &scene,
-                    materials: &materials,
-                    lights: &[],
-                    environment: &env,
-                    max_bounces,
-                };
+                let integ = Integrator::new(&scene, &materials, &[], &env, max_bounces);
                 let ray = ray_to(Vec3::new(0.2, -0.1, 0.0), omega, 0.5);
                 let n = 40_000u32;
                 let (mut sum, mut sum2) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
@@ -1298,13 +1223,7 @@ fn point_light_over_a_metallic_roughness_floor() {
     }];
     let scene = ground(0.0);
     let env = Environment::Constant(Vec3::ZERO);
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &materials,
-        lights: &lights,
-        environment: &env,
-        max_bounces: 0,
-    };
+    let integ = Integrator::new(&scene, &materials, &lights, &env, 0);
     let mut rng = Rng::new(0, 0);
     for (q, omega) in [
         (Vec3::ZERO, Vec3::Z),
@@ -1358,13 +1277,7 @@ fn an_emitting_ceiling_lights_the_floor() {
     ];
     let env = Environment::Constant(Vec3::ZERO);
     for max_bounces in [0, 1, 3] {
-        let integ = Integrator {
-            geometry: &scene,
-            materials: &materials,
-            lights: &[],
-            environment: &env,
-            max_bounces,
-        };
+        let integ = Integrator::new(&scene, &materials, &[], &env, max_bounces);
         let mut rng = Rng::new(4, 0);
         let mut stats = RayStats::default();
         let up = Ray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::Z);
@@ -1386,13 +1299,7 @@ fn an_emitting_ceiling_lights_the_floor() {
         Material::lambertian(Vec3::splat(a)),
         Material::lambertian(Vec3::ZERO),
     ];
-    let integ = Integrator {
-        geometry: &scene,
-        materials: &dark,
-        lights: &[],
-        environment: &env,
-        max_bounces: 0,
-    };
+    let integ = Integrator::new(&scene, &dark, &[], &env, 0);
     let (mean, stats) = mean_radiance(&integ, &ray_to(Vec3::ZERO, Vec3::Z, 0.5), 100, 9);
     assert_eq!((mean, stats.closest), (Vec3::ZERO, 100));
 }
