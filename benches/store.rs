@@ -52,6 +52,7 @@ fn reference_store() -> PathBuf {
             progress: None,
             cube_limit: None,
             refuse_empty_texels: false,
+            device: None,
         };
         bake(&scene, &options).expect("bake the example scene");
     }

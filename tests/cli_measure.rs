@@ -59,6 +59,7 @@ fn fixture() -> &'static Fixture {
                     progress: None,
                     cube_limit: None,
                     refuse_empty_texels: false,
+                    device: None,
                 },
             )
             .unwrap();

@@ -49,6 +49,7 @@ fn bake_with_threads(
         progress: None,
         cube_limit: limit,
         refuse_empty_texels: false,
+        device: None,
     };
     let report = pool.install(|| bake(scene, &options)).unwrap();
     assert_eq!(report.finished, limit.is_none() || resume);

@@ -86,6 +86,28 @@ impl Environment {
         }
     }
 
+    /// What another implementation (the GPU path tracer) needs to compute the same
+    /// radiance, samples and densities.
+    pub fn model(&self) -> EnvironmentModel<'_> {
+        match self {
+            Environment::Constant(c) => EnvironmentModel::Constant(*c),
+            Environment::LatLong(map) => EnvironmentModel::LatLong {
+                map,
+                sampling: map.sampler.tables(),
+            },
+            Environment::Sky(sky) => EnvironmentModel::Sky {
+                model: SkyModel {
+                    perez: [sky.perez_y, sky.perez_x, sky.perez_yc]
+                        .map(|p| [p.a, p.b, p.c, p.d, p.e]),
+                    norm: sky.norm,
+                    model_sun: sky.model_sun,
+                    ground: sky.ground,
+                },
+                sampling: sky.sampler.tables(),
+            },
+        }
+    }
+
     /// Inverse of [`Environment::sample_environment`]: the `u` that maps to `dir`.
     pub fn invert_environment(&self, dir: Vec3) -> Vec2 {
         match self {
@@ -94,6 +116,42 @@ impl Environment {
             Environment::Sky(sky) => sky.sampler.invert(dir),
         }
     }
+}
+
+/// An [`Environment`] as data ([`Environment::model`]).
+#[derive(Clone, Copy, Debug)]
+pub enum EnvironmentModel<'a> {
+    Constant(Vec3),
+    /// The map (nearest-texel lookup in its lat-long convention, see the module
+    /// documentation) and its sampling tables.
+    LatLong {
+        map: &'a LatLongMap,
+        sampling: SamplingTables<'a>,
+    },
+    Sky {
+        model: SkyModel,
+        sampling: SamplingTables<'a>,
+    },
+}
+
+/// A lat-long sampling distribution: the map's rotation about z, and the distribution over
+/// `(u, v)` (density in solid angle `p(u, v) / (2π² sin θ)`).
+#[derive(Clone, Copy, Debug)]
+pub struct SamplingTables<'a> {
+    pub cos_rot: f32,
+    pub sin_rot: f32,
+    pub distribution: &'a Distribution2D,
+}
+
+/// The constants of [`Sky::eval`]: the Perez coefficients `[A, B, C, D, E]` of Y, x and y,
+/// their normalisation (zenith value over the Perez function there), the sun direction the
+/// model uses and the ground's radiance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SkyModel {
+    pub perez: [[f32; 5]; 3],
+    pub norm: Vec3,
+    pub model_sun: Vec3,
+    pub ground: Vec3,
 }
 
 /// The lat-long parameterisation with a rotation about z, and a luminance-based sampling
@@ -114,6 +172,14 @@ impl LatLongSampler {
             sin_rot: r.sin(),
             distribution: Distribution2D::new(values, width as usize, height as usize)?,
         })
+    }
+
+    fn tables(&self) -> SamplingTables<'_> {
+        SamplingTables {
+            cos_rot: self.cos_rot,
+            sin_rot: self.sin_rot,
+            distribution: &self.distribution,
+        }
     }
 
     fn to_map(&self, d: Vec3) -> Vec3 {

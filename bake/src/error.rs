@@ -60,6 +60,10 @@ pub enum BakeError {
         path: PathBuf,
         detail: String,
     },
+    /// The capture device ([`crate::device::CaptureDevice`], the GPU) failed: `device` names
+    /// it.
+    #[error("capture on {device}: {message}")]
+    Device { device: String, message: String },
     /// The store could not be written or resumed.
     #[error(transparent)]
     Format(#[from] oslf_format::Error),

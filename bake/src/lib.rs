@@ -13,7 +13,7 @@
 //! | --- | --- |
 //! | geometry | [`bezier`], [`mesh`] and [`camera`] (the shared pinhole camera; all three re-exported from `oslf-geometry`, which the runtime shares), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`obj`] (Wavefront OBJ), [`normals`] (vertex normals where a file has none: flat, smooth, crease angle), [`gltf`] (glTF 2.0 files: meshes, materials, lights, cameras), [`bvh`] (one obvhs CWBVH over every triangle, watertight ray–triangle test) |
 //! | light transport | [`ray`] (rays, hits, the `Intersector` trait), [`sampling`] (PCG32, sampling triplets `sample_x` / `x_pdf` / `invert_x`, piecewise-constant distributions), [`texture`], [`material`] (Lambertian), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky), [`integrator`] (path tracing with next-event estimation and MIS), [`preview`] (path-traced images through a [`camera::Camera`]), [`ashikhmin_shirley`] (the glossy BRDF, its sampling triplets) |
-//! | the bake | [`scene`] (the scene model: objects, shapes, lights, settings), [`scene_file`] (reading scenes: TOML files with located errors, presets, glTF and OBJ includes), [`input`] (every input file read with bounds: regular files only, size limits), [`tolerance`] (tolerances the stages share), [`surface`] (the sample-map domains), [`sample_points`], [`sample_map`], [`coverage`] (why sample-map texels are short, per object), [`capture`], [`noise`] (the captured cubes' Monte Carlo noise), [`preflight`] (the estimate checked against the machine), [`bake`] (the pipeline's stages, resumable, deterministic), [`progress`] (the `Progress` trait the long stages report to; tools draw it) |
+//! | the bake | [`scene`] (the scene model: objects, shapes, lights, settings), [`scene_file`] (reading scenes: TOML files with located errors, presets, glTF and OBJ includes), [`input`] (every input file read with bounds: regular files only, size limits), [`tolerance`] (tolerances the stages share), [`surface`] (the sample-map domains), [`sample_points`], [`sample_map`], [`coverage`] (why sample-map texels are short, per object), [`capture`], [`device`] (the `CaptureDevice` trait through which another capture, the GPU's in `oslf-bake-gpu`, takes the cube maps' place), [`noise`] (the captured cubes' Monte Carlo noise), [`preflight`] (the estimate checked against the machine), [`bake`] (the pipeline's stages, resumable, deterministic), [`progress`] (the `Progress` trait the long stages report to; tools draw it) |
 //! | measurement | [`ground_truth`] (ray-traced reference images of what each runtime mode approximates: the diffuse object, the mirror term, the Ashikhmin–Shirley term; the `oslf truth` command) |
 //!
 //! Conventions: Z is up; radiance is linear RGB in `f32`; cube maps use the wgpu/Vulkan face
@@ -46,6 +46,7 @@ pub mod texture;
 pub mod bake;
 pub mod capture;
 pub mod coverage;
+pub mod device;
 pub mod ground_truth;
 pub mod input;
 pub mod noise;

@@ -465,6 +465,16 @@ impl Distribution2D {
     }
 
     /// Grid width.
+    /// The tables [`Distribution2D::sample_continuous`] and [`Distribution2D::pdf`] read,
+    /// for another implementation of them (the GPU path tracer): the marginal's
+    /// `height + 1` entries `[cdf, pdf]`, and the conditionals' `width + 1` entries per row,
+    /// row after row. The sample with `u` is in row `i` = the last marginal entry whose cdf
+    /// is ≤ `u.y` (at most `height − 1`), at `(i + (u.y − cdf_i) / (cdf_{i+1} − cdf_i)) /
+    /// height`, and likewise along the row; the pdf of a bin is its entry's second value.
+    pub fn tables(&self) -> (&[[f32; 2]], &[[f32; 2]]) {
+        (&self.marginal.cdf, &self.conditional_cdf)
+    }
+
     pub fn width(&self) -> usize {
         self.conditional[0].len()
     }

@@ -32,6 +32,7 @@ fn bake_box(d: &Path, translate: [f32; 3], sample_count: u32, more: &str) -> Bak
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     bake(&scene, &options).unwrap_or_else(|e| panic!("{e}"))
 }

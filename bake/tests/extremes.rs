@@ -265,6 +265,7 @@ fn bake_and_check(text: &str, name: &str) -> oslf_bake::bake::BakeReport {
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     let report = oslf_bake::bake::bake(&scene, &options).unwrap();
     let store = oslf_format::Store::open(&output).unwrap();

@@ -165,6 +165,7 @@ fn bake_to(scene: &Scene, output: &Path) -> BakeReport {
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     bake(scene, &options).unwrap()
 }

@@ -47,6 +47,7 @@ fn bake_at(test: &str, samples_per_texel: u32) -> (BakeReport, Vec<u8>) {
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     let report = bake(&scene, &options).unwrap_or_else(|e| panic!("{e}"));
     (report, std::fs::read(&output).unwrap())

@@ -333,6 +333,7 @@ fn a_tiny_bake_lands_within_2x_of_its_estimate() {
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(THREADS)

@@ -36,6 +36,7 @@ fn bake_with(bits: u32, dir: &Path) -> Store {
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     let report = bake(&scene, &options).unwrap();
     assert!(report.finished);

@@ -329,6 +329,7 @@ fn bake_or_reuse(
             progress,
             cube_limit: None,
             refuse_empty_texels: false,
+            device: None,
         },
     )?;
     let r = StoreRecord {

@@ -48,6 +48,7 @@ fn store_path() -> PathBuf {
             progress: None,
             cube_limit: None,
             refuse_empty_texels: false,
+            device: None,
         };
         bake(&scene, &options).unwrap();
     }

@@ -194,6 +194,26 @@ impl Gpu {
         }
     }
 
+    /// Maps `buffer` (created with `MAP_READ`), waits for the GPU, and copies its bytes out.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|_| RuntimeError::Gpu("buffer mapping was dropped".into()))?
+            .map_err(|e| RuntimeError::Gpu(format!("cannot map a buffer: {e}")))?;
+        let bytes = {
+            let view = buffer
+                .get_mapped_range(..)
+                .map_err(|e| RuntimeError::Gpu(format!("cannot read a mapped buffer: {e}")))?;
+            view.to_vec()
+        };
+        buffer.unmap();
+        Ok(bytes)
+    }
+
     /// Waits until the GPU has finished all submitted work.
     pub fn wait(&self) -> Result<()> {
         self.device

@@ -223,6 +223,7 @@ seed = {seed}
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     oslf_bake::bake::bake(&scene, &options).unwrap();
     output
@@ -351,6 +352,7 @@ fn bake_text(name: &str, text: &str) -> (std::path::PathBuf, oslf_bake::bake::Ba
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     let report = oslf_bake::bake::bake(&scene, &options).unwrap();
     assert!(report.finished);

@@ -137,6 +137,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         progress: super::progress::bars(!args.quiet),
         cube_limit: args.max_cubes,
         refuse_empty_texels: args.strict,
+        device: None,
     };
     if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
         bail!(

@@ -50,6 +50,10 @@ pub struct BakeOptions {
     /// texel has no visible sample point at all (the runtime has nothing to reconstruct it
     /// from). `false`: bake anyway; the report counts them.
     pub refuse_empty_texels: bool,
+    /// What captures the cube maps: `None`, this crate's CPU path tracer
+    /// ([`crate::capture`]); else another device for this scene (the GPU,
+    /// `oslf-bake-gpu`), given the cubes in batches of its size.
+    pub device: Option<Arc<dyn crate::device::CaptureDevice>>,
 }
 
 /// The largest place of each object's empty texels, for [`BakeError::EmptyTexels`]:
@@ -138,6 +142,7 @@ pub fn bake_shard(
         &points,
         &mut sink,
         options.cube_limit,
+        options.device.as_ref(),
         progress,
         &mut report,
     )?;

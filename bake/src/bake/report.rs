@@ -58,6 +58,9 @@ pub struct BakeReport {
     pub placement_seconds: f64,
     pub sample_map_seconds: f64,
     pub capture_seconds: f64,
+    /// What captured the cube maps: `CPU (N threads)`, or the capture device's description
+    /// ([`crate::device::CaptureDevice::describe`]).
+    pub capture_device: String,
     /// CPU time all of the process's threads spent during the capture, where the system
     /// reports it (Linux). On a shared machine, capture rays per CPU-second do not depend on
     /// what else runs; `mrays_per_second` (wall time) does.

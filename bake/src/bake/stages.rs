@@ -2,6 +2,7 @@
 //! place, build maps, capture, write. Each fills in its part of the [`BakeReport`].
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -15,6 +16,7 @@ use super::writable::check_store_writable;
 use crate::bvh::TriangleScene;
 use crate::capture::{capture_cube, capture_cube_with_noise, chunk_cubes, CaptureSettings};
 use crate::coverage::{self, SurfaceNames};
+use crate::device::{CaptureDevice, CapturedCube, CubeJob};
 use crate::error::Result;
 use crate::integrator::{Integrator, RayStats};
 use crate::noise::NoiseStats;
@@ -171,9 +173,14 @@ pub(super) fn capture(
     points: &[SamplePoint],
     sink: &mut Sink,
     cube_limit: Option<u32>,
+    device: Option<&Arc<dyn CaptureDevice>>,
     progress: &dyn Progress,
     report: &mut BakeReport,
 ) -> Result<Captured> {
+    report.capture_device = match device {
+        Some(d) => d.describe(),
+        None => format!("CPU ({} threads)", rayon::current_num_threads()),
+    };
     report.cubes_resumed = sink.done();
     report.cubes = sink.total();
     report.store_cubes = sink.store_cubes();
@@ -181,7 +188,7 @@ pub(super) fn capture(
     let capture = CaptureSettings::from_bake(&scene.bake);
     let integrator = Integrator::for_scene(scene, geometry);
     // The environment-map baseline sees the scene without the OSLF objects.
-    let env_geometry = if meta.has_env_cube && !scene.shapes.is_empty() {
+    let env_geometry = if device.is_none() && meta.has_env_cube && !scene.shapes.is_empty() {
         Some(TriangleScene::build(scene.instances(false, 0.0))?)
     } else {
         None
@@ -196,41 +203,81 @@ pub(super) fn capture(
     let stop_at = cube_limit.map_or(sink.total(), |limit| {
         sink.done().saturating_add(limit).min(sink.total())
     });
-    let chunk = chunk_cubes(capture.resolution, capture.distance_channel);
+    let chunk = match &device {
+        Some(d) => d.batch_cubes(&capture).max(1),
+        None => chunk_cubes(capture.resolution, capture.distance_channel),
+    };
     while sink.done() < stop_at {
         let first = sink.done() as usize;
         let end = (first + chunk).min(stop_at as usize);
         let order = &*sink;
-        let encoded: Vec<_> = (first..end)
-            .into_par_iter()
-            .map(|k| {
-                let i = order.cube(k as u32) as usize;
-                let (cube, stats, noise) = match points.get(i) {
-                    Some(p) => capture_cube_with_noise(
-                        &integrator,
-                        Vec3::from_array(p.position),
-                        i as u32,
-                        &capture,
-                    ),
-                    // The one cube past the sample points: the environment-map baseline.
-                    None => match &env_geometry {
-                        Some(geometry) => {
-                            let env = integrator.with_geometry(geometry);
-                            with_no_noise(capture_cube(&env, centre, i as u32, &capture))
+        let encode = |i: u32, (cube, stats, noise): CapturedCube| {
+            let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i)?;
+            // Each cube as it finishes, not each chunk: one cube of a slow bake (many
+            // samples per texel, many lights) can take minutes.
+            progress.advance(1);
+            Ok((enc, enc_stats, stats, noise))
+        };
+        let encoded: Vec<_> = match &device {
+            Some(d) => {
+                let jobs: Vec<CubeJob> = (first..end)
+                    .map(|k| {
+                        let i = order.cube(k as u32);
+                        match points.get(i as usize) {
+                            Some(p) => CubeJob {
+                                origin: Vec3::from_array(p.position),
+                                index: i,
+                                sees_objects: true,
+                            },
+                            // The one cube past the sample points: the environment-map
+                            // baseline, which sees the scene without the objects.
+                            None => CubeJob {
+                                origin: centre,
+                                index: i,
+                                sees_objects: false,
+                            },
                         }
-                        None => {
-                            let env = integrator.with_geometry(&EmptyScene);
-                            with_no_noise(capture_cube(&env, centre, i as u32, &capture))
-                        }
-                    },
-                };
-                let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i as u32)?;
-                // Each cube as it finishes, not each chunk: one cube of a slow bake (many
-                // samples per texel, many lights) can take minutes.
-                progress.advance(1);
-                Ok((enc, enc_stats, stats, noise))
-            })
-            .collect::<Result<Vec<_>>>()?;
+                    })
+                    .collect();
+                let cubes = d.capture(&jobs, &capture)?;
+                if cubes.len() != jobs.len() {
+                    return Err(crate::BakeError::Device {
+                        device: d.describe(),
+                        message: format!("{} cubes returned for {}", cubes.len(), jobs.len()),
+                    });
+                }
+                jobs.par_iter()
+                    .zip(cubes)
+                    .map(|(job, cube)| encode(job.index, cube))
+                    .collect::<Result<Vec<_>>>()?
+            }
+            None => (first..end)
+                .into_par_iter()
+                .map(|k| {
+                    let i = order.cube(k as u32) as usize;
+                    let cube = match points.get(i) {
+                        Some(p) => capture_cube_with_noise(
+                            &integrator,
+                            Vec3::from_array(p.position),
+                            i as u32,
+                            &capture,
+                        ),
+                        // The one cube past the sample points: the environment-map baseline.
+                        None => match &env_geometry {
+                            Some(geometry) => {
+                                let env = integrator.with_geometry(geometry);
+                                with_no_noise(capture_cube(&env, centre, i as u32, &capture))
+                            }
+                            None => {
+                                let env = integrator.with_geometry(&EmptyScene);
+                                with_no_noise(capture_cube(&env, centre, i as u32, &capture))
+                            }
+                        },
+                    };
+                    encode(i as u32, cube)
+                })
+                .collect::<Result<Vec<_>>>()?,
+        };
         for (enc, enc_stats, stats, noise) in encoded {
             captured.noise.merge(&noise);
             rays.closest += stats.closest;

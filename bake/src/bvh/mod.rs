@@ -81,6 +81,22 @@ struct TriangleAttributes {
     global: u32,
 }
 
+/// One triangle of a [`TriangleScene`] with what a hit on it reports: what another tracer of
+/// the same scene (the GPU path tracer of `oslf-bake-gpu`) uploads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleRecord {
+    pub corners: [Vec3; 3],
+    /// Vertex normals at the corners.
+    pub normals: [Vec3; 3],
+    pub uvs: [Vec2; 3],
+    /// The unit normal of the triangle's plane, by its winding.
+    pub geometric_normal: Vec3,
+    pub material: u32,
+    pub object: u32,
+    /// [`SurfaceHit::triangle`] of hits on it.
+    pub global: u32,
+}
+
 /// Every triangle of a scene in one CWBVH.
 pub struct TriangleScene {
     bvh: CwBvh,
@@ -240,6 +256,26 @@ impl TriangleScene {
             #[cfg(not(target_arch = "x86_64"))]
             avx2: false,
         })
+    }
+
+    /// The scene's (non-degenerate) triangles in input order: instance by instance, each
+    /// instance's in its own order, zero-area ones left out.
+    pub fn triangles(&self) -> Vec<TriangleRecord> {
+        self.input_order
+            .iter()
+            .map(|&slot| {
+                let a = &self.attributes[slot as usize];
+                TriangleRecord {
+                    corners: self.vertices[slot as usize].vertices(),
+                    normals: a.normals,
+                    uvs: a.uvs,
+                    geometric_normal: a.geometric_normal,
+                    material: a.material,
+                    object: a.object,
+                    global: a.global,
+                }
+            })
+            .collect()
     }
 
     /// Number of (non-degenerate) triangles in the BVH.

@@ -145,22 +145,7 @@ impl Renderer {
     }
 }
 
-/// Maps a MAP_READ buffer, waits, and copies its bytes out.
+/// Maps a MAP_READ buffer, waits, and copies its bytes out ([`Gpu::read_buffer`]).
 pub(super) fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait()?;
-    rx.recv()
-        .map_err(|_| RuntimeError::Gpu("buffer mapping was dropped".into()))?
-        .map_err(|e| RuntimeError::Gpu(format!("cannot map a buffer: {e}")))?;
-    let bytes = {
-        let view = buffer
-            .get_mapped_range(..)
-            .map_err(|e| RuntimeError::Gpu(format!("cannot read a mapped buffer: {e}")))?;
-        view.to_vec()
-    };
-    buffer.unmap();
-    Ok(bytes)
+    gpu.read_buffer(buffer)
 }

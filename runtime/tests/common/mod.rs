@@ -85,6 +85,7 @@ fn bake_scene(scene: &str, name: &str) -> PathBuf {
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
+        device: None,
     };
     bake(&scene, &options).unwrap();
     output

@@ -1,0 +1,547 @@
+//! The GPU capture: the scene uploaded once, cubes captured in batches by shader/capture.wgsl
+//! ([`GpuCapture::capture_cubes`]), and the closest-hit queries the tests compare with the
+//! CPU BVH ([`GpuCapture::trace`]).
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use oslf_bake::capture::{strata_per_side, CaptureSettings};
+use oslf_bake::device::{CaptureDevice, CapturedCube, CubeJob};
+use oslf_bake::integrator::RayStats;
+use oslf_bake::noise::NoiseStats;
+use oslf_bake::scene::Scene;
+use oslf_format::CubeImage;
+use oslf_runtime::Gpu;
+use wgpu::util::DeviceExt;
+
+use crate::error::{GpuBakeError, Result};
+use crate::scene::GpuScene;
+use crate::shader;
+
+/// Invocations per workgroup (`@workgroup_size` in shader/capture.wgsl).
+const WORKGROUP: u32 = 64;
+/// Workgroups per dispatch row: a dispatch is `ROW_GROUPS × rows` workgroups.
+const ROW_GROUPS: u32 = 4096;
+/// Most paths (texels × samples) per dispatch: each dispatch stays short (well under a
+/// second on a desktop GPU, whose driver may reset a device that runs one for seconds).
+const PATHS_PER_DISPATCH: u64 = 1 << 22;
+/// Texels a batch aims for, so that the GPU has enough work in flight.
+const BATCH_TEXELS: u64 = 1 << 20;
+/// Most bytes of one batch's per-texel results.
+const BATCH_BYTES: u64 = 64 << 20;
+/// Most cubes per batch.
+const MAX_BATCH_CUBES: u64 = 256;
+
+/// The shader's `Params` (shader/capture.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct Params {
+    pub resolution: u32,
+    pub strata: u32,
+    pub max_bounces: u32,
+    pub light_count: u32,
+    pub seed: [u32; 2],
+    pub env_kind: u32,
+    pub flags: u32,
+    pub texels: u32,
+    pub row_invocations: u32,
+    pub first: u32,
+    pub _pad1: u32,
+    pub env_size: [u32; 4],
+    pub env_tables: [u32; 4],
+    pub env_rotation: [f32; 4],
+    pub env_constant: [f32; 4],
+    pub perez_y: [f32; 4],
+    pub perez_x: [f32; 4],
+    pub perez_yc: [f32; 4],
+    pub perez_e: [f32; 4],
+    pub norm: [f32; 4],
+    pub model_sun: [f32; 4],
+    pub ground: [f32; 4],
+}
+
+/// `FLAG_*` of shader/capture.wgsl.
+const FLAG_ENV_ACTIVE: u32 = 1;
+const FLAG_EMITTERS: u32 = 2;
+const FLAG_DISTANCE: u32 = 4;
+
+/// The shader's `Job`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct Job {
+    pub origin: [f32; 3],
+    pub index: u32,
+    pub sees_objects: u32,
+    pub _pad: [u32; 3],
+}
+
+/// The shader's `TexelOut`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TexelOut {
+    pub radiance: [f32; 3],
+    pub distance: f32,
+    pub lum_sum: f32,
+    pub lum_sq: f32,
+    pub closest: u32,
+    pub shadow_hit: u32,
+}
+
+/// The shader's `TraceRay`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TraceRay {
+    pub origin: [f32; 3],
+    pub t_max: f32,
+    pub dir: [f32; 3],
+    pub objects: u32,
+}
+
+/// The shader's `TraceHit`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct TraceHit {
+    pub t: f32,
+    pub triangle: u32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+/// A ray of [`GpuCapture::trace`]: origin, unit direction, `t_max`, and whether the OSLF
+/// objects take part.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QueryRay {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub t_max: f32,
+    pub objects: bool,
+}
+
+/// The scene's buffers on the GPU.
+struct SceneBuffers {
+    nodes: wgpu::Buffer,
+    tris: wgpu::Buffer,
+    attrs: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    texels: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    env_tables: wgpu::Buffer,
+}
+
+/// The bake's cube-map capture on a GPU, for one scene.
+pub struct GpuCapture {
+    gpu: Gpu,
+    buffers: SceneBuffers,
+    capture: wgpu::ComputePipeline,
+    trace: wgpu::ComputePipeline,
+    /// `Params` without the per-capture fields.
+    base: Params,
+    triangles: usize,
+}
+
+impl std::fmt::Debug for GpuCapture {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuCapture")
+            .field("adapter", &self.gpu.adapter_name)
+            .field("triangles", &self.triangles)
+            .finish()
+    }
+}
+
+/// A storage buffer holding `data` (one zeroed `T` when `data` is empty: a binding cannot be
+/// empty; the shader never reads it then).
+fn storage<T: Pod>(gpu: &Gpu, label: &str, data: &[T]) -> wgpu::Buffer {
+    let zero = [T::zeroed()];
+    let contents: &[T] = if data.is_empty() { &zero } else { data };
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(contents),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+}
+
+impl GpuCapture {
+    /// The capture of `scene` on `gpu`: the same triangles as the CPU bake's geometry (the
+    /// objects tessellated within ε × `TESSELLATION_ERROR`), its materials, lights,
+    /// environment and bounces.
+    pub fn for_scene(gpu: Gpu, scene: &Scene) -> Result<Self> {
+        let max_error = scene.bake.epsilon * oslf_bake::tolerance::TESSELLATION_ERROR;
+        let geometry = oslf_bake::bvh::TriangleScene::build(scene.instances(true, max_error))?;
+        let packed = GpuScene::new(
+            &geometry.triangles(),
+            &scene.materials,
+            &scene.lights,
+            &scene.environment,
+        )?;
+        Self::new(gpu, &packed, scene.bake.bounces)
+    }
+
+    /// The capture of a packed scene, gathering `max_bounces` bounces.
+    pub fn new(gpu: Gpu, scene: &GpuScene, max_bounces: u32) -> Result<Self> {
+        let limits = gpu.limits();
+        let largest = [
+            std::mem::size_of_val(scene.tris.as_slice()),
+            std::mem::size_of_val(scene.attrs.as_slice()),
+            std::mem::size_of_val(scene.nodes.as_slice()),
+            std::mem::size_of_val(scene.texels.as_slice()),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0) as u64;
+        if largest > u64::from(limits.max_storage_buffer_binding_size) {
+            return Err(GpuBakeError::Scene(format!(
+                "the scene needs a {largest}-byte buffer; {} binds at most {} bytes (bake on the CPU: --device cpu)",
+                gpu.adapter_name, limits.max_storage_buffer_binding_size
+            )));
+        }
+        if limits.max_storage_buffers_per_shader_stage < 10 {
+            return Err(GpuBakeError::Scene(format!(
+                "{} allows {} storage buffers per shader stage; the GPU capture needs 10 (bake on the CPU: --device cpu)",
+                gpu.adapter_name, limits.max_storage_buffers_per_shader_stage
+            )));
+        }
+        let buffers = SceneBuffers {
+            nodes: storage(&gpu, "bvh nodes", &scene.nodes),
+            tris: storage(&gpu, "triangles", &scene.tris),
+            attrs: storage(&gpu, "triangle attributes", &scene.attrs),
+            materials: storage(&gpu, "materials", &scene.materials),
+            texels: storage(&gpu, "texels", &scene.texels),
+            lights: storage(&gpu, "lights", &scene.lights),
+            env_tables: storage(&gpu, "environment tables", &scene.env_tables),
+        };
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("capture"),
+                source: wgpu::ShaderSource::Wgsl(shader::source().into()),
+            });
+        let pipeline = |entry: &str| {
+            gpu.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: None,
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        };
+        let capture = pipeline("capture");
+        let trace = pipeline("trace");
+        let e = &scene.environment;
+        let mut flags = 0;
+        if e.active {
+            flags |= FLAG_ENV_ACTIVE;
+        }
+        if scene.emitters {
+            flags |= FLAG_EMITTERS;
+        }
+        let base = Params {
+            max_bounces,
+            light_count: scene.lights.len() as u32,
+            env_kind: e.kind,
+            flags,
+            env_size: e.size,
+            env_tables: e.tables,
+            env_rotation: e.rotation,
+            env_constant: e.constant,
+            perez_y: e.perez[0],
+            perez_x: e.perez[1],
+            perez_yc: e.perez[2],
+            perez_e: e.perez[3],
+            norm: e.norm,
+            model_sun: e.model_sun,
+            ground: e.ground,
+            ..Params::zeroed()
+        };
+        let capture_gpu = GpuCapture {
+            gpu,
+            buffers,
+            capture,
+            trace,
+            base,
+            triangles: scene.tris.len(),
+        };
+        capture_gpu.check("building the capture pipelines")?;
+        Ok(capture_gpu)
+    }
+
+    /// The adapter this runs on.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    fn check(&self, what: &str) -> Result<()> {
+        self.gpu.take_errors().map_err(|e| GpuBakeError::Gpu {
+            adapter: self.gpu.adapter_name.clone(),
+            message: format!("{what}: {e}"),
+        })
+    }
+
+    fn read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        self.gpu.read_buffer(buffer).map_err(|e| GpuBakeError::Gpu {
+            adapter: self.gpu.adapter_name.clone(),
+            message: e.to_string(),
+        })
+    }
+
+    /// Cubes per batch for `settings` (see [`CaptureDevice::batch_cubes`]).
+    pub fn cubes_per_batch(&self, settings: &CaptureSettings) -> usize {
+        let texels = 6 * u64::from(settings.resolution.max(1)).pow(2);
+        let bytes = texels * std::mem::size_of::<TexelOut>() as u64;
+        let limit = u64::from(self.gpu.limits().max_storage_buffer_binding_size).min(BATCH_BYTES);
+        let by_memory = (limit / bytes).max(1);
+        BATCH_TEXELS
+            .div_ceil(texels)
+            .min(by_memory)
+            .clamp(1, MAX_BATCH_CUBES) as usize
+    }
+
+    /// Captures the cubes of `jobs` (each as `oslf_bake::capture::capture_cube_with_noise`
+    /// does; no noise for the environment-map baseline's cube), in order.
+    pub fn capture_cubes(
+        &self,
+        jobs: &[CubeJob],
+        settings: &CaptureSettings,
+    ) -> Result<Vec<CapturedCube>> {
+        if jobs.is_empty() {
+            return Ok(Vec::new());
+        }
+        let res = settings.resolution;
+        let k = strata_per_side(settings.samples_per_texel);
+        let per_cube = 6 * u64::from(res) * u64::from(res);
+        let total = per_cube * jobs.len() as u64;
+        let out_bytes = total * std::mem::size_of::<TexelOut>() as u64;
+        if total > u64::from(u32::MAX)
+            || out_bytes > u64::from(self.gpu.limits().max_storage_buffer_binding_size)
+        {
+            return Err(GpuBakeError::Scene(format!(
+                "{} cubes of {res}² texels do not fit one GPU batch ({out_bytes} bytes)",
+                jobs.len()
+            )));
+        }
+        let gpu_jobs: Vec<Job> = jobs
+            .iter()
+            .map(|j| Job {
+                origin: j.origin.to_array(),
+                index: j.index,
+                sees_objects: u32::from(j.sees_objects),
+                _pad: [0; 3],
+            })
+            .collect();
+        let jobs_buffer = storage(&self.gpu, "jobs", &gpu_jobs);
+        let out = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("texels out"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("texels readback"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniform = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("capture params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let b = &self.buffers;
+        let entries: Vec<(u32, &wgpu::Buffer)> = vec![
+            (0, &uniform),
+            (1, &b.nodes),
+            (2, &b.tris),
+            (3, &b.attrs),
+            (4, &b.materials),
+            (5, &b.texels),
+            (6, &b.lights),
+            (7, &b.env_tables),
+            (8, &jobs_buffer),
+            (9, &out),
+        ];
+        let bind_group = self.bind_group(&self.capture, &entries);
+        let seed = settings.seed;
+        let mut params = Params {
+            resolution: res,
+            strata: k,
+            seed: [seed as u32, (seed >> 32) as u32],
+            texels: total as u32,
+            row_invocations: ROW_GROUPS * WORKGROUP,
+            ..self.base
+        };
+        if settings.distance_channel {
+            params.flags |= FLAG_DISTANCE;
+        }
+        // Dispatches of at most PATHS_PER_DISPATCH paths, each with its first texel.
+        let per_dispatch = (PATHS_PER_DISPATCH / u64::from(k * k))
+            .max(u64::from(WORKGROUP))
+            .next_multiple_of(u64::from(WORKGROUP));
+        let mut first = 0u64;
+        while first < total {
+            let count = per_dispatch.min(total - first);
+            params.first = first as u32;
+            self.gpu
+                .queue
+                .write_buffer(&uniform, 0, bytemuck::bytes_of(&params));
+            let groups = count.div_ceil(u64::from(WORKGROUP)) as u32;
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.capture);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(groups.min(ROW_GROUPS), groups.div_ceil(ROW_GROUPS), 1);
+            }
+            self.gpu.queue.submit([encoder.finish()]);
+            first += count;
+        }
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, out_bytes);
+        self.gpu.queue.submit([encoder.finish()]);
+        let bytes = self.read(&staging)?;
+        self.check("capturing cubes")?;
+        let texels: &[TexelOut] = bytemuck::cast_slice(&bytes);
+        Ok(jobs
+            .iter()
+            .zip(texels.chunks_exact(per_cube as usize))
+            .map(|(job, cube)| {
+                unpack_cube(cube, res, k, settings.distance_channel, job.sees_objects)
+            })
+            .collect())
+    }
+
+    fn bind_group(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        entries: &[(u32, &wgpu::Buffer)],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = entries
+            .iter()
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
+        self.gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            })
+    }
+
+    /// The closest hit of each ray on the GPU: `(t, global triangle index)`, `None` where it
+    /// escapes.
+    pub fn trace(&self, rays: &[QueryRay]) -> Result<Vec<Option<(f32, u32)>>> {
+        if rays.is_empty() {
+            return Ok(Vec::new());
+        }
+        let gpu_rays: Vec<TraceRay> = rays
+            .iter()
+            .map(|r| TraceRay {
+                origin: r.origin.to_array(),
+                t_max: r.t_max,
+                dir: r.dir.to_array(),
+                objects: u32::from(r.objects),
+            })
+            .collect();
+        let rays_buffer = storage(&self.gpu, "trace rays", &gpu_rays);
+        let bytes = (rays.len() * std::mem::size_of::<TraceHit>()) as u64;
+        let hits = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trace hits"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("trace readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let b = &self.buffers;
+        let bind_group = self.bind_group(
+            &self.trace,
+            &[
+                (1, &b.nodes),
+                (2, &b.tris),
+                (3, &b.attrs),
+                (10, &rays_buffer),
+                (11, &hits),
+            ],
+        );
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.trace);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups((rays.len() as u32).div_ceil(WORKGROUP), 1, 1);
+        }
+        encoder.copy_buffer_to_buffer(&hits, 0, &staging, 0, bytes);
+        self.gpu.queue.submit([encoder.finish()]);
+        let out = self.read(&staging)?;
+        self.check("tracing rays")?;
+        Ok(bytemuck::cast_slice::<u8, TraceHit>(&out)
+            .iter()
+            .map(|h| (h.triangle != u32::MAX).then_some((h.t, h.triangle)))
+            .collect())
+    }
+}
+
+/// One cube's texels read back: the image, its rays, and the noise of its texels (none for
+/// the environment-map baseline's cube).
+fn unpack_cube(texels: &[TexelOut], res: u32, k: u32, distance: bool, noise: bool) -> CapturedCube {
+    let per_face = (res * res) as usize;
+    let mut stats = RayStats::default();
+    let mut noise_stats = NoiseStats::default();
+    let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
+    let mut planes: [Vec<f32>; 6] = Default::default();
+    for (face, chunk) in texels.chunks_exact(per_face).enumerate() {
+        faces[face] = chunk.iter().map(|t| t.radiance).collect();
+        if distance {
+            planes[face] = chunk.iter().map(|t| t.distance).collect();
+        }
+        for t in chunk {
+            stats.closest += u64::from(t.closest);
+            stats.shadow += u64::from(t.shadow_hit >> 1);
+            if noise {
+                noise_stats.add_texel(
+                    f64::from(t.lum_sum),
+                    f64::from(t.lum_sq),
+                    k * k,
+                    t.shadow_hit & 1 == 1,
+                );
+            }
+        }
+    }
+    let cube = CubeImage {
+        resolution: res,
+        faces,
+        distance: distance.then_some(planes),
+    };
+    (cube, stats, noise_stats)
+}
+
+impl CaptureDevice for GpuCapture {
+    fn describe(&self) -> String {
+        format!("GPU {}", self.gpu.adapter_name)
+    }
+
+    fn batch_cubes(&self, settings: &CaptureSettings) -> usize {
+        self.cubes_per_batch(settings)
+    }
+
+    fn capture(
+        &self,
+        jobs: &[CubeJob],
+        settings: &CaptureSettings,
+    ) -> oslf_bake::Result<Vec<CapturedCube>> {
+        self.capture_cubes(jobs, settings)
+            .map_err(|e| oslf_bake::BakeError::Device {
+                device: self.describe(),
+                message: e.to_string(),
+            })
+    }
+}

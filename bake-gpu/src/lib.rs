@@ -1,0 +1,31 @@
+//! # oslf-bake-gpu: the bake's cube-map capture on the GPU
+//!
+//! The cube maps are what a bake spends its time on (thesis §3.2: an HDR cube map ray traced
+//! at every sample point), and their Monte Carlo noise is what limits a bake's accuracy
+//! indoors. This crate runs that capture as a wgpu compute shader, with the estimator of the
+//! CPU path tracer (`oslf_bake::integrator`) ported line by line:
+//!
+//! - [`scene`]: the scene packed for the GPU: an obvhs BVH2 over the bake's own triangles
+//!   (the objects tessellated as for the CPU BVH), materials (Lambertian and glTF
+//!   metallic-roughness, constant, checker and image textures), point, spot and sun lights,
+//!   the environment (constant, lat-long map or Preetham sky, with the CPU's sampling tables);
+//! - [`capture`]: [`GpuCapture`], which uploads it once and captures batches of cubes
+//!   (bounded memory per batch, short dispatches), implementing the bake's
+//!   `CaptureDevice`, so `oslf bake --device gpu` resumes, shards and merges as the CPU bake;
+//! - [`shader`]: the WGSL, split as the CPU code is (random numbers, traversal, scene,
+//!   integrator, capture).
+//!
+//! The GPU draws the CPU's random numbers: PCG32 on the stream hashed from (seed, cube, face,
+//! texel), 64-bit arithmetic emulated on 32-bit words. A texel's paths therefore make the same
+//! choices on both devices until their floating point parts, rounded differently (fused
+//! multiply-adds, transcendental functions), first change a decision; CPU and GPU stores
+//! differ by that, within the Monte Carlo noise (tests/parity.rs). On one adapter the same
+//! scene and seed give the same bytes, however the cubes are batched.
+
+pub mod capture;
+pub mod error;
+pub mod scene;
+pub mod shader;
+
+pub use capture::GpuCapture;
+pub use error::{GpuBakeError, Result};

@@ -1,0 +1,18 @@
+//! The capture shader: its WGSL files joined in dependency order (bindings and entry points
+//! last, each file naming the functions of bake/src it mirrors).
+
+/// The random numbers (PCG32 and the stream hash).
+const RNG: &str = include_str!("shader/rng.wgsl");
+/// The BVH traversal and the triangle test.
+const BVH: &str = include_str!("shader/bvh.wgsl");
+/// Hits, textures, materials, lights, environment.
+const SCENE: &str = include_str!("shader/scene.wgsl");
+/// Sampling, BRDFs and the path tracer.
+const INTEGRATOR: &str = include_str!("shader/integrator.wgsl");
+/// Bindings, the layout structs and the `capture` and `trace` entry points.
+pub const CAPTURE: &str = include_str!("shader/capture.wgsl");
+
+/// The whole module's source.
+pub fn source() -> String {
+    [RNG, BVH, SCENE, INTEGRATOR, CAPTURE].join("\n")
+}

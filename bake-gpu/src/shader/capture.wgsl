@@ -1,0 +1,243 @@
+// The cube-map capture of bake/src/capture.rs: one invocation per texel of a batch of cubes,
+// its samples stratified k × k, its random stream keyed by (seed, cube, face, texel) as on the
+// CPU; and `trace`, the closest-hit queries the traversal tests compare with the CPU's BVH.
+
+struct Params {
+    resolution: u32,
+    strata: u32,
+    max_bounces: u32,
+    light_count: u32,
+    seed: vec2<u32>,
+    env_kind: u32,
+    flags: u32,
+    // Texels of the batch (cubes × 6 × resolution²), and the invocations per dispatch row.
+    texels: u32,
+    row_invocations: u32,
+    // The dispatch's first texel.
+    first: u32,
+    _pad1: u32,
+    // Lat-long map: width, height, first texel in `texels`; sampling tables: width, height.
+    env_size: vec4<u32>,
+    env_tables: vec4<u32>,
+    // cos and sin of the map's rotation about z.
+    env_rotation: vec4<f32>,
+    env_constant: vec4<f32>,
+    // The sky's Perez coefficients A–D of Y, x and y, their E, normalisation, sun and ground.
+    perez_y: vec4<f32>,
+    perez_x: vec4<f32>,
+    perez_yc: vec4<f32>,
+    perez_e: vec4<f32>,
+    norm: vec4<f32>,
+    model_sun: vec4<f32>,
+    ground: vec4<f32>,
+}
+
+const FLAG_ENV_ACTIVE: u32 = 1u;
+const FLAG_EMITTERS: u32 = 2u;
+const FLAG_DISTANCE: u32 = 4u;
+
+struct Node {
+    min: vec3<f32>,
+    count: u32,
+    max: vec3<f32>,
+    first: u32,
+}
+
+// Corners (w of v0: the largest coordinate magnitude of the corners) and the unnormalised
+// plane normal with its length.
+struct Tri {
+    v0: vec4<f32>,
+    v1: vec4<f32>,
+    v2: vec4<f32>,
+    plane: vec4<f32>,
+}
+
+struct TriAttr {
+    n0: vec3<f32>,
+    material: u32,
+    n1: vec3<f32>,
+    object: u32,
+    n2: vec3<f32>,
+    global: u32,
+    gn: vec3<f32>,
+    _pad0: u32,
+    uv01: vec4<f32>,
+    uv2: vec2<f32>,
+    _pad1: vec2<u32>,
+}
+
+struct Tex {
+    kind: u32,
+    width: u32,
+    height: u32,
+    offset: u32,
+    a: vec3<f32>,
+    scale: f32,
+    b: vec3<f32>,
+    _pad: f32,
+}
+
+struct Mat {
+    albedo: Tex,
+    mr_texture: Tex,
+    model: u32,
+    metallic: f32,
+    roughness: f32,
+    _pad: u32,
+    emission: vec3<f32>,
+    has_mr_texture: u32,
+}
+
+struct Light {
+    position: vec3<f32>,
+    kind: u32,
+    direction: vec3<f32>,
+    inner: f32,
+    power: vec3<f32>,
+    outer: f32,
+    angular_radius: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct Job {
+    origin: vec3<f32>,
+    index: u32,
+    sees_objects: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// One texel's result: radiance, distance, its samples' luminance sum and sum of squares, the
+// closest-hit rays, and (shadow rays << 1) | whether a sample hit a surface.
+struct TexelOut {
+    radiance: vec3<f32>,
+    distance: f32,
+    lum_sum: f32,
+    lum_sq: f32,
+    closest: u32,
+    shadow_hit: u32,
+}
+
+struct TraceRay {
+    origin: vec3<f32>,
+    t_max: f32,
+    dir: vec3<f32>,
+    objects: u32,
+}
+
+// t, the hit triangle's global index (0xffffffff: none), barycentrics b1, b2.
+struct TraceHit {
+    t: f32,
+    triangle: u32,
+    b1: f32,
+    b2: f32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> nodes: array<Node>;
+@group(0) @binding(2) var<storage, read> tris: array<Tri>;
+@group(0) @binding(3) var<storage, read> attrs: array<TriAttr>;
+@group(0) @binding(4) var<storage, read> materials: array<Mat>;
+@group(0) @binding(5) var<storage, read> texels: array<f32>;
+@group(0) @binding(6) var<storage, read> lights: array<Light>;
+@group(0) @binding(7) var<storage, read> env_tables: array<vec2<f32>>;
+@group(0) @binding(8) var<storage, read> jobs: array<Job>;
+@group(0) @binding(9) var<storage, read_write> out: array<TexelOut>;
+@group(0) @binding(10) var<storage, read> trace_rays: array<TraceRay>;
+@group(0) @binding(11) var<storage, read_write> trace_hits: array<TraceHit>;
+
+// `oslf_format::cube::face_st_to_direction`.
+fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
+    let sc = 2.0 * s - 1.0;
+    let tc = 2.0 * t - 1.0;
+    var d: vec3<f32>;
+    switch face {
+        case 0u: { d = vec3<f32>(1.0, -tc, -sc); }
+        case 1u: { d = vec3<f32>(-1.0, -tc, sc); }
+        case 2u: { d = vec3<f32>(sc, 1.0, tc); }
+        case 3u: { d = vec3<f32>(sc, -1.0, -tc); }
+        case 4u: { d = vec3<f32>(sc, -tc, 1.0); }
+        default: { d = vec3<f32>(-sc, -tc, -1.0); }
+    }
+    let len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if len > 0.0 && finite(len) {
+        return d / len;
+    }
+    return vec3<f32>(1.0, 0.0, 0.0);
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+}
+
+const WORKGROUP: u32 = 64u;
+
+@compute @workgroup_size(64)
+fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
+    if id >= params.texels {
+        return;
+    }
+    let res = params.resolution;
+    let per_face = res * res;
+    let per_cube = 6u * per_face;
+    let job = jobs[id / per_cube];
+    let face = (id % per_cube) / per_face;
+    let texel = id % per_face;
+    let x = texel % res;
+    let y = texel / res;
+    let objects = job.sees_objects != 0u;
+    let stream = hash4(params.seed, vec2<u32>(job.index, 0u), vec2<u32>(face, 0u), vec2<u32>(texel, 0u));
+    var rng = rng_new(params.seed, stream);
+    var counts = Counts(0u, 0u);
+    let k = params.strata;
+    var sum = vec3<f32>(0.0);
+    var lum_sum = 0.0;
+    var lum_sq = 0.0;
+    var hit_any = false;
+    for (var j = 0u; j < k * k; j++) {
+        let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
+        let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
+        let s = (f32(x) + sx) / f32(res);
+        let t = (f32(y) + sy) / f32(res);
+        let dir = face_st_to_direction(face, s, t);
+        let r = radiance(job.origin, dir, objects, &rng, &counts);
+        sum += r.xyz;
+        let l = luminance(r.xyz);
+        lum_sum += l;
+        lum_sq += l * l;
+        hit_any = hit_any || r.w != F32_MAX;
+    }
+    var o: TexelOut;
+    o.radiance = sum * (1.0 / f32(k * k));
+    o.distance = 0.0;
+    if (params.flags & FLAG_DISTANCE) != 0u {
+        let n = f32(res);
+        let centre = face_st_to_direction(face, (f32(x) + 0.5) / n, (f32(y) + 0.5) / n);
+        let h = closest(job.origin, centre, objects, &counts);
+        o.distance = select(F32_MAX, h.t, h.found);
+    }
+    o.lum_sum = lum_sum;
+    o.lum_sq = lum_sq;
+    o.closest = counts.closest;
+    o.shadow_hit = (counts.shadow << 1u) | select(0u, 1u, hit_any);
+    out[id] = o;
+}
+
+@compute @workgroup_size(64)
+fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= arrayLength(&trace_rays) {
+        return;
+    }
+    let r = trace_rays[i];
+    let h = traverse(r.origin, r.dir, r.t_max, r.objects != 0u, false);
+    var o = TraceHit(F32_MAX, 0xffffffffu, 0.0, 0.0);
+    if h.found {
+        o = TraceHit(h.t, attrs[h.slot].global, h.b.y, h.b.z);
+    }
+    trace_hits[i] = o;
+}

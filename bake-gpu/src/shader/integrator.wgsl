@@ -1,0 +1,440 @@
+// The path tracer of bake/src/integrator.rs, step for step and drawing its random numbers in
+// the same order: emission wherever the path meets a surface, one shadow ray per delta
+// light, one environment sample and one BSDF sample combined by MIS (power heuristic), the
+// BSDF sample continuing the path, Russian roulette from the 4th vertex. Its BRDFs are those
+// of bake/src/material.rs: Lambertian and glTF metallic-roughness
+// (bake/src/metallic_roughness.rs).
+
+const FRAC_PI_4: f32 = 0.785398163397448;
+const FRAC_PI_2: f32 = 1.5707963267949;
+// 2⁻¹⁹ (integrator::OFFSET_RELATIVE).
+const OFFSET_RELATIVE: f32 = 1.9073486e-6;
+const RUSSIAN_ROULETTE_START: u32 = 3u;
+const MIN_ALPHA: f32 = 1e-3;
+const DIELECTRIC_F0: f32 = 0.04;
+
+fn sample_uniform_disk_concentric(u: vec2<f32>) -> vec2<f32> {
+    let o = 2.0 * u - vec2<f32>(1.0);
+    if o.x == 0.0 && o.y == 0.0 {
+        return vec2<f32>(0.0);
+    }
+    var r = o.y;
+    var theta = FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y);
+    if abs(o.x) > abs(o.y) {
+        r = o.x;
+        theta = FRAC_PI_4 * (o.y / o.x);
+    }
+    return r * vec2<f32>(cos(theta), sin(theta));
+}
+
+fn sample_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
+    let d = sample_uniform_disk_concentric(u);
+    return vec3<f32>(d, sqrt(max(1.0 - dot(d, d), 0.0)));
+}
+
+fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    if cos_theta > 0.0 {
+        return cos_theta * FRAC_1_PI;
+    }
+    return 0.0;
+}
+
+fn sample_uniform_sphere(u: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - 2.0 * u.x;
+    let r = sqrt(max(1.0 - z * z, 0.0));
+    let phi = 2.0 * PI * u.y;
+    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+}
+
+struct Frame {
+    x: vec3<f32>,
+    y: vec3<f32>,
+    z: vec3<f32>,
+}
+
+// `Frame::from_normal` (Duff et al. 2017).
+fn frame_from_normal(n_in: vec3<f32>) -> Frame {
+    var n = safe_normalize(n_in);
+    if all(n == vec3<f32>(0.0)) {
+        n = vec3<f32>(0.0, 0.0, 1.0);
+    }
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Frame(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3<f32>(b, sign + n.y * n.y * a, -n.y), n);
+}
+
+fn to_world(f: Frame, v: vec3<f32>) -> vec3<f32> {
+    return f.x * v.x + f.y * v.y + f.z * v.z;
+}
+
+fn to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(v, f.x), dot(v, f.y), dot(v, f.z));
+}
+
+fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
+    let a = pdf_a * pdf_a;
+    let b = pdf_b * pdf_b;
+    let s = a + b;
+    if s > 0.0 && finite(s) {
+        return a / s;
+    }
+    if pdf_a > F32_MAX {
+        return 1.0;
+    }
+    return 0.0;
+}
+
+// The BRDF at one path vertex (`Lobe`): Lambertian with `albedo`, or metallic-roughness with
+// base colour `albedo`.
+struct Lobe {
+    model: u32,
+    albedo: vec3<f32>,
+    metallic: f32,
+    roughness: f32,
+}
+
+fn mr_alpha(l: Lobe) -> f32 {
+    return max(l.roughness * l.roughness, MIN_ALPHA);
+}
+
+fn ggx_distribution(a2: f32, n: vec3<f32>, h: vec3<f32>) -> f32 {
+    let nh = dot(n, h);
+    if nh <= 0.0 {
+        return 0.0;
+    }
+    let c = cross(n, h);
+    let d = a2 * nh * nh + dot(c, c);
+    return a2 / (PI * d * d);
+}
+
+fn smith_lambda(a2: f32, c: f32) -> f32 {
+    return c + sqrt(a2 + (1.0 - a2) * c * c);
+}
+
+fn smith_g1(a2: f32, nv: f32) -> f32 {
+    return 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
+}
+
+// `MetallicRoughness::eval`.
+fn mr_eval(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let nv = dot(n, wo);
+    let nl = dot(n, wi);
+    if nv <= 0.0 || nl <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let h = safe_normalize(wo + wi);
+    if all(h == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let alpha = mr_alpha(l);
+    let a2 = alpha * alpha;
+    let vh = abs(dot(wo, h));
+    let specular = 1.0 / (smith_lambda(a2, nl) * smith_lambda(a2, nv)) * ggx_distribution(a2, n, h);
+    let schlick = pow(clamp(1.0 - vh, 0.0, 1.0), 5.0);
+    let c = l.albedo;
+    let metal = specular * (c + (vec3<f32>(1.0) - c) * schlick);
+    let fr = DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick;
+    let dielectric = c * FRAC_1_PI * (1.0 - fr) + vec3<f32>(specular * fr);
+    return mix(dielectric, metal, l.metallic);
+}
+
+// `MetallicRoughness::pdf`.
+fn mr_pdf(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let nv = dot(n, wo);
+    let nl = dot(n, wi);
+    if nv <= 0.0 || nl <= 0.0 {
+        return 0.0;
+    }
+    let h = safe_normalize(wo + wi);
+    if all(h == vec3<f32>(0.0)) {
+        return 0.0;
+    }
+    let alpha = mr_alpha(l);
+    let a2 = alpha * alpha;
+    let specular = smith_g1(a2, nv) * ggx_distribution(a2, n, h) / (4.0 * nv);
+    let p = 0.5 + 0.5 * l.metallic;
+    return p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl);
+}
+
+// `sample_visible_normal` (Heitz 2018).
+fn sample_visible_normal(v: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3<f32>(alpha * v.x, alpha * v.y, v.z));
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if len2 > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(len2);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    let nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+    let m = safe_normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    if all(m == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0, 0.0, 1.0);
+    }
+    return m;
+}
+
+// The lobe of material `m` at `uv` (`Lobe::at`); `valid` false for a black Lambertian one.
+fn lobe_at(m: Mat, uv: vec2<f32>, valid: ptr<function, bool>) -> Lobe {
+    var l: Lobe;
+    l.model = m.model;
+    l.albedo = material_albedo(m, uv);
+    l.metallic = m.metallic;
+    l.roughness = m.roughness;
+    if m.model == MODEL_METALLIC_ROUGHNESS {
+        if m.has_mr_texture != 0u {
+            let c = texture_eval(m.mr_texture, uv);
+            l.metallic = clamp01(c.z);
+            l.roughness = clamp01(c.y);
+        }
+        *valid = true;
+    } else {
+        *valid = any(l.albedo != vec3<f32>(0.0));
+    }
+    return l;
+}
+
+fn lobe_f(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if l.model == MODEL_METALLIC_ROUGHNESS {
+        return mr_eval(l, ns, wo, wi);
+    }
+    return l.albedo * FRAC_1_PI;
+}
+
+fn lobe_pdf(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, cos_theta: f32) -> f32 {
+    if l.model == MODEL_METALLIC_ROUGHNESS {
+        return mr_pdf(l, ns, wo, wi);
+    }
+    return cosine_hemisphere_pdf(cos_theta);
+}
+
+struct BsdfSample {
+    wi: vec3<f32>,
+    weight: vec3<f32>,
+    pdf: f32,
+    valid: bool,
+}
+
+// `Lobe::sample`.
+fn lobe_sample(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, rng: ptr<function, Rng>) -> BsdfSample {
+    var s: BsdfSample;
+    s.valid = false;
+    if l.model != MODEL_METALLIC_ROUGHNESS {
+        let wi = to_world(frame_from_normal(ns), sample_cosine_hemisphere(rng_vec2(rng)));
+        s.wi = wi;
+        s.weight = l.albedo;
+        s.pdf = cosine_hemisphere_pdf(dot(ns, wi));
+        s.valid = true;
+        return s;
+    }
+    let choice = rng_f32(rng);
+    let u = rng_vec2(rng);
+    let frame = frame_from_normal(ns);
+    let v = to_local(frame, wo);
+    if v.z <= 0.0 {
+        return s;
+    }
+    var wi: vec3<f32>;
+    if choice < 0.5 + 0.5 * l.metallic {
+        let m = to_world(frame, sample_visible_normal(v, mr_alpha(l), u));
+        wi = safe_normalize(2.0 * dot(wo, m) * m - wo);
+        if all(wi == vec3<f32>(0.0)) {
+            return s;
+        }
+    } else {
+        wi = to_world(frame, sample_cosine_hemisphere(u));
+    }
+    let pdf = mr_pdf(l, ns, wo, wi);
+    let nl = dot(ns, wi);
+    if !(pdf > 0.0 && finite(pdf) && nl > 0.0) {
+        return s;
+    }
+    let weight = mr_eval(l, ns, wo, wi) * (nl / pdf);
+    if !finite_vec(weight) {
+        return s;
+    }
+    s.wi = wi;
+    s.weight = weight;
+    s.pdf = pdf;
+    s.valid = true;
+    return s;
+}
+
+fn offset_origin(p: vec3<f32>, n: vec3<f32>, extent: f32) -> vec3<f32> {
+    let delta = OFFSET_RELATIVE * max(extent, max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    return p + n * delta;
+}
+
+fn finite_or_zero(v: vec3<f32>) -> vec3<f32> {
+    if finite_vec(v) {
+        return v;
+    }
+    return vec3<f32>(0.0);
+}
+
+// Rays traced for one texel, by kind (`RayStats`).
+struct Counts {
+    closest: u32,
+    shadow: u32,
+}
+
+fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, counts: ptr<function, Counts>) -> bool {
+    (*counts).shadow += 1u;
+    return traverse(o, d, t_max, objects, true).found;
+}
+
+fn closest(o: vec3<f32>, d: vec3<f32>, objects: bool, counts: ptr<function, Counts>) -> Hit {
+    (*counts).closest += 1u;
+    return traverse(o, d, F32_MAX, objects, false);
+}
+
+fn env_active() -> bool {
+    return (params.flags & FLAG_ENV_ACTIVE) != 0u;
+}
+
+// `Integrator::escaped`.
+fn escaped(wi: vec3<f32>, pdf: f32, throughput: vec3<f32>) -> vec3<f32> {
+    return throughput * environment_eval(wi) * power_heuristic(pdf, environment_pdf(wi));
+}
+
+// `Integrator::radiance_leaving` from the first hit `first` of a ray along `incoming_in`.
+fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec3<f32> {
+    let env_on = env_active();
+    let emitters = (params.flags & FLAG_EMITTERS) != 0u;
+    var radiance = vec3<f32>(0.0);
+    var throughput = vec3<f32>(1.0);
+    var hit = first;
+    var incoming = incoming_in;
+    var bounce = 0u;
+    loop {
+        // `oriented_normals`.
+        var ng = safe_normalize(hit.geometric_normal);
+        if all(ng == vec3<f32>(0.0)) {
+            ng = -incoming;
+        }
+        if dot(ng, incoming) > 0.0 {
+            ng = -ng;
+        }
+        var ns = safe_normalize(hit.shading_normal);
+        if all(ns == vec3<f32>(0.0)) {
+            ns = ng;
+        }
+        if dot(ns, ng) < 0.0 {
+            ns = -ns;
+        }
+        let wo = -incoming;
+        if hit.material >= arrayLength(&materials) {
+            break;
+        }
+        let m = materials[hit.material];
+        radiance += throughput * m.emission;
+        var valid = false;
+        let lobe = lobe_at(m, hit.uv, &valid);
+        if !valid {
+            break;
+        }
+        let p = hit.position;
+        let origin = offset_origin(p, ng, hit.extent);
+
+        // Delta lights.
+        for (var i = 0u; i < params.light_count; i++) {
+            let ls = sample_li(lights[i], p);
+            if !ls.valid {
+                continue;
+            }
+            let c = dot(ns, ls.dir);
+            if c <= 0.0 || dot(ng, ls.dir) <= 0.0 {
+                continue;
+            }
+            var t_max = F32_MAX;
+            if ls.distance != F32_MAX {
+                t_max = ls.distance * (1.0 - 1e-4);
+            }
+            if !occluded(origin, ls.dir, t_max, objects, counts) {
+                radiance += throughput * lobe_f(lobe, ns, wo, ls.dir) * ls.irradiance * c;
+            }
+        }
+
+        // Environment light sample (MIS with the BSDF sample below).
+        if env_on {
+            let es = sample_environment(rng_vec2(rng));
+            let c = dot(ns, es.dir);
+            if es.pdf > 0.0 && c > 0.0 && dot(ng, es.dir) > 0.0 {
+                if !occluded(origin, es.dir, F32_MAX, objects, counts) {
+                    let le = environment_eval(es.dir);
+                    let w = power_heuristic(es.pdf, lobe_pdf(lobe, ns, wo, es.dir, c));
+                    radiance += throughput * lobe_f(lobe, ns, wo, es.dir) * le * (c * w / es.pdf);
+                }
+            }
+        }
+
+        // BSDF sample: environment MIS partner and path continuation.
+        let gather_next = bounce < params.max_bounces;
+        if !env_on && !gather_next && !emitters {
+            break;
+        }
+        let bs = lobe_sample(lobe, ns, wo, rng);
+        if !bs.valid {
+            break;
+        }
+        if bs.pdf <= 0.0 || dot(ng, bs.wi) <= 0.0 {
+            break;
+        }
+        throughput *= bs.weight;
+        if !gather_next {
+            // `Integrator::last_sample`.
+            if emitters {
+                let h = closest(origin, bs.wi, objects, counts);
+                if h.found {
+                    let mi = attrs[h.slot].material;
+                    if mi < arrayLength(&materials) {
+                        radiance += throughput * materials[mi].emission;
+                    }
+                } else if env_on {
+                    radiance += escaped(bs.wi, bs.pdf, throughput);
+                }
+            } else if !occluded(origin, bs.wi, F32_MAX, objects, counts) {
+                radiance += escaped(bs.wi, bs.pdf, throughput);
+            }
+            break;
+        }
+        let next = closest(origin, bs.wi, objects, counts);
+        if !next.found {
+            if env_on {
+                radiance += escaped(bs.wi, bs.pdf, throughput);
+            }
+            break;
+        }
+        bounce += 1u;
+        if bounce >= RUSSIAN_ROULETTE_START {
+            // `russian_roulette`.
+            let q = min(max(max(throughput.x, throughput.y), throughput.z), 0.95);
+            if !(q > 0.0) || rng_f32(rng) >= q {
+                break;
+            }
+            throughput /= q;
+        }
+        hit = surface_hit(next);
+        incoming = bs.wi;
+    }
+    return finite_or_zero(radiance);
+}
+
+// `Integrator::radiance_from`: radiance arriving at `o` from `-dir`, and the first hit's
+// distance (F32_MAX when the ray escapes).
+fn radiance(o: vec3<f32>, dir: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec4<f32> {
+    let first = closest(o, dir, objects, counts);
+    if !first.found {
+        var l = environment_eval(dir);
+        for (var i = 0u; i < params.light_count; i++) {
+            l += disc_radiance(lights[i], dir);
+        }
+        return vec4<f32>(finite_or_zero(l), F32_MAX);
+    }
+    return vec4<f32>(radiance_leaving(surface_hit(first), dir, objects, rng, counts), first.t);
+}

@@ -1,0 +1,44 @@
+//! Capture devices: what captures the cube maps of a bake when it is not this crate's CPU path
+//! tracer ([`crate::capture`]). The GPU path tracer (crate `oslf-bake-gpu`, which this crate
+//! never depends on: the bake has no wgpu) implements [`CaptureDevice`]; the bake hands it
+//! batches of cubes in store order ([`crate::bake::BakeOptions::device`]), so resuming,
+//! sharding and merging work as with the CPU path.
+
+use glam::Vec3;
+use oslf_format::CubeImage;
+
+use crate::capture::CaptureSettings;
+use crate::integrator::RayStats;
+use crate::noise::NoiseStats;
+use crate::Result;
+
+/// One cube to capture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CubeJob {
+    /// Where the cube is captured from.
+    pub origin: Vec3,
+    /// The cube's index in the store: it selects the random streams, so a cube's texels are
+    /// the same in whatever batch it is captured.
+    pub index: u32,
+    /// Whether the OSLF objects are part of the scene this cube sees: false for the
+    /// environment-map baseline's cube at the objects' centre.
+    pub sees_objects: bool,
+}
+
+/// A captured cube: its texels (and distance plane), the rays traced for it, and the noise of
+/// its texels ([`crate::noise`]; empty for the environment-map baseline's cube).
+pub type CapturedCube = (CubeImage, RayStats, NoiseStats);
+
+/// A cube-map capture backend for a scene it was built for.
+pub trait CaptureDevice: Send + Sync + std::fmt::Debug {
+    /// What captures, for reports: the adapter's name, driver and backend.
+    fn describe(&self) -> String;
+
+    /// How many cubes of `settings` one [`CaptureDevice::capture`] call should get (bounded
+    /// memory: the device keeps one batch's texels at a time).
+    fn batch_cubes(&self, settings: &CaptureSettings) -> usize;
+
+    /// The cubes of `jobs`, in order, each the capture [`crate::capture::capture_cube`]
+    /// computes (the same estimator, so the same expected texels).
+    fn capture(&self, jobs: &[CubeJob], settings: &CaptureSettings) -> Result<Vec<CapturedCube>>;
+}
