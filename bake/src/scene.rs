@@ -104,6 +104,9 @@ pub struct BakeSettings {
     pub distance_channel: bool,
     /// Capture the environment-map baseline: one extra cube at the object's centre.
     pub env_cube: bool,
+    /// What captures the cube maps (not part of the store: CPU and GPU captures of a scene
+    /// differ only by rounding, so either may resume the other's bake).
+    pub device: crate::device::DeviceChoice,
 }
 
 /// How densely sample points are placed.

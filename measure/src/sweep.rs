@@ -104,6 +104,7 @@ fn default_settings() -> BakeSettings {
         mantissa_bits: 9,
         distance_channel: false,
         env_cube: true,
+        device: Default::default(),
     }
 }
 

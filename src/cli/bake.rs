@@ -58,6 +58,11 @@ pub struct Args {
     /// machine's threads (0: no limit). Memory and disk are always checked.
     #[arg(long, default_value_t = 12.0, value_name = "HOURS")]
     max_hours: f64,
+    /// What captures the cube maps: auto (the GPU on a hardware adapter, else the CPU), cpu
+    /// or gpu [default: the scene's `[bake] device`, else auto]. Both compute the same
+    /// estimator; their stores differ only by rounding.
+    #[arg(long, value_parser = parse_device)]
+    device: Option<oslf_bake::device::DeviceChoice>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -69,6 +74,10 @@ pub struct Args {
 
 fn parse_encoding(s: &str) -> Result<oslf_format::Encoding, String> {
     s.parse().map_err(|e: oslf_format::Error| e.to_string())
+}
+
+fn parse_device(s: &str) -> Result<oslf_bake::device::DeviceChoice, String> {
+    s.parse()
 }
 
 fn parse_shard(s: &str) -> Result<ShardSpec, String> {
@@ -131,13 +140,20 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             eprintln!("warning: {w}");
         }
     }
+    let (device, why) = match args.device {
+        Some(d) => super::device::capture_device(&scene, d, "--device")?,
+        None => super::device::capture_device(&scene, scene.bake.device, "[bake] device")?,
+    };
+    if !args.quiet {
+        eprintln!("capture on {why}");
+    }
     let options = BakeOptions {
         output: output.clone(),
         resume: args.resume,
         progress: super::progress::bars(!args.quiet),
         cube_limit: args.max_cubes,
         refuse_empty_texels: args.strict,
-        device: None,
+        device,
     };
     if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
         bail!(
@@ -158,7 +174,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         }
     }
     let report = bake_shard(&scene, &options, args.shard, &limits).map_err(with_flag_hints)?;
-    print_summary(&report);
+    print_summary(&report, &why);
     warn_empty_texels(&report);
     if !report.finished {
         println!(
@@ -215,7 +231,7 @@ fn warn_empty_texels(report: &BakeReport) {
     }
 }
 
-fn print_summary(r: &BakeReport) {
+fn print_summary(r: &BakeReport, why: &str) {
     let m = &r.sample_maps;
     match &r.shard {
         Some(s) => println!(
@@ -277,8 +293,10 @@ fn print_summary(r: &BakeReport) {
             String::new()
         }
     );
+    println!("capture        {why}");
     print_noise(r);
     let rays = (r.rays_closest + r.rays_shadow) as f64;
+    let on_cpu = r.capture_device.starts_with("CPU");
     println!(
         "rays           {} closest + {} shadow = {:.1} M, {:.2} Mrays/s{}",
         r.rays_closest,
@@ -286,7 +304,7 @@ fn print_summary(r: &BakeReport) {
         rays / 1e6,
         r.mrays_per_second,
         match r.capture_cpu_seconds {
-            Some(cpu) if cpu > 0.0 => format!(
+            Some(cpu) if cpu > 0.0 && on_cpu => format!(
                 " ({:.2} Mrays per CPU-second, {:.1} CPU-s)",
                 rays / cpu / 1e6,
                 cpu

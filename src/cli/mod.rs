@@ -5,6 +5,7 @@ mod bake;
 mod cache_stats;
 mod compare;
 mod completions;
+mod device;
 mod flags;
 mod progress;
 mod render;

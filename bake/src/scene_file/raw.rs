@@ -336,6 +336,7 @@ pub(super) struct RawBake {
     pub(super) mantissa_bits: Option<Spanned<i64>>,
     pub(super) distance_channel: Option<bool>,
     pub(super) env_cube: Option<bool>,
+    pub(super) device: Option<DeviceName>,
 }
 
 impl RawBake {
@@ -358,7 +359,8 @@ impl RawBake {
             zstd_level,
             mantissa_bits,
             distance_channel,
-            env_cube
+            env_cube,
+            device
         );
         // A preset that sets one density key replaces the other.
         if over.sample_count.is_some() && over.sample_spacing.is_none() {
@@ -473,6 +475,15 @@ impl<'de> Deserialize<'de> for EncodingName {
                     "unknown encoding {s:?} (expected \"rgb9e5\", \"rgba16f\", \"rgba32f\" or \"bc6h\")"
                 ))
             })
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct DeviceName(pub(super) crate::device::DeviceChoice);
+impl<'de> Deserialize<'de> for DeviceName {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map(DeviceName).map_err(D::Error::custom)
     }
 }
 

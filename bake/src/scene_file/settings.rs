@@ -123,6 +123,7 @@ impl Ctx<'_> {
             mantissa_bits,
             distance_channel: merged.distance_channel.unwrap_or(true),
             env_cube: merged.env_cube.unwrap_or(true),
+            device: merged.device.map_or_else(Default::default, |d| d.0),
         };
         Ok((settings, epsilon_span))
     }

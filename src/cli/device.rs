@@ -1,0 +1,49 @@
+//! `--device auto|cpu|gpu`: which device captures a bake's cube maps, and why.
+
+use std::sync::Arc;
+
+use anyhow::Context;
+use oslf_bake::device::{CaptureDevice, DeviceChoice};
+use oslf_bake::scene::Scene;
+use oslf_bake_gpu::GpuCapture;
+use oslf_runtime::Gpu;
+
+/// The capture device for `scene` by `choice` (`None`: the CPU path tracer), and the reason,
+/// for the summary.
+pub fn capture_device(
+    scene: &Scene,
+    choice: DeviceChoice,
+    flag: &str,
+) -> anyhow::Result<(Option<Arc<dyn CaptureDevice>>, String)> {
+    match choice {
+        DeviceChoice::Cpu => Ok((None, format!("CPU, as {flag} asks"))),
+        DeviceChoice::Gpu => {
+            let gpu = Gpu::headless().with_context(|| format!("{flag} gpu: no GPU to bake on"))?;
+            let reason = if gpu.shares_system_memory {
+                format!(
+                    "GPU {}, as {flag} asks (a CPU adapter: the CPU path is usually faster there)",
+                    gpu.adapter_name
+                )
+            } else {
+                format!("GPU {}, as {flag} asks", gpu.adapter_name)
+            };
+            let capture = GpuCapture::for_scene(gpu, scene).context("the GPU capture")?;
+            Ok((Some(Arc::new(capture)), reason))
+        }
+        DeviceChoice::Auto => match Gpu::headless() {
+            Ok(gpu) if !gpu.shares_system_memory => {
+                let reason = format!("GPU {} (auto: a hardware adapter)", gpu.adapter_name);
+                let capture = GpuCapture::for_scene(gpu, scene).context("the GPU capture")?;
+                Ok((Some(Arc::new(capture)), reason))
+            }
+            Ok(gpu) => Ok((
+                None,
+                format!(
+                    "CPU (auto: the only adapter, {}, runs on the CPU, where the CPU path is faster; --device gpu uses it anyway)",
+                    gpu.adapter_name
+                ),
+            )),
+            Err(e) => Ok((None, format!("CPU (auto: no GPU adapter: {e})"))),
+        },
+    }
+}
