@@ -130,7 +130,10 @@ fn cases() -> Vec<Case> {
         Case {
             name: "lat-long map, metallic-roughness with a texture",
             instances: sphere_on_ground(vec![]),
-            materials: vec![metallic_roughness(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.3), mr_textured],
+            materials: vec![
+                metallic_roughness(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.3),
+                mr_textured,
+            ],
             lights: vec![],
             environment: Environment::LatLong(map.into()),
         },
@@ -257,7 +260,10 @@ fn paired(case: &Case, bounces: u32, job: CubeJob, cpu: &CubeImage, gpu: &CubeIm
         .map(|(a, b)| (*a, *b))
         .collect();
     assert!(
-        texels.iter().flat_map(|(_, g)| g).all(|c| c.is_finite() && *c >= 0.0),
+        texels
+            .iter()
+            .flat_map(|(_, g)| g)
+            .all(|c| c.is_finite() && *c >= 0.0),
         "{what}: a GPU texel is negative or not finite"
     );
     let differing = texels
@@ -324,7 +330,8 @@ fn gpu_capture_is_the_cpu_capture_texel_by_texel() {
                         index: i as u32 * 7 + 3,
                         sees_objects,
                     };
-                    let ((cpu, cpu_rays), (gpu, gpu_rays)) = both(&case, &d, bounces, job, &settings);
+                    let ((cpu, cpu_rays), (gpu, gpu_rays)) =
+                        both(&case, &d, bounces, job, &settings);
                     assert!(
                         cpu_rays.abs_diff(gpu_rays) * 100 <= cpu_rays,
                         "{}: {cpu_rays} CPU rays, {gpu_rays} GPU rays",
