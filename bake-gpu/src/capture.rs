@@ -188,7 +188,7 @@ impl GpuCapture {
         .into_iter()
         .max()
         .unwrap_or(0) as u64;
-        if largest > u64::from(limits.max_storage_buffer_binding_size) {
+        if largest > limits.max_storage_buffer_binding_size {
             return Err(GpuBakeError::Scene(format!(
                 "the scene needs a {largest}-byte buffer; {} binds at most {} bytes (bake on the CPU: --device cpu)",
                 gpu.adapter_name, limits.max_storage_buffer_binding_size
@@ -289,7 +289,11 @@ impl GpuCapture {
     pub fn cubes_per_batch(&self, settings: &CaptureSettings) -> usize {
         let texels = 6 * u64::from(settings.resolution.max(1)).pow(2);
         let bytes = texels * std::mem::size_of::<TexelOut>() as u64;
-        let limit = u64::from(self.gpu.limits().max_storage_buffer_binding_size).min(BATCH_BYTES);
+        let limit = self
+            .gpu
+            .limits()
+            .max_storage_buffer_binding_size
+            .min(BATCH_BYTES);
         let by_memory = (limit / bytes).max(1);
         BATCH_TEXELS
             .div_ceil(texels)
@@ -313,7 +317,7 @@ impl GpuCapture {
         let total = per_cube * jobs.len() as u64;
         let out_bytes = total * std::mem::size_of::<TexelOut>() as u64;
         if total > u64::from(u32::MAX)
-            || out_bytes > u64::from(self.gpu.limits().max_storage_buffer_binding_size)
+            || out_bytes > self.gpu.limits().max_storage_buffer_binding_size
         {
             return Err(GpuBakeError::Scene(format!(
                 "{} cubes of {res}² texels do not fit one GPU batch ({out_bytes} bytes)",

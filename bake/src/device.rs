@@ -42,38 +42,3 @@ pub trait CaptureDevice: Send + Sync + std::fmt::Debug {
     /// computes (the same estimator, so the same expected texels).
     fn capture(&self, jobs: &[CubeJob], settings: &CaptureSettings) -> Result<Vec<CapturedCube>>;
 }
-
-/// Which device captures a bake's cube maps (`[bake] device`, `oslf bake --device`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DeviceChoice {
-    /// The GPU on a hardware adapter, else the CPU (on a CPU adapter such as lavapipe the CPU
-    /// path tracer is the faster of the two).
-    #[default]
-    Auto,
-    Cpu,
-    Gpu,
-}
-
-impl std::str::FromStr for DeviceChoice {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        match s {
-            "auto" => Ok(DeviceChoice::Auto),
-            "cpu" => Ok(DeviceChoice::Cpu),
-            "gpu" => Ok(DeviceChoice::Gpu),
-            _ => Err(format!(
-                "unknown device {s:?} (expected \"auto\", \"cpu\" or \"gpu\")"
-            )),
-        }
-    }
-}
-
-impl std::fmt::Display for DeviceChoice {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            DeviceChoice::Auto => "auto",
-            DeviceChoice::Cpu => "cpu",
-            DeviceChoice::Gpu => "gpu",
-        })
-    }
-}

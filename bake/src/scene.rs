@@ -106,7 +106,42 @@ pub struct BakeSettings {
     pub env_cube: bool,
     /// What captures the cube maps (not part of the store: CPU and GPU captures of a scene
     /// differ only by rounding, so either may resume the other's bake).
-    pub device: crate::device::DeviceChoice,
+    pub device: DeviceChoice,
+}
+
+/// Which device captures a bake's cube maps (`[bake] device`, `oslf bake --device`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DeviceChoice {
+    /// The GPU on a hardware adapter, else the CPU (on a CPU adapter such as lavapipe the CPU
+    /// path tracer is the faster of the two).
+    #[default]
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+impl std::str::FromStr for DeviceChoice {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "auto" => Ok(DeviceChoice::Auto),
+            "cpu" => Ok(DeviceChoice::Cpu),
+            "gpu" => Ok(DeviceChoice::Gpu),
+            _ => Err(format!(
+                "unknown device {s:?} (expected \"auto\", \"cpu\" or \"gpu\")"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for DeviceChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            DeviceChoice::Auto => "auto",
+            DeviceChoice::Cpu => "cpu",
+            DeviceChoice::Gpu => "gpu",
+        })
+    }
 }
 
 /// How densely sample points are placed.

@@ -62,7 +62,7 @@ pub struct Args {
     /// or gpu [default: the scene's `[bake] device`, else auto]. Both compute the same
     /// estimator; their stores differ only by rounding.
     #[arg(long, value_parser = parse_device)]
-    device: Option<oslf_bake::device::DeviceChoice>,
+    device: Option<oslf_bake::scene::DeviceChoice>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -76,7 +76,23 @@ fn parse_encoding(s: &str) -> Result<oslf_format::Encoding, String> {
     s.parse().map_err(|e: oslf_format::Error| e.to_string())
 }
 
-fn parse_device(s: &str) -> Result<oslf_bake::device::DeviceChoice, String> {
+/// The store's path when `-o` is not given: the scene's name with .oslf in the current
+/// directory, with `.shard-I-of-N` for a shard.
+fn default_output(args: &Args) -> PathBuf {
+    let stem = args.scene.file_stem().unwrap_or_default();
+    let store = PathBuf::from(stem).with_extension("oslf");
+    match args.shard {
+        Some(s) => PathBuf::from(format!(
+            "{}.shard-{}-of-{}",
+            store.display(),
+            s.index(),
+            s.count()
+        )),
+        None => store,
+    }
+}
+
+fn parse_device(s: &str) -> Result<oslf_bake::scene::DeviceChoice, String> {
     s.parse()
 }
 
@@ -103,19 +119,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         }
         scene.bake.encoding = encoding;
     }
-    let output = args.output.clone().unwrap_or_else(|| {
-        let stem = args.scene.file_stem().unwrap_or_default();
-        let store = PathBuf::from(stem).with_extension("oslf");
-        match args.shard {
-            Some(s) => PathBuf::from(format!(
-                "{}.shard-{}-of-{}",
-                store.display(),
-                s.index(),
-                s.count()
-            )),
-            None => store,
-        }
-    });
+    let output = args.output.clone().unwrap_or_else(|| default_output(&args));
     let preview = match &args.preview {
         Some(p) if p.as_os_str() == "none" => None,
         Some(p) => Some(p.clone()),
@@ -140,21 +144,6 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             eprintln!("warning: {w}");
         }
     }
-    let (device, why) = match args.device {
-        Some(d) => super::device::capture_device(&scene, d, "--device")?,
-        None => super::device::capture_device(&scene, scene.bake.device, "[bake] device")?,
-    };
-    if !args.quiet {
-        eprintln!("capture on {why}");
-    }
-    let options = BakeOptions {
-        output: output.clone(),
-        resume: args.resume,
-        progress: super::progress::bars(!args.quiet),
-        cube_limit: args.max_cubes,
-        refuse_empty_texels: args.strict,
-        device,
-    };
     if !(args.max_hours.is_finite() && args.max_hours >= 0.0) {
         bail!(
             "--max-hours {} must be a number of hours ≥ 0",
@@ -173,6 +162,21 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             e => bail!("{e}"),
         }
     }
+    // The device last: starting a GPU takes a moment.
+    let (device, why) = match args.device {
+        Some(d) => super::device::capture_device(&scene, d, "--device", args.quiet)?,
+        None => {
+            super::device::capture_device(&scene, scene.bake.device, "[bake] device", args.quiet)?
+        }
+    };
+    let options = BakeOptions {
+        output: output.clone(),
+        resume: args.resume,
+        progress: super::progress::bars(!args.quiet),
+        cube_limit: args.max_cubes,
+        refuse_empty_texels: args.strict,
+        device,
+    };
     let report = bake_shard(&scene, &options, args.shard, &limits).map_err(with_flag_hints)?;
     print_summary(&report, &why);
     warn_empty_texels(&report);

@@ -3,14 +3,28 @@
 use std::sync::Arc;
 
 use anyhow::Context;
-use oslf_bake::device::{CaptureDevice, DeviceChoice};
+use oslf_bake::device::CaptureDevice;
+use oslf_bake::scene::DeviceChoice;
 use oslf_bake::scene::Scene;
 use oslf_bake_gpu::GpuCapture;
 use oslf_runtime::Gpu;
 
 /// The capture device for `scene` by `choice` (`None`: the CPU path tracer), and the reason,
-/// for the summary.
+/// for the summary; said on stderr unless `quiet`.
 pub fn capture_device(
+    scene: &Scene,
+    choice: DeviceChoice,
+    flag: &str,
+    quiet: bool,
+) -> anyhow::Result<(Option<Arc<dyn CaptureDevice>>, String)> {
+    let chosen = choose(scene, choice, flag)?;
+    if !quiet {
+        eprintln!("capture on {}", chosen.1);
+    }
+    Ok(chosen)
+}
+
+fn choose(
     scene: &Scene,
     choice: DeviceChoice,
     flag: &str,

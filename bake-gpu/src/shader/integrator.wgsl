@@ -302,6 +302,59 @@ fn escaped(wi: vec3<f32>, pdf: f32, throughput: vec3<f32>) -> vec3<f32> {
     return throughput * environment_eval(wi) * power_heuristic(pdf, environment_pdf(wi));
 }
 
+// `Integrator::last_sample`: what the last vertex's BSDF sample from `origin` towards `wi`
+// (density `pdf`) adds with `throughput`.
+fn last_sample(origin: vec3<f32>, wi: vec3<f32>, pdf: f32, throughput: vec3<f32>, emitters: bool, objects: bool, counts: ptr<function, Counts>) -> vec3<f32> {
+    if emitters {
+        let h = closest(origin, wi, objects, counts);
+        if h.found {
+            let mi = attrs[h.slot].material;
+            if mi < arrayLength(&materials) {
+                return throughput * materials[mi].emission;
+            }
+            return vec3<f32>(0.0);
+        }
+        if env_active() {
+            return escaped(wi, pdf, throughput);
+        }
+        return vec3<f32>(0.0);
+    }
+    if occluded(origin, wi, F32_MAX, objects, counts) {
+        return vec3<f32>(0.0);
+    }
+    return escaped(wi, pdf, throughput);
+}
+
+// `oriented_normals`: the geometric and shading normals of `hit` facing the incoming ray.
+fn oriented_normals(hit: SurfaceHit, incoming: vec3<f32>) -> array<vec3<f32>, 2> {
+    var ng = safe_normalize(hit.geometric_normal);
+    if all(ng == vec3<f32>(0.0)) {
+        ng = -incoming;
+    }
+    if dot(ng, incoming) > 0.0 {
+        ng = -ng;
+    }
+    var ns = safe_normalize(hit.shading_normal);
+    if all(ns == vec3<f32>(0.0)) {
+        ns = ng;
+    }
+    if dot(ns, ng) < 0.0 {
+        ns = -ns;
+    }
+    return array<vec3<f32>, 2>(ng, ns);
+}
+
+// `russian_roulette`: whether the path survives (probability q, the throughput's largest
+// channel up to 0.95), its throughput then divided by q.
+fn russian_roulette(throughput: ptr<function, vec3<f32>>, rng: ptr<function, Rng>) -> bool {
+    let q = min(max(max((*throughput).x, (*throughput).y), (*throughput).z), 0.95);
+    if !(q > 0.0) || rng_f32(rng) >= q {
+        return false;
+    }
+    *throughput = *throughput / q;
+    return true;
+}
+
 // `Integrator::radiance_leaving` from the first hit `first` of a ray along `incoming_in`.
 fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec3<f32> {
     let env_on = env_active();
@@ -312,21 +365,9 @@ fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rn
     var incoming = incoming_in;
     var bounce = 0u;
     loop {
-        // `oriented_normals`.
-        var ng = safe_normalize(hit.geometric_normal);
-        if all(ng == vec3<f32>(0.0)) {
-            ng = -incoming;
-        }
-        if dot(ng, incoming) > 0.0 {
-            ng = -ng;
-        }
-        var ns = safe_normalize(hit.shading_normal);
-        if all(ns == vec3<f32>(0.0)) {
-            ns = ng;
-        }
-        if dot(ns, ng) < 0.0 {
-            ns = -ns;
-        }
+        let normals = oriented_normals(hit, incoming);
+        let ng = normals[0];
+        let ns = normals[1];
         let wo = -incoming;
         if hit.material >= arrayLength(&materials) {
             break;
@@ -387,20 +428,7 @@ fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rn
         }
         throughput *= bs.weight;
         if !gather_next {
-            // `Integrator::last_sample`.
-            if emitters {
-                let h = closest(origin, bs.wi, objects, counts);
-                if h.found {
-                    let mi = attrs[h.slot].material;
-                    if mi < arrayLength(&materials) {
-                        radiance += throughput * materials[mi].emission;
-                    }
-                } else if env_on {
-                    radiance += escaped(bs.wi, bs.pdf, throughput);
-                }
-            } else if !occluded(origin, bs.wi, F32_MAX, objects, counts) {
-                radiance += escaped(bs.wi, bs.pdf, throughput);
-            }
+            radiance += last_sample(origin, bs.wi, bs.pdf, throughput, emitters, objects, counts);
             break;
         }
         let next = closest(origin, bs.wi, objects, counts);
@@ -411,13 +439,8 @@ fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rn
             break;
         }
         bounce += 1u;
-        if bounce >= RUSSIAN_ROULETTE_START {
-            // `russian_roulette`.
-            let q = min(max(max(throughput.x, throughput.y), throughput.z), 0.95);
-            if !(q > 0.0) || rng_f32(rng) >= q {
-                break;
-            }
-            throughput /= q;
+        if bounce >= RUSSIAN_ROULETTE_START && !russian_roulette(&throughput, rng) {
+            break;
         }
         hit = surface_hit(next);
         incoming = bs.wi;

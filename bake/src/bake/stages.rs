@@ -220,25 +220,7 @@ pub(super) fn capture(
         };
         let encoded: Vec<_> = match &device {
             Some(d) => {
-                let jobs: Vec<CubeJob> = (first..end)
-                    .map(|k| {
-                        let i = order.cube(k as u32);
-                        match points.get(i as usize) {
-                            Some(p) => CubeJob {
-                                origin: Vec3::from_array(p.position),
-                                index: i,
-                                sees_objects: true,
-                            },
-                            // The one cube past the sample points: the environment-map
-                            // baseline, which sees the scene without the objects.
-                            None => CubeJob {
-                                origin: centre,
-                                index: i,
-                                sees_objects: false,
-                            },
-                        }
-                    })
-                    .collect();
+                let jobs = device_jobs(order, first..end, points, centre);
                 let cubes = d.capture(&jobs, &capture)?;
                 if cubes.len() != jobs.len() {
                     return Err(crate::BakeError::Device {
@@ -298,6 +280,34 @@ pub(super) fn capture(
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
     Ok(captured)
+}
+
+/// The cubes `range` of `sink`'s order as jobs for a capture device: sample points, and past
+/// them the environment-map baseline's cube at `centre`, which sees the scene without the
+/// objects.
+fn device_jobs(
+    sink: &Sink,
+    range: std::ops::Range<usize>,
+    points: &[SamplePoint],
+    centre: Vec3,
+) -> Vec<CubeJob> {
+    range
+        .map(|k| {
+            let index = sink.cube(k as u32);
+            match points.get(index as usize) {
+                Some(p) => CubeJob {
+                    origin: Vec3::from_array(p.position),
+                    index,
+                    sees_objects: true,
+                },
+                None => CubeJob {
+                    origin: centre,
+                    index,
+                    sees_objects: false,
+                },
+            }
+        })
+        .collect()
 }
 
 /// A capture without a noise estimate: the environment-map baseline's cube is no sample

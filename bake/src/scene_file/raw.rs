@@ -479,7 +479,7 @@ impl<'de> Deserialize<'de> for EncodingName {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct DeviceName(pub(super) crate::device::DeviceChoice);
+pub(super) struct DeviceName(pub(super) crate::scene::DeviceChoice);
 impl<'de> Deserialize<'de> for DeviceName {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         let s = String::deserialize(d)?;
