@@ -18,7 +18,7 @@ use crate::scene::GpuScene;
 use crate::shader;
 
 /// Invocations per workgroup (`@workgroup_size` in shader/capture.wgsl).
-const WORKGROUP: u32 = 64;
+pub const WORKGROUP: u32 = 64;
 /// Workgroups per dispatch row: a dispatch is `ROW_GROUPS × rows` workgroups.
 const ROW_GROUPS: u32 = 4096;
 /// Most paths (texels × samples) per dispatch: each dispatch stays short (well under a

@@ -88,6 +88,7 @@ pub mod renderer;
 pub mod replay;
 #[cfg(test)]
 mod shader_layout;
+pub mod wgsl_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
 pub use error::{Param, Result, RuntimeError};

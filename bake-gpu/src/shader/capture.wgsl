@@ -105,9 +105,7 @@ struct Job {
     origin: vec3<f32>,
     index: u32,
     sees_objects: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    _pad: array<u32, 3>,
 }
 
 // One texel's result: radiance, distance, its samples' luminance sum and sum of squares, the

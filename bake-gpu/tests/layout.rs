@@ -1,0 +1,196 @@
+//! shader/capture.wgsl's structs are the Rust structs that fill them (field by field: name,
+//! order, offset, size, type), and the constants both sides use are equal. A change to either
+//! side alone fails here.
+
+use std::mem::size_of;
+
+use oslf_bake_gpu::capture::{Job, Params, TexelOut, TraceHit, TraceRay};
+use oslf_bake_gpu::scene::{GpuLight, Mat, Node, Tex, Tri, TriAttr};
+use oslf_runtime::wgsl_fields as fields;
+use oslf_runtime::wgsl_layout::{check_struct, constant_value, parse};
+
+#[test]
+fn the_shader_structs_are_the_rust_structs() {
+    let module = parse("capture shader", &oslf_bake_gpu::shader::source());
+    let check = |name: &str, fields: Vec<oslf_runtime::wgsl_layout::Field>, size: usize| {
+        check_struct(&module, name, &fields, size, false)
+    };
+    check(
+        "Params",
+        fields!(Params {
+            resolution,
+            strata,
+            max_bounces,
+            light_count,
+            seed,
+            env_kind,
+            flags,
+            texels,
+            row_invocations,
+            first,
+            _pad1,
+            env_size,
+            env_tables,
+            env_rotation,
+            env_constant,
+            perez_y,
+            perez_x,
+            perez_yc,
+            perez_e,
+            norm,
+            model_sun,
+            ground,
+        }),
+        size_of::<Params>(),
+    );
+    check(
+        "Node",
+        fields!(Node {
+            min,
+            count,
+            max,
+            first
+        }),
+        size_of::<Node>(),
+    );
+    check("Tri", fields!(Tri { v0, v1, v2, plane }), size_of::<Tri>());
+    check(
+        "TriAttr",
+        fields!(TriAttr {
+            n0,
+            material,
+            n1,
+            object,
+            n2,
+            global,
+            gn,
+            _pad0,
+            uv01,
+            uv2,
+            _pad1
+        }),
+        size_of::<TriAttr>(),
+    );
+    check(
+        "Tex",
+        fields!(Tex {
+            kind,
+            width,
+            height,
+            offset,
+            a,
+            scale,
+            b,
+            _pad
+        }),
+        size_of::<Tex>(),
+    );
+    check(
+        "Light",
+        fields!(GpuLight {
+            position,
+            kind,
+            direction,
+            inner,
+            power,
+            outer,
+            angular_radius,
+            _pad0,
+            _pad1,
+            _pad2,
+        }),
+        size_of::<GpuLight>(),
+    );
+    check(
+        "Job",
+        fields!(Job {
+            origin,
+            index,
+            sees_objects,
+            _pad
+        }),
+        size_of::<Job>(),
+    );
+    check(
+        "TexelOut",
+        fields!(TexelOut {
+            radiance,
+            distance,
+            lum_sum,
+            lum_sq,
+            closest,
+            shadow_hit
+        }),
+        size_of::<TexelOut>(),
+    );
+    check(
+        "TraceRay",
+        fields!(TraceRay {
+            origin,
+            t_max,
+            dir,
+            objects
+        }),
+        size_of::<TraceRay>(),
+    );
+    check(
+        "TraceHit",
+        fields!(TraceHit {
+            t,
+            triangle,
+            b1,
+            b2
+        }),
+        size_of::<TraceHit>(),
+    );
+    check(
+        "Mat",
+        fields!(Mat {
+            albedo,
+            mr_texture,
+            model,
+            metallic,
+            roughness,
+            _pad,
+            emission,
+            has_mr_texture,
+        }),
+        size_of::<Mat>(),
+    );
+}
+
+#[test]
+fn the_shader_constants_are_the_crates() {
+    let module = parse("capture shader", &oslf_bake_gpu::shader::source());
+    let value = |name: &str| {
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no constant {name}"));
+        constant_value(&module, c).unwrap_or_else(|| panic!("{name} is no literal"))
+    };
+    assert_eq!(
+        value("OFFSET_RELATIVE"),
+        f64::from(oslf_bake::integrator::OFFSET_RELATIVE)
+    );
+    assert_eq!(
+        value("SELF_TOLERANCE"),
+        f64::from(oslf_bake::bvh::SELF_TOLERANCE)
+    );
+    assert_eq!(
+        value("MIN_ALPHA"),
+        f64::from(oslf_bake::metallic_roughness::MIN_ALPHA)
+    );
+    assert_eq!(value("STACK") as usize, oslf_bake_gpu::scene::MAX_DEPTH);
+    assert_eq!(
+        value("ONE_MINUS_EPSILON"),
+        f64::from(oslf_bake::sampling::ONE_MINUS_EPSILON)
+    );
+    assert_eq!(value("WORKGROUP") as u32, oslf_bake_gpu::capture::WORKGROUP);
+    assert_eq!(
+        value("ENVIRONMENT_OBJECT") as u32,
+        oslf_bake::ray::ENVIRONMENT_OBJECT
+    );
+    assert_eq!(value("F32_MAX"), f64::from(f32::MAX));
+}
