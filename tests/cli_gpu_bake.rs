@@ -188,6 +188,16 @@ fn the_scene_chooses_the_device_and_a_bad_one_is_refused_where_it_stands() {
         summary.contains("capture        GPU ") && summary.contains("as [bake] device asks"),
         "{summary}"
     );
+    // Not quiet: the estimate's capture time is the GPU's, measured on this scene.
+    let (_, stderr) = run(oslf("bake")
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("c.oslf"))
+        .args(["--preview", "none"]));
+    assert!(
+        stderr.contains("capture on GPU ") && stderr.contains("with the cube maps on GPU "),
+        "{stderr}"
+    );
     // The flag wins over the scene.
     let summary = bake(&scene, &dir.join("b.oslf"), &["--device", "cpu"]);
     assert!(

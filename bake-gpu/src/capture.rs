@@ -136,6 +136,8 @@ pub struct GpuCapture {
     /// `Params` without the per-capture fields.
     base: Params,
     triangles: usize,
+    /// Capture rays per second measured on this scene ([`GpuCapture::calibrate`]).
+    rate: Option<f64>,
 }
 
 impl std::fmt::Debug for GpuCapture {
@@ -173,7 +175,49 @@ impl GpuCapture {
             &scene.lights,
             &scene.environment,
         )?;
-        Self::new(gpu, &packed, scene.bake.bounces)
+        let mut capture = Self::new(gpu, &packed, scene.bake.bounces)?;
+        let settings = CaptureSettings::from_bake(&scene.bake);
+        capture.rate = Some(capture.calibrate(oslf_bake::bake::object_centre(scene), &settings)?);
+        Ok(capture)
+    }
+
+    /// Capture rays per second of this device on this scene: a batch of cubes of 16² texels
+    /// (at most the bake's resolution) at `origin`, with the bake's samples per texel and
+    /// bounces, timed after a warm-up capture (drivers compile at the first dispatch). A
+    /// hardware GPU gets 64 cubes (enough to fill it, else the rate would be
+    /// that of an idle GPU), a CPU adapter one.
+    pub fn calibrate(&self, origin: Vec3, settings: &CaptureSettings) -> Result<f64> {
+        let settings = CaptureSettings {
+            resolution: settings.resolution.min(16),
+            samples_per_texel: settings.samples_per_texel.min(16),
+            distance_channel: false,
+            ..*settings
+        };
+        // A first tiny capture: drivers compile the pipeline at its first dispatch.
+        let warm_up = CaptureSettings {
+            resolution: 1,
+            samples_per_texel: 1,
+            ..settings
+        };
+        let first = CubeJob {
+            origin,
+            index: 0,
+            sees_objects: true,
+        };
+        self.capture_cubes(&[first], &warm_up)?;
+        let cubes = if self.gpu.shares_system_memory { 1 } else { 64 };
+        let jobs: Vec<CubeJob> = (0..cubes)
+            .map(|index| CubeJob {
+                origin,
+                index,
+                sees_objects: true,
+            })
+            .collect();
+        let start = std::time::Instant::now();
+        let captured = self.capture_cubes(&jobs, &settings)?;
+        let seconds = start.elapsed().as_secs_f64().max(1e-6);
+        let rays: u64 = captured.iter().map(|c| c.1.total()).sum();
+        Ok(rays as f64 / seconds)
     }
 
     /// The capture of a packed scene, gathering `max_bounces` bounces.
@@ -261,6 +305,7 @@ impl GpuCapture {
             trace,
             base,
             triangles: scene.tris.len(),
+            rate: None,
         };
         capture_gpu.check("building the capture pipelines")?;
         Ok(capture_gpu)
@@ -531,6 +576,10 @@ fn unpack_cube(texels: &[TexelOut], res: u32, k: u32, distance: bool, noise: boo
 impl CaptureDevice for GpuCapture {
     fn describe(&self) -> String {
         format!("GPU {}", self.gpu.adapter_name)
+    }
+
+    fn rays_per_second(&self) -> Option<f64> {
+        self.rate
     }
 
     fn batch_cubes(&self, settings: &CaptureSettings) -> usize {

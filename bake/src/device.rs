@@ -34,6 +34,10 @@ pub trait CaptureDevice: Send + Sync + std::fmt::Debug {
     /// What captures, for reports: the adapter's name, driver and backend.
     fn describe(&self) -> String;
 
+    /// Capture rays per second this device was measured at for this scene (the preflight's
+    /// time estimate uses it), if it was.
+    fn rays_per_second(&self) -> Option<f64>;
+
     /// How many cubes of `settings` one [`CaptureDevice::capture`] call should get (bounded
     /// memory: the device keeps one batch's texels at a time).
     fn batch_cubes(&self, settings: &CaptureSettings) -> usize;

@@ -136,8 +136,15 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         check_writable(png, "the preview")?;
         check_writable(&png.with_extension("exr"), "the preview")?;
     }
+    // The device first: the estimate's capture time is its measured rate.
+    let (device, why) = match args.device {
+        Some(d) => super::device::capture_device(&scene, d, "--device", args.quiet)?,
+        None => {
+            super::device::capture_device(&scene, scene.bake.device, "[bake] device", args.quiet)?
+        }
+    };
     // What the bake will cost (the bake itself refuses what cannot fit, naming the setting).
-    let estimate = estimate(&scene, args.shard);
+    let estimate = estimate(&scene, args.shard, device.as_deref());
     if !args.quiet {
         eprintln!("{estimate}");
         for w in &estimate.warnings {
@@ -162,13 +169,6 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             e => bail!("{e}"),
         }
     }
-    // The device last: starting a GPU takes a moment.
-    let (device, why) = match args.device {
-        Some(d) => super::device::capture_device(&scene, d, "--device", args.quiet)?,
-        None => {
-            super::device::capture_device(&scene, scene.bake.device, "[bake] device", args.quiet)?
-        }
-    };
     let options = BakeOptions {
         output: output.clone(),
         resume: args.resume,
@@ -438,8 +438,13 @@ fn with_flag_hints(e: oslf_bake::BakeError) -> anyhow::Error {
 }
 
 /// What baking `scene` (or one shard of it) will cost on this machine's threads.
-fn estimate(scene: &Scene, shard: Option<ShardSpec>) -> oslf_bake::preflight::Estimate {
+fn estimate(
+    scene: &Scene,
+    shard: Option<ShardSpec>,
+    device: Option<&dyn oslf_bake::device::CaptureDevice>,
+) -> oslf_bake::preflight::Estimate {
     let estimate = oslf_bake::preflight::estimate(scene, rayon::current_num_threads());
+    let estimate = oslf_bake::preflight::for_device(estimate, device);
     match shard {
         Some(s) => estimate.for_shard(s.count()),
         None => estimate,

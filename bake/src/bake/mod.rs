@@ -105,7 +105,14 @@ pub fn bake_shard(
         shard: shard.map(|s| s.to_string()),
         ..Default::default()
     };
-    let (geometry, names) = stages::prepare(scene, &options.output, shard, limits, &mut report)?;
+    let (geometry, names) = stages::prepare(
+        scene,
+        &options.output,
+        shard,
+        limits,
+        options.device.as_ref(),
+        &mut report,
+    )?;
     let (surfaces, placement) = stages::place(scene, &geometry, &mut report)?;
     let (points, maps) = stages::build_maps(
         settings,
@@ -148,6 +155,7 @@ pub fn bake_shard(
     )?;
     if written.texels > 0 {
         let estimate = crate::preflight::estimate(scene, rayon::current_num_threads());
+        let estimate = crate::preflight::for_device(estimate, options.device.as_deref());
         let estimate = match shard {
             Some(s) => estimate.for_shard(s.count()),
             None => estimate,

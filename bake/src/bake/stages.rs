@@ -38,10 +38,12 @@ pub(super) fn prepare(
     output: &Path,
     shard: Option<ShardSpec>,
     limits: &Limits,
+    device: Option<&Arc<dyn CaptureDevice>>,
     report: &mut BakeReport,
 ) -> Result<(TriangleScene, SurfaceNames)> {
     check_store_writable(output)?;
     let estimate = preflight::estimate(scene, rayon::current_num_threads());
+    let estimate = preflight::for_device(estimate, device.map(|d| &**d));
     let estimate = match shard {
         Some(s) => estimate.for_shard(s.count()),
         None => estimate,

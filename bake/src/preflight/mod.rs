@@ -71,6 +71,9 @@ pub struct Estimate {
     pub time: Vec<TimeTerm>,
     /// Things that will work but may not be what was meant (shown, never refused).
     pub warnings: Vec<String>,
+    /// The capture device the cube maps' time is for ([`Estimate::on_device`]); `None`: the
+    /// CPU.
+    pub device: Option<String>,
 }
 
 /// What the machine offers. `None`: unknown, not checked.
@@ -177,6 +180,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         seconds,
         time,
         warnings: warnings(s),
+        device: None,
     }
 }
 
@@ -301,6 +305,46 @@ pub fn duration(s: f64) -> String {
     }
 }
 
+/// `estimate` for `device`'s capture where the device was measured ([`Estimate::on_device`]),
+/// else as it is.
+pub fn for_device(
+    estimate: Estimate,
+    device: Option<&dyn crate::device::CaptureDevice>,
+) -> Estimate {
+    match device.and_then(|d| d.rays_per_second().map(|r| (r, d.describe()))) {
+        Some((rate, name)) => estimate.on_device(rate, &name),
+        None => estimate,
+    }
+}
+
+impl Estimate {
+    /// This estimate for a capture on a device measured at `rays_per_second` (`device`
+    /// names it): the cube maps' time is the capture's rays at that rate (optimistic: half of
+    /// them, as on the CPU, whose paths often end early).
+    pub fn on_device(mut self, rays_per_second: f64, device: &str) -> Self {
+        let rays = self.capture_rays as f64;
+        if let Some(t) = self.time.iter_mut().find(|t| t.name == "cube maps") {
+            t.seconds = (
+                rays * 0.5 / rays_per_second.max(1.0),
+                rays / rays_per_second.max(1.0),
+            );
+            t.detail = format!(
+                "{} at {:.1} Mrays/s on {device} (measured)",
+                t.detail,
+                rays_per_second / 1e6
+            );
+        }
+        self.time
+            .sort_by(|a, b| b.seconds.1.total_cmp(&a.seconds.1));
+        self.seconds = self
+            .time
+            .iter()
+            .fold((0.0, 0.0), |a, t| (a.0 + t.seconds.0, a.1 + t.seconds.1));
+        self.device = Some(device.to_string());
+        self
+    }
+}
+
 impl fmt::Display for Estimate {
     /// One line: `estimate: peak memory ~38 MB, store ~14 MB, time ~9 s–1 min on 2 threads`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -313,6 +357,10 @@ impl fmt::Display for Estimate {
             duration(self.seconds.1),
             self.threads,
             if self.threads == 1 { "" } else { "s" }
-        )
+        )?;
+        match &self.device {
+            Some(d) => write!(f, " with the cube maps on {d}"),
+            None => Ok(()),
+        }
     }
 }
