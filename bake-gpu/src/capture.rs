@@ -117,24 +117,25 @@ pub struct QueryRay {
 }
 
 /// The scene's buffers on the GPU.
-struct SceneBuffers {
-    nodes: wgpu::Buffer,
-    tris: wgpu::Buffer,
-    attrs: wgpu::Buffer,
-    materials: wgpu::Buffer,
-    texels: wgpu::Buffer,
-    lights: wgpu::Buffer,
-    env_tables: wgpu::Buffer,
+pub(crate) struct SceneBuffers {
+    pub(crate) nodes: wgpu::Buffer,
+    pub(crate) tris: wgpu::Buffer,
+    pub(crate) attrs: wgpu::Buffer,
+    pub(crate) materials: wgpu::Buffer,
+    pub(crate) texels: wgpu::Buffer,
+    pub(crate) lights: wgpu::Buffer,
+    pub(crate) env_tables: wgpu::Buffer,
 }
 
 /// The bake's cube-map capture on a GPU, for one scene.
 pub struct GpuCapture {
-    gpu: Gpu,
-    buffers: SceneBuffers,
+    pub(crate) gpu: Gpu,
+    pub(crate) buffers: SceneBuffers,
     capture: wgpu::ComputePipeline,
     trace: wgpu::ComputePipeline,
+    pub(crate) preview: wgpu::ComputePipeline,
     /// `Params` without the per-capture fields.
-    base: Params,
+    pub(crate) base: Params,
     triangles: usize,
     /// Capture rays per second measured on this scene ([`GpuCapture::calibrate`]).
     rate: Option<f64>,
@@ -151,7 +152,7 @@ impl std::fmt::Debug for GpuCapture {
 
 /// A storage buffer holding `data` (one zeroed `T` when `data` is empty: a binding cannot be
 /// empty; the shader never reads it then).
-fn storage<T: Pod>(gpu: &Gpu, label: &str, data: &[T]) -> wgpu::Buffer {
+pub(crate) fn storage<T: Pod>(gpu: &Gpu, label: &str, data: &[T]) -> wgpu::Buffer {
     let zero = [T::zeroed()];
     let contents: &[T] = if data.is_empty() { &zero } else { data };
     gpu.device
@@ -272,6 +273,7 @@ impl GpuCapture {
         };
         let capture = pipeline("capture");
         let trace = pipeline("trace");
+        let preview = pipeline("preview");
         let e = &scene.environment;
         let mut flags = 0;
         if e.active {
@@ -303,6 +305,7 @@ impl GpuCapture {
             buffers,
             capture,
             trace,
+            preview,
             base,
             triangles: scene.tris.len(),
             rate: None,
@@ -316,14 +319,14 @@ impl GpuCapture {
         &self.gpu
     }
 
-    fn check(&self, what: &str) -> Result<()> {
+    pub(crate) fn check(&self, what: &str) -> Result<()> {
         self.gpu.take_errors().map_err(|e| GpuBakeError::Gpu {
             adapter: self.gpu.adapter_name.clone(),
             message: format!("{what}: {e}"),
         })
     }
 
-    fn read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+    pub(crate) fn read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         self.gpu.read_buffer(buffer).map_err(|e| GpuBakeError::Gpu {
             adapter: self.gpu.adapter_name.clone(),
             message: e.to_string(),
@@ -423,28 +426,14 @@ impl GpuCapture {
         if settings.distance_channel {
             params.flags |= FLAG_DISTANCE;
         }
-        // Dispatches of at most PATHS_PER_DISPATCH paths, each with its first texel.
-        let per_dispatch = (PATHS_PER_DISPATCH / u64::from(k * k))
-            .max(u64::from(WORKGROUP))
-            .next_multiple_of(u64::from(WORKGROUP));
-        let mut first = 0u64;
-        while first < total {
-            let count = per_dispatch.min(total - first);
-            params.first = first as u32;
-            self.gpu
-                .queue
-                .write_buffer(&uniform, 0, bytemuck::bytes_of(&params));
-            let groups = count.div_ceil(u64::from(WORKGROUP)) as u32;
-            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.capture);
-                pass.set_bind_group(0, &bind_group, &[]);
-                pass.dispatch_workgroups(groups.min(ROW_GROUPS), groups.div_ceil(ROW_GROUPS), 1);
-            }
-            self.gpu.queue.submit([encoder.finish()]);
-            first += count;
-        }
+        self.dispatch(
+            &self.capture,
+            &bind_group,
+            &uniform,
+            params,
+            total,
+            u64::from(k * k),
+        );
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, out_bytes);
         self.gpu.queue.submit([encoder.finish()]);
@@ -460,7 +449,43 @@ impl GpuCapture {
             .collect())
     }
 
-    fn bind_group(
+    /// Runs `pipeline` over `items` invocations (texels, pixels) of `samples` paths each, in
+    /// dispatches of at most [`PATHS_PER_DISPATCH`] paths, each told its first item through
+    /// `params.first` in `uniform`.
+    pub(crate) fn dispatch(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bind_group: &wgpu::BindGroup,
+        uniform: &wgpu::Buffer,
+        mut params: Params,
+        items: u64,
+        samples: u64,
+    ) {
+        params.row_invocations = ROW_GROUPS * WORKGROUP;
+        let per_dispatch = (PATHS_PER_DISPATCH / samples.max(1))
+            .max(u64::from(WORKGROUP))
+            .next_multiple_of(u64::from(WORKGROUP));
+        let mut first = 0u64;
+        while first < items {
+            let count = per_dispatch.min(items - first);
+            params.first = first as u32;
+            self.gpu
+                .queue
+                .write_buffer(uniform, 0, bytemuck::bytes_of(&params));
+            let groups = count.div_ceil(u64::from(WORKGROUP)) as u32;
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind_group, &[]);
+                pass.dispatch_workgroups(groups.min(ROW_GROUPS), groups.div_ceil(ROW_GROUPS), 1);
+            }
+            self.gpu.queue.submit([encoder.finish()]);
+            first += count;
+        }
+    }
+
+    pub(crate) fn bind_group(
         &self,
         pipeline: &wgpu::ComputePipeline,
         entries: &[(u32, &wgpu::Buffer)],

@@ -1,5 +1,5 @@
 //! The capture shader: its WGSL files joined in dependency order (bindings and entry points
-//! last, each file naming the functions of bake/src it mirrors).
+//! then, each file naming the functions of bake/src it mirrors).
 
 /// The random numbers (PCG32 and the stream hash).
 const RNG: &str = include_str!("shader/rng.wgsl");
@@ -11,8 +11,10 @@ const SCENE: &str = include_str!("shader/scene.wgsl");
 const INTEGRATOR: &str = include_str!("shader/integrator.wgsl");
 /// Bindings, the layout structs and the `capture` and `trace` entry points.
 pub const CAPTURE: &str = include_str!("shader/capture.wgsl");
+/// The bake's preview: the scene camera's image.
+const PREVIEW: &str = include_str!("shader/preview.wgsl");
 
 /// The whole module's source.
 pub fn source() -> String {
-    [RNG, BVH, SCENE, INTEGRATOR, CAPTURE].join("\n")
+    [RNG, BVH, SCENE, INTEGRATOR, CAPTURE, PREVIEW].join("\n")
 }

@@ -134,6 +134,20 @@ fn the_shader_structs_are_the_rust_structs() {
         size_of::<TraceRay>(),
     );
     check(
+        "PreviewCamera",
+        fields!(oslf_bake_gpu::preview::PreviewCamera {
+            position,
+            width,
+            right,
+            height,
+            up,
+            tan_half,
+            forward,
+            spp,
+        }),
+        size_of::<oslf_bake_gpu::preview::PreviewCamera>(),
+    );
+    check(
         "TraceHit",
         fields!(TraceHit {
             t,

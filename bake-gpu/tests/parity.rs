@@ -389,3 +389,44 @@ fn gpu_and_cpu_captures_agree_within_their_noise_on_independent_seeds() {
         }
     }
 }
+
+#[test]
+fn gpu_preview_is_the_cpu_preview_pixel_by_pixel() {
+    let camera = oslf_bake::camera::Camera {
+        position: Vec3::new(3.5, -2.5, 1.8),
+        target: Vec3::new(0.0, 0.0, 0.0),
+        up: Vec3::Z,
+        vfov_deg: 40.0,
+    };
+    let (w, h) = (24, 16);
+    for case in cases() {
+        let d = devices(&case, 1);
+        let integrator = Integrator::new(
+            &d.cpu_full,
+            &case.materials,
+            &case.lights,
+            &case.environment,
+            1,
+        );
+        // 5 samples per pixel: strata of a 3 × 2 grid, one left out.
+        let (cpu, _) = oslf_bake::preview::render(&integrator, &camera, w, h, 5, 9);
+        let gpu = d.gpu.preview(&camera, w, h, 5, 9).unwrap();
+        assert_eq!(gpu.len(), cpu.len());
+        let differ = cpu
+            .iter()
+            .zip(&gpu)
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * a.max_element().max(1e-2))
+            .count();
+        assert!(
+            differ * 100 <= 3 * cpu.len(),
+            "{}: {differ} of {} pixels differ",
+            case.name,
+            cpu.len()
+        );
+        assert!(
+            gpu.iter().any(|p| p.max_element() > 0.01),
+            "{}: black",
+            case.name
+        );
+    }
+}

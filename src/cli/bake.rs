@@ -1,6 +1,7 @@
 //! `oslf bake`: bakes a scene file into an OSLF store.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
@@ -137,12 +138,15 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         check_writable(&png.with_extension("exr"), "the preview")?;
     }
     // The device first: the estimate's capture time is its measured rate.
-    let (device, why) = match args.device {
+    let (gpu, why) = match args.device {
         Some(d) => super::device::capture_device(&scene, d, "--device", args.quiet)?,
         None => {
             super::device::capture_device(&scene, scene.bake.device, "[bake] device", args.quiet)?
         }
     };
+    let device = gpu
+        .clone()
+        .map(|g| g as Arc<dyn oslf_bake::device::CaptureDevice>);
     // What the bake will cost (the bake itself refuses what cannot fit, naming the setting).
     let estimate = estimate(&scene, args.shard, device.as_deref());
     if !args.quiet {
@@ -197,12 +201,18 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
             return Ok(());
         };
         let t = Instant::now();
-        let geometry =
-            TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))?;
-        let integrator = Integrator::for_scene(&scene, &geometry);
         let (w, h) = (655, 460); // the thesis's image size (§6.1)
-        let (pixels, _) =
-            oslf_bake::preview::render(&integrator, cam, w, h, args.preview_spp, scene.bake.seed);
+        let pixels = match &gpu {
+            // The same integrator on the device that captured.
+            Some(gpu) => gpu.preview(cam, w, h, args.preview_spp, scene.bake.seed)?,
+            None => {
+                let max_error = scene.bake.epsilon * TESSELLATION_ERROR;
+                let geometry = TriangleScene::build(scene.instances(true, max_error))?;
+                let integrator = Integrator::for_scene(&scene, &geometry);
+                let seed = scene.bake.seed;
+                oslf_bake::preview::render(&integrator, cam, w, h, args.preview_spp, seed).0
+            }
+        };
         image_file::write_png(&png, w, h, &pixels, 1.0)?;
         let exr = png.with_extension("exr");
         image_file::write_exr(&exr, w, h, &pixels)?;

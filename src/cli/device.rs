@@ -3,20 +3,19 @@
 use std::sync::Arc;
 
 use anyhow::Context;
-use oslf_bake::device::CaptureDevice;
 use oslf_bake::scene::DeviceChoice;
 use oslf_bake::scene::Scene;
 use oslf_bake_gpu::GpuCapture;
 use oslf_runtime::Gpu;
 
-/// The capture device for `scene` by `choice` (`None`: the CPU path tracer), and the reason,
-/// for the summary; said on stderr unless `quiet`.
+/// The GPU capture for `scene` by `choice` (`None`: the CPU path tracer), and the reason, for
+/// the summary; said on stderr unless `quiet`. The GPU also renders the bake's preview.
 pub fn capture_device(
     scene: &Scene,
     choice: DeviceChoice,
     flag: &str,
     quiet: bool,
-) -> anyhow::Result<(Option<Arc<dyn CaptureDevice>>, String)> {
+) -> anyhow::Result<(Option<Arc<GpuCapture>>, String)> {
     let chosen = choose(scene, choice, flag)?;
     if !quiet {
         eprintln!("capture on {}", chosen.1);
@@ -28,7 +27,7 @@ fn choose(
     scene: &Scene,
     choice: DeviceChoice,
     flag: &str,
-) -> anyhow::Result<(Option<Arc<dyn CaptureDevice>>, String)> {
+) -> anyhow::Result<(Option<Arc<GpuCapture>>, String)> {
     match choice {
         DeviceChoice::Cpu => Ok((None, format!("CPU, as {flag} asks"))),
         DeviceChoice::Gpu => {

@@ -1,0 +1,121 @@
+//! The bake's preview on the GPU: the scene camera's image path traced by
+//! shader/preview.wgsl with the capture's integrator, as `oslf_bake::preview::render` does on
+//! the CPU (the same strata and random streams, so the same image up to rounding).
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use oslf_bake::camera::Camera;
+
+use crate::capture::{GpuCapture, Params};
+use crate::error::Result;
+
+/// The shader's `PreviewCamera`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct PreviewCamera {
+    pub position: [f32; 3],
+    pub width: u32,
+    pub right: [f32; 3],
+    pub height: u32,
+    pub up: [f32; 3],
+    pub tan_half: f32,
+    pub forward: [f32; 3],
+    pub spp: u32,
+}
+
+impl GpuCapture {
+    /// `camera`'s `width × height` image, `spp` samples per pixel (at least 1), random
+    /// streams from `seed`: linear RGB, row-major.
+    pub fn preview(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        spp: u32,
+        seed: u64,
+    ) -> Result<Vec<Vec3>> {
+        let (right, up, forward) = camera.basis();
+        let vfov = if camera.vfov_deg.is_finite() {
+            camera.vfov_deg.clamp(1e-3, 179.0)
+        } else {
+            60.0
+        };
+        let lens = PreviewCamera {
+            position: camera.position.to_array(),
+            width,
+            right: right.to_array(),
+            height,
+            up: up.to_array(),
+            tan_half: (0.5 * vfov.to_radians()).tan(),
+            forward: forward.to_array(),
+            spp: spp.max(1),
+        };
+        let device = &self.gpu.device;
+        let pixels = u64::from(width) * u64::from(height);
+        let bytes = pixels.max(1) * 16;
+        let camera_buffer = wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("preview camera"),
+                contents: bytemuck::bytes_of(&lens),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
+        let out = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("preview pixels"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("preview readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("preview params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let b = &self.buffers;
+        let bind_group = self.bind_group(
+            &self.preview,
+            &[
+                (0, &uniform),
+                (1, &b.nodes),
+                (2, &b.tris),
+                (3, &b.attrs),
+                (4, &b.materials),
+                (5, &b.texels),
+                (6, &b.lights),
+                (7, &b.env_tables),
+                (12, &camera_buffer),
+                (13, &out),
+            ],
+        );
+        let params = Params {
+            seed: [seed as u32, (seed >> 32) as u32],
+            ..self.base
+        };
+        self.dispatch(
+            &self.preview,
+            &bind_group,
+            &uniform,
+            params,
+            pixels,
+            u64::from(lens.spp),
+        );
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, bytes);
+        self.gpu.queue.submit([encoder.finish()]);
+        let read = self.read(&staging)?;
+        self.check("rendering the preview")?;
+        Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&read)
+            .iter()
+            .take(pixels as usize)
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect())
+    }
+}

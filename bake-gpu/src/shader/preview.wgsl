@@ -1,0 +1,78 @@
+// The bake's preview (bake/src/preview.rs): the scene camera's image path traced with the
+// capture's integrator, one invocation per pixel, its samples stratified and its random
+// stream keyed by (seed, x, y) as on the CPU.
+
+// The camera's basis and lens: right, up, forward; tan(vfov / 2) and the aspect ratio.
+struct PreviewCamera {
+    position: vec3<f32>,
+    width: u32,
+    right: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    tan_half: f32,
+    forward: vec3<f32>,
+    spp: u32,
+}
+
+@group(0) @binding(12) var<uniform> camera: PreviewCamera;
+@group(0) @binding(13) var<storage, read_write> pixels: array<vec4<f32>>;
+
+// `hash_u64(&[a, b, c])`.
+fn hash3(a: vec2<u32>, b: vec2<u32>, c: vec2<u32>) -> vec2<u32> {
+    var h = mix64(GOLDEN ^ vec2<u32>(3u, 0u));
+    h = mix64(h ^ mix64(add64(a, GOLDEN)));
+    h = mix64(h ^ mix64(add64(b, GOLDEN)));
+    h = mix64(h ^ mix64(add64(c, GOLDEN)));
+    return h;
+}
+
+// `stratified_2d`: a jittered sample in stratum `i` of `n`.
+fn stratified_2d(i_in: u32, n_in: u32, rng: ptr<function, Rng>) -> vec2<f32> {
+    let n = max(n_in, 1u);
+    let i = i_in % n;
+    var kx = u32(sqrt(f32(n)));
+    while kx * kx < n {
+        kx += 1u;
+    }
+    while kx > 1u && (kx - 1u) * (kx - 1u) >= n {
+        kx -= 1u;
+    }
+    let ky = (n + kx - 1u) / kx;
+    let j = rng_vec2(rng);
+    let x = (f32(i % kx) + j.x) / f32(kx);
+    let y = (f32(i / kx) + j.y) / f32(ky);
+    return vec2<f32>(min(x, ONE_MINUS_EPSILON), min(y, ONE_MINUS_EPSILON));
+}
+
+// `Camera::direction` of the pixel position (px, py).
+fn camera_direction(px: f32, py: f32) -> vec3<f32> {
+    let w = f32(max(camera.width, 1u));
+    let h = f32(max(camera.height, 1u));
+    let sx = (2.0 * px / w - 1.0) * (w / h) * camera.tan_half;
+    let sy = (1.0 - 2.0 * py / h) * camera.tan_half;
+    let d = safe_normalize(camera.forward + camera.right * sx + camera.up * sy);
+    if all(d == vec3<f32>(0.0)) {
+        return camera.forward;
+    }
+    return d;
+}
+
+@compute @workgroup_size(64)
+fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
+    if id >= camera.width * camera.height {
+        return;
+    }
+    let x = id % camera.width;
+    let y = id / camera.width;
+    var rng = rng_new(params.seed, hash3(params.seed, vec2<u32>(x, 0u), vec2<u32>(y, 0u)));
+    var counts = Counts(0u, 0u);
+    let spp = max(camera.spp, 1u);
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < spp; s++) {
+        let j = stratified_2d(s, spp, &rng);
+        let dir = camera_direction(f32(x) + j.x, f32(y) + j.y);
+        sum += radiance(camera.position, dir, true, &rng, &counts).xyz;
+    }
+    pixels[id] = vec4<f32>(sum / f32(spp), 1.0);
+}
