@@ -196,34 +196,46 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     }
 
     if let Some(png) = preview {
-        let Some(cam) = &scene.camera else {
-            eprintln!("no preview: the scene has no [camera]");
-            return Ok(());
-        };
-        let t = Instant::now();
-        let (w, h) = (655, 460); // the thesis's image size (§6.1)
-        let pixels = match &gpu {
-            // The same integrator on the device that captured.
-            Some(gpu) => gpu.preview(cam, w, h, args.preview_spp, scene.bake.seed)?,
-            None => {
-                let max_error = scene.bake.epsilon * TESSELLATION_ERROR;
-                let geometry = TriangleScene::build(scene.instances(true, max_error))?;
-                let integrator = Integrator::for_scene(&scene, &geometry);
-                let seed = scene.bake.seed;
-                oslf_bake::preview::render(&integrator, cam, w, h, args.preview_spp, seed).0
-            }
-        };
-        image_file::write_png(&png, w, h, &pixels, 1.0)?;
-        let exr = png.with_extension("exr");
-        image_file::write_exr(&exr, w, h, &pixels)?;
-        println!(
-            "preview        {} and {} ({w}x{h}, {} spp, {:.1} s)",
-            png.display(),
-            exr.display(),
-            args.preview_spp,
-            t.elapsed().as_secs_f64()
-        );
+        write_preview(&scene, gpu.as_deref(), &png, args.preview_spp)?;
     }
+    Ok(())
+}
+
+/// Renders the scene camera with the bake's path tracer (on the GPU that captured, if one
+/// did) to `png` and an EXR beside it.
+fn write_preview(
+    scene: &Scene,
+    gpu: Option<&oslf_bake_gpu::GpuCapture>,
+    png: &std::path::Path,
+    preview_spp: u32,
+) -> anyhow::Result<()> {
+    let Some(cam) = &scene.camera else {
+        eprintln!("no preview: the scene has no [camera]");
+        return Ok(());
+    };
+    let t = Instant::now();
+    let (w, h) = (655, 460); // the thesis's image size (§6.1)
+    let pixels = match &gpu {
+        // The same integrator on the device that captured.
+        Some(gpu) => gpu.preview(cam, w, h, preview_spp, scene.bake.seed)?,
+        None => {
+            let max_error = scene.bake.epsilon * TESSELLATION_ERROR;
+            let geometry = TriangleScene::build(scene.instances(true, max_error))?;
+            let integrator = Integrator::for_scene(scene, &geometry);
+            let seed = scene.bake.seed;
+            oslf_bake::preview::render(&integrator, cam, w, h, preview_spp, seed).0
+        }
+    };
+    image_file::write_png(png, w, h, &pixels, 1.0)?;
+    let exr = png.with_extension("exr");
+    image_file::write_exr(&exr, w, h, &pixels)?;
+    println!(
+        "preview        {} and {} ({w}x{h}, {} spp, {:.1} s)",
+        png.display(),
+        exr.display(),
+        preview_spp,
+        t.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 
