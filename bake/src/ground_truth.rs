@@ -44,6 +44,7 @@ use crate::ashikhmin_shirley::AsLobe;
 use crate::bezier::BezierPatch;
 use crate::bvh::{Instance, TriangleScene};
 use crate::integrator::{offset_origin, Integrator, RayStats};
+use crate::material::Model;
 use crate::metallic_roughness::MetallicRoughness;
 use crate::preview::primary_ray;
 use crate::progress::{self, Progress};
@@ -61,10 +62,12 @@ pub enum Term {
     Mirror,
     Glossy(AsLobe),
     /// glTF's metallic-roughness BRDF with the object's base colour C_s: `metallic` and
-    /// `roughness`, each in [0, 1].
+    /// `roughness`, each in [0, 1]; with `object_material`, an object whose own material is
+    /// metallic-roughness is drawn with its factors instead (as the store records them).
     Pbr {
         metallic: f32,
         roughness: f32,
+        object_material: bool,
     },
 }
 
@@ -200,6 +203,7 @@ impl<'s> GroundTruth<'s> {
         if let Term::Pbr {
             metallic,
             roughness,
+            ..
         } = term
         {
             if !((0.0..=1.0).contains(&metallic) && (0.0..=1.0).contains(&roughness)) {
@@ -386,7 +390,20 @@ impl<'s> GroundTruth<'s> {
             Term::Pbr {
                 metallic,
                 roughness,
+                object_material,
             } => {
+                let own = self
+                    .scene
+                    .materials
+                    .get(hit.material as usize)
+                    .map(|m| m.model);
+                let (metallic, roughness) = match own {
+                    Some(Model::MetallicRoughness {
+                        metallic,
+                        roughness,
+                    }) if object_material => (metallic, roughness),
+                    _ => (metallic, roughness),
+                };
                 let brdf = MetallicRoughness {
                     base_color: color,
                     metallic,

@@ -185,6 +185,7 @@ fn the_pbr_term_is_the_brdf_albedo_times_the_sky() {
                 Term::Pbr {
                     metallic,
                     roughness,
+                    object_material: false,
                 },
                 &s,
             )
@@ -244,6 +245,7 @@ fn the_pbr_term_is_the_brdf_albedo_times_the_sky() {
             Term::Pbr {
                 metallic: 1.5,
                 roughness: 0.2,
+                object_material: false,
             },
             &settings(1),
         )

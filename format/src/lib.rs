@@ -31,7 +31,7 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (6); readers also accept [`MIN_VERSION`] (1) to 5, see "Versions" |
+//! | 8      | `u32`     | version = [`VERSION`] (7); readers also accept [`MIN_VERSION`] (1) to 6, see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
 //! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F, 3 BC6H (version 4 and later: in an older store 3 is [`Error::EncodingVersion`]) |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
@@ -70,8 +70,17 @@
 //! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag (as the header's; 3 only from version 4), `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
 //! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Versions 2 and 3: absent in version 1, whose stores read as 9 |
 //! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
-//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count (its maps `first_patch..first_patch + patch_count`); from version 5, then `u32` kind (0 Bézier patches, 1 triangle mesh) and, for kind 1, the mesh record below |
+//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count (its maps `first_patch..first_patch + patch_count`); from version 5, then `u32` kind (0 Bézier patches, 1 triangle mesh) and, for kind 1, the mesh record below; from version 7, then the material record below |
 //! | 192 × B | the Bézier patches' control points, B = Σ patch_count over the Bézier objects (before version 5 every object is Bézier, so B = patch_count), in object order, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
+//!
+//! A **material record** (version 7 and later) ends each object record (after its mesh record,
+//! if any), 24 bytes:
+//!
+//! | bytes | content |
+//! |------:|---------|
+//! | 4     | `u32` model: 0 Lambertian (the base colour alone), 1 glTF metallic-roughness (the base colour with the two factors, glTF 2.0 Appendix B) |
+//! | 4, 4  | `f32` metallic, `f32` roughness: each in `[0, 1]` for model 1, both 0 for model 0 |
+//! | 12    | `f32`×3 emission: emitted radiance, linear RGB, finite and ≥ 0 |
 //!
 //! A **mesh record** (object kind 1, version 5 and later) continues the object record:
 //!
@@ -369,16 +378,18 @@
 //! metadata's patch_count counting sample maps (patches plus atlas pages), and control points
 //! for the Bézier objects' patches only; version 6 the distance lattice (distances rounded to
 //! it, and filters 1 to 3 storing their codes in two byte planes instead of the `f32`
-//! patterns in four; see "Distance lattice"). Readers accept versions
-//! [`MIN_VERSION`] (1) to [`VERSION`] (6) and refuse others ([`Error::UnsupportedVersion`]); a
+//! patterns in four; see "Distance lattice"); version 7 the material record after each object
+//! record (stores before it read as Lambertian objects of their base colour). Readers accept
+//! versions [`MIN_VERSION`] (1) to [`VERSION`] (7) and refuse others ([`Error::UnsupportedVersion`]); a
 //! version-1 metadata section has no `mantissa_bits` and reads as 9; versions 1 and 2 have no
 //! checksum of the decoded faces, so [`Store::verify`] checks their frames but not what they
 //! decode to; before version 5 every object is Bézier (no kind field). Every other byte of the
 //! layout is the same in all versions: a version-3 store is a version-4 store that holds no
 //! BC6H, and a version-6 store without a distance channel is laid out as a version-5 one.
-//! Writers write version 6; [`StoreWriter::resume`] continues partial files of versions 2 to
+//! Writers write version 7; [`StoreWriter::resume`] continues partial files of versions 2 to
 //! 4 as version 4 (their shared layout; such a bake cannot hold mesh objects), of version 5
-//! as version 5 and of version 6 as version 6. A continued version-2 to version-5 file keeps
+//! as version 5, of version 6 as version 6 (these cannot hold a material other than
+//! Lambertian) and of version 7 as version 7. A continued version-2 to version-5 file keeps
 //! `f32` distance planes: the cubes appended to it have their distances on the lattice (as
 //! [`encode_cube`] makes them) but filtered as `f32` patterns.
 //!
@@ -431,7 +442,9 @@ pub use distance::DistancePlane;
 pub use encoding_kind::Encoding;
 pub use error::Error;
 pub use filter::Filter;
-pub use meta::{BakeParams, CameraInfo, MeshInfo, ObjectInfo, Patch, SamplePoint, StoreMeta};
+pub use meta::{
+    BakeParams, CameraInfo, MeshInfo, ObjectInfo, ObjectMaterial, Patch, SamplePoint, StoreMeta,
+};
 pub use output_file::{check_not_input, check_output, same_file};
 pub use sample_map::{IndexWidth, SampleMapView, SampleMaps, INVALID_INDEX};
 pub use shard::{ShardSpec, ShardSummary, ShardWriter};
@@ -442,7 +455,7 @@ pub use writer::{StoreSummary, StoreWriter};
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
 /// metadata, read as 9).
 pub const MIN_VERSION: u32 = 1;

@@ -53,6 +53,36 @@ pub struct ObjectInfo {
     /// The triangle mesh of a mesh object (format version 5 and later); `None` for an object
     /// made of Bézier patches.
     pub mesh: Option<MeshInfo>,
+    /// How the surface reflects (format version 7 and later; older stores read as
+    /// [`ObjectMaterial::default`], a Lambertian surface of `base_color`).
+    pub material: ObjectMaterial,
+}
+
+/// Material model tag of a Lambertian object (format version 7): only `base_color` matters.
+pub const MATERIAL_LAMBERTIAN: u32 = 0;
+/// Material model tag of glTF's metallic-roughness model (format version 7): `base_color`,
+/// `metallic` and `roughness` as in the glTF 2.0 specification's Appendix B.
+pub const MATERIAL_METALLIC_ROUGHNESS: u32 = 1;
+
+/// An object's material (format version 7): its model and factors; the base colour is
+/// [`ObjectInfo::base_color`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ObjectMaterial {
+    /// [`MATERIAL_LAMBERTIAN`] or [`MATERIAL_METALLIC_ROUGHNESS`].
+    pub model: u32,
+    /// In `[0, 1]`; 0 for a Lambertian object.
+    pub metallic: f32,
+    /// Perceptual roughness in `[0, 1]` (GGX α = roughness²); 0 for a Lambertian object.
+    pub roughness: f32,
+    /// Emitted radiance, linear RGB, finite and ≥ 0.
+    pub emission: [f32; 3],
+}
+
+impl ObjectMaterial {
+    /// Whether this is glTF's metallic-roughness model.
+    pub fn is_metallic_roughness(&self) -> bool {
+        self.model == MATERIAL_METALLIC_ROUGHNESS
+    }
 }
 
 /// A triangle-mesh object (format version 5): vertices in object space and an atlas of
@@ -275,6 +305,15 @@ pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
                         }
                     }
                 }
+            }
+        }
+        if version >= MATERIAL_VERSION {
+            let m = &o.material;
+            w.u32(m.model);
+            w.f32(m.metallic);
+            w.f32(m.roughness);
+            for v in m.emission {
+                w.f32(v);
             }
         }
     }
@@ -506,6 +545,11 @@ fn decode_objects(
         } else {
             None
         };
+        let material = if version >= MATERIAL_VERSION {
+            decode_material(r, i)?
+        } else {
+            ObjectMaterial::default()
+        };
         objects.push(ObjectInfo {
             name,
             transform,
@@ -513,6 +557,7 @@ fn decode_objects(
             first_patch,
             patch_count: count,
             mesh,
+            material,
         });
     }
     if prev_end != patch_count as u64 {
@@ -524,6 +569,53 @@ fn decode_objects(
         ));
     }
     Ok(objects)
+}
+
+/// The first format version with object materials.
+pub const MATERIAL_VERSION: u32 = 7;
+
+/// Parses the version-7 material record of object `i`: model, factors, emission.
+fn decode_material(r: &mut ByteReader<'_>, i: usize) -> Result<ObjectMaterial, Error> {
+    let at = r.offset();
+    let model = r.u32()?;
+    let metallic = r.finite_f32("object metallic")?;
+    let roughness = r.finite_f32("object roughness")?;
+    let mut emission = [0f32; 3];
+    for v in &mut emission {
+        *v = r.finite_f32("object emission")?;
+    }
+    let problem = match model {
+        MATERIAL_LAMBERTIAN if metallic != 0.0 || roughness != 0.0 => Some(format!(
+            "a Lambertian material has metallic {metallic} and roughness {roughness} (both must be 0)"
+        )),
+        MATERIAL_LAMBERTIAN => None,
+        MATERIAL_METALLIC_ROUGHNESS
+            if !(0.0..=1.0).contains(&metallic) || !(0.0..=1.0).contains(&roughness) =>
+        {
+            Some(format!(
+                "metallic {metallic} and roughness {roughness} must lie in [0, 1]"
+            ))
+        }
+        MATERIAL_METALLIC_ROUGHNESS => None,
+        other => Some(format!(
+            "unknown material model {other} (0 Lambertian, 1 metallic-roughness)"
+        )),
+    };
+    let problem = problem.or_else(|| {
+        emission
+            .iter()
+            .any(|v| *v < 0.0)
+            .then(|| format!("emission {emission:?} is negative"))
+    });
+    match problem {
+        Some(p) => Err(bad(at, format!("object {i}: {p}"))),
+        None => Ok(ObjectMaterial {
+            model,
+            metallic,
+            roughness,
+            emission,
+        }),
+    }
 }
 
 /// Parses the version-5 tail of object `i`'s record (its kind, and a mesh object's atlas

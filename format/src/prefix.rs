@@ -31,7 +31,7 @@ impl Prefix {
         Self::build_version(meta, points, maps, filter, VERSION)
     }
 
-    /// [`Prefix::build`] in the layout of format `version` (4, 5 or [`VERSION`], the older
+    /// [`Prefix::build`] in the layout of format `version` (4, 5, 6 or [`VERSION`], the older
     /// ones for continuing older partial files; a version-4 layout cannot hold mesh objects).
     pub(crate) fn build_version(
         meta: &StoreMeta,
@@ -47,6 +47,17 @@ impl Prefix {
                     offset: meta_offset,
                     detail: format!(
                         "object {i} is a triangle mesh, which format version {version} cannot hold"
+                    ),
+                });
+            }
+        }
+        if version < crate::meta::MATERIAL_VERSION {
+            let lambertian = crate::meta::ObjectMaterial::default();
+            if let Some(i) = meta.objects.iter().position(|o| o.material != lambertian) {
+                return Err(Error::InvalidMetadata {
+                    offset: meta_offset,
+                    detail: format!(
+                        "object {i} has a material other than Lambertian, which format version {version} cannot hold"
                     ),
                 });
             }

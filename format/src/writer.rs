@@ -220,7 +220,7 @@ impl StoreWriter {
     /// decoded-faces checksum, which `finish()` writes; version 3's only in the version number,
     /// version 4 adding the BC6H encoding), so they cannot take mesh objects, whose object
     /// records need version 5; version-5 partial files are finished as version 5, version-6
-    /// ones as version 6. Files before version 6 keep `f32` distance planes: [`Self::append`]
+    /// ones as version 6 (neither holds materials), version-7 ones as version 7. Files before version 6 keep `f32` distance planes: [`Self::append`]
     /// refilters the planes of the cubes [`crate::encode_cube`] put on the distance lattice
     /// (their raw faces, and so the checksum of the decoded faces, stay the same).
     pub fn resume(

@@ -64,8 +64,101 @@ fn kind_offset(b: &[u8], meta: &StoreMeta, index: usize) -> usize {
         if let Some(m) = &o.mesh {
             off += 12 + 32 * m.positions.len() + 12 * m.triangles.len();
         }
+        off += MATERIAL_RECORD;
     }
     off + 4 + meta.objects[index].name.len() + 64 + 12 + 8
+}
+
+/// Bytes of an object's material record (version 7).
+const MATERIAL_RECORD: usize = 24;
+
+/// Byte offset of object `index`'s material record (version 7).
+fn material_offset(b: &[u8], meta: &StoreMeta, index: usize) -> usize {
+    let mesh = meta.objects[index]
+        .mesh
+        .as_ref()
+        .map_or(0, |m| 12 + 32 * m.positions.len() + 12 * m.triangles.len());
+    kind_offset(b, meta, index) + 4 + mesh
+}
+
+#[test]
+fn object_materials_round_trip_and_damaged_ones_are_typed_errors() {
+    let mut f = mesh_fixture();
+    f.meta.objects[0].material = ObjectMaterial {
+        model: meta::MATERIAL_METALLIC_ROUGHNESS,
+        metallic: 0.5,
+        roughness: 0.25,
+        emission: [1.0, 0.0, 0.5],
+    };
+    f.meta.objects[2].material = ObjectMaterial {
+        model: meta::MATERIAL_METALLIC_ROUGHNESS,
+        metallic: 1.0,
+        roughness: 0.0,
+        emission: [0.0; 3],
+    };
+    let (_dir, path) = temp_store("materials.oslf");
+    write(&path, &f);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.meta(), &f.meta);
+    assert_eq!(store.header().version, VERSION);
+    let b = std::fs::read(&path).unwrap();
+    for i in 0..f.meta.objects.len() {
+        let m = material_offset(&b, &f.meta, i);
+        let model = u32::from_le_bytes(b[m..m + 4].try_into().unwrap());
+        assert_eq!(model, f.meta.objects[i].material.model, "object {i}");
+    }
+    let crafted = |at: usize, bytes: &[u8]| -> (u64, String) {
+        let mut c = b.clone();
+        c[at..at + bytes.len()].copy_from_slice(bytes);
+        reseal_all(&mut c);
+        match Store::from_bytes(&c) {
+            Err(Error::InvalidMetadata { offset, detail }) => (offset, detail),
+            other => panic!("{:?}", other.err()),
+        }
+    };
+    let m0 = material_offset(&b, &f.meta, 0);
+    let m1 = material_offset(&b, &f.meta, 1);
+    let m2 = material_offset(&b, &f.meta, 2);
+    for (what, at, bytes, offset, words) in [
+        (
+            "model 7",
+            m0,
+            7u32.to_le_bytes().to_vec(),
+            m0,
+            vec!["object 0", "unknown material model 7"],
+        ),
+        (
+            "metallic 2",
+            m2 + 4,
+            2f32.to_le_bytes().to_vec(),
+            m2,
+            vec!["object 2", "must lie in [0, 1]"],
+        ),
+        (
+            "Lambertian with roughness",
+            m1 + 8,
+            0.5f32.to_le_bytes().to_vec(),
+            m1,
+            vec!["object 1", "both must be 0"],
+        ),
+        (
+            "negative emission",
+            m0 + 16,
+            (-1f32).to_le_bytes().to_vec(),
+            m0,
+            vec!["object 0", "negative"],
+        ),
+    ] {
+        let (got, detail) = crafted(at, &bytes);
+        assert_eq!(got, offset as u64, "{what}: {detail}");
+        for w in words {
+            assert!(detail.contains(w), "{what}: {detail}");
+        }
+    }
+    // A NaN factor is refused where it stands.
+    let (got, detail) = crafted(m0 + 8, &f32::NAN.to_le_bytes());
+    assert_eq!(got, (m0 + 8) as u64, "{detail}");
+    assert!(detail.contains("roughness"), "{detail}");
 }
 
 #[test]
@@ -268,10 +361,11 @@ fn damaged_mesh_records_are_typed_errors() {
         vcount,
         &["object 2", "1 triangle"],
     );
-    // Bytes after the counts: the vertices, triangles and the 3 Bézier patches.
+    // Bytes after the counts: the vertices, triangles, the mesh object's material record
+    // and the 3 Bézier patches.
     let h = Header::parse(&b).unwrap();
     let left = h.meta.end() as usize - verts;
-    assert_eq!(left, 32 * v + 12 * 4 + 3 * 192);
+    assert_eq!(left, 32 * v + 12 * 4 + MATERIAL_RECORD + 3 * 192);
     let fit = ((left - 32 * v) / 12) as u32;
     for (what, at, n) in [
         ("huge vertex count", vcount, u32::MAX),

@@ -178,6 +178,7 @@ pub fn render_truth(
             Term::Pbr {
                 metallic: params.metallic,
                 roughness: params.roughness,
+                object_material: params.object_material,
             },
             settings,
         )?,

@@ -41,6 +41,10 @@ pub struct ObjectMesh {
     pub patches: Vec<BezierPatch>,
     /// The base colour C_s of each map's object (indexed by map).
     pub colors: Vec<Vec3>,
+    /// The pbr mode's material of each map's object (indexed by map): metallic, GGX α (at
+    /// least `MIN_ALPHA`), 1 for a metallic-roughness material (else 0: the parameters'
+    /// factors apply), 0.
+    pub materials: Vec<[f32; 4]>,
     /// Vertices, patch after patch, then each mesh object's (in object order).
     pub vertices: Vec<GVertex>,
     /// Triangle list (three indices per triangle).
@@ -59,6 +63,7 @@ impl ObjectMesh {
     /// collapsed edges (never NaN).
     pub fn from_store(store: &Store, max_error: f32) -> Self {
         let (world, colors, meshes) = world_objects(store.meta());
+        let materials = map_materials(store.meta());
         let (lo, hi) = world
             .iter()
             .flatten()
@@ -97,6 +102,7 @@ impl ObjectMesh {
             origin,
             patches,
             colors,
+            materials,
             vertices,
             indices,
             relative_lo,
@@ -180,6 +186,23 @@ impl WorldMesh {
             indices.extend(t.iter().map(|i| base + i));
         }
     }
+}
+
+/// Per sample map, its object's material as the shader's `PatchGpu.material` holds it.
+fn map_materials(meta: &oslf_format::StoreMeta) -> Vec<[f32; 4]> {
+    meta.objects
+        .iter()
+        .flat_map(|o| {
+            let m = o.material;
+            let alpha = (m.roughness * m.roughness).max(crate::params::MIN_ALPHA);
+            let entry = if m.is_metallic_roughness() {
+                [m.metallic, alpha, 1.0, 0.0]
+            } else {
+                [0.0; 4]
+            };
+            std::iter::repeat_n(entry, o.patch_count as usize)
+        })
+        .collect()
 }
 
 /// Per sample map, its world-space control points (`None` for a page of a mesh's atlas) and

@@ -253,6 +253,11 @@ pub struct ShadingParams {
     /// `roughness` of [`Mode::Pbr`] (glTF's perceptual roughness; α = roughness²), in [0, 1].
     #[serde(default = "default_roughness")]
     pub roughness: f32,
+    /// [`Mode::Pbr`] shades each object with a metallic-roughness material in the store
+    /// (format version 7) with that material's factors; `metallic` and `roughness` then serve
+    /// only the objects without one. `false`: `metallic` and `roughness` for every object.
+    #[serde(default = "default_object_material")]
+    pub object_material: bool,
     /// Seed of the per-pixel random numbers.
     pub seed: u32,
     /// Depth-corrected lookups (needs a store with a distance channel): each sample point's
@@ -276,6 +281,10 @@ fn default_roughness() -> f32 {
     0.3
 }
 
+fn default_object_material() -> bool {
+    true
+}
+
 impl Default for ShadingParams {
     /// The thesis's settings: reconstruction plus mirror reflection blended with B^n, N = 4;
     /// φ_shader = 65°; Ashikhmin–Shirley R_s = 1, R_d = 0, n_u = n_v = 100, M = 16. Beyond the
@@ -295,6 +304,7 @@ impl Default for ShadingParams {
             nv: 100.0,
             metallic: default_metallic(),
             roughness: default_roughness(),
+            object_material: default_object_material(),
             seed: 0,
             depth: true,
             glossy_filter: GlossyFilter::Mip,
@@ -455,8 +465,12 @@ pub struct ShadeUniform {
     pub metallic: f32,
     /// GGX α = roughness², at least [`MIN_ALPHA`].
     pub alpha: f32,
-    /// Unused: the struct's size is a multiple of 16 bytes, as WGSL's is.
-    pub pad: [f32; 2],
+    /// 1: the pbr mode takes an object's metallic and α from its material in the store where
+    /// it has one ([`ShadingParams::object_material`] and a store with such objects).
+    pub object_material: u32,
+    /// The smallest metallic factor any pixel can have (`metallic`, and the store's
+    /// materials' with `object_material`): below 1 the pbr mode has a diffuse part.
+    pub min_metallic: f32,
 }
 
 /// The smallest GGX α the pbr mode draws (roughness below 0.03 is drawn at it): the bake's
@@ -482,6 +496,9 @@ pub struct StoreConstants {
     pub origin: [f32; 3],
     /// The proxy box fitted to the environment cube's distances (world space), if it has them.
     pub fitted_box: Option<[[f32; 3]; 2]>,
+    /// The smallest metallic factor of the store's metallic-roughness objects (format version
+    /// 7), `None` if it has none.
+    pub min_object_metallic: Option<f32>,
 }
 
 impl ShadeUniform {
@@ -547,7 +564,11 @@ impl ShadeUniform {
             box_max: [0.0; 4],
             metallic: p.metallic,
             alpha: (p.roughness * p.roughness).max(MIN_ALPHA),
-            pad: [0.0; 2],
+            object_material: u32::from(p.object_material && k.min_object_metallic.is_some()),
+            min_metallic: match k.min_object_metallic {
+                Some(m) if p.object_material => m.min(p.metallic),
+                _ => p.metallic,
+            },
         }
         .with_proxy_box(p.proxy_box.or(k.fitted_box), k.origin)
     }

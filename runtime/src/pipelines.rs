@@ -215,7 +215,7 @@ impl ShadeKey {
             source: u.source,
             order: u.order,
             diffuse: if u.terms & 16 != 0 {
-                u.metallic < 1.0
+                u.min_metallic < 1.0
             } else {
                 u.rd > 0.0
             },

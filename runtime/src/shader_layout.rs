@@ -47,7 +47,8 @@ fn shade_fields() -> Vec<Field> {
         box_max,
         metallic,
         alpha,
-        pad,
+        object_material,
+        min_metallic,
     })
 }
 
@@ -62,7 +63,8 @@ fn the_uniform_block_is_shade_uniform() {
 }
 
 /// gbuffer.wgsl's `GVertex` is [`GVertex`]; shade.wgsl's `PatchGpu` is what
-/// [`crate::buffers::PATCH_VEC4S`] vec4s per patch hold (16 control points, the colour).
+/// [`crate::buffers::PATCH_VEC4S`] vec4s per patch hold (16 control points, the colour, the
+/// material).
 #[test]
 fn the_vertex_and_patch_records_match() {
     let gbuffer = parse("gbuffer.wgsl", include_str!("gbuffer.wgsl"));
@@ -81,7 +83,11 @@ fn the_vertex_and_patch_records_match() {
         .collect();
     assert_eq!(
         names,
-        [("cp", 0, "[[f32; 4]; 16]"), ("color", 256, "[f32; 4]")]
+        [
+            ("cp", 0, "[[f32; 4]; 16]"),
+            ("color", 256, "[f32; 4]"),
+            ("material", 272, "[f32; 4]")
+        ]
     );
 }
 

@@ -48,6 +48,7 @@ fn synthetic_store_with(points: usize, map_res: u32, cube_res: u32) -> std::path
             first_patch: 0,
             patch_count: 1,
             mesh: None,
+            material: Default::default(),
         }],
         patches: vec![patch],
         bake: BakeParams {

@@ -126,6 +126,7 @@ fn write_mesh_store() -> std::path::PathBuf {
                 first_patch: 0,
                 patch_count: 1,
                 mesh: None,
+                material: Default::default(),
             },
             ObjectInfo {
                 name: "bent grid".into(),
@@ -134,6 +135,14 @@ fn write_mesh_store() -> std::path::PathBuf {
                 first_patch: 1,
                 patch_count: K * K,
                 mesh: Some(grid_mesh()),
+                // A rough, partly metallic glTF material (format version 7): the pbr mode
+                // shades this object with it, the plane with the parameters' factors.
+                material: oslf_format::ObjectMaterial {
+                    model: oslf_format::meta::MATERIAL_METALLIC_ROUGHNESS,
+                    metallic: 0.4,
+                    roughness: 0.55,
+                    emission: [0.0; 3],
+                },
             },
         ],
         patches: vec![plane],
@@ -293,6 +302,66 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
     for (p, label) in common::glossy_cases(base) {
         check(&mut r, &cubes, p, &label);
     }
+    // The pbr mode with the mesh object's own material (the plane takes the parameters'),
+    // and with the parameters' factors for both.
+    for object_material in [true, false] {
+        for depth in [false, true] {
+            let p = ShadingParams {
+                mode: Mode::Pbr,
+                metallic: 1.0,
+                roughness: 0.2,
+                object_material,
+                depth,
+                ..base
+            };
+            check(
+                &mut r,
+                &cubes,
+                p,
+                &format!("pbr object_material={object_material} depth={depth}"),
+            );
+        }
+    }
+}
+
+/// With the store's materials the mesh object is shaded with its own factors: its pixels
+/// differ from a render with the parameters' factors, the plane's do not.
+#[test]
+fn the_pbr_mode_takes_an_objects_material_from_the_store() {
+    let (mut r, _) = open();
+    let render = |r: &mut Renderer, object_material: bool| {
+        let p = ShadingParams {
+            mode: Mode::Pbr,
+            metallic: 1.0,
+            roughness: 0.2,
+            object_material,
+            ..ShadingParams::default()
+        };
+        let options = RenderOptions {
+            width: W,
+            height: H,
+            ..Default::default()
+        };
+        let camera = r.default_view();
+        r.render(&camera, &p, &options).unwrap().pixels
+    };
+    let own = render(&mut r, true);
+    let flags = render(&mut r, false);
+    let gbuffer = r.read_gbuffer().unwrap();
+    let (mut mesh_diff, mut plane_diff) = (0, 0);
+    for ((a, b), g) in own.iter().zip(&flags).zip(&gbuffer) {
+        if g.position_patch[3] < 0.5 {
+            continue;
+        }
+        let differs = (0..3).any(|c| (a[c] - b[c]).abs() > 1e-4);
+        if g.position_patch[3] > 1.5 {
+            mesh_diff += usize::from(differs);
+        } else {
+            plane_diff += usize::from(differs);
+        }
+    }
+    assert!(mesh_diff > 100, "only {mesh_diff} mesh pixels changed");
+    assert_eq!(plane_diff, 0, "plane pixels changed");
 }
 
 /// Renders reconstruction alone; returns the pixels and the G-buffer.

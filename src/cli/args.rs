@@ -59,12 +59,15 @@ pub struct ShadingArgs {
     /// Exponent n_v.
     #[arg(long, default_value_t = 100.0)]
     pub nv: f32,
-    /// glTF metallic factor of the pbr mode (its base colour is the object's C_s).
-    #[arg(long, default_value_t = 1.0)]
-    pub metallic: f32,
-    /// glTF roughness of the pbr mode (α = roughness²).
-    #[arg(long, default_value_t = 0.3)]
-    pub roughness: f32,
+    /// glTF metallic factor of the pbr mode (its base colour is the object's C_s) [default:
+    /// each object's metallic-roughness material in the store, else 1]. With this flag or
+    /// --roughness, every object is shaded with the flags' factors.
+    #[arg(long)]
+    pub metallic: Option<f32>,
+    /// glTF roughness of the pbr mode (α = roughness²) [default: the object's material's,
+    /// else 0.3]; see --metallic.
+    #[arg(long)]
+    pub roughness: Option<f32>,
     /// Seed of the Monte Carlo random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
@@ -85,8 +88,10 @@ impl ShadingArgs {
             rd: self.rd,
             nu: self.nu,
             nv: self.nv,
-            metallic: self.metallic,
-            roughness: self.roughness,
+            metallic: self.metallic.unwrap_or(ShadingParams::default().metallic),
+            roughness: self.roughness.unwrap_or(ShadingParams::default().roughness),
+            // The store's materials unless a flag sets the factors.
+            object_material: self.metallic.is_none() && self.roughness.is_none(),
             seed: self.seed,
             depth: !self.no_depth,
             glossy_filter: self.glossy_filter,

@@ -34,9 +34,11 @@ pub struct Args {
     /// included, is written beside it.
     #[arg(short, long, default_value = "render.exr")]
     output: PathBuf,
-    /// recon | mirror | recon-mirror | glossy | recon-glossy.
-    #[arg(long, default_value = "recon-mirror")]
-    mode: Mode,
+    /// recon | mirror | recon-mirror | glossy | recon-glossy | pbr [default: pbr for a store
+    /// whose objects carry a metallic-roughness material (format version 7), else
+    /// recon-mirror].
+    #[arg(long)]
+    mode: Option<Mode>,
     /// distance | angle | avg | r | n (thesis 4.3, 4.4, 4.9, 4.10, 4.11).
     #[arg(long, default_value = "n")]
     blend: Blend,
@@ -99,7 +101,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.verify {
         super::store::verify_for_render(&store, &args.store, args.strict)?;
     }
-    let params = args.shading.params(args.mode, args.blend)?;
+    let mode = args.mode.unwrap_or_else(|| default_mode(&store));
+    let params = args.shading.params(mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
     let (background, note) = args.background.resolve(&store, &args.store)?;
     if let Some(note) = &note {
@@ -166,6 +169,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         renderer.face_layout().encoding,
         open_seconds * 1e3,
         if args.access.mmap { "memory-mapped" } else { "positioned reads" }
+    );
+    let materials = if params.mode == Mode::Pbr && params.object_material {
+        ", objects with a metallic-roughness material in the store shaded with it"
+    } else {
+        ""
+    };
+    println!(
+        "mode           {}{}{materials}",
+        params.mode.name(),
+        if args.mode.is_none() {
+            " (the default for this store)"
+        } else {
+            ""
+        }
     );
     let gpu_time = match (frame.shade_gpu_seconds, frame.gbuffer_gpu_seconds) {
         (Some(s), Some(g)) => format!(
@@ -371,4 +388,19 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
         check_writable(path, "the --stats-json file")?;
     }
     Ok(())
+}
+
+/// The mode a render without `--mode` draws: `pbr` where an object of the store carries a
+/// metallic-roughness material, else reconstruction plus mirror reflection (the thesis's).
+fn default_mode(store: &oslf_format::Store) -> Mode {
+    let pbr = store
+        .meta()
+        .objects
+        .iter()
+        .any(|o| o.material.is_metallic_roughness());
+    if pbr {
+        Mode::Pbr
+    } else {
+        Mode::ReconMirror
+    }
 }

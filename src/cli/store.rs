@@ -410,6 +410,12 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
                 "name": o.name, "first_patch": o.first_patch, "patch_count": o.patch_count,
                 "base_color": o.base_color,
                 "kind": if o.mesh.is_some() { "mesh" } else { "bezier" },
+                "material": {
+                    "model": if o.material.is_metallic_roughness() { "metallic-roughness" } else { "lambertian" },
+                    "metallic": o.material.metallic,
+                    "roughness": o.material.roughness,
+                    "emission": o.material.emission,
+                },
             });
             if let Some(mesh) = &o.mesh {
                 v["vertices"] = mesh.positions.len().into();
@@ -501,6 +507,22 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
                 k = mesh.atlas_grid
             ),
         }
+        let c = o.base_color;
+        let material = if o.material.is_metallic_roughness() {
+            format!(
+                "metallic-roughness, base colour {c:?}, metallic {}, roughness {}",
+                o.material.metallic, o.material.roughness
+            )
+        } else {
+            format!("Lambertian, base colour {c:?}")
+        };
+        let emits = o.material.emission.iter().any(|&e| e > 0.0);
+        let emission = if emits {
+            format!(", emission {:?}", o.material.emission)
+        } else {
+            String::new()
+        };
+        println!("    material: {material}{emission}");
     }
     println!("cube resolution  {0}x{0} per face", b.cube_resolution);
     println!(

@@ -57,11 +57,12 @@ pub struct Args {
     nv: f32,
     #[arg(long, default_value = "per-point")]
     order: String,
-    /// The pbr mode's glTF metallic factor and roughness.
-    #[arg(long, default_value_t = 1.0)]
-    metallic: f32,
-    #[arg(long, default_value_t = 0.3)]
-    roughness: f32,
+    /// The pbr mode's glTF metallic factor and roughness [default: each object's own
+    /// metallic-roughness material, else 1 and 0.3]; either flag sets them for every object.
+    #[arg(long)]
+    metallic: Option<f32>,
+    #[arg(long)]
+    roughness: Option<f32>,
     /// Samples per pixel of the ground truth.
     #[arg(long, default_value_t = 256)]
     spp: u32,
@@ -105,8 +106,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rs: args.rs,
         nu: args.nu,
         nv: args.nv,
-        metallic: args.metallic,
-        roughness: args.roughness,
+        metallic: args.metallic.unwrap_or(ShadingParams::default().metallic),
+        roughness: args.roughness.unwrap_or(ShadingParams::default().roughness),
+        object_material: args.metallic.is_none() && args.roughness.is_none(),
         order: match args.order.as_str() {
             "per-point" => Order::PerPoint,
             "per-direction" => Order::PerDirection,

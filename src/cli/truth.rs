@@ -45,12 +45,14 @@ pub struct Args {
     /// Ashikhmin–Shirley exponent along the bitangent.
     #[arg(long, default_value_t = 100.0)]
     nv: f64,
-    /// glTF metallic factor of the pbr mode's material (base colour: the object's C_s).
-    #[arg(long, default_value_t = 1.0)]
-    metallic: f32,
-    /// glTF roughness of the pbr mode's material.
-    #[arg(long, default_value_t = 0.3)]
-    roughness: f32,
+    /// glTF metallic factor of the pbr mode's material (base colour: the object's C_s)
+    /// [default: each object's own metallic-roughness material, else 1]. With this flag or
+    /// --roughness, every object is drawn with the flags' factors (as `oslf render`).
+    #[arg(long)]
+    metallic: Option<f32>,
+    /// glTF roughness of the pbr mode's material [default: the object's own, else 0.3].
+    #[arg(long)]
+    roughness: Option<f32>,
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Exposure of the PNG previews.
@@ -157,9 +159,11 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         None
     };
     let pbr = if wants("pbr") {
+        let defaults = oslf_runtime::ShadingParams::default();
         let term = Term::Pbr {
-            metallic: args.metallic,
-            roughness: args.roughness,
+            metallic: args.metallic.unwrap_or(defaults.metallic),
+            roughness: args.roughness.unwrap_or(defaults.roughness),
+            object_material: args.metallic.is_none() && args.roughness.is_none(),
         };
         Some(timed("pbr", || truth.render(term, &settings))?)
     } else {

@@ -356,7 +356,12 @@ impl App {
                 (s, _) => format!(" {}", s.name()),
             },
             p.blend_n,
-            if p.mode == Mode::Pbr {
+            if p.mode == Mode::Pbr && p.object_material {
+                format!(
+                    "object materials (else metallic={} roughness={:.2})",
+                    p.metallic, p.roughness
+                )
+            } else if p.mode == Mode::Pbr {
                 format!("metallic={} roughness={:.2}", p.metallic, p.roughness)
             } else {
                 format!("n_u={} n_v={}", p.nu, p.nv)
@@ -425,9 +430,19 @@ impl App {
                 "k" => p.nv /= 2.0,
                 "]" => p.m = (p.m * 2).min(65536),
                 "[" => p.m = (p.m / 2).max(1),
-                "r" => p.roughness = (p.roughness + 0.05).min(1.0),
-                "t" => p.roughness = (p.roughness - 0.05).max(0.0),
-                "m" => p.metallic = if p.metallic < 1.0 { 1.0 } else { 0.0 },
+                // The keys set the factors for every object, as the flags do.
+                "r" => {
+                    p.roughness = (p.roughness + 0.05).min(1.0);
+                    p.object_material = false;
+                }
+                "t" => {
+                    p.roughness = (p.roughness - 0.05).max(0.0);
+                    p.object_material = false;
+                }
+                "m" => {
+                    p.metallic = if p.metallic < 1.0 { 1.0 } else { 0.0 };
+                    p.object_material = false;
+                }
                 "+" | "=" => self.exposure *= 1.25,
                 "-" => self.exposure /= 1.25,
                 _ => {}

@@ -35,6 +35,7 @@ pub fn store_meta(scene: &Scene, surfaces: &Surfaces) -> StoreMeta {
             first_patch: surfaces.first_map(i),
             patch_count,
             mesh,
+            material: object_material(scene, o),
         });
         patches.extend(o.object_patches.iter().map(|p| Patch {
             control_points: p.cp.map(|c| c.to_array()),
@@ -77,4 +78,29 @@ pub fn object_centre(scene: &Scene) -> Vec3 {
         hi = hi.max(c);
     }
     (lo + hi) * 0.5
+}
+
+/// What the store records of object `o`'s material: its model, factors and emission (its
+/// textures are not recorded yet; a metallic-roughness texture's factors are the model's).
+fn object_material(scene: &Scene, o: &crate::scene::OslfObject) -> oslf_format::ObjectMaterial {
+    let Some(m) = scene.materials.get(o.material as usize) else {
+        return Default::default();
+    };
+    let (model, metallic, roughness) = match m.model {
+        crate::material::Model::Lambertian => (oslf_format::meta::MATERIAL_LAMBERTIAN, 0.0, 0.0),
+        crate::material::Model::MetallicRoughness {
+            metallic,
+            roughness,
+        } => (
+            oslf_format::meta::MATERIAL_METALLIC_ROUGHNESS,
+            metallic,
+            roughness,
+        ),
+    };
+    oslf_format::ObjectMaterial {
+        model,
+        metallic,
+        roughness,
+        emission: m.emission.to_array(),
+    }
 }

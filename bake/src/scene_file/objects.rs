@@ -88,18 +88,6 @@ impl Ctx<'_> {
                 ))
             }
         };
-        let raw_material = o.material.get_ref();
-        if raw_material.metallic.is_some()
-            || raw_material.roughness.is_some()
-            || raw_material.emission.is_some()
-        {
-            return Err(self.error_at(
-                o.material.span(),
-                "an [[object]]'s material is its base colour only (the runtime shades it with \
-                 its own lobe): `metallic`, `roughness` and `emission` apply to environment \
-                 shapes",
-            ));
-        }
         let (material, base_color) = self.material(&o.material, materials)?;
         let world = patches.iter().map(|p| p.transformed(&transform)).collect();
         Ok(OslfObject {

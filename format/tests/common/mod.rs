@@ -90,6 +90,7 @@ pub fn fixture(spec: Spec) -> Fixture {
         first_patch: 0,
         patch_count: split,
         mesh: None,
+        material: Default::default(),
     }];
     objects.push(ObjectInfo {
         name: "lid".into(),
@@ -98,6 +99,7 @@ pub fn fixture(spec: Spec) -> Fixture {
         first_patch: split,
         patch_count: spec.patches as u32 - split,
         mesh: None,
+        material: Default::default(),
     });
     let meta = StoreMeta {
         objects,
@@ -348,6 +350,7 @@ pub fn with_mesh(mut f: Fixture, spec: Spec) -> Fixture {
         first_patch: first,
         patch_count: 4,
         mesh: Some(test_mesh()),
+        material: Default::default(),
     });
     let object = (f.meta.objects.len() - 1) as u32;
     let old_points = f.points.len();

@@ -3,7 +3,7 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use oslf_format::INVALID_INDEX;
 
 use super::blend::Candidates;
@@ -87,9 +87,10 @@ impl<C: CubeTexels> Shader<'_, C> {
         v: Vec3,
         nv: f32,
         base: Vec3,
+        pbr: Vec2,
     ) -> AsSample {
         let u = &self.uniform;
-        let a = u.alpha;
+        let a = pbr.y;
         let a2 = a * a;
         let vl = Vec3::new(v.dot(t), v.dot(b), nv);
         let vs = Vec3::new(a * vl.x, a * vl.y, vl.z).normalize();
@@ -127,7 +128,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             let k5 = k * k * k * k * k;
             let metal = base + (Vec3::ONE - base) * k5;
             let dielectric = Vec3::splat(0.04 + 0.96 * k5);
-            weight = dielectric.lerp(metal, u.metallic) * g1l;
+            weight = dielectric.lerp(metal, pbr.x) * g1l;
         }
         AsSample { l, weight, lpdf }
     }
@@ -160,13 +161,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         b: Vec3,
         v: Vec3,
         base: Vec3,
+        pbr: Vec2,
     ) -> AsSample {
         let mut out = self.cosine_sample(xi1, r2, n, t, b);
         let h = (v + out.l).normalize_or(n);
         let k = (1.0 - v.dot(h).abs()).clamp(0.0, 1.0);
         let fr = 0.04 + 0.96 * (k * k * k * k * k);
         if n.dot(out.l) > 0.0 && n.dot(v) > 0.0 {
-            out.weight = base * ((1.0 - self.uniform.metallic) * (1.0 - fr));
+            out.weight = base * ((1.0 - pbr.x) * (1.0 - fr));
         }
         out
     }
@@ -246,9 +248,10 @@ impl<C: CubeTexels> Shader<'_, C> {
         v: Vec3,
         nv: f32,
         base: Vec3,
+        pbr: Vec2,
     ) -> AsSample {
         if self.uniform.terms & 16 != 0 {
-            return self.sample_ggx(xi1, xi2, n, t, b, v, nv, base);
+            return self.sample_ggx(xi1, xi2, n, t, b, v, nv, base, pbr);
         }
         self.sample_as(xi1, xi2, n, t, b, v, nv)
     }
@@ -265,9 +268,10 @@ impl<C: CubeTexels> Shader<'_, C> {
         v: Vec3,
         nv: f32,
         base: Vec3,
+        pbr: Vec2,
     ) -> AsSample {
         if self.uniform.terms & 16 != 0 {
-            return self.sample_pbr_diffuse(xi1, xi2, n, t, b, v, base);
+            return self.sample_pbr_diffuse(xi1, xi2, n, t, b, v, base, pbr);
         }
         self.sample_diffuse(xi1, xi2, n, t, b, nv)
     }
@@ -286,10 +290,11 @@ impl<C: CubeTexels> Shader<'_, C> {
         v: Vec3,
         nv: f32,
         base: Vec3,
+        pbr: Vec2,
     ) -> (Vec3, bool) {
         let u = &self.uniform;
         let diffuse = if u.terms & 16 != 0 {
-            u.metallic < 1.0
+            u.min_metallic < 1.0
         } else {
             u.rd > 0.0
         };
@@ -311,9 +316,9 @@ impl<C: CubeTexels> Shader<'_, C> {
                 }
                 let [x1, x2] = self.sample_xi(pixel, i, j, 2 * k);
                 let s = if k == 0 {
-                    self.sample_spec(x1, x2, n, t, b, v, nv, base)
+                    self.sample_spec(x1, x2, n, t, b, v, nv, base, pbr)
                 } else {
-                    self.sample_diff(x1, x2, n, t, b, v, nv, base)
+                    self.sample_diff(x1, x2, n, t, b, v, nv, base, pbr)
                 };
                 if !(s.weight.max_element() > 0.0) {
                     continue;
@@ -342,6 +347,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         v: Vec3,
         r: Vec3,
         base: Vec3,
+        pbr: Vec2,
     ) -> Vec3 {
         let u = &self.uniform;
         let b = n.cross(t);
@@ -351,12 +357,12 @@ impl<C: CubeTexels> Shader<'_, C> {
                 return Vec3::ZERO;
             }
             return self
-                .integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base)
+                .integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr)
                 .0;
         }
         if u.order == 1 {
             return self
-                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv, base)
+                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv, base, pbr)
                 .0;
         }
         let axis = if u.blend == 4 { n } else { r };
@@ -366,7 +372,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         for j in 0..4 {
             if w[j] > 0.0 {
                 let (est, ok) =
-                    self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv, base);
+                    self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv, base, pbr);
                 if ok {
                     acc += est * w[j];
                     wsum += w[j];
@@ -379,7 +385,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         if u.env_cube == INVALID_INDEX {
             return Vec3::ZERO;
         }
-        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base)
+        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr)
             .0
     }
 }

@@ -82,6 +82,9 @@ pub struct Shader<'a, C: CubeTexels> {
     /// whose tangent frame then comes from the normal alone) and its object's base colour C_s.
     pub patches: &'a [BezierPatch],
     pub colors: &'a [Vec3],
+    /// Per sample map: its object's material for the pbr mode (`ObjectMesh::materials`;
+    /// missing entries are no material).
+    pub materials: &'a [[f32; 4]],
     /// One sample map per map index (Bézier patch or atlas page).
     pub maps: &'a [SampleMapView<'a>],
     pub cubes: &'a C,

@@ -13,6 +13,16 @@ pub(super) fn finite3(c: Vec3) -> Vec3 {
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {
+    /// The pbr mode's metallic and GGX α on map `patch` (as `pbr_material`): its object's
+    /// material's where the store has one and the uniform takes it, else the uniform's.
+    pub(super) fn pbr_material(&self, patch: u32) -> glam::Vec2 {
+        let u = &self.uniform;
+        match self.materials.get(patch as usize) {
+            Some(m) if u.object_material != 0 && m[2] > 0.5 => glam::Vec2::new(m[0], m[1]),
+            _ => glam::Vec2::new(u.metallic, u.alpha),
+        }
+    }
+
     /// Shades pixel `(px, py)` with G-buffer texel `g`: the background with alpha 0 off the
     /// object, else the colour with alpha 1 (as `shade` in shade.wgsl).
     pub fn shade(&self, px: u32, py: u32, g: &GTexel) -> [f32; 4] {
@@ -50,7 +60,7 @@ impl<C: CubeTexels> Shader<'_, C> {
                 .get(patch as usize)
                 .map_or(Vec3::ZERO, |p| patch_du(p, pu, pv));
             let t = tangent_frame(n, du);
-            spec = self.glossy(&c, pixel, x, n, t, v, r, base);
+            spec = self.glossy(&c, pixel, x, n, t, v, r, base, self.pbr_material(patch));
         }
         if u.terms & 8 != 0 {
             spec *= base;

@@ -21,6 +21,7 @@ fn store_constants(env_cube: u32, cube_res: u32) -> crate::params::StoreConstant
         has_depth: false,
         origin: [0.0; 3],
         fitted_box: None,
+        min_object_metallic: None,
     }
 }
 
@@ -132,6 +133,7 @@ fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
             samples: &[],
             patches: &[],
             colors: &[],
+            materials: &[],
             maps: &[],
             cubes: &NoCubes,
             feedback: &[],
@@ -266,6 +268,7 @@ fn bare_shader<'a, C: CubeTexels>(
         samples,
         patches: &[],
         colors: &[],
+        materials: &[],
         maps: &[],
         cubes,
         feedback: &[],
@@ -595,6 +598,7 @@ fn the_env_background_is_continuous_across_face_edges() {
                 samples: &[],
                 patches: &[],
                 colors: &[],
+                materials: &[],
                 maps: &[],
                 cubes: &SmoothCube(res),
                 feedback: &[],
@@ -829,7 +833,8 @@ fn pbr_under_a_uniform_environment_is_the_gltf_albedo() {
             let (n, t) = (Vec3::Z, Vec3::X);
             let r = 2.0 * n.dot(v) * n - v;
             let base32 = Vec3::new(base[0] as f32, base[1] as f32, base[2] as f32);
-            let got = shader.glossy(&empty, 7, Vec3::ZERO, n, t, v, r, base32);
+            let pbr = shader.pbr_material(0);
+            let got = shader.glossy(&empty, 7, Vec3::ZERO, n, t, v, r, base32, pbr);
             let (nt, np) = (400, 400);
             let mut want = [0.0f64; 3];
             let vd = [v.x as f64, v.y as f64, v.z as f64];

@@ -194,6 +194,13 @@ impl Renderer {
             // A damaged environment cube leaves no fitted box; the cache reports the damage
             // when it loads the cube (below), and parallax then asks for a given box.
             fitted_box: crate::probe::fit_proxy_box(&store, mesh.origin).unwrap_or(None),
+            min_object_metallic: store
+                .meta()
+                .objects
+                .iter()
+                .filter(|o| o.material.is_metallic_roughness())
+                .map(|o| o.material.metallic)
+                .reduce(f32::min),
         };
         let mut renderer = Self {
             gpu,

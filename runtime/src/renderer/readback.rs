@@ -131,6 +131,7 @@ impl Renderer {
             samples: &samples,
             patches: &self.mesh.patches,
             colors: &self.mesh.colors,
+            materials: &self.mesh.materials,
             maps: &maps,
             cubes,
             feedback: &feedback,

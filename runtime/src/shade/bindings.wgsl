@@ -59,7 +59,10 @@ struct Params {
     // pbr: glTF's metallic factor, and GGX α = roughness² (at least MIN_ALPHA).
     metallic: f32,
     alpha: f32,
-    pad: vec2<f32>,
+    // 1: an object's metallic and α from its material (PatchGpu.material) where it has one.
+    object_material: u32,
+    // The smallest metallic any pixel can have (below 1: DIFFUSE).
+    min_metallic: f32,
 };
 
 // The mode's switches are pipeline-overridable constants (set from the same values as the
@@ -84,6 +87,8 @@ override FILTER: bool = false;
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
     color: vec4<f32>,
+    // Its object's material: metallic, GGX α, 1 if metallic-roughness (else 0), unused.
+    material: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> P: Params;

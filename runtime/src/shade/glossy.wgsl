@@ -50,9 +50,9 @@ fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: ve
 }
 
 // glTF's GGX lobe: a visible normal drawn at (ξ1, ξ2) (Heitz 2018), v reflected about it.
-fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> AsSample {
+fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> AsSample {
     var out: AsSample;
-    let a = P.alpha;
+    let a = pbr.y;
     let a2 = a * a;
     let vl = vec3<f32>(dot(v, t), dot(v, b), nv);
     let vs = normalize(vec3<f32>(a * vl.x, a * vl.y, vl.z));
@@ -87,7 +87,7 @@ fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: v
         let k5 = k * k * k * k * k;
         let metal = base + (vec3<f32>(1.0) - base) * k5;
         let dielectric = vec3<f32>(0.04 + 0.96 * k5);
-        out.weight = mix(dielectric, metal, P.metallic) * g1l;
+        out.weight = mix(dielectric, metal, pbr.x) * g1l;
     }
     return out;
 }
@@ -108,7 +108,7 @@ fn cosine_sample(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>) ->
 
 // glTF's diffuse base of a dielectric, cosine-weighted: f ⟨n,l⟩ / p(l) =
 // (1 − metallic)(1 − F(⟨v,h⟩)) C.
-fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, base: vec3<f32>) -> AsSample {
+fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> AsSample {
     var out = cosine_sample(xi1, r2, n, t, b);
     let nl = dot(n, out.l);
     var h = n;
@@ -117,7 +117,7 @@ fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32
     let k = clamp(1.0 - abs(dot(v, h)), 0.0, 1.0);
     let fr = 0.04 + 0.96 * (k * k * k * k * k);
     if (nl > 0.0 && dot(n, v) > 0.0) {
-        out.weight = base * ((1.0 - P.metallic) * (1.0 - fr));
+        out.weight = base * ((1.0 - pbr.x) * (1.0 - fr));
     }
     return out;
 }
@@ -167,14 +167,14 @@ fn max3(w: vec3<f32>) -> f32 {
 }
 
 // The specular sample of the mode: Ashikhmin–Shirley, or glTF's GGX with TERMS & 16.
-fn sample_spec(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> AsSample {
-    if ((TERMS & 16u) != 0u) { return sample_ggx(xi1, xi2, n, t, b, v, nv, base); }
+fn sample_spec(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> AsSample {
+    if ((TERMS & 16u) != 0u) { return sample_ggx(xi1, xi2, n, t, b, v, nv, base, pbr); }
     return sample_as(xi1, xi2, n, t, b, v, nv);
 }
 
 // The diffuse sample of the mode: the term 5.4, or glTF's diffuse base with TERMS & 16.
-fn sample_diff(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> AsSample {
-    if ((TERMS & 16u) != 0u) { return sample_pbr_diffuse(xi1, xi2, n, t, b, v, base); }
+fn sample_diff(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> AsSample {
+    if ((TERMS & 16u) != 0u) { return sample_pbr_diffuse(xi1, xi2, n, t, b, v, base, pbr); }
     return sample_diffuse(xi1, xi2, n, t, b, nv);
 }
 
@@ -205,7 +205,7 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<
 // every source takes the same fixed samples, so each is drawn once for all of them. The
 // diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
 // call site: lavapipe pays for every inlined copy whether it runs or not.
-fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>) -> Sums {
+fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
@@ -240,10 +240,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
         var diff_lod = 0.0;
         if (FILTER) {
             let xi = filter_xi(i);
-            spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base);
+            spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
             spec_lod = sample_lod(spec.l, spec.lpdf);
             if (DIFFUSE) {
-                diff = sample_diff(xi.x, xi.y, n, t, b, v, nv, base);
+                diff = sample_diff(xi.x, xi.y, n, t, b, v, nv, base, pbr);
                 diff_lod = sample_lod(diff.l, diff.lpdf);
             }
         }
@@ -251,10 +251,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             if (!used[k]) { continue; }
             if (!FILTER) {
                 let xi = sample_xi(pixel, i, j0 + k, 0u);
-                spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base);
+                spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
                 if (DIFFUSE) {
                     let xd = sample_xi(pixel, i, j0 + k, 2u);
-                    diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base);
+                    diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base, pbr);
                 }
             }
             if (max3(spec.weight) > 0.0) {
@@ -284,13 +284,13 @@ fn estimate(s: Sums, k: u32) -> vec3<f32> {
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
 // (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
 // (order B): one integration over the blend. Both passes through one `integrate` call.
-fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>) -> vec3<f32> {
+fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
     let b = cross(n, t);
     let nv = dot(n, v);
     let use_env = SOURCE != 0u || cand.count == 0u;
     let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base), 0u);
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u);
     }
     var axis = r;
     if (BLEND == 4u) { axis = n; }
@@ -309,7 +309,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
             used = one;
             wp = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         }
-        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base);
+        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base, pbr);
         for (var k = 0u; k < 4u; k++) {
             if (used[k] && (sums.ok[k] > 0.0 || phase == 1u)) {
                 acc += estimate(sums, k) * wp[k];

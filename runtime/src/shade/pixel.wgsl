@@ -12,6 +12,14 @@ fn finite3(c: vec3<f32>) -> vec3<f32> {
     return o;
 }
 
+// The pbr mode's metallic and GGX α on map `pid`: its object's material's where the store has
+// one and the parameters take it (P.object_material), else the parameters'.
+fn pbr_material(pid: u32) -> vec2<f32> {
+    let m = patches[pid].material;
+    if (P.object_material != 0u && m.z > 0.5) { return m.xy; }
+    return vec2<f32>(P.metallic, P.alpha);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= P.size.x || gid.y >= P.size.y) { return; }
@@ -41,7 +49,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
         spec = mirror(x, n, r);
     } else if ((TERMS & 4u) != 0u) {
         let t = tangent_frame(n, patch_du(pid, u, v_param));
-        spec = glossy(pixel, x, n, t, v, r, base);
+        spec = glossy(pixel, x, n, t, v, r, base, pbr_material(pid));
     }
     if ((TERMS & 8u) != 0u) {
         spec *= base;
