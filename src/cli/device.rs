@@ -45,9 +45,19 @@ fn choose(
         }
         DeviceChoice::Auto => match Gpu::headless() {
             Ok(gpu) if !gpu.shares_system_memory => {
-                let reason = format!("GPU {} (auto: a hardware adapter)", gpu.adapter_name);
-                let capture = GpuCapture::for_scene(gpu, scene).context("the GPU capture")?;
-                Ok((Some(Arc::new(capture)), reason))
+                let name = gpu.adapter_name.clone();
+                match GpuCapture::for_scene(gpu, scene) {
+                    Ok(capture) => Ok((
+                        Some(Arc::new(capture)),
+                        format!("GPU {name} (auto: a hardware adapter)"),
+                    )),
+                    // A scene the GPU cannot hold (a buffer over its limits, say) bakes on the
+                    // CPU, saying why; --device gpu makes that an error.
+                    Err(e) => Ok((
+                        None,
+                        format!("CPU (auto: {name} cannot take this scene: {e})"),
+                    )),
+                }
             }
             Ok(gpu) => Ok((
                 None,

@@ -170,20 +170,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         open_seconds * 1e3,
         if args.access.mmap { "memory-mapped" } else { "positioned reads" }
     );
-    let materials = if params.mode == Mode::Pbr && params.object_material {
-        ", objects with a metallic-roughness material in the store shaded with it"
-    } else {
-        ""
-    };
-    println!(
-        "mode           {}{}{materials}",
-        params.mode.name(),
-        if args.mode.is_none() {
-            " (the default for this store)"
-        } else {
-            ""
-        }
-    );
+    print_mode(&params, args.mode.is_none());
     let gpu_time = match (frame.shade_gpu_seconds, frame.gbuffer_gpu_seconds) {
         (Some(s), Some(g)) => format!(
             ", on the GPU: shading {:.2} ms, G-buffer {:.2} ms",
@@ -388,6 +375,22 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
         check_writable(path, "the --stats-json file")?;
     }
     Ok(())
+}
+
+/// The summary's `mode` line: the mode, whether it was the store's default, and whether
+/// objects take their own materials.
+fn print_mode(params: &oslf_runtime::ShadingParams, defaulted: bool) {
+    let materials = if params.mode == Mode::Pbr && params.object_material {
+        ", objects with a metallic-roughness material in the store shaded with it"
+    } else {
+        ""
+    };
+    let default = if defaulted {
+        " (the default for this store)"
+    } else {
+        ""
+    };
+    println!("mode           {}{default}{materials}", params.mode.name());
 }
 
 /// The mode a render without `--mode` draws: `pbr` where an object of the store carries a
