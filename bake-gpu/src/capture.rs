@@ -382,18 +382,7 @@ impl GpuCapture {
             })
             .collect();
         let jobs_buffer = storage(&self.gpu, "jobs", &gpu_jobs);
-        let out = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("texels out"),
-            size: out_bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("texels readback"),
-            size: out_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (out, staging) = self.output_buffers("texels", out_bytes);
         let uniform = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("capture params"),
             size: std::mem::size_of::<Params>() as u64,
@@ -447,6 +436,29 @@ impl GpuCapture {
                 unpack_cube(cube, res, k, settings.distance_channel, job.sees_objects)
             })
             .collect())
+    }
+
+    /// A storage buffer of `bytes` the shader writes, and the buffer it is copied to for
+    /// reading back.
+    pub(crate) fn output_buffers(&self, label: &str, bytes: u64) -> (wgpu::Buffer, wgpu::Buffer) {
+        let buffer = |usage, suffix: &str| {
+            self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&format!("{label} {suffix}")),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        (
+            buffer(
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                "out",
+            ),
+            buffer(
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                "readback",
+            ),
+        )
     }
 
     /// Runs `pipeline` over `items` invocations (texels, pixels) of `samples` paths each, in
@@ -523,18 +535,7 @@ impl GpuCapture {
             .collect();
         let rays_buffer = storage(&self.gpu, "trace rays", &gpu_rays);
         let bytes = (rays.len() * std::mem::size_of::<TraceHit>()) as u64;
-        let hits = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trace hits"),
-            size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("trace readback"),
-            size: bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (hits, staging) = self.output_buffers("trace hits", bytes);
         let b = &self.buffers;
         let bind_group = self.bind_group(
             &self.trace,

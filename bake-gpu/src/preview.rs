@@ -61,18 +61,7 @@ impl GpuCapture {
                 usage: wgpu::BufferUsages::UNIFORM,
             },
         );
-        let out = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("preview pixels"),
-            size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("preview readback"),
-            size: bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (out, staging) = self.output_buffers("preview pixels", bytes);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("preview params"),
             size: std::mem::size_of::<Params>() as u64,

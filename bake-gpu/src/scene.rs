@@ -5,9 +5,6 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::ploc::PlocBuilder;
-use obvhs::BvhBuildParams;
 use oslf_bake::bvh::TriangleRecord;
 use oslf_bake::environment::{Environment, EnvironmentModel};
 use oslf_bake::light::Light;
@@ -344,7 +341,7 @@ fn gpu_light(l: &Light) -> GpuLight {
     g
 }
 
-/// An obvhs BVH2 over `triangles` (PLOC and reinsertion, the CPU BVH's settings, one
+/// The CPU BVH's binary tree over `triangles` ([`oslf_bake::bvh::build_bvh2`], one
 /// triangle per leaf): its nodes, the triangles' order in the leaves and the deepest leaf's
 /// depth. Errors if that depth exceeds [`MAX_DEPTH`].
 fn build_bvh(triangles: &[TriangleRecord]) -> Result<(Vec<Node>, Vec<u32>, usize)> {
@@ -352,18 +349,7 @@ fn build_bvh(triangles: &[TriangleRecord]) -> Result<(Vec<Node>, Vec<u32>, usize
         .iter()
         .map(|t| Aabb::from_points(&t.corners.map(glam::Vec3A::from)))
         .collect();
-    let params = BvhBuildParams {
-        pre_split: false,
-        ..BvhBuildParams::slow_build()
-    };
-    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-        params.ploc_search_distance,
-        &aabbs,
-        (0..aabbs.len() as u32).collect(),
-        params.sort_precision,
-        params.search_depth_threshold,
-    );
-    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    let bvh2 = oslf_bake::bvh::build_bvh2(&aabbs);
     let nodes: Vec<Node> = bvh2
         .nodes
         .iter()

@@ -13,6 +13,9 @@
 //!   the two devices' mean luminance is within 6 standard errors (estimated from the seeds'
 //!   spread) — the Monte Carlo agreement of two estimators of the same expectation.
 
+mod common;
+
+use common::sphere_on_ground;
 use glam::Vec3;
 use oslf_bake::bvh::{Instance, TriangleScene};
 use oslf_bake::capture::{capture_cube_with_noise, CaptureSettings};
@@ -36,25 +39,6 @@ struct Case {
     materials: Vec<Material>,
     lights: Vec<Light>,
     environment: Environment,
-}
-
-fn sphere_on_ground(extra: Vec<Instance>) -> Vec<Instance> {
-    let mut v = vec![Instance {
-        name: "sphere".into(),
-        mesh: shapes::sphere(1.0, 24).unwrap(),
-        material: 0,
-        object: 0,
-    }];
-    let mut ground = shapes::cuboid(Vec3::new(8.0, 8.0, 0.2)).unwrap();
-    ground.positions.iter_mut().for_each(|p| p.z -= 1.1);
-    v.push(Instance {
-        name: "ground".into(),
-        mesh: ground,
-        material: 1,
-        object: ENVIRONMENT_OBJECT,
-    });
-    v.extend(extra);
-    v
 }
 
 fn image(w: u32, h: u32, seed: u64, scale: f32) -> ImageTexture {
@@ -100,7 +84,7 @@ fn cases() -> Vec<Case> {
     vec![
         Case {
             name: "sun and constant sky, Lambertian",
-            instances: sphere_on_ground(vec![]),
+            instances: sphere_on_ground(24, vec![]),
             materials: vec![
                 Material::lambertian(Vec3::new(0.2, 0.6, 0.3)),
                 Material::lambertian(Vec3::splat(0.5)),
@@ -110,7 +94,7 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "point and spot lights, checker and image textures",
-            instances: sphere_on_ground(vec![]),
+            instances: sphere_on_ground(24, vec![]),
             materials: vec![checker, textured],
             lights: vec![
                 Light::Point {
@@ -129,7 +113,7 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "lat-long map, metallic-roughness with a texture",
-            instances: sphere_on_ground(vec![]),
+            instances: sphere_on_ground(24, vec![]),
             materials: vec![
                 metallic_roughness(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.3),
                 mr_textured,
@@ -139,7 +123,7 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "Preetham sky and its sun, dielectric",
-            instances: sphere_on_ground(vec![]),
+            instances: sphere_on_ground(24, vec![]),
             materials: vec![
                 metallic_roughness(Vec3::new(0.2, 0.5, 0.8), 0.0, 0.5),
                 Material::lambertian(Vec3::splat(0.4)),
@@ -149,12 +133,15 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "an emitting ceiling in the dark",
-            instances: sphere_on_ground(vec![Instance {
-                name: "ceiling".into(),
-                mesh: ceiling,
-                material: 2,
-                object: ENVIRONMENT_OBJECT,
-            }]),
+            instances: sphere_on_ground(
+                24,
+                vec![Instance {
+                    name: "ceiling".into(),
+                    mesh: ceiling,
+                    material: 2,
+                    object: ENVIRONMENT_OBJECT,
+                }],
+            ),
             materials: vec![
                 Material::lambertian(Vec3::splat(0.7)),
                 Material::lambertian(Vec3::splat(0.5)),

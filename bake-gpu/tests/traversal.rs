@@ -2,6 +2,8 @@
 //! distance up to rounding, on random rays through a scene with small and large, near and
 //! far triangles, and on rays leaving its surfaces.
 
+mod common;
+
 use glam::Vec3;
 use oslf_bake::bvh::{Instance, TriangleScene};
 use oslf_bake::material::Material;
@@ -13,31 +15,19 @@ use oslf_bake_gpu::scene::GpuScene;
 use oslf_bake_gpu::GpuCapture;
 
 fn instances() -> Vec<Instance> {
-    let mut v = vec![Instance {
-        name: "sphere".into(),
-        mesh: shapes::sphere(1.0, 48).unwrap(),
-        material: 0,
-        object: 0,
-    }];
-    let mut ground = shapes::cuboid(Vec3::new(8.0, 8.0, 0.2)).unwrap();
-    ground.positions.iter_mut().for_each(|p| p.z -= 1.1);
-    v.push(Instance {
-        name: "ground".into(),
-        mesh: ground,
-        material: 1,
-        object: ENVIRONMENT_OBJECT,
-    });
     let mut post = shapes::cylinder(0.1, 3.0, 24, true).unwrap();
     post.positions
         .iter_mut()
         .for_each(|p| *p += Vec3::new(1.6, 0.4, -1.0));
-    v.push(Instance {
-        name: "post".into(),
-        mesh: post,
-        material: 1,
-        object: ENVIRONMENT_OBJECT,
-    });
-    v
+    common::sphere_on_ground(
+        48,
+        vec![Instance {
+            name: "post".into(),
+            mesh: post,
+            material: 1,
+            object: ENVIRONMENT_OBJECT,
+        }],
+    )
 }
 
 #[test]

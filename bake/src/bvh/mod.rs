@@ -97,6 +97,25 @@ pub struct TriangleRecord {
     pub global: u32,
 }
 
+/// The binary BVH over `aabbs` (one primitive each, in order) that [`TriangleScene`] converts
+/// to its CWBVH: obvhs's PLOC with its slow-build settings (no pre-splitting), then
+/// reinsertion. The GPU path tracer traverses it as it is.
+pub fn build_bvh2(aabbs: &[Aabb]) -> obvhs::bvh2::Bvh2 {
+    let params = BvhBuildParams {
+        pre_split: false,
+        ..BvhBuildParams::slow_build()
+    };
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        aabbs,
+        (0..aabbs.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    bvh2
+}
+
 /// Every triangle of a scene in one CWBVH.
 pub struct TriangleScene {
     bvh: CwBvh,
@@ -191,18 +210,8 @@ impl TriangleScene {
             .iter()
             .map(|v| Aabb::from_points(&v.map(Vec3A::from)))
             .collect();
-        let params = BvhBuildParams {
-            pre_split: false,
-            ..BvhBuildParams::slow_build()
-        };
-        let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-            params.ploc_search_distance,
-            &aabbs,
-            (0..aabbs.len() as u32).collect(),
-            params.sort_precision,
-            params.search_depth_threshold,
-        );
-        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+        let bvh2 = build_bvh2(&aabbs);
+        let params = BvhBuildParams::slow_build();
         let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
         // Put the triangles in leaf order so a primitive slot indexes them directly.
         let vertices_bvh: Vec<[Vec3; 3]> = bvh

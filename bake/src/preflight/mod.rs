@@ -223,12 +223,7 @@ impl Estimate {
             t.seconds = (t.seconds.0 / n as f64, t.seconds.1 / n as f64);
             t.detail = format!("{} (1/{n} of it in this shard)", t.detail);
         }
-        self.time
-            .sort_by(|a, b| b.seconds.1.total_cmp(&a.seconds.1));
-        self.seconds = self
-            .time
-            .iter()
-            .fold((0.0, 0.0), |a, t| (a.0 + t.seconds.0, a.1 + t.seconds.1));
+        self.resum_time();
         self
     }
 }
@@ -334,14 +329,19 @@ impl Estimate {
                 rays_per_second / 1e6
             );
         }
+        self.resum_time();
+        self.device = Some(device.to_string());
+        self
+    }
+
+    /// Sorts the time terms, largest first, and sums them again.
+    fn resum_time(&mut self) {
         self.time
             .sort_by(|a, b| b.seconds.1.total_cmp(&a.seconds.1));
         self.seconds = self
             .time
             .iter()
             .fold((0.0, 0.0), |a, t| (a.0 + t.seconds.0, a.1 + t.seconds.1));
-        self.device = Some(device.to_string());
-        self
     }
 }
 
