@@ -175,6 +175,8 @@ fn sweep_writes_rows_front_and_plot() {
         "--vary",
         "cube_resolution=4",
         "--vary",
+        "device=gpu",
+        "--vary",
         "blend=distance,envmap",
         "--spp",
         "4",
@@ -192,10 +194,17 @@ fn sweep_writes_rows_front_and_plot() {
     assert!(ok, "{stderr}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
-    // 2 stores × 3 runtime settings.
-    assert_eq!(lines.len(), 1 + 6, "{csv}");
+    // 3 stores × 3 runtime settings.
+    assert_eq!(lines.len(), 1 + 9, "{csv}");
     assert!(lines[1].starts_with("defaults,"));
     assert!(csv.contains("\"cube_resolution=4, blend=envmap\""));
+    // Each row names what captured its store: the CPU by default (auto on lavapipe), the
+    // GPU where the variation asks for it.
+    for l in &lines[1..] {
+        let on_gpu = l.contains("device=gpu");
+        assert_eq!(l.contains(",\"GPU "), on_gpu, "{l}");
+        assert_eq!(l.contains(",CPU ("), !on_gpu, "{l}");
+    }
     // The two Pareto fronts (frame time, bake time, the last two columns) hold a row each.
     for back in [2, 1] {
         let column: Vec<&str> = lines[1..]

@@ -12,6 +12,7 @@
 //! - [`capture`]: [`GpuCapture`], which uploads it once and captures batches of cubes
 //!   (bounded memory per batch, short dispatches), implementing the bake's
 //!   `CaptureDevice`, so `oslf bake --device gpu` resumes, shards and merges as the CPU bake;
+//! - [`choice`]: `--device auto|cpu|gpu` decided and explained, for the CLI and the sweep;
 //! - [`preview`]: the bake's preview (the scene camera's image) with the same integrator;
 //! - [`shader`]: the WGSL, split as the CPU code is (random numbers, traversal, scene,
 //!   integrator, capture).
@@ -24,6 +25,7 @@
 //! scene and seed give the same bytes, however the cubes are batched.
 
 pub mod capture;
+pub mod choice;
 pub mod error;
 pub mod preview;
 pub mod scene;

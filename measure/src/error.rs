@@ -11,6 +11,9 @@ pub enum MeasureError {
     Runtime(#[from] oslf_runtime::RuntimeError),
     #[error(transparent)]
     Store(#[from] oslf_format::Error),
+    /// The GPU capture a bake asked for cannot be had.
+    #[error(transparent)]
+    Gpu(#[from] oslf_bake_gpu::GpuBakeError),
     /// Writing an output file failed.
     #[error("{path}: {message}")]
     Output { path: PathBuf, message: String },

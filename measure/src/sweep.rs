@@ -23,7 +23,7 @@ use crate::error::{MeasureError, Result};
 use crate::judge::{judge, time_interleaved, Judgement, TimedJob};
 
 /// Bake settings the sweep can vary.
-pub const BAKE_KEYS: [&str; 7] = [
+pub const BAKE_KEYS: [&str; 8] = [
     "epsilon",
     "sample_count",
     "cube_resolution",
@@ -31,6 +31,7 @@ pub const BAKE_KEYS: [&str; 7] = [
     "samples_per_texel",
     "sample_map_resolution",
     "mantissa_bits",
+    "device",
 ];
 
 /// Runtime settings the sweep can vary. `blend` takes `distance`, `angle`, `avg`, `rN`
@@ -145,6 +146,7 @@ pub fn apply_bake(s: &mut BakeSettings, c: &Change) -> Result<()> {
             check(c, v > 0.0 && v < 90.0, "(0, 90)")?;
             s.phi_samplemap_deg = v;
         }
+        "device" => s.device = parse(c)?,
         "samples_per_texel" => {
             let v: u32 = parse(c)?;
             check(c, v >= 1, "[1, ∞)")?;
@@ -257,6 +259,8 @@ pub struct SweepRow {
     /// CPU time of the bake, all threads: less sensitive than `bake_seconds` to what else
     /// runs on the machine.
     pub bake_cpu_seconds: Option<f64>,
+    /// What captured the store's cube maps: `CPU (N threads)` or `GPU <adapter>`.
+    pub capture_device: String,
     pub store_bytes: u64,
     pub sample_points: usize,
     pub judgement: Judgement,
@@ -292,6 +296,9 @@ struct StoreRecord {
     bake_cpu_seconds: Option<f64>,
     store_bytes: u64,
     sample_points: usize,
+    /// What captured the cube maps ([`BakeReport::capture_device`]).
+    #[serde(default)]
+    capture_device: String,
 }
 
 fn record_path(store: &Path) -> PathBuf {
@@ -322,6 +329,7 @@ fn bake_or_reuse(
             }
         }
     }
+    let (gpu, _) = oslf_bake_gpu::choice::capture_device(scene, scene.bake.device, "device")?;
     let report: BakeReport = bake(
         scene,
         &BakeOptions {
@@ -330,7 +338,7 @@ fn bake_or_reuse(
             progress,
             cube_limit: None,
             refuse_empty_texels: false,
-            device: None,
+            device: gpu.map(|g| g as Arc<dyn oslf_bake::device::CaptureDevice>),
         },
     )?;
     let r = StoreRecord {
@@ -340,6 +348,7 @@ fn bake_or_reuse(
         bake_cpu_seconds: report.cpu_seconds,
         store_bytes: report.store_bytes,
         sample_points: report.sample_points,
+        capture_device: report.capture_device.clone(),
     };
     let json =
         serde_json::to_string_pretty(&r).map_err(|e| MeasureError::Invalid(e.to_string()))?;
@@ -454,6 +463,7 @@ pub fn run_sweep(
                 store: path.clone(),
                 bake_seconds: record.bake_seconds,
                 bake_cpu_seconds: record.bake_cpu_seconds,
+                capture_device: record.capture_device.clone(),
                 store_bytes: record.store_bytes,
                 sample_points: record.sample_points,
                 judgement,

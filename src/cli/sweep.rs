@@ -210,8 +210,12 @@ fn front_of(
     out
 }
 
-/// The bake's CPU seconds (all threads), or its wall seconds where CPU time is not known.
+/// The bake's CPU seconds (all threads), or its wall seconds where CPU time is not known or
+/// the cube maps were captured on a GPU (whose time the CPU's does not count).
 fn bake_cost(r: &SweepRow) -> f64 {
+    if r.capture_device.starts_with("GPU") {
+        return r.bake_seconds;
+    }
     r.bake_cpu_seconds.unwrap_or(r.bake_seconds)
 }
 
@@ -289,6 +293,7 @@ impl Outputs<'_> {
                 "sample points",
                 "bake s",
                 "bake CPU-s",
+                "capture on",
                 "store MB",
                 "frame ms",
                 "RMSE L*",
@@ -310,6 +315,7 @@ impl Outputs<'_> {
                 r.sample_points.to_string(),
                 format!("{:.1}", r.bake_seconds),
                 r.bake_cpu_seconds.map_or("–".into(), |c| format!("{c:.1}")),
+                r.capture_device.clone(),
                 format!("{:.2}", r.store_bytes as f64 / 1e6),
                 format!("{:.1}", r.judgement.frame_ms),
                 format!("{:.3}", m.rmse_lab[0]),
