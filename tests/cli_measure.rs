@@ -253,6 +253,8 @@ fn bad_input_is_a_clear_error() {
     std::fs::write(&other, SCENE.replace("seed = 3", "seed = 4")).unwrap();
     let (ok, _, e) = run(tables, &[s(&other), "--store", s(&f.coarse), "-q"]);
     assert!(!ok && e.contains("was not baked from"), "{e}");
+    let (ok, _, e) = run(sweep, &[s(&f.scene), "--device", "tpu", "-q"]);
+    assert!(!ok && e.contains("unknown device \"tpu\""), "{e}");
     let (ok, _, e) = run(sweep, &[s(&f.scene), "--vary", "colour=1", "-q"]);
     assert!(!ok && e.contains("unknown key \"colour\""), "{e}");
     let (ok, _, e) = run(sweep, &[s(&f.scene), "--vary", "epsilon=-1", "-q"]);

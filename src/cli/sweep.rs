@@ -30,8 +30,12 @@ pub struct Args {
     scene: PathBuf,
     #[arg(short, long)]
     preset: Option<String>,
+    /// What captures the default store's cube maps (and every variation's but
+    /// `--vary device=…`): auto, cpu or gpu [default: the scene's `[bake] device`].
+    #[arg(long, value_parser = parse_device)]
+    device: Option<oslf_bake::scene::DeviceChoice>,
     /// KEY=V1,V2,...: bake keys epsilon, sample_count, cube_resolution, phi_samplemap,
-    /// samples_per_texel, sample_map_resolution; runtime keys phi_shader, blend (distance,
+    /// samples_per_texel, sample_map_resolution, mantissa_bits, device; runtime keys phi_shader, blend (distance,
     /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction). Repeatable.
     /// [default: cube_resolution=16,64 sample_count=150,600 epsilon=0.05,0.2 phi_samplemap=60
     /// phi_shader=45,85 blend=distance,angle,avg,r4,envmap]
@@ -92,7 +96,10 @@ const DEFAULT_VARY: [&str; 6] = [
 ];
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    let mut scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    if let Some(d) = args.device {
+        scene.bake.device = d;
+    }
     let Some(camera) = scene.camera else {
         bail!(
             "{}: the scene has no [camera] to judge from",
@@ -483,4 +490,8 @@ fn vary_flag(e: MeasureError) -> anyhow::Error {
         } => anyhow::anyhow!("--vary: {problem}"),
         e => e.into(),
     }
+}
+
+fn parse_device(s: &str) -> Result<oslf_bake::scene::DeviceChoice, String> {
+    s.parse()
 }
