@@ -383,25 +383,9 @@ impl GpuCapture {
             .collect();
         let jobs_buffer = storage(&self.gpu, "jobs", &gpu_jobs);
         let (out, staging) = self.output_buffers("texels", out_bytes);
-        let uniform = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("capture params"),
-            size: std::mem::size_of::<Params>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let b = &self.buffers;
-        let entries: Vec<(u32, &wgpu::Buffer)> = vec![
-            (0, &uniform),
-            (1, &b.nodes),
-            (2, &b.tris),
-            (3, &b.attrs),
-            (4, &b.materials),
-            (5, &b.texels),
-            (6, &b.lights),
-            (7, &b.env_tables),
-            (8, &jobs_buffer),
-            (9, &out),
-        ];
+        let uniform = self.params_buffer("capture params");
+        let mut entries = self.scene_entries(&uniform);
+        entries.extend([(8, &jobs_buffer), (9, &out)]);
         let bind_group = self.bind_group(&self.capture, &entries);
         let seed = settings.seed;
         let mut params = Params {
@@ -436,6 +420,34 @@ impl GpuCapture {
                 unpack_cube(cube, res, k, settings.distance_channel, job.sees_objects)
             })
             .collect())
+    }
+
+    /// The uniform buffer a pass writes its [`Params`] to (per dispatch, [`Self::dispatch`]).
+    pub(crate) fn params_buffer(&self, label: &str) -> wgpu::Buffer {
+        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Bindings 0 to 7, which the capture and the preview share: `uniform` and the scene.
+    pub(crate) fn scene_entries<'a>(
+        &'a self,
+        uniform: &'a wgpu::Buffer,
+    ) -> Vec<(u32, &'a wgpu::Buffer)> {
+        let b = &self.buffers;
+        vec![
+            (0, uniform),
+            (1, &b.nodes),
+            (2, &b.tris),
+            (3, &b.attrs),
+            (4, &b.materials),
+            (5, &b.texels),
+            (6, &b.lights),
+            (7, &b.env_tables),
+        ]
     }
 
     /// A storage buffer of `bytes` the shader writes, and the buffer it is copied to for

@@ -62,28 +62,10 @@ impl GpuCapture {
             },
         );
         let (out, staging) = self.output_buffers("preview pixels", bytes);
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("preview params"),
-            size: std::mem::size_of::<Params>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let b = &self.buffers;
-        let bind_group = self.bind_group(
-            &self.preview,
-            &[
-                (0, &uniform),
-                (1, &b.nodes),
-                (2, &b.tris),
-                (3, &b.attrs),
-                (4, &b.materials),
-                (5, &b.texels),
-                (6, &b.lights),
-                (7, &b.env_tables),
-                (12, &camera_buffer),
-                (13, &out),
-            ],
-        );
+        let uniform = self.params_buffer("preview params");
+        let mut entries = self.scene_entries(&uniform);
+        entries.extend([(12, &camera_buffer), (13, &out)]);
+        let bind_group = self.bind_group(&self.preview, &entries);
         let params = Params {
             seed: [seed as u32, (seed >> 32) as u32],
             ..self.base

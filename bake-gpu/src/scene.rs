@@ -211,7 +211,6 @@ impl GpuScene {
                 has_mr_texture,
             });
         }
-        // The shader reads `materials[i]` only below `arrayLength`; a binding cannot be empty.
         scene.emitters = materials.iter().any(|m| m.emission != Vec3::ZERO);
         scene.lights = lights.iter().map(gpu_light).collect();
         scene.pack_environment(environment)?;
