@@ -293,7 +293,7 @@ fn print_summary(r: &BakeReport, why: &str) {
         };
         println!(
             "atlas          {:?}: {}x{} pages of {}², from {uvs}; the surface covers {:.0}% of \
-             its texels ({:.0}% with gutters)",
+             its texels ({:.0}% with the free texels beside it)",
             a.object,
             a.grid,
             a.grid,

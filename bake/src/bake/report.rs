@@ -89,7 +89,7 @@ pub struct AtlasReport {
     pub charts: u32,
     /// The fraction of the atlas's texels that the surface's triangles touch.
     pub fill: f64,
-    /// The fraction that stand for a surface point: those and the gutters round the charts.
+    /// The fraction that stand for a surface point: those and the free texels beside them.
     pub used: f64,
     /// The uv sets tried and not used, each with why.
     pub rejected: Vec<String>,

@@ -1,18 +1,22 @@
 //! Chart packing: flat charts placed in the atlas by their texel masks.
 //!
-//! A chart at scale `s` occupies a *mask*: its conservative footprint (every texel whose square
-//! meets one of its triangles, the chart kept [`CHART_MARGIN`] texel inside its footprint
-//! cells) grown by a one-texel gutter all round. Masks never overlap, so no texel is shared by
-//! two charts and every chart has its own gutter.
+//! A chart at scale `s` occupies a *mask*: its conservative footprint, every texel whose square
+//! comes within [`FOOTPRINT_MARGIN`](super::FOOTPRINT_MARGIN) texel of one of its triangles (the chart kept
+//! [`CHART_MARGIN`] texel inside its footprint cells). Masks never overlap, so no texel is shared
+//! by two charts. Masks may touch: the runtime looks a sample map up at the texel its uv falls
+//! in (nearest texel), and a uv of a triangle, even rounded off it by up to the footprint
+//! margin, falls in a texel of its own chart's footprint. No gutter texels are needed.
 //!
 //! Masks are placed one by one, the chart whose mask has the largest smaller side first
 //! (ties: more texels, then the lower chart index), each at the lowest, then leftmost, place
-//! where it meets no taken texel, over its four quarter turns (bottom-left first fit on a bitmap
-//! of the atlas: holes left beside earlier charts are filled). Only places where the mask's
-//! first texel falls on a free texel are tested, a 64-texel word at a time. Once all are placed
-//! at one scale, [`grow`] enlarges charts one by one into the space left free.
+//! where it meets no taken texel, over its eight orientations (four quarter turns, of the chart
+//! and of its mirror image; bottom-left first fit on a bitmap of the atlas: holes left beside
+//! earlier charts are filled). Only places where the mask's first texel falls on a free texel
+//! are tested, a 64-texel word at a time. Once all are placed at one scale, [`grow`] enlarges
+//! charts one by one into the space left free.
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use super::flatten::Flat;
 use super::{touches, CHART_MARGIN};
@@ -47,7 +51,7 @@ pub(super) struct Placed {
     pub x: u32,
     pub y: u32,
     pub mask: Mask,
-    pub scale: f64,
+    pub scale: DVec2,
 }
 
 impl Placed {
@@ -58,39 +62,83 @@ impl Placed {
     }
 }
 
-/// Factors by which [`grow`] tries to enlarge a chart, largest first.
-const GROWTH: [f64; 4] = [2.0, 1.6, 1.3, 1.15];
+/// Factors by which [`grow`] tries to enlarge a chart, smallest first.
+const GROWTH: [f64; 7] = [1.015, 1.03, 1.07, 1.15, 1.3, 1.6, 2.0];
 
-/// Grows charts one by one, smallest first, into the space the packing left free: each is
-/// taken out and put back at the largest of [`GROWTH`] × its scale that fits anywhere (lowest,
-/// then leftmost, over its four turns), or where it was. Small charts fill the holes between
-/// large ones at a finer texel; no chart gets coarser.
+/// Rounds of [`grow`] over all charts (it stops early when a round grows none).
+const GROWTH_ROUNDS: usize = 8;
+
+/// Largest ratio between a chart's two scales (its texels' aspect) that [`grow`] makes.
+const MAX_ANISOTROPY: f64 = 2.0;
+
+/// Grows charts one by one, largest first, into the space the packing left free, in rounds
+/// until none grows (at most [`GROWTH_ROUNDS`]). Each chart is taken out and put back at the
+/// largest scale that fits anywhere (lowest, then leftmost, over its orientations), or where it
+/// was: the scale grows by the factors of [`GROWTH`] in turn, in both directions or in one (up
+/// to [`MAX_ANISOTROPY`]), each direction until a factor no longer fits; of those that fit, the
+/// largest area wins. Charts fill the holes and slivers beside them at a finer texel; no
+/// chart gets coarser, and a sample map is read at the nearest texel, so a stretched texel
+/// costs nothing but the texels.
 pub(super) fn grow(flats: &[Flat], placed: &mut [Placed], a: u32) {
     let mut atlas = Occupancy::new(a);
     for p in placed.iter() {
         atlas.mark(&p.mask, p.x, p.y, true);
     }
     let mut order: Vec<usize> = (0..placed.len()).collect();
-    order.sort_by_key(|&i| (placed[i].mask.count, i));
-    for i in order {
-        let p = &mut placed[i];
-        atlas.mark(&p.mask, p.x, p.y, false);
-        for factor in GROWTH {
-            let scale = p.scale * factor;
-            let mut turned = [0, 1, 2, 3].map(|t| mask(&flats[i], scale, t, a));
-            if let Some((x, y, o)) = atlas.lowest_fit(&turned) {
-                let mask = turned[o].take().expect("the chosen turn has a mask");
-                *p = Placed { x, y, mask, scale };
-                break;
+    order.sort_by_key(|&i| (std::cmp::Reverse(placed[i].mask.count), i));
+    let mut stuck = vec![false; placed.len()];
+    for _ in 0..GROWTH_ROUNDS {
+        let mut grew = false;
+        for &i in &order {
+            if stuck[i] {
+                continue;
             }
+            let p = &mut placed[i];
+            atlas.mark(&p.mask, p.x, p.y, false);
+            let mut best: Option<Placed> = None;
+            for direction in [DVec2::ONE, DVec2::X, DVec2::Y] {
+                for factor in GROWTH {
+                    let scale = p.scale * (DVec2::ONE + (factor - 1.0) * direction);
+                    if scale.max_element() > MAX_ANISOTROPY * scale.min_element() {
+                        break;
+                    }
+                    let mut turned = masks(&flats[i], scale, a);
+                    let Some((x, y, o)) = atlas.lowest_fit(&turned) else {
+                        break;
+                    };
+                    if best
+                        .as_ref()
+                        .is_none_or(|b| scale.x * scale.y > b.scale.x * b.scale.y)
+                    {
+                        let mask = turned[o].take().expect("the chosen turn has a mask");
+                        best = Some(Placed { x, y, mask, scale });
+                    }
+                }
+            }
+            match best {
+                Some(b) => {
+                    *p = b;
+                    grew = true;
+                }
+                None => stuck[i] = true,
+            }
+            atlas.mark(&p.mask, p.x, p.y, true);
         }
-        atlas.mark(&p.mask, p.x, p.y, true);
+        if !grew {
+            break;
+        }
     }
 }
 
-/// A point `c` of a chart of `size` turned `turns` quarters counter-clockwise, kept in the
-/// first quadrant.
+/// A point `c` of a chart of `size` turned `turns % 4` quarters counter-clockwise, mirrored
+/// (`x ↦ size.x − x`) first where `turns ≥ 4`, kept in the first quadrant. A mirrored chart's
+/// uvs wind the other way; nothing reads their winding.
 fn turn(c: DVec2, size: DVec2, turns: u8) -> DVec2 {
+    let c = if turns >= 4 {
+        DVec2::new(size.x - c.x, c.y)
+    } else {
+        c
+    };
     match turns % 4 {
         0 => c,
         1 => DVec2::new(size.y - c.y, c.x),
@@ -101,7 +149,7 @@ fn turn(c: DVec2, size: DVec2, turns: u8) -> DVec2 {
 
 /// The mask of `flat` at `scale`, turned `turns` quarters; `None` when it would be wider or
 /// taller than `max_side` texels (or not finite).
-pub(super) fn mask(flat: &Flat, scale: f64, turns: u8, max_side: u32) -> Option<Mask> {
+pub(super) fn mask(flat: &Flat, scale: DVec2, turns: u8, max_side: u32) -> Option<Mask> {
     let size = flat.size * scale;
     let size = if turns % 2 == 1 {
         DVec2::new(size.y, size.x)
@@ -110,13 +158,16 @@ pub(super) fn mask(flat: &Flat, scale: f64, turns: u8, max_side: u32) -> Option<
     };
     let cells = |w: f64| (w + 2.0 * CHART_MARGIN).ceil().max(1.0);
     let (fx, fy) = (cells(size.x), cells(size.y));
-    if !(fx + 2.0 <= f64::from(max_side) && fy + 2.0 <= f64::from(max_side)) {
+    if !(fx <= f64::from(max_side) && fy <= f64::from(max_side)) {
         return None;
     }
-    let (w, h) = (fx as u32 + 2, fy as u32 + 2);
-    let origin = DVec2::new(1.0 + (fx - size.x) / 2.0, 1.0 + (fy - size.y) / 2.0);
+    let (w, h) = (fx as u32, fy as u32);
+    // Centred in its cells, the chart keeps CHART_MARGIN (more than FOOTPRINT_MARGIN) from
+    // their border: its footprint stays inside them.
+    let origin = (DVec2::new(fx, fy) - size) / 2.0;
     let (wu, hu) = (w as usize, h as usize);
-    let mut foot = vec![false; wu * hu];
+    let mut rows = vec![vec![0u64; wu.div_ceil(64)]; hu];
+    let mut count = 0u64;
     for tri in &flat.corners {
         let p = tri.map(|c| origin + turn(c * scale, flat.size * scale, turns));
         let (lo, hi) = super::bbox(&p);
@@ -124,35 +175,31 @@ pub(super) fn mask(flat: &Flat, scale: f64, turns: u8, max_side: u32) -> Option<
         let y0 = (lo.y.floor() as i64 - 1).max(0) as usize;
         let x1 = (hi.x.floor() as usize + 1).min(wu - 1);
         let y1 = (hi.y.floor() as usize + 1).min(hu - 1);
-        for y in y0..=y1 {
+        for (y, row) in rows.iter_mut().enumerate().take(y1 + 1).skip(y0) {
             for x in x0..=x1 {
-                if !foot[y * wu + x] && touches(&p, x as f64, y as f64) {
-                    foot[y * wu + x] = true;
+                let bit = 1u64 << (x % 64);
+                if row[x / 64] & bit == 0 && touches(&p, x as f64, y as f64) {
+                    row[x / 64] |= bit;
+                    count += 1;
                 }
             }
         }
     }
-    // The gutter: every texel next to the footprint (8-neighbourhood).
-    let words = wu.div_ceil(64);
-    let mut rows = vec![vec![0u64; words]; hu];
-    let mut count = 0u64;
-    let mut anchor = None;
-    for (y, row) in rows.iter_mut().enumerate() {
-        for x in 0..wu {
-            let near = (y.saturating_sub(1)..=(y + 1).min(hu - 1))
-                .any(|ny| (x.saturating_sub(1)..=(x + 1).min(wu - 1)).any(|nx| foot[ny * wu + nx]));
-            if near {
-                row[x / 64] |= 1 << (x % 64);
-                count += 1;
-                anchor.get_or_insert((x as u32, y as u32));
-            }
-        }
-    }
+    let anchor = rows
+        .iter()
+        .enumerate()
+        .find_map(|(y, row)| {
+            row.iter()
+                .enumerate()
+                .find(|(_, &word)| word != 0)
+                .map(|(j, word)| (j as u32 * 64 + word.trailing_zeros(), y as u32))
+        })
+        .unwrap_or((0, 0));
     Some(Mask {
         w,
         h,
         rows,
-        anchor: anchor.unwrap_or((0, 0)),
+        anchor,
         count,
         origin,
         turns,
@@ -291,4 +338,14 @@ impl Occupancy {
 }
 
 /// Orientations tried per chart: quarter turns 0 to 3.
-pub(super) const TURNS: usize = 4;
+pub(super) const TURNS: usize = 8;
+
+/// The masks of `flat` at `scale` in each orientation (quarter turns 0 to 3, then the same of
+/// the mirrored chart), built in parallel; `None` where too large for `max_side`.
+pub(super) fn masks(flat: &Flat, scale: DVec2, max_side: u32) -> [Option<Mask>; TURNS] {
+    let mut out: [Option<Mask>; TURNS] = Default::default();
+    out.par_iter_mut()
+        .enumerate()
+        .for_each(|(t, m)| *m = mask(flat, scale, t as u8, max_side));
+    out
+}

@@ -12,6 +12,17 @@
 //!   itself, such as a spiral ramp, is cut into several charts),
 //! - the chart stays within `max_extent` texels across and [`MAX_CHART_TRIANGLES`] triangles.
 //!
+//! Then the charts' outlines are refined, which matters where triangles are large against the
+//! texel (their zigzag outlines leave notches that no neighbouring chart fills):
+//!
+//! - **notches filled**: a triangle that borders its own chart on at most one edge and another
+//!   chart on two moves to that chart, where the tests above let the chart take it (rounds of
+//!   this until none moves, at most [`SMOOTH_ROUNDS`]);
+//! - **teeth split off**: a triangle that still borders its own chart on at most one edge, and
+//!   covers at least [`TOOTH_TEXELS`] texels, becomes a chart of its own (never a chart's seed,
+//!   nor a triangle of a chart of two). Its chart's outline is straighter, and the small chart
+//!   fills a hole that the packing leaves between large ones.
+//!
 //! A triangle of zero area is a chart of its own. Everything is sequential and free of
 //! hashing: the same mesh gives the same charts.
 
@@ -28,6 +39,14 @@ pub const MAX_CHART_ANGLE_DEG: f64 = 35.0;
 
 /// Most triangles in one chart (bounds the cost of the overlap test while growing).
 pub const MAX_CHART_TRIANGLES: usize = 2048;
+
+/// Rounds of notch filling (it stops early when a round moves no triangle).
+pub const SMOOTH_ROUNDS: usize = 8;
+
+/// Least area (texels at the asked density) of a tooth split off as a chart of its own: a
+/// smaller triangle would cost the packing more than its notch (on a fine scan every triangle
+/// is below a texel, and none is split).
+pub const TOOTH_TEXELS: f64 = 4.0;
 
 const NONE: u32 = u32::MAX;
 
@@ -126,7 +145,130 @@ pub(super) fn segment(mesh: &Mesh, texel_size: f64, max_extent: f64) -> Vec<Char
             axis,
         });
     }
+    let mut refine = Refine {
+        mesh,
+        neighbours: &neighbours,
+        normals: &normals,
+        chart_of,
+        texel_size,
+        max_extent,
+        cos_max,
+    };
+    refine.fill_notches(&mut charts);
+    refine.split_teeth(&mut charts);
     charts
+}
+
+/// What refining the charts' outlines reads and keeps up to date.
+struct Refine<'a> {
+    mesh: &'a Mesh,
+    neighbours: &'a [[u32; 3]],
+    normals: &'a [Option<DVec3>],
+    chart_of: Vec<u32>,
+    texel_size: f64,
+    max_extent: f64,
+    cos_max: f64,
+}
+
+impl Refine<'_> {
+    /// How many of triangle `t`'s neighbours are in chart `c`.
+    fn bordering(&self, t: usize, c: u32) -> usize {
+        self.neighbours[t]
+            .iter()
+            .filter(|&&nb| nb != NONE && self.chart_of[nb as usize] == c)
+            .count()
+    }
+
+    /// `t`'s corners projected on the plane of `axis`, in texels.
+    fn project(&self, t: usize, axis: DVec3) -> [DVec2; 3] {
+        let (u, v) = basis(axis);
+        corners3(self.mesh, &self.mesh.triangles[t])
+            .map(|p| DVec2::new(p.dot(u), p.dot(v)) / self.texel_size)
+    }
+
+    /// Whether `chart` can take triangle `t`: the tests of growing (normal within the angle,
+    /// triangle count, extent, no overlap in projection).
+    fn takes(&self, chart: &Chart, t: usize) -> bool {
+        let Some(nt) = self.normals[t] else {
+            return false;
+        };
+        if chart.axis == DVec3::ZERO
+            || nt.dot(chart.axis) < self.cos_max
+            || chart.triangles.len() >= MAX_CHART_TRIANGLES
+        {
+            return false;
+        }
+        let p = self.project(t, chart.axis);
+        let b = bbox(&p);
+        let (mut lo, mut hi) = b;
+        for &q in &chart.triangles {
+            let f = self.project(q as usize, chart.axis);
+            let bq = bbox(&f);
+            (lo, hi) = (lo.min(bq.0), hi.max(bq.1));
+            if boxes_meet(b, bq) && overlap(&p, &f) {
+                return false;
+            }
+        }
+        (hi - lo).max_element() <= self.max_extent
+    }
+
+    /// Moves each triangle bordering its chart on at most one edge and another chart on two
+    /// into that chart, where it takes it; in rounds (see the module documentation).
+    fn fill_notches(&mut self, charts: &mut [Chart]) {
+        for _ in 0..SMOOTH_ROUNDS {
+            let mut moved = false;
+            for t in 0..self.mesh.triangles.len() {
+                let a = self.chart_of[t];
+                if self.bordering(t, a) > 1 || charts[a as usize].triangles[0] == t as u32 {
+                    continue;
+                }
+                let Some(b) = self.neighbours[t].iter().find_map(|&nb| {
+                    let c = *self.chart_of.get(nb as usize)?;
+                    (c != a && self.bordering(t, c) >= 2).then_some(c)
+                }) else {
+                    continue;
+                };
+                if !self.takes(&charts[b as usize], t) {
+                    continue;
+                }
+                charts[a as usize].triangles.retain(|&q| q != t as u32);
+                charts[b as usize].triangles.push(t as u32);
+                self.chart_of[t] = b;
+                moved = true;
+            }
+            if !moved {
+                break;
+            }
+        }
+    }
+
+    /// Splits off the teeth of the charts as charts of their own (see the module
+    /// documentation). A tooth borders at most one triangle of its chart, so the rest stays
+    /// connected.
+    fn split_teeth(&mut self, charts: &mut Vec<Chart>) {
+        let min_area = TOOTH_TEXELS * self.texel_size * self.texel_size;
+        for c in 0..charts.len() {
+            if charts[c].triangles.len() <= 2 {
+                continue;
+            }
+            let members = std::mem::take(&mut charts[c].triangles);
+            let mut kept = Vec::with_capacity(members.len());
+            for (k, &t) in members.iter().enumerate() {
+                let p = corners3(self.mesh, &self.mesh.triangles[t as usize]);
+                let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+                if k == 0 || self.bordering(t as usize, c as u32) > 1 || area < min_area {
+                    kept.push(t);
+                    continue;
+                }
+                self.chart_of[t as usize] = charts.len() as u32;
+                charts.push(Chart {
+                    triangles: vec![t],
+                    axis: self.normals[t as usize].unwrap_or(DVec3::ZERO),
+                });
+            }
+            charts[c].triangles = kept;
+        }
+    }
 }
 
 /// A right-handed orthonormal basis `(u, v)` with `u × v = n` for unit `n` (Duff et al. 2017,
