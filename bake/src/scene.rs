@@ -8,9 +8,11 @@
 //! Conventions: Z is up; lengths are in scene units; angles in degrees; colours are linear RGB.
 
 use glam::{Affine3A, Vec2, Vec3};
-use oslf_geometry::atlas::UvSource;
+use oslf_geometry::atlas::{Atlas, AtlasOptions, UvSource};
 use oslf_geometry::Camera;
+use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 use crate::bezier::{self, BezierPatch};
 use crate::bvh::Instance;
@@ -186,6 +188,73 @@ pub struct MeshSource {
     /// Candidate atlas uv sets, most preferred first: the lightmap set (glTF `TEXCOORD_1`),
     /// then the texture set (`TEXCOORD_0`, OBJ `vt`). Unusable sets are skipped by the atlas.
     pub uv_sets: Vec<(UvSource, Vec<Vec2>)>,
+    /// The last atlas built from this source (see [`MeshSource::atlas`]).
+    built: AtlasMemo,
+}
+
+/// The last atlas built from a mesh source, with what it was built from: the preflight's atlas
+/// is the bake's, built once.
+#[derive(Clone, Debug, Default)]
+struct AtlasMemo(Arc<Mutex<Option<KeyedAtlas>>>);
+
+/// An atlas and the hash of what it was built from.
+type KeyedAtlas = (u64, Arc<Atlas>);
+
+impl MeshSource {
+    /// A mesh object's source: world-space mesh and candidate atlas uv sets.
+    pub fn new(mesh: Mesh, uv_sets: Vec<(UvSource, Vec<Vec2>)>) -> MeshSource {
+        MeshSource {
+            mesh,
+            uv_sets,
+            built: AtlasMemo::default(),
+        }
+    }
+
+    /// The atlas of this mesh at `options` ([`Atlas::build`] over the uv sets in order). The
+    /// last one built is kept, keyed by a hash of the mesh, the uv sets and the options, so the
+    /// preflight and the bake build it once between them, and a changed mesh is rebuilt.
+    pub fn atlas(&self, options: &AtlasOptions) -> oslf_geometry::Result<Arc<Atlas>> {
+        let key = self.atlas_key(options);
+        let mut memo = self
+            .built
+            .0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some((k, atlas)) = memo.as_ref() {
+            if *k == key {
+                return Ok(Arc::clone(atlas));
+            }
+        }
+        let sets: Vec<(UvSource, &[Vec2])> = self
+            .uv_sets
+            .iter()
+            .map(|(s, uv)| (*s, uv.as_slice()))
+            .collect();
+        let atlas = Arc::new(Atlas::build(&self.mesh, &sets, options)?);
+        *memo = Some((key, Arc::clone(&atlas)));
+        Ok(atlas)
+    }
+
+    /// What an atlas is built from, hashed: every position, normal, triangle and uv bit, and
+    /// the options.
+    fn atlas_key(&self, options: &AtlasOptions) -> u64 {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        let floats = |h: &mut std::collections::hash_map::DefaultHasher, v: &[f32]| {
+            v.iter().for_each(|f| f.to_bits().hash(h));
+        };
+        for p in self.mesh.positions.iter().chain(&self.mesh.normals) {
+            floats(&mut h, &p.to_array());
+        }
+        self.mesh.triangles.hash(&mut h);
+        for (source, uvs) in &self.uv_sets {
+            source.hash(&mut h);
+            uvs.iter().for_each(|uv| floats(&mut h, &uv.to_array()));
+        }
+        options.page_resolution.hash(&mut h);
+        options.texel_size.to_bits().hash(&mut h);
+        options.max_grid.hash(&mut h);
+        h.finish()
+    }
 }
 
 impl Scene {
@@ -294,5 +363,32 @@ impl Scene {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mesh_source_builds_its_atlas_once_and_again_when_the_mesh_changes() {
+        let options = AtlasOptions {
+            page_resolution: 32,
+            texel_size: 0.1,
+            max_grid: 4,
+        };
+        let mut source = MeshSource::new(Mesh::icosphere(1), Vec::new());
+        let first = source.atlas(&options).unwrap();
+        assert!(Arc::ptr_eq(&first, &source.atlas(&options).unwrap()));
+        // Other options, or a moved vertex: built anew.
+        let finer = AtlasOptions {
+            texel_size: 0.05,
+            ..options
+        };
+        assert!(!Arc::ptr_eq(&first, &source.atlas(&finer).unwrap()));
+        source.mesh.positions[0] *= 1.5;
+        let moved = source.atlas(&options).unwrap();
+        assert!(!Arc::ptr_eq(&first, &moved));
+        assert_ne!(first.mesh.positions[0], moved.mesh.positions[0]);
     }
 }

@@ -17,8 +17,10 @@
 //! spacings of their own): a patch's area is tabulated on a grid of (u, v) cells, a mesh's per
 //! triangle.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
-use oslf_geometry::atlas::{Atlas, AtlasOptions, UvSource};
+use oslf_geometry::atlas::{Atlas, AtlasOptions};
 
 use crate::bezier::BezierPatch;
 use crate::error::{BakeError, Result};
@@ -133,7 +135,7 @@ pub struct SurfacePoint {
 pub struct Surfaces<'s> {
     objects: &'s [OslfObject],
     /// Per object: its atlas (mesh objects) and first global map index.
-    atlases: Vec<Option<Atlas>>,
+    atlases: Vec<Option<Arc<Atlas>>>,
     first_map: Vec<u32>,
     map_count: u32,
     cells: Vec<Cell>,
@@ -236,12 +238,7 @@ impl<'s> Surfaces<'s> {
                         texel_size: spacing / ATLAS_TEXELS_PER_SPACING,
                         max_grid: MAX_ATLAS_GRID,
                     };
-                    let sets: Vec<(UvSource, &[Vec2])> = source
-                        .uv_sets
-                        .iter()
-                        .map(|(s, uv)| (*s, uv.as_slice()))
-                        .collect();
-                    let atlas = Atlas::build(&source.mesh, &sets, &options).map_err(|e| {
+                    let atlas = source.atlas(&options).map_err(|e| {
                         BakeError::Invalid(format!(
                             "object {:?}: its sample-map atlas: {e} (the atlas texel is the \
                              sample spacing / {ATLAS_TEXELS_PER_SPACING}: fewer sample points or a \
@@ -309,7 +306,7 @@ impl<'s> Surfaces<'s> {
 
     /// The atlas of object `o`, if it is a mesh.
     pub fn atlas(&self, o: usize) -> Option<&Atlas> {
-        self.atlases.get(o).and_then(Option::as_ref)
+        self.atlases.get(o).and_then(Option::as_deref)
     }
 
     /// The first global map index of object `o`.
@@ -326,7 +323,7 @@ impl<'s> Surfaces<'s> {
                 object: object_index,
                 patch,
             }));
-            if let Some(atlas) = &self.atlases[o] {
+            if let Some(atlas) = self.atlases[o].as_deref() {
                 out.extend((0..atlas.grid * atlas.grid).map(|page| MapDomain::Page {
                     object: object_index,
                     atlas,
@@ -384,7 +381,7 @@ impl<'s> Surfaces<'s> {
     /// The surface point of object `object`'s input triangle `triangle` at `bary`.
     fn mesh_point(&self, object: u32, triangle: u32, bary: [f32; 3]) -> SurfacePoint {
         let atlas = self.atlases[object as usize]
-            .as_ref()
+            .as_deref()
             .expect("triangle cells belong to mesh objects");
         let (position, normal) = atlas.sample_surface(triangle, bary);
         let (page, uv) = atlas.locate(triangle, bary);

@@ -78,7 +78,7 @@ impl Ctx<'_> {
                 } else {
                     Vec::new()
                 };
-                let source = MeshSource { mesh, uv_sets };
+                let source = MeshSource::new(mesh, uv_sets);
                 (Vec::new(), Some(source), Some(normals))
             }
             _ => {
@@ -296,10 +296,7 @@ pub(super) fn mesh_objects(
             name: o.node,
             object_patches: Vec::new(),
             patches: Vec::new(),
-            mesh: Some(MeshSource {
-                mesh: o.mesh,
-                uv_sets: o.uv_sets,
-            }),
+            mesh: Some(MeshSource::new(o.mesh, o.uv_sets)),
             transform: Affine3A::IDENTITY,
             material: o.material,
             base_color: materials[o.material as usize].mean_albedo(),
