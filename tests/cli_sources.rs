@@ -1,6 +1,7 @@
 //! `oslf render`'s reflection sources and accuracy switches: `--source oslf|env|parallax`,
-//! `--proxy-box`, `--no-depth`, `--glossy-filter`; and what a store without a distance channel
-//! gets (a plain warning, `--strict` fails, parallax needs a given box).
+//! `--proxy-box`, `--no-depth`, `--glossy-filter` (the pbr mode's split-sum baseline too); and
+//! what a store without a distance channel gets (a plain warning, `--strict` fails, parallax
+//! needs a given box).
 
 mod common;
 
@@ -53,6 +54,32 @@ fn every_source_and_switch_renders_and_changes_the_image() {
             "glossy-point",
             vec!["--mode", "glossy", "-M", "4", "--glossy-filter", "point"],
         ),
+        (
+            "pbr-env",
+            vec![
+                "--mode",
+                "pbr",
+                "--roughness",
+                "0.4",
+                "--source",
+                "env",
+                "-M",
+                "16",
+            ],
+        ),
+        (
+            "pbr-split-sum",
+            vec![
+                "--mode",
+                "pbr",
+                "--roughness",
+                "0.4",
+                "--source",
+                "env",
+                "--glossy-filter",
+                "split-sum",
+            ],
+        ),
     ] {
         let (ok, e, out) = render(&store, dir, name, &flags);
         assert!(ok, "{name}: {e}");
@@ -70,6 +97,7 @@ fn every_source_and_switch_renders_and_changes_the_image() {
     differ(2, 3); // parallax correction
     differ(3, 4); // the given box is used
     differ(5, 6); // filtered importance sampling
+    differ(7, 8); // the split-sum baseline is not the Monte Carlo one
 }
 
 #[test]
@@ -82,6 +110,10 @@ fn bad_source_flags_are_named() {
         (vec!["--proxy-box", "1,2,3"], "is not a box"),
         (vec!["--proxy-box", "1,2,3,0,5,6"], "min < max"),
         (vec!["--glossy-filter", "box"], "unknown glossy filter"),
+        (
+            vec!["--mode", "pbr", "--glossy-filter", "split-sum"],
+            "needs mode pbr and source env or parallax",
+        ),
         (
             vec!["--envmap", "--source", "parallax"],
             "cannot be used with",

@@ -25,7 +25,9 @@
 //!     cube maps as the Ashikhmin–Shirley samples are, so the truth's and the bake's BRDF;
 //!   - the environment-map baseline: one cube at the object's centre, by direction alone;
 //!     and the baseline engines use, that cube parallax-corrected against a proxy box fitted
-//!     to its distances ([`probe`]). See [`params`].
+//!     to its distances ([`probe`]); for the pbr mode also as engines light from one probe,
+//!     the cube prefiltered per roughness with the split-sum approximation ([`prefilter`]).
+//!     See [`params`].
 //!
 //!   Beyond the thesis, with a store's distance channel (§6.3's RGBZ; a twin R16Float pool),
 //!   every mirror and glossy lookup is *depth-corrected*: each sample point's cube is traced as
@@ -82,6 +84,7 @@ pub mod gpu;
 pub mod params;
 mod pipelines;
 mod pool;
+pub mod prefilter;
 pub mod probe;
 pub mod reference;
 pub mod renderer;

@@ -162,17 +162,28 @@ pub enum GlossyFilter {
     Mip,
     /// One bilinear read at full resolution per sample, as the thesis did.
     Point,
+    /// No Monte Carlo: the engines' baseline of [`Mode::Pbr`] with [`Source::EnvMap`] or
+    /// [`Source::Parallax`]. The environment cube prefiltered per roughness, read once towards
+    /// the (parallax-corrected) reflection vector and scaled by GGX's directional albedo (the
+    /// split-sum approximation, Karis 2013); the diffuse base from the cube's irradiance
+    /// ([`crate::prefilter`]).
+    SplitSum,
 }
 
 impl GlossyFilter {
     /// Every filter, in CLI order.
-    pub const ALL: [GlossyFilter; 2] = [GlossyFilter::Mip, GlossyFilter::Point];
+    pub const ALL: [GlossyFilter; 3] = [
+        GlossyFilter::Mip,
+        GlossyFilter::Point,
+        GlossyFilter::SplitSum,
+    ];
 
     /// The CLI name.
     pub fn name(self) -> &'static str {
         match self {
             GlossyFilter::Mip => "mip",
             GlossyFilter::Point => "point",
+            GlossyFilter::SplitSum => "split-sum",
         }
     }
 }
@@ -341,6 +352,16 @@ impl ShadingParams {
                 )));
             }
         }
+        if self.glossy_filter == GlossyFilter::SplitSum
+            && (self.mode != Mode::Pbr || self.source == Source::Oslf)
+        {
+            return Err(RuntimeError::Parameter(format!(
+                "glossy filter split-sum is the engines' baseline of the pbr mode: it needs mode \
+                 pbr and source env or parallax, not mode {} and source {}",
+                self.mode.name(),
+                self.source.name()
+            )));
+        }
         if !(1..=65536).contains(&self.m) {
             return Err(RuntimeError::Parameter(format!(
                 "M = {} must be in [1, 65536]",
@@ -471,6 +492,12 @@ pub struct ShadeUniform {
     /// The smallest metallic factor any pixel can have (`metallic`, and the store's
     /// materials' with `object_material`): below 1 the pbr mode has a diffuse part.
     pub min_metallic: f32,
+    /// 1: [`GlossyFilter::SplitSum`].
+    pub split_sum: u32,
+    /// Pad the block to WGSL's 16-byte struct alignment.
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// The smallest GGX α the pbr mode draws (roughness below 0.03 is drawn at it): the bake's
@@ -569,6 +596,10 @@ impl ShadeUniform {
                 Some(m) if p.object_material => m.min(p.metallic),
                 _ => p.metallic,
             },
+            split_sum: u32::from(p.glossy_filter == GlossyFilter::SplitSum),
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         }
         .with_proxy_box(p.proxy_box.or(k.fitted_box), k.origin)
     }

@@ -35,6 +35,7 @@ pub(crate) const SHADE_WGSL: &str = concat!(
     include_str!("shade/mirror.wgsl"),
     include_str!("shade/glossy.wgsl"),
     include_str!("shade/seams.wgsl"),
+    include_str!("shade/split_sum.wgsl"),
     include_str!("shade/background.wgsl"),
     include_str!("shade/pixel.wgsl"),
 );
@@ -204,6 +205,8 @@ pub(crate) struct ShadeKey {
     pub depth: bool,
     /// FILTER: filtered importance sampling for the glossy term (the uniform's `mip_levels` > 1).
     pub filter: bool,
+    /// SPLIT_SUM: the pbr mode's split-sum baseline (the uniform's `split_sum`).
+    pub split_sum: bool,
 }
 
 impl ShadeKey {
@@ -222,6 +225,7 @@ impl ShadeKey {
             background: u.background,
             depth: u.depth_steps > 0,
             filter: u.mip_levels > 1,
+            split_sum: u.split_sum != 0,
         }
     }
 
@@ -238,6 +242,7 @@ impl ShadeKey {
             ("BACKGROUND", f64::from(self.background)),
             ("DEPTH", f64::from(u32::from(self.depth))),
             ("FILTER", f64::from(u32::from(self.filter))),
+            ("SPLIT_SUM", f64::from(u32::from(self.split_sum))),
         ]
     }
 }
@@ -268,6 +273,8 @@ pub(crate) struct ShadeBindings<'a> {
     pub output: &'a wgpu::TextureView,
     /// `gb_depth`: the G-buffer pass's depth.
     pub gb_depth: &'a wgpu::TextureView,
+    /// `prefiltered`: the prefiltered environment ([`crate::prefilter`]).
+    pub prefiltered: &'a wgpu::TextureView,
 }
 
 /// Binding of `pool0`; the pool arrays follow it.
@@ -278,6 +285,8 @@ const DEPTH_POOL_BINDING: u32 = 12;
 const OUTPUT_BINDING: u32 = 16;
 /// Binding of `gb_depth`.
 const GB_DEPTH_BINDING: u32 = 17;
+/// Binding of `prefiltered`.
+const PREFILTERED_BINDING: u32 = 18;
 
 /// The shading pass: its bind-group layout, shader module, and the compute pipelines built so
 /// far, one per [`ShadeKey`].
@@ -351,6 +360,7 @@ impl ShadePipelines {
             wgpu::TextureSampleType::Depth,
             d2,
         ));
+        entries.push(texture_entry(PREFILTERED_BINDING, float, d2a));
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shade"),
             entries: &entries,
@@ -412,6 +422,10 @@ impl ShadePipelines {
         entries.push(wgpu::BindGroupEntry {
             binding: GB_DEPTH_BINDING,
             resource: wgpu::BindingResource::TextureView(b.gb_depth),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: PREFILTERED_BINDING,
+            resource: wgpu::BindingResource::TextureView(b.prefiltered),
         });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shade"),

@@ -49,6 +49,10 @@ fn shade_fields() -> Vec<Field> {
         alpha,
         object_material,
         min_metallic,
+        split_sum,
+        pad0,
+        pad1,
+        pad2,
     })
 }
 

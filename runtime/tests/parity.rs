@@ -423,3 +423,85 @@ fn distance_planes_of_every_format_version_reach_gpu_and_cpu_alike() {
     // The version-5 store's distances are f32 values off any lattice, read as they are.
     assert!(off_lattice > 0);
 }
+
+/// The split-sum baseline of the pbr mode (the environment cube prefiltered per roughness)
+/// against the CPU reference, plain and parallax-corrected, metallic and with a diffuse base;
+/// roughness blurs it, and it asks for what it needs.
+#[test]
+fn the_split_sum_baseline_matches_the_cpu_reference() {
+    let store = open_store();
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let base = ShadingParams {
+        mode: Mode::Pbr,
+        glossy_filter: GlossyFilter::SplitSum,
+        source: Source::EnvMap,
+        metallic: 1.0,
+        object_material: false,
+        ..Default::default()
+    };
+    let mut images = Vec::new();
+    for source in [Source::EnvMap, Source::Parallax] {
+        for (metallic, roughness) in [(1.0, 0.05), (1.0, 0.4), (1.0, 1.0), (0.3, 0.4)] {
+            let p = ShadingParams {
+                source,
+                metallic,
+                roughness,
+                ..base
+            };
+            let label = format!(
+                "split-sum {} metallic {metallic} roughness {roughness}",
+                source.name()
+            );
+            images.push(check(&mut r, &cubes, p, &label));
+        }
+    }
+    // Rougher is blurrier: the images differ by roughness and by source.
+    assert!(
+        compare(&images[0], &images[2], 1e-3).1 < 0.9,
+        "roughness changes nothing"
+    );
+    assert!(
+        compare(&images[1], &images[5], 1e-3).1 < 0.9,
+        "parallax changes nothing"
+    );
+    // The Monte Carlo env baseline of the same lobe draws about the same mean.
+    let mc = check(
+        &mut r,
+        &cubes,
+        ShadingParams {
+            glossy_filter: GlossyFilter::Mip,
+            m: 64,
+            roughness: 0.4,
+            ..base
+        },
+        "pbr env Monte Carlo, roughness 0.4",
+    );
+    let mean = |img: &[[f32; 4]]| {
+        let on: Vec<_> = img.iter().filter(|p| p[3] > 0.0).collect();
+        on.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / on.len() as f32
+    };
+    let (a, b) = (mean(&images[1]), mean(&mc));
+    assert!(
+        (a / b - 1.0).abs() < 0.25,
+        "split-sum mean {a}, Monte Carlo {b}"
+    );
+    // Only a baseline of the pbr mode.
+    let camera = r.default_view();
+    for bad in [
+        ShadingParams {
+            source: Source::Oslf,
+            ..base
+        },
+        ShadingParams {
+            mode: Mode::Glossy,
+            ..base
+        },
+    ] {
+        let e = r
+            .render(&camera, &bad, &Default::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("split-sum") && e.contains("pbr"), "{e}");
+    }
+}

@@ -31,7 +31,9 @@ pub struct ShadingArgs {
     /// instead of depth-corrected ones (which need a store with a distance channel).
     #[arg(long)]
     pub no_depth: bool,
-    /// How glossy samples read the cube maps: mip (filtered importance sampling) or point.
+    /// How glossy samples read the cube maps: mip (filtered importance sampling) or point;
+    /// split-sum is the engines' baseline of `--mode pbr` with `--source env|parallax` (the
+    /// environment cube prefiltered per roughness, no Monte Carlo).
     #[arg(long, default_value = "mip", value_parser = parse_glossy_filter)]
     pub glossy_filter: GlossyFilter,
     /// The proxy box of `--source parallax`, world space: xmin,ymin,zmin,xmax,ymax,zmax

@@ -412,9 +412,11 @@ impl App {
                 }
                 "d" => p.depth = !p.depth,
                 "f" => {
+                    let split_sum = p.mode == Mode::Pbr && p.source != Source::Oslf;
                     p.glossy_filter = match p.glossy_filter {
                         GlossyFilter::Mip => GlossyFilter::Point,
-                        GlossyFilter::Point => GlossyFilter::Mip,
+                        GlossyFilter::Point if split_sum => GlossyFilter::SplitSum,
+                        GlossyFilter::Point | GlossyFilter::SplitSum => GlossyFilter::Mip,
                     }
                 }
                 "g" => self.background = (self.background + 1) % self.backgrounds.len(),
@@ -448,6 +450,12 @@ impl App {
                 _ => {}
             },
             _ => {}
+        }
+        // The split sum is a baseline of the pbr mode only: another mode or source leaves it.
+        if p.glossy_filter == GlossyFilter::SplitSum
+            && (p.mode != Mode::Pbr || p.source == Source::Oslf)
+        {
+            p.glossy_filter = GlossyFilter::Mip;
         }
         true
     }

@@ -350,6 +350,9 @@ impl<C: CubeTexels> Shader<'_, C> {
         pbr: Vec2,
     ) -> Vec3 {
         let u = &self.uniform;
+        if u.split_sum != 0 {
+            return self.split_sum(x, n, v, r, base, pbr);
+        }
         let b = n.cross(t);
         let nv = n.dot(v);
         if u.source != 0 || c.count == 0 {

@@ -30,6 +30,7 @@ mod pixel;
 mod random;
 mod reconstruct;
 mod seams;
+mod split_sum;
 mod store;
 #[cfg(test)]
 mod tests;
@@ -37,7 +38,7 @@ mod tests;
 pub use cube::{face_point, face_st};
 pub use patch::{patch_du, patch_dv, patch_normal, tangent_frame};
 pub use random::{filter_rows, filter_xi, pcg};
-pub use seams::seam_coords;
+pub use seams::{seam_bilinear, seam_coords, seam_taps, SeamTaps};
 pub use store::StoreCubes;
 
 /// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
@@ -90,4 +91,34 @@ pub struct Shader<'a, C: CubeTexels> {
     pub cubes: &'a C,
     /// Feedback masks, one per cube (sample points, then the environment cube).
     pub feedback: &'a [AtomicU32],
+    /// The prefiltered environment the split-sum baseline reads (`crate::prefilter`;
+    /// [`NoPrefiltered`] where none is drawn).
+    pub prefiltered: &'a dyn PrefilteredTexels,
+}
+
+/// Where the reference reads the prefiltered environment of the split-sum baseline (as
+/// shade.wgsl's `prefiltered` texture holds it).
+pub trait PrefilteredTexels: Sync {
+    /// Specular levels, one per mip (at least 1).
+    fn levels(&self) -> u32;
+    /// Texels a side of mip `level`.
+    fn side(&self, level: u32) -> u32;
+    /// Texel `(x, y)` of `face` of specular level `level`, or of the irradiance for
+    /// `irradiance` (level 0 only); black out of range.
+    fn texel(&self, irradiance: bool, face: usize, level: u32, x: u32, y: u32) -> Vec3;
+}
+
+/// No prefiltered environment: one black texel.
+pub struct NoPrefiltered;
+
+impl PrefilteredTexels for NoPrefiltered {
+    fn levels(&self) -> u32 {
+        1
+    }
+    fn side(&self, _: u32) -> u32 {
+        1
+    }
+    fn texel(&self, _: bool, _: usize, _: u32, _: u32, _: u32) -> Vec3 {
+        Vec3::ZERO
+    }
 }

@@ -25,68 +25,81 @@ pub fn seam_coords(face: usize, (x, y): (i32, i32), n: i32) -> (usize, (i32, i32
     )
 }
 
-#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
-impl<C: CubeTexels> Shader<'_, C> {
-    /// Texel `(x, y)` of mip `level` of `face` of `cube`, where `(x, y)` may lie one texel off
-    /// the face: then the texel of the adjacent face it stands for ([`seam_coords`]). `None`
-    /// when that face is not available. Marks the face it reads when `mark` (as `seam_texel`).
-    pub(super) fn seam_texel(
-        &self,
-        cube: u32,
-        face: usize,
-        (x, y): (i32, i32),
-        level: u32,
-        mark: bool,
-    ) -> Option<Vec3> {
-        let n = (self.uniform.cube_res >> level).max(1) as i32;
-        let (f, c) = seam_coords(face, (x, y), n);
-        if mark {
-            self.mark(cube, f);
-        }
-        self.cubes.texel(cube, f, level, c.0 as u32, c.1 as u32)
-    }
+/// The four texel centres around `face_st` of a direction on a level `n` texels wide, *across*
+/// face edges: those off the face are the adjacent face's ([`seam_coords`]). At a corner of the
+/// cube, where three faces meet, the texel off the face in both directions does not exist:
+/// `corner` names it (k = column + 2 · row; 4 = none) and [`seam_bilinear`] replaces it by the
+/// mean of the other three. As `SeamTaps` in shade/seams.wgsl.
+pub struct SeamTaps {
+    /// Face and texel of each tap, in the order (x0, y0), (x0 + 1, y0), (x0, y0 + 1),
+    /// (x0 + 1, y0 + 1).
+    pub c: [(usize, (i32, i32)); 4],
+    pub wx: f32,
+    pub wy: f32,
+    pub corner: usize,
+}
 
-    /// Radiance of mip `level` of `cube` at `face_st` of a direction, bilinear *across* face
-    /// edges: the four
-    /// texel centres around the direction on its face, those off the face read from the
-    /// adjacent face ([`Self::seam_texel`]), with the usual bilinear weights. At a corner of
-    /// the cube, where three faces meet, the texel off the face in both directions does not
-    /// exist: it is the mean of the other three. `None` when a face it reads is not available.
-    /// Marks the faces it reads when `mark` (as `seamless_level`).
+pub fn seam_taps((face, s, t): (usize, f32, f32), n: i32) -> SeamTaps {
+    let nf = n as f32;
+    let fx = s * nf - 0.5;
+    let fy = t * nf - 0.5;
+    let (x0, y0) = (fx.floor() as i32, fy.floor() as i32);
+    let mut corner = 4;
+    if (x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n) {
+        corner = usize::from(x0 >= 0) + 2 * usize::from(y0 >= 0);
+    }
+    SeamTaps {
+        c: std::array::from_fn(|k| {
+            seam_coords(face, (x0 + (k & 1) as i32, y0 + (k >> 1) as i32), n)
+        }),
+        wx: fx - fx.floor(),
+        wy: fy - fy.floor(),
+        corner,
+    }
+}
+
+/// The bilinear blend of the four texels read at `taps` (the corner's replaced by the mean of
+/// the other three).
+pub fn seam_bilinear(taps: &SeamTaps, mut t: [Vec3; 4]) -> Vec3 {
+    if taps.corner < 4 {
+        t[taps.corner] = Vec3::ZERO;
+        t[taps.corner] = (t[0] + t[1] + t[2] + t[3]) * (1.0 / 3.0);
+    }
+    let top = t[0] + (t[1] - t[0]) * taps.wx;
+    let bottom = t[2] + (t[3] - t[2]) * taps.wx;
+    top + (bottom - top) * taps.wy
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+impl<C: CubeTexels> Shader<'_, C> {
+    /// Radiance of mip `level` of `cube` at `face_st` of a direction, bilinear across face
+    /// edges ([`seam_taps`]). `None` when a face it reads is not available. Marks the faces it
+    /// reads when `mark` (as `seamless_level`).
     pub(super) fn seamless_level(
         &self,
         cube: u32,
-        (face, s, t): (usize, f32, f32),
+        fst: (usize, f32, f32),
         level: u32,
         mark: bool,
     ) -> Option<Vec3> {
         let n = (self.uniform.cube_res >> level).max(1) as i32;
-        let nf = n as f32;
-        let fx = s * nf - 0.5;
-        let fy = t * nf - 0.5;
-        let (x0, y0) = (fx.floor() as i32, fy.floor() as i32);
-        let (wx, wy) = (fx - fx.floor(), fy - fy.floor());
-        // The texel off the face in both directions, as k = column + 2 * row; 4 = none.
-        let mut corner = 4;
-        if (x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n) {
-            corner = usize::from(x0 >= 0) + 2 * usize::from(y0 >= 0);
-        }
+        let taps = seam_taps(fst, n);
         // Every texel is read (and its face marked) before any is missed, as on the GPU.
         let read: [Option<Vec3>; 4] = std::array::from_fn(|k| {
-            if k == corner {
+            if k == taps.corner {
                 Some(Vec3::ZERO)
             } else {
-                let at = (x0 + (k & 1) as i32, y0 + (k >> 1) as i32);
-                self.seam_texel(cube, face, at, level, mark)
+                let (f, (x, y)) = taps.c[k];
+                if mark {
+                    self.mark(cube, f);
+                }
+                self.cubes.texel(cube, f, level, x as u32, y as u32)
             }
         });
-        let mut t = [read[0]?, read[1]?, read[2]?, read[3]?];
-        if corner < 4 {
-            t[corner] = (t[0] + t[1] + t[2] + t[3]) * (1.0 / 3.0);
-        }
-        let top = t[0] + (t[1] - t[0]) * wx;
-        let bottom = t[2] + (t[3] - t[2]) * wx;
-        Some(top + (bottom - top) * wy)
+        Some(seam_bilinear(
+            &taps,
+            [read[0]?, read[1]?, read[2]?, read[3]?],
+        ))
     }
 
     /// `seamless_level` at level 0 without feedback marks: for the background only (as

@@ -137,6 +137,7 @@ fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
             maps: &[],
             cubes: &NoCubes,
             feedback: &[],
+            prefiltered: &super::NoPrefiltered,
         };
         assert_eq!(shader.shade(1, 2, &GTexel::default()), want, "{bg:?}");
     }
@@ -272,6 +273,7 @@ fn bare_shader<'a, C: CubeTexels>(
         maps: &[],
         cubes,
         feedback: &[],
+        prefiltered: &super::NoPrefiltered,
     }
 }
 
@@ -602,6 +604,7 @@ fn the_env_background_is_continuous_across_face_edges() {
                 maps: &[],
                 cubes: &SmoothCube(res),
                 feedback: &[],
+                prefiltered: &super::NoPrefiltered,
             };
             let px = |i: u32, j: u32| {
                 let c = shader.shade(i, j, &GTexel::default());
@@ -655,7 +658,7 @@ fn fresnel_is_schlick_at_both_ends() {
 /// Each file here and its twin under shade/ hold the functions they share in the same order.
 #[test]
 fn reference_files_follow_the_shader_files_order() {
-    let pairs: [(&str, &str, &str); 12] = [
+    let pairs: [(&str, &str, &str); 13] = [
         (
             "random",
             include_str!("../shade/random.wgsl"),
@@ -705,6 +708,11 @@ fn reference_files_follow_the_shader_files_order() {
             "seams",
             include_str!("../shade/seams.wgsl"),
             include_str!("seams.rs"),
+        ),
+        (
+            "split_sum",
+            include_str!("../shade/split_sum.wgsl"),
+            include_str!("split_sum.rs"),
         ),
         (
             "background",

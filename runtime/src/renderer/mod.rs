@@ -17,14 +17,18 @@ use crate::error::{Param, Result, RuntimeError};
 use crate::face::FaceLayout;
 use crate::geometry::ObjectMesh;
 use crate::gpu::Gpu;
-use crate::params::{Background, ShadeUniform, ShadingParams, Source, StoreConstants};
+use crate::params::{
+    Background, GlossyFilter, ShadeUniform, ShadingParams, Source, StoreConstants,
+};
 use crate::pipelines::{GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines};
 use crate::pool::{CubePool, PoolLayout};
+use crate::prefilter::PrefilteredEnv;
 
 pub use crate::pool::DEFAULT_POOL_BYTES;
 
 mod camera;
 mod passes;
+mod prefiltered;
 mod readback;
 mod targets;
 mod timer;
@@ -121,6 +125,11 @@ pub struct Renderer {
     targets: Option<SizedTargets>,
     cube_count: u32,
     timer: Option<PassTimer>,
+    /// The prefiltered environment of the split-sum baseline (black until a frame asks for
+    /// it: [`Renderer::ensure_prefiltered`]), and its texture.
+    prefiltered: Arc<PrefilteredEnv>,
+    prefiltered_view: wgpu::TextureView,
+    prefiltered_ready: bool,
 }
 
 /// Errors with [`RuntimeError::Limits`] when the device's 2D textures cannot hold `store`'s
@@ -202,6 +211,8 @@ impl Renderer {
                 .map(|o| o.material.metallic)
                 .reduce(f32::min),
         };
+        let black = PrefilteredEnv::black();
+        let prefiltered_view = prefiltered::upload(&gpu, black);
         let mut renderer = Self {
             gpu,
             store: Arc::new(store),
@@ -218,6 +229,9 @@ impl Renderer {
             targets: None,
             cube_count,
             timer: None,
+            prefiltered: Arc::new(black.clone()),
+            prefiltered_view,
+            prefiltered_ready: false,
         };
         renderer.timer = PassTimer::new(&renderer.gpu);
         renderer.load_env_cube();
@@ -357,6 +371,7 @@ impl Renderer {
                     depth_pool: self.pool.depth_views(),
                     output: out,
                     gb_depth: dv,
+                    prefiltered: &self.prefiltered_view,
                 },
             )
         });
@@ -384,6 +399,9 @@ impl Renderer {
         }
         opts.background
             .validate(self.constants.env_cube != u32::MAX)?;
+        if params.glossy_filter == GlossyFilter::SplitSum {
+            self.ensure_prefiltered()?;
+        }
         self.ensure_targets(opts.width, opts.height)?;
         let u = self.uniform(camera, params, opts.width, opts.height, opts.background);
         self.current = ShadeKey::of(&u);

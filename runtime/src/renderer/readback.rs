@@ -135,6 +135,7 @@ impl Renderer {
             maps: &maps,
             cubes,
             feedback: &feedback,
+            prefiltered: &*self.prefiltered,
         };
         let pixels = gbuffer
             .par_iter()

@@ -63,6 +63,11 @@ struct Params {
     object_material: u32,
     // The smallest metallic any pixel can have (below 1: DIFFUSE).
     min_metallic: f32,
+    // 1: the pbr mode's split-sum baseline (SPLIT_SUM): the prefiltered environment.
+    split_sum: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 };
 
 // The mode's switches are pipeline-overridable constants (set from the same values as the
@@ -83,6 +88,8 @@ override BACKGROUND: u32 = 0u;
 override DEPTH: bool = false;
 // Filtered importance sampling for the glossy term (the uniform's mip_levels > 1).
 override FILTER: bool = false;
+// The split-sum baseline of the pbr mode (the uniform's split_sum).
+override SPLIT_SUM: bool = false;
 
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
@@ -111,6 +118,9 @@ struct PatchGpu {
 // The G-buffer pass's depth: below 1.0 (the clear) where a triangle covers the pixel; the
 // colour targets are not cleared, so only there do gb_position and gb_normal hold this frame.
 @group(0) @binding(17) var gb_depth: texture_depth_2d;
+// The prefiltered environment (prefilter.rs): layers 0–5 the specular levels' faces, one mip
+// per roughness level; layers 6–11 the irradiance's faces at mip 0.
+@group(0) @binding(18) var prefiltered: texture_2d_array<f32>;
 
 const INVALID: u32 = 0xffffffffu;
 const PI: f32 = 3.14159265358979;

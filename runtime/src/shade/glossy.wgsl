@@ -283,8 +283,12 @@ fn estimate(s: Sums, k: u32) -> vec3<f32> {
 
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
 // (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
-// (order B): one integration over the blend. Both passes through one `integrate` call.
+// (order B): one integration over the blend. Both passes through one `integrate` call. With
+// SPLIT_SUM (the pbr mode's engine baseline) no Monte Carlo: `split_sum`.
 fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
+    if (SPLIT_SUM) {
+        return split_sum(x, n, v, r, base, pbr);
+    }
     let b = cross(n, t);
     let nv = dot(n, v);
     let use_env = SOURCE != 0u || cand.count == 0u;

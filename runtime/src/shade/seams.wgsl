@@ -41,53 +41,76 @@ fn slot_texel(entry: u32, c: vec3<u32>, level: u32) -> vec3<f32> {
     return load_texel(at.x, i32(at.y), vec2<u32>((at.z >> level) + c.y, c.z), level);
 }
 
-// Radiance of mip `level` of cube `cube` at `fst` (`face_st` of the direction: face and face
-// coordinates), bilinear ACROSS face edges: the four texel centres around the direction on its
-// face, those off the face read from the adjacent face (`seam_texel`), with the usual bilinear
-// weights. At a corner of the cube, where three faces meet, the texel off the face in both
-// directions does not exist: it is the mean of the other three. `.w` = 0 when a face it reads
-// is not resident. Marks the faces it reads when `mark`. The four texels are found first and
-// then read alike, so that an invocation at a face edge differs from its neighbours only in
-// `seam_texel`'s arithmetic, not in what it loads (lavapipe runs every path any lane takes).
-// Written without a local array (see `Candidates`).
-fn seamless_level(cube: u32, entry: u32, fst: vec3<f32>, level: u32, mark: bool) -> vec4<f32> {
+// The four texel centres around `fst` (`face_st` of a direction: face and face coordinates) on
+// a level `n` texels wide, ACROSS face edges: those off the face are the adjacent face's
+// (`seam_texel`). At a corner of the cube, where three faces meet, the texel off the face in
+// both directions does not exist: `corner` names it (k = column + 2 · row; 4 = none) and
+// `seam_bilinear` replaces it by the mean of the other three.
+struct SeamTaps {
+    c0: vec3<u32>,
+    c1: vec3<u32>,
+    c2: vec3<u32>,
+    c3: vec3<u32>,
+    wx: f32,
+    wy: f32,
+    corner: u32,
+};
+
+fn seam_taps(fst: vec3<f32>, n: i32) -> SeamTaps {
     let face = u32(fst.x);
-    let n = i32(max(P.cube_res >> level, 1u));
     let nf = f32(n);
     let fx = fst.y * nf - 0.5;
     let fy = fst.z * nf - 0.5;
     let x0 = i32(floor(fx));
     let y0 = i32(floor(fy));
-    let wx = fx - floor(fx);
-    let wy = fy - floor(fy);
-    // The texel off the face in both directions, as k = column + 2 * row; 4 = none.
-    var corner = 4u;
+    var t: SeamTaps;
+    t.wx = fx - floor(fx);
+    t.wy = fy - floor(fy);
+    t.corner = 4u;
     if ((x0 < 0 || x0 + 1 >= n) && (y0 < 0 || y0 + 1 >= n)) {
-        corner = select(0u, 1u, x0 >= 0) + select(0u, 2u, y0 >= 0);
+        t.corner = select(0u, 1u, x0 >= 0) + select(0u, 2u, y0 >= 0);
     }
-    let c0 = seam_texel(face, x0, y0, n);
-    let c1 = seam_texel(face, x0 + 1, y0, n);
-    let c2 = seam_texel(face, x0, y0 + 1, n);
-    let c3 = seam_texel(face, x0 + 1, y0 + 1, n);
-    let bits = select(1u << c0.x, 0u, corner == 0u) | select(1u << c1.x, 0u, corner == 1u)
-        | select(1u << c2.x, 0u, corner == 2u) | select(1u << c3.x, 0u, corner == 3u);
+    t.c0 = seam_texel(face, x0, y0, n);
+    t.c1 = seam_texel(face, x0 + 1, y0, n);
+    t.c2 = seam_texel(face, x0, y0 + 1, n);
+    t.c3 = seam_texel(face, x0 + 1, y0 + 1, n);
+    return t;
+}
+
+// The bilinear blend of the four texels read at `t`'s taps (the corner's value, loaded from a
+// valid address of no meaning, replaced by the mean of the other three).
+fn seam_bilinear(t: SeamTaps, a0: vec3<f32>, a1: vec3<f32>, a2: vec3<f32>, a3: vec3<f32>) -> vec3<f32> {
+    var t0 = a0;
+    var t1 = a1;
+    var t2 = a2;
+    var t3 = a3;
+    if (t.corner == 0u) { t0 = vec3<f32>(0.0); } else if (t.corner == 1u) { t1 = vec3<f32>(0.0); } else if (t.corner == 2u) { t2 = vec3<f32>(0.0); } else if (t.corner == 3u) { t3 = vec3<f32>(0.0); }
+    let mean = (t0 + t1 + t2 + t3) * (1.0 / 3.0);
+    if (t.corner == 0u) { t0 = mean; } else if (t.corner == 1u) { t1 = mean; } else if (t.corner == 2u) { t2 = mean; } else if (t.corner == 3u) { t3 = mean; }
+    let top = t0 + (t1 - t0) * t.wx;
+    let bottom = t2 + (t3 - t2) * t.wx;
+    return top + (bottom - top) * t.wy;
+}
+
+// Radiance of mip `level` of cube `cube` at `fst`, bilinear across face edges (`seam_taps`).
+// `.w` = 0 when a face it reads is not resident. Marks the faces it reads when `mark`. The
+// four texels are found first and then read alike, so that an invocation at a face edge
+// differs from its neighbours only in `seam_texel`'s arithmetic, not in what it loads
+// (lavapipe runs every path any lane takes). Written without a local array (see
+// `Candidates`).
+fn seamless_level(cube: u32, entry: u32, fst: vec3<f32>, level: u32, mark: bool) -> vec4<f32> {
+    let t = seam_taps(fst, i32(max(P.cube_res >> level, 1u)));
+    let bits = select(1u << t.c0.x, 0u, t.corner == 0u) | select(1u << t.c1.x, 0u, t.corner == 1u)
+        | select(1u << t.c2.x, 0u, t.corner == 2u) | select(1u << t.c3.x, 0u, t.corner == 3u);
     if (mark) {
         mark_face(cube, bits);
     }
     if ((entry & bits) != bits) {
         return vec4<f32>(0.0);
     }
-    // The corner's texel is loaded too (a valid address; the value is replaced below).
-    var t0 = slot_texel(entry, c0, level);
-    var t1 = slot_texel(entry, c1, level);
-    var t2 = slot_texel(entry, c2, level);
-    var t3 = slot_texel(entry, c3, level);
-    if (corner == 0u) { t0 = vec3<f32>(0.0); } else if (corner == 1u) { t1 = vec3<f32>(0.0); } else if (corner == 2u) { t2 = vec3<f32>(0.0); } else if (corner == 3u) { t3 = vec3<f32>(0.0); }
-    let mean = (t0 + t1 + t2 + t3) * (1.0 / 3.0);
-    if (corner == 0u) { t0 = mean; } else if (corner == 1u) { t1 = mean; } else if (corner == 2u) { t2 = mean; } else if (corner == 3u) { t3 = mean; }
-    let top = t0 + (t1 - t0) * wx;
-    let bottom = t2 + (t3 - t2) * wx;
-    return vec4<f32>(top + (bottom - top) * wy, 1.0);
+    let c = seam_bilinear(t, slot_texel(entry, t.c0, level), slot_texel(entry, t.c1, level),
+        slot_texel(entry, t.c2, level), slot_texel(entry, t.c3, level));
+    return vec4<f32>(c, 1.0);
 }
 
 // `seamless_level` at level 0 without feedback marks: for the background only. `lookup`
