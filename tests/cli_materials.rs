@@ -7,18 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{oslf, read_exr};
-
-fn run(cmd: &mut std::process::Command) -> String {
-    let out = cmd.output().unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
-}
+use common::{oslf, read_exr, run_ok};
 
 /// The lid scene with a brushed-metal lid: metallic 1, roughness 0.4.
 fn scene(dir: &Path) -> std::path::PathBuf {
@@ -41,13 +30,15 @@ fn an_objects_material_reaches_the_store_the_renderer_and_the_truth() {
     let dir = tmp.path();
     let scene = scene(dir);
     let store = dir.join("lid.oslf");
-    run(oslf("bake")
-        .arg(&scene)
-        .arg("-o")
-        .arg(&store)
-        .args(["-q", "--preview", "none"]));
+    run_ok(
+        oslf("bake")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&store)
+            .args(["-q", "--preview", "none"]),
+    );
     let info: serde_json::Value =
-        serde_json::from_str(&run(oslf("store info").arg(&store).arg("--json"))).unwrap();
+        serde_json::from_str(&run_ok(oslf("store info").arg(&store).arg("--json"))).unwrap();
     let material = &info["objects"][0]["material"];
     assert_eq!(material["model"], "metallic-roughness", "{info}");
     assert_eq!(material["metallic"], 1.0, "{info}");
@@ -55,7 +46,7 @@ fn an_objects_material_reaches_the_store_the_renderer_and_the_truth() {
         (material["roughness"].as_f64().unwrap() - 0.4).abs() < 1e-6,
         "{info}"
     );
-    let text = run(oslf("store info").arg(&store));
+    let text = run_ok(oslf("store info").arg(&store));
     assert!(
         text.contains(
             "material: metallic-roughness, base colour [0.9, 0.6, 0.3], metallic 1, roughness 0.4"
@@ -66,11 +57,13 @@ fn an_objects_material_reaches_the_store_the_renderer_and_the_truth() {
     // Without --mode: pbr with the object's factors; the same image as the factors given.
     let render = |name: &str, extra: &[&str]| {
         let out = dir.join(format!("{name}.exr"));
-        let summary = run(oslf("render")
-            .arg(&store)
-            .args(["--width", "48", "--height", "36", "-M", "8", "-o"])
-            .arg(&out)
-            .args(extra));
+        let summary = run_ok(
+            oslf("render")
+                .arg(&store)
+                .args(["--width", "48", "--height", "36", "-M", "8", "-o"])
+                .arg(&out)
+                .args(extra),
+        );
         (summary, read_exr(&out).1)
     };
     let (summary, own) = render("own", &[]);
@@ -88,13 +81,15 @@ fn an_objects_material_reaches_the_store_the_renderer_and_the_truth() {
 
     // The truth likewise.
     let truth = |prefix: &str, extra: &[&str]| {
-        run(oslf("truth")
-            .arg(&scene)
-            .args([
-                "-m", "pbr", "--spp", "4", "--width", "24", "--height", "18", "-q", "-o",
-            ])
-            .arg(dir.join(prefix))
-            .args(extra));
+        run_ok(
+            oslf("truth")
+                .arg(&scene)
+                .args([
+                    "-m", "pbr", "--spp", "4", "--width", "24", "--height", "18", "-q", "-o",
+                ])
+                .arg(dir.join(prefix))
+                .args(extra),
+        );
         read_exr(&dir.join(format!("{prefix}-pbr.exr"))).1
     };
     let own = truth("t-own", &[]);

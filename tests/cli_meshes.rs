@@ -8,7 +8,7 @@ mod common;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use common::{oslf, read_exr};
+use common::{oslf, read_exr, run_ok};
 
 /// A UV-less sphere of `radius` as Wavefront OBJ text (positions, normals, faces `v//vn`),
 /// `rings` × `segments` quads, counter-clockwise seen from outside.
@@ -105,23 +105,15 @@ fn rmse(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
     (sum / n as f64).sqrt()
 }
 
-fn run(cmd: &mut std::process::Command) -> String {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
 fn render(store: &Path, out: &Path, flags: &[&str]) -> Vec<[f32; 4]> {
-    run(oslf("render")
-        .arg(store)
-        .arg("-o")
-        .arg(out)
-        .args(["--width", "96", "--height", "72", "--background", "none"])
-        .args(flags));
+    run_ok(
+        oslf("render")
+            .arg(store)
+            .arg("-o")
+            .arg(out)
+            .args(["--width", "96", "--height", "72", "--background", "none"])
+            .args(flags),
+    );
     read_exr(out).1
 }
 
@@ -134,11 +126,13 @@ fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
     std::fs::write(&scene, SCENE).unwrap();
     let store = dir.join("ball.oslf");
     let summary =
-        run(oslf("bake")
-            .arg(&scene)
-            .arg("-o")
-            .arg(&store)
-            .args(["--preview", "none", "-q"]));
+        run_ok(
+            oslf("bake")
+                .arg(&scene)
+                .arg("-o")
+                .arg(&store)
+                .args(["--preview", "none", "-q"]),
+        );
     // The OBJ has no texture coordinates: the summary says how the atlas was laid out.
     assert!(
         summary.contains("atlas          \"ball\": ")
@@ -146,7 +140,7 @@ fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
         "{summary}"
     );
 
-    let info = run(oslf("store").args(["info", "--json"]).arg(&store));
+    let info = run_ok(oslf("store").args(["info", "--json"]).arg(&store));
     let info: serde_json::Value = serde_json::from_str(&info).unwrap();
     let object = &info["objects"][0];
     assert_eq!(object["name"], "ball", "{info}");
@@ -179,15 +173,17 @@ fn an_obj_mesh_object_bakes_renders_and_beats_the_environment_map() {
 /// the light field and for the environment map: `(oslf, env)`. Asserts that the rasterized
 /// and the ray-traced object cover the same pixels.
 fn mirror_errors(dir: &Path, scene: &Path, store: &Path) -> (f64, f64) {
-    run(oslf("truth")
-        .arg(scene)
-        .arg("--store")
-        .arg(store)
-        .args([
-            "-m", "mirror", "--spp", "16", "--width", "96", "--height", "72",
-        ])
-        .args(["-q", "-o"])
-        .arg(dir.join("truth")));
+    run_ok(
+        oslf("truth")
+            .arg(scene)
+            .arg("--store")
+            .arg(store)
+            .args([
+                "-m", "mirror", "--spp", "16", "--width", "96", "--height", "72",
+            ])
+            .args(["-q", "-o"])
+            .arg(dir.join("truth")),
+    );
     let truth = read_exr(&dir.join("truth-mirror.exr")).1;
     let oslf_px = render(store, &dir.join("oslf.exr"), &["--mode", "mirror"]);
     let env_px = render(
@@ -253,7 +249,7 @@ samples_per_texel = 1
     {
         std::fs::write(&scene, text(normals)).unwrap();
         let report = dir.join("report.json");
-        let summary = run(oslf("bake")
+        let summary = run_ok(oslf("bake")
             .arg(&scene)
             .arg("-o")
             .arg(dir.join(format!("box{i}.oslf")))
@@ -286,12 +282,14 @@ fn a_box_without_normals_keeps_its_points_and_mirrors_with_flat_faces() {
     std::fs::write(&scene, text).unwrap();
     let store = dir.join("box.oslf");
     let report = dir.join("report.json");
-    run(oslf("bake")
-        .arg(&scene)
-        .arg("-o")
-        .arg(&store)
-        .args(["--preview", "none", "-q", "--report-json"])
-        .arg(&report));
+    run_ok(
+        oslf("bake")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&store)
+            .args(["--preview", "none", "-q", "--report-json"])
+            .arg(&report),
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     let placed = json["points_placed"].as_u64().unwrap();

@@ -5,24 +5,13 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::oslf;
+use common::{oslf, run_ok};
 
 /// The small scene of tests/common (its environment cube is the cube past the sample points):
 /// 24 sample points, 25 cubes.
 const SCENE: &str = common::LID_SCENE;
 
 const CUBES: u32 = 25;
-
-fn run_ok(cmd: &mut std::process::Command) -> String {
-    let out = cmd.output().unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
-}
 
 /// Runs `cmd`, which must fail; returns its stderr.
 fn run_err(cmd: &mut std::process::Command) -> String {

@@ -19,8 +19,6 @@
 //! engines use (Karis 2014, "Physically Based Shading on Mobile"). Everything here is
 //! deterministic and independent of the thread count.
 
-use std::sync::OnceLock;
-
 use glam::Vec3;
 use oslf_format::cube::{face_st_to_direction, CubeImage, FACES};
 use rayon::prelude::*;
@@ -91,16 +89,13 @@ impl PrefilteredEnv {
     }
 
     /// A one-texel black environment: what the shader binds when no split sum is drawn.
-    pub fn black() -> &'static PrefilteredEnv {
-        static BLACK: OnceLock<PrefilteredEnv> = OnceLock::new();
-        BLACK.get_or_init(|| {
-            let face = || std::array::from_fn(|_| vec![Vec3::ZERO]);
-            PrefilteredEnv {
-                resolution: 1,
-                specular: vec![face()],
-                irradiance: face(),
-            }
-        })
+    pub fn black() -> PrefilteredEnv {
+        let face = || std::array::from_fn(|_| vec![Vec3::ZERO]);
+        PrefilteredEnv {
+            resolution: 1,
+            specular: vec![face()],
+            irradiance: face(),
+        }
     }
 
     /// The texels of mip `level` as the shader's texture holds them: 12 layers (the specular
@@ -111,26 +106,11 @@ impl PrefilteredEnv {
         (0..2 * FACES)
             .flat_map(|layer| {
                 (0..side * side).map(move |i| {
-                    let c = self.texel_at(layer >= FACES, layer % FACES, level, i % side, i / side);
+                    let c = self.texel(layer >= FACES, layer % FACES, level, i % side, i / side);
                     [c.x, c.y, c.z, 1.0]
                 })
             })
             .collect()
-    }
-
-    /// Texel `(x, y)` of `face` of specular level `level`, or of the irradiance for
-    /// `irradiance` (level 0 only); black out of range.
-    pub fn texel_at(&self, irradiance: bool, face: usize, level: u32, x: u32, y: u32) -> Vec3 {
-        let faces = if irradiance {
-            (level == 0).then_some(&self.irradiance)
-        } else {
-            self.specular.get(level as usize)
-        };
-        let side = level_size(self.resolution, level);
-        match faces {
-            Some(f) if x < side && y < side => f[face][(y * side + x) as usize],
-            _ => Vec3::ZERO,
-        }
     }
 }
 
@@ -142,7 +122,16 @@ impl PrefilteredTexels for PrefilteredEnv {
         level_size(self.resolution, level)
     }
     fn texel(&self, irradiance: bool, face: usize, level: u32, x: u32, y: u32) -> Vec3 {
-        self.texel_at(irradiance, face, level, x, y)
+        let faces = if irradiance {
+            (level == 0).then_some(&self.irradiance)
+        } else {
+            self.specular.get(level as usize)
+        };
+        let side = level_size(self.resolution, level);
+        match faces {
+            Some(f) if x < side && y < side => f[face][(y * side + x) as usize],
+            _ => Vec3::ZERO,
+        }
     }
 }
 

@@ -19,6 +19,19 @@ pub fn oslf(sub: &str) -> Command {
     command
 }
 
+/// Runs `cmd`, asserts it succeeded (showing its stdout and stderr if not) and returns its
+/// stdout.
+pub fn run_ok(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
 /// A small scene: the teapot's lid (tests/fixtures/teapot-lid.toml), 12 sample points (24
 /// after refinement, plus the environment cube: 25 cubes) of 2² texels. Bakes in well under a
 /// second.

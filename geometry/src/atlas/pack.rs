@@ -76,7 +76,8 @@ const MAX_ANISOTROPY: f64 = 2.0;
 /// largest scale that fits anywhere (lowest, then leftmost, over its orientations), or where it
 /// was: the scale grows by the factors of [`GROWTH`] in turn, in both directions or in one (up
 /// to [`MAX_ANISOTROPY`]), each direction until a factor no longer fits; of those that fit, the
-/// largest area wins. Charts fill the holes and slivers beside them at a finer texel; no
+/// largest area wins; a chart that found none is not tried again. Charts fill the holes and
+/// slivers beside them at a finer texel; no
 /// chart gets coarser, and a sample map is read at the nearest texel, so a stretched texel
 /// costs nothing but the texels.
 pub(super) fn grow(flats: &[Flat], placed: &mut [Placed], a: u32) {

@@ -125,11 +125,10 @@ pub struct Renderer {
     targets: Option<SizedTargets>,
     cube_count: u32,
     timer: Option<PassTimer>,
-    /// The prefiltered environment of the split-sum baseline (black until a frame asks for
-    /// it: [`Renderer::ensure_prefiltered`]), and its texture.
-    prefiltered: Arc<PrefilteredEnv>,
+    /// The prefiltered environment of the split-sum baseline, once a frame has asked for it
+    /// ([`Renderer::ensure_prefiltered`]), and its texture (one black texel before).
+    prefiltered: Option<PrefilteredEnv>,
     prefiltered_view: wgpu::TextureView,
-    prefiltered_ready: bool,
 }
 
 /// Errors with [`RuntimeError::Limits`] when the device's 2D textures cannot hold `store`'s
@@ -211,8 +210,7 @@ impl Renderer {
                 .map(|o| o.material.metallic)
                 .reduce(f32::min),
         };
-        let black = PrefilteredEnv::black();
-        let prefiltered_view = prefiltered::upload(&gpu, black);
+        let prefiltered_view = prefiltered::upload(&gpu, &PrefilteredEnv::black());
         let mut renderer = Self {
             gpu,
             store: Arc::new(store),
@@ -229,9 +227,8 @@ impl Renderer {
             targets: None,
             cube_count,
             timer: None,
-            prefiltered: Arc::new(black.clone()),
+            prefiltered: None,
             prefiltered_view,
-            prefiltered_ready: false,
         };
         renderer.timer = PassTimer::new(&renderer.gpu);
         renderer.load_env_cube();

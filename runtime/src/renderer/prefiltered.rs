@@ -1,8 +1,6 @@
 //! The prefiltered environment on the GPU: built from the store's environment cube the first
 //! time a frame asks for the split-sum baseline, then kept ([`crate::prefilter`]).
 
-use std::sync::Arc;
-
 use crate::error::{Result, RuntimeError};
 use crate::gpu::Gpu;
 use crate::prefilter::{level_size, PrefilteredEnv};
@@ -61,7 +59,7 @@ impl Renderer {
     /// Prefilters the store's environment cube and binds it, unless done already. The shading
     /// bind group is rebuilt on the next frame.
     pub(super) fn ensure_prefiltered(&mut self) -> Result<()> {
-        if self.prefiltered_ready {
+        if self.prefiltered.is_some() {
             return Ok(());
         }
         let Some(env) = self.store.env_cube_index() else {
@@ -80,8 +78,7 @@ impl Renderer {
             })?;
         let prefiltered = PrefilteredEnv::new(&cube);
         self.prefiltered_view = upload(&self.gpu, &prefiltered);
-        self.prefiltered = Arc::new(prefiltered);
-        self.prefiltered_ready = true;
+        self.prefiltered = Some(prefiltered);
         self.targets = None;
         Ok(())
     }

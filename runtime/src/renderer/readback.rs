@@ -135,7 +135,10 @@ impl Renderer {
             maps: &maps,
             cubes,
             feedback: &feedback,
-            prefiltered: &*self.prefiltered,
+            prefiltered: match &self.prefiltered {
+                Some(p) => p,
+                None => &crate::reference::NoPrefiltered,
+            },
         };
         let pixels = gbuffer
             .par_iter()
