@@ -222,3 +222,43 @@ fn the_scene_chooses_the_device_and_a_bad_one_is_refused_where_it_stands() {
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn a_gpu_capture_takes_the_scenes_gpu_preset_unless_another_is_asked_for() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = dir.join("lid.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{}\n[presets.gpu]\nsamples_per_texel = 9\n\n[presets.four]\nsamples_per_texel = 4\n",
+            common::LID_SCENE
+        ),
+    )
+    .unwrap();
+    let samples = |store: &str| {
+        oslf_format::Store::open(&dir.join(store))
+            .unwrap()
+            .meta()
+            .bake
+            .samples_per_texel
+    };
+    let summary = bake(&scene, &dir.join("gpu.oslf"), &["--device", "gpu"]);
+    assert!(
+        summary.contains("settings: the scene's preset \"gpu\", applied for a GPU capture"),
+        "{summary}"
+    );
+    assert!(summary.contains("9 samples per texel"), "{summary}");
+    assert_eq!(samples("gpu.oslf"), 9);
+    // On the CPU, and where another preset is asked for, the scene's own settings.
+    let summary = bake(&scene, &dir.join("cpu.oslf"), &["--device", "cpu"]);
+    assert!(!summary.contains("preset \"gpu\""), "{summary}");
+    assert_eq!(samples("cpu.oslf"), 1);
+    let summary = bake(
+        &scene,
+        &dir.join("four.oslf"),
+        &["--device", "gpu", "--preset", "four"],
+    );
+    assert!(!summary.contains("preset \"gpu\""), "{summary}");
+    assert_eq!(samples("four.oslf"), 4);
+}

@@ -21,9 +21,15 @@ use crate::shader;
 pub const WORKGROUP: u32 = 64;
 /// Workgroups per dispatch row: a dispatch is `ROW_GROUPS × rows` workgroups.
 const ROW_GROUPS: u32 = 4096;
-/// Most paths (texels × samples) per dispatch: each dispatch stays short (well under a
+/// Most paths (texels × samples) per dispatch unless that is fewer than
+/// [`MIN_INVOCATIONS_PER_DISPATCH`] invocations: each dispatch stays short (well under a
 /// second on a desktop GPU, whose driver may reset a device that runs one for seconds).
 const PATHS_PER_DISPATCH: u64 = 1 << 22;
+/// Fewest invocations per dispatch, whatever the samples per texel: a large GPU holds about
+/// 2¹⁸ threads at once (an H200: 132 multiprocessors × 2 048), and a dispatch of fewer leaves
+/// most of it idle while the slowest paths finish (at 256 samples per texel, 2²² paths were
+/// only 2¹⁴ texels).
+const MIN_INVOCATIONS_PER_DISPATCH: u64 = 1 << 18;
 /// Texels a batch aims for, so that the GPU has enough work in flight.
 const BATCH_TEXELS: u64 = 1 << 20;
 /// Most bytes of one batch's per-texel results.
@@ -487,7 +493,7 @@ impl GpuCapture {
     ) {
         params.row_invocations = ROW_GROUPS * WORKGROUP;
         let per_dispatch = (PATHS_PER_DISPATCH / samples.max(1))
-            .max(u64::from(WORKGROUP))
+            .max(MIN_INVOCATIONS_PER_DISPATCH)
             .next_multiple_of(u64::from(WORKGROUP));
         let mut first = 0u64;
         while first < items {

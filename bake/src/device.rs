@@ -43,6 +43,8 @@ pub trait CaptureDevice: Send + Sync + std::fmt::Debug {
     fn batch_cubes(&self, settings: &CaptureSettings) -> usize;
 
     /// The cubes of `jobs`, in order, each the capture [`crate::capture::capture_cube`]
-    /// computes (the same estimator, so the same expected texels).
+    /// computes (the same estimator, so the same expected texels). The bake calls it from a
+    /// thread of its own while it encodes the previous batch, so the device never waits for
+    /// the encoder.
     fn capture(&self, jobs: &[CubeJob], settings: &CaptureSettings) -> Result<Vec<CapturedCube>>;
 }

@@ -111,6 +111,11 @@ pub struct BakeSettings {
     pub device: DeviceChoice,
 }
 
+/// The preset `oslf bake` applies by itself when the cube maps are captured on a GPU and no
+/// other preset is asked for: the settings a GPU makes affordable (more samples per texel,
+/// say), where the scene file defines `[presets.gpu]`.
+pub const GPU_PRESET: &str = "gpu";
+
 /// Which device captures a bake's cube maps (`[bake] device`, `oslf bake --device`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DeviceChoice {
@@ -174,6 +179,8 @@ pub struct Scene {
     pub bake: BakeSettings,
     /// Name of the preset applied, if any.
     pub preset: Option<String>,
+    /// Names of the presets the scene file defines (`[presets.NAME]`), sorted.
+    pub presets: Vec<String>,
     /// What the scene asks for that the bake cannot do and ignores (unsupported glTF
     /// features, each naming the file and the node, mesh or material). Tools print them.
     pub warnings: Vec<String>,

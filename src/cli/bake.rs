@@ -8,7 +8,7 @@ use anyhow::{bail, Context};
 use oslf_bake::bake::{bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::integrator::Integrator;
-use oslf_bake::scene::Scene;
+use oslf_bake::scene::{Scene, GPU_PRESET};
 use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_format::ShardSpec;
 use oslf_util::image_file;
@@ -106,20 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn run_in_pool(args: Args) -> anyhow::Result<()> {
-    let mut scene = Scene::load(&args.scene, args.preset.as_deref())?;
-    scene
-        .warnings
-        .iter()
-        .for_each(|w| eprintln!("warning: {w}"));
-    if let Some(encoding) = args.encoding {
-        if oslf_format::meta::check_mantissa_bits(encoding, scene.bake.mantissa_bits).is_err() {
-            bail!(
-                "--encoding {encoding}: the scene sets mantissa_bits = {}, which applies to rgb9e5 only (remove it from the scene or preset, or bake with --encoding rgb9e5)",
-                scene.bake.mantissa_bits
-            );
-        }
-        scene.bake.encoding = encoding;
-    }
+    let mut scene = load_scene(&args, args.preset.as_deref())?;
     let output = args.output.clone().unwrap_or_else(|| default_output(&args));
     let preview = match &args.preview {
         Some(p) if p.as_os_str() == "none" => None,
@@ -138,12 +125,24 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         check_writable(&png.with_extension("exr"), "the preview")?;
     }
     // The device first: the estimate's capture time is its measured rate.
-    let (gpu, why) = match args.device {
-        Some(d) => super::device::capture_device(&scene, d, "--device", args.quiet)?,
-        None => {
-            super::device::capture_device(&scene, scene.bake.device, "[bake] device", args.quiet)?
+    let (mut gpu, mut why) = choose_device(&args, &scene, args.quiet)?;
+    // What a GPU makes affordable: the scene's `gpu` preset, unless another was asked for.
+    if gpu.is_some() && args.preset.is_none() && scene.presets.iter().any(|p| p == GPU_PRESET) {
+        scene = load_scene(&args, Some(GPU_PRESET))?;
+        (gpu, why) = choose_device(&args, &scene, true)?;
+        if gpu.is_some() {
+            why = format!(
+                "{why}; settings: the scene's preset {GPU_PRESET:?}, applied for a GPU capture (--preset NAME or --device cpu to bake otherwise)"
+            );
+            if !args.quiet {
+                eprintln!("settings: the scene's preset {GPU_PRESET:?}, applied for a GPU capture (--preset NAME or --device cpu to bake otherwise)");
+            }
         }
-    };
+    }
+    scene
+        .warnings
+        .iter()
+        .for_each(|w| eprintln!("warning: {w}"));
     let device = gpu
         .clone()
         .map(|g| g as Arc<dyn oslf_bake::device::CaptureDevice>);
@@ -203,6 +202,33 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
 
 /// Renders the scene camera with the bake's path tracer (on the GPU that captured, if one
 /// did) to `png` and an EXR beside it.
+/// The scene file of `args` with `preset` applied and `--encoding` over it.
+fn load_scene(args: &Args, preset: Option<&str>) -> anyhow::Result<Scene> {
+    let mut scene = Scene::load(&args.scene, preset)?;
+    if let Some(encoding) = args.encoding {
+        if oslf_format::meta::check_mantissa_bits(encoding, scene.bake.mantissa_bits).is_err() {
+            bail!(
+                "--encoding {encoding}: the scene sets mantissa_bits = {}, which applies to rgb9e5 only (remove it from the scene or preset, or bake with --encoding rgb9e5)",
+                scene.bake.mantissa_bits
+            );
+        }
+        scene.bake.encoding = encoding;
+    }
+    Ok(scene)
+}
+
+/// The capture device `--device` (else the scene's `[bake] device`) asks for, and why.
+fn choose_device(
+    args: &Args,
+    scene: &Scene,
+    quiet: bool,
+) -> anyhow::Result<(Option<Arc<oslf_bake_gpu::GpuCapture>>, String)> {
+    match args.device {
+        Some(d) => super::device::capture_device(scene, d, "--device", quiet),
+        None => super::device::capture_device(scene, scene.bake.device, "[bake] device", quiet),
+    }
+}
+
 fn write_preview(
     scene: &Scene,
     gpu: Option<&oslf_bake_gpu::GpuCapture>,

@@ -209,59 +209,14 @@ pub(super) fn capture(
         Some(d) => d.batch_cubes(&capture).max(1),
         None => chunk_cubes(capture.resolution, capture.distance_channel),
     };
-    while sink.done() < stop_at {
-        let first = sink.done() as usize;
-        let end = (first + chunk).min(stop_at as usize);
-        let order = &*sink;
-        let encode = |i: u32, (cube, stats, noise): CapturedCube| {
-            let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i)?;
-            // Each cube as it finishes, not each chunk: one cube of a slow bake (many
-            // samples per texel, many lights) can take minutes.
-            progress.advance(1);
-            Ok((enc, enc_stats, stats, noise))
-        };
-        let encoded: Vec<_> = match &device {
-            Some(d) => {
-                let jobs = device_jobs(order, first..end, points, centre);
-                let cubes = d.capture(&jobs, &capture)?;
-                if cubes.len() != jobs.len() {
-                    return Err(crate::BakeError::Device {
-                        device: d.describe(),
-                        message: format!("{} cubes returned for {}", cubes.len(), jobs.len()),
-                    });
-                }
-                jobs.par_iter()
-                    .zip(cubes)
-                    .map(|(job, cube)| encode(job.index, cube))
-                    .collect::<Result<Vec<_>>>()?
-            }
-            None => (first..end)
-                .into_par_iter()
-                .map(|k| {
-                    let i = order.cube(k as u32) as usize;
-                    let cube = match points.get(i) {
-                        Some(p) => capture_cube_with_noise(
-                            &integrator,
-                            Vec3::from_array(p.position),
-                            i as u32,
-                            &capture,
-                        ),
-                        // The one cube past the sample points: the environment-map baseline.
-                        None => match &env_geometry {
-                            Some(geometry) => {
-                                let env = integrator.with_geometry(geometry);
-                                with_no_noise(capture_cube(&env, centre, i as u32, &capture))
-                            }
-                            None => {
-                                let env = integrator.with_geometry(&EmptyScene);
-                                with_no_noise(capture_cube(&env, centre, i as u32, &capture))
-                            }
-                        },
-                    };
-                    encode(i as u32, cube)
-                })
-                .collect::<Result<Vec<_>>>()?,
-        };
+    let encode = |i: u32, (cube, stats, noise): CapturedCube| {
+        let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i)?;
+        // Each cube as it finishes, not each chunk: one cube of a slow bake (many samples
+        // per texel, many lights) can take minutes.
+        progress.advance(1);
+        Ok((enc, enc_stats, stats, noise))
+    };
+    let mut append = |sink: &mut Sink, encoded: Vec<EncodedCube>| -> Result<()> {
         for (enc, enc_stats, stats, noise) in encoded {
             captured.noise.merge(&noise);
             rays.closest += stats.closest;
@@ -270,6 +225,88 @@ pub(super) fn capture(
             captured.bytes += enc_stats.compressed_bytes;
             captured.texels += 6 * (capture.resolution as u64).pow(2);
             sink.append(enc)?;
+        }
+        Ok(())
+    };
+    let batches: Vec<std::ops::Range<usize>> = (sink.done() as usize..stop_at as usize)
+        .step_by(chunk)
+        .map(|first| first..(first + chunk).min(stop_at as usize))
+        .collect();
+    match device {
+        // The device captures batch k + 1 while the CPU encodes batch k: the GPU does not
+        // wait for the encoder, nor the encoder for the GPU.
+        Some(d) => {
+            let jobs: Vec<Vec<CubeJob>> = batches
+                .into_iter()
+                .map(|range| device_jobs(sink, range, points, centre))
+                .collect();
+            let mut pending: Option<(&[CubeJob], Vec<CapturedCube>)> = None;
+            for k in 0..=jobs.len() {
+                let (next, encoded) = std::thread::scope(|s| {
+                    let next = jobs.get(k).map(|batch| {
+                        (
+                            batch.as_slice(),
+                            s.spawn(|| device_capture(d.as_ref(), batch, &capture)),
+                        )
+                    });
+                    let encoded = pending.take().map(|(batch, cubes)| {
+                        batch
+                            .par_iter()
+                            .zip(cubes)
+                            .map(|(job, cube)| encode(job.index, cube))
+                            .collect::<Result<Vec<_>>>()
+                    });
+                    let next = next.map(|(batch, handle)| {
+                        let cubes = handle.join().unwrap_or_else(|_| {
+                            Err(crate::BakeError::Device {
+                                device: d.describe(),
+                                message: "the capture thread panicked".into(),
+                            })
+                        });
+                        cubes.map(|cubes| (batch, cubes))
+                    });
+                    (next, encoded)
+                });
+                // The finished batch is kept before an error of the next one is reported:
+                // `--resume` continues after it.
+                if let Some(encoded) = encoded {
+                    append(sink, encoded?)?;
+                }
+                pending = next.transpose()?;
+            }
+        }
+        None => {
+            for range in batches {
+                let order = &*sink;
+                let encoded = range
+                    .into_par_iter()
+                    .map(|k| {
+                        let i = order.cube(k as u32) as usize;
+                        let cube = match points.get(i) {
+                            Some(p) => capture_cube_with_noise(
+                                &integrator,
+                                Vec3::from_array(p.position),
+                                i as u32,
+                                &capture,
+                            ),
+                            // The one cube past the sample points: the environment-map
+                            // baseline.
+                            None => match &env_geometry {
+                                Some(geometry) => {
+                                    let env = integrator.with_geometry(geometry);
+                                    with_no_noise(capture_cube(&env, centre, i as u32, &capture))
+                                }
+                                None => {
+                                    let env = integrator.with_geometry(&EmptyScene);
+                                    with_no_noise(capture_cube(&env, centre, i as u32, &capture))
+                                }
+                            },
+                        };
+                        encode(i as u32, cube)
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                append(sink, encoded)?;
+            }
         }
     }
     progress.finish();
@@ -282,6 +319,30 @@ pub(super) fn capture(
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
     Ok(captured)
+}
+
+/// A cube encoded for the store, with the statistics the report sums.
+type EncodedCube = (
+    oslf_format::EncodedCube,
+    oslf_format::EncodeStats,
+    RayStats,
+    NoiseStats,
+);
+
+/// `device`'s capture of `jobs`, checked to return one cube per job.
+fn device_capture(
+    device: &dyn CaptureDevice,
+    jobs: &[CubeJob],
+    capture: &CaptureSettings,
+) -> Result<Vec<CapturedCube>> {
+    let cubes = device.capture(jobs, capture)?;
+    if cubes.len() != jobs.len() {
+        return Err(crate::BakeError::Device {
+            device: device.describe(),
+            message: format!("{} cubes returned for {}", cubes.len(), jobs.len()),
+        });
+    }
+    Ok(cubes)
 }
 
 /// The cubes `range` of `sink`'s order as jobs for a capture device: sample points, and past

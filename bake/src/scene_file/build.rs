@@ -31,6 +31,7 @@ impl Ctx<'_> {
     /// The scene of the parsed file `raw` with the named preset applied.
     pub(super) fn build(&self, mut raw: RawScene, preset: Option<&str>) -> Result<Scene> {
         let (bake, epsilon_span) = self.bake_settings(&raw, preset)?;
+        let presets = raw.presets.keys().cloned().collect();
 
         let camera_spec = match raw.camera.take() {
             Some(c) => Some(self.camera(c)?),
@@ -78,6 +79,7 @@ impl Ctx<'_> {
             shapes: shapes_out,
             bake,
             preset: preset.map(str::to_string),
+            presets,
             warnings,
         })
     }

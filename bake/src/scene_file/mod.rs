@@ -180,6 +180,7 @@ impl Scene {
             shapes: import.shapes,
             bake,
             preset: None,
+            presets: Vec::new(),
             warnings: import.warnings,
         })
     }
