@@ -27,6 +27,7 @@ pub mod judge;
 pub mod metrics;
 pub mod pareto;
 pub mod plot;
+pub mod series_plot;
 pub mod sweep;
 pub mod table;
 

@@ -37,7 +37,7 @@ pub struct Panel {
     pub text: PlotText,
 }
 
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 fn register_font() -> Result<()> {
     static ONCE: Once = Once::new();
@@ -74,31 +74,55 @@ pub fn plot_tradeoff(panels: &[Panel], png: &Path, svg: &Path, size: (u32, u32))
             "nothing to plot: a panel has no finite point".into(),
         ));
     }
-    register_font()?;
-    fn all<DB: DrawingBackend>(
+    write_png_and_svg(&Panels(panels), png, svg, size)
+}
+
+/// A figure drawn the same way on the SVG and the bitmap backend.
+pub(crate) trait Figure {
+    fn draw<DB: DrawingBackend>(
+        &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
-        panels: &[(Vec<&PlotPoint>, &PlotText)],
-    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-        root.fill(&WHITE)?;
-        let areas = root.split_evenly((1, panels.len()));
-        for (area, (points, text)) in areas.into_iter().zip(panels) {
-            draw(area, points, text)?;
-        }
-        root.present()
-    }
-    all(SVGBackend::new(svg, size).into_drawing_area(), &panels).map_err(draw_err(svg))?;
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>;
+}
+
+/// Draws `figure` as SVG (`svg`) and PNG (`png`), `size` pixels, in the embedded font.
+pub(crate) fn write_png_and_svg(
+    figure: &impl Figure,
+    png: &Path,
+    svg: &Path,
+    size: (u32, u32),
+) -> Result<()> {
+    register_font()?;
+    figure
+        .draw(SVGBackend::new(svg, size).into_drawing_area())
+        .map_err(draw_err(svg))?;
     let mut buffer = vec![0u8; size.0 as usize * size.1 as usize * 3];
-    all(
-        BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area(),
-        &panels,
-    )
-    .map_err(draw_err(png))?;
+    figure
+        .draw(BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area())
+        .map_err(draw_err(png))?;
     image::save_buffer(png, &buffer, size.0, size.1, image::ColorType::Rgb8).map_err(|e| {
         MeasureError::Output {
             path: png.to_path_buf(),
             message: format!("cannot write PNG: {e}"),
         }
     })
+}
+
+/// The trade-off's panels side by side.
+struct Panels<'a>(Vec<(Vec<&'a PlotPoint>, &'a PlotText)>);
+
+impl Figure for Panels<'_> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let areas = root.split_evenly((1, self.0.len()));
+        for (area, (points, text)) in areas.into_iter().zip(&self.0) {
+            draw(area, points, text)?;
+        }
+        root.present()
+    }
 }
 
 fn draw<DB: DrawingBackend>(

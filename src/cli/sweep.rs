@@ -226,6 +226,19 @@ fn bake_cost(r: &SweepRow) -> f64 {
     r.bake_cpu_seconds.unwrap_or(r.bake_seconds)
 }
 
+/// The bake panel's x axis: what [`bake_cost`] measures for these rows.
+fn bake_cost_label(rows: &[SweepRow]) -> &'static str {
+    let gpu = rows
+        .iter()
+        .filter(|r| r.capture_device.starts_with("GPU"))
+        .count();
+    match gpu {
+        0 => "bake, CPU seconds",
+        n if n == rows.len() => "bake, seconds (wall, cube maps captured on a GPU)",
+        _ => "bake, CPU seconds (wall seconds for GPU bakes)",
+    }
+}
+
 /// What `oslf sweep` writes: the rows with their places on the two Pareto fronts.
 #[derive(Clone, Copy)]
 struct Outputs<'a> {
@@ -411,7 +424,7 @@ impl Outputs<'_> {
                 panel(
                     bake_front,
                     &bake_cost,
-                    "bake, CPU seconds",
+                    bake_cost_label(self.rows),
                     "bake settings, default runtime",
                 ),
             ],
