@@ -27,6 +27,7 @@ use crate::prefilter::PrefilteredEnv;
 pub use crate::pool::DEFAULT_POOL_BYTES;
 
 mod camera;
+mod host;
 mod passes;
 mod prefiltered;
 mod readback;
@@ -34,6 +35,7 @@ mod targets;
 mod timer;
 
 pub use camera::{default_camera, view_projection};
+pub use host::{HostTarget, HostView};
 pub use targets::FrameBytes;
 
 use readback::map_read;
@@ -129,6 +131,12 @@ pub struct Renderer {
     /// ([`Renderer::ensure_prefiltered`]), and its texture (one black texel before).
     prefiltered: Option<PrefilteredEnv>,
     prefiltered_view: wgpu::TextureView,
+    /// Frames recorded into a host's encoder ([`Renderer::encode_into`]).
+    host_frames: u64,
+    /// Where host frames' feedback is copied and mapped, asynchronously.
+    feedback_slots: Vec<host::FeedbackSlot>,
+    /// The composite pipelines of the host targets seen.
+    composites: host::Composites,
 }
 
 /// Errors with [`RuntimeError::Limits`] when the device's 2D textures cannot hold `store`'s
@@ -229,6 +237,9 @@ impl Renderer {
             timer: None,
             prefiltered: None,
             prefiltered_view,
+            host_frames: 0,
+            feedback_slots: Vec::new(),
+            composites: host::Composites::default(),
         };
         renderer.timer = PassTimer::new(&renderer.gpu);
         renderer.load_env_cube();
@@ -385,17 +396,7 @@ impl Renderer {
         params: &ShadingParams,
         opts: &RenderOptions,
     ) -> Result<Frame> {
-        params.validate()?;
-        if params.source == Source::Parallax && self.proxy_box(params).is_none() {
-            return Err(RuntimeError::InvalidParam {
-                param: Param::ProxyBox,
-                problem: "missing: source parallax needs one, and this store has no environment \
-                          cube with a readable distance channel to fit one to (give the box)"
-                    .into(),
-            });
-        }
-        opts.background
-            .validate(self.constants.env_cube != u32::MAX)?;
+        self.check_frame(params, opts.background)?;
         if params.glossy_filter == GlossyFilter::SplitSum {
             self.ensure_prefiltered()?;
         }
@@ -455,6 +456,21 @@ impl Renderer {
             shade_gpu_seconds,
             gbuffer_gpu_seconds,
         })
+    }
+
+    /// Errors for parameters this store cannot shade: invalid values, the parallax baseline
+    /// without a proxy box, an environment background without an environment cube.
+    fn check_frame(&self, params: &ShadingParams, background: Background) -> Result<()> {
+        params.validate()?;
+        if params.source == Source::Parallax && self.proxy_box(params).is_none() {
+            return Err(RuntimeError::InvalidParam {
+                param: Param::ProxyBox,
+                problem: "missing: source parallax needs one, and this store has no environment \
+                          cube with a readable distance channel to fit one to (give the box)"
+                    .into(),
+            });
+        }
+        background.validate(self.constants.env_cube != u32::MAX)
     }
 
     /// Runs the G-buffer pass (if `geometry`) and the shading pass, and returns the feedback

@@ -1,0 +1,533 @@
+//! Drawing into a host application's frame (an engine, a viewer): the host's view and
+//! projection matrices, its colour and depth targets and its command encoder. The object is
+//! depth-tested against what the host drew and writes its own depth, so the host's meshes in
+//! front hide it and it hides what lies behind it. The cache's feedback is read back
+//! asynchronously: a frame never waits for the GPU, misses fall back (as in `oslf view`) and
+//! are resident a few frames later.
+//!
+//! Per frame: [`Renderer::encode_into`] records the G-buffer, shading and composite passes into
+//! the host's encoder; the host submits it; [`Renderer::after_submit`] then maps that frame's
+//! feedback and books the feedback of earlier frames whose maps have arrived (loads, uploads).
+
+use std::sync::{Arc, Mutex};
+
+use glam::{Mat4, Vec3, Vec4};
+use oslf_geometry::Camera;
+use wgpu::util::DeviceExt;
+
+use super::Renderer;
+use crate::cache::CacheStats;
+use crate::error::{Result, RuntimeError};
+use crate::params::{Background, GlossyFilter, ShadeUniform, ShadingParams};
+use crate::pipelines::ShadeKey;
+
+/// A host's view of the world: the matrices it draws its own meshes with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HostView {
+    /// World to view space: right-handed, the camera looking down −z (glam's
+    /// `camera::rh::view::look_at_mat4`, Bevy's inverse camera transform).
+    pub view: Mat4,
+    /// View to clip space with depth in 0..1, as wgpu wants: a perspective projection, with
+    /// depth increasing away from the camera or reversed (glam's
+    /// `camera::rh::proj::directx::perspective_infinite_reverse`, Bevy's default), as [`HostTarget::depth_compare`] says.
+    pub projection: Mat4,
+}
+
+impl HostView {
+    /// The camera of this view in world space (position, a target one unit ahead, up and the
+    /// vertical field of view), as [`Renderer::render`] and the CPU reference take it.
+    ///
+    /// Errors when a matrix is not finite or not invertible, or the projection is not a
+    /// perspective one (the shading needs the eye point).
+    pub fn camera(&self) -> Result<Camera> {
+        let finite = |m: &Mat4| m.to_cols_array().iter().all(|v| v.is_finite());
+        if !finite(&self.view) || !finite(&self.projection) {
+            return Err(RuntimeError::Parameter(
+                "HostView: the view and projection matrices must be finite".into(),
+            ));
+        }
+        let det = self.view.determinant();
+        if det.abs() <= 1e-12 {
+            return Err(RuntimeError::Parameter(format!(
+                "HostView: the view matrix is not invertible (determinant {det})"
+            )));
+        }
+        // A perspective projection makes clip w = −z_view: its last row is (0, 0, −1, 0).
+        let last_row = self.projection.row(3);
+        if (last_row - Vec4::new(0.0, 0.0, -1.0, 0.0))
+            .abs()
+            .max_element()
+            > 1e-6
+        {
+            return Err(RuntimeError::Parameter(format!(
+                "HostView: the projection's last row is {last_row:?}, not (0, 0, -1, 0): only \
+                 right-handed perspective projections are supported (the shading needs the eye \
+                 point; orthographic views have none)"
+            )));
+        }
+        let inv = self.view.inverse();
+        let position = inv.w_axis.truncate();
+        let forward = (-inv.z_axis.truncate()).normalize_or(Vec3::NEG_Z);
+        let up = inv.y_axis.truncate().normalize_or(Vec3::Y);
+        let fy = self.projection.y_axis.y;
+        if !(fy.is_finite() && fy > 0.0) {
+            return Err(RuntimeError::Parameter(format!(
+                "HostView: the projection's y scale {fy} must be positive"
+            )));
+        }
+        Ok(Camera {
+            position,
+            target: position + forward,
+            up,
+            vfov_deg: (2.0 * (1.0 / fy).atan()).to_degrees(),
+        })
+    }
+}
+
+/// Where a host wants the object drawn: its colour and depth targets, as its own meshes were
+/// drawn into them.
+#[derive(Clone, Copy, Debug)]
+pub struct HostTarget<'a> {
+    /// The colour target; the object's linear radiance is written where it is visible
+    /// (tonemapping is the host's, as for its other meshes).
+    pub color: &'a wgpu::TextureView,
+    /// Its format (any renderable colour format; an `…Srgb` one encodes on write).
+    pub color_format: wgpu::TextureFormat,
+    /// The depth target holding the host's meshes' depth; the object's depth is written into
+    /// it where the object is visible.
+    pub depth: &'a wgpu::TextureView,
+    /// Its format (a depth format: `Depth32Float`, `Depth24Plus`, …).
+    pub depth_format: wgpu::TextureFormat,
+    /// The host's depth test: `Less` or `LessEqual` for depth growing away from the camera,
+    /// `Greater` or `GreaterEqual` for reversed depth (Bevy).
+    pub depth_compare: wgpu::CompareFunction,
+    /// Samples per pixel of both targets: 1 (multisampled targets are refused).
+    pub sample_count: u32,
+    /// Size of both targets in pixels.
+    pub width: u32,
+    pub height: u32,
+}
+
+impl HostTarget<'_> {
+    /// Whether depth is reversed (1 near, 0 far), from the depth test; errors for a test that
+    /// is neither kind.
+    fn reversed(&self) -> Result<bool> {
+        use wgpu::CompareFunction as C;
+        match self.depth_compare {
+            C::Less | C::LessEqual => Ok(false),
+            C::Greater | C::GreaterEqual => Ok(true),
+            other => Err(RuntimeError::Parameter(format!(
+                "HostTarget::depth_compare {other:?}: must be Less, LessEqual, Greater or \
+                 GreaterEqual (the test the host draws its meshes with)"
+            ))),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.sample_count != 1 {
+            return Err(RuntimeError::Parameter(format!(
+                "HostTarget::sample_count {}: multisampled targets (MSAA) are not supported; \
+                 draw the object into single-sampled targets (turn MSAA off for the view)",
+                self.sample_count
+            )));
+        }
+        if !self.depth_format.has_depth_aspect() {
+            return Err(RuntimeError::Parameter(format!(
+                "HostTarget::depth_format {:?} has no depth aspect",
+                self.depth_format
+            )));
+        }
+        if self.color_format.has_depth_aspect() || self.color_format.has_stencil_aspect() {
+            return Err(RuntimeError::Parameter(format!(
+                "HostTarget::color_format {:?} is not a colour format",
+                self.color_format
+            )));
+        }
+        self.reversed().map(|_| ())
+    }
+}
+
+/// The composite pipelines, one per host target kind.
+#[derive(Default)]
+pub(super) struct Composites {
+    pipelines: std::collections::HashMap<CompositeKey, wgpu::RenderPipeline>,
+    layout: Option<wgpu::BindGroupLayout>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct CompositeKey {
+    color: wgpu::TextureFormat,
+    depth: wgpu::TextureFormat,
+    compare: wgpu::CompareFunction,
+    reversed: bool,
+}
+
+/// Where a frame's feedback is copied and mapped; a slot is reused once read.
+pub(super) struct FeedbackSlot {
+    buffer: wgpu::Buffer,
+    state: SlotState,
+}
+
+enum SlotState {
+    Free,
+    /// Copied into by the frame of this sequence number, not yet submitted.
+    Encoded(u64),
+    /// Being mapped; the callback's result lands in the mutex.
+    Mapping(u64, Arc<Mutex<Option<bool>>>),
+}
+
+/// Feedback buffers in flight at most: a frame whose every slot is busy skips its feedback
+/// (the next one reports the same needs).
+const FEEDBACK_SLOTS: usize = 3;
+
+impl Renderer {
+    /// Records this frame of the object into the host's `encoder`, seen through `view`, drawn
+    /// into `target`: the G-buffer pass (at the target's size, the host's matrices), the
+    /// shading pass, the feedback copy and the composite pass, which writes the shaded
+    /// object's colour and depth into the host's targets where it passes the host's depth
+    /// test. Nothing is submitted and nothing waits: submit the encoder, then call
+    /// [`Renderer::after_submit`].
+    ///
+    /// Several calls may go into one encoder (several views): each records its own uniform.
+    /// Errors for an invalid view or target ([`HostView::camera`], multisampling, formats) or
+    /// parameters, before anything is recorded.
+    pub fn encode_into(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &HostView,
+        target: &HostTarget<'_>,
+        params: &ShadingParams,
+    ) -> Result<()> {
+        target.validate()?;
+        let reversed = target.reversed()?;
+        let camera = view.camera()?;
+        self.check_frame(params, Background::None)?;
+        if params.glossy_filter == GlossyFilter::SplitSum {
+            self.ensure_prefiltered()?;
+        }
+        self.ensure_targets(target.width, target.height)?;
+        let u = self.host_uniform(view, &camera, params, target, reversed);
+        self.current = ShadeKey::of(&u);
+        self.background = Background::None;
+        self.shade.prepare(&self.gpu.device, self.current);
+        let device = &self.gpu.device;
+        // The uniform travels in the encoder, so that each view recorded into it has its own.
+        let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("host uniform"),
+            contents: bytemuck::bytes_of(&u),
+            usage: wgpu::BufferUsages::COPY_SRC,
+        });
+        encoder.copy_buffer_to_buffer(
+            &staging,
+            0,
+            &self.buffers.uniform,
+            0,
+            Some(std::mem::size_of::<ShadeUniform>() as u64),
+        );
+        encoder.clear_buffer(&self.buffers.feedback, 0, None);
+        let targets = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
+        self.encode_gbuffer(encoder, targets);
+        self.encode_shading(encoder, targets)?;
+        self.host_frames += 1;
+        let frame = self.host_frames;
+        let table_bytes = self.buffers.timestamps_offset;
+        if let Some(slot) = self.feedback_slot(table_bytes) {
+            encoder.copy_buffer_to_buffer(
+                &self.buffers.feedback,
+                0,
+                &self.feedback_slots[slot].buffer,
+                0,
+                Some(table_bytes),
+            );
+            self.feedback_slots[slot].state = SlotState::Encoded(frame);
+        }
+        self.encode_composite(encoder, target, reversed)?;
+        self.gpu.take_errors()
+    }
+
+    /// Call once the encoder of [`Renderer::encode_into`] is submitted: maps the feedback it
+    /// recorded, and books the feedback of earlier frames whose maps have arrived, oldest
+    /// first: the cube maps they missed are loaded (decoded in the background) and uploaded.
+    /// Never waits for the GPU. Returns the cache counters of the feedback booked now, if any
+    /// arrived (`misses` > 0: some sample points fell back in that frame).
+    pub fn after_submit(&mut self) -> Result<Option<CacheStats>> {
+        for slot in &mut self.feedback_slots {
+            if let SlotState::Encoded(frame) = slot.state {
+                let done = Arc::new(Mutex::new(None));
+                let sink = Arc::clone(&done);
+                slot.buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+                    if let Ok(mut d) = sink.lock() {
+                        *d = Some(r.is_ok());
+                    }
+                });
+                slot.state = SlotState::Mapping(frame, done);
+            }
+        }
+        self.gpu
+            .device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| RuntimeError::Gpu(format!("polling the device: {e}")))?;
+        let mut booked: Option<CacheStats> = None;
+        while let Some(slot) = self.oldest_mapped() {
+            let masks = {
+                let buffer = &self.feedback_slots[slot].buffer;
+                let bytes = buffer
+                    .get_mapped_range(..)
+                    .map_err(|e| RuntimeError::Gpu(format!("reading the feedback: {e}")))?
+                    .to_vec();
+                buffer.unmap();
+                let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                masks.truncate(self.cube_count as usize);
+                masks
+            };
+            self.feedback_slots[slot].state = SlotState::Free;
+            let (uploads, mut stats) = self.cache.plan(&masks, &self.store, false);
+            stats.upload_seconds = self.pool.upload(&self.gpu.queue, &uploads);
+            self.write_slots();
+            self.cache.cumulative.add(&stats);
+            match &mut booked {
+                None => booked = Some(stats),
+                Some(b) => b.add_loading(&stats),
+            }
+        }
+        self.gpu.take_errors()?;
+        Ok(booked)
+    }
+
+    /// Whether every feedback slot is free: all recorded frames have been booked.
+    pub fn feedback_idle(&self) -> bool {
+        self.feedback_slots
+            .iter()
+            .all(|s| matches!(s.state, SlotState::Free))
+    }
+
+    /// The slot whose map arrived for the oldest frame, if any; a failed map frees its slot.
+    fn oldest_mapped(&mut self) -> Option<usize> {
+        let mut best: Option<(u64, usize)> = None;
+        for (i, slot) in self.feedback_slots.iter_mut().enumerate() {
+            if let SlotState::Mapping(frame, done) = &slot.state {
+                let result = done.lock().ok().and_then(|d| *d);
+                match result {
+                    Some(true) if best.is_none_or(|(f, _)| *frame < f) => best = Some((*frame, i)),
+                    Some(false) => slot.state = SlotState::Free,
+                    _ => {}
+                }
+            }
+        }
+        best.map(|(_, i)| i)
+    }
+
+    /// A free feedback slot of `bytes`, created on first use; `None` when all are busy.
+    fn feedback_slot(&mut self, bytes: u64) -> Option<usize> {
+        if let Some(i) = self
+            .feedback_slots
+            .iter()
+            .position(|s| matches!(s.state, SlotState::Free))
+        {
+            return Some(i);
+        }
+        if self.feedback_slots.len() >= FEEDBACK_SLOTS {
+            return None;
+        }
+        let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("host feedback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.feedback_slots.push(FeedbackSlot {
+            buffer,
+            state: SlotState::Free,
+        });
+        Some(self.feedback_slots.len() - 1)
+    }
+
+    /// The uniform of a host frame: the host's matrices in the object-relative coordinates the
+    /// G-buffer works in; reversed depth is turned around (z ↦ w − z), so that the G-buffer's
+    /// own test and clear stay as they are, and the composite turns it back.
+    fn host_uniform(
+        &self,
+        view: &HostView,
+        camera: &Camera,
+        params: &ShadingParams,
+        target: &HostTarget<'_>,
+        reversed: bool,
+    ) -> ShadeUniform {
+        let origin = self.mesh.origin;
+        let flip = if reversed {
+            Mat4::from_cols(
+                Vec4::X,
+                Vec4::Y,
+                Vec4::new(0.0, 0.0, -1.0, 0.0),
+                Vec4::new(0.0, 0.0, 1.0, 1.0),
+            )
+        } else {
+            Mat4::IDENTITY
+        };
+        let view_proj = flip * view.projection * view.view * Mat4::from_translation(origin);
+        let relative = Camera {
+            position: camera.position - origin,
+            target: camera.target - origin,
+            ..*camera
+        };
+        ShadeUniform::new(
+            params,
+            view_proj,
+            &relative,
+            [target.width, target.height],
+            &self.constants,
+            Background::None,
+        )
+    }
+
+    /// Records the composite pass: the shaded object into the host's colour target, its depth
+    /// (turned back if reversed) tested against and written into the host's depth.
+    fn encode_composite(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &HostTarget<'_>,
+        reversed: bool,
+    ) -> Result<()> {
+        let key = CompositeKey {
+            color: target.color_format,
+            depth: target.depth_format,
+            compare: target.depth_compare,
+            reversed,
+        };
+        let device = &self.gpu.device;
+        let layout = self
+            .composites
+            .layout
+            .get_or_insert_with(|| composite_layout(device))
+            .clone();
+        let pipeline = self
+            .composites
+            .pipelines
+            .entry(key)
+            .or_insert_with(|| composite_pipeline(device, &layout, key))
+            .clone();
+        let targets = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
+        let shaded = targets.output.create_view(&Default::default());
+        let depth = targets.depth.create_view(&Default::default());
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("composite"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&shaded),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&depth),
+                },
+            ],
+        });
+        fn keep<V>() -> wgpu::Operations<V> {
+            wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }
+        }
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("composite"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target.color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: keep(),
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: target.depth,
+                depth_ops: Some(keep()),
+                stencil_ops: target.depth_format.has_stencil_aspect().then(keep),
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw(0..3, 0..1);
+        Ok(())
+    }
+}
+
+/// composite.wgsl's bindings: the shaded image and the G-buffer's depth.
+fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("composite"),
+        entries: &[
+            texture(0, wgpu::TextureSampleType::Float { filterable: false }),
+            texture(1, wgpu::TextureSampleType::Depth),
+        ],
+    })
+}
+
+/// A full-screen triangle writing the host's colour format and testing its depth as it does.
+fn composite_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    key: CompositeKey,
+) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("composite.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("composite.wgsl").into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("composite"),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    let constants = [("REVERSED", if key.reversed { 1.0 } else { 0.0 })];
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("composite"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: key.depth,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(key.compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
+            targets: &[Some(wgpu::ColorTargetState {
+                format: key.color,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

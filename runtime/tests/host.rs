@@ -1,0 +1,448 @@
+//! Drawing into a host's frame (`Renderer::encode_into`, `after_submit`): the host's matrices,
+//! colour and depth targets and encoder, depth tested both ways against the host's meshes,
+//! with depth growing away from the camera and reversed (as Bevy draws); the cache's feedback
+//! read back asynchronously until nothing falls back. The object's pixels equal the CPU
+//! reference of the same G-buffer, as for `Renderer::render`.
+
+mod common;
+
+use common::{compare, open_store};
+use glam::camera::rh::proj::directx;
+use glam::camera::rh::view::look_at_mat4;
+use glam::{Mat4, Vec3};
+use oslf_runtime::reference::StoreCubes;
+use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Mode, Renderer, ShadingParams};
+
+const W: u32 = 160;
+const H: u32 = 120;
+const COLOR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The host's clear colour, its mesh in front of the object (left half) and its mesh behind
+/// the object (everywhere, drawn after it).
+const CLEAR: [f32; 4] = [0.1, 0.2, 0.3, 1.0];
+const FRONT: [f32; 4] = [1.0, 0.0, 0.0, 1.0];
+const BEHIND: [f32; 4] = [0.0, 1.0, 0.0, 1.0];
+
+struct Host {
+    color: wgpu::Texture,
+    depth: wgpu::Texture,
+    reversed: bool,
+}
+
+impl Host {
+    fn new(gpu: &Gpu, reversed: bool) -> Self {
+        let make = |format| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: None,
+                size: wgpu::Extent3d {
+                    width: W,
+                    height: H,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        Self {
+            color: make(COLOR),
+            depth: make(DEPTH),
+            reversed,
+        }
+    }
+
+    /// Depth as the host's convention has it: `near` 0 is the camera, 1 the far end.
+    fn depth_of(&self, near: f32) -> f32 {
+        if self.reversed {
+            1.0 - near
+        } else {
+            near
+        }
+    }
+
+    fn compare(&self) -> wgpu::CompareFunction {
+        if self.reversed {
+            wgpu::CompareFunction::Greater
+        } else {
+            wgpu::CompareFunction::Less
+        }
+    }
+
+    /// Clears colour and depth, then draws the host's mesh in front of everything over the
+    /// left half.
+    fn begin(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) {
+        let cv = self.color.create_view(&Default::default());
+        let dv = self.depth.create_view(&Default::default());
+        let [r, g, b, a] = CLEAR.map(f64::from);
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("host clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &cv,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(self.depth_of(1.0)),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        self.mesh(
+            gpu,
+            encoder,
+            self.depth_of(0.0),
+            FRONT,
+            (0, W / 2),
+            wgpu::CompareFunction::Always,
+        );
+    }
+
+    /// A full-height quad over columns `x0..x1` at depth `z`, colour `c`, tested by `compare`.
+    fn mesh(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        z: f32,
+        c: [f32; 4],
+        (x0, x1): (u32, u32),
+        compare: wgpu::CompareFunction,
+    ) {
+        let source = format!(
+            "@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {{
+                let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+                return vec4<f32>(p, {z:?}, 1.0);
+            }}
+            @fragment fn fs() -> @location(0) vec4<f32> {{
+                return vec4<f32>({:?}, {:?}, {:?}, {:?});
+            }}",
+            c[0], c[1], c[2], c[3]
+        );
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: None,
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let pipeline = gpu
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("host mesh"),
+                layout: None,
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(COLOR.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        let cv = self.color.create_view(&Default::default());
+        let dv = self.depth.create_view(&Default::default());
+        fn keep<V>() -> wgpu::Operations<V> {
+            wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }
+        }
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("host mesh"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &cv,
+                depth_slice: None,
+                resolve_target: None,
+                ops: keep(),
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(keep()),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_viewport(x0 as f32, 0.0, (x1 - x0) as f32, H as f32, 0.0, 1.0);
+        pass.set_pipeline(&pipeline);
+        pass.draw(0..3, 0..1);
+    }
+
+    /// One host frame: its front mesh, the object, then its mesh behind the object drawn over
+    /// everything; submitted, then the renderer's `after_submit`.
+    fn frame(
+        &self,
+        gpu: &Gpu,
+        r: &mut Renderer,
+        view: &HostView,
+        params: &ShadingParams,
+    ) -> Option<oslf_runtime::CacheStats> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        self.begin(gpu, &mut encoder);
+        let cv = self.color.create_view(&Default::default());
+        let dv = self.depth.create_view(&Default::default());
+        let target = HostTarget {
+            color: &cv,
+            color_format: COLOR,
+            depth: &dv,
+            depth_format: DEPTH,
+            depth_compare: self.compare(),
+            sample_count: 1,
+            width: W,
+            height: H,
+        };
+        r.encode_into(&mut encoder, view, &target, params).unwrap();
+        self.mesh(
+            gpu,
+            &mut encoder,
+            self.depth_of(0.9999),
+            BEHIND,
+            (0, W),
+            self.compare(),
+        );
+        gpu.queue.submit([encoder.finish()]);
+        r.after_submit().unwrap()
+    }
+
+    fn read<T: bytemuck::Pod>(&self, gpu: &Gpu, depth: bool) -> Vec<T> {
+        let texel = std::mem::size_of::<T>() as u32;
+        let row = (W * texel).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: u64::from(row * H),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: if depth { &self.depth } else { &self.color },
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: if depth {
+                    wgpu::TextureAspect::DepthOnly
+                } else {
+                    wgpu::TextureAspect::All
+                },
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(H),
+                },
+            },
+            wgpu::Extent3d {
+                width: W,
+                height: H,
+                depth_or_array_layers: 1,
+            },
+        );
+        gpu.queue.submit([encoder.finish()]);
+        let bytes = gpu.read_buffer(&buffer).unwrap();
+        (0..H as usize)
+            .flat_map(|y| {
+                let line = &bytes[y * row as usize..][..(W * texel) as usize];
+                bytemuck::pod_collect_to_vec::<u8, T>(line)
+            })
+            .collect()
+    }
+}
+
+/// The store's camera as a host's matrices: a right-handed look-at and a perspective projection with
+/// depth growing away from the camera, or reversed and infinite (Bevy's).
+fn host_view(r: &Renderer, reversed: bool) -> HostView {
+    let cam = r.default_view();
+    let aspect = W as f32 / H as f32;
+    let near = (cam.target - cam.position).length() * 1e-3;
+    let projection = if reversed {
+        directx::perspective_infinite_reverse(cam.vfov_deg.to_radians(), aspect, near)
+    } else {
+        directx::perspective(cam.vfov_deg.to_radians(), aspect, near, near * 1e6)
+    };
+    HostView {
+        view: look_at_mat4(cam.position, cam.target, cam.up),
+        projection,
+    }
+}
+
+fn draws_into_a_host_frame(reversed: bool) {
+    let label = if reversed { "reversed depth" } else { "depth" };
+    let store = open_store();
+    let cubes = StoreCubes::decode(&store).unwrap();
+    let gpu = Gpu::headless().unwrap();
+    let mut r = Renderer::new(gpu.clone(), store, CacheConfig::default()).unwrap();
+    let view = host_view(&r, reversed);
+    let params = ShadingParams {
+        mode: Mode::ReconMirror,
+        ..Default::default()
+    };
+    let host = Host::new(&gpu, reversed);
+    // Streaming: the first frame finds the cube maps missing and falls back; their loads
+    // arrive over the next frames, read back without waiting.
+    let mut booked = Vec::new();
+    for _ in 0..40 {
+        booked.extend(host.frame(&gpu, &mut r, &view, &params));
+        gpu.wait().unwrap();
+        if booked.last().is_some_and(|s| s.misses == 0) {
+            break;
+        }
+    }
+    assert!(
+        booked.first().is_some_and(|s| s.misses > 0),
+        "{label}: the first frame should miss: {booked:?}"
+    );
+    assert!(
+        booked.last().is_some_and(|s| s.misses == 0),
+        "{label}: the frames never stopped missing: {booked:?}"
+    );
+    // One more frame, everything resident: the image to check.
+    host.frame(&gpu, &mut r, &view, &params);
+    gpu.wait().unwrap();
+    r.after_submit().unwrap();
+    let color: Vec<[f32; 4]> = host.read(&gpu, false);
+    let depth: Vec<f32> = host.read(&gpu, true);
+    let camera = view.camera().unwrap();
+    let (cpu, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+    let behind = host.depth_of(0.9999);
+    let (mut hidden, mut shown) = (0, 0);
+    let mut object_gpu = Vec::new();
+    let mut object_cpu = Vec::new();
+    for (i, ((c, d), reference)) in color.iter().zip(&depth).zip(&cpu).enumerate() {
+        let left = (i as u32 % W) < W / 2;
+        let on_object = reference[3] == 1.0;
+        if left {
+            // The host's mesh in front hides the object.
+            assert_eq!(*c, FRONT, "{label}: pixel {i}");
+            hidden += usize::from(on_object);
+        } else if on_object {
+            // The object hides the host's mesh behind it, and wrote its depth.
+            shown += 1;
+            object_gpu.push(*c);
+            object_cpu.push([reference[0], reference[1], reference[2], 1.0]);
+            let nearer = if reversed { *d > behind } else { *d < behind };
+            assert!(
+                nearer,
+                "{label}: pixel {i}: object depth {d} against {behind}"
+            );
+        } else {
+            assert_eq!(*c, BEHIND, "{label}: pixel {i}");
+            assert_eq!(*d, behind, "{label}: pixel {i}");
+        }
+    }
+    assert!(
+        hidden > 100 && shown > 100,
+        "{label}: {hidden} hidden, {shown} shown"
+    );
+    let (n, share, mae) = compare(&object_gpu, &object_cpu, 2e-3);
+    println!("{label}: {n} object pixels, {:.3}% within 2e-3 of the CPU reference, mean |gpu-cpu| {mae:.2e}", share * 100.0);
+    assert!(share >= 0.995 && mae < 2e-3, "{label}: {share} {mae}");
+}
+
+#[test]
+fn the_object_is_drawn_into_a_host_frame_depth_tested_both_ways() {
+    draws_into_a_host_frame(false);
+}
+
+#[test]
+fn the_object_is_drawn_into_a_host_frame_with_reversed_depth() {
+    draws_into_a_host_frame(true);
+}
+
+#[test]
+fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
+    let gpu = Gpu::headless().unwrap();
+    let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
+    let host = Host::new(&gpu, false);
+    let (cv, dv) = (
+        host.color.create_view(&Default::default()),
+        host.depth.create_view(&Default::default()),
+    );
+    let good = HostTarget {
+        color: &cv,
+        color_format: COLOR,
+        depth: &dv,
+        depth_format: DEPTH,
+        depth_compare: wgpu::CompareFunction::Less,
+        sample_count: 1,
+        width: W,
+        height: H,
+    };
+    let view = host_view(&r, false);
+    let params = ShadingParams::default();
+    let mut refuse = |view: &HostView, target: &HostTarget, expect: &str| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let e = r
+            .encode_into(&mut encoder, view, target, &params)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(expect), "{e}");
+    };
+    refuse(
+        &view,
+        &HostTarget {
+            sample_count: 4,
+            ..good
+        },
+        "multisampled targets (MSAA) are not supported",
+    );
+    refuse(
+        &view,
+        &HostTarget {
+            depth_compare: wgpu::CompareFunction::Always,
+            ..good
+        },
+        "depth_compare Always",
+    );
+    refuse(
+        &view,
+        &HostTarget {
+            depth_format: COLOR,
+            ..good
+        },
+        "has no depth aspect",
+    );
+    let ortho = HostView {
+        projection: directx::orthographic(-1.0, 1.0, -1.0, 1.0, 0.1, 10.0),
+        ..view
+    };
+    refuse(&ortho, &good, "only right-handed perspective projections");
+    let nan = HostView {
+        view: Mat4::from_translation(Vec3::NAN),
+        ..view
+    };
+    refuse(&nan, &good, "must be finite");
+    // Nothing was recorded for the refused frames: a good one still draws.
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    r.encode_into(&mut encoder, &view, &good, &params).unwrap();
+    gpu.queue.submit([encoder.finish()]);
+    r.after_submit().unwrap();
+}
