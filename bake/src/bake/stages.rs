@@ -233,76 +233,28 @@ pub(super) fn capture(
         .map(|first| first..(first + chunk).min(stop_at as usize))
         .collect();
     match device {
-        // The device captures batch k + 1 while the CPU encodes batch k: the GPU does not
-        // wait for the encoder, nor the encoder for the GPU.
         Some(d) => {
             let jobs: Vec<Vec<CubeJob>> = batches
                 .into_iter()
                 .map(|range| device_jobs(sink, range, points, centre))
                 .collect();
-            let mut pending: Option<(&[CubeJob], Vec<CapturedCube>)> = None;
-            for k in 0..=jobs.len() {
-                let (next, encoded) = std::thread::scope(|s| {
-                    let next = jobs.get(k).map(|batch| {
-                        (
-                            batch.as_slice(),
-                            s.spawn(|| device_capture(d.as_ref(), batch, &capture)),
-                        )
-                    });
-                    let encoded = pending.take().map(|(batch, cubes)| {
-                        batch
-                            .par_iter()
-                            .zip(cubes)
-                            .map(|(job, cube)| encode(job.index, cube))
-                            .collect::<Result<Vec<_>>>()
-                    });
-                    let next = next.map(|(batch, handle)| {
-                        let cubes = handle.join().unwrap_or_else(|_| {
-                            Err(crate::BakeError::Device {
-                                device: d.describe(),
-                                message: "the capture thread panicked".into(),
-                            })
-                        });
-                        cubes.map(|cubes| (batch, cubes))
-                    });
-                    (next, encoded)
-                });
-                // The finished batch is kept before an error of the next one is reported:
-                // `--resume` continues after it.
-                if let Some(encoded) = encoded {
-                    append(sink, encoded?)?;
-                }
-                pending = next.transpose()?;
-            }
+            capture_on_device(d.as_ref(), &jobs, &capture, sink, &encode, &mut append)?;
         }
         None => {
+            let cpu = CpuCapture {
+                integrator: &integrator,
+                env_geometry: env_geometry.as_ref(),
+                points,
+                centre,
+                capture: &capture,
+            };
             for range in batches {
                 let order = &*sink;
                 let encoded = range
                     .into_par_iter()
                     .map(|k| {
-                        let i = order.cube(k as u32) as usize;
-                        let cube = match points.get(i) {
-                            Some(p) => capture_cube_with_noise(
-                                &integrator,
-                                Vec3::from_array(p.position),
-                                i as u32,
-                                &capture,
-                            ),
-                            // The one cube past the sample points: the environment-map
-                            // baseline.
-                            None => match &env_geometry {
-                                Some(geometry) => {
-                                    let env = integrator.with_geometry(geometry);
-                                    with_no_noise(capture_cube(&env, centre, i as u32, &capture))
-                                }
-                                None => {
-                                    let env = integrator.with_geometry(&EmptyScene);
-                                    with_no_noise(capture_cube(&env, centre, i as u32, &capture))
-                                }
-                            },
-                        };
-                        encode(i as u32, cube)
+                        let i = order.cube(k as u32);
+                        encode(i, cpu.cube(i))
                     })
                     .collect::<Result<Vec<_>>>()?;
                 append(sink, encoded)?;
@@ -319,6 +271,87 @@ pub(super) fn capture(
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
     Ok(captured)
+}
+
+/// The CPU's capture of one cube of the store's order.
+struct CpuCapture<'a> {
+    integrator: &'a Integrator<'a, TriangleScene>,
+    /// The scene without the objects, which the environment-map baseline's cube sees.
+    env_geometry: Option<&'a TriangleScene>,
+    points: &'a [SamplePoint],
+    centre: Vec3,
+    capture: &'a CaptureSettings,
+}
+
+impl CpuCapture<'_> {
+    /// Cube `i`: a sample point's, or past them the environment-map baseline's.
+    fn cube(&self, i: u32) -> CapturedCube {
+        match self.points.get(i as usize) {
+            Some(p) => capture_cube_with_noise(
+                self.integrator,
+                Vec3::from_array(p.position),
+                i,
+                self.capture,
+            ),
+            None => match self.env_geometry {
+                Some(geometry) => {
+                    let env = self.integrator.with_geometry(geometry);
+                    with_no_noise(capture_cube(&env, self.centre, i, self.capture))
+                }
+                None => {
+                    let env = self.integrator.with_geometry(&EmptyScene);
+                    with_no_noise(capture_cube(&env, self.centre, i, self.capture))
+                }
+            },
+        }
+    }
+}
+
+/// The batches of `jobs` captured on `device`, encoded and appended in order: the device
+/// captures batch k + 1 while the CPU encodes batch k, so neither waits for the other.
+fn capture_on_device(
+    device: &dyn CaptureDevice,
+    jobs: &[Vec<CubeJob>],
+    capture: &CaptureSettings,
+    sink: &mut Sink,
+    encode: &(dyn Fn(u32, CapturedCube) -> Result<EncodedCube> + Sync),
+    append: &mut dyn FnMut(&mut Sink, Vec<EncodedCube>) -> Result<()>,
+) -> Result<()> {
+    let mut pending: Option<(&[CubeJob], Vec<CapturedCube>)> = None;
+    for k in 0..=jobs.len() {
+        let (next, encoded) = std::thread::scope(|s| {
+            let next = jobs.get(k).map(|batch| {
+                (
+                    batch.as_slice(),
+                    s.spawn(|| device_capture(device, batch, capture)),
+                )
+            });
+            let encoded = pending.take().map(|(batch, cubes)| {
+                batch
+                    .par_iter()
+                    .zip(cubes)
+                    .map(|(job, cube)| encode(job.index, cube))
+                    .collect::<Result<Vec<_>>>()
+            });
+            let next = next.map(|(batch, handle)| {
+                let cubes = handle.join().unwrap_or_else(|_| {
+                    Err(crate::BakeError::Device {
+                        device: device.describe(),
+                        message: "the capture thread panicked".into(),
+                    })
+                });
+                cubes.map(|cubes| (batch, cubes))
+            });
+            (next, encoded)
+        });
+        // The finished batch is kept before an error of the next one is reported: `--resume`
+        // continues after it.
+        if let Some(encoded) = encoded {
+            append(sink, encoded?)?;
+        }
+        pending = next.transpose()?;
+    }
+    Ok(())
 }
 
 /// A cube encoded for the store, with the statistics the report sums.
