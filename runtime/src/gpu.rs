@@ -27,6 +27,9 @@ pub struct Gpu {
     /// as their blocks ([`Gpu::has_bc`]).
     bc: bool,
     errors: Arc<Mutex<Vec<String>>>,
+    /// A host's device with the host's own uncaptured-error handler ([`Gpu::from_host_device`]):
+    /// the renderer catches its errors in error scopes ([`Gpu::scoped`]).
+    host_watched: bool,
 }
 
 impl Gpu {
@@ -151,6 +154,52 @@ impl Gpu {
             shares_system_memory: false,
             bc,
             errors,
+            host_watched: false,
+        }
+    }
+
+    /// Wraps a device and queue that a host application owns and watches (an engine with its
+    /// own uncaptured-error handler): unlike [`Gpu::from_device`], no handler is installed, so
+    /// the host's stays. The renderer catches the errors of its own calls in error scopes
+    /// instead ([`Gpu::scoped`]): the host's handler never sees the renderer's errors, nor the
+    /// renderer the host's.
+    pub fn from_host_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        adapter_name: String,
+    ) -> Self {
+        let bc = device
+            .features()
+            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+        Self {
+            device,
+            queue,
+            adapter_name,
+            shares_system_memory: false,
+            bc,
+            errors: Arc::new(Mutex::new(Vec::new())),
+            host_watched: true,
+        }
+    }
+
+    /// Runs `f` and returns the validation and out-of-memory errors the device reported while
+    /// it ran as [`RuntimeError::Gpu`] (else `f`'s result): in error scopes on a host's device
+    /// ([`Gpu::from_host_device`]), otherwise from the error list ([`Gpu::take_errors`]).
+    pub fn scoped<T>(&self, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        if !self.host_watched {
+            let out = f();
+            self.take_errors()?;
+            return out;
+        }
+        let out_of_memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        // Native error scopes resolve at once: nothing waits for the GPU here.
+        let invalid = pollster::block_on(validation.pop());
+        let memory = pollster::block_on(out_of_memory.pop());
+        match invalid.or(memory) {
+            Some(e) => Err(RuntimeError::Gpu(e.to_string())),
+            None => out,
         }
     }
 

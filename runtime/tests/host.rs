@@ -6,6 +6,8 @@
 
 mod common;
 
+use std::sync::{Arc, Mutex};
+
 use common::{compare, open_store};
 use glam::camera::rh::proj::directx;
 use glam::camera::rh::view::look_at_mat4;
@@ -445,4 +447,53 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
     r.encode_into(&mut encoder, &view, &good, &params).unwrap();
     gpu.queue.submit([encoder.finish()]);
     r.after_submit().unwrap();
+}
+
+#[test]
+fn on_a_hosts_device_the_renderer_keeps_its_errors_and_the_host_its_handler() {
+    let own = Gpu::headless().unwrap();
+    let heard = Arc::new(Mutex::new(Vec::<String>::new()));
+    let sink = Arc::clone(&heard);
+    own.device
+        .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            sink.lock().unwrap().push(e.to_string());
+        }));
+    let gpu = Gpu::from_host_device(own.device.clone(), own.queue.clone(), "host".into());
+    let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
+    let host = Host::new(&gpu, false);
+    let view = host_view(&r, false);
+    let params = ShadingParams::default();
+    host.frame(&gpu, &mut r, &view, &params);
+    gpu.wait().unwrap();
+    // A colour format no render pass writes: the renderer's error, and nothing recorded.
+    let (cv, dv) = (
+        host.color.create_view(&Default::default()),
+        host.depth.create_view(&Default::default()),
+    );
+    let bad = HostTarget {
+        color: &cv,
+        color_format: wgpu::TextureFormat::Rgb9e5Ufloat,
+        depth: &dv,
+        depth_format: DEPTH,
+        depth_compare: wgpu::CompareFunction::Less,
+        sample_count: 1,
+        width: W,
+        height: H,
+    };
+    for _ in 0..2 {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let e = r
+            .encode_into(&mut encoder, &view, &bad, &params)
+            .unwrap_err();
+        assert!(matches!(e, oslf_runtime::RuntimeError::Gpu(_)), "{e}");
+        println!("refused: {e}");
+        gpu.queue.submit([encoder.finish()]);
+    }
+    host.frame(&gpu, &mut r, &view, &params);
+    gpu.wait().unwrap();
+    assert!(
+        heard.lock().unwrap().is_empty(),
+        "the host heard {:?}",
+        heard.lock().unwrap()
+    );
 }

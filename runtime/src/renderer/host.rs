@@ -202,21 +202,72 @@ impl Renderer {
         let reversed = target.reversed()?;
         let camera = view.camera()?;
         self.check_frame(params, Background::None)?;
+        let gpu = self.gpu.clone();
+        // What can fail on the device (targets, pipelines) first: a failure records nothing.
+        let (u, composite) =
+            gpu.scoped(|| self.prepare_host_frame(view, &camera, target, params, reversed))?;
+        gpu.scoped(|| self.record_host_frame(encoder, target, &u, &composite))
+    }
+
+    /// The host frame's uniform and composite pipeline, with the targets and the shading
+    /// pipeline it needs made ready.
+    fn prepare_host_frame(
+        &mut self,
+        view: &HostView,
+        camera: &Camera,
+        target: &HostTarget<'_>,
+        params: &ShadingParams,
+        reversed: bool,
+    ) -> Result<(ShadeUniform, wgpu::RenderPipeline)> {
         if params.glossy_filter == GlossyFilter::SplitSum {
             self.ensure_prefiltered()?;
         }
         self.ensure_targets(target.width, target.height)?;
-        let u = self.host_uniform(view, &camera, params, target, reversed);
+        let u = self.host_uniform(view, camera, params, target, reversed);
         self.current = ShadeKey::of(&u);
         self.background = Background::None;
         self.shade.prepare(&self.gpu.device, self.current);
+        let key = CompositeKey {
+            color: target.color_format,
+            depth: target.depth_format,
+            compare: target.depth_compare,
+            reversed,
+        };
+        if let Some(pipeline) = self.composites.pipelines.get(&key) {
+            return Ok((u, pipeline.clone()));
+        }
         let device = &self.gpu.device;
+        let layout = self
+            .composites
+            .layout
+            .get_or_insert_with(|| composite_layout(device))
+            .clone();
+        // Kept only once the device took it (a colour format it cannot render to fails here).
+        let pipeline = self
+            .gpu
+            .scoped(|| Ok(composite_pipeline(device, &layout, key)))?;
+        self.composites.pipelines.insert(key, pipeline.clone());
+        Ok((u, pipeline))
+    }
+
+    /// Records the host frame's passes into `encoder`: its uniform, the G-buffer, the shading,
+    /// the feedback copy (when a slot is free) and the composite.
+    fn record_host_frame(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &HostTarget<'_>,
+        u: &ShadeUniform,
+        composite: &wgpu::RenderPipeline,
+    ) -> Result<()> {
         // The uniform travels in the encoder, so that each view recorded into it has its own.
-        let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("host uniform"),
-            contents: bytemuck::bytes_of(&u),
-            usage: wgpu::BufferUsages::COPY_SRC,
-        });
+        let staging = self
+            .gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("host uniform"),
+                contents: bytemuck::bytes_of(u),
+                usage: wgpu::BufferUsages::COPY_SRC,
+            });
         encoder.copy_buffer_to_buffer(
             &staging,
             0,
@@ -244,8 +295,7 @@ impl Renderer {
             );
             self.feedback_slots[slot].state = SlotState::Encoded(frame);
         }
-        self.encode_composite(encoder, target, reversed)?;
-        self.gpu.take_errors()
+        self.encode_composite(encoder, target, composite)
     }
 
     /// Call once the encoder of [`Renderer::encode_into`] is submitted: maps the feedback it
@@ -254,6 +304,12 @@ impl Renderer {
     /// Never waits for the GPU. Returns the cache counters of the feedback booked now, if any
     /// arrived (`misses` > 0: some sample points fell back in that frame).
     pub fn after_submit(&mut self) -> Result<Option<CacheStats>> {
+        let gpu = self.gpu.clone();
+        gpu.scoped(|| self.book_feedback())
+    }
+
+    /// [`Renderer::after_submit`]'s work, its device errors caught by the caller.
+    fn book_feedback(&mut self) -> Result<Option<CacheStats>> {
         for slot in &mut self.feedback_slots {
             if let SlotState::Encoded(frame) = slot.state {
                 let done = Arc::new(Mutex::new(None));
@@ -293,7 +349,6 @@ impl Renderer {
                 Some(b) => b.add_loading(&stats),
             }
         }
-        self.gpu.take_errors()?;
         Ok(booked)
     }
 
@@ -386,29 +441,17 @@ impl Renderer {
     /// Records the composite pass: the shaded object into the host's colour target, its depth
     /// (turned back if reversed) tested against and written into the host's depth.
     fn encode_composite(
-        &mut self,
+        &self,
         encoder: &mut wgpu::CommandEncoder,
         target: &HostTarget<'_>,
-        reversed: bool,
+        pipeline: &wgpu::RenderPipeline,
     ) -> Result<()> {
-        let key = CompositeKey {
-            color: target.color_format,
-            depth: target.depth_format,
-            compare: target.depth_compare,
-            reversed,
-        };
         let device = &self.gpu.device;
         let layout = self
             .composites
             .layout
-            .get_or_insert_with(|| composite_layout(device))
-            .clone();
-        let pipeline = self
-            .composites
-            .pipelines
-            .entry(key)
-            .or_insert_with(|| composite_pipeline(device, &layout, key))
-            .clone();
+            .as_ref()
+            .ok_or_else(|| RuntimeError::Gpu("composite layout missing".into()))?;
         let targets = self
             .targets
             .as_ref()
@@ -417,7 +460,7 @@ impl Renderer {
         let depth = targets.depth.create_view(&Default::default());
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("composite"),
-            layout: &layout,
+            layout,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
@@ -452,7 +495,7 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&pipeline);
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &group, &[]);
         pass.draw(0..3, 0..1);
         Ok(())

@@ -184,6 +184,11 @@ impl Renderer {
     /// Errors with [`RuntimeError::Limits`] when the device cannot hold the store's sample
     /// maps, or the requested number of GPU slots.
     pub fn new(gpu: Gpu, store: Store, config: CacheConfig) -> Result<Self> {
+        gpu.clone().scoped(|| Self::open(gpu, store, config))
+    }
+
+    /// [`Renderer::new`]'s work, its device errors caught by the caller.
+    fn open(gpu: Gpu, store: Store, config: CacheConfig) -> Result<Self> {
         let limits = gpu.limits();
         check_textures_fit(&limits, &store)?;
         let cube_count = store.cube_count();
