@@ -46,10 +46,11 @@
 //!   shader marks every face it needs. Whole-cube or per-face loading. Documented fallback
 //!   when a needed face is not resident; statistics per frame and cumulative ([`CacheStats`]).
 //! * **Host frames** ([`Renderer::encode_into`], [`Renderer::after_submit`]): the object drawn
-//!   into an application's own colour and depth targets through its view and projection
-//!   matrices (reversed depth too), recorded into its command encoder, depth-tested both ways
-//!   against its meshes by a composite pass; the feedback read back asynchronously, so a frame
-//!   never waits (docs/embedding.md, "Drawing into your own frame").
+//!   into an application's own colour and depth targets (multisampled too) through its view
+//!   and projection matrices (reversed depth too), recorded into its command encoder and
+//!   depth-tested both ways against its meshes by a composite pass; the feedback read back
+//!   asynchronously, so a frame never waits (docs/embedding.md, "Drawing into your own
+//!   frame").
 //! * **CPU reference** ([`reference`](mod@reference)): the same shading in Rust, function for function, used
 //!   by the parity tests against the GPU.
 //!

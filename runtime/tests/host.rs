@@ -1,8 +1,9 @@
 //! Drawing into a host's frame (`Renderer::encode_into`, `after_submit`): the host's matrices,
 //! colour and depth targets and encoder, depth tested both ways against the host's meshes,
-//! with depth growing away from the camera and reversed (as Bevy draws); the cache's feedback
-//! read back asynchronously until nothing falls back. The object's pixels equal the CPU
-//! reference of the same G-buffer, as for `Renderer::render`.
+//! with depth growing away from the camera and reversed (as Bevy draws), single-sampled and
+//! 4× multisampled; the cache's feedback read back asynchronously until nothing falls back.
+//! The object's pixels equal the CPU reference of the same G-buffer, as for
+//! `Renderer::render`.
 
 mod common;
 
@@ -18,6 +19,7 @@ use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Mode, Renderer, Shadi
 const W: u32 = 160;
 const H: u32 = 120;
 const COLOR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const COLOR_MSAA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The host's clear colour, its mesh in front of the object (left half) and its mesh behind
 /// the object (everywhere, drawn after it).
@@ -26,14 +28,20 @@ const FRONT: [f32; 4] = [1.0, 0.0, 0.0, 1.0];
 const BEHIND: [f32; 4] = [0.0, 1.0, 0.0, 1.0];
 
 struct Host {
+    /// The colour target (multisampled with `samples` > 1, then resolved into `resolved`).
     color: wgpu::Texture,
+    resolved: Option<wgpu::Texture>,
+    format: wgpu::TextureFormat,
     depth: wgpu::Texture,
     reversed: bool,
+    samples: u32,
 }
 
 impl Host {
-    fn new(gpu: &Gpu, reversed: bool) -> Self {
-        let make = |format| {
+    /// Single-sampled targets (`Rgba32Float`), or `samples` per pixel (`Rgba16Float`, which
+    /// every adapter multisamples).
+    fn new(gpu: &Gpu, reversed: bool, samples: u32) -> Self {
+        let make = |format, samples| {
             gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: None,
                 size: wgpu::Extent3d {
@@ -42,17 +50,21 @@ impl Host {
                     depth_or_array_layers: 1,
                 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
             })
         };
+        let format = if samples == 1 { COLOR } else { COLOR_MSAA };
         Self {
-            color: make(COLOR),
-            depth: make(DEPTH),
+            color: make(format, samples),
+            resolved: (samples > 1).then(|| make(format, 1)),
+            format,
+            depth: make(DEPTH, samples),
             reversed,
+            samples,
         }
     }
 
@@ -157,12 +169,15 @@ impl Host {
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
-                multisample: Default::default(),
+                multisample: wgpu::MultisampleState {
+                    count: self.samples,
+                    ..Default::default()
+                },
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some("fs"),
                     compilation_options: Default::default(),
-                    targets: &[Some(COLOR.into())],
+                    targets: &[Some(self.format.into())],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -212,11 +227,11 @@ impl Host {
         let dv = self.depth.create_view(&Default::default());
         let target = HostTarget {
             color: &cv,
-            color_format: COLOR,
+            color_format: self.format,
             depth: &dv,
             depth_format: DEPTH,
             depth_compare: self.compare(),
-            sample_count: 1,
+            sample_count: self.samples,
             width: W,
             height: H,
         };
@@ -229,8 +244,39 @@ impl Host {
             (0, W),
             self.compare(),
         );
+        if let Some(resolved) = &self.resolved {
+            // The host resolves its multisampled colour: an empty pass does.
+            let rv = resolved.create_view(&Default::default());
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("host resolve"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &cv,
+                    depth_slice: None,
+                    resolve_target: Some(&rv),
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+        }
         gpu.queue.submit([encoder.finish()]);
         r.after_submit().unwrap()
+    }
+
+    /// The colour target (resolved), as f32.
+    fn colors(&self, gpu: &Gpu) -> Vec<[f32; 4]> {
+        if self.format == COLOR {
+            return self.read(gpu, false);
+        }
+        self.read::<[u16; 4]>(gpu, false)
+            .into_iter()
+            .map(|p| p.map(f16_to_f32))
+            .collect()
     }
 
     fn read<T: bytemuck::Pod>(&self, gpu: &Gpu, depth: bool) -> Vec<T> {
@@ -245,7 +291,11 @@ impl Host {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
-                texture: if depth { &self.depth } else { &self.color },
+                texture: match (depth, &self.resolved) {
+                    (true, _) => &self.depth,
+                    (false, Some(resolved)) => resolved,
+                    (false, None) => &self.color,
+                },
                 mip_level: 0,
                 origin: wgpu::Origin3d::ZERO,
                 aspect: if depth {
@@ -279,6 +329,18 @@ impl Host {
     }
 }
 
+/// An IEEE half-precision value as f32 (finite values; the targets hold no others).
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h >> 15 == 1 { -1.0 } else { 1.0 };
+    let exponent = i32::from((h >> 10) & 0x1f);
+    let mantissa = f32::from(h & 0x3ff);
+    match exponent {
+        0 => sign * mantissa * 2f32.powi(-24),
+        31 => f32::NAN,
+        e => sign * (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
 /// The store's camera as a host's matrices: a right-handed look-at and a perspective projection with
 /// depth growing away from the camera, or reversed and infinite (Bevy's).
 fn host_view(r: &Renderer, reversed: bool) -> HostView {
@@ -296,8 +358,11 @@ fn host_view(r: &Renderer, reversed: bool) -> HostView {
     }
 }
 
-fn draws_into_a_host_frame(reversed: bool) {
-    let label = if reversed { "reversed depth" } else { "depth" };
+fn draws_into_a_host_frame(reversed: bool, samples: u32) {
+    let label = format!(
+        "{}, {samples} sample(s) per pixel",
+        if reversed { "reversed depth" } else { "depth" }
+    );
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
     let gpu = Gpu::headless().unwrap();
@@ -307,7 +372,7 @@ fn draws_into_a_host_frame(reversed: bool) {
         mode: Mode::ReconMirror,
         ..Default::default()
     };
-    let host = Host::new(&gpu, reversed);
+    let host = Host::new(&gpu, reversed, samples);
     // Streaming: the first frame finds the cube maps missing and falls back; their loads
     // arrive over the next frames, read back without waiting.
     let mut booked = Vec::new();
@@ -330,8 +395,13 @@ fn draws_into_a_host_frame(reversed: bool) {
     host.frame(&gpu, &mut r, &view, &params);
     gpu.wait().unwrap();
     r.after_submit().unwrap();
-    let color: Vec<[f32; 4]> = host.read(&gpu, false);
-    let depth: Vec<f32> = host.read(&gpu, true);
+    let color = host.colors(&gpu);
+    // A multisampled depth target cannot be copied out: its samples are judged by the colours.
+    let depth: Vec<Option<f32>> = if samples == 1 {
+        host.read::<f32>(&gpu, true).into_iter().map(Some).collect()
+    } else {
+        vec![None; color.len()]
+    };
     let camera = view.camera().unwrap();
     let (cpu, _) = r.reference_image(&camera, &params, &cubes).unwrap();
     let behind = host.depth_of(0.9999);
@@ -350,14 +420,16 @@ fn draws_into_a_host_frame(reversed: bool) {
             shown += 1;
             object_gpu.push(*c);
             object_cpu.push([reference[0], reference[1], reference[2], 1.0]);
-            let nearer = if reversed { *d > behind } else { *d < behind };
-            assert!(
-                nearer,
-                "{label}: pixel {i}: object depth {d} against {behind}"
-            );
+            if let Some(d) = *d {
+                let nearer = if reversed { d > behind } else { d < behind };
+                assert!(
+                    nearer,
+                    "{label}: pixel {i}: object depth {d} against {behind}"
+                );
+            }
         } else {
             assert_eq!(*c, BEHIND, "{label}: pixel {i}");
-            assert_eq!(*d, behind, "{label}: pixel {i}");
+            assert!(d.is_none_or(|d| d == behind), "{label}: pixel {i}: {d:?}");
         }
     }
     assert!(
@@ -371,19 +443,24 @@ fn draws_into_a_host_frame(reversed: bool) {
 
 #[test]
 fn the_object_is_drawn_into_a_host_frame_depth_tested_both_ways() {
-    draws_into_a_host_frame(false);
+    draws_into_a_host_frame(false, 1);
 }
 
 #[test]
 fn the_object_is_drawn_into_a_host_frame_with_reversed_depth() {
-    draws_into_a_host_frame(true);
+    draws_into_a_host_frame(true, 1);
+}
+
+#[test]
+fn the_object_is_drawn_into_a_multisampled_host_frame() {
+    draws_into_a_host_frame(true, 4);
 }
 
 #[test]
 fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
     let gpu = Gpu::headless().unwrap();
     let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
-    let host = Host::new(&gpu, false);
+    let host = Host::new(&gpu, false, 1);
     let (cv, dv) = (
         host.color.create_view(&Default::default()),
         host.depth.create_view(&Default::default()),
@@ -411,10 +488,10 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
     refuse(
         &view,
         &HostTarget {
-            sample_count: 4,
+            sample_count: 3,
             ..good
         },
-        "multisampled targets (MSAA) are not supported",
+        "sample_count 3: must be 1, 2, 4 or 8",
     );
     refuse(
         &view,
@@ -460,7 +537,7 @@ fn on_a_hosts_device_the_renderer_keeps_its_errors_and_the_host_its_handler() {
         }));
     let gpu = Gpu::from_host_device(own.device.clone(), own.queue.clone(), "host".into());
     let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
-    let host = Host::new(&gpu, false);
+    let host = Host::new(&gpu, false, 1);
     let view = host_view(&r, false);
     let params = ShadingParams::default();
     host.frame(&gpu, &mut r, &view, &params);

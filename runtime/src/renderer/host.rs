@@ -101,7 +101,9 @@ pub struct HostTarget<'a> {
     /// The host's depth test: `Less` or `LessEqual` for depth growing away from the camera,
     /// `Greater` or `GreaterEqual` for reversed depth (Bevy).
     pub depth_compare: wgpu::CompareFunction,
-    /// Samples per pixel of both targets: 1 (multisampled targets are refused).
+    /// Samples per pixel of both targets: 1, or 2, 4, 8 for multisampled targets (MSAA). The
+    /// object is shaded once per pixel and written to every sample its pixel covers, each
+    /// depth-tested against the host's samples; resolving the colour target stays the host's.
     pub sample_count: u32,
     /// Size of both targets in pixels.
     pub width: u32,
@@ -124,10 +126,10 @@ impl HostTarget<'_> {
     }
 
     fn validate(&self) -> Result<()> {
-        if self.sample_count != 1 {
+        if !matches!(self.sample_count, 1 | 2 | 4 | 8) {
             return Err(RuntimeError::Parameter(format!(
-                "HostTarget::sample_count {}: multisampled targets (MSAA) are not supported; \
-                 draw the object into single-sampled targets (turn MSAA off for the view)",
+                "HostTarget::sample_count {}: must be 1, 2, 4 or 8 (the samples per pixel of \
+                 both targets)",
                 self.sample_count
             )));
         }
@@ -156,6 +158,7 @@ pub(super) struct Composites {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct CompositeKey {
+    samples: u32,
     color: wgpu::TextureFormat,
     depth: wgpu::TextureFormat,
     compare: wgpu::CompareFunction,
@@ -189,7 +192,7 @@ impl Renderer {
     /// [`Renderer::after_submit`].
     ///
     /// Several calls may go into one encoder (several views): each records its own uniform.
-    /// Errors for an invalid view or target ([`HostView::camera`], multisampling, formats) or
+    /// Errors for an invalid view or target ([`HostView::camera`], sample counts, formats) or
     /// parameters, before anything is recorded.
     pub fn encode_into(
         &mut self,
@@ -228,6 +231,7 @@ impl Renderer {
         self.background = Background::None;
         self.shade.prepare(&self.gpu.device, self.current);
         let key = CompositeKey {
+            samples: target.sample_count,
             color: target.color_format,
             depth: target.depth_format,
             compare: target.depth_compare,
@@ -556,7 +560,10 @@ fn composite_pipeline(
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
+        multisample: wgpu::MultisampleState {
+            count: key.samples,
+            ..Default::default()
+        },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),
