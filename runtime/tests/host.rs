@@ -355,19 +355,23 @@ fn host_view(r: &Renderer, reversed: bool) -> HostView {
     HostView {
         view: look_at_mat4(cam.position, cam.target, cam.up),
         projection,
+        exposure: 1.0,
     }
 }
 
-fn draws_into_a_host_frame(reversed: bool, samples: u32) {
+fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
     let label = format!(
-        "{}, {samples} sample(s) per pixel",
+        "{}, {samples} sample(s) per pixel, exposure {exposure}",
         if reversed { "reversed depth" } else { "depth" }
     );
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
     let gpu = Gpu::headless().unwrap();
     let mut r = Renderer::new(gpu.clone(), store, CacheConfig::default()).unwrap();
-    let view = host_view(&r, reversed);
+    let view = HostView {
+        exposure,
+        ..host_view(&r, reversed)
+    };
     let params = ShadingParams {
         mode: Mode::ReconMirror,
         ..Default::default()
@@ -419,7 +423,8 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32) {
             // The object hides the host's mesh behind it, and wrote its depth.
             shown += 1;
             object_gpu.push(*c);
-            object_cpu.push([reference[0], reference[1], reference[2], 1.0]);
+            let [x, y, z, _] = reference.map(|v| v * exposure);
+            object_cpu.push([x, y, z, 1.0]);
             if let Some(d) = *d {
                 let nearer = if reversed { d > behind } else { d < behind };
                 assert!(
@@ -443,17 +448,17 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32) {
 
 #[test]
 fn the_object_is_drawn_into_a_host_frame_depth_tested_both_ways() {
-    draws_into_a_host_frame(false, 1);
+    draws_into_a_host_frame(false, 1, 1.0);
 }
 
 #[test]
 fn the_object_is_drawn_into_a_host_frame_with_reversed_depth() {
-    draws_into_a_host_frame(true, 1);
+    draws_into_a_host_frame(true, 1, 1.0);
 }
 
 #[test]
-fn the_object_is_drawn_into_a_multisampled_host_frame() {
-    draws_into_a_host_frame(true, 4);
+fn the_object_is_drawn_into_a_multisampled_host_frame_at_the_hosts_exposure() {
+    draws_into_a_host_frame(true, 4, 0.5);
 }
 
 #[test]
@@ -519,6 +524,15 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
         ..view
     };
     refuse(&nan, &good, "must be finite");
+    let dark = HostView {
+        exposure: -1.0,
+        ..view
+    };
+    refuse(
+        &dark,
+        &good,
+        "HostView::exposure -1: must be finite and ≥ 0",
+    );
     // Nothing was recorded for the refused frames: a good one still draws.
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     r.encode_into(&mut encoder, &view, &good, &params).unwrap();

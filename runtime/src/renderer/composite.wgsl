@@ -1,4 +1,4 @@
-// Composite: the shaded object into a host's colour target, its depth tested against and
+// Composite: the shaded object, scaled by the host's exposure, into a host's colour target, its depth tested against and
 // written into the host's depth target (host.rs binds it). A full-screen triangle; pixels the
 // object does not cover (G-buffer depth still cleared to 1) are discarded.
 
@@ -7,6 +7,8 @@ override REVERSED: bool = false;
 
 @group(0) @binding(0) var shaded: texture_2d<f32>;
 @group(0) @binding(1) var object_depth: texture_depth_2d;
+// x: the scale of the radiance written (the host camera's exposure); yzw unused.
+@group(0) @binding(2) var<uniform> exposure: vec4<f32>;
 
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
@@ -27,7 +29,7 @@ fn fs_main(@builtin(position) p: vec4<f32>) -> FsOut {
         discard;
     }
     var out: FsOut;
-    out.color = vec4<f32>(textureLoad(shaded, xy, 0).rgb, 1.0);
+    out.color = vec4<f32>(textureLoad(shaded, xy, 0).rgb * exposure.x, 1.0);
     out.depth = select(d, 1.0 - d, REVERSED);
     return out;
 }

@@ -31,6 +31,9 @@ pub struct HostView {
     /// depth increasing away from the camera or reversed (glam's
     /// `camera::rh::proj::directx::perspective_infinite_reverse`, Bevy's default), as [`HostTarget::depth_compare`] says.
     pub projection: Mat4,
+    /// The scale of the radiance written: an engine's camera exposure (Bevy multiplies its
+    /// meshes' lighting by the view's exposure, `ExtractedCamera::exposure`), 1 for none.
+    pub exposure: f32,
 }
 
 impl HostView {
@@ -40,6 +43,12 @@ impl HostView {
     /// Errors when a matrix is not finite or not invertible, or the projection is not a
     /// perspective one (the shading needs the eye point).
     pub fn camera(&self) -> Result<Camera> {
+        if !(self.exposure.is_finite() && self.exposure >= 0.0) {
+            return Err(RuntimeError::Parameter(format!(
+                "HostView::exposure {}: must be finite and ≥ 0",
+                self.exposure
+            )));
+        }
         let finite = |m: &Mat4| m.to_cols_array().iter().all(|v| v.is_finite());
         if !finite(&self.view) || !finite(&self.projection) {
             return Err(RuntimeError::Parameter(
@@ -209,7 +218,7 @@ impl Renderer {
         // What can fail on the device (targets, pipelines) first: a failure records nothing.
         let (u, composite) =
             gpu.scoped(|| self.prepare_host_frame(view, &camera, target, params, reversed))?;
-        gpu.scoped(|| self.record_host_frame(encoder, target, &u, &composite))
+        gpu.scoped(|| self.record_host_frame(encoder, target, &u, &composite, view.exposure))
     }
 
     /// The host frame's uniform and composite pipeline, with the targets and the shading
@@ -262,6 +271,7 @@ impl Renderer {
         target: &HostTarget<'_>,
         u: &ShadeUniform,
         composite: &wgpu::RenderPipeline,
+        exposure: f32,
     ) -> Result<()> {
         // The uniform travels in the encoder, so that each view recorded into it has its own.
         let staging = self
@@ -299,7 +309,7 @@ impl Renderer {
             );
             self.feedback_slots[slot].state = SlotState::Encoded(frame);
         }
-        self.encode_composite(encoder, target, composite)
+        self.encode_composite(encoder, target, composite, exposure)
     }
 
     /// Call once the encoder of [`Renderer::encode_into`] is submitted: maps the feedback it
@@ -442,15 +452,22 @@ impl Renderer {
         )
     }
 
-    /// Records the composite pass: the shaded object into the host's colour target, its depth
+    /// Records the composite pass: the shaded object, scaled by `exposure`, into the host's
+    /// colour target, its depth
     /// (turned back if reversed) tested against and written into the host's depth.
     fn encode_composite(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         target: &HostTarget<'_>,
         pipeline: &wgpu::RenderPipeline,
+        exposure: f32,
     ) -> Result<()> {
         let device = &self.gpu.device;
+        let scale = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("composite exposure"),
+            contents: bytemuck::bytes_of(&[exposure, 0.0, 0.0, 0.0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
         let layout = self
             .composites
             .layout
@@ -473,6 +490,10 @@ impl Renderer {
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: wgpu::BindingResource::TextureView(&depth),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: scale.as_entire_binding(),
                 },
             ],
         });
@@ -506,7 +527,7 @@ impl Renderer {
     }
 }
 
-/// composite.wgsl's bindings: the shaded image and the G-buffer's depth.
+/// composite.wgsl's bindings: the shaded image, the G-buffer's depth and the exposure.
 fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
         binding,
@@ -523,6 +544,16 @@ fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         entries: &[
             texture(0, wgpu::TextureSampleType::Float { filterable: false }),
             texture(1, wgpu::TextureSampleType::Depth),
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
         ],
     })
 }
