@@ -137,25 +137,16 @@ impl Gpu {
     /// when the device has `TEXTURE_COMPRESSION_BC` enabled ([`Gpu::without_bc`] turns that
     /// off).
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_name: String) -> Self {
-        let errors = Arc::new(Mutex::new(Vec::new()));
-        let sink = Arc::clone(&errors);
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
-            }
-        }));
-        let bc = device
-            .features()
-            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
-        Self {
-            device,
-            queue,
-            adapter_name,
-            shares_system_memory: false,
-            bc,
-            errors,
-            host_watched: false,
-        }
+        let mut gpu = Self::from_host_device(device, queue, adapter_name);
+        gpu.host_watched = false;
+        let sink = Arc::clone(&gpu.errors);
+        gpu.device
+            .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                if let Ok(mut v) = sink.lock() {
+                    v.push(e.to_string());
+                }
+            }));
+        gpu
     }
 
     /// Wraps a device and queue that a host application owns and watches (an engine with its
