@@ -29,7 +29,8 @@ pub struct HostView {
     pub view: Mat4,
     /// View to clip space with depth in 0..1, as wgpu wants: a perspective projection, with
     /// depth increasing away from the camera or reversed (glam's
-    /// `camera::rh::proj::directx::perspective_infinite_reverse`, Bevy's default), as [`HostTarget::depth_compare`] says.
+    /// `camera::rh::proj::directx::perspective_infinite_reverse`, Bevy's default), as
+    /// [`HostTarget::depth_compare`] says.
     pub projection: Mat4,
     /// The scale of the radiance written: an engine's camera exposure (Bevy multiplies its
     /// meshes' lighting by the view's exposure, `ExtractedCamera::exposure`), 1 for none.
@@ -40,8 +41,9 @@ impl HostView {
     /// The camera of this view in world space (position, a target one unit ahead, up and the
     /// vertical field of view), as [`Renderer::render`] and the CPU reference take it.
     ///
-    /// Errors when a matrix is not finite or not invertible, or the projection is not a
-    /// perspective one (the shading needs the eye point).
+    /// Errors when a matrix is not finite or not invertible, the projection is not a
+    /// perspective one (the shading needs the eye point), or the exposure is negative or not
+    /// finite.
     pub fn camera(&self) -> Result<Camera> {
         if !(self.exposure.is_finite() && self.exposure >= 0.0) {
             return Err(RuntimeError::Parameter(format!(
@@ -165,6 +167,8 @@ pub(super) struct Composites {
     layout: Option<wgpu::BindGroupLayout>,
 }
 
+/// What a composite pipeline depends on: the host targets' sample count and formats, its
+/// depth test, and whether its depth is reversed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct CompositeKey {
     samples: u32,
@@ -294,8 +298,9 @@ impl Renderer {
             .targets
             .as_ref()
             .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
-        self.encode_gbuffer(encoder, targets);
-        self.encode_shading(encoder, targets)?;
+        // Untimed: a host frame's timestamps would never be read back.
+        self.encode_gbuffer(encoder, targets, false);
+        self.encode_shading(encoder, targets, false)?;
         self.host_frames += 1;
         let frame = self.host_frames;
         let table_bytes = self.buffers.timestamps_offset;

@@ -490,9 +490,9 @@ impl Renderer {
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.buffers.feedback, 0, None);
         if geometry {
-            self.encode_gbuffer(&mut encoder, targets);
+            self.encode_gbuffer(&mut encoder, targets, true);
         }
-        self.encode_shading(&mut encoder, targets)?;
+        self.encode_shading(&mut encoder, targets, true)?;
         encoder.copy_buffer_to_buffer(
             &self.buffers.feedback,
             0,

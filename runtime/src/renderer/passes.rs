@@ -11,11 +11,12 @@ impl Renderer {
     /// colour targets are not cleared: the shading pass and `read_gbuffer` take a pixel as
     /// covered where its depth is below [`DEPTH_CLEAR`] and ignore the colour elsewhere (an
     /// NVIDIA H200 spent most of the pass clearing the two Rgba32Float targets:
-    /// docs/measurements.md).
+    /// docs/measurements.md). `timed`: with the renderer's GPU timestamps, when it has them.
     pub(super) fn encode_gbuffer(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &SizedTargets,
+        timed: bool,
     ) {
         let gp = targets.gb_position.create_view(&Default::default());
         let gn = targets.gb_normal.create_view(&Default::default());
@@ -48,7 +49,7 @@ impl Renderer {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: self.timer.as_ref().map(|t| {
+            timestamp_writes: self.timer.as_ref().filter(|_| timed).map(|t| {
                 let (query_set, begin, end) = t.writes(TimedPass::GBuffer);
                 wgpu::RenderPassTimestampWrites {
                     query_set,
@@ -65,15 +66,17 @@ impl Renderer {
         pass.draw_indexed(0..self.buffers.index_count, 0, 0..1);
     }
 
-    /// Encodes the shading pass of the current frame's pipeline over every pixel.
+    /// Encodes the shading pass of the current frame's pipeline over every pixel; `timed` as
+    /// for [`Renderer::encode_gbuffer`].
     pub(super) fn encode_shading(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &SizedTargets,
+        timed: bool,
     ) -> Result<()> {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("shade"),
-            timestamp_writes: self.timer.as_ref().map(|t| {
+            timestamp_writes: self.timer.as_ref().filter(|_| timed).map(|t| {
                 let (query_set, begin, end) = t.writes(TimedPass::Shade);
                 wgpu::ComputePassTimestampWrites {
                     query_set,
