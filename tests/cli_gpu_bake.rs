@@ -198,6 +198,8 @@ fn the_scene_chooses_the_device_and_a_bad_one_is_refused_where_it_stands() {
         stderr.contains("capture on GPU ") && stderr.contains("with the cube maps on GPU "),
         "{stderr}"
     );
+    // …and the device memory the capture holds: the scene and one batch.
+    assert!(stderr.contains(" (GPU memory ~"), "{stderr}");
     // The flag wins over the scene.
     let summary = bake(&scene, &dir.join("b.oslf"), &["--device", "cpu"]);
     assert!(

@@ -133,6 +133,24 @@ pub(crate) struct SceneBuffers {
     pub(crate) env_tables: wgpu::Buffer,
 }
 
+impl SceneBuffers {
+    /// Their bytes on the device.
+    fn bytes(&self) -> u64 {
+        [
+            &self.nodes,
+            &self.tris,
+            &self.attrs,
+            &self.materials,
+            &self.texels,
+            &self.lights,
+            &self.env_tables,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
+    }
+}
+
 /// The bake's cube-map capture on a GPU, for one scene.
 pub struct GpuCapture {
     pub(crate) gpu: Gpu,
@@ -337,6 +355,16 @@ impl GpuCapture {
             adapter: self.gpu.adapter_name.clone(),
             message: e.to_string(),
         })
+    }
+
+    /// The device memory a capture of `settings` holds, bytes: the scene's buffers, uploaded
+    /// once, and one batch's jobs, texels and read-back copy of them.
+    pub fn memory_bytes(&self, settings: &CaptureSettings) -> u64 {
+        let cubes = self.cubes_per_batch(settings) as u64;
+        let texels = cubes * 6 * u64::from(settings.resolution).pow(2);
+        let batch = 2 * texels * std::mem::size_of::<TexelOut>() as u64
+            + cubes * std::mem::size_of::<Job>() as u64;
+        self.buffers.bytes() + batch
     }
 
     /// Cubes per batch for `settings` (see [`CaptureDevice::batch_cubes`]).
@@ -628,6 +656,10 @@ impl CaptureDevice for GpuCapture {
 
     fn batch_cubes(&self, settings: &CaptureSettings) -> usize {
         self.cubes_per_batch(settings)
+    }
+
+    fn memory_bytes(&self, settings: &CaptureSettings) -> Option<u64> {
+        Some(self.memory_bytes(settings))
     }
 
     fn capture(

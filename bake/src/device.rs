@@ -42,6 +42,12 @@ pub trait CaptureDevice: Send + Sync + std::fmt::Debug {
     /// memory: the device keeps one batch's texels at a time).
     fn batch_cubes(&self, settings: &CaptureSettings) -> usize;
 
+    /// The device memory a capture of `settings` holds, bytes: the scene uploaded once and
+    /// one batch's buffers (the preflight reports it); `None` if the device does not say.
+    fn memory_bytes(&self, _settings: &CaptureSettings) -> Option<u64> {
+        None
+    }
+
     /// The cubes of `jobs`, in order, each the capture [`crate::capture::capture_cube`]
     /// computes (the same estimator, so the same expected texels). The bake calls it from a
     /// thread of its own while it encodes the previous batch, so the device never waits for

@@ -492,7 +492,8 @@ fn estimate(
     device: Option<&dyn oslf_bake::device::CaptureDevice>,
 ) -> oslf_bake::preflight::Estimate {
     let estimate = oslf_bake::preflight::estimate(scene, rayon::current_num_threads());
-    let estimate = oslf_bake::preflight::for_device(estimate, device);
+    let capture = oslf_bake::capture::CaptureSettings::from_bake(&scene.bake);
+    let estimate = oslf_bake::preflight::for_device(estimate, device, &capture);
     match shard {
         Some(s) => estimate.for_shard(s.count()),
         None => estimate,

@@ -155,7 +155,8 @@ pub fn bake_shard(
     )?;
     if written.texels > 0 {
         let estimate = crate::preflight::estimate(scene, rayon::current_num_threads());
-        let estimate = crate::preflight::for_device(estimate, options.device.as_deref());
+        let capture = crate::capture::CaptureSettings::from_bake(&scene.bake);
+        let estimate = crate::preflight::for_device(estimate, options.device.as_deref(), &capture);
         let estimate = match shard {
             Some(s) => estimate.for_shard(s.count()),
             None => estimate,

@@ -43,7 +43,8 @@ pub(super) fn prepare(
 ) -> Result<(TriangleScene, SurfaceNames)> {
     check_store_writable(output)?;
     let estimate = preflight::estimate(scene, rayon::current_num_threads());
-    let estimate = preflight::for_device(estimate, device.map(|d| &**d));
+    let capture = CaptureSettings::from_bake(&scene.bake);
+    let estimate = preflight::for_device(estimate, device.map(|d| &**d), &capture);
     let estimate = match shard {
         Some(s) => estimate.for_shard(s.count()),
         None => estimate,

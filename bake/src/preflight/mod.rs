@@ -74,6 +74,8 @@ pub struct Estimate {
     /// The capture device the cube maps' time is for ([`Estimate::on_device`]); `None`: the
     /// CPU.
     pub device: Option<String>,
+    /// The device memory its capture holds, bytes, where the device says ([`for_device`]).
+    pub device_memory_bytes: Option<u64>,
 }
 
 /// What the machine offers. `None`: unknown, not checked.
@@ -181,6 +183,7 @@ pub fn estimate(scene: &Scene, threads: usize) -> Estimate {
         time,
         warnings: warnings(s),
         device: None,
+        device_memory_bytes: None,
     }
 }
 
@@ -300,16 +303,23 @@ pub fn duration(s: f64) -> String {
     }
 }
 
-/// `estimate` for `device`'s capture where the device was measured ([`Estimate::on_device`]),
-/// else as it is.
+/// `estimate` for `device`'s capture of `capture` where the device was measured
+/// ([`Estimate::on_device`]), with the device memory it holds where the device says; else as it
+/// is.
 pub fn for_device(
     estimate: Estimate,
     device: Option<&dyn crate::device::CaptureDevice>,
+    capture: &crate::capture::CaptureSettings,
 ) -> Estimate {
-    match device.and_then(|d| d.rays_per_second().map(|r| (r, d.describe()))) {
-        Some((rate, name)) => estimate.on_device(rate, &name),
+    let Some(device) = device else {
+        return estimate;
+    };
+    let mut estimate = match device.rays_per_second() {
+        Some(rate) => estimate.on_device(rate, &device.describe()),
         None => estimate,
-    }
+    };
+    estimate.device_memory_bytes = device.memory_bytes(capture);
+    estimate
 }
 
 impl Estimate {
@@ -358,8 +368,11 @@ impl fmt::Display for Estimate {
             self.threads,
             if self.threads == 1 { "" } else { "s" }
         )?;
-        match &self.device {
-            Some(d) => write!(f, " with the cube maps on {d}"),
+        if let Some(d) = &self.device {
+            write!(f, " with the cube maps on {d}")?;
+        }
+        match self.device_memory_bytes {
+            Some(b) => write!(f, " (GPU memory ~{})", bytes(b)),
             None => Ok(()),
         }
     }
