@@ -129,6 +129,8 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     // What a GPU makes affordable: the scene's `gpu` preset, unless another was asked for.
     if gpu.is_some() && args.preset.is_none() && scene.presets.iter().any(|p| p == GPU_PRESET) {
         scene = load_scene(&args, Some(GPU_PRESET))?;
+        // Built again: the preset may change what the device holds (ε tessellates the objects,
+        // `bounces` sizes the paths) and the rate its estimate is measured at.
         (gpu, why) = choose_device(&args, &scene, true)?;
         if gpu.is_some() {
             why = format!(

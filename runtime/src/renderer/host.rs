@@ -136,7 +136,8 @@ impl HostTarget<'_> {
         }
     }
 
-    fn validate(&self) -> Result<()> {
+    /// Checks the target; returns whether its depth is reversed ([`HostTarget::reversed`]).
+    fn validate(&self) -> Result<bool> {
         if !matches!(self.sample_count, 1 | 2 | 4 | 8) {
             return Err(RuntimeError::Parameter(format!(
                 "HostTarget::sample_count {}: must be 1, 2, 4 or 8 (the samples per pixel of \
@@ -156,15 +157,23 @@ impl HostTarget<'_> {
                 self.color_format
             )));
         }
-        self.reversed().map(|_| ())
+        self.reversed()
     }
 }
 
-/// The composite pipelines, one per host target kind.
-#[derive(Default)]
+/// The composite pipelines, one per host target kind, and their bind-group layout.
 pub(super) struct Composites {
     pipelines: std::collections::HashMap<CompositeKey, wgpu::RenderPipeline>,
-    layout: Option<wgpu::BindGroupLayout>,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl Composites {
+    pub(super) fn new(device: &wgpu::Device) -> Self {
+        Self {
+            pipelines: Default::default(),
+            layout: composite_layout(device),
+        }
+    }
 }
 
 /// What a composite pipeline depends on: the host targets' sample count and formats, its
@@ -214,8 +223,7 @@ impl Renderer {
         target: &HostTarget<'_>,
         params: &ShadingParams,
     ) -> Result<()> {
-        target.validate()?;
-        let reversed = target.reversed()?;
+        let reversed = target.validate()?;
         let camera = view.camera()?;
         self.check_frame(params, Background::None)?;
         let gpu = self.gpu.clone();
@@ -253,16 +261,11 @@ impl Renderer {
         if let Some(pipeline) = self.composites.pipelines.get(&key) {
             return Ok((u, pipeline.clone()));
         }
-        let device = &self.gpu.device;
-        let layout = self
-            .composites
-            .layout
-            .get_or_insert_with(|| composite_layout(device))
-            .clone();
+        let (device, layout) = (&self.gpu.device, &self.composites.layout);
         // Kept only once the device took it (a colour format it cannot render to fails here).
         let pipeline = self
             .gpu
-            .scoped(|| Ok(composite_pipeline(device, &layout, key)))?;
+            .scoped(|| Ok(composite_pipeline(device, layout, key)))?;
         self.composites.pipelines.insert(key, pipeline.clone());
         Ok((u, pipeline))
     }
@@ -371,13 +374,6 @@ impl Renderer {
         Ok(booked)
     }
 
-    /// Whether every feedback slot is free: all recorded frames have been booked.
-    pub fn feedback_idle(&self) -> bool {
-        self.feedback_slots
-            .iter()
-            .all(|s| matches!(s.state, SlotState::Free))
-    }
-
     /// The slot whose map arrived for the oldest frame, if any; a failed map frees its slot.
     fn oldest_mapped(&mut self) -> Option<usize> {
         let mut best: Option<(u64, usize)> = None;
@@ -473,11 +469,7 @@ impl Renderer {
             contents: bytemuck::bytes_of(&[exposure, 0.0, 0.0, 0.0]),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let layout = self
-            .composites
-            .layout
-            .as_ref()
-            .ok_or_else(|| RuntimeError::Gpu("composite layout missing".into()))?;
+        let layout = &self.composites.layout;
         let targets = self
             .targets
             .as_ref()

@@ -224,6 +224,7 @@ impl Renderer {
                 .reduce(f32::min),
         };
         let prefiltered_view = prefiltered::upload(&gpu, &PrefilteredEnv::black());
+        let composites = host::Composites::new(&gpu.device);
         let mut renderer = Self {
             gpu,
             store: Arc::new(store),
@@ -244,7 +245,7 @@ impl Renderer {
             prefiltered_view,
             host_frames: 0,
             feedback_slots: Vec::new(),
-            composites: host::Composites::default(),
+            composites,
         };
         renderer.timer = PassTimer::new(&renderer.gpu);
         renderer.load_env_cube();
