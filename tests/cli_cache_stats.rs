@@ -155,8 +155,8 @@ fn the_command_prints_a_table_that_agrees_with_its_csv_and_json() {
 fn bad_inputs_give_clear_errors_and_a_failing_exit() {
     let store = runtime_fixture::store_path();
     let store = store.to_str().unwrap();
-    let missing = std::env::temp_dir().join(format!("oslf-cache-stats-{}", std::process::id()));
-    let missing = missing.join("nope.oslf");
+    let tmp = tempfile::tempdir().unwrap();
+    let missing = tmp.path().join("nope.oslf");
     for (args, says) in [
         (vec![missing.to_str().unwrap()], "nope.oslf"),
         (vec![store, "--modes", "recon,shiny"], "shiny"),

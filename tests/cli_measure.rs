@@ -42,7 +42,9 @@ struct Fixture {
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("oslf-measure-tests-{}", std::process::id()));
+        // Under Cargo's target tmp, replaced by the next run: the stores outlive the tests
+        // that share them (statics are never dropped).
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_measure");
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let scene = dir.join("scene.toml");

@@ -248,8 +248,8 @@ fn outputs_are_checked_before_any_work() {
 
 #[test]
 fn bad_inputs_give_clear_errors_and_a_failing_exit() {
-    let dir = std::env::temp_dir().join(format!("oslf-render-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let missing = dir.join("nope.oslf");
     let out = render(&[missing.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);

@@ -238,9 +238,7 @@ fn normals_used(
 mod tests {
     use super::*;
 
-    fn write(name: &str, text: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("oslf-obj-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();
         p
@@ -248,7 +246,9 @@ mod tests {
 
     #[test]
     fn loads_quad_and_computes_normals() {
+        let tmp = tempfile::tempdir().unwrap();
         let p = write(
+            tmp.path(),
             "quad.obj",
             "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
         );
@@ -261,6 +261,7 @@ mod tests {
 
     #[test]
     fn non_finite_positions_and_texture_coordinates_are_located_errors() {
+        let tmp = tempfile::tempdir().unwrap();
         for (text, line, column, what) in [
             (
                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n",
@@ -281,7 +282,7 @@ mod tests {
                 "position component 1e39",
             ),
         ] {
-            let p = write("nan.obj", text);
+            let p = write(tmp.path(), "nan.obj", text);
             match load_obj(&p) {
                 Err(e @ BakeError::Parse { .. }) => {
                     let e = e.to_string();
@@ -297,7 +298,12 @@ mod tests {
 
     #[test]
     fn errors_are_located() {
-        let p = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n");
+        let tmp = tempfile::tempdir().unwrap();
+        let p = write(
+            tmp.path(),
+            "bad.obj",
+            "v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n",
+        );
         match load_obj(&p) {
             Err(BakeError::Parse { path, line, .. }) => {
                 assert_eq!(path, p);
@@ -305,14 +311,18 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
-        let missing = std::env::temp_dir().join("oslf-no-such-file.obj");
+        let missing = tmp.path().join("no-such-file.obj");
         assert!(matches!(
             load_obj(&missing),
             Err(BakeError::Input(oslf_util::UtilError::Input { .. }))
         ));
-        let p = write("empty.obj", "v 0 0 0\n");
+        let p = write(tmp.path(), "empty.obj", "v 0 0 0\n");
         assert!(load_obj(&p).is_err());
-        let p = write("oob.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");
+        let p = write(
+            tmp.path(),
+            "oob.obj",
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n",
+        );
         let e = load_obj(&p).unwrap_err().to_string();
         assert!(e.contains("oob.obj"), "{e}");
     }

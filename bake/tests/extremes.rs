@@ -255,10 +255,9 @@ fn an_epsilon_f32_or_the_tessellation_cannot_resolve_is_rejected() {
 /// every sample point's surface ε below it (for ε small against the object), and sample maps
 /// that find points. Returns the report.
 fn bake_and_check(text: &str, name: &str) -> oslf_bake::bake::BakeReport {
-    let dir = std::env::temp_dir().join(format!("oslf-bake-extremes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tempfile::tempdir().unwrap();
     let scene = load(text).unwrap();
-    let output = dir.join(format!("{name}.oslf"));
+    let output = dir.path().join(format!("{name}.oslf"));
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),
         resume: false,
@@ -278,7 +277,6 @@ fn bake_and_check(text: &str, name: &str) -> oslf_bake::bake::BakeReport {
             );
         }
     }
-    std::fs::remove_file(&output).unwrap();
     println!(
         "{name}: {} points ({} placed, {} close, {} inside, {} added); {} of {} texels short, {} empty; {:.1} s",
         report.sample_points,

@@ -18,8 +18,10 @@ use oslf_bake::scene::Scene;
 use oslf_bake::texture::srgb_to_linear;
 use serde_json::json;
 
+/// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
 fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("oslf-gltf-{}-{test}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("gltf/{test}"));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }

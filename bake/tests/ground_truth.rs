@@ -17,11 +17,12 @@ const ALBEDO: [f32; 3] = [0.6, 0.5, 0.4];
 /// side its normal faces.
 fn plane_scene() -> Scene {
     static NEXT: AtomicU32 = AtomicU32::new(0);
-    let dir = std::env::temp_dir().join(format!(
-        "oslf-gt-{}-{}",
-        std::process::id(),
+    // Under Cargo's target tmp; the next run replaces it.
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "ground_truth/plane-{}",
         NEXT.fetch_add(1, Ordering::Relaxed)
     ));
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let mut text = String::from("1\n");
     text += &(1..=16)

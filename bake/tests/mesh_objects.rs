@@ -24,14 +24,14 @@ use serde_json::{json, Value};
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-/// A fresh directory for one test.
+/// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
 fn dir(test: &str) -> PathBuf {
     static NEXT: AtomicU32 = AtomicU32::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "oslf-mesh-objects-{}-{test}-{}",
-        std::process::id(),
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "mesh_objects/{test}-{}",
         NEXT.fetch_add(1, Ordering::Relaxed)
     ));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }

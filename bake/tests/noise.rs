@@ -9,14 +9,14 @@ use oslf_bake::bake::{bake, BakeOptions, BakeReport};
 use oslf_bake::noise::VISIBLE_RELATIVE_ERROR;
 use oslf_bake::scene::Scene;
 
-/// A fresh directory for one test.
+/// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
 fn dir(test: &str) -> PathBuf {
     static NEXT: AtomicU32 = AtomicU32::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "oslf-noise-{}-{test}-{}",
-        std::process::id(),
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "noise/{test}-{}",
         NEXT.fetch_add(1, Ordering::Relaxed)
     ));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }

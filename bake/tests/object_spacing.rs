@@ -17,8 +17,11 @@ use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_bake::BakeError;
 use serde_json::json;
 
+/// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
 fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("oslf-object-spacing-{}-{test}", std::process::id()));
+    let d =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("object_spacing/{test}"));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }

@@ -47,10 +47,10 @@ fn bake_with(bits: u32, dir: &Path) -> Store {
 
 #[test]
 fn five_bits_is_the_nine_bit_bake_quantized() {
-    let dir = std::env::temp_dir().join(format!("oslf-bake-quantize-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let full = bake_with(9, &dir);
-    let q = bake_with(5, &dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let full = bake_with(9, dir);
+    let q = bake_with(5, dir);
     assert_eq!(full.meta().bake.mantissa_bits, 9);
     assert_eq!(q.meta().bake.mantissa_bits, 5);
     // Quantized stores are written with filter 3, lossless ones with filter 2.
@@ -111,5 +111,4 @@ fn five_bits_is_the_nine_bit_bake_quantized() {
         full.cube_bytes(),
         q.cube_bytes()
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1051,8 +1051,8 @@ fn render_preview_and_throughput() {
         let q = |v: f32| (linear_to_srgb(v) * 255.0 + 0.5) as u8;
         image::Rgb([q(c.x), q(c.y), q(c.z)])
     });
-    // Kept for viewing.
-    let path = tempfile::tempdir().unwrap().keep().join("preview.png");
+    // Kept for viewing, under Cargo's target tmp (the next run replaces it).
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("radiance-preview.png");
     png.save(&path).unwrap();
     println!("preview: {}", path.display());
 }

@@ -212,8 +212,8 @@ mod tests {
 
     #[test]
     fn writes_a_png_and_an_svg() {
-        let dir = std::env::temp_dir().join(format!("oslf-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let pts: Vec<PlotPoint> = [(20.0, 0.2, true), (40.0, 0.1, true), (45.0, 0.15, false)]
             .iter()
             .enumerate()

@@ -138,8 +138,8 @@ mod tests {
 
     #[test]
     fn draws_each_series_and_refuses_what_it_cannot_place() {
-        let dir = std::env::temp_dir().join(format!("oslf-series-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let (png, svg) = (dir.join("s.png"), dir.join("s.svg"));
         let text = PlotText {
             caption: "error against bake time".into(),
@@ -170,6 +170,5 @@ mod tests {
         let e = plot_series(&bad, &text, &png, &svg, (64, 64)).unwrap_err();
         assert!(e.to_string().contains("\"cpu\", point \"64\""), "{e}");
         assert!(plot_series(&[], &text, &png, &svg, (64, 64)).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -12,17 +12,18 @@ use oslf_format::{
 };
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams};
+use std::path::{Path, PathBuf};
 
 /// A flat unit patch facing +z with `points` sample points ε above it, 1² cube
 /// maps whose six texels span 0 … 6.5e4, and `map_res`² sample maps of pseudo-random
 /// indices.
-fn synthetic_store(points: usize, map_res: u32) -> std::path::PathBuf {
-    synthetic_store_with(points, map_res, 1)
+fn synthetic_store(dir: &Path, points: usize, map_res: u32) -> PathBuf {
+    synthetic_store_with(dir, points, map_res, 1)
 }
 
 /// [`synthetic_store`] with `cube_res`² cube maps: texel `i` of a face holds the face's value
 /// times `1 + i` (so neighbouring texels differ and a wrong texel shows).
-fn synthetic_store_with(points: usize, map_res: u32, cube_res: u32) -> std::path::PathBuf {
+fn synthetic_store_with(dir: &Path, points: usize, map_res: u32, cube_res: u32) -> PathBuf {
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = move || {
         state ^= state << 13;
@@ -83,8 +84,6 @@ fn synthetic_store_with(points: usize, map_res: u32, cube_res: u32) -> std::path
             .map(|_| std::array::from_fn(|_| (next() % points as u64) as u32))
             .collect(),
     };
-    let dir = std::env::temp_dir().join(format!("oslf-runtime-extremes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("synthetic-{points}-{map_res}-{cube_res}.oslf"));
     let mut w = StoreWriter::create(&path, &meta, &sample_points, &maps).unwrap();
     let values = [0.0f32, 1e-20, 0.5, 3.0, 6.5e4, 1e-3];
@@ -106,7 +105,8 @@ fn synthetic_store_with(points: usize, map_res: u32, cube_res: u32) -> std::path
 
 #[test]
 fn more_than_65535_sample_points_with_one_texel_cube_maps_and_a_small_cache() {
-    let path = synthetic_store(70_000, 64);
+    let tmp = tempfile::tempdir().unwrap();
+    let path = synthetic_store(tmp.path(), 70_000, 64);
     let store = Store::open(&path).unwrap();
     assert_eq!(store.index_width(), IndexWidth::U32);
     let cubes = StoreCubes::decode(&store).unwrap();
@@ -149,7 +149,8 @@ fn more_than_65535_sample_points_with_one_texel_cube_maps_and_a_small_cache() {
 
 #[test]
 fn one_texel_sample_maps_render() {
-    let path = synthetic_store(50, 1);
+    let tmp = tempfile::tempdir().unwrap();
+    let path = synthetic_store(tmp.path(), 50, 1);
     let store = Store::open(&path).unwrap();
     assert_eq!(store.index_width(), IndexWidth::U16);
     let cubes = StoreCubes::decode(&store).unwrap();
@@ -169,7 +170,7 @@ fn one_texel_sample_maps_render() {
 
 /// The teapot alone under a uniform sky and a point light, translated by `t`, with the camera
 /// and the light moved along: the same picture wherever it is.
-fn teapot_store(name: &str, t: [f64; 3], seed: u64) -> std::path::PathBuf {
+fn teapot_store(dir: &Path, name: &str, t: [f64; 3], seed: u64) -> PathBuf {
     let text = format!(
         r#"
 [camera]
@@ -212,8 +213,6 @@ seed = {seed}
         oy = t[1],
         oz = t[2],
     );
-    let dir = std::env::temp_dir().join(format!("oslf-runtime-extremes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let scene_path = dir.join(format!("{name}.toml"));
     std::fs::write(&scene_path, text).unwrap();
     let scene = oslf_bake::scene::Scene::load(&scene_path, None).unwrap();
@@ -232,7 +231,7 @@ seed = {seed}
 
 /// Renders `path` from its camera on the GPU, checks it against the CPU reference, and returns
 /// the GPU image.
-fn render_checked(path: &std::path::Path, params: &ShadingParams, w: u32, h: u32) -> Vec<[f32; 4]> {
+fn render_checked(path: &Path, params: &ShadingParams, w: u32, h: u32) -> Vec<[f32; 4]> {
     let store = Store::open(path).unwrap();
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
@@ -275,9 +274,10 @@ fn agreement(a: &[[f32; 4]], b: &[[f32; 4]]) -> (f64, f64) {
 #[test]
 fn a_teapot_far_from_the_origin_renders_as_at_the_origin() {
     // Before object-relative coordinates the far G-buffer covered 1844 pixels against 1842.
-    let near = teapot_store("near", [0.0; 3], 3);
-    let reseeded = teapot_store("reseeded", [0.0; 3], 4);
-    let far = teapot_store("far", [1e5, -1e5, 1e5], 3);
+    let tmp = tempfile::tempdir().unwrap();
+    let near = teapot_store(tmp.path(), "near", [0.0; 3], 3);
+    let reseeded = teapot_store(tmp.path(), "reseeded", [0.0; 3], 4);
+    let far = teapot_store(tmp.path(), "far", [1e5, -1e5, 1e5], 3);
     for mode in [Mode::Recon, Mode::ReconMirror] {
         let params = ShadingParams {
             mode,
@@ -307,7 +307,8 @@ fn a_teapot_far_from_the_origin_renders_as_at_the_origin() {
 #[test]
 fn two_texel_cube_maps_render() {
     // 2² faces: every bilinear tap sits on a face edge, where lookups clamp.
-    let path = synthetic_store_with(50, 4, 2);
+    let tmp = tempfile::tempdir().unwrap();
+    let path = synthetic_store_with(tmp.path(), 50, 4, 2);
     let store = Store::open(&path).unwrap();
     assert_eq!(store.cube_resolution(), 2);
     let cubes = StoreCubes::decode(&store).unwrap();
@@ -340,9 +341,7 @@ fn two_texel_cube_maps_render() {
 
 /// Bakes the scene `text` (relative paths resolve against the test's temporary directory)
 /// and returns the store and the bake's report.
-fn bake_text(name: &str, text: &str) -> (std::path::PathBuf, oslf_bake::bake::BakeReport) {
-    let dir = std::env::temp_dir().join(format!("oslf-runtime-extremes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+fn bake_text(dir: &Path, name: &str, text: &str) -> (PathBuf, oslf_bake::bake::BakeReport) {
     let scene_path = dir.join(format!("{name}.toml"));
     std::fs::write(&scene_path, text).unwrap();
     let scene = oslf_bake::scene::Scene::load(&scene_path, None).unwrap();
@@ -428,7 +427,8 @@ distance_channel = false
 #[test]
 fn cube_maps_of_2048_squared_bake_store_and_render() {
     let t = std::time::Instant::now();
-    let (path, report) = bake_text("cube2048", CUBE_2048_SCENE);
+    let tmp = tempfile::tempdir().unwrap();
+    let (path, report) = bake_text(tmp.path(), "cube2048", CUBE_2048_SCENE);
     println!(
         "bake: {:.1} s, {} sample points, {} cubes, {:.1} M rays, {} bytes",
         t.elapsed().as_secs_f64(),
@@ -571,11 +571,11 @@ bounces = 0
 
 #[test]
 fn sample_maps_of_4096_squared_bake_store_and_render() {
-    let dir = std::env::temp_dir().join(format!("oslf-runtime-extremes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     std::fs::write(dir.join("flat.txt"), FLAT_PATCH).unwrap();
     let t = std::time::Instant::now();
-    let (path, report) = bake_text("map4096", MAP_4096_SCENE);
+    let (path, report) = bake_text(dir, "map4096", MAP_4096_SCENE);
     println!(
         "bake: {:.1} s (sample maps {:.1} s, {} visibility rays), {} sample points, {} bytes",
         t.elapsed().as_secs_f64(),

@@ -209,7 +209,9 @@ fn write_mesh_store() -> std::path::PathBuf {
         resolution: map_res,
         indices,
     };
-    let dir = std::env::temp_dir().join(format!("oslf-runtime-mesh-{}", std::process::id()));
+    // Under Cargo's target tmp, replaced by the next run: the store outlives the tests that
+    // share it (statics are never dropped).
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(env!("CARGO_CRATE_NAME"));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("mesh.oslf");
     let mut w = StoreWriter::create(&path, &meta, &points, &maps).unwrap();

@@ -1,7 +1,7 @@
 //! A small store baked once per test binary, and image comparisons.
 #![allow(dead_code)] // each test binary uses its own part
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use oslf_bake::bake::{bake, BakeOptions};
@@ -70,9 +70,13 @@ pub fn store_path_bc6h() -> PathBuf {
     .clone()
 }
 
-/// Bakes `scene` into a fresh directory `name`-PID under the temporary directory.
+/// Bakes `scene` into the directory `name`, made afresh under this test binary's directory in
+/// Cargo's target tmp: the stores outlive the tests that share them (statics are never dropped)
+/// and the next run replaces them rather than adding more.
 fn bake_scene(scene: &str, name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(env!("CARGO_CRATE_NAME"))
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let scene_path = dir.join("scene.toml");
