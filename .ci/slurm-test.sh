@@ -22,7 +22,7 @@ if ! command -v slurmctld >/dev/null || ! command -v slurmd >/dev/null || ! comm
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends slurm-wlm munge >/dev/null
 fi
-# The binary `cargo test --workspace --release` built (CARGO_TARGET_DIR respected).
+# The binary `cargo test --workspace --release --ignore-rust-version` built (CARGO_TARGET_DIR respected).
 target_dir=${CARGO_TARGET_DIR:-$repo/target}
 case $target_dir in /*) ;; *) target_dir=$repo/$target_dir ;; esac
 oslf=$target_dir/release/oslf

@@ -1,0 +1,147 @@
+//! The room of `examples/room.glb`, drawn by Bevy (its meshes, materials and lights), with the
+//! teapot baked from `examples/room.toml` drawn by the OSLF plugin on its table.
+//!
+//! ```text
+//! oslf bake examples/room.toml -o examples/room.oslf
+//! cargo run --release -p oslf-bevy --features viewer --example room --ignore-rust-version
+//! ```
+//!
+//! Drag with the left mouse button to orbit the teapot, scroll to move closer. Keys, as in
+//! `oslf view`: 1–6 the mode, `e` OSLF or the environment-map baseline, `d` depth-corrected
+//! lookups, `b` the blend, `[` `]` halve or double M, Esc quits.
+
+use std::f32::consts::FRAC_PI_2;
+
+use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
+use bevy::prelude::*;
+use oslf_bevy::{Blend, Mode, OslfCacheStats, OslfObject, OslfPlugin, Source};
+
+/// Where the bake put the teapot (room.toml: on the table top, z = 0.78 in the bake's Z-up
+/// metres), in Bevy's Y-up world.
+const TEAPOT: Vec3 = Vec3::new(0.0, 0.95, 0.0);
+
+#[derive(Component)]
+struct Orbit {
+    yaw: f32,
+    pitch: f32,
+    distance: f32,
+}
+
+fn main() {
+    App::new()
+        .add_plugins(DefaultPlugins.set(AssetPlugin {
+            // The repository's examples folder: room.glb and room.oslf.
+            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../examples").into(),
+            ..default()
+        }))
+        .add_plugins(OslfPlugin::default())
+        .add_systems(Startup, setup)
+        .add_systems(Update, (orbit, keys, report))
+        .run();
+}
+
+fn setup(mut commands: Commands, assets: Res<AssetServer>) {
+    commands.spawn(WorldAssetRoot(
+        assets.load(GltfAssetLabel::Scene(0).from_asset("room.glb")),
+    ));
+    // The bake's scene is room.glb turned 90° about x (Z up): turning back puts the teapot's
+    // light field in Bevy's Y-up room. Its radiance is in watts (lights at 683 lm/W): ×683
+    // gives Bevy's luminance.
+    commands.spawn((
+        OslfObject::new(assets.load("room.oslf")).with_radiance_scale(683.0),
+        Transform::from_rotation(Quat::from_rotation_x(-FRAC_PI_2)),
+    ));
+    commands.spawn((
+        Camera3d::default(),
+        bevy::camera::Hdr,
+        Msaa::Off,
+        Orbit {
+            yaw: 0.6,
+            pitch: 0.35,
+            distance: 1.6,
+        },
+        Transform::default(),
+    ));
+}
+
+fn orbit(
+    mut cameras: Query<(&mut Orbit, &mut Transform)>,
+    buttons: Res<ButtonInput<MouseButton>>,
+    motion: Res<AccumulatedMouseMotion>,
+    scroll: Res<AccumulatedMouseScroll>,
+) {
+    for (mut o, mut t) in &mut cameras {
+        if buttons.pressed(MouseButton::Left) {
+            o.yaw -= motion.delta.x * 0.005;
+            o.pitch = (o.pitch + motion.delta.y * 0.005).clamp(-1.4, 1.4);
+        }
+        o.distance = (o.distance * (1.0 - scroll.delta.y * 0.1)).clamp(0.3, 6.0);
+        let offset = Quat::from_euler(EulerRot::YXZ, o.yaw, -o.pitch, 0.0) * Vec3::Z;
+        *t = Transform::from_translation(TEAPOT + offset * o.distance).looking_at(TEAPOT, Vec3::Y);
+    }
+}
+
+fn keys(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut objects: Query<&mut OslfObject>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    if keys.just_pressed(KeyCode::Escape) {
+        exit.write(AppExit::Success);
+    }
+    let modes = [
+        KeyCode::Digit1,
+        KeyCode::Digit2,
+        KeyCode::Digit3,
+        KeyCode::Digit4,
+        KeyCode::Digit5,
+        KeyCode::Digit6,
+    ];
+    for mut object in &mut objects {
+        let p = &mut object.params;
+        for (i, key) in modes.iter().enumerate() {
+            if keys.just_pressed(*key) {
+                p.mode = Mode::ALL[i.min(Mode::ALL.len() - 1)];
+            }
+        }
+        if keys.just_pressed(KeyCode::KeyE) {
+            p.source = match p.source {
+                Source::Oslf => Source::EnvMap,
+                Source::EnvMap | Source::Parallax => Source::Oslf,
+            };
+        }
+        if keys.just_pressed(KeyCode::KeyD) {
+            p.depth = !p.depth;
+        }
+        if keys.just_pressed(KeyCode::KeyB) {
+            let i = Blend::ALL.iter().position(|b| *b == p.blend).unwrap_or(0);
+            p.blend = Blend::ALL[(i + 1) % Blend::ALL.len()];
+        }
+        if keys.just_pressed(KeyCode::BracketRight) {
+            p.m = (p.m * 2).min(65536);
+        }
+        if keys.just_pressed(KeyCode::BracketLeft) {
+            p.m = (p.m / 2).max(1);
+        }
+    }
+}
+
+/// Once a second: the shading settings and the cache.
+fn report(
+    time: Res<Time>,
+    mut last: Local<f32>,
+    objects: Query<&OslfObject>,
+    stats: Res<OslfCacheStats>,
+) {
+    if time.elapsed_secs() - *last < 1.0 {
+        return;
+    }
+    *last = time.elapsed_secs();
+    for o in &objects {
+        let p = &o.params;
+        info!(
+            "{:?} {:?} depth {} blend {:?} M {}; cache: {} frames booked, miss rate {:.3}, {} loads",
+            p.mode, p.source, p.depth, p.blend, p.m, stats.total.frames, stats.total.miss_rate, stats.total.loads
+        );
+    }
+}

@@ -1,0 +1,396 @@
+//! A real headless Bevy app (no window: the camera renders into an image, read back by Bevy's
+//! screenshot) with the plugin: the object's pixels against the runtime's own render of the
+//! same store, camera and settings; Bevy meshes in front of and behind the object; damaged and
+//! missing stores.
+//!
+//! On lavapipe in CI; these tests fail, never skip, without an adapter.
+
+#[path = "../../runtime/tests/common/mod.rs"]
+mod common;
+
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use bevy::app::{App, PluginGroup, Startup};
+use bevy::asset::{AssetPlugin, AssetServer, Assets, Handle};
+use bevy::camera::{Camera3d, Exposure, Hdr, PerspectiveProjection, Projection, RenderTarget};
+use bevy::color::Color;
+use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
+use bevy::ecs::prelude::*;
+use bevy::image::Image;
+use bevy::math::Vec3;
+use bevy::mesh::{Mesh, Mesh3d};
+use bevy::pbr::{MeshMaterial3d, StandardMaterial};
+use bevy::render::render_resource::TextureFormat;
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
+use bevy::render::view::Msaa;
+use bevy::render::RenderPlugin;
+use bevy::shape::Cuboid;
+use bevy::transform::components::Transform;
+use bevy::window::{ExitCondition, WindowPlugin};
+use bevy::DefaultPlugins;
+use oslf_bevy::{Mode, OslfCacheStats, OslfMessages, OslfObject, OslfPlugin, ShadingParams};
+use oslf_runtime::{CacheConfig, Camera, Gpu, RenderOptions, Renderer};
+
+const W: u32 = 160;
+const H: u32 = 120;
+
+/// What a test puts in the scene besides the camera.
+#[derive(Clone, Copy, PartialEq)]
+enum Extra {
+    None,
+    /// A red cube between the camera and the object's left part.
+    Front,
+    /// A green wall behind the object.
+    Behind,
+}
+
+#[derive(Resource, Clone)]
+struct Setup {
+    camera: Camera,
+    store: Option<String>,
+    extra: Extra,
+    params: ShadingParams,
+    msaa: Msaa,
+}
+
+#[derive(Resource)]
+struct Target(Handle<Image>);
+
+fn setup(
+    mut commands: Commands,
+    setup: Res<Setup>,
+    assets: Res<AssetServer>,
+    mut images: ResMut<Assets<Image>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    let target = images.add(Image::new_target_texture(
+        W,
+        H,
+        TextureFormat::Rgba16Float,
+        None,
+    ));
+    let c = &setup.camera;
+    let v = |a: glam::Vec3| Vec3::from_array(a.to_array());
+    commands.spawn((
+        Camera3d::default(),
+        Hdr,
+        setup.msaa,
+        Tonemapping::None,
+        DebandDither::Disabled,
+        // Exposure 1 (2^-ev100 / 1.2): radiance as the runtime writes it.
+        Exposure {
+            ev100: -(1.2f32).log2(),
+        },
+        Projection::Perspective(PerspectiveProjection {
+            fov: c.vfov_deg.to_radians(),
+            near: 0.01,
+            ..Default::default()
+        }),
+        RenderTarget::from(target.clone()),
+        Transform::from_translation(v(c.position)).looking_at(v(c.target), v(c.up)),
+    ));
+    commands.insert_resource(Target(target));
+    if let Some(store) = &setup.store {
+        commands.spawn(OslfObject::new(assets.load(store.clone())).with_params(setup.params));
+    }
+    let unlit = |color: Color| StandardMaterial {
+        base_color: color,
+        unlit: true,
+        ..Default::default()
+    };
+    // The teapot of the fixture sits near the origin, about 3 units across; the camera looks
+    // at it from the store's view.
+    let towards = (v(c.target) - v(c.position)).normalize();
+    match setup.extra {
+        Extra::None => {}
+        Extra::Front => {
+            let at = v(c.position) + towards * 2.0;
+            let left = towards.cross(v(c.up)).normalize() * -0.6;
+            commands.spawn((
+                Mesh3d(meshes.add(Cuboid::new(0.5, 3.0, 0.5))),
+                MeshMaterial3d(materials.add(unlit(Color::srgb(1.0, 0.0, 0.0)))),
+                Transform::from_translation(at + left).looking_to(towards, v(c.up)),
+            ));
+        }
+        Extra::Behind => {
+            let at = v(c.target) + towards * 6.0;
+            commands.spawn((
+                Mesh3d(meshes.add(Cuboid::new(40.0, 40.0, 0.1))),
+                MeshMaterial3d(materials.add(unlit(Color::srgb(0.0, 1.0, 0.0)))),
+                Transform::from_translation(at).looking_to(towards, v(c.up)),
+            ));
+        }
+    }
+}
+
+/// A headless app with the plugin, as `setup` says; the store directory is the asset root.
+fn app(dir: &Path, setup_: Setup) -> App {
+    let mut app = App::new();
+    app.add_plugins(
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..Default::default()
+            })
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..Default::default()
+            })
+            .set(AssetPlugin {
+                file_path: dir.to_string_lossy().into_owned(),
+                ..Default::default()
+            })
+            .disable::<bevy::render::pipelined_rendering::PipelinedRenderingPlugin>(),
+    )
+    .add_plugins(OslfPlugin {
+        cache: CacheConfig::default(),
+    })
+    .insert_resource(setup_)
+    .add_systems(Startup, setup);
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// Updates until the cache's feedback reports a frame with no misses (at most `frames`), then
+/// takes a screenshot of the camera's image: linear RGBA per pixel, top row first.
+fn run_and_capture(app: &mut App, frames: usize) -> Vec<[f32; 4]> {
+    for _ in 0..frames {
+        app.update();
+        let stats = app.world().resource::<OslfCacheStats>();
+        if stats.latest.frames > 0 && stats.latest.misses == 0 {
+            break;
+        }
+    }
+    let shot: Arc<Mutex<Option<Image>>> = Arc::default();
+    let sink = Arc::clone(&shot);
+    let target = app.world().resource::<Target>().0.clone();
+    app.world_mut()
+        .spawn(Screenshot::image(target))
+        .observe(move |ev: On<ScreenshotCaptured>| {
+            *sink.lock().unwrap() = Some(ev.image.clone());
+        });
+    for _ in 0..10 {
+        app.update();
+        if shot.lock().unwrap().is_some() {
+            break;
+        }
+    }
+    let image = shot.lock().unwrap().take().expect("no screenshot arrived");
+    assert_eq!(image.texture_descriptor.format, TextureFormat::Rgba16Float);
+    let data = image.data.expect("screenshot without data");
+    data.chunks_exact(8)
+        .map(|p| std::array::from_fn(|k| half_to_f32(u16::from_le_bytes([p[2 * k], p[2 * k + 1]]))))
+        .collect()
+}
+
+fn half_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exponent = i32::from((h >> 10) & 0x1f);
+    let mantissa = f32::from(h & 0x3ff);
+    match exponent {
+        0 => sign * mantissa * 2f32.powi(-24),
+        31 => f32::NAN,
+        e => sign * (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
+fn params() -> ShadingParams {
+    ShadingParams {
+        mode: Mode::ReconMirror,
+        ..Default::default()
+    }
+}
+
+/// The store's default camera and the runtime's own render of it at W×H (as `oslf render`
+/// does), converged.
+fn reference(store: &Path, params: &ShadingParams) -> (Camera, Vec<[f32; 4]>) {
+    let gpu = Gpu::headless().unwrap();
+    let store = oslf_format::Store::open(store).unwrap();
+    let mut r = Renderer::new(gpu, store, CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let frame = r
+        .render(
+            &camera,
+            params,
+            &RenderOptions {
+                width: W,
+                height: H,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    (camera, frame.pixels)
+}
+
+fn setup_for(camera: Camera, extra: Extra, with_object: bool) -> Setup {
+    Setup {
+        camera,
+        store: with_object.then(|| "teapot.oslf".to_string()),
+        extra,
+        params: params(),
+        msaa: Msaa::Off,
+    }
+}
+
+/// The share of `object` pixels (alpha 1 in `reference`) where `a` is within `tol` relative
+/// of `reference`, and their count.
+fn agreement(a: &[[f32; 4]], reference: &[[f32; 4]], tol: f32) -> (usize, f64) {
+    let (mut n, mut ok) = (0usize, 0usize);
+    for (p, r) in a.iter().zip(reference) {
+        if r[3] != 1.0 {
+            continue;
+        }
+        n += 1;
+        let good = (0..3).all(|k| (p[k] - r[k]).abs() <= tol * r[k].abs().max(1.0));
+        ok += usize::from(good);
+    }
+    (n, ok as f64 / n.max(1) as f64)
+}
+
+#[test]
+fn the_object_in_a_bevy_frame_equals_the_runtimes_render() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, reference) = reference(&store, &params());
+    // Multisampled: shaded once per pixel, written to each sample, resolved by the plugin; the
+    // edge pixels blend with the clear colour, hence the lower share.
+    for (msaa, least) in [(Msaa::Off, 0.99), (Msaa::Sample4, 0.99)] {
+        let setup = Setup {
+            msaa,
+            ..setup_for(camera, Extra::None, true)
+        };
+        let mut app = app(dir, setup);
+        let pixels = run_and_capture(&mut app, 60);
+        dump(&format!("bevy-{msaa:?}"), &pixels);
+        let stats = app.world().resource::<OslfCacheStats>().clone();
+        assert!(
+            stats.total.misses > 0 && stats.latest.misses == 0,
+            "{msaa:?}: the first frames should miss and later ones not: {stats:?}"
+        );
+        assert!(pixels.iter().flatten().all(|v| v.is_finite()));
+        let (n, share) = agreement(&pixels, &reference, 1e-2);
+        println!(
+            "{msaa:?}: {n} object pixels, {:.2}% within 1% of the runtime's render",
+            share * 100.0
+        );
+        assert!(n > 1000, "{msaa:?}: {n} object pixels");
+        assert!(share >= least, "{msaa:?}: {share}");
+        let messages = app.world().resource::<OslfMessages>().all();
+        assert!(messages.is_empty(), "{messages:?}");
+    }
+}
+
+/// With `OSLF_BEVY_DUMP=DIR`, writes `pixels` as `DIR/NAME.ppm` (clamped to 0..1, sRGB) to
+/// look at.
+fn dump(name: &str, pixels: &[[f32; 4]]) {
+    let Some(dir) = std::env::var_os("OSLF_BEVY_DUMP") else {
+        return;
+    };
+    let srgb = |v: f32| {
+        let v = v.clamp(0.0, 1.0);
+        let s = if v <= 0.0031308 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round() as u8
+    };
+    let mut bytes = format!("P6\n{W} {H}\n255\n").into_bytes();
+    bytes.extend(
+        pixels
+            .iter()
+            .flat_map(|p| [srgb(p[0]), srgb(p[1]), srgb(p[2])]),
+    );
+    std::fs::write(Path::new(&dir).join(format!("{name}.ppm")), bytes).unwrap();
+}
+
+#[test]
+fn bevy_meshes_in_front_hide_the_object_and_it_hides_those_behind() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, reference) = reference(&store, &params());
+    dump("runtime", &reference);
+    // Bevy's frame with nothing in it: its clear colour.
+    let empty = run_and_capture(&mut app(dir, setup_for(camera, Extra::None, false)), 4);
+    for extra in [Extra::Front, Extra::Behind] {
+        let without = run_and_capture(&mut app(dir, setup_for(camera, extra, false)), 4);
+        let with = run_and_capture(&mut app(dir, setup_for(camera, extra, true)), 60);
+        let name = if extra == Extra::Front {
+            "front"
+        } else {
+            "behind"
+        };
+        dump(&format!("bevy-{name}"), &with);
+        let (mut hidden, mut shown) = (0, 0);
+        let mut object = (Vec::new(), Vec::new());
+        for (((w, o), r), clear) in with.iter().zip(&without).zip(&reference).zip(&empty) {
+            let mesh = o != clear;
+            let on_object = r[3] == 1.0;
+            if extra == Extra::Front && mesh {
+                // The cube in front: exactly its pixels, the object hidden behind it.
+                assert_eq!(w, o);
+                hidden += usize::from(on_object);
+            } else if on_object {
+                shown += 1;
+                object.0.push(*w);
+                object.1.push(*r);
+            } else {
+                assert_eq!(w, o, "off the object the scene is Bevy's alone");
+            }
+        }
+        let (_, share) = agreement(&object.0, &object.1, 1e-2);
+        println!(
+            "{name}: {hidden} object pixels hidden, {shown} shown, {:.2}% within 1%",
+            share * 100.0
+        );
+        assert!(shown > 1000 && share >= 0.99, "{shown} {share}");
+        if extra == Extra::Front {
+            assert!(hidden > 100, "{hidden}");
+        }
+    }
+}
+
+#[test]
+fn damaged_and_missing_stores_are_said_once_and_draw_nothing() {
+    let store = common::store_path();
+    let tmp = tempfile::tempdir().unwrap();
+    // Cut short: the store's table of contents points past its end.
+    let bytes = std::fs::read(&store).unwrap();
+    std::fs::write(tmp.path().join("damaged.oslf"), &bytes[..bytes.len() / 2]).unwrap();
+    let (camera, _) = reference(&store, &params());
+    for (name, says) in [
+        (
+            "damaged.oslf",
+            format!(
+                "header says {} bytes, the file has {}",
+                bytes.len(),
+                bytes.len() / 2
+            ),
+        ),
+        ("missing.oslf", "Path not found".to_string()),
+    ] {
+        let setup = Setup {
+            store: Some(name.to_string()),
+            ..setup_for(camera, Extra::None, true)
+        };
+        let mut app = app(tmp.path(), setup);
+        let pixels = run_and_capture(&mut app, 20);
+        let without = run_and_capture(
+            &mut self::app(tmp.path(), setup_for(camera, Extra::None, false)),
+            4,
+        );
+        assert_eq!(pixels, without, "{name}: nothing is drawn");
+        let messages = app.world().resource::<OslfMessages>().all();
+        assert_eq!(messages.len(), 1, "{name}: said once: {messages:?}");
+        assert!(
+            messages[0].contains(name)
+                && messages[0].contains(&says)
+                && !messages[0].contains('\n'),
+            "{messages:?}"
+        );
+    }
+}
