@@ -156,7 +156,9 @@ fn app(dir: &Path, setup_: Setup) -> App {
 }
 
 /// Updates until the cache's feedback reports a frame with no misses (at most `frames`), then
-/// takes a screenshot of the camera's image: linear RGBA per pixel, top row first.
+/// takes screenshots of the camera's image until two in a row agree and every pixel was drawn
+/// (Bevy prepares meshes and pipelines over the first frames, later on a loaded machine):
+/// linear RGBA per pixel, top row first.
 fn run_and_capture(app: &mut App, frames: usize) -> Vec<[f32; 4]> {
     for _ in 0..frames {
         app.update();
@@ -165,6 +167,19 @@ fn run_and_capture(app: &mut App, frames: usize) -> Vec<[f32; 4]> {
             break;
         }
     }
+    let mut last = capture(app);
+    for _ in 0..20 {
+        let next = capture(app);
+        if next == last && next.iter().all(|p| p[3] == 1.0) {
+            return next;
+        }
+        last = next;
+    }
+    panic!("the frame never settled: two screenshots in a row differ or leave pixels undrawn");
+}
+
+/// One screenshot of the camera's image.
+fn capture(app: &mut App) -> Vec<[f32; 4]> {
     let shot: Arc<Mutex<Option<Image>>> = Arc::default();
     let sink = Arc::clone(&shot);
     let target = app.world().resource::<Target>().0.clone();
