@@ -10,47 +10,27 @@
 //! `oslf view`: 1–6 the mode, `e` OSLF or the environment-map baseline, `d` depth-corrected
 //! lookups, `b` the blend, `[` `]` halve or double M, Esc quits.
 
-use std::f32::consts::FRAC_PI_2;
+mod shared;
 
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
 use oslf_bevy::{Blend, Mode, OslfCacheStats, OslfObject, OslfPlugin, Source};
-
-/// Where the bake put the teapot (room.toml: on the table top, z = 0.78 in the bake's Z-up
-/// metres), in Bevy's Y-up world.
-const TEAPOT: Vec3 = Vec3::new(0.0, 0.95, 0.0);
-
-#[derive(Component)]
-struct Orbit {
-    yaw: f32,
-    pitch: f32,
-    distance: f32,
-}
+use shared::{keep_only_the_orbit_camera, spawn_room, Orbit, ASSETS};
 
 fn main() {
     App::new()
         .add_plugins(DefaultPlugins.set(AssetPlugin {
-            // The repository's examples folder: room.glb and room.oslf.
-            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/../examples").into(),
+            file_path: ASSETS.into(),
             ..default()
         }))
         .add_plugins(OslfPlugin::default())
         .add_systems(Startup, setup)
-        .add_systems(Update, (orbit, keys, report))
+        .add_systems(Update, (keep_only_the_orbit_camera, orbit, keys, report))
         .run();
 }
 
 fn setup(mut commands: Commands, assets: Res<AssetServer>) {
-    commands.spawn(WorldAssetRoot(
-        assets.load(GltfAssetLabel::Scene(0).from_asset("room.glb")),
-    ));
-    // The bake's scene is room.glb turned 90° about x (Z up): turning back puts the teapot's
-    // light field in Bevy's Y-up room. Its radiance is in watts (lights at 683 lm/W): ×683
-    // gives Bevy's luminance.
-    commands.spawn((
-        OslfObject::new(assets.load("room.oslf")).with_radiance_scale(683.0),
-        Transform::from_rotation(Quat::from_rotation_x(-FRAC_PI_2)),
-    ));
+    spawn_room(&mut commands, &assets, true);
     commands.spawn((
         Camera3d::default(),
         bevy::camera::Hdr,
@@ -60,7 +40,6 @@ fn setup(mut commands: Commands, assets: Res<AssetServer>) {
             pitch: 0.35,
             distance: 1.6,
         },
-        Transform::default(),
     ));
 }
 
@@ -76,8 +55,7 @@ fn orbit(
             o.pitch = (o.pitch + motion.delta.y * 0.005).clamp(-1.4, 1.4);
         }
         o.distance = (o.distance * (1.0 - scroll.delta.y * 0.1)).clamp(0.3, 6.0);
-        let offset = Quat::from_euler(EulerRot::YXZ, o.yaw, -o.pitch, 0.0) * Vec3::Z;
-        *t = Transform::from_translation(TEAPOT + offset * o.distance).looking_at(TEAPOT, Vec3::Y);
+        *t = o.transform();
     }
 }
 
