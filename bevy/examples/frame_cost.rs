@@ -14,18 +14,17 @@
 
 mod shared;
 
+use std::path::Path;
 use std::time::Instant;
 
-use bevy::app::PluginGroup;
 use bevy::asset::UntypedAssetId;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::render_resource::TextureFormat;
 use bevy::render::renderer::RenderDevice;
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
-use bevy::render::RenderPlugin;
-use bevy::window::{ExitCondition, WindowPlugin};
-use oslf_bevy::{CacheConfig, OslfCacheStats, OslfPlugin};
+use oslf_bevy::{CacheConfig, OslfCacheStats};
+use shared::headless::headless_app;
 use shared::{keep_only_the_orbit_camera, spawn_room, Orbit, ASSETS};
 
 #[derive(Resource, Clone, Copy)]
@@ -68,29 +67,10 @@ fn setup(
 }
 
 fn app(width: u32, height: u32, teapot: bool, cache: CacheConfig) -> App {
-    let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            })
-            .set(AssetPlugin {
-                file_path: ASSETS.into(),
-                ..default()
-            })
-            .set(RenderPlugin {
-                synchronous_pipeline_compilation: true,
-                ..default()
-            })
-            .disable::<bevy::winit::WinitPlugin>()
-            .disable::<bevy::render::pipelined_rendering::PipelinedRenderingPlugin>(),
-    )
-    .add_plugins(OslfPlugin { cache })
-    .insert_resource(Size(width, height, teapot))
-    .add_systems(Startup, setup)
-    .add_systems(Update, keep_only_the_orbit_camera);
+    let mut app = headless_app(Path::new(ASSETS), cache);
+    app.insert_resource(Size(width, height, teapot))
+        .add_systems(Startup, setup)
+        .add_systems(Update, keep_only_the_orbit_camera);
     app.finish();
     app.cleanup();
     app

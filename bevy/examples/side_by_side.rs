@@ -13,13 +13,13 @@
 //! `HALF_*`: the parallax box's half extents around the capture point (default: the room of
 //! `examples/room.toml`, 3 × 3 × 1.5 m).
 
-use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+#[path = "shared/headless.rs"]
+mod headless;
 
-use bevy::app::PluginGroup;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
 use bevy::asset::RenderAssetUsages;
-use bevy::camera::{Exposure, Hdr, RenderTarget};
-use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::light::{
     GeneratedEnvironmentMapLight, GlobalAmbientLight, LightProbe, ParallaxCorrection,
 };
@@ -28,10 +28,8 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{
     Extent3d, TextureDimension, TextureFormat, TextureViewDescriptor, TextureViewDimension,
 };
-use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
-use bevy::render::RenderPlugin;
-use bevy::window::{ExitCondition, WindowPlugin};
-use oslf_bevy::{Mode, OslfCacheStats, OslfObject, OslfPlugin, ShadingParams};
+use headless::{headless_app, settle_and_capture, spawn_linear_camera};
+use oslf_bevy::{Mode, OslfObject, ShadingParams};
 use oslf_format::cube::{direction_to_face_st, texel_direction};
 
 /// What one run draws.
@@ -65,9 +63,6 @@ struct Job {
     store_file: String,
 }
 
-#[derive(Resource)]
-struct Target(Handle<Image>);
-
 fn v3(a: glam::Vec3) -> Vec3 {
     Vec3::from_array(a.to_array())
 }
@@ -80,31 +75,13 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
-    let target = images.add(Image::new_target_texture(
-        job.width,
-        job.height,
-        TextureFormat::Rgba16Float,
-        None,
-    ));
-    commands.insert_resource(Target(target.clone()));
-    let c = &job.camera;
-    let mut camera = commands.spawn((
-        Camera3d::default(),
-        Hdr,
+    let mut camera = spawn_linear_camera(
+        &mut commands,
+        &mut images,
+        &job.camera,
+        (job.width, job.height),
         Msaa::Off,
-        Tonemapping::None,
-        DebandDither::Disabled,
-        Exposure {
-            ev100: -(1.2f32).log2(),
-        },
-        Projection::Perspective(PerspectiveProjection {
-            fov: c.vfov_deg.to_radians(),
-            near: 0.01,
-            ..default()
-        }),
-        RenderTarget::from(target),
-        Transform::from_translation(v3(c.position)).looking_at(v3(c.target), v3(c.up)),
-    ));
+    );
     let (res, bytes) = &*job.cube;
     let mut cube = Image::new(
         Extent3d {
@@ -176,31 +153,12 @@ fn setup(
 /// Runs one variant until its frame settles (the environment map filtered; the OSLF cache
 /// without misses) and returns its linear RGBA pixels.
 fn run(job: Job, dir: &Path) -> Option<Vec<[f32; 4]>> {
-    let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            })
-            .set(AssetPlugin {
-                file_path: dir.to_string_lossy().into_owned(),
-                ..default()
-            })
-            .set(RenderPlugin {
-                synchronous_pipeline_compilation: true,
-                ..default()
-            })
-            .disable::<bevy::winit::WinitPlugin>()
-            .disable::<bevy::render::pipelined_rendering::PipelinedRenderingPlugin>(),
-    )
-    .add_plugins(OslfPlugin::default())
+    let mut app = headless_app(dir, Default::default());
     // Bevy's default ambient light (80 cd/m²) would add to the metal at exposure 1: the
     // environment map is the only light, as in the bake.
-    .insert_resource(GlobalAmbientLight::NONE)
-    .insert_resource(job.clone())
-    .add_systems(Startup, setup);
+    app.insert_resource(GlobalAmbientLight::NONE)
+        .insert_resource(job.clone())
+        .add_systems(Startup, setup);
     app.finish();
     app.cleanup();
     if job.variant == Variant::Parallax && !probes_usable(&app) {
@@ -211,40 +169,11 @@ fn run(job: Job, dir: &Path) -> Option<Vec<[f32; 4]>> {
         );
         return None;
     }
-    for i in 0..200 {
-        app.update();
-        let stats = app.world().resource::<OslfCacheStats>();
-        let settled = match job.variant {
-            Variant::Oslf => stats.latest.frames > 0 && stats.latest.misses == 0,
-            _ => true,
-        };
-        if settled && i >= 20 {
-            break;
-        }
-    }
-    let shot: Arc<Mutex<Option<Image>>> = Arc::default();
-    let sink = Arc::clone(&shot);
-    let target = app.world().resource::<Target>().0.clone();
-    app.world_mut()
-        .spawn(Screenshot::image(target))
-        .observe(move |ev: On<ScreenshotCaptured>| {
-            *sink.lock().unwrap() = Some(ev.image.clone());
-        });
-    for _ in 0..10 {
-        app.update();
-        if shot.lock().unwrap().is_some() {
-            break;
-        }
-    }
-    let image = shot.lock().unwrap().take().expect("no screenshot arrived");
-    let data = image.data.expect("screenshot without data");
-    Some(
-        data.chunks_exact(8)
-            .map(|p| {
-                std::array::from_fn(|k| f16_to_f32(u16::from_le_bytes([p[2 * k], p[2 * k + 1]])))
-            })
-            .collect(),
-    )
+    // The environment map is filtered over the first frames; the OSLF object's cache settles.
+    Some(match job.variant {
+        Variant::Oslf => settle_and_capture(&mut app, 200, true),
+        _ => settle_and_capture(&mut app, 20, false),
+    })
 }
 
 /// Whether Bevy draws reflection probes on this device (`bevy_pbr`'s own test: texture binding
@@ -261,10 +190,6 @@ fn probes_usable(app: &App) -> bool {
             | WgpuFeatures::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING,
     ) && limits.max_binding_array_elements_per_shader_stage >= 16
         && limits.max_binding_array_sampler_elements_per_shader_stage >= 16
-}
-
-fn f16_to_f32(h: u16) -> f32 {
-    half::f16::from_bits(h).to_f32()
 }
 
 /// The environment cube as Bevy samples it: Bevy's shaders look up (x, y, −z) ("cubemaps are

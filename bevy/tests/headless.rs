@@ -7,29 +7,23 @@
 
 #[path = "../../runtime/tests/common/mod.rs"]
 mod common;
+#[path = "../examples/shared/headless.rs"]
+mod headless;
 
 use std::path::Path;
-use std::sync::{Arc, Mutex};
 
-use bevy::app::{App, PluginGroup, Startup};
-use bevy::asset::{AssetPlugin, AssetServer, Assets, Handle};
-use bevy::camera::{Camera3d, Exposure, Hdr, PerspectiveProjection, Projection, RenderTarget};
+use bevy::app::{App, Startup};
+use bevy::asset::{AssetServer, Assets};
 use bevy::color::Color;
-use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::ecs::prelude::*;
 use bevy::image::Image;
 use bevy::math::Vec3;
 use bevy::mesh::{Mesh, Mesh3d};
 use bevy::pbr::{MeshMaterial3d, StandardMaterial};
-use bevy::render::render_resource::TextureFormat;
-use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use bevy::render::view::Msaa;
-use bevy::render::RenderPlugin;
 use bevy::shape::Cuboid;
 use bevy::transform::components::Transform;
-use bevy::window::{ExitCondition, WindowPlugin};
-use bevy::DefaultPlugins;
-use oslf_bevy::{Mode, OslfCacheStats, OslfMessages, OslfObject, OslfPlugin, ShadingParams};
+use oslf_bevy::{Mode, OslfCacheStats, OslfMessages, OslfObject, ShadingParams};
 use oslf_runtime::{CacheConfig, Camera, Gpu, RenderOptions, Renderer};
 
 const W: u32 = 160;
@@ -54,9 +48,6 @@ struct Setup {
     msaa: Msaa,
 }
 
-#[derive(Resource)]
-struct Target(Handle<Image>);
-
 fn setup(
     mut commands: Commands,
     setup: Res<Setup>,
@@ -65,33 +56,9 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
-    let target = images.add(Image::new_target_texture(
-        W,
-        H,
-        TextureFormat::Rgba16Float,
-        None,
-    ));
     let c = &setup.camera;
     let v = |a: glam::Vec3| Vec3::from_array(a.to_array());
-    commands.spawn((
-        Camera3d::default(),
-        Hdr,
-        setup.msaa,
-        Tonemapping::None,
-        DebandDither::Disabled,
-        // Exposure 1 (2^-ev100 / 1.2): radiance as the runtime writes it.
-        Exposure {
-            ev100: -(1.2f32).log2(),
-        },
-        Projection::Perspective(PerspectiveProjection {
-            fov: c.vfov_deg.to_radians(),
-            near: 0.01,
-            ..Default::default()
-        }),
-        RenderTarget::from(target.clone()),
-        Transform::from_translation(v(c.position)).looking_at(v(c.target), v(c.up)),
-    ));
-    commands.insert_resource(Target(target));
+    headless::spawn_linear_camera(&mut commands, &mut images, c, (W, H), setup.msaa);
     if let Some(store) = &setup.store {
         commands.spawn(OslfObject::new(assets.load(store.clone())).with_params(setup.params));
     }
@@ -127,90 +94,17 @@ fn setup(
 
 /// A headless app with the plugin, as `setup` says; the store directory is the asset root.
 fn app(dir: &Path, setup_: Setup) -> App {
-    let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..Default::default()
-            })
-            .set(RenderPlugin {
-                synchronous_pipeline_compilation: true,
-                ..Default::default()
-            })
-            .set(AssetPlugin {
-                file_path: dir.to_string_lossy().into_owned(),
-                ..Default::default()
-            })
-            .disable::<bevy::render::pipelined_rendering::PipelinedRenderingPlugin>(),
-    )
-    .add_plugins(OslfPlugin {
-        cache: CacheConfig::default(),
-    })
-    .insert_resource(setup_)
-    .add_systems(Startup, setup);
+    let mut app = headless::headless_app(dir, CacheConfig::default());
+    app.insert_resource(setup_).add_systems(Startup, setup);
     app.finish();
     app.cleanup();
     app
 }
 
 /// Updates until the cache's feedback reports a frame with no misses (at most `frames`), then
-/// takes screenshots of the camera's image until two in a row agree and every pixel was drawn
-/// (Bevy prepares meshes and pipelines over the first frames, later on a loaded machine):
-/// linear RGBA per pixel, top row first.
+/// screenshots the camera's image until it settles ([`headless::settle_and_capture`]).
 fn run_and_capture(app: &mut App, frames: usize) -> Vec<[f32; 4]> {
-    for _ in 0..frames {
-        app.update();
-        let stats = app.world().resource::<OslfCacheStats>();
-        if stats.latest.frames > 0 && stats.latest.misses == 0 {
-            break;
-        }
-    }
-    let mut last = capture(app);
-    for _ in 0..20 {
-        let next = capture(app);
-        if next == last && next.iter().all(|p| p[3] == 1.0) {
-            return next;
-        }
-        last = next;
-    }
-    panic!("the frame never settled: two screenshots in a row differ or leave pixels undrawn");
-}
-
-/// One screenshot of the camera's image.
-fn capture(app: &mut App) -> Vec<[f32; 4]> {
-    let shot: Arc<Mutex<Option<Image>>> = Arc::default();
-    let sink = Arc::clone(&shot);
-    let target = app.world().resource::<Target>().0.clone();
-    app.world_mut()
-        .spawn(Screenshot::image(target))
-        .observe(move |ev: On<ScreenshotCaptured>| {
-            *sink.lock().unwrap() = Some(ev.image.clone());
-        });
-    for _ in 0..10 {
-        app.update();
-        if shot.lock().unwrap().is_some() {
-            break;
-        }
-    }
-    let image = shot.lock().unwrap().take().expect("no screenshot arrived");
-    assert_eq!(image.texture_descriptor.format, TextureFormat::Rgba16Float);
-    let data = image.data.expect("screenshot without data");
-    data.chunks_exact(8)
-        .map(|p| std::array::from_fn(|k| half_to_f32(u16::from_le_bytes([p[2 * k], p[2 * k + 1]]))))
-        .collect()
-}
-
-fn half_to_f32(h: u16) -> f32 {
-    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
-    let exponent = i32::from((h >> 10) & 0x1f);
-    let mantissa = f32::from(h & 0x3ff);
-    match exponent {
-        0 => sign * mantissa * 2f32.powi(-24),
-        31 => f32::NAN,
-        e => sign * (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
-    }
+    headless::settle_and_capture(app, frames, true)
 }
 
 fn params() -> ShadingParams {

@@ -1,6 +1,8 @@
 //! The room scene both examples draw: `examples/room.glb` by Bevy, the teapot of
 //! `examples/room.toml` by the OSLF plugin.
 
+pub mod headless;
+
 use std::f32::consts::FRAC_PI_2;
 
 use bevy::prelude::*;

@@ -1,0 +1,142 @@
+//! A windowless Bevy app with the OSLF plugin, driven frame by frame, and screenshots of an
+//! image target read back as linear RGBA: shared by the headless tests and the measuring
+//! examples.
+#![allow(dead_code)] // each user takes its part
+
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use bevy::app::{App, PluginGroup};
+use bevy::asset::{AssetPlugin, Assets, Handle};
+use bevy::camera::{Camera3d, Exposure, Hdr, PerspectiveProjection, Projection, RenderTarget};
+use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
+use bevy::ecs::prelude::*;
+use bevy::ecs::system::EntityCommands;
+use bevy::image::Image;
+use bevy::math::Vec3;
+use bevy::render::render_resource::TextureFormat;
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
+use bevy::render::view::Msaa;
+use bevy::render::RenderPlugin;
+use bevy::transform::components::Transform;
+use bevy::window::{ExitCondition, WindowPlugin};
+use bevy::DefaultPlugins;
+use oslf_bevy::{CacheConfig, OslfCacheStats, OslfPlugin};
+
+/// The image the camera of [`spawn_linear_camera`] draws into.
+#[derive(Resource)]
+pub struct Target(pub Handle<Image>);
+
+/// Spawns a camera that sees as `camera` does (the runtime's: position, target, up, vertical
+/// field of view) into a new `width`×`height` `Rgba16Float` image: HDR at exposure 1
+/// (2^-ev100 / 1.2) without tonemapping or dithering, so the image holds linear radiance as
+/// the runtime writes it. Inserts [`Target`].
+pub fn spawn_linear_camera<'a>(
+    commands: &'a mut Commands,
+    images: &mut Assets<Image>,
+    camera: &oslf_runtime::Camera,
+    (width, height): (u32, u32),
+    msaa: Msaa,
+) -> EntityCommands<'a> {
+    let target = images.add(Image::new_target_texture(
+        width,
+        height,
+        TextureFormat::Rgba16Float,
+        None,
+    ));
+    commands.insert_resource(Target(target.clone()));
+    let v = |a: glam::Vec3| Vec3::from_array(a.to_array());
+    commands.spawn((
+        Camera3d::default(),
+        Hdr,
+        msaa,
+        Tonemapping::None,
+        DebandDither::Disabled,
+        Exposure {
+            ev100: -(1.2f32).log2(),
+        },
+        Projection::Perspective(PerspectiveProjection {
+            fov: camera.vfov_deg.to_radians(),
+            near: 0.01,
+            ..Default::default()
+        }),
+        RenderTarget::from(target),
+        Transform::from_translation(v(camera.position)).looking_at(v(camera.target), v(camera.up)),
+    ))
+}
+
+/// Bevy's default plugins without a window (nor winit, when built in), pipelines compiled
+/// before the frame that needs them, frames rendered in the update that makes them; assets
+/// from `asset_dir`; the OSLF plugin with `cache`. Ready for `App::update`.
+pub fn headless_app(asset_dir: &Path, cache: CacheConfig) -> App {
+    let plugins = DefaultPlugins
+        .set(WindowPlugin {
+            primary_window: None,
+            exit_condition: ExitCondition::DontExit,
+            ..Default::default()
+        })
+        .set(RenderPlugin {
+            synchronous_pipeline_compilation: true,
+            ..Default::default()
+        })
+        .set(AssetPlugin {
+            file_path: asset_dir.to_string_lossy().into_owned(),
+            ..Default::default()
+        })
+        .disable::<bevy::render::pipelined_rendering::PipelinedRenderingPlugin>();
+    #[cfg(feature = "viewer")]
+    let plugins = plugins.disable::<bevy::winit::WinitPlugin>();
+    let mut app = App::new();
+    app.add_plugins(plugins).add_plugins(OslfPlugin { cache });
+    app
+}
+
+/// Updates `frames` times, or with `until_cached` until the cache's feedback reports a frame
+/// with no misses, then takes screenshots of the [`Target`] image (made by the app's start-up
+/// systems) until two in a row agree and every pixel was drawn (Bevy prepares meshes and
+/// pipelines over the first frames, later on a loaded machine): linear RGBA per pixel, top
+/// row first.
+pub fn settle_and_capture(app: &mut App, frames: usize, until_cached: bool) -> Vec<[f32; 4]> {
+    for _ in 0..frames.max(1) {
+        app.update();
+        let stats = app.world().resource::<OslfCacheStats>();
+        if until_cached && stats.latest.frames > 0 && stats.latest.misses == 0 {
+            break;
+        }
+    }
+    let target = app.world().resource::<Target>().0.clone();
+    let mut last = capture(app, &target);
+    for _ in 0..20 {
+        let next = capture(app, &target);
+        if next == last && next.iter().all(|p| p[3] == 1.0) {
+            return next;
+        }
+        last = next;
+    }
+    panic!("the frame never settled: two screenshots in a row differ or leave pixels undrawn");
+}
+
+/// One screenshot of `target`, an `Rgba16Float` image.
+pub fn capture(app: &mut App, target: &Handle<Image>) -> Vec<[f32; 4]> {
+    let shot: Arc<Mutex<Option<Image>>> = Arc::default();
+    let sink = Arc::clone(&shot);
+    app.world_mut()
+        .spawn(Screenshot::image(target.clone()))
+        .observe(move |ev: bevy::ecs::observer::On<ScreenshotCaptured>| {
+            *sink.lock().unwrap() = Some(ev.image.clone());
+        });
+    for _ in 0..10 {
+        app.update();
+        if shot.lock().unwrap().is_some() {
+            break;
+        }
+    }
+    let image = shot.lock().unwrap().take().expect("no screenshot arrived");
+    assert_eq!(image.texture_descriptor.format, TextureFormat::Rgba16Float);
+    let data = image.data.expect("screenshot without data");
+    data.chunks_exact(8)
+        .map(|p| {
+            std::array::from_fn(|k| half::f16::from_le_bytes([p[2 * k], p[2 * k + 1]]).to_f32())
+        })
+        .collect()
+}
