@@ -31,7 +31,7 @@
 //! | offset | type      | field |
 //! |-------:|-----------|-------|
 //! | 0      | `[u8; 8]` | magic [`MAGIC`] = `"OSLFSTOR"` |
-//! | 8      | `u32`     | version = [`VERSION`] (7); readers also accept [`MIN_VERSION`] (1) to 6, see "Versions" |
+//! | 8      | `u32`     | version = [`VERSION`] (8); readers also accept [`MIN_VERSION`] (1) to 7, see "Versions" |
 //! | 12     | `u32`     | flags: bit 0 distance channel, bit 1 environment cube, bit 2 COMPLETE (set by `finish()`); other bits must be 0 |
 //! | 16     | `u32`     | encoding: 0 RGB9E5, 1 RGBA16F, 2 RGBA32F, 3 BC6H (version 4 and later: in an older store 3 is [`Error::EncodingVersion`]) |
 //! | 20     | `u32`     | sample-map index bytes: 2 if sample_count ≤ 65535, else 4 |
@@ -70,7 +70,7 @@
 //! | 80    | bake parameters: `f32` epsilon (> 0), `f32` phi_samplemap_deg (0..=180), `u32` cube_resolution, `u32` sample_map_resolution, `u32` samples_per_texel, `u32` bounces, `u64` seed, `u32` encoding tag (as the header's; 3 only from version 4), `u32` distance_channel (0/1), `i32` zstd_level (zstd's valid range), `u32` has_env_cube (0/1), `[u8; 32]` scene_hash |
 //! | 4     | `u32` mantissa_bits: RGB9E5 mantissa bits kept per channel, 1..=9, and exactly 9 unless the encoding is RGB9E5 (see "Quantized RGB9E5"). Versions 2 and 3: absent in version 1, whose stores read as 9 |
 //! | 44    | camera: `u32` present (0/1), `f32`×3 position, `f32`×3 target, `f32`×3 up, `f32` vfov_deg (in (0, 180) when present; all 44 bytes are zero when absent) |
-//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count (its maps `first_patch..first_patch + patch_count`); from version 5, then `u32` kind (0 Bézier patches, 1 triangle mesh) and, for kind 1, the mesh record below; from version 7, then the material record below |
+//! | …     | object_count objects, each: `u32` name length L (≤ [`MAX_NAME_BYTES`] = 4096), L bytes UTF-8 name (no padding), `f32`×16 column-major object→world transform, `f32`×3 base colour, `u32` first_patch, `u32` patch_count (its maps `first_patch..first_patch + patch_count`); from version 5, then `u32` kind (0 Bézier patches, 1 triangle mesh) and, for kind 1, the mesh record below; from version 7, then the material record below; from version 8, then the texture record below |
 //! | 192 × B | the Bézier patches' control points, B = Σ patch_count over the Bézier objects (before version 5 every object is Bézier, so B = patch_count), in object order, each 16 control points × `f32`×3 (object space); `CP_ij` at index `4i + j`, `i` along u, `j` along v |
 //!
 //! A **material record** (version 7 and later) ends each object record (after its mesh record,
@@ -81,6 +81,18 @@
 //! | 4     | `u32` model: 0 Lambertian (the base colour alone), 1 glTF metallic-roughness (the base colour with the two factors, glTF 2.0 Appendix B) |
 //! | 4, 4  | `f32` metallic, `f32` roughness: each in `[0, 1]` for model 1, both 0 for model 0 |
 //! | 12    | `f32`×3 emission: emitted radiance, linear RGB, finite and ≥ 0 |
+//!
+//! A **texture record** (version 8 and later) ends each object record (after its material
+//! record). Only a mesh object may hold textures; its images are read at texture coordinates
+//! interpolated over its triangles like the normals (see "Object textures"):
+//!
+//! | bytes | content |
+//! |------:|---------|
+//! | 4     | `u32` flags: bit 0 base colour, 1 metallic-roughness, 2 normal, 3 occlusion, 4 emissive ([`TextureKind`]); other bits 0. When 0 the record ends here |
+//! | 4, 4  | `f32` normal_scale (finite), `f32` occlusion_strength in `[0, 1]` |
+//! | 8 × V | texture coordinates, `f32`×2 per mesh vertex, finite |
+//! | 16 × V | only with a normal texture: tangents, `f32`×3 unit (object space, length 1 within 1e-3) and `f32` w = ±1 (the bitangent is `w·(n × t)`), per mesh vertex |
+//! | …     | one image per flag bit, in bit order: `u32` width, `u32` height (each 1..=[`textures::MAX_TEXTURE_SIDE`], at most [`textures::MAX_TEXTURE_TEXELS`] texels), `u32` frame length L, L bytes: one zstd frame that decompresses to exactly width × height × 4 bytes, RGBA8 texels row-major, row 0 at the top |
 //!
 //! A **mesh record** (object kind 1, version 5 and later) continues the object record:
 //!
@@ -108,6 +120,21 @@
 //! and the local page uv as `uv`. The shading normal of a mesh is the interpolated vertex
 //! normal (barycentric, renormalized); the geometric (face) normal serves sample-point and ray
 //! offsets and side tests.
+//!
+//! ## Object textures
+//!
+//! A texture image's texel `(x, y)` is centred at texture coordinates `((x + ½)/w, 1 − (y + ½)/h)`
+//! (v = 0 at the image's bottom row); a lookup is bilinear between the four nearest texel
+//! centres and repeats in both directions (the bake resamples glTF clamp and mirror wraps
+//! into the image). Base colour and emissive texels are sRGB-encoded and decoded (IEC
+//! 61966-2-1) before filtering; the others are linear, `c/255`. The material at a point:
+//! base colour = the base colour texture's RGB (the bake multiplied glTF's factor in), else
+//! the object's base colour; roughness = G and metallic = B of the metallic-roughness texture
+//! (factors multiplied in), else the material record's factors; the normal =
+//! `normalize(t·x' + b·y' + n·z')` with `(x', y', z') = (2c − 1)·(scale, scale, 1)` of the
+//! normal texture, `t`, `n` the interpolated tangent and normal (`t` made orthogonal to `n`)
+//! and `b = w·(n × t)`; occlusion = `1 + strength·(R − 1)`, applied to the diffuse term;
+//! emission = the material record's emission × the emissive texture's RGB.
 //!
 //! ## Sample points section
 //!
@@ -379,17 +406,19 @@
 //! for the Bézier objects' patches only; version 6 the distance lattice (distances rounded to
 //! it, and filters 1 to 3 storing their codes in two byte planes instead of the `f32`
 //! patterns in four; see "Distance lattice"); version 7 the material record after each object
-//! record (stores before it read as Lambertian objects of their base colour). Readers accept
-//! versions [`MIN_VERSION`] (1) to [`VERSION`] (7) and refuse others ([`Error::UnsupportedVersion`]); a
+//! record (stores before it read as Lambertian objects of their base colour); version 8 the
+//! texture record after each material record (older stores read as untextured). Readers accept
+//! versions [`MIN_VERSION`] (1) to [`VERSION`] (8) and refuse others ([`Error::UnsupportedVersion`]); a
 //! version-1 metadata section has no `mantissa_bits` and reads as 9; versions 1 and 2 have no
 //! checksum of the decoded faces, so [`Store::verify`] checks their frames but not what they
 //! decode to; before version 5 every object is Bézier (no kind field). Every other byte of the
 //! layout is the same in all versions: a version-3 store is a version-4 store that holds no
 //! BC6H, and a version-6 store without a distance channel is laid out as a version-5 one.
-//! Writers write version 7; [`StoreWriter::resume`] continues partial files of versions 2 to
+//! Writers write version 8; [`StoreWriter::resume`] continues partial files of versions 2 to
 //! 4 as version 4 (their shared layout; such a bake cannot hold mesh objects), of version 5
 //! as version 5, of version 6 as version 6 (these cannot hold a material other than
-//! Lambertian) and of version 7 as version 7. A continued version-2 to version-5 file keeps
+//! Lambertian), of version 7 as version 7 (it cannot hold textures) and of version 8 as
+//! version 8. A continued version-2 to version-5 file keeps
 //! `f32` distance planes: the cubes appended to it have their distances on the lattice (as
 //! [`encode_cube`] makes them) but filtered as `f32` patterns.
 //!
@@ -434,6 +463,7 @@ mod resume;
 pub mod sample_map;
 pub mod shard;
 pub mod store;
+pub mod textures;
 pub mod toc;
 pub mod writer;
 
@@ -449,13 +479,14 @@ pub use output_file::{check_not_input, check_output, same_file};
 pub use sample_map::{IndexWidth, SampleMapView, SampleMaps, INVALID_INDEX};
 pub use shard::{ShardSpec, ShardSummary, ShardWriter};
 pub use store::{Store, StoreAccess, VerifyReport};
+pub use textures::{ObjectTextures, TextureImage, TextureKind};
 pub use toc::FaceEntry;
 pub use writer::{StoreSummary, StoreWriter};
 
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 7;
+pub const VERSION: u32 = 8;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
 /// metadata, read as 9).
 pub const MIN_VERSION: u32 = 1;

@@ -3,6 +3,7 @@
 
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::encoding::{Encoding, RGB9E5_FULL_MANTISSA_BITS};
+use crate::textures::{decode_textures, encode_textures, ObjectTextures, TEXTURES_VERSION};
 use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTION, VERSION};
 
 /// One sample point: where a cube map was captured. 40 bytes, `#[repr(C)]`, stored as is.
@@ -56,6 +57,9 @@ pub struct ObjectInfo {
     /// How the surface reflects (format version 7 and later; older stores read as
     /// [`ObjectMaterial::default`], a Lambertian surface of `base_color`).
     pub material: ObjectMaterial,
+    /// A mesh object's material textures with their texture coordinates and tangents (format
+    /// version 8 and later; `None` for untextured objects and older stores).
+    pub textures: Option<ObjectTextures>,
 }
 
 /// Material model tag of a Lambertian object (format version 7): only `base_color` matters.
@@ -316,6 +320,9 @@ pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
                 w.f32(v);
             }
         }
+        if version >= TEXTURES_VERSION {
+            encode_textures(&mut w, o.textures.as_ref(), meta.bake.zstd_level);
+        }
     }
     for p in &meta.patches {
         for v in p.control_points.iter().flatten() {
@@ -550,6 +557,11 @@ fn decode_objects(
         } else {
             ObjectMaterial::default()
         };
+        let textures = if version >= TEXTURES_VERSION {
+            decode_textures(r, i, mesh.as_ref().map(|m| m.positions.len()))?
+        } else {
+            None
+        };
         objects.push(ObjectInfo {
             name,
             transform,
@@ -558,6 +570,7 @@ fn decode_objects(
             patch_count: count,
             mesh,
             material,
+            textures,
         });
     }
     if prev_end != patch_count as u64 {

@@ -62,6 +62,17 @@ impl Prefix {
                 });
             }
         }
+        if version < crate::textures::TEXTURES_VERSION {
+            if let Some(i) = meta.objects.iter().position(|o| o.textures.is_some()) {
+                return Err(Error::InvalidMetadata {
+                    offset: meta_offset,
+                    detail: format!(
+                        "object {i} has textures, which format version {version} cannot hold"
+                    ),
+                });
+            }
+        }
+        crate::textures::check_objects(meta, meta_offset)?;
         let meta_bytes = encode_meta(meta, version);
         // Validate by decoding what was encoded (same checks as the reader).
         let decoded = decode_meta(&meta_bytes, meta_offset, version)?;

@@ -55,7 +55,8 @@ pub(crate) fn reopen(
         // Versions 2 to 4 share version 4's metadata layout: continue as version 4. Version 5
         // differs from version 6 only in its distance planes (f32 rather than on the distance
         // lattice): continue as version 5 (StoreWriter::append refilters the new cubes'
-        // planes as f32). Version 6 differs from 7 only in the objects' material records.
+        // planes as f32). Version 6 differs from 7 only in the objects' material records, 7
+        // from 8 only in their texture records.
         let version = old.version.max(4);
         prefix = Prefix::build_version(meta, points, maps, filter, version).map_err(|e| {
             rd.mismatch(format!(

@@ -64,13 +64,16 @@ fn kind_offset(b: &[u8], meta: &StoreMeta, index: usize) -> usize {
         if let Some(m) = &o.mesh {
             off += 12 + 32 * m.positions.len() + 12 * m.triangles.len();
         }
-        off += MATERIAL_RECORD;
+        off += MATERIAL_RECORD + TEXTURE_FLAGS;
     }
     off + 4 + meta.objects[index].name.len() + 64 + 12 + 8
 }
 
 /// Bytes of an object's material record (version 7).
 const MATERIAL_RECORD: usize = 24;
+
+/// Bytes of an untextured object's texture record: its flag word 0 (version 8).
+const TEXTURE_FLAGS: usize = 4;
 
 /// Byte offset of object `index`'s material record (version 7).
 fn material_offset(b: &[u8], meta: &StoreMeta, index: usize) -> usize {
@@ -362,10 +365,10 @@ fn damaged_mesh_records_are_typed_errors() {
         &["object 2", "1 triangle"],
     );
     // Bytes after the counts: the vertices, triangles, the mesh object's material record
-    // and the 3 Bézier patches.
+    // and texture records, and the 3 Bézier patches.
     let h = Header::parse(&b).unwrap();
     let left = h.meta.end() as usize - verts;
-    assert_eq!(left, 32 * v + 12 * 4 + MATERIAL_RECORD + 3 * 192);
+    assert_eq!(left, 32 * v + 12 * 4 + MATERIAL_RECORD + TEXTURE_FLAGS + 3 * 192);
     let fit = ((left - 32 * v) / 12) as u32;
     for (what, at, n) in [
         ("huge vertex count", vcount, u32::MAX),
@@ -420,4 +423,167 @@ fn every_damaged_mesh_byte_is_handled() {
         reseal_all(&mut c);
         assert!(Store::from_bytes(&c).is_err(), "metadata cut by {cut}");
     }
+}
+
+/// The mesh fixture's object 2 with every kind of texture: 2×1 base colour, 1×1 the others.
+fn textured_fixture() -> Fixture {
+    let mut f = mesh_fixture();
+    let v = f.meta.objects[2].mesh.as_ref().unwrap().positions.len();
+    let image = |w: u32, h: u32, seed: u8| TextureImage {
+        width: w,
+        height: h,
+        texels: (0..w * h)
+            .map(|i| [seed, i as u8 * 40, 255 - seed, 255])
+            .collect(),
+    };
+    f.meta.objects[2].material = ObjectMaterial {
+        model: meta::MATERIAL_METALLIC_ROUGHNESS,
+        metallic: 1.0,
+        roughness: 0.5,
+        emission: [2.0, 1.0, 0.0],
+    };
+    f.meta.objects[2].textures = Some(ObjectTextures {
+        texcoords: (0..v).map(|i| [i as f32 * 0.5, -1.25]).collect(),
+        tangents: (0..v)
+            .map(|i| [1.0, 0.0, 0.0, if i % 2 == 0 { 1.0 } else { -1.0 }])
+            .collect(),
+        normal_scale: 0.75,
+        occlusion_strength: 0.5,
+        images: TextureKind::ALL
+            .into_iter()
+            .enumerate()
+            .map(|(k, kind)| (kind, image(2 - (k > 0) as u32, 1, 30 * k as u8)))
+            .collect(),
+    });
+    f
+}
+
+#[test]
+fn object_textures_round_trip_and_damaged_ones_are_typed_errors() {
+    let f = textured_fixture();
+    let (_dir, path) = temp_store("textures.oslf");
+    write(&path, &f);
+    let store = Store::open(&path).unwrap();
+    assert_eq!(store.header().version, VERSION);
+    assert_eq!(store.meta(), &f.meta);
+    let b = std::fs::read(&path).unwrap();
+    let flags_at = material_offset(&b, &f.meta, 2) + MATERIAL_RECORD;
+    assert_eq!(
+        u32::from_le_bytes(b[flags_at..flags_at + 4].try_into().unwrap()),
+        0x1f
+    );
+    let v = f.meta.objects[2].mesh.as_ref().unwrap().positions.len();
+    let tangents_at = flags_at + 12 + 8 * v;
+    let first_image = tangents_at + 16 * v;
+    let crafted = |at: usize, bytes: &[u8]| -> (u64, String) {
+        let mut c = b.clone();
+        c[at..at + bytes.len()].copy_from_slice(bytes);
+        reseal_all(&mut c);
+        match Store::from_bytes(&c) {
+            Err(Error::InvalidMetadata { offset, detail }) => (offset, detail),
+            other => panic!("{:?}", other.err()),
+        }
+    };
+    let bezier_flags = material_offset(&b, &f.meta, 0) + MATERIAL_RECORD;
+    for (what, at, bytes, offset, words) in [
+        (
+            "unknown flag",
+            flags_at,
+            0x3fu32.to_le_bytes().to_vec(),
+            flags_at,
+            vec!["object 2", "unknown bits"],
+        ),
+        (
+            "Bézier textures",
+            bezier_flags,
+            1u32.to_le_bytes().to_vec(),
+            bezier_flags,
+            vec!["object 0", "Bézier"],
+        ),
+        (
+            "occlusion strength 2",
+            flags_at + 8,
+            2f32.to_le_bytes().to_vec(),
+            flags_at + 8,
+            vec!["object 2", "occlusion strength 2"],
+        ),
+        (
+            "texcoord NaN",
+            flags_at + 12,
+            f32::NAN.to_le_bytes().to_vec(),
+            flags_at + 12,
+            vec!["texture coordinate"],
+        ),
+        (
+            "tangent w 0.5",
+            tangents_at + 12,
+            0.5f32.to_le_bytes().to_vec(),
+            tangents_at,
+            vec!["object 2", "vertex 0 tangent"],
+        ),
+        (
+            "long tangent",
+            tangents_at + 16,
+            2f32.to_le_bytes().to_vec(),
+            tangents_at + 16,
+            vec!["vertex 1 tangent"],
+        ),
+        (
+            "zero width",
+            first_image,
+            0u32.to_le_bytes().to_vec(),
+            first_image,
+            vec!["base colour texture of 0×1"],
+        ),
+        (
+            "huge",
+            first_image,
+            16385u32.to_le_bytes().to_vec(),
+            first_image,
+            vec!["16385×1"],
+        ),
+        // 1×1 where the frame holds 2×1: the frame decompresses past the size asked for.
+        (
+            "short size",
+            first_image,
+            1u32.to_le_bytes().to_vec(),
+            first_image + 12,
+            vec!["base colour texture"],
+        ),
+    ] {
+        let (got, detail) = crafted(at, &bytes);
+        assert_eq!(got, offset as u64, "{what}: {detail}");
+        for w in words {
+            assert!(detail.contains(w), "{what}: {detail}");
+        }
+    }
+    // A frame length past the section's end is refused, not read.
+    let (_, detail) = crafted(first_image + 8, &u32::MAX.to_le_bytes());
+    assert!(detail.contains("metadata"), "{detail}");
+}
+
+#[test]
+fn writers_refuse_textures_that_do_not_fit_the_mesh() {
+    let mut f = textured_fixture();
+    f.meta.objects[2].textures.as_mut().unwrap().texcoords.pop();
+    let (_dir, path) = temp_store("bad-textures.oslf");
+    let e = StoreWriter::create(&path, &f.meta, &f.points, &f.maps)
+        .err()
+        .expect("refused");
+    assert!(
+        e.to_string()
+            .contains("4 texture coordinates for 5 vertices"),
+        "{e}"
+    );
+    let mut f = textured_fixture();
+    f.meta.objects[0].textures = f.meta.objects[2].textures.clone();
+    let e = StoreWriter::create(&path, &f.meta, &f.points, &f.maps)
+        .err()
+        .expect("refused");
+    assert!(
+        e.to_string()
+            .contains("object 0: a Bézier object cannot hold textures"),
+        "{e}"
+    );
+    assert!(!path.exists());
 }

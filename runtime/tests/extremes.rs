@@ -50,6 +50,7 @@ fn synthetic_store_with(dir: &Path, points: usize, map_res: u32, cube_res: u32) 
             patch_count: 1,
             mesh: None,
             material: Default::default(),
+            textures: None,
         }],
         patches: vec![patch],
         bake: BakeParams {

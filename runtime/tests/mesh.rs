@@ -127,6 +127,7 @@ fn write_mesh_store() -> std::path::PathBuf {
                 patch_count: 1,
                 mesh: None,
                 material: Default::default(),
+                textures: None,
             },
             ObjectInfo {
                 name: "bent grid".into(),
@@ -143,6 +144,7 @@ fn write_mesh_store() -> std::path::PathBuf {
                     roughness: 0.55,
                     emission: [0.0; 3],
                 },
+                textures: None,
             },
         ],
         patches: vec![plane],

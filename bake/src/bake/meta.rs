@@ -36,6 +36,7 @@ pub fn store_meta(scene: &Scene, surfaces: &Surfaces) -> StoreMeta {
             patch_count,
             mesh,
             material: object_material(scene, o),
+            textures: None,
         });
         patches.extend(o.object_patches.iter().map(|p| Patch {
             control_points: p.cp.map(|c| c.to_array()),

@@ -91,6 +91,7 @@ pub fn fixture(spec: Spec) -> Fixture {
         patch_count: split,
         mesh: None,
         material: Default::default(),
+        textures: None,
     }];
     objects.push(ObjectInfo {
         name: "lid".into(),
@@ -100,6 +101,7 @@ pub fn fixture(spec: Spec) -> Fixture {
         patch_count: spec.patches as u32 - split,
         mesh: None,
         material: Default::default(),
+        textures: None,
     });
     let meta = StoreMeta {
         objects,
@@ -351,6 +353,7 @@ pub fn with_mesh(mut f: Fixture, spec: Spec) -> Fixture {
         patch_count: 4,
         mesh: Some(test_mesh()),
         material: Default::default(),
+        textures: None,
     });
     let object = (f.meta.objects.len() - 1) as u32;
     let old_points = f.points.len();
