@@ -368,7 +368,10 @@ fn damaged_mesh_records_are_typed_errors() {
     // and texture records, and the 3 Bézier patches.
     let h = Header::parse(&b).unwrap();
     let left = h.meta.end() as usize - verts;
-    assert_eq!(left, 32 * v + 12 * 4 + MATERIAL_RECORD + TEXTURE_FLAGS + 3 * 192);
+    assert_eq!(
+        left,
+        32 * v + 12 * 4 + MATERIAL_RECORD + TEXTURE_FLAGS + 3 * 192
+    );
     let fit = ((left - 32 * v) / 12) as u32;
     for (what, at, n) in [
         ("huge vertex count", vcount, u32::MAX),

@@ -1,16 +1,20 @@
 // G-buffer pass: rasterizes the tessellated Bézier patches and the triangle meshes
 // (geometry.rs) and writes, per pixel, the world position with the sample-map id, and the
 // octahedral-encoded shading normal with the map parameters (u, v). shade.wgsl reads these.
-// Bindings in the order of `GBufferPipeline::bind_group_layout` (pipelines.rs).
+// A store with textured objects (format version 8) draws with fs_textured instead, which also
+// writes each pixel's material from the object's textures (group 1, bound per object; the
+// functions below fs_main have their CPU twins in reference/material.rs, in the same order).
+// Bindings in the order of `GBufferPipeline::bind_group_layout` and `ObjectTextures`
+// (pipelines.rs, textures.rs).
 
 struct Params {
     view_proj: mat4x4<f32>,
     camera_pos: vec4<f32>,
 };
 
-// One vertex: position and map id + 1 (as f32, exact below 2^24); normal and u; v and the
+// One vertex: position and map id + 1 (as f32, exact below 2^24); normal and u; v, the
 // atlas grid k (0 for a Bézier patch; for a mesh the id is its first map and (u, v) its atlas
-// uv, made page-local per fragment).
+// uv, made page-local per fragment) and a textured mesh's texture coordinates.
 struct GVertex {
     position_patch: vec4<f32>,
     normal_u: vec4<f32>,
@@ -21,12 +25,13 @@ struct GVertex {
 @group(0) @binding(1) var<storage, read> vertices: array<GVertex>;
 
 struct VsOut {
-    @builtin(position) clip: vec4<f32>,
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) @interpolate(flat) patch_id: f32,
     @location(4) @interpolate(flat) grid: f32,
+    @location(5) texcoord: vec2<f32>,
 };
 
 @vertex
@@ -39,6 +44,7 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VsOut {
     out.uv = vec2<f32>(vert.normal_u.w, vert.v.x);
     out.patch_id = vert.position_patch.w;
     out.grid = vert.v.y;
+    out.texcoord = vert.v.zw;
     return out;
 }
 
@@ -59,6 +65,10 @@ struct FsOut {
 
 @fragment
 fn fs_main(in: VsOut) -> FsOut {
+    return gbuffer(in);
+}
+
+fn gbuffer(in: VsOut) -> FsOut {
     var n = in.normal;
     let l2 = dot(n, n);
     if (l2 > 1e-20) { n = n * inverseSqrt(l2); } else { n = vec3<f32>(0.0, 0.0, 1.0); }
@@ -75,5 +85,88 @@ fn fs_main(in: VsOut) -> FsOut {
     var out: FsOut;
     out.position_patch = vec4<f32>(in.world, id);
     out.normal_uv = vec4<f32>(oct_encode(n), clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)));
+    return out;
+}
+
+// ---- the material of textured objects (format docs, "Object textures") ----
+
+// The object's textures: which it has (bit i: TextureKind::ALL[i]), and one texture per kind
+// (1×1 where it has none).
+struct TextureParams {
+    flags: u32,
+    normal_scale: f32,
+    occlusion_strength: f32,
+    pad: u32,
+};
+
+@group(1) @binding(0) var<uniform> T: TextureParams;
+@group(1) @binding(1) var tex_base_color: texture_2d<f32>;
+@group(1) @binding(2) var tex_metallic_roughness: texture_2d<f32>;
+
+struct FsTexturedOut {
+    @location(0) position_patch: vec4<f32>,
+    @location(1) normal_uv: vec4<f32>,
+    @location(2) material: vec4<u32>,
+};
+
+// The sRGB transfer function, encoded to linear (IEC 61966-2-1).
+fn srgb_to_linear(c: f32) -> f32 {
+    if (c <= 0.04045) { return c / 12.92; }
+    return pow((c + 0.055) / 1.055, 2.4);
+}
+
+// Texel (x, y) of `t` with repeat, its RGB decoded from sRGB when `srgb`.
+fn texel(t: texture_2d<f32>, x: i32, y: i32, srgb: bool) -> vec3<f32> {
+    let size = vec2<i32>(textureDimensions(t));
+    let p = vec2<i32>(((x % size.x) + size.x) % size.x, ((y % size.y) + size.y) % size.y);
+    let c = textureLoad(t, p, 0).rgb;
+    if (!srgb) { return c; }
+    return vec3<f32>(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z));
+}
+
+// Bilinear lookup at texture coordinates `uv` (v up), repeating; as the bake's
+// ImageTexture::eval.
+fn bilinear(t: texture_2d<f32>, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
+    let size = vec2<f32>(textureDimensions(t));
+    let u = uv.x - floor(uv.x);
+    let v = uv.y - floor(uv.y);
+    let x = u * size.x - 0.5;
+    let y = (1.0 - v) * size.y - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = clamp(x - x0, 0.0, 1.0);
+    let fy = clamp(y - y0, 0.0, 1.0);
+    let ix = i32(x0);
+    let iy = i32(y0);
+    let top = mix(texel(t, ix, iy, srgb), texel(t, ix + 1, iy, srgb), fx);
+    let bottom = mix(texel(t, ix, iy + 1, srgb), texel(t, ix + 1, iy + 1, srgb), fx);
+    return mix(top, bottom, fy);
+}
+
+// The pixel's material, packed for shade.wgsl (`material_of` there): base colour RGB,
+// metallic, roughness, occlusion as 16-bit unorm pairs; a kind the object lacks reads 0 and
+// shade.wgsl takes the object's own value for it.
+fn material_texel(uv: vec2<f32>) -> vec4<u32> {
+    var base = vec3<f32>(0.0);
+    var mr = vec3<f32>(0.0);
+    if ((T.flags & 1u) != 0u) { base = bilinear(tex_base_color, uv, true); }
+    if ((T.flags & 2u) != 0u) { mr = bilinear(tex_metallic_roughness, uv, false); }
+    return vec4<u32>(
+        pack2x16unorm(base.xy),
+        pack2x16unorm(vec2<f32>(base.z, mr.z)),
+        pack2x16unorm(vec2<f32>(mr.y, 1.0)),
+        T.flags,
+    );
+}
+
+@fragment
+fn fs_textured(in: VsOut) -> FsTexturedOut {
+    let g = gbuffer(in);
+    var uv = in.texcoord;
+    if (!(abs(uv.x) < 1.0e30 && abs(uv.y) < 1.0e30)) { uv = vec2<f32>(0.0); }
+    var out: FsTexturedOut;
+    out.position_patch = g.position_patch;
+    out.normal_uv = g.normal_uv;
+    out.material = material_texel(uv);
     return out;
 }

@@ -9,7 +9,8 @@ use oslf_format::Store;
 use oslf_geometry::BezierPatch;
 
 /// One vertex as `GVertex` in gbuffer.wgsl: position and map id + 1 (exact as `f32` below
-/// 2²⁴), the unit normal and u, then v and the atlas grid `k` (`v[1]`; 0 for a Bézier patch,
+/// 2²⁴), the unit normal and u, then v, the atlas grid `k` (`v[1]`) and a textured mesh's
+/// texture coordinates (`v[2..4]`; 0 for a Bézier patch's `k` and coordinates,
 /// whose id is its map. For a mesh, the id is the object's first map and (u, v) its atlas uv:
 /// the G-buffer shader adds the page `py·k + px` per fragment and makes (u, v) page-local).
 #[repr(C)]
@@ -49,6 +50,9 @@ pub struct ObjectMesh {
     pub vertices: Vec<GVertex>,
     /// Triangle list (three indices per triangle).
     pub indices: Vec<u32>,
+    /// The G-buffer pass's draws: ranges of `indices` and the object each belongs to (whose
+    /// textures it binds; all Bézier patches form one range, of the first Bézier object).
+    pub draws: Vec<(std::ops::Range<u32>, u32)>,
     /// Bounds of the control points and mesh vertices relative to `origin`.
     relative_lo: Vec3,
     relative_hi: Vec3,
@@ -90,8 +94,14 @@ impl ObjectMesh {
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         tessellate_patches(&patches, &world, max_error, &mut vertices, &mut indices);
+        let mut draws = Vec::new();
+        if let Some(first) = store.meta().objects.iter().position(|o| o.mesh.is_none()) {
+            draws.push((0..indices.len() as u32, first as u32));
+        }
         for m in &meshes {
+            let start = indices.len() as u32;
             m.emit(relative, &mut vertices, &mut indices);
+            draws.push((start..indices.len() as u32, m.object));
         }
         let (relative_lo, relative_hi) = if empty {
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
@@ -105,6 +115,7 @@ impl ObjectMesh {
             materials,
             vertices,
             indices,
+            draws,
             relative_lo,
             relative_hi,
         }
@@ -162,6 +173,10 @@ struct WorldMesh {
     triangles: Vec<[u32; 3]>,
     first_map: u32,
     grid: u32,
+    /// Its texture coordinates (format version 8), if it has textures.
+    texcoords: Option<Vec<[f32; 2]>>,
+    /// Its index in the store's objects.
+    object: u32,
 }
 
 impl WorldMesh {
@@ -174,12 +189,24 @@ impl WorldMesh {
     ) {
         let base = vertices.len() as u32;
         let tag = self.first_map as f32 + 1.0;
-        for ((&p, n), uv) in self.positions.iter().zip(&self.normals).zip(&self.uvs) {
+        for (k, ((&p, n), uv)) in self
+            .positions
+            .iter()
+            .zip(&self.normals)
+            .zip(&self.uvs)
+            .enumerate()
+        {
             let p = relative(p);
+            let tc = self
+                .texcoords
+                .as_ref()
+                .and_then(|t| t.get(k))
+                .copied()
+                .unwrap_or_default();
             vertices.push(GVertex {
                 position_patch: [p.x, p.y, p.z, tag],
                 normal_u: [n.x, n.y, n.z, uv[0]],
-                v: [uv[1], self.grid as f32, 0.0, 0.0],
+                v: [uv[1], self.grid as f32, tc[0], tc[1]],
             });
         }
         for t in &self.triangles {
@@ -255,6 +282,8 @@ fn world_objects(
                     triangles: m.triangles.clone(),
                     first_map: object.first_patch,
                     grid: m.atlas_grid,
+                    texcoords: object.textures.as_ref().map(|t| t.texcoords.clone()),
+                    object: i as u32,
                 });
             }
         }

@@ -97,6 +97,7 @@ pub mod renderer;
 pub mod replay;
 #[cfg(test)]
 mod shader_layout;
+mod textures;
 pub mod wgsl_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};

@@ -9,6 +9,9 @@ use crate::params::ShadeUniform;
 
 /// The G-buffer's colour targets: position and patch id; octahedral normal and (u, v).
 pub(crate) const GBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The G-buffer's material target of a store with textured objects (gbuffer.wgsl
+/// `fs_textured`): 16-bit unorm pairs, and the object's texture flags.
+pub(crate) const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 /// The G-buffer pass's depth buffer.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The depth the G-buffer pass clears to: a pixel is covered where its depth is below it
@@ -99,8 +102,15 @@ pub(crate) struct GBufferPipeline {
 }
 
 impl GBufferPipeline {
-    /// Creates the pipeline and binds `uniform` (the [`ShadeUniform`] buffer) and `vertices`.
-    pub fn new(device: &wgpu::Device, uniform: &wgpu::Buffer, vertices: &wgpu::Buffer) -> Self {
+    /// Creates the pipeline and binds `uniform` (the [`ShadeUniform`] buffer) and `vertices`;
+    /// with `textures` (the layout of the objects' texture groups) it draws with
+    /// `fs_textured` into a third target, [`MATERIAL_FORMAT`].
+    pub fn new(
+        device: &wgpu::Device,
+        uniform: &wgpu::Buffer,
+        vertices: &wgpu::Buffer,
+        textures: Option<&wgpu::BindGroupLayout>,
+    ) -> Self {
         let layout = Self::bind_group_layout(device);
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer"),
@@ -116,7 +126,7 @@ impl GBufferPipeline {
                 },
             ],
         });
-        let pipeline = Self::render_pipeline(device, &layout);
+        let pipeline = Self::render_pipeline(device, &layout, textures);
         Self { pipeline, group }
     }
 
@@ -131,10 +141,12 @@ impl GBufferPipeline {
         })
     }
 
-    /// Triangle lists without culling, depth test `Less`, two [`GBUFFER_FORMAT`] targets.
+    /// Triangle lists without culling, depth test `Less`, two [`GBUFFER_FORMAT`] targets (and
+    /// the [`MATERIAL_FORMAT`] one with `textures`).
     fn render_pipeline(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
+        textures: Option<&wgpu::BindGroupLayout>,
     ) -> wgpu::RenderPipeline {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("gbuffer.wgsl"),
@@ -142,14 +154,25 @@ impl GBufferPipeline {
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer"),
-            bind_group_layouts: &[Some(layout)],
+            bind_group_layouts: &[Some(layout), textures][..1 + usize::from(textures.is_some())],
             immediate_size: 0,
         });
-        let target = Some(wgpu::ColorTargetState {
-            format: GBUFFER_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        });
+        let target = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let targets = [
+            target(GBUFFER_FORMAT),
+            target(GBUFFER_FORMAT),
+            target(MATERIAL_FORMAT),
+        ];
+        let (entry, targets) = match textures {
+            Some(_) => ("fs_textured", &targets[..]),
+            None => ("fs_main", &targets[..2]),
+        };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer"),
             layout: Some(&pipeline_layout),
@@ -174,9 +197,9 @@ impl GBufferPipeline {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
-                targets: &[target.clone(), target],
+                targets,
             }),
             multiview_mask: None,
             cache: None,
@@ -184,8 +207,8 @@ impl GBufferPipeline {
     }
 }
 
-/// The override constants of shade.wgsl that change from frame to frame (the rest, POOLS and
-/// FACE_SHIFT, are fixed per renderer): one compute pipeline per distinct key.
+/// The override constants of shade.wgsl that change from frame to frame (the rest, POOLS,
+/// FACE_SHIFT and TEXTURED, are fixed per renderer): one compute pipeline per distinct key.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub(crate) struct ShadeKey {
     /// TERMS: the uniform's `terms`.
@@ -230,7 +253,12 @@ impl ShadeKey {
     }
 
     /// The override constants by name.
-    pub(crate) fn constants(&self, pools: u32, face_shift: u32) -> Vec<(&'static str, f64)> {
+    pub(crate) fn constants(
+        &self,
+        pools: u32,
+        face_shift: u32,
+        textured: bool,
+    ) -> Vec<(&'static str, f64)> {
         vec![
             ("TERMS", f64::from(self.terms)),
             ("BLEND", f64::from(self.blend)),
@@ -243,6 +271,7 @@ impl ShadeKey {
             ("DEPTH", f64::from(u32::from(self.depth))),
             ("FILTER", f64::from(u32::from(self.filter))),
             ("SPLIT_SUM", f64::from(u32::from(self.split_sum))),
+            ("TEXTURED", f64::from(u32::from(textured))),
         ]
     }
 }
@@ -275,6 +304,8 @@ pub(crate) struct ShadeBindings<'a> {
     pub gb_depth: &'a wgpu::TextureView,
     /// `prefiltered`: the prefiltered environment ([`crate::prefilter`]).
     pub prefiltered: &'a wgpu::TextureView,
+    /// `gb_material`: the G-buffer's material target (1×1 unless the store has textures).
+    pub gb_material: &'a wgpu::TextureView,
 }
 
 /// Binding of `pool0`; the pool arrays follow it.
@@ -287,6 +318,8 @@ const OUTPUT_BINDING: u32 = 16;
 const GB_DEPTH_BINDING: u32 = 17;
 /// Binding of `prefiltered`.
 const PREFILTERED_BINDING: u32 = 18;
+/// Binding of `gb_material`.
+const GB_MATERIAL_BINDING: u32 = 19;
 
 /// The shading pass: its bind-group layout, shader module, and the compute pipelines built so
 /// far, one per [`ShadeKey`].
@@ -298,13 +331,16 @@ pub(crate) struct ShadePipelines {
     pools: u32,
     /// FACE_SHIFT: 2^face_shift faces side by side in each pool layer.
     face_shift: u32,
+    /// TEXTURED: the store has textured objects (the G-buffer has its material target).
+    textured: bool,
     pipelines: HashMap<ShadeKey, wgpu::ComputePipeline>,
 }
 
 impl ShadePipelines {
-    /// Compiles shade.wgsl for a pool of `pools` arrays with 2^`face_shift` faces per layer;
+    /// Compiles shade.wgsl for a pool of `pools` arrays with 2^`face_shift` faces per layer
+    /// (and for a G-buffer with a material target where `textured`);
     /// pipelines are built on first use ([`ShadePipelines::prepare`]).
-    pub fn new(device: &wgpu::Device, pools: u32, face_shift: u32) -> Self {
+    pub fn new(device: &wgpu::Device, pools: u32, face_shift: u32, textured: bool) -> Self {
         let layout = Self::bind_group_layout(device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shade.wgsl"),
@@ -321,6 +357,7 @@ impl ShadePipelines {
             pipeline_layout,
             pools,
             face_shift,
+            textured,
             pipelines: HashMap::new(),
         }
     }
@@ -361,6 +398,11 @@ impl ShadePipelines {
             d2,
         ));
         entries.push(texture_entry(PREFILTERED_BINDING, float, d2a));
+        entries.push(texture_entry(
+            GB_MATERIAL_BINDING,
+            wgpu::TextureSampleType::Uint,
+            d2,
+        ));
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shade"),
             entries: &entries,
@@ -427,6 +469,10 @@ impl ShadePipelines {
             binding: PREFILTERED_BINDING,
             resource: wgpu::BindingResource::TextureView(b.prefiltered),
         });
+        entries.push(wgpu::BindGroupEntry {
+            binding: GB_MATERIAL_BINDING,
+            resource: wgpu::BindingResource::TextureView(b.gb_material),
+        });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shade"),
             layout: &self.layout,
@@ -439,7 +485,7 @@ impl ShadePipelines {
         if self.pipelines.contains_key(&key) {
             return;
         }
-        let constants = key.constants(self.pools, self.face_shift);
+        let constants = key.constants(self.pools, self.face_shift, self.textured);
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("shade"),
             layout: Some(&self.pipeline_layout),

@@ -78,6 +78,20 @@ fn the_vertex_and_patch_records_match() {
         v
     });
     check_struct(&gbuffer, "GVertex", &vertex, size_of::<GVertex>(), false);
+    use crate::textures::TextureParams;
+    let params = fields!(TextureParams {
+        flags,
+        normal_scale,
+        occlusion_strength,
+        pad
+    });
+    check_struct(
+        &gbuffer,
+        "TextureParams",
+        &params,
+        size_of::<TextureParams>(),
+        false,
+    );
     let shade = parse("shade.wgsl", SHADE_WGSL);
     let (members, span) = wgsl_struct(&shade, "PatchGpu");
     assert_eq!(span as usize, crate::buffers::PATCH_VEC4S * 16);
@@ -98,7 +112,8 @@ fn the_vertex_and_patch_records_match() {
 /// Every constant of shade.wgsl has the value of its Rust twin, and every one has a twin.
 #[test]
 fn shader_constants_are_the_rust_constants() {
-    let twins: [(&str, f64); 8] = [
+    let twins: [(&str, f64); 9] = [
+        ("MIN_ALPHA", f64::from(crate::params::MIN_ALPHA)),
         ("INVALID", f64::from(oslf_format::INVALID_INDEX)),
         ("PI", f64::from(std::f32::consts::PI)),
         ("FAR", f64::from(crate::face::FAR_DISTANCE)),
@@ -149,7 +164,7 @@ fn pipeline_overrides_are_the_shaders() {
         .map(|(_, o)| o.name.clone().unwrap_or_default())
         .collect();
     let mut rust: Vec<_> = crate::pipelines::ShadeKey::default()
-        .constants(1, 0)
+        .constants(1, 0, false)
         .into_iter()
         .map(|(n, _)| n.to_string())
         .collect();

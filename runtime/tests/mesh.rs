@@ -104,13 +104,65 @@ fn map_of(points: &[(u32, [f32; 2])], res: u32) -> Vec<[u32; 4]> {
 /// The synthetic store's path, written once per test binary (the tests run in parallel).
 fn mesh_store() -> std::path::PathBuf {
     static PATH: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
-    PATH.get_or_init(write_mesh_store).clone()
+    PATH.get_or_init(|| write_mesh_store(None)).clone()
+}
+
+/// The same store with the grid textured ([`grid_textures`]; format version 8).
+fn textured_store() -> std::path::PathBuf {
+    static PATH: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    PATH.get_or_init(|| write_mesh_store(Some(grid_textures())))
+        .clone()
+}
+
+/// Texture coordinates of the grid at atlas uv (x, y): affine, so a pixel's follow from its
+/// atlas uv, and past [0, 1] so lookups repeat.
+fn texcoord_at(x: f32, y: f32) -> [f32; 2] {
+    [2.0 * x - 0.3, 1.5 * y + 0.25]
+}
+
+/// A 5×3 base-colour texture of varied sRGB codes and a 3×2 metallic-roughness one (roughness
+/// 0.1–0.9, metallic 0–1) over the grid.
+fn grid_textures() -> oslf_format::ObjectTextures {
+    use oslf_format::{TextureImage, TextureKind};
+    let image = |w: u32, h: u32, f: &dyn Fn(u32) -> [u8; 4]| TextureImage {
+        width: w,
+        height: h,
+        texels: (0..w * h).map(f).collect(),
+    };
+    let base = image(5, 3, &|i| {
+        [
+            (i * 53 % 256) as u8,
+            (i * 97 % 256) as u8,
+            (255 - i * 17) as u8,
+            255,
+        ]
+    });
+    let mr = image(3, 2, &|i| [0, (25 + i * 40) as u8, (i * 51) as u8, 255]);
+    oslf_format::ObjectTextures {
+        texcoords: grid_mesh()
+            .uvs
+            .iter()
+            .map(|uv| texcoord_at(uv[0], uv[1]))
+            .collect(),
+        tangents: Vec::new(),
+        normal_scale: 1.0,
+        occlusion_strength: 1.0,
+        images: vec![
+            (TextureKind::BaseColor, base),
+            (TextureKind::MetallicRoughness, mr),
+        ],
+    }
 }
 
 /// Writes the synthetic store: object 0 a Bézier plane (map 0), object 1 the bent grid (maps
 /// 1..5), 4 sample points per map, cubes of the map's colour with per-texel variation, an
 /// environment cube, distances.
-fn write_mesh_store() -> std::path::PathBuf {
+fn write_mesh_store(textures: Option<oslf_format::ObjectTextures>) -> std::path::PathBuf {
+    let name = if textures.is_some() {
+        "textured.oslf"
+    } else {
+        "mesh.oslf"
+    };
     let map_res = 8;
     let cube_res = 8;
     let plane = Patch {
@@ -144,7 +196,7 @@ fn write_mesh_store() -> std::path::PathBuf {
                     roughness: 0.55,
                     emission: [0.0; 3],
                 },
-                textures: None,
+                textures,
             },
         ],
         patches: vec![plane],
@@ -215,7 +267,7 @@ fn write_mesh_store() -> std::path::PathBuf {
     // share it (statics are never dropped).
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(env!("CARGO_CRATE_NAME"));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("mesh.oslf");
+    let path = dir.join(name);
     let mut w = StoreWriter::create(&path, &meta, &points, &maps).unwrap();
     for (cube, c) in colors.iter().enumerate() {
         let mut image = CubeImage::black(cube_res, true);
@@ -240,15 +292,24 @@ fn write_mesh_store() -> std::path::PathBuf {
 }
 
 fn open() -> (Renderer, StoreCubes) {
-    let store = oslf_format::Store::open(&mesh_store()).unwrap();
+    open_path(&mesh_store())
+}
+
+fn open_path(path: &std::path::Path) -> (Renderer, StoreCubes) {
+    let store = oslf_format::Store::open(path).unwrap();
     assert_eq!(store.meta().map_count(), 5);
     let cubes = StoreCubes::decode(&store).unwrap();
     let r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
     (r, cubes)
 }
 
-fn check(r: &mut Renderer, cubes: &StoreCubes, params: ShadingParams, label: &str) {
-    common::check_parity(r, cubes, params, (W, H), label);
+fn check(
+    r: &mut Renderer,
+    cubes: &StoreCubes,
+    params: ShadingParams,
+    label: &str,
+) -> Vec<[f32; 4]> {
+    common::check_parity(r, cubes, params, (W, H), label)
 }
 
 #[test]
@@ -490,4 +551,85 @@ fn a_bezier_object_and_a_mesh_object_both_render() {
     }
     println!("plane {plane} pixels, mesh {mesh} pixels");
     assert!(plane > 300 && mesh > 300, "plane {plane}, mesh {mesh}");
+}
+
+/// A textured object (format version 8): the G-buffer's material at each of its pixels is the
+/// CPU reference's `material_texel` at the pixel's texture coordinates (within 1e-3 per value),
+/// and the GPU matches the CPU reference in the pbr mode with and without the store's
+/// material, and in the glossy modes.
+#[test]
+fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference() {
+    use oslf_runtime::reference::material::{material_texel, unpack2x16unorm};
+    let (mut r, cubes) = open_path(&textured_store());
+    let textures = grid_textures();
+    let pbr = ShadingParams {
+        mode: Mode::Pbr,
+        metallic: 1.0,
+        roughness: 0.2,
+        m: 8,
+        ..ShadingParams::default()
+    };
+    let own = check(&mut r, &cubes, pbr, "pbr, textured");
+    let gbuffer = r.read_gbuffer().unwrap();
+    let (mut checked, mut worst) = (0, 0f32);
+    for g in &gbuffer {
+        let id = g.position_patch[3];
+        if id < 1.5 {
+            assert_eq!(g.material[3], 0, "an untextured pixel has texture flags");
+            continue;
+        }
+        let page = (id - 1.5) as u32;
+        let (px, py) = ((page % K) as f32, (page / K) as f32);
+        let x = (px + g.normal_uv[2]) / K as f32;
+        let y = (py + g.normal_uv[3]) / K as f32;
+        let want = material_texel(&textures, glam::Vec2::from(texcoord_at(x, y)));
+        assert_eq!(g.material[3], want[3], "texture flags");
+        for (got, want) in g.material.iter().zip(&want).take(3) {
+            let (a, b) = (unpack2x16unorm(*got), unpack2x16unorm(*want));
+            worst = worst.max((a - b).abs().max_element());
+        }
+        checked += 1;
+    }
+    println!("{checked} textured pixels, largest material difference {worst:.2e}");
+    assert!(checked > 500, "only {checked} textured pixels");
+    assert!(worst < 1e-3, "material differs by {worst}");
+    // The textures change the picture: against the untextured store, most grid pixels differ.
+    let (mut plain, _) = open();
+    let options = RenderOptions {
+        width: W,
+        height: H,
+        ..Default::default()
+    };
+    let camera = plain.default_view();
+    let before = plain.render(&camera, &pbr, &options).unwrap().pixels;
+    let changed = own
+        .iter()
+        .zip(&before)
+        .zip(&gbuffer)
+        .filter(|((a, b), g)| {
+            g.position_patch[3] > 1.5 && (0..3).any(|c| (a[c] - b[c]).abs() > 1e-3)
+        })
+        .count();
+    assert!(
+        changed * 10 > checked * 9,
+        "only {changed} of {checked} pixels changed"
+    );
+    for (params, label) in [
+        (
+            ShadingParams {
+                object_material: false,
+                ..pbr
+            },
+            "pbr, textured, the parameters' factors",
+        ),
+        (
+            ShadingParams {
+                mode: Mode::Glossy,
+                ..pbr
+            },
+            "glossy, textured",
+        ),
+    ] {
+        check(&mut r, &cubes, params, label);
+    }
 }

@@ -25,9 +25,21 @@ pub fn store_meta(scene: &Scene, surfaces: &Surfaces) -> StoreMeta {
                     uvs: m.uvs.iter().map(|uv| uv.to_array()).collect(),
                     triangles: m.triangles.clone(),
                 };
-                (Affine3A::IDENTITY, atlas.grid * atlas.grid, Some(mesh))
+                let material = scene.materials.get(o.material as usize);
+                let (mesh, textures) = match (material, &o.mesh) {
+                    (Some(material), Some(source)) => {
+                        super::textures::object_textures(material, mesh, &source.mesh)
+                    }
+                    _ => (mesh, None),
+                };
+                (
+                    Affine3A::IDENTITY,
+                    atlas.grid * atlas.grid,
+                    Some((mesh, textures)),
+                )
             }
         };
+        let (mesh, textures) = mesh.map_or((None, None), |(m, t)| (Some(m), t));
         objects.push(ObjectInfo {
             name: o.name.clone(),
             transform: Mat4::from(transform).to_cols_array_2d(),
@@ -36,7 +48,7 @@ pub fn store_meta(scene: &Scene, surfaces: &Surfaces) -> StoreMeta {
             patch_count,
             mesh,
             material: object_material(scene, o),
-            textures: None,
+            textures,
         });
         patches.extend(o.object_patches.iter().map(|p| Patch {
             control_points: p.cp.map(|c| c.to_array()),
@@ -81,8 +93,8 @@ pub fn object_centre(scene: &Scene) -> Vec3 {
     (lo + hi) * 0.5
 }
 
-/// What the store records of object `o`'s material: its model, factors and emission (its
-/// textures are not recorded yet; a metallic-roughness texture's factors are the model's).
+/// What the store records of object `o`'s material: its model, factors and emission (a mesh
+/// object's image textures go to its texture record, [`super::textures`]).
 fn object_material(scene: &Scene, o: &crate::scene::OslfObject) -> oslf_format::ObjectMaterial {
     let Some(m) = scene.materials.get(o.material as usize) else {
         return Default::default();

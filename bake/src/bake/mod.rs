@@ -13,6 +13,7 @@ mod noise_report;
 mod report;
 mod sink;
 mod stages;
+mod textures;
 mod writable;
 
 use std::path::PathBuf;

@@ -24,6 +24,7 @@ mod cube;
 mod depth;
 mod feedback;
 mod glossy;
+pub mod material;
 mod mirror;
 mod patch;
 mod pixel;
@@ -72,6 +73,10 @@ pub struct GTexel {
     pub position_patch: [f32; 4],
     /// Octahedral normal, u, v (on the patch, or local to the atlas page).
     pub normal_uv: [f32; 4],
+    /// The material target of a store with textured objects (zero otherwise): base colour,
+    /// metallic, roughness, occlusion as 16-bit unorm pairs, the object's texture flags
+    /// ([`material::material_texel`]).
+    pub material: [u32; 4],
 }
 
 /// Everything the shader reads besides the G-buffer.

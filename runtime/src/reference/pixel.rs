@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+use super::material::unpack2x16unorm;
 use super::patch::{patch_du, patch_normal, tangent_frame};
 use super::random::pcg;
 use super::{CubeTexels, GTexel, Shader};
@@ -21,6 +22,32 @@ impl<C: CubeTexels> Shader<'_, C> {
             Some(m) if u.object_material != 0 && m[2] > 0.5 => glam::Vec2::new(m[0], m[1]),
             _ => glam::Vec2::new(u.metallic, u.alpha),
         }
+    }
+
+    /// The pixel's base colour and pbr material (metallic, GGX α): its object's, with what the
+    /// object's textures give (the G-buffer's material) in their place (as `surface_of`).
+    pub(super) fn surface_of(&self, patch: u32, g: &GTexel) -> (Vec3, glam::Vec2) {
+        let mut base = self
+            .colors
+            .get(patch as usize)
+            .copied()
+            .unwrap_or(Vec3::ONE);
+        let mut pbr = self.pbr_material(patch);
+        let m = g.material;
+        let rg = unpack2x16unorm(m[0]);
+        let bm = unpack2x16unorm(m[1]);
+        let ro = unpack2x16unorm(m[2]);
+        if m[3] & 1 != 0 {
+            base = Vec3::new(rg.x, rg.y, bm.x);
+        }
+        let own = self
+            .materials
+            .get(patch as usize)
+            .is_some_and(|o| o[2] > 0.5);
+        if m[3] & 2 != 0 && self.uniform.object_material != 0 && own {
+            pbr = glam::Vec2::new(bm.y, (ro.x * ro.x).max(crate::params::MIN_ALPHA));
+        }
+        (base, pbr)
     }
 
     /// Shades pixel `(px, py)` with G-buffer texel `g`: the background with alpha 0 off the
@@ -46,11 +73,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
         let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
         let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
-        let base = self
-            .colors
-            .get(patch as usize)
-            .copied()
-            .unwrap_or(Vec3::ONE);
+        let (base, pbr) = self.surface_of(patch, g);
         let mut spec = Vec3::ZERO;
         if u.terms & 2 != 0 {
             spec = self.mirror(&c, x, n, r);
@@ -60,7 +83,7 @@ impl<C: CubeTexels> Shader<'_, C> {
                 .get(patch as usize)
                 .map_or(Vec3::ZERO, |p| patch_du(p, pu, pv));
             let t = tangent_frame(n, du);
-            spec = self.glossy(&c, pixel, x, n, t, v, r, base, self.pbr_material(patch));
+            spec = self.glossy(&c, pixel, x, n, t, v, r, base, pbr);
         }
         if u.terms & 8 != 0 {
             spec *= base;

@@ -23,6 +23,7 @@ use crate::params::{
 use crate::pipelines::{GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines};
 use crate::pool::{CubePool, PoolLayout};
 use crate::prefilter::PrefilteredEnv;
+use crate::textures::ObjectTextureGroups;
 
 pub use crate::pool::DEFAULT_POOL_BYTES;
 
@@ -119,6 +120,8 @@ pub struct Renderer {
     sample_maps: wgpu::TextureView,
     pool: CubePool,
     gbuffer: GBufferPipeline,
+    /// The textured objects' texture groups (`None` when no object has textures).
+    textures: Option<ObjectTextureGroups>,
     shade: ShadePipelines,
     /// The shading pipeline of the current frame.
     current: ShadeKey,
@@ -153,6 +156,15 @@ fn check_textures_fit(limits: &wgpu::Limits, store: &Store) -> Result<()> {
             limits.max_texture_dimension_2d
         )));
     }
+    let textured = store.meta().objects.iter().any(|o| o.textures.is_some());
+    let material_bytes = 2 * 16 + 16;
+    if textured && limits.max_color_attachment_bytes_per_sample < material_bytes {
+        return Err(RuntimeError::Limits(format!(
+            "the store's textured objects need a G-buffer of {material_bytes} bytes per sample \
+             (three Rgba32 targets); the device allows {} (request the adapter's limits)",
+            limits.max_color_attachment_bytes_per_sample
+        )));
+    }
     if patch_count == 0 || patch_count > limits.max_texture_array_layers {
         return Err(RuntimeError::Limits(format!(
             "{patch_count} sample maps (patches and atlas pages) need as many layers; the device allows {}",
@@ -160,6 +172,25 @@ fn check_textures_fit(limits: &wgpu::Limits, store: &Store) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// The smallest metallic any pixel of a metallic-roughness object can have: its factor, or
+/// the smallest its metallic-roughness texture holds (`None` without such objects).
+fn min_object_metallic(meta: &oslf_format::StoreMeta) -> Option<f32> {
+    let kind = oslf_format::TextureKind::MetallicRoughness;
+    meta.objects
+        .iter()
+        .filter(|o| o.material.is_metallic_roughness())
+        .map(|o| match o.textures.as_ref().and_then(|t| t.image(kind)) {
+            Some(image) => image
+                .texels
+                .iter()
+                .map(|t| t[2])
+                .min()
+                .map_or(0.0, |b| f32::from(b) / 255.0),
+            None => o.material.metallic,
+        })
+        .reduce(f32::min)
 }
 
 /// The cube cache for `store` with the pool's slots, the environment cube pinned.
@@ -200,8 +231,19 @@ impl Renderer {
         let buffers = StoreBuffers::new(&gpu.device, &store, &mesh, cube_count);
         let sample_maps = upload_sample_maps(&gpu, &store)?;
         let pool = CubePool::new(&gpu.device, layout);
-        let gbuffer = GBufferPipeline::new(&gpu.device, &buffers.uniform, &buffers.vertices);
-        let shade = ShadePipelines::new(&gpu.device, layout.textures_in_use(), layout.face_shift);
+        let textures = ObjectTextureGroups::new(&gpu.device, &gpu.queue, store.meta());
+        let gbuffer = GBufferPipeline::new(
+            &gpu.device,
+            &buffers.uniform,
+            &buffers.vertices,
+            textures.as_ref().map(|t| &t.layout),
+        );
+        let shade = ShadePipelines::new(
+            &gpu.device,
+            layout.textures_in_use(),
+            layout.face_shift,
+            textures.is_some(),
+        );
         let constants = StoreConstants {
             sample_count: store.sample_points().len() as u32,
             env_cube: store.env_cube_index().unwrap_or(u32::MAX),
@@ -215,13 +257,7 @@ impl Renderer {
             // A damaged environment cube leaves no fitted box; the cache reports the damage
             // when it loads the cube (below), and parallax then asks for a given box.
             fitted_box: crate::probe::fit_proxy_box(&store, mesh.origin).unwrap_or(None),
-            min_object_metallic: store
-                .meta()
-                .objects
-                .iter()
-                .filter(|o| o.material.is_metallic_roughness())
-                .map(|o| o.material.metallic)
-                .reduce(f32::min),
+            min_object_metallic: min_object_metallic(store.meta()),
         };
         let prefiltered_view = prefiltered::upload(&gpu, &PrefilteredEnv::black());
         let composites = host::Composites::new(&gpu.device);
@@ -235,6 +271,7 @@ impl Renderer {
             sample_maps,
             pool,
             gbuffer,
+            textures,
             shade,
             current: ShadeKey::default(),
             background: Background::None,
@@ -369,26 +406,34 @@ impl Renderer {
                 limits.max_texture_dimension_2d
             )));
         }
-        let targets = SizedTargets::new(&self.gpu.device, width, height, |gp, gn, out, dv| {
-            self.shade.bind_group(
-                &self.gpu.device,
-                &ShadeBindings {
-                    uniform: &self.buffers.uniform,
-                    gb_position: gp,
-                    gb_normal: gn,
-                    sample_maps: &self.sample_maps,
-                    samples: &self.buffers.samples,
-                    patches: &self.buffers.patches,
-                    slots: &self.buffers.slots,
-                    feedback: &self.buffers.feedback,
-                    pool: self.pool.views(),
-                    depth_pool: self.pool.depth_views(),
-                    output: out,
-                    gb_depth: dv,
-                    prefiltered: &self.prefiltered_view,
-                },
-            )
-        });
+        let textured = self.textures.is_some();
+        let targets = SizedTargets::new(
+            &self.gpu.device,
+            width,
+            height,
+            textured,
+            |gp, gn, out, dv, gm| {
+                self.shade.bind_group(
+                    &self.gpu.device,
+                    &ShadeBindings {
+                        uniform: &self.buffers.uniform,
+                        gb_position: gp,
+                        gb_normal: gn,
+                        sample_maps: &self.sample_maps,
+                        samples: &self.buffers.samples,
+                        patches: &self.buffers.patches,
+                        slots: &self.buffers.slots,
+                        feedback: &self.buffers.feedback,
+                        pool: self.pool.views(),
+                        depth_pool: self.pool.depth_views(),
+                        output: out,
+                        gb_depth: dv,
+                        prefiltered: &self.prefiltered_view,
+                        gb_material: gm,
+                    },
+                )
+            },
+        );
         self.targets = Some(targets);
         Ok(())
     }

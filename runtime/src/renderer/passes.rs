@@ -20,27 +20,42 @@ impl Renderer {
     ) {
         let gp = targets.gb_position.create_view(&Default::default());
         let gn = targets.gb_normal.create_view(&Default::default());
+        let gm = targets.gb_material.create_view(&Default::default());
         let dv = targets.depth.create_view(&Default::default());
         let keep = wgpu::Operations {
             load: wgpu::LoadOp::Load,
             store: wgpu::StoreOp::Store,
         };
+        let attachments = [
+            Some(wgpu::RenderPassColorAttachment {
+                view: &gp,
+                depth_slice: None,
+                resolve_target: None,
+                ops: keep,
+            }),
+            Some(wgpu::RenderPassColorAttachment {
+                view: &gn,
+                depth_slice: None,
+                resolve_target: None,
+                ops: keep,
+            }),
+            // Cleared: a pixel whose object has no textures reads flags 0.
+            self.textures
+                .as_ref()
+                .map(|_| wgpu::RenderPassColorAttachment {
+                    view: &gm,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                }),
+        ];
+        let used = 2 + usize::from(self.textures.is_some());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer"),
-            color_attachments: &[
-                Some(wgpu::RenderPassColorAttachment {
-                    view: &gp,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: keep,
-                }),
-                Some(wgpu::RenderPassColorAttachment {
-                    view: &gn,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: keep,
-                }),
-            ],
+            color_attachments: &attachments[..used],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &dv,
                 depth_ops: Some(wgpu::Operations {
@@ -63,7 +78,18 @@ impl Renderer {
         pass.set_pipeline(&self.gbuffer.pipeline);
         pass.set_bind_group(0, &self.gbuffer.group, &[]);
         pass.set_index_buffer(self.buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.buffers.index_count, 0, 0..1);
+        match &self.textures {
+            None => pass.draw_indexed(0..self.buffers.index_count, 0, 0..1),
+            // Each object's triangles with its textures bound.
+            Some(t) => {
+                for (range, object) in &self.mesh.draws {
+                    if let Some(group) = t.groups.get(*object as usize) {
+                        pass.set_bind_group(1, group, &[]);
+                        pass.draw_indexed(range.clone(), 0, 0..1);
+                    }
+                }
+            }
+        }
     }
 
     /// Encodes the shading pass of the current frame's pipeline over every pixel; `timed` as

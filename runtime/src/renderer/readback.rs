@@ -79,14 +79,20 @@ impl Renderer {
         let p = self.read_texture_rgba32f(|t| &t.gb_position)?;
         let n = self.read_texture_rgba32f(|t| &t.gb_normal)?;
         let z: Vec<f32> = self.read_texture(|t| &t.depth, wgpu::TextureAspect::DepthOnly)?;
+        let m: Vec<[u32; 4]> = match self.textures {
+            Some(_) => self.read_texture(|t| &t.gb_material, wgpu::TextureAspect::All)?,
+            None => vec![[0; 4]; z.len()],
+        };
         Ok(p.into_iter()
             .zip(n)
             .zip(z)
-            .map(|((position_patch, normal_uv), z)| {
+            .zip(m)
+            .map(|(((position_patch, normal_uv), z), material)| {
                 if z < DEPTH_CLEAR {
                     GTexel {
                         position_patch,
                         normal_uv,
+                        material,
                     }
                 } else {
                     GTexel::default()

@@ -1,7 +1,7 @@
 //! The render targets of one image size (G-buffer, depth, output) and what a frame of a size
 //! costs in bytes.
 
-use crate::pipelines::{DEPTH_FORMAT, GBUFFER_FORMAT, OUTPUT_FORMAT};
+use crate::pipelines::{DEPTH_FORMAT, GBUFFER_FORMAT, MATERIAL_FORMAT, OUTPUT_FORMAT};
 
 /// The textures of one image size and the shading bind group that binds them.
 pub(super) struct SizedTargets {
@@ -9,19 +9,24 @@ pub(super) struct SizedTargets {
     pub(super) height: u32,
     pub(super) gb_position: wgpu::Texture,
     pub(super) gb_normal: wgpu::Texture,
+    /// The material target of a store with textured objects; 1×1 (and unused) otherwise.
+    pub(super) gb_material: wgpu::Texture,
     pub(super) depth: wgpu::Texture,
     pub(super) output: wgpu::Texture,
     pub(super) shade_group: wgpu::BindGroup,
 }
 
 impl SizedTargets {
-    /// Creates the G-buffer, depth and output textures for `width` × `height` and the shading
-    /// bind group `bind` makes of the views of position, normal, output and depth.
+    /// Creates the G-buffer (with a material target where `textured`), depth and output
+    /// textures for `width` × `height` and the shading bind group `bind` makes of the views of
+    /// position, normal, output, depth and material.
     pub(super) fn new(
         device: &wgpu::Device,
         width: u32,
         height: u32,
+        textured: bool,
         bind: impl FnOnce(
+            &wgpu::TextureView,
             &wgpu::TextureView,
             &wgpu::TextureView,
             &wgpu::TextureView,
@@ -33,7 +38,7 @@ impl SizedTargets {
             height,
             depth_or_array_layers: 1,
         };
-        let make = |label, format, usage| {
+        let make_sized = |label, format, usage, size| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size,
@@ -45,11 +50,23 @@ impl SizedTargets {
                 view_formats: &[],
             })
         };
+        let make = |label, format, usage| make_sized(label, format, usage, size);
         let rt = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
         let gb_position = make("gbuffer position", GBUFFER_FORMAT, rt);
         let gb_normal = make("gbuffer normal", GBUFFER_FORMAT, rt);
+        let one = wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        };
+        let gb_material = make_sized(
+            "gbuffer material",
+            MATERIAL_FORMAT,
+            rt,
+            if textured { size } else { one },
+        );
         let depth = make(
             "depth",
             DEPTH_FORMAT,
@@ -70,12 +87,14 @@ impl SizedTargets {
             &view(&gb_normal),
             &view(&output),
             &view(&depth),
+            &view(&gb_material),
         );
         Self {
             width,
             height,
             gb_position,
             gb_normal,
+            gb_material,
             depth,
             output,
             shade_group,

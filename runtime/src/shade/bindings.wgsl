@@ -90,6 +90,9 @@ override DEPTH: bool = false;
 override FILTER: bool = false;
 // The split-sum baseline of the pbr mode (the uniform's split_sum).
 override SPLIT_SUM: bool = false;
+// The store has textured objects: gb_material holds each pixel's material (gbuffer.wgsl
+// fs_textured).
+override TEXTURED: bool = false;
 
 struct PatchGpu {
     cp: array<vec4<f32>, 16>,
@@ -121,8 +124,13 @@ struct PatchGpu {
 // The prefiltered environment (prefilter.rs): layers 0–5 the specular levels' faces, one mip
 // per roughness level; layers 6–11 the irradiance's faces at mip 0.
 @group(0) @binding(18) var prefiltered: texture_2d_array<f32>;
+// The G-buffer's material target (TEXTURED; gbuffer.wgsl `material_texel`): base colour RGB,
+// metallic, roughness and occlusion as 16-bit unorm pairs, the object's texture flags in w.
+@group(0) @binding(19) var gb_material: texture_2d<u32>;
 
 const INVALID: u32 = 0xffffffffu;
+// The smallest GGX α (params.rs MIN_ALPHA).
+const MIN_ALPHA: f32 = 1.0e-3;
 const PI: f32 = 3.14159265358979;
 // Distances at or above this mean "nothing this way" (face.rs FAR_DISTANCE, binary16's largest).
 const FAR: f32 = 65504.0;

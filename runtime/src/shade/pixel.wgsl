@@ -20,6 +20,30 @@ fn pbr_material(pid: u32) -> vec2<f32> {
     return vec2<f32>(P.metallic, P.alpha);
 }
 
+// The pixel's base colour and pbr material (metallic, GGX α): its object's, with what the
+// object's textures give (gb_material, TEXTURED) in their place.
+struct Surface {
+    base: vec3<f32>,
+    pbr: vec2<f32>,
+};
+
+fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
+    var s: Surface;
+    s.base = patches[pid].color.rgb;
+    s.pbr = pbr_material(pid);
+    if (TEXTURED) {
+        let m = textureLoad(gb_material, px, 0);
+        let rg = unpack2x16unorm(m.x);
+        let bm = unpack2x16unorm(m.y);
+        let ro = unpack2x16unorm(m.z);
+        if ((m.w & 1u) != 0u) { s.base = vec3<f32>(rg.x, rg.y, bm.x); }
+        if ((m.w & 2u) != 0u && P.object_material != 0u && patches[pid].material.z > 0.5) {
+            s.pbr = vec2<f32>(bm.y, max(ro.x * ro.x, MIN_ALPHA));
+        }
+    }
+    return s;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= P.size.x || gid.y >= P.size.y) { return; }
@@ -43,13 +67,14 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let r = 2.0 * dot(n, v) * n - v; // Eq. 2.4
     let pixel = pcg(gid.x + pcg(gid.y + pcg(P.seed)));
 
-    let base = patches[pid].color.rgb;
+    let surface = surface_of(pid, px);
+    let base = surface.base;
     var spec = vec3<f32>(0.0);
     if ((TERMS & 2u) != 0u) {
         spec = mirror(x, n, r);
     } else if ((TERMS & 4u) != 0u) {
         let t = tangent_frame(n, patch_du(pid, u, v_param));
-        spec = glossy(pixel, x, n, t, v, r, base, pbr_material(pid));
+        spec = glossy(pixel, x, n, t, v, r, base, surface.pbr);
     }
     if ((TERMS & 8u) != 0u) {
         spec *= base;

@@ -1,0 +1,90 @@
+//! The CPU twin of gbuffer.wgsl's material functions (format docs, "Object textures"): a
+//! textured object's material at texture coordinates, packed as the G-buffer's material
+//! target holds it. Same functions, same order, same operations.
+
+use glam::{Vec2, Vec3};
+use oslf_format::{ObjectTextures, TextureImage, TextureKind};
+
+use crate::textures::BOUND_KINDS;
+
+/// The sRGB transfer function, encoded to linear (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Texel `(x, y)` of `t` with repeat, its RGB decoded from sRGB when `srgb` (as `texel`).
+fn texel(t: &TextureImage, x: i32, y: i32, srgb: bool) -> Vec3 {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let p = (((x % w) + w) % w, ((y % h) + h) % h);
+    let c = t.texels[(p.1 * w + p.0) as usize];
+    let c = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) / 255.0;
+    if !srgb {
+        return c;
+    }
+    Vec3::new(
+        srgb_to_linear(c.x),
+        srgb_to_linear(c.y),
+        srgb_to_linear(c.z),
+    )
+}
+
+/// Bilinear lookup at `uv` (v up), repeating (as `bilinear`).
+pub fn bilinear(t: &TextureImage, uv: Vec2, srgb: bool) -> Vec3 {
+    let size = Vec2::new(t.width as f32, t.height as f32);
+    let u = uv.x - uv.x.floor();
+    let v = uv.y - uv.y.floor();
+    let x = u * size.x - 0.5;
+    let y = (1.0 - v) * size.y - 0.5;
+    let x0 = x.floor();
+    let y0 = y.floor();
+    let fx = (x - x0).clamp(0.0, 1.0);
+    let fy = (y - y0).clamp(0.0, 1.0);
+    let (ix, iy) = (x0 as i32, y0 as i32);
+    let top = texel(t, ix, iy, srgb).lerp(texel(t, ix + 1, iy, srgb), fx);
+    let bottom = texel(t, ix, iy + 1, srgb).lerp(texel(t, ix + 1, iy + 1, srgb), fx);
+    top.lerp(bottom, fy)
+}
+
+/// WGSL's `pack2x16unorm`: each component clamped to [0, 1], times 65535, rounded to even.
+pub fn pack2x16unorm(a: f32, b: f32) -> u32 {
+    let q = |c: f32| (c.clamp(0.0, 1.0) * 65535.0).round_ties_even() as u32;
+    q(a) | q(b) << 16
+}
+
+/// WGSL's `unpack2x16unorm`.
+pub fn unpack2x16unorm(p: u32) -> Vec2 {
+    Vec2::new((p & 0xffff) as f32, (p >> 16) as f32) / 65535.0
+}
+
+/// The material target's texel of an object with textures `t` at texture coordinates `uv`
+/// (as `material_texel`; non-finite coordinates read at 0, as `fs_textured`).
+pub fn material_texel(t: &ObjectTextures, uv: Vec2) -> [u32; 4] {
+    let uv = if uv.x.abs() < 1e30 && uv.y.abs() < 1e30 {
+        uv
+    } else {
+        Vec2::ZERO
+    };
+    let flags = BOUND_KINDS
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| t.image(**k).is_some())
+        .fold(0u32, |f, (bit, _)| f | 1 << bit);
+    let mut base = Vec3::ZERO;
+    let mut mr = Vec3::ZERO;
+    if let Some(img) = t.image(TextureKind::BaseColor) {
+        base = bilinear(img, uv, true);
+    }
+    if let Some(img) = t.image(TextureKind::MetallicRoughness) {
+        mr = bilinear(img, uv, false);
+    }
+    [
+        pack2x16unorm(base.x, base.y),
+        pack2x16unorm(base.z, mr.z),
+        pack2x16unorm(mr.y, 1.0),
+        flags,
+    ]
+}
