@@ -392,20 +392,34 @@ impl<'s> GroundTruth<'s> {
                 roughness,
                 object_material,
             } => {
-                let own = self
-                    .scene
-                    .materials
-                    .get(hit.material as usize)
-                    .map(|m| m.model);
+                let own = self.scene.materials.get(hit.material as usize);
+                // A mesh object reads its textures at the hit, as the store's texture record
+                // has the runtime do (format docs, "Object textures").
+                let textured = |t: Option<&crate::texture::Texture>| {
+                    patch.is_none() && matches!(t, Some(crate::texture::Texture::Image(_)))
+                };
+                let base_color = match own {
+                    Some(m) if textured(Some(&m.albedo)) => m.eval(hit.uv),
+                    _ => color,
+                };
                 let (metallic, roughness) = match own {
-                    Some(Model::MetallicRoughness {
-                        metallic,
-                        roughness,
-                    }) if object_material => (metallic, roughness),
+                    Some(m) if object_material => match (m.model, m.metallic_roughness(hit.uv)) {
+                        (_, Some(mr)) if textured(m.metallic_roughness_texture.as_ref()) => {
+                            (mr.metallic, mr.roughness)
+                        }
+                        (
+                            Model::MetallicRoughness {
+                                metallic,
+                                roughness,
+                            },
+                            _,
+                        ) => (metallic, roughness),
+                        _ => (metallic, roughness),
+                    },
                     _ => (metallic, roughness),
                 };
                 let brdf = MetallicRoughness {
-                    base_color: color,
+                    base_color,
                     metallic,
                     roughness,
                 };
