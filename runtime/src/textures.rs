@@ -156,3 +156,75 @@ fn group(
         entries: &entries,
     })
 }
+
+/// What the store's objects carry that the renderer does not draw: textures of kinds other
+/// than [`BOUND_KINDS`] (normal, occlusion, emissive), one line per object that has any.
+pub(crate) fn undrawn(meta: &StoreMeta) -> Vec<String> {
+    meta.objects
+        .iter()
+        .filter_map(|o| {
+            let kinds: Vec<&str> = o
+                .textures
+                .as_ref()?
+                .images
+                .iter()
+                .filter(|(k, _)| !BOUND_KINDS.contains(k))
+                .map(|(k, _)| k.name())
+                .collect();
+            (!kinds.is_empty()).then(|| {
+                format!(
+                    "object {:?}: its {} texture{} not drawn (this runtime draws base colour and metallic-roughness textures)",
+                    o.name,
+                    kinds.join(", "),
+                    if kinds.len() == 1 { " is" } else { "s are" }
+                )
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use oslf_format::{ObjectInfo, ObjectTextures};
+
+    #[test]
+    fn normal_occlusion_and_emissive_textures_are_said_undrawn() {
+        let image = TextureImage {
+            width: 1,
+            height: 1,
+            texels: vec![[0; 4]],
+        };
+        let object = |name: &str, kinds: &[TextureKind]| ObjectInfo {
+            name: name.into(),
+            transform: glam::Mat4::IDENTITY.to_cols_array_2d(),
+            base_color: [1.0; 3],
+            first_patch: 0,
+            patch_count: 0,
+            mesh: None,
+            material: Default::default(),
+            textures: Some(ObjectTextures {
+                images: kinds.iter().map(|k| (*k, image.clone())).collect(),
+                ..Default::default()
+            }),
+        };
+        let meta = StoreMeta {
+            objects: vec![
+                object("drawn", &[TextureKind::BaseColor, TextureKind::MetallicRoughness]),
+                object("bumpy", &[TextureKind::BaseColor, TextureKind::Normal]),
+                object("glowing", &[TextureKind::Occlusion, TextureKind::Emissive]),
+            ],
+            patches: Vec::new(),
+            bake: Default::default(),
+            camera: None,
+            has_env_cube: false,
+        };
+        assert_eq!(
+            undrawn(&meta),
+            [
+                "object \"bumpy\": its normal texture is not drawn (this runtime draws base colour and metallic-roughness textures)",
+                "object \"glowing\": its occlusion, emissive textures are not drawn (this runtime draws base colour and metallic-roughness textures)",
+            ]
+        );
+    }
+}

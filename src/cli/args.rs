@@ -61,9 +61,10 @@ pub struct ShadingArgs {
     /// Exponent n_v.
     #[arg(long, default_value_t = 100.0)]
     pub nv: f32,
-    /// glTF metallic factor of the pbr mode (its base colour is the object's C_s) [default:
-    /// each object's metallic-roughness material in the store, else 1]. With this flag or
-    /// --roughness, every object is shaded with the flags' factors.
+    /// glTF metallic factor of the pbr mode (its base colour is the object's C_s, or its base
+    /// colour texture) [default: each object's metallic-roughness material in the store, its
+    /// metallic-roughness texture included, else 1]. With this flag or --roughness, every
+    /// object is shaded with the flags' factors.
     #[arg(long)]
     pub metallic: Option<f32>,
     /// glTF roughness of the pbr mode (α = roughness²) [default: the object's material's,

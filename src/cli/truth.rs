@@ -45,8 +45,9 @@ pub struct Args {
     /// Ashikhmin–Shirley exponent along the bitangent.
     #[arg(long, default_value_t = 100.0)]
     nv: f64,
-    /// glTF metallic factor of the pbr mode's material (base colour: the object's C_s)
-    /// [default: each object's own metallic-roughness material, else 1]. With this flag or
+    /// glTF metallic factor of the pbr mode's material (base colour: the object's C_s, or a
+    /// mesh object's base colour texture) [default: each object's own metallic-roughness
+    /// material, its metallic-roughness texture included, else 1]. With this flag or
     /// --roughness, every object is drawn with the flags' factors (as `oslf render`).
     #[arg(long)]
     metallic: Option<f32>,
