@@ -19,6 +19,8 @@ struct GVertex {
     position_patch: vec4<f32>,
     normal_u: vec4<f32>,
     v: vec4<f32>,
+    // A mesh's tangent and the bitangent's sign, where it has a normal texture; else zero.
+    tangent: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> P: Params;
@@ -32,6 +34,7 @@ struct VsOut {
     @location(3) @interpolate(flat) patch_id: f32,
     @location(4) @interpolate(flat) grid: f32,
     @location(5) texcoord: vec2<f32>,
+    @location(6) tangent: vec4<f32>,
 };
 
 @vertex
@@ -45,6 +48,7 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VsOut {
     out.patch_id = vert.position_patch.w;
     out.grid = vert.v.y;
     out.texcoord = vert.v.zw;
+    out.tangent = vert.tangent;
     return out;
 }
 
@@ -102,6 +106,7 @@ struct TextureParams {
 @group(1) @binding(0) var<uniform> T: TextureParams;
 @group(1) @binding(1) var tex_base_color: texture_2d<f32>;
 @group(1) @binding(2) var tex_metallic_roughness: texture_2d<f32>;
+@group(1) @binding(3) var tex_normal: texture_2d<f32>;
 
 struct FsTexturedOut {
     @location(0) position_patch: vec4<f32>,
@@ -159,6 +164,24 @@ fn material_texel(uv: vec2<f32>) -> vec4<u32> {
     );
 }
 
+// The shading normal with the normal texture at `uv`: the tangent made orthogonal to the
+// interpolated unit normal `n`, the bitangent w·(n × t), the texel's 2c − 1 scaled in x and y
+// by the texture's scale. `n` itself where the object has no normal texture or the frame
+// degenerates.
+fn mapped_normal(uv: vec2<f32>, n: vec3<f32>, tangent: vec4<f32>) -> vec3<f32> {
+    if ((T.flags & 4u) == 0u) { return n; }
+    let c = bilinear(tex_normal, uv, false) * 2.0 - vec3<f32>(1.0);
+    let t0 = tangent.xyz - n * dot(n, tangent.xyz);
+    let lt = dot(t0, t0);
+    if (!(lt > 1.0e-12)) { return n; }
+    let t = t0 * inverseSqrt(lt);
+    let b = select(-1.0, 1.0, tangent.w >= 0.0) * cross(n, t);
+    let m = t * (c.x * T.normal_scale) + b * (c.y * T.normal_scale) + n * c.z;
+    let lm = dot(m, m);
+    if (!(lm > 1.0e-12)) { return n; }
+    return m * inverseSqrt(lm);
+}
+
 @fragment
 fn fs_textured(in: VsOut) -> FsTexturedOut {
     let g = gbuffer(in);
@@ -167,6 +190,12 @@ fn fs_textured(in: VsOut) -> FsTexturedOut {
     var out: FsTexturedOut;
     out.position_patch = g.position_patch;
     out.normal_uv = g.normal_uv;
+    if ((T.flags & 4u) != 0u) {
+        var n = in.normal;
+        let l2 = dot(n, n);
+        if (l2 > 1e-20) { n = n * inverseSqrt(l2); } else { n = vec3<f32>(0.0, 0.0, 1.0); }
+        out.normal_uv = vec4<f32>(oct_encode(mapped_normal(uv, n, in.tangent)), g.normal_uv.zw);
+    }
     out.material = material_texel(uv);
     return out;
 }

@@ -10,7 +10,8 @@ use oslf_geometry::BezierPatch;
 
 /// One vertex as `GVertex` in gbuffer.wgsl: position and map id + 1 (exact as `f32` below
 /// 2²⁴), the unit normal and u, then v, the atlas grid `k` (`v[1]`) and a textured mesh's
-/// texture coordinates (`v[2..4]`; 0 for a Bézier patch's `k` and coordinates,
+/// texture coordinates (`v[2..4]`; 0 for a Bézier patch's `k` and coordinates, then the
+/// tangent of a mesh with a normal texture,
 /// whose id is its map. For a mesh, the id is the object's first map and (u, v) its atlas uv:
 /// the G-buffer shader adds the page `py·k + px` per fragment and makes (u, v) page-local).
 #[repr(C)]
@@ -19,6 +20,9 @@ pub struct GVertex {
     pub position_patch: [f32; 4],
     pub normal_u: [f32; 4],
     pub v: [f32; 4],
+    /// A textured mesh's tangent (world space, unit) with the bitangent's sign in `w`, where
+    /// it has a normal texture; zero elsewhere.
+    pub tangent: [f32; 4],
 }
 
 /// Largest tessellation grid per patch.
@@ -175,6 +179,8 @@ struct WorldMesh {
     grid: u32,
     /// Its texture coordinates (format version 8), if it has textures.
     texcoords: Option<Vec<[f32; 2]>>,
+    /// Its tangents in world space (unit, w the bitangent's sign), if it has a normal texture.
+    tangents: Option<Vec<[f32; 4]>>,
     /// Its index in the store's objects.
     object: u32,
 }
@@ -203,10 +209,17 @@ impl WorldMesh {
                 .and_then(|t| t.get(k))
                 .copied()
                 .unwrap_or_default();
+            let tangent = self
+                .tangents
+                .as_ref()
+                .and_then(|t| t.get(k))
+                .copied()
+                .unwrap_or_default();
             vertices.push(GVertex {
                 position_patch: [p.x, p.y, p.z, tag],
                 normal_u: [n.x, n.y, n.z, uv[0]],
                 v: [uv[1], self.grid as f32, tc[0], tc[1]],
+                tangent,
             });
         }
         for t in &self.triangles {
@@ -283,12 +296,37 @@ fn world_objects(
                     first_map: object.first_patch,
                     grid: m.atlas_grid,
                     texcoords: object.textures.as_ref().map(|t| t.texcoords.clone()),
+                    tangents: object
+                        .textures
+                        .as_ref()
+                        .filter(|t| !t.tangents.is_empty())
+                        .map(|t| world_tangents(&affine, &t.tangents)),
                     object: i as u32,
                 });
             }
         }
     }
     (world, colors, meshes)
+}
+
+/// Object-space tangents in world space: the transform's linear part applied and
+/// renormalized, the bitangent's sign flipped where the transform mirrors (the bitangent is
+/// `w·(n × t)` with the transformed normal).
+fn world_tangents(affine: &DAffine3, tangents: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    let mirror = if affine.matrix3.determinant() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    tangents
+        .iter()
+        .map(|t| {
+            let w = (affine.matrix3 * DVec3::new(t[0].into(), t[1].into(), t[2].into()))
+                .normalize_or(DVec3::X)
+                .as_vec3();
+            [w.x, w.y, w.z, t[3] * mirror]
+        })
+        .collect()
 }
 
 /// Appends the triangles of every Bézier patch (those with control points in `world`),
@@ -313,6 +351,7 @@ fn tessellate_patches(
                 position_patch: [p.x, p.y, p.z, tag],
                 normal_u: [n.x, n.y, n.z, uv.x],
                 v: [uv.y, 0.0, 0.0, 0.0],
+                tangent: [0.0; 4],
             });
         }
         for t in &mesh.triangles {

@@ -75,7 +75,8 @@ fn the_vertex_and_patch_records_match() {
     let vertex = fields!(GVertex {
         position_patch,
         normal_u,
-        v
+        v,
+        tangent
     });
     check_struct(&gbuffer, "GVertex", &vertex, size_of::<GVertex>(), false);
     use crate::textures::TextureParams;

@@ -6,8 +6,11 @@ use oslf_format::{StoreMeta, TextureImage, TextureKind};
 use wgpu::util::DeviceExt;
 
 /// The kinds gbuffer.wgsl reads, in the order of its group-1 texture bindings (1, 2, …).
-pub(crate) const BOUND_KINDS: [TextureKind; 2] =
-    [TextureKind::BaseColor, TextureKind::MetallicRoughness];
+pub(crate) const BOUND_KINDS: [TextureKind; 3] = [
+    TextureKind::BaseColor,
+    TextureKind::MetallicRoughness,
+    TextureKind::Normal,
+];
 
 /// gbuffer.wgsl's `TextureParams`.
 #[repr(C)]
@@ -158,7 +161,7 @@ fn group(
 }
 
 /// What the store's objects carry that the renderer does not draw: textures of kinds other
-/// than [`BOUND_KINDS`] (normal, occlusion, emissive), one line per object that has any.
+/// than [`BOUND_KINDS`] (occlusion, emissive), one line per object that has any.
 pub(crate) fn undrawn(meta: &StoreMeta) -> Vec<String> {
     meta.objects
         .iter()
@@ -173,7 +176,7 @@ pub(crate) fn undrawn(meta: &StoreMeta) -> Vec<String> {
                 .collect();
             (!kinds.is_empty()).then(|| {
                 format!(
-                    "object {:?}: its {} texture{} not drawn (this runtime draws base colour and metallic-roughness textures)",
+                    "object {:?}: its {} texture{} not drawn (this runtime draws base colour, metallic-roughness and normal textures)",
                     o.name,
                     kinds.join(", "),
                     if kinds.len() == 1 { " is" } else { "s are" }
@@ -189,7 +192,7 @@ mod tests {
     use oslf_format::{ObjectInfo, ObjectTextures};
 
     #[test]
-    fn normal_occlusion_and_emissive_textures_are_said_undrawn() {
+    fn occlusion_and_emissive_textures_are_said_undrawn() {
         let image = TextureImage {
             width: 1,
             height: 1,
@@ -210,8 +213,12 @@ mod tests {
         };
         let meta = StoreMeta {
             objects: vec![
-                object("drawn", &[TextureKind::BaseColor, TextureKind::MetallicRoughness]),
+                object(
+                    "drawn",
+                    &[TextureKind::BaseColor, TextureKind::MetallicRoughness],
+                ),
                 object("bumpy", &[TextureKind::BaseColor, TextureKind::Normal]),
+                object("dim", &[TextureKind::Occlusion]),
                 object("glowing", &[TextureKind::Occlusion, TextureKind::Emissive]),
             ],
             patches: Vec::new(),
@@ -222,8 +229,8 @@ mod tests {
         assert_eq!(
             undrawn(&meta),
             [
-                "object \"bumpy\": its normal texture is not drawn (this runtime draws base colour and metallic-roughness textures)",
-                "object \"glowing\": its occlusion, emissive textures are not drawn (this runtime draws base colour and metallic-roughness textures)",
+                "object \"dim\": its occlusion texture is not drawn (this runtime draws base colour, metallic-roughness and normal textures)",
+                "object \"glowing\": its occlusion, emissive textures are not drawn (this runtime draws base colour, metallic-roughness and normal textures)",
             ]
         );
     }

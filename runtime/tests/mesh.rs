@@ -120,8 +120,8 @@ fn texcoord_at(x: f32, y: f32) -> [f32; 2] {
     [2.0 * x - 0.3, 1.5 * y + 0.25]
 }
 
-/// A 5×3 base-colour texture of varied sRGB codes and a 3×2 metallic-roughness one (roughness
-/// 0.1–0.9, metallic 0–1) over the grid.
+/// A 5×3 base-colour texture of varied sRGB codes, a 3×2 metallic-roughness one (roughness
+/// 0.1–0.9, metallic 0–1) and a 2×2 normal texture over the grid.
 fn grid_textures() -> oslf_format::ObjectTextures {
     use oslf_format::{TextureImage, TextureKind};
     let image = |w: u32, h: u32, f: &dyn Fn(u32) -> [u8; 4]| TextureImage {
@@ -138,18 +138,28 @@ fn grid_textures() -> oslf_format::ObjectTextures {
         ]
     });
     let mr = image(3, 2, &|i| [0, (25 + i * 40) as u8, (i * 51) as u8, 255]);
+    // Tilted normals, x and y both ways, scaled by 0.8.
+    let tilts = [
+        [160, 128, 240],
+        [100, 150, 230],
+        [128, 128, 255],
+        [180, 90, 220],
+    ];
+    let normal = image(2, 2, &|i| {
+        let [r, g, b] = tilts[i as usize];
+        [r, g, b, 255]
+    });
+    let uvs = grid_mesh().uvs;
     oslf_format::ObjectTextures {
-        texcoords: grid_mesh()
-            .uvs
-            .iter()
-            .map(|uv| texcoord_at(uv[0], uv[1]))
-            .collect(),
-        tangents: Vec::new(),
-        normal_scale: 1.0,
+        texcoords: uvs.iter().map(|uv| texcoord_at(uv[0], uv[1])).collect(),
+        // Along +x, which the shaders make orthogonal to the bent grid's normals.
+        tangents: vec![[1.0, 0.0, 0.0, 1.0]; uvs.len()],
+        normal_scale: 0.8,
         occlusion_strength: 1.0,
         images: vec![
             (TextureKind::BaseColor, base),
             (TextureKind::MetallicRoughness, mr),
+            (TextureKind::Normal, normal),
         ],
     }
 }
@@ -555,11 +565,11 @@ fn a_bezier_object_and_a_mesh_object_both_render() {
 
 /// A textured object (format version 8): the G-buffer's material at each of its pixels is the
 /// CPU reference's `material_texel` at the pixel's texture coordinates (within 1e-3 per value),
-/// and the GPU matches the CPU reference in the pbr mode with and without the store's
+/// its normal the CPU's `mapped_normal` (within 1e-3), and the GPU matches the CPU reference in the pbr mode with and without the store's
 /// material, and in the glossy modes.
 #[test]
 fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference() {
-    use oslf_runtime::reference::material::{material_texel, unpack2x16unorm};
+    use oslf_runtime::reference::material::{mapped_normal, material_texel, unpack2x16unorm};
     let (mut r, cubes) = open_path(&textured_store());
     let textures = grid_textures();
     let pbr = ShadingParams {
@@ -602,6 +612,35 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
     };
     let camera = plain.default_view();
     let before = plain.render(&camera, &pbr, &options).unwrap().pixels;
+    // The normal texture: the textured G-buffer's normal is the CPU's mapped normal of the
+    // untextured G-buffer's (the interpolated normal of the same pixel) at the pixel's
+    // texture coordinates, with the tangent +x.
+    let unmapped = plain.read_gbuffer().unwrap();
+    let mut tilted = 0;
+    let mut worst_normal = 0f32;
+    for (g, p) in gbuffer.iter().zip(&unmapped) {
+        if g.position_patch[3] < 1.5 {
+            continue;
+        }
+        let n = oslf_runtime::geometry::oct_decode([p.normal_uv[0], p.normal_uv[1]]);
+        let got = oslf_runtime::geometry::oct_decode([g.normal_uv[0], g.normal_uv[1]]);
+        let page = (g.position_patch[3] - 1.5) as u32;
+        let x = ((page % K) as f32 + g.normal_uv[2]) / K as f32;
+        let y = ((page / K) as f32 + g.normal_uv[3]) / K as f32;
+        let tc = glam::Vec2::from(texcoord_at(x, y));
+        let want = mapped_normal(&textures, tc, n, glam::Vec4::new(1.0, 0.0, 0.0, 1.0));
+        worst_normal = worst_normal.max((got - want).length());
+        tilted += usize::from(got.dot(n) < 0.999);
+    }
+    println!("largest mapped-normal difference {worst_normal:.2e}, {tilted} pixels tilted");
+    assert!(
+        worst_normal < 1e-3,
+        "mapped normals differ by {worst_normal}"
+    );
+    assert!(
+        tilted * 10 > checked * 9,
+        "only {tilted} of {checked} normals tilted"
+    );
     let changed = own
         .iter()
         .zip(&before)

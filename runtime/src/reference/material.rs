@@ -2,7 +2,7 @@
 //! textured object's material at texture coordinates, packed as the G-buffer's material
 //! target holds it. Same functions, same order, same operations.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use oslf_format::{ObjectTextures, TextureImage, TextureKind};
 
 use crate::textures::BOUND_KINDS;
@@ -87,4 +87,27 @@ pub fn material_texel(t: &ObjectTextures, uv: Vec2) -> [u32; 4] {
         pack2x16unorm(mr.y, 1.0),
         flags,
     ]
+}
+
+/// The shading normal with `t`'s normal texture at `uv`, from the interpolated unit normal `n`
+/// and tangent `tangent` (as `mapped_normal`).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn mapped_normal(t: &ObjectTextures, uv: Vec2, n: Vec3, tangent: Vec4) -> Vec3 {
+    let Some(img) = t.image(TextureKind::Normal) else {
+        return n;
+    };
+    let c = bilinear(img, uv, false) * 2.0 - Vec3::ONE;
+    let t0 = tangent.truncate() - n * n.dot(tangent.truncate());
+    let lt = t0.dot(t0);
+    if !(lt > 1e-12) {
+        return n;
+    }
+    let tn = t0 / lt.sqrt();
+    let b = if tangent.w >= 0.0 { 1.0 } else { -1.0 } * n.cross(tn);
+    let m = tn * (c.x * t.normal_scale) + b * (c.y * t.normal_scale) + n * c.z;
+    let lm = m.dot(m);
+    if !(lm > 1e-12) {
+        return n;
+    }
+    m / lm.sqrt()
 }
