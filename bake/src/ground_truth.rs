@@ -134,6 +134,9 @@ pub struct GroundTruth<'s> {
     /// runtime does).
     patches: Vec<Option<BezierPatch>>,
     colors: Vec<Vec3>,
+    /// Per entry of `patches`: a mesh object's MikkTSpace tangents where its material has a
+    /// normal texture, which then turns its shading normal.
+    tangents: Vec<Option<MeshTangents>>,
     camera: Camera,
     /// Where the renders report their rows (`None`: nowhere).
     progress: Option<Arc<dyn Progress>>,
@@ -148,6 +151,8 @@ impl<'s> GroundTruth<'s> {
         let mut instances = Vec::new();
         let mut patches = Vec::new();
         let mut colors = Vec::new();
+        let mut tangents = Vec::new();
+        let mut first_triangle = 0u32;
         for object in &scene.objects {
             for patch in &object.patches {
                 instances.push(Instance {
@@ -156,8 +161,12 @@ impl<'s> GroundTruth<'s> {
                     material: object.material,
                     object: patches.len() as u32,
                 });
+                first_triangle += instances
+                    .last()
+                    .map_or(0, |i: &Instance| i.mesh.triangles.len() as u32);
                 patches.push(Some(*patch));
                 colors.push(object.base_color);
+                tangents.push(None);
             }
             if let Some(source) = &object.mesh {
                 instances.push(Instance {
@@ -166,6 +175,17 @@ impl<'s> GroundTruth<'s> {
                     material: object.material,
                     object: patches.len() as u32,
                 });
+                let mapped = scene
+                    .materials
+                    .get(object.material as usize)
+                    .is_some_and(|m| m.normal_texture.is_some());
+                tangents.push(mapped.then(|| MeshTangents {
+                    first: first_triangle,
+                    triangles: source.mesh.triangles.clone(),
+                    positions: source.mesh.positions.clone(),
+                    corners: oslf_geometry::tangents::corner_tangents(&source.mesh),
+                }));
+                first_triangle += source.mesh.triangles.len() as u32;
                 patches.push(None);
                 colors.push(object.base_color);
             }
@@ -177,6 +197,7 @@ impl<'s> GroundTruth<'s> {
             object,
             patches,
             colors,
+            tangents,
             camera,
             progress: None,
         })
@@ -341,6 +362,30 @@ impl<'s> GroundTruth<'s> {
         self.object.intersect(&ray, f32::MAX).map(|hit| (ray, hit))
     }
 
+    /// A mesh hit's shading normal: the interpolated one, turned by the object's normal texture
+    /// in the frame of its MikkTSpace tangents interpolated at the hit (as the runtime's
+    /// G-buffer does).
+    fn mapped_normal(&self, pid: usize, hit: &SurfaceHit) -> Vec3 {
+        let n = hit.shading_normal;
+        let Some(Some(m)) = self.tangents.get(pid) else {
+            return n;
+        };
+        let Some(local) = hit.triangle.checked_sub(m.first).map(|l| l as usize) else {
+            return n;
+        };
+        let (Some(tri), Some(corners)) = (m.triangles.get(local), m.corners.get(local)) else {
+            return n;
+        };
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let w = barycentric(hit.position, a, b, c);
+        let tangent = corners[0] * w.x + corners[1] * w.y + corners[2] * w.z;
+        let tangent = tangent.truncate().extend(corners[0].w);
+        match self.scene.materials.get(hit.material as usize) {
+            Some(material) => material.mapped_normal(hit.uv, n, tangent),
+            None => n,
+        }
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn pixel(
         &self,
@@ -364,7 +409,7 @@ impl<'s> GroundTruth<'s> {
         let (u, v) = (hit.uv.x, hit.uv.y);
         let n = match patch {
             Some(patch) => patch.normal(u, v),
-            None => hit.shading_normal,
+            None => self.mapped_normal(pid, &hit),
         };
         let view = -ray.dir;
         let mut ng = hit.geometric_normal;
@@ -501,4 +546,28 @@ pub fn compose(recon: &TruthImage, term: &TruthImage) -> Result<TruthImage> {
         rays,
         seconds: recon.seconds + term.seconds,
     })
+}
+
+/// A mesh object's MikkTSpace tangents, per triangle corner, for the truth's normal mapping.
+struct MeshTangents {
+    /// `SurfaceHit::triangle` of the object's first triangle.
+    first: u32,
+    triangles: Vec<[u32; 3]>,
+    positions: Vec<Vec3>,
+    corners: Vec<[glam::Vec4; 3]>,
+}
+
+/// Barycentric weights of `p` in triangle `(a, b, c)` (projected onto its plane); equal
+/// thirds for a degenerate triangle.
+fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (e0, e1, ep) = (b - a, c - a, p - a);
+    let (d00, d01, d11) = (e0.dot(e0), e0.dot(e1), e1.dot(e1));
+    let (d20, d21) = (ep.dot(e0), ep.dot(e1));
+    let den = d00 * d11 - d01 * d01;
+    if !(den.abs() > f32::MIN_POSITIVE) {
+        return Vec3::splat(1.0 / 3.0);
+    }
+    let v = (d11 * d20 - d01 * d21) / den;
+    let w = (d00 * d21 - d01 * d20) / den;
+    Vec3::new(1.0 - v - w, v, w)
 }

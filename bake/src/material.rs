@@ -26,6 +26,17 @@ pub struct Material {
     /// factors: roughness in green, metallic in blue (each clamped to [0, 1] where read). With
     /// it, the model's factors are not used again.
     pub metallic_roughness_texture: Option<Texture>,
+    /// glTF's `normalTexture` (data, `2c − 1` per channel) and its scale: the shading normal
+    /// of a mesh object, in the MikkTSpace frame of its texture coordinates
+    /// ([`Material::mapped_normal`]).
+    pub normal_texture: Option<NormalTexture>,
+}
+
+/// A tangent-space normal texture with its scale (glTF `normalTexture.scale`).
+#[derive(Clone, Debug)]
+pub struct NormalTexture {
+    pub texture: Texture,
+    pub scale: f32,
 }
 
 /// How a [`Material`] reflects.
@@ -45,7 +56,26 @@ impl Material {
             model: Model::Lambertian,
             emission: Vec3::ZERO,
             metallic_roughness_texture: None,
+            normal_texture: None,
         }
+    }
+
+    /// The shading normal at `uv` with the normal texture (format docs, "Object textures";
+    /// as the runtime's `mapped_normal`): `tangent` (xyz, and the bitangent's sign in w) made
+    /// orthogonal to the unit normal `n`, the bitangent `w·(n × t)`, the texel's `2c − 1`
+    /// scaled in x and y. `n` without a normal texture or where the frame degenerates.
+    pub fn mapped_normal(&self, uv: Vec2, n: Vec3, tangent: glam::Vec4) -> Vec3 {
+        let Some(map) = &self.normal_texture else {
+            return n;
+        };
+        let c = map.texture.eval(uv) * 2.0 - Vec3::ONE;
+        let Some(t) = (tangent.truncate() - n * n.dot(tangent.truncate())).try_normalize() else {
+            return n;
+        };
+        let b = if tangent.w >= 0.0 { 1.0 } else { -1.0 } * n.cross(t);
+        (t * (c.x * map.scale) + b * (c.y * map.scale) + n * c.z)
+            .try_normalize()
+            .unwrap_or(n)
     }
 
     /// The metallic-roughness BRDF at `uv` (`None` for a Lambertian material).

@@ -886,6 +886,7 @@ fn degenerate_hits_stay_finite() {
     let materials = vec![Material {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
+        normal_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::splat(0.5),
@@ -966,6 +967,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
         Material {
             emission: Vec3::ZERO,
             metallic_roughness_texture: None,
+            normal_texture: None,
             model: Model::Lambertian,
             albedo: Texture::Checker {
                 a: Vec3::splat(0.8),
@@ -1069,6 +1071,7 @@ fn validation_rejects_bad_inputs() {
     let checker = |scale: f32| Material {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
+        normal_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::ZERO,
@@ -1083,6 +1086,7 @@ fn validation_rejects_bad_inputs() {
     let m = Material {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
+        normal_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Image(Arc::new(img)),
     };
@@ -1136,6 +1140,7 @@ fn metallic_roughness(
     let materials = vec![Material {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
+        normal_texture: None,
         albedo: Texture::Constant(base),
         model: Model::MetallicRoughness {
             metallic,

@@ -1,7 +1,11 @@
 //! A textured glTF object end to end on the bake side (format version 8): examples/orb.toml's
 //! gold orb, whose metallicRoughnessTexture bands its roughness, bakes into a store that carries
 //! the texture with the file's own codes and one texture coordinate per store vertex; and the
-//! ground truth shades each pixel with the roughness the texture holds there.
+//! ground truth shades each pixel with the roughness the texture holds there. A normal
+//! texture goes into the store with MikkTSpace tangents, and turns the truth's normals.
+
+#[path = "data/gltf_builder.rs"]
+mod gltf_builder;
 
 use std::path::{Path, PathBuf};
 
@@ -136,5 +140,137 @@ fn the_truth_reads_the_roughness_texture_at_each_pixel() {
     assert!(
         differs > bottom / 2,
         "the bands differ from one roughness: {differs}"
+    );
+}
+
+/// A normal-mapped metal square (2 × 2 texels tilting the normal four ways, scale 0.9) on
+/// room.glb's table: `scene.toml` in `dir` includes `examples/room.glb` and `quad.glb`.
+fn normal_mapped_scene(dir: &Path) -> Scene {
+    use gltf_builder::Builder;
+    let mut b = Builder::new();
+    let s = 0.15;
+    // glTF: y up; the square lies flat 5 cm above the table top (y = 0.78), normal +y.
+    let pos = b.positions(&[[-s, 0.83, s], [s, 0.83, s], [s, 0.83, -s], [-s, 0.83, -s]]);
+    let nor = b.vec3(&[[0.0, 1.0, 0.0]; 4]);
+    let uv = b.vec2(&[[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]);
+    let idx = b.indices_u16(&[0, 1, 2, 0, 2, 3]);
+    let png = b.png(
+        2,
+        2,
+        &[200, 128, 220, 60, 128, 220, 128, 200, 220, 128, 60, 220],
+    );
+    let doc = serde_json::json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "Quad", "mesh": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}],
+        "samplers": [{"wrapS": 10497, "wrapT": 10497}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "materials": [{"name": "Hammered", "pbrMetallicRoughness": {"metallicFactor": 1.0,
+            "roughnessFactor": 0.1}, "normalTexture": {"index": 0, "scale": 0.9}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nor,
+            "TEXCOORD_0": uv}, "indices": idx, "material": 0}]}],
+    });
+    std::fs::write(dir.join("quad.glb"), b.glb(doc)).unwrap();
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/room.glb");
+    std::fs::copy(room, dir.join("room.glb")).unwrap();
+    let toml = r#"
+[camera]
+position = [0.5, -0.5, 1.3]
+target = [0.0, 0.0, 0.83]
+vfov = 40.0
+
+[environment]
+uniform = [0.55, 0.65, 0.85]
+
+[[gltf]]
+path = "room.glb"
+transform = { rotate = [90.0, 0.0, 0.0] }
+
+[[gltf]]
+path = "quad.glb"
+transform = { rotate = [90.0, 0.0, 0.0] }
+objects = ["Quad"]
+
+[bake]
+epsilon = 0.01
+sample_count = 40
+cube_resolution = 8
+sample_map_resolution = 16
+samples_per_texel = 1
+bounces = 1
+"#;
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, toml).unwrap();
+    Scene::load(&path, None).unwrap()
+}
+
+#[test]
+fn a_normal_texture_is_stored_with_tangents_and_turns_the_truths_normals() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut scene = normal_mapped_scene(dir.path());
+    let output = dir.path().join("quad.oslf");
+    let options = BakeOptions {
+        output: output.clone(),
+        resume: false,
+        progress: None,
+        cube_limit: None,
+        refuse_empty_texels: false,
+        device: None,
+    };
+    bake(&scene, &options).unwrap();
+    let store = Store::open(&output).unwrap();
+    let object = &store.meta().objects[0];
+    let mesh = object.mesh.as_ref().unwrap();
+    let t = object
+        .textures
+        .as_ref()
+        .expect("the normal texture is stored");
+    let image = t.image(TextureKind::Normal).expect("normal image");
+    assert_eq!(image.texels[0], [200, 128, 220, 255]);
+    assert_eq!(t.normal_scale, 0.9);
+    // MikkTSpace on the square: u runs along glTF +x (the scene's +x), v (up, the bake's
+    // convention) along glTF −z, the scene's +y: tangent +x, bitangent n × t = +y, w = +1.
+    assert_eq!(t.tangents.len(), mesh.positions.len());
+    for tangent in &t.tangents {
+        let d = glam::Vec4::from(*tangent) - glam::Vec4::new(1.0, 0.0, 0.0, 1.0);
+        assert!(d.length() < 1e-4, "{tangent:?}");
+    }
+    // The truth: the texture turns the normals, so the reflections move.
+    let camera = scene.camera.clone().unwrap();
+    let settings = TruthSettings {
+        width: 48,
+        height: 36,
+        spp: 16,
+        seed: 5,
+    };
+    let term = Term::Pbr {
+        metallic: 1.0,
+        roughness: 0.1,
+        object_material: true,
+    };
+    let mapped = GroundTruth::new(&scene, camera.clone())
+        .unwrap()
+        .render(term, &settings)
+        .unwrap()
+        .pixels;
+    for m in &mut scene.materials {
+        m.normal_texture = None;
+    }
+    let flat = GroundTruth::new(&scene, camera)
+        .unwrap()
+        .render(term, &settings)
+        .unwrap()
+        .pixels;
+    let covered = flat.iter().filter(|p| p[3] > 0.5).count();
+    let moved = mapped
+        .iter()
+        .zip(&flat)
+        .filter(|(a, b)| b[3] > 0.5 && (0..3).any(|c| (a[c] - b[c]).abs() > 0.02 * (b[c] + 0.05)))
+        .count();
+    assert!(covered > 100, "the square covers {covered} pixels");
+    assert!(
+        moved * 2 > covered,
+        "only {moved} of {covered} pixels changed"
     );
 }

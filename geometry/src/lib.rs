@@ -20,6 +20,7 @@ pub mod bezier;
 pub mod camera;
 pub mod error;
 pub mod mesh;
+pub mod tangents;
 
 pub use atlas::{Atlas, AtlasOptions, TexelSurface, UvSource};
 pub use bezier::BezierPatch;

@@ -1,10 +1,11 @@
 //! A mesh object's material textures as the store holds them (format version 8): the images
-//! the bake itself shades the object with, and per store vertex their texture coordinates.
+//! the bake itself shades the object with, and per store vertex their texture coordinates and,
+//! with a normal texture, MikkTSpace tangents.
 
 use glam::Vec3;
 use oslf_format::{MeshInfo, ObjectTextures, TextureImage, TextureKind};
 
-use crate::material::Material;
+use crate::material::{Material, NormalTexture};
 use crate::texture::{linear_to_srgb, ImageTexture, Texture};
 
 /// The textures of a mesh object whose material has image textures, with its store mesh:
@@ -23,14 +24,25 @@ pub fn object_textures(
     if let Some(Texture::Image(img)) = &material.metallic_roughness_texture {
         images.push((TextureKind::MetallicRoughness, quantize(img, false)));
     }
+    let mut normal_scale = 1.0;
+    if let Some(NormalTexture {
+        texture: Texture::Image(img),
+        scale,
+    }) = &material.normal_texture
+    {
+        images.push((TextureKind::Normal, quantize(img, false)));
+        normal_scale = *scale;
+    }
     if images.is_empty() || source.uvs.len() != source.positions.len() {
         return (atlas, None);
     }
-    let (mesh, texcoords) = split_vertices(atlas, source);
+    let has_normal = images.iter().any(|(k, _)| *k == TextureKind::Normal);
+    let tangents = has_normal.then(|| oslf_geometry::tangents::corner_tangents(source));
+    let (mesh, texcoords, tangents) = split_vertices(atlas, source, tangents.as_deref());
     let textures = ObjectTextures {
         texcoords,
-        tangents: Vec::new(),
-        normal_scale: 1.0,
+        tangents,
+        normal_scale,
         occlusion_strength: 1.0,
         images,
     };
@@ -55,9 +67,14 @@ fn quantize(img: &ImageTexture, srgb: bool) -> TextureImage {
     }
 }
 
-/// The atlas mesh with one vertex per distinct (atlas vertex, texture coordinate) pair, and
-/// those coordinates: corner `c` of triangle `i` reads `source`'s corner `c` of triangle `i`.
-fn split_vertices(atlas: MeshInfo, source: &oslf_geometry::Mesh) -> (MeshInfo, Vec<[f32; 2]>) {
+/// The atlas mesh with one vertex per distinct (atlas vertex, texture coordinate, tangent)
+/// triple, and those coordinates and tangents (empty without `tangents`, given per triangle
+/// corner): corner `c` of triangle `i` reads `source`'s corner `c` of triangle `i`.
+fn split_vertices(
+    atlas: MeshInfo,
+    source: &oslf_geometry::Mesh,
+    tangents: Option<&[[glam::Vec4; 3]]>,
+) -> (MeshInfo, Vec<[f32; 2]>, Vec<[f32; 4]>) {
     let mut index = std::collections::HashMap::new();
     let mut out = MeshInfo {
         atlas_grid: atlas.atlas_grid,
@@ -66,23 +83,29 @@ fn split_vertices(atlas: MeshInfo, source: &oslf_geometry::Mesh) -> (MeshInfo, V
         uvs: Vec::new(),
         triangles: Vec::with_capacity(atlas.triangles.len()),
     };
-    let mut texcoords = Vec::new();
-    for (t, src) in atlas.triangles.iter().zip(&source.triangles) {
+    let (mut texcoords, mut out_tangents) = (Vec::new(), Vec::new());
+    for (i, (t, src)) in atlas.triangles.iter().zip(&source.triangles).enumerate() {
         let tri = std::array::from_fn(|c| {
             let (a, s) = (t[c] as usize, src[c] as usize);
             let tc = source.uvs[s].to_array();
-            let key = (a, tc.map(f32::to_bits));
+            let tangent = tangents.map(|t| t[i][c].to_array());
+            let key = (
+                a,
+                tc.map(f32::to_bits),
+                tangent.map(|t| t.map(f32::to_bits)),
+            );
             *index.entry(key).or_insert_with(|| {
                 out.positions.push(atlas.positions[a]);
                 out.normals.push(atlas.normals[a]);
                 out.uvs.push(atlas.uvs[a]);
                 texcoords.push(tc);
+                out_tangents.extend(tangent);
                 (out.positions.len() - 1) as u32
             })
         });
         out.triangles.push(tri);
     }
-    (out, texcoords)
+    (out, texcoords, out_tangents)
 }
 
 #[cfg(test)]

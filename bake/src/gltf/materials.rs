@@ -1,5 +1,6 @@
-//! Materials: glTF's metallic-roughness model from its base colour (factor and texture) and
-//! its metallic and roughness factors; what else a material uses is warned about.
+//! Materials: glTF's metallic-roughness model from its base colour (factor and texture), its
+//! metallic and roughness factors and texture, and its normal texture; what else a material
+//! uses is warned about.
 
 use std::sync::Arc;
 
@@ -7,7 +8,7 @@ use glam::Vec3;
 
 use super::loader::{label, material_label, Loader};
 use super::textures::{wrapped_image, UvMap};
-use crate::material::{Material, Model};
+use crate::material::{Material, Model, NormalTexture};
 use crate::texture::Texture;
 use crate::Result;
 
@@ -47,6 +48,17 @@ impl<'d> Loader<'d> {
             .as_ref()
             .is_some_and(|mr| color_map.as_ref().is_none_or(|c| c == mr));
         let uv_map = color_map.or(if mr_drawn { mr_map } else { None });
+        // The normal texture likewise, where it maps as the others do (and has no transform).
+        let normal_map = match m.normal_texture().filter(|_| m.index().is_some()) {
+            Some(nt) if nt.extension_value("KHR_texture_transform").is_none() => {
+                Some(self.normal_uv_map(&nt)?)
+            }
+            _ => None,
+        };
+        let normal_drawn = normal_map
+            .as_ref()
+            .is_some_and(|nm| uv_map.as_ref().is_none_or(|u| u == nm));
+        let uv_map = uv_map.or(if normal_drawn { normal_map } else { None });
         let key = (m.index(), uv_map.as_ref().map_or(0, |u| u.set));
         if let Some(&index) = self.materials.get(&key) {
             return Ok((index, uv_map));
@@ -67,7 +79,7 @@ impl<'d> Loader<'d> {
                 format!("{factor:?}: components must be in [0, 1]"),
             ));
         }
-        self.warn_material(m, &name, mr_drawn);
+        self.warn_material(m, &name, mr_drawn, normal_drawn);
         let albedo = match &info {
             None => Texture::Constant(rgb),
             Some(info) => {
@@ -91,6 +103,10 @@ impl<'d> Loader<'d> {
             None => None,
             Some(info) => Some(self.metallic_roughness_texture(&info, &pbr)?),
         };
+        let normal_texture = match m.normal_texture().filter(|_| normal_drawn) {
+            None => None,
+            Some(nt) => Some(self.normal_texture(&nt, &at)?),
+        };
         let model = self.model(m, &at)?;
         let emission = self.emission(m, &at)?;
         materials.push(Material {
@@ -98,6 +114,7 @@ impl<'d> Loader<'d> {
             model,
             emission,
             metallic_roughness_texture,
+            normal_texture,
         });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);
@@ -119,6 +136,30 @@ impl<'d> Loader<'d> {
         Ok(Texture::Image(Arc::new(wrapped_image(
             &image, ws, wt, factor,
         ))))
+    }
+
+    /// glTF's `normalTexture` `nt` (of the material at JSON path `at`) as data, resampled for
+    /// its wraps, with its scale (finite).
+    fn normal_texture(
+        &mut self,
+        nt: &gltf::material::NormalTexture,
+        at: &str,
+    ) -> Result<NormalTexture> {
+        let scale = nt.scale();
+        if !scale.is_finite() {
+            return Err(self.err(
+                format!("{at}.normalTexture.scale"),
+                format!("{scale}: must be finite"),
+            ));
+        }
+        let texture = nt.texture();
+        let image = self.image(&texture.source(), false)?;
+        let sampler = texture.sampler();
+        let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
+        Ok(NormalTexture {
+            texture: Texture::Image(Arc::new(wrapped_image(&image, ws, wt, Vec3::ONE))),
+            scale,
+        })
     }
 
     /// The reflection model of `m` (at JSON path `at`): its metallic and roughness factors,
@@ -160,9 +201,15 @@ impl<'d> Loader<'d> {
         Ok(emission)
     }
 
-    /// Warns about what material `m` uses that is not drawn; `mr_drawn`: its
-    /// metallic-roughness texture is.
-    pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str, mr_drawn: bool) {
+    /// Warns about what material `m` uses that is not drawn; `mr_drawn`, `normal_drawn`: its
+    /// metallic-roughness and normal textures are.
+    pub(super) fn warn_material(
+        &mut self,
+        m: &gltf::Material,
+        name: &str,
+        mr_drawn: bool,
+        normal_drawn: bool,
+    ) {
         let pbr = m.pbr_metallic_roughness();
         let mut ignored = Vec::new();
         if pbr.metallic_roughness_texture().is_some() && m.index().is_some() && !mr_drawn {
@@ -177,8 +224,12 @@ impl<'d> Loader<'d> {
         if m.emissive_texture().is_some() {
             ignored.push("emissiveTexture (drawn with emissiveFactor alone)".into());
         }
-        if m.normal_texture().is_some() {
-            ignored.push("normalTexture".into());
+        if m.normal_texture().is_some() && !normal_drawn {
+            ignored.push(
+                "normalTexture, which maps texture coordinates unlike the material's other \
+                 textures (its TEXCOORD set, KHR_texture_transform or sampler wrap differs)"
+                    .into(),
+            );
         }
         if m.occlusion_texture().is_some() {
             ignored.push("occlusionTexture".into());

@@ -55,6 +55,24 @@ impl<'d> Loader<'d> {
         })
     }
 
+    /// How glTF's `normalTexture` `nt` maps texture coordinates (it has no
+    /// `KHR_texture_transform`): its set and its sampler's wraps.
+    pub(super) fn normal_uv_map(&mut self, nt: &gltf::material::NormalTexture) -> Result<UvMap> {
+        let texture = nt.texture();
+        let image = self.image(&texture.source(), false)?;
+        let sampler = texture.sampler();
+        Ok(UvMap {
+            set: nt.tex_coord(),
+            offset: Vec2::ZERO,
+            rotation: 0.0,
+            scale: Vec2::ONE,
+            wrap: [
+                axis_map(sampler.wrap_s(), image.width),
+                axis_map(sampler.wrap_t(), image.height),
+            ],
+        })
+    }
+
     /// An image decoded to linear RGB, from sRGB where `srgb` (colours) or as stored (data such
     /// as metallic-roughness), cached by index and decoding.
     pub(super) fn image(&mut self, image: &gltf::Image, srgb: bool) -> Result<Arc<ImageTexture>> {

@@ -225,6 +225,7 @@ impl Ctx<'_> {
             model,
             emission,
             metallic_roughness_texture: None,
+            normal_texture: None,
         };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))
