@@ -564,7 +564,7 @@ fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     let (d00, d01, d11) = (e0.dot(e0), e0.dot(e1), e1.dot(e1));
     let (d20, d21) = (ep.dot(e0), ep.dot(e1));
     let den = d00 * d11 - d01 * d01;
-    if !(den.abs() > f32::MIN_POSITIVE) {
+    if den.abs() <= f32::MIN_POSITIVE || den.is_nan() {
         return Vec3::splat(1.0 / 3.0);
     }
     let v = (d11 * d20 - d01 * d21) / den;

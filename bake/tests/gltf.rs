@@ -1054,3 +1054,37 @@ fn metallic_roughness_textures_are_drawn_where_they_map_alike() {
         import.warnings
     );
 }
+
+/// A normal texture on environment geometry is said to be drawn on OSLF objects only, naming
+/// the shape, once per material.
+#[test]
+fn normal_textures_on_environment_geometry_are_said_undrawn() {
+    let mut b = Builder::new();
+    let pos = b.positions(&TRIANGLE);
+    let uv = b.vec2(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+    let png = b.png(1, 1, &[128, 128, 255]);
+    let doc = json!({
+        "nodes": [{"name": "Wall", "mesh": 0}, {"name": "Wall 2", "mesh": 0}],
+        "images": [{"bufferView": png, "mimeType": "image/png"}],
+        "textures": [{"source": 0}],
+        "materials": [{"name": "Brick", "normalTexture": {"index": 0}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+            "material": 0}]}],
+    });
+    let d = dir("environment-normal-texture");
+    let path = write(&d, "wall.glb", &b.glb(doc));
+    let (import, materials) = import(&path, &Options::default());
+    assert!(materials[import.shapes[0].material as usize]
+        .normal_texture
+        .is_some());
+    let said: Vec<&String> = import
+        .warnings
+        .iter()
+        .filter(|w| w.contains("normalTexture is drawn on OSLF objects only"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", import.warnings);
+    assert!(
+        said[0].starts_with("wall.glb: nodes[0] \"Wall\""),
+        "{said:?}"
+    );
+}

@@ -76,7 +76,7 @@ fn a_textured_glb_object_stores_its_texture_and_texture_coordinates() {
 #[test]
 fn the_truth_reads_the_roughness_texture_at_each_pixel() {
     let scene = orb_scene();
-    let camera = scene.camera.clone().expect("orb.toml has a camera");
+    let camera = scene.camera.expect("orb.toml has a camera");
     let truth = GroundTruth::new(&scene, camera).unwrap();
     let settings = TruthSettings {
         width: 64,
@@ -237,7 +237,7 @@ fn a_normal_texture_is_stored_with_tangents_and_turns_the_truths_normals() {
         assert!(d.length() < 1e-4, "{tangent:?}");
     }
     // The truth: the texture turns the normals, so the reflections move.
-    let camera = scene.camera.clone().unwrap();
+    let camera = scene.camera.unwrap();
     let settings = TruthSettings {
         width: 48,
         height: 36,
@@ -249,7 +249,7 @@ fn a_normal_texture_is_stored_with_tangents_and_turns_the_truths_normals() {
         roughness: 0.1,
         object_material: true,
     };
-    let mapped = GroundTruth::new(&scene, camera.clone())
+    let mapped = GroundTruth::new(&scene, camera)
         .unwrap()
         .render(term, &settings)
         .unwrap()

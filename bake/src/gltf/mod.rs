@@ -100,6 +100,26 @@ fn load_bytes(
         }
     }
     import.warnings = std::mem::take(&mut loader.warnings);
+    warn_environment_normal_textures(&mut import, materials);
     import.files = loader.files.take();
     Ok(import)
+}
+
+/// Warns, once per material, where environment geometry uses a material with a normal
+/// texture: normal textures turn the OSLF objects' normals (the store carries them with their
+/// tangents), not the environment's, which the path tracer draws with its interpolated
+/// normals.
+fn warn_environment_normal_textures(import: &mut Import, materials: &[Material]) {
+    let mut seen = std::collections::BTreeSet::new();
+    for shape in &import.shapes {
+        let mapped = materials
+            .get(shape.material as usize)
+            .is_some_and(|m| m.normal_texture.is_some());
+        if mapped && seen.insert(shape.material) {
+            import.warnings.push(format!(
+                "{}: normalTexture is drawn on OSLF objects only; this environment geometry is drawn with its interpolated normals",
+                shape.name
+            ));
+        }
+    }
 }
