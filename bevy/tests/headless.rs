@@ -303,3 +303,59 @@ fn damaged_and_missing_stores_are_said_once_and_draw_nothing() {
         );
     }
 }
+
+/// examples/orb.toml baked small into `dir` as `orb.oslf`: a glTF object whose roughness
+/// texture the store carries (format version 8).
+fn bake_orb(dir: &Path) -> std::path::PathBuf {
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/orb.toml");
+    let mut scene = oslf_bake::scene::Scene::load(&scene_path, None).unwrap();
+    scene.bake.sample_count = oslf_bake::scene::SampleDensity::Count(80);
+    scene.bake.cube_resolution = 16;
+    scene.bake.sample_map_resolution = 32;
+    scene.bake.samples_per_texel = 1;
+    let output = dir.join("orb.oslf");
+    let options = oslf_bake::bake::BakeOptions {
+        output: output.clone(),
+        resume: false,
+        progress: None,
+        cube_limit: None,
+        refuse_empty_texels: false,
+        device: None,
+    };
+    oslf_bake::bake::bake(&scene, &options).unwrap();
+    output
+}
+
+/// A textured object (its roughness from its texture, in the pbr mode) in a Bevy frame equals
+/// the runtime's render: the plugin draws through the same G-buffer with the material target.
+#[test]
+fn a_textured_object_in_a_bevy_frame_equals_the_runtimes_render() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = bake_orb(tmp.path());
+    assert!(oslf_format::Store::open(&store).unwrap().meta().objects[0]
+        .textures
+        .is_some());
+    let params = ShadingParams {
+        mode: Mode::Pbr,
+        m: 8,
+        ..Default::default()
+    };
+    let (camera, reference) = reference(&store, &params);
+    let setup = Setup {
+        store: Some("orb.oslf".into()),
+        params,
+        ..setup_for(camera, Extra::None, true)
+    };
+    let mut app = app(tmp.path(), setup);
+    let pixels = run_and_capture(&mut app, 60);
+    dump("bevy-orb", &pixels);
+    let (n, share) = agreement(&pixels, &reference, 1e-2);
+    println!(
+        "textured: {n} object pixels, {:.2}% within 1% of the runtime's render",
+        share * 100.0
+    );
+    assert!(n > 500, "{n} object pixels");
+    assert!(share >= 0.99, "{share}");
+    let messages = app.world().resource::<OslfMessages>().all();
+    assert!(messages.is_empty(), "{messages:?}");
+}

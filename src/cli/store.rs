@@ -422,6 +422,12 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
                 v["triangles"] = mesh.triangles.len().into();
                 v["atlas_grid"] = mesh.atlas_grid.into();
             }
+            if let Some(t) = &o.textures {
+                v["textures"] = t.images.iter().map(|(k, i)| serde_json::json!({
+                    "kind": k.name(), "width": i.width, "height": i.height,
+                })).collect::<Vec<_>>().into();
+                v["normal_scale"] = t.normal_scale.into();
+            }
             v
         }).collect::<Vec<_>>(),
         "cube_resolution": b.cube_resolution,
@@ -523,6 +529,14 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
             String::new()
         };
         println!("    material: {material}{emission}");
+        if let Some(t) = &o.textures {
+            let images: Vec<String> = t
+                .images
+                .iter()
+                .map(|(k, i)| format!("{} {}x{}", k.name(), i.width, i.height))
+                .collect();
+            println!("    textures: {}", images.join(", "));
+        }
     }
     println!("cube resolution  {0}x{0} per face", b.cube_resolution);
     println!(
