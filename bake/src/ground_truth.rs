@@ -386,6 +386,49 @@ impl<'s> GroundTruth<'s> {
         }
     }
 
+    /// The pbr term's BRDF at `hit`: the flags' factors, or with `object_material` the
+    /// object's own (a mesh object's metallic-roughness texture read at the hit, as the store's
+    /// texture record has the runtime do: format docs, "Object textures"); the base colour C_s,
+    /// or a mesh object's base colour texture at the hit.
+    fn pbr_brdf(
+        &self,
+        hit: &SurfaceHit,
+        mesh: bool,
+        color: Vec3,
+        (metallic, roughness): (f32, f32),
+        object_material: bool,
+    ) -> MetallicRoughness {
+        let own = self.scene.materials.get(hit.material as usize);
+        let textured = |t: Option<&crate::texture::Texture>| {
+            mesh && matches!(t, Some(crate::texture::Texture::Image(_)))
+        };
+        let base_color = match own {
+            Some(m) if textured(Some(&m.albedo)) => m.eval(hit.uv),
+            _ => color,
+        };
+        let (metallic, roughness) = match own {
+            Some(m) if object_material => match (m.model, m.metallic_roughness(hit.uv)) {
+                (_, Some(mr)) if textured(m.metallic_roughness_texture.as_ref()) => {
+                    (mr.metallic, mr.roughness)
+                }
+                (
+                    Model::MetallicRoughness {
+                        metallic,
+                        roughness,
+                    },
+                    _,
+                ) => (metallic, roughness),
+                _ => (metallic, roughness),
+            },
+            _ => (metallic, roughness),
+        };
+        MetallicRoughness {
+            base_color,
+            metallic,
+            roughness,
+        }
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn pixel(
         &self,
@@ -437,37 +480,13 @@ impl<'s> GroundTruth<'s> {
                 roughness,
                 object_material,
             } => {
-                let own = self.scene.materials.get(hit.material as usize);
-                // A mesh object reads its textures at the hit, as the store's texture record
-                // has the runtime do (format docs, "Object textures").
-                let textured = |t: Option<&crate::texture::Texture>| {
-                    patch.is_none() && matches!(t, Some(crate::texture::Texture::Image(_)))
-                };
-                let base_color = match own {
-                    Some(m) if textured(Some(&m.albedo)) => m.eval(hit.uv),
-                    _ => color,
-                };
-                let (metallic, roughness) = match own {
-                    Some(m) if object_material => match (m.model, m.metallic_roughness(hit.uv)) {
-                        (_, Some(mr)) if textured(m.metallic_roughness_texture.as_ref()) => {
-                            (mr.metallic, mr.roughness)
-                        }
-                        (
-                            Model::MetallicRoughness {
-                                metallic,
-                                roughness,
-                            },
-                            _,
-                        ) => (metallic, roughness),
-                        _ => (metallic, roughness),
-                    },
-                    _ => (metallic, roughness),
-                };
-                let brdf = MetallicRoughness {
-                    base_color,
-                    metallic,
-                    roughness,
-                };
+                let brdf = self.pbr_brdf(
+                    &hit,
+                    patch.is_none(),
+                    color,
+                    (metallic, roughness),
+                    object_material,
+                );
                 for s in 0..spp {
                     let xi = stratified_2d(s, spp, rng);
                     let lobe = rng.next_f32();
