@@ -72,7 +72,7 @@ impl Prefix {
                 });
             }
         }
-        crate::textures::check_objects(meta, meta_offset)?;
+        check_textures(meta, meta_offset)?;
         let meta_bytes = encode_meta(meta, version);
         // Validate by decoding what was encoded (same checks as the reader).
         let decoded = decode_meta(&meta_bytes, meta_offset, version)?;
@@ -167,4 +167,24 @@ impl Prefix {
             ("sample maps", self.header.maps, &self.maps),
         ]
     }
+}
+
+/// Checks what a writer was given: textures only on mesh objects, one texture coordinate (and
+/// with a normal texture one tangent) per vertex, kinds in order without repeats, texel
+/// counts matching the sizes. `offset` is the metadata section's (for the error).
+fn check_textures(meta: &StoreMeta, offset: u64) -> Result<(), Error> {
+    for (i, o) in meta.objects.iter().enumerate() {
+        let Some(t) = &o.textures else { continue };
+        let problem = match &o.mesh {
+            None => Some("a Bézier object cannot hold textures".to_string()),
+            Some(m) => crate::textures::check(t, m.positions.len()),
+        };
+        if let Some(p) = problem {
+            return Err(Error::InvalidMetadata {
+                offset,
+                detail: format!("object {i}: {p}"),
+            });
+        }
+    }
+    Ok(())
 }

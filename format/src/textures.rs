@@ -3,13 +3,14 @@
 //! "Texture record").
 
 use crate::bytes::{ByteReader, ByteWriter};
-use crate::meta::NORMAL_LENGTH_TOLERANCE;
 use crate::Error;
 
 /// The first format version with object textures.
 pub const TEXTURES_VERSION: u32 = 8;
 /// Largest width or height of a stored texture.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
+/// How far from 1 a stored tangent's length may be (as a mesh record's normals).
+pub const TANGENT_LENGTH_TOLERANCE: f32 = 1e-3;
 /// Most texels of one stored texture (8192², 256 MiB of RGBA8).
 pub const MAX_TEXTURE_TEXELS: u64 = 1 << 26;
 
@@ -205,7 +206,7 @@ pub(crate) fn decode_textures(
     }))
 }
 
-/// Parses vertex `k`'s tangent: unit xyz (within [`NORMAL_LENGTH_TOLERANCE`]), `w` ±1.
+/// Parses vertex `k`'s tangent: unit xyz (within [`TANGENT_LENGTH_TOLERANCE`]), `w` ±1.
 fn decode_tangent(r: &mut ByteReader<'_>, i: usize, k: usize) -> Result<[f32; 4], Error> {
     let at = r.offset();
     let mut t = [0f32; 4];
@@ -217,7 +218,7 @@ fn decode_tangent(r: &mut ByteReader<'_>, i: usize, k: usize) -> Result<[f32; 4]
         .map(|x| f64::from(*x).powi(2))
         .sum::<f64>()
         .sqrt();
-    if (len - 1.0).abs() > f64::from(NORMAL_LENGTH_TOLERANCE) || t[3].abs() != 1.0 {
+    if (len - 1.0).abs() > f64::from(TANGENT_LENGTH_TOLERANCE) || t[3].abs() != 1.0 {
         return Err(bad(
             at,
             format!("object {i}: vertex {k} tangent {t:?} is not a unit vector with w = ±1"),
@@ -282,25 +283,8 @@ fn decode_image(
     })
 }
 
-/// Checks what a writer was given: textures only on mesh objects, one texture coordinate (and
-/// with a normal texture one tangent) per vertex, kinds in order without repeats, texel
-/// counts matching the sizes. `offset` is the metadata section's (for the error).
-pub(crate) fn check_objects(meta: &crate::StoreMeta, offset: u64) -> Result<(), Error> {
-    for (i, o) in meta.objects.iter().enumerate() {
-        let Some(t) = &o.textures else { continue };
-        let problem = match &o.mesh {
-            None => Some("a Bézier object cannot hold textures".to_string()),
-            Some(m) => check(t, m.positions.len()),
-        };
-        if let Some(p) = problem {
-            return Err(bad(offset, format!("object {i}: {p}")));
-        }
-    }
-    Ok(())
-}
-
 /// What is wrong with `t` on a mesh of `v` vertices, if anything.
-fn check(t: &ObjectTextures, v: usize) -> Option<String> {
+pub(crate) fn check(t: &ObjectTextures, v: usize) -> Option<String> {
     let has_normal = t.image(TextureKind::Normal).is_some();
     let kinds: Vec<usize> = t
         .images
