@@ -7,7 +7,7 @@
 #[path = "data/gltf_builder.rs"]
 mod gltf_builder;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use oslf_bake::bake::{bake, BakeOptions};
 use oslf_bake::ground_truth::{GroundTruth, Term, TruthSettings};
@@ -25,21 +25,25 @@ fn orb_scene() -> Scene {
     scene
 }
 
-#[test]
-fn a_textured_glb_object_stores_its_texture_and_texture_coordinates() {
-    let scene = orb_scene();
-    let dir = tempfile::tempdir().unwrap();
-    let output: PathBuf = dir.path().join("orb.oslf");
+/// Bakes `scene` into `output` and opens the store.
+fn bake_store(scene: &Scene, output: &Path) -> Store {
     let options = BakeOptions {
-        output: output.clone(),
+        output: output.to_path_buf(),
         resume: false,
         progress: None,
         cube_limit: None,
         refuse_empty_texels: false,
         device: None,
     };
-    bake(&scene, &options).unwrap();
-    let store = Store::open(&output).unwrap();
+    bake(scene, &options).unwrap();
+    Store::open(output).unwrap()
+}
+
+#[test]
+fn a_textured_glb_object_stores_its_texture_and_texture_coordinates() {
+    let scene = orb_scene();
+    let dir = tempfile::tempdir().unwrap();
+    let store = bake_store(&scene, &dir.path().join("orb.oslf"));
     let object = &store.meta().objects[0];
     let mesh = object.mesh.as_ref().expect("a mesh object");
     let t = object
@@ -209,17 +213,7 @@ bounces = 1
 fn a_normal_texture_is_stored_with_tangents_and_turns_the_truths_normals() {
     let dir = tempfile::tempdir().unwrap();
     let mut scene = normal_mapped_scene(dir.path());
-    let output = dir.path().join("quad.oslf");
-    let options = BakeOptions {
-        output: output.clone(),
-        resume: false,
-        progress: None,
-        cube_limit: None,
-        refuse_empty_texels: false,
-        device: None,
-    };
-    bake(&scene, &options).unwrap();
-    let store = Store::open(&output).unwrap();
+    let store = bake_store(&scene, &dir.path().join("quad.oslf"));
     let object = &store.meta().objects[0];
     let mesh = object.mesh.as_ref().unwrap();
     let t = object

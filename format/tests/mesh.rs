@@ -84,6 +84,17 @@ fn material_offset(b: &[u8], meta: &StoreMeta, index: usize) -> usize {
     kind_offset(b, meta, index) + 4 + mesh
 }
 
+/// The metadata error of store bytes `b` with `bytes` written at `at` (resealed).
+fn metadata_error(b: &[u8], at: usize, bytes: &[u8]) -> (u64, String) {
+    let mut c = b.to_vec();
+    c[at..at + bytes.len()].copy_from_slice(bytes);
+    reseal_all(&mut c);
+    match Store::from_bytes(&c) {
+        Err(Error::InvalidMetadata { offset, detail }) => (offset, detail),
+        other => panic!("{:?}", other.err()),
+    }
+}
+
 #[test]
 fn object_materials_round_trip_and_damaged_ones_are_typed_errors() {
     let mut f = mesh_fixture();
@@ -110,15 +121,7 @@ fn object_materials_round_trip_and_damaged_ones_are_typed_errors() {
         let model = u32::from_le_bytes(b[m..m + 4].try_into().unwrap());
         assert_eq!(model, f.meta.objects[i].material.model, "object {i}");
     }
-    let crafted = |at: usize, bytes: &[u8]| -> (u64, String) {
-        let mut c = b.clone();
-        c[at..at + bytes.len()].copy_from_slice(bytes);
-        reseal_all(&mut c);
-        match Store::from_bytes(&c) {
-            Err(Error::InvalidMetadata { offset, detail }) => (offset, detail),
-            other => panic!("{:?}", other.err()),
-        }
-    };
+    let crafted = |at: usize, bytes: &[u8]| metadata_error(&b, at, bytes);
     let m0 = material_offset(&b, &f.meta, 0);
     let m1 = material_offset(&b, &f.meta, 1);
     let m2 = material_offset(&b, &f.meta, 2);
@@ -478,15 +481,7 @@ fn object_textures_round_trip_and_damaged_ones_are_typed_errors() {
     let v = f.meta.objects[2].mesh.as_ref().unwrap().positions.len();
     let tangents_at = flags_at + 12 + 8 * v;
     let first_image = tangents_at + 16 * v;
-    let crafted = |at: usize, bytes: &[u8]| -> (u64, String) {
-        let mut c = b.clone();
-        c[at..at + bytes.len()].copy_from_slice(bytes);
-        reseal_all(&mut c);
-        match Store::from_bytes(&c) {
-            Err(Error::InvalidMetadata { offset, detail }) => (offset, detail),
-            other => panic!("{:?}", other.err()),
-        }
-    };
+    let crafted = |at: usize, bytes: &[u8]| metadata_error(&b, at, bytes);
     let bezier_flags = material_offset(&b, &f.meta, 0) + MATERIAL_RECORD;
     for (what, at, bytes, offset, words) in [
         (
