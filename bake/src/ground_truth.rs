@@ -524,7 +524,18 @@ impl<'s> GroundTruth<'s> {
                 }
             }
         }
-        let c = sum / spp as f32;
+        let mut c = sum / spp as f32;
+        if let Term::Pbr { .. } = term {
+            // The pbr mode draws the object's own emission (a mesh object's emissive texture
+            // read at the hit), as the runtime does.
+            if let Some(m) = self.scene.materials.get(hit.material as usize) {
+                c += if patch.is_none() {
+                    m.emission_at(hit.uv)
+                } else {
+                    m.emission
+                };
+            }
+        }
         let c = if c.is_finite() { c } else { Vec3::ZERO };
         ([c.x, c.y, c.z, 1.0], color)
     }

@@ -30,6 +30,9 @@ pub struct Material {
     /// of a mesh object, in the MikkTSpace frame of its texture coordinates
     /// ([`Material::mapped_normal`]).
     pub normal_texture: Option<NormalTexture>,
+    /// glTF's `emissiveTexture` (sRGB decoded): an OSLF mesh object emits `emission` times it
+    /// ([`Material::emission_at`]); environment geometry emits `emission` alone.
+    pub emissive_texture: Option<Texture>,
 }
 
 /// A tangent-space normal texture with its scale (glTF `normalTexture.scale`).
@@ -57,6 +60,16 @@ impl Material {
             emission: Vec3::ZERO,
             metallic_roughness_texture: None,
             normal_texture: None,
+            emissive_texture: None,
+        }
+    }
+
+    /// The radiance a mesh object with this material emits at `uv`: `emission` times the
+    /// emissive texture, where there is one (format docs, "Object textures").
+    pub fn emission_at(&self, uv: Vec2) -> Vec3 {
+        match &self.emissive_texture {
+            Some(t) => self.emission * t.eval(uv),
+            None => self.emission,
         }
     }
 

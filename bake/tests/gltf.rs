@@ -1055,8 +1055,8 @@ fn metallic_roughness_textures_are_drawn_where_they_map_alike() {
     );
 }
 
-/// A normal texture on environment geometry is said to be drawn on OSLF objects only, naming
-/// the shape, once per material.
+/// Normal and emissive textures on environment geometry are said to be drawn on OSLF objects
+/// only, naming the shape, once per material.
 #[test]
 fn normal_textures_on_environment_geometry_are_said_undrawn() {
     let mut b = Builder::new();
@@ -1067,7 +1067,8 @@ fn normal_textures_on_environment_geometry_are_said_undrawn() {
         "nodes": [{"name": "Wall", "mesh": 0}, {"name": "Wall 2", "mesh": 0}],
         "images": [{"bufferView": png, "mimeType": "image/png"}],
         "textures": [{"source": 0}],
-        "materials": [{"name": "Brick", "normalTexture": {"index": 0}}],
+        "materials": [{"name": "Brick", "normalTexture": {"index": 0},
+            "emissiveFactor": [1.0, 0.5, 0.0], "emissiveTexture": {"index": 0}}],
         "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
             "material": 0}]}],
     });
@@ -1080,11 +1081,17 @@ fn normal_textures_on_environment_geometry_are_said_undrawn() {
     let said: Vec<&String> = import
         .warnings
         .iter()
-        .filter(|w| w.contains("normalTexture is drawn on OSLF objects only"))
+        .filter(|w| w.contains("drawn on OSLF objects only"))
         .collect();
     assert_eq!(said.len(), 1, "{:?}", import.warnings);
     assert!(
         said[0].starts_with("wall.glb: nodes[0] \"Wall\""),
         "{said:?}"
     );
+    assert!(
+        said[0].contains("normalTexture") && said[0].contains("emissiveTexture"),
+        "{said:?}"
+    );
+    let m = &materials[import.shapes[0].material as usize];
+    assert!(m.emissive_texture.is_some());
 }

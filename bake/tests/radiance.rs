@@ -887,6 +887,7 @@ fn degenerate_hits_stay_finite() {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
         normal_texture: None,
+        emissive_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::splat(0.5),
@@ -968,6 +969,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
             emission: Vec3::ZERO,
             metallic_roughness_texture: None,
             normal_texture: None,
+            emissive_texture: None,
             model: Model::Lambertian,
             albedo: Texture::Checker {
                 a: Vec3::splat(0.8),
@@ -1072,6 +1074,7 @@ fn validation_rejects_bad_inputs() {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
         normal_texture: None,
+        emissive_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::ZERO,
@@ -1087,6 +1090,7 @@ fn validation_rejects_bad_inputs() {
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
         normal_texture: None,
+        emissive_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Image(Arc::new(img)),
     };
@@ -1141,6 +1145,7 @@ fn metallic_roughness(
         emission: Vec3::ZERO,
         metallic_roughness_texture: None,
         normal_texture: None,
+        emissive_texture: None,
         albedo: Texture::Constant(base),
         model: Model::MetallicRoughness {
             metallic,

@@ -268,3 +268,51 @@ fn a_normal_texture_is_stored_with_tangents_and_turns_the_truths_normals() {
         "only {moved} of {covered} pixels changed"
     );
 }
+
+/// The pbr truth adds the object's own emission (its factor times its emissive texture at the
+/// hit, as the runtime does): with the same seed, an emitting orb's pixels are the dark orb's
+/// plus its emission, plus the little its light adds to the table it reflects.
+#[test]
+fn the_pbr_truth_adds_the_objects_emission() {
+    let mut scene = orb_scene();
+    let camera = scene.camera.expect("orb.toml has a camera");
+    let settings = TruthSettings {
+        width: 32,
+        height: 24,
+        spp: 8,
+        seed: 9,
+    };
+    let term = Term::Pbr {
+        metallic: 1.0,
+        roughness: 0.5,
+        object_material: true,
+    };
+    let render = |scene: &Scene| {
+        GroundTruth::new(scene, camera)
+            .unwrap()
+            .render(term, &settings)
+            .unwrap()
+            .pixels
+    };
+    let dark = render(&scene);
+    let glow = glam::Vec3::new(0.5, 0.25, 0.125);
+    let orb = scene.objects[0].material as usize;
+    scene.materials[orb].emission = glow;
+    let lit = render(&scene);
+    let mut covered = 0;
+    for (a, b) in lit.iter().zip(&dark) {
+        if b[3] < 0.5 {
+            assert_eq!(a, b, "off the orb nothing changes");
+            continue;
+        }
+        covered += 1;
+        for c in 0..3 {
+            let added = a[c] - b[c];
+            assert!(
+                added >= glow[c] * (1.0 - 1e-4) && added < 1.5 * glow[c],
+                "{a:?} vs {b:?}"
+            );
+        }
+    }
+    assert!(covered > 50, "{covered} orb pixels");
+}

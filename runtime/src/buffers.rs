@@ -13,7 +13,7 @@ use crate::params::ShadeUniform;
 
 /// The vec4s of one patch in the `patches` buffer (shade.wgsl's `PatchGpu`): its 16 control
 /// points, then its base colour.
-pub(crate) const PATCH_VEC4S: usize = 18;
+pub(crate) const PATCH_VEC4S: usize = 19;
 
 /// The buffers of a store on the GPU. Storage buffers may not be empty: those that could be
 /// are padded with one element.
@@ -66,10 +66,17 @@ impl StoreBuffers {
             usage: storage,
         });
         let mut patch_data: Vec<[f32; 4]> = Vec::with_capacity(mesh.patches.len() * PATCH_VEC4S);
-        for ((p, c), m) in mesh.patches.iter().zip(&mesh.colors).zip(&mesh.materials) {
+        for (((p, c), m), e) in mesh
+            .patches
+            .iter()
+            .zip(&mesh.colors)
+            .zip(&mesh.materials)
+            .zip(&mesh.emissions)
+        {
             patch_data.extend(p.cp.iter().map(|v| v.extend(0.0).to_array()));
             patch_data.push(c.extend(1.0).to_array());
             patch_data.push(*m);
+            patch_data.push(*e);
         }
         let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("patches"),

@@ -107,6 +107,7 @@ struct TextureParams {
 @group(1) @binding(1) var tex_base_color: texture_2d<f32>;
 @group(1) @binding(2) var tex_metallic_roughness: texture_2d<f32>;
 @group(1) @binding(3) var tex_normal: texture_2d<f32>;
+@group(1) @binding(4) var tex_emissive: texture_2d<f32>;
 
 struct FsTexturedOut {
     @location(0) position_patch: vec4<f32>,
@@ -148,19 +149,30 @@ fn bilinear(t: texture_2d<f32>, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
     return mix(top, bottom, fy);
 }
 
-// The pixel's material, packed for shade.wgsl (`material_of` there): base colour RGB,
-// metallic, roughness, occlusion as 16-bit unorm pairs; a kind the object lacks reads 0 and
-// shade.wgsl takes the object's own value for it.
+// The inverse sRGB transfer function, linear [0, 1] to encoded.
+fn linear_to_srgb(c: f32) -> f32 {
+    let x = clamp(c, 0.0, 1.0);
+    if (x <= 0.0031308) { return 12.92 * x; }
+    return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+}
+
+// The pixel's material, packed for shade.wgsl (`surface_of` there): base colour RGB,
+// metallic, roughness, occlusion as 16-bit unorm pairs; the texture flags in w's low byte and
+// the emissive texture's RGB, sRGB-encoded to 8 bits, above them. A kind the object lacks
+// reads 0 and shade.wgsl takes the object's own value for it.
 fn material_texel(uv: vec2<f32>) -> vec4<u32> {
     var base = vec3<f32>(0.0);
     var mr = vec3<f32>(0.0);
+    var glow = vec3<f32>(0.0);
     if ((T.flags & 1u) != 0u) { base = bilinear(tex_base_color, uv, true); }
     if ((T.flags & 2u) != 0u) { mr = bilinear(tex_metallic_roughness, uv, false); }
+    if ((T.flags & 8u) != 0u) { glow = bilinear(tex_emissive, uv, true); }
+    let code = vec3<u32>(round(vec3<f32>(linear_to_srgb(glow.x), linear_to_srgb(glow.y), linear_to_srgb(glow.z)) * 255.0));
     return vec4<u32>(
         pack2x16unorm(base.xy),
         pack2x16unorm(vec2<f32>(base.z, mr.z)),
         pack2x16unorm(vec2<f32>(mr.y, 1.0)),
-        T.flags,
+        T.flags | (code.x << 8u) | (code.y << 16u) | (code.z << 24u),
     );
 }
 

@@ -50,6 +50,9 @@ pub struct ObjectMesh {
     /// least `MIN_ALPHA`), 1 for a metallic-roughness material (else 0: the parameters'
     /// factors apply), 0.
     pub materials: Vec<[f32; 4]>,
+    /// The emitted radiance of each map's object (indexed by map; linear RGB, w 0): its
+    /// material record's emission, times its emissive texture where it has one.
+    pub emissions: Vec<[f32; 4]>,
     /// Vertices, patch after patch, then each mesh object's (in object order).
     pub vertices: Vec<GVertex>,
     /// Triangle list (three indices per triangle).
@@ -72,6 +75,15 @@ impl ObjectMesh {
     pub fn from_store(store: &Store, max_error: f32) -> Self {
         let (world, colors, meshes) = world_objects(store.meta());
         let materials = map_materials(store.meta());
+        let emissions = store
+            .meta()
+            .objects
+            .iter()
+            .flat_map(|o| {
+                let e = o.material.emission;
+                std::iter::repeat_n([e[0], e[1], e[2], 0.0], o.patch_count as usize)
+            })
+            .collect();
         let (lo, hi) = world
             .iter()
             .flatten()
@@ -117,6 +129,7 @@ impl ObjectMesh {
             patches,
             colors,
             materials,
+            emissions,
             vertices,
             indices,
             draws,

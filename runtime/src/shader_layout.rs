@@ -105,7 +105,8 @@ fn the_vertex_and_patch_records_match() {
         [
             ("cp", 0, "[[f32; 4]; 16]"),
             ("color", 256, "[f32; 4]"),
-            ("material", 272, "[f32; 4]")
+            ("material", 272, "[f32; 4]"),
+            ("emission", 288, "[f32; 4]")
         ]
     );
 }

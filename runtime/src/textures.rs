@@ -6,10 +6,11 @@ use oslf_format::{StoreMeta, TextureImage, TextureKind};
 use wgpu::util::DeviceExt;
 
 /// The kinds gbuffer.wgsl reads, in the order of its group-1 texture bindings (1, 2, …).
-pub(crate) const BOUND_KINDS: [TextureKind; 3] = [
+pub(crate) const BOUND_KINDS: [TextureKind; 4] = [
     TextureKind::BaseColor,
     TextureKind::MetallicRoughness,
     TextureKind::Normal,
+    TextureKind::Emissive,
 ];
 
 /// gbuffer.wgsl's `TextureParams`.
@@ -161,7 +162,7 @@ fn group(
 }
 
 /// What the store's objects carry that the renderer does not draw: textures of kinds other
-/// than [`BOUND_KINDS`] (occlusion, emissive), one line per object that has any.
+/// than [`BOUND_KINDS`] (occlusion), one line per object that has any.
 pub(crate) fn undrawn(meta: &StoreMeta) -> Vec<String> {
     meta.objects
         .iter()
@@ -176,7 +177,7 @@ pub(crate) fn undrawn(meta: &StoreMeta) -> Vec<String> {
                 .collect();
             (!kinds.is_empty()).then(|| {
                 format!(
-                    "object {:?}: its {} texture{} not drawn (this runtime draws base colour, metallic-roughness and normal textures)",
+                    "object {:?}: its {} texture{} not drawn (this runtime draws base colour, metallic-roughness, normal and emissive textures)",
                     o.name,
                     kinds.join(", "),
                     if kinds.len() == 1 { " is" } else { "s are" }
@@ -192,7 +193,7 @@ mod tests {
     use oslf_format::{ObjectInfo, ObjectTextures};
 
     #[test]
-    fn occlusion_and_emissive_textures_are_said_undrawn() {
+    fn occlusion_textures_are_said_undrawn() {
         let image = TextureImage {
             width: 1,
             height: 1,
@@ -220,6 +221,7 @@ mod tests {
                 object("bumpy", &[TextureKind::BaseColor, TextureKind::Normal]),
                 object("dim", &[TextureKind::Occlusion]),
                 object("glowing", &[TextureKind::Occlusion, TextureKind::Emissive]),
+                object("lit", &[TextureKind::Emissive]),
             ],
             patches: Vec::new(),
             bake: Default::default(),
@@ -229,8 +231,8 @@ mod tests {
         assert_eq!(
             undrawn(&meta),
             [
-                "object \"dim\": its occlusion texture is not drawn (this runtime draws base colour, metallic-roughness and normal textures)",
-                "object \"glowing\": its occlusion, emissive textures are not drawn (this runtime draws base colour, metallic-roughness and normal textures)",
+                "object \"dim\": its occlusion texture is not drawn (this runtime draws base colour, metallic-roughness, normal and emissive textures)",
+                "object \"glowing\": its occlusion texture is not drawn (this runtime draws base colour, metallic-roughness, normal and emissive textures)",
             ]
         );
     }

@@ -121,7 +121,7 @@ fn texcoord_at(x: f32, y: f32) -> [f32; 2] {
 }
 
 /// A 5×3 base-colour texture of varied sRGB codes, a 3×2 metallic-roughness one (roughness
-/// 0.1–0.9, metallic 0–1) and a 2×2 normal texture over the grid.
+/// 0.1–0.9, metallic 0–1), a 2×2 normal texture and a 3×3 emissive one over the grid.
 fn grid_textures() -> oslf_format::ObjectTextures {
     use oslf_format::{TextureImage, TextureKind};
     let image = |w: u32, h: u32, f: &dyn Fn(u32) -> [u8; 4]| TextureImage {
@@ -149,6 +149,9 @@ fn grid_textures() -> oslf_format::ObjectTextures {
         let [r, g, b] = tilts[i as usize];
         [r, g, b, 255]
     });
+    let glow = image(3, 3, &|i| {
+        [(i * 80 % 256) as u8, 200, (40 + i * 20) as u8, 255]
+    });
     let uvs = grid_mesh().uvs;
     oslf_format::ObjectTextures {
         texcoords: uvs.iter().map(|uv| texcoord_at(uv[0], uv[1])).collect(),
@@ -160,6 +163,7 @@ fn grid_textures() -> oslf_format::ObjectTextures {
             (TextureKind::BaseColor, base),
             (TextureKind::MetallicRoughness, mr),
             (TextureKind::Normal, normal),
+            (TextureKind::Emissive, glow),
         ],
     }
 }
@@ -204,7 +208,12 @@ fn write_mesh_store(textures: Option<oslf_format::ObjectTextures>) -> std::path:
                     model: oslf_format::meta::MATERIAL_METALLIC_ROUGHNESS,
                     metallic: 0.4,
                     roughness: 0.55,
-                    emission: [0.0; 3],
+                    // The textured grid glows: this times its emissive texture.
+                    emission: if textures.is_some() {
+                        [0.6, 0.3, 0.1]
+                    } else {
+                        [0.0; 3]
+                    },
                 },
                 textures,
             },
@@ -593,7 +602,11 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
         let x = (px + g.normal_uv[2]) / K as f32;
         let y = (py + g.normal_uv[3]) / K as f32;
         let want = material_texel(&textures, glam::Vec2::from(texcoord_at(x, y)));
-        assert_eq!(g.material[3], want[3], "texture flags");
+        assert_eq!(g.material[3] & 0xff, want[3] & 0xff, "texture flags");
+        for shift in [8, 16, 24] {
+            let (a, b) = ((g.material[3] >> shift) & 0xff, (want[3] >> shift) & 0xff);
+            assert!(a.abs_diff(b) <= 1, "emissive code {a} against {b}");
+        }
         for (got, want) in g.material.iter().zip(&want).take(3) {
             let (a, b) = (unpack2x16unorm(*got), unpack2x16unorm(*want));
             worst = worst.max((a - b).abs().max_element());

@@ -1,7 +1,7 @@
 //! The runtime and the bake read an object's textures alike (format docs, "Object textures"):
 //! from the same 8-bit texels, the runtime's CPU twin of its G-buffer (`material_texel`,
 //! `mapped_normal`) and the bake's `Material` (which the truth shades the object with) give the
-//! same base colour, metallic, roughness and normal on a table of texture coordinates,
+//! same base colour, metallic, roughness, normal and emission on a table of texture coordinates,
 //! normals and tangents, repeating past [0, 1].
 
 use std::sync::Arc;
@@ -60,6 +60,7 @@ fn the_runtime_and_the_bake_read_textures_alike() {
             [30, 220, 140],
         ][i as usize]
     });
+    let glow = codes(3, 3, |i| [(i * 80 % 256) as u8, 200, (40 + i * 20) as u8]);
     let scale = 0.8;
     let bake = Material {
         albedo: bake_image(5, 3, &base, true),
@@ -67,12 +68,13 @@ fn the_runtime_and_the_bake_read_textures_alike() {
             metallic: 1.0,
             roughness: 1.0,
         },
-        emission: Vec3::ZERO,
+        emission: Vec3::ONE,
         metallic_roughness_texture: Some(bake_image(3, 2, &mr, false)),
         normal_texture: Some(NormalTexture {
             texture: bake_image(2, 2, &normal, false),
             scale,
         }),
+        emissive_texture: Some(bake_image(3, 3, &glow, true)),
     };
     let store = ObjectTextures {
         texcoords: Vec::new(),
@@ -83,9 +85,10 @@ fn the_runtime_and_the_bake_read_textures_alike() {
             (TextureKind::BaseColor, store_image(5, 3, &base)),
             (TextureKind::MetallicRoughness, store_image(3, 2, &mr)),
             (TextureKind::Normal, store_image(2, 2, &normal)),
+            (TextureKind::Emissive, store_image(3, 3, &glow)),
         ],
     };
-    let mut worst = (0f32, 0f32);
+    let mut worst = (0f32, 0f32, 0f32);
     for k in 0..400 {
         let f = k as f32;
         let uv = Vec2::new((f * 0.137).sin() * 2.3, (f * 0.071).cos() * 1.7 + 0.4);
@@ -110,16 +113,24 @@ fn the_runtime_and_the_bake_read_textures_alike() {
                 .abs()
                 .max((ro.x - want.roughness).abs()),
         );
+        // The emissive texture, kept to 8-bit sRGB codes in the G-buffer (w above the flags).
+        let code = |shift: u32| srgb_to_linear(((texel[3] >> shift) & 0xff) as f32 / 255.0);
+        let got_glow = Vec3::new(code(8), code(16), code(24));
+        worst.2 = worst
+            .2
+            .max((got_glow - bake.emission_at(uv)).abs().max_element());
         let got_n = mapped_normal(&store, uv, n, t);
         let want_n = bake.mapped_normal(uv, n, t);
         worst.1 = worst.1.max((got_n - want_n).length());
         assert!((got_n.length() - 1.0).abs() < 1e-5);
     }
     println!(
-        "largest difference: material {:.2e}, normal {:.2e}",
-        worst.0, worst.1
+        "largest difference: material {:.2e}, normal {:.2e}, emission {:.2e}",
+        worst.0, worst.1, worst.2
     );
     // The G-buffer keeps 16 bits per value (1.5e-5); the normals are the same arithmetic.
     assert!(worst.0 < 2e-5, "material differs by {}", worst.0);
     assert!(worst.1 < 1e-5, "normals differ by {}", worst.1);
+    // Emission keeps 8-bit sRGB codes: half a code step, at most 1/255 of the range.
+    assert!(worst.2 < 4e-3, "emission differs by {}", worst.2);
 }

@@ -33,6 +33,9 @@ pub fn object_textures(
         images.push((TextureKind::Normal, quantize(img, false)));
         normal_scale = *scale;
     }
+    if let Some(Texture::Image(img)) = &material.emissive_texture {
+        images.push((TextureKind::Emissive, quantize(img, true)));
+    }
     if images.is_empty() || source.uvs.len() != source.positions.len() {
         return (atlas, None);
     }

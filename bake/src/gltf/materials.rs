@@ -59,6 +59,20 @@ impl<'d> Loader<'d> {
             .as_ref()
             .is_some_and(|nm| uv_map.as_ref().is_none_or(|u| u == nm));
         let uv_map = uv_map.or(if normal_drawn { normal_map } else { None });
+        // And the emissive texture.
+        let glow_info = m.emissive_texture().filter(|_| m.index().is_some());
+        let glow_transform = glow_info.as_ref().and_then(|i| i.texture_transform());
+        let glow_map = match &glow_info {
+            None => None,
+            Some(i) => {
+                let set = tex_coord(i, glow_transform.as_ref());
+                Some(self.uv_map(m, "emissiveTexture", true, i, glow_transform.as_ref(), set)?)
+            }
+        };
+        let glow_drawn = glow_map
+            .as_ref()
+            .is_some_and(|g| uv_map.as_ref().is_none_or(|u| u == g));
+        let uv_map = uv_map.or(if glow_drawn { glow_map } else { None });
         let key = (m.index(), uv_map.as_ref().map_or(0, |u| u.set));
         if let Some(&index) = self.materials.get(&key) {
             return Ok((index, uv_map));
@@ -79,25 +93,10 @@ impl<'d> Loader<'d> {
                 format!("{factor:?}: components must be in [0, 1]"),
             ));
         }
-        self.warn_material(m, &name, mr_drawn, normal_drawn);
+        self.warn_material(m, &name, [mr_drawn, normal_drawn, glow_drawn]);
         let albedo = match &info {
             None => Texture::Constant(rgb),
-            Some(info) => {
-                let texture = info.texture();
-                let image = self.image(&texture.source(), true)?;
-                let sampler = texture.sampler();
-                let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
-                if let Some(ext) = texture.extensions() {
-                    let names: Vec<String> = ext.keys().cloned().collect();
-                    for e in names {
-                        self.warn(format!(
-                            "{}: extension {e} is not supported",
-                            label("textures", texture.index(), texture.name())
-                        ));
-                    }
-                }
-                Texture::Image(Arc::new(wrapped_image(&image, ws, wt, rgb)))
-            }
+            Some(info) => self.colour_texture(info, rgb)?,
         };
         let metallic_roughness_texture = match mr_info.filter(|_| mr_drawn) {
             None => None,
@@ -107,6 +106,10 @@ impl<'d> Loader<'d> {
             None => None,
             Some(nt) => Some(self.normal_texture(&nt, &at)?),
         };
+        let emissive_texture = match glow_info.filter(|_| glow_drawn) {
+            None => None,
+            Some(info) => Some(self.colour_texture(&info, Vec3::ONE)?),
+        };
         let model = self.model(m, &at)?;
         let emission = self.emission(m, &at)?;
         materials.push(Material {
@@ -115,10 +118,32 @@ impl<'d> Loader<'d> {
             emission,
             metallic_roughness_texture,
             normal_texture,
+            emissive_texture,
         });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);
         Ok((index, uv_map))
+    }
+
+    /// An sRGB colour texture (`baseColorTexture`, `emissiveTexture`) `info` decoded to linear,
+    /// times `factor`, resampled for its wraps; the texture's extensions are warned about.
+    fn colour_texture(&mut self, info: &gltf::texture::Info, factor: Vec3) -> Result<Texture> {
+        let texture = info.texture();
+        let image = self.image(&texture.source(), true)?;
+        let sampler = texture.sampler();
+        let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
+        if let Some(ext) = texture.extensions() {
+            let names: Vec<String> = ext.keys().cloned().collect();
+            for e in names {
+                self.warn(format!(
+                    "{}: extension {e} is not supported",
+                    label("textures", texture.index(), texture.name())
+                ));
+            }
+        }
+        Ok(Texture::Image(Arc::new(wrapped_image(
+            &image, ws, wt, factor,
+        ))))
     }
 
     /// glTF's `metallicRoughnessTexture` `info` as data (roughness in green, metallic in
@@ -201,15 +226,10 @@ impl<'d> Loader<'d> {
         Ok(emission)
     }
 
-    /// Warns about what material `m` uses that is not drawn; `mr_drawn`, `normal_drawn`: its
-    /// metallic-roughness and normal textures are.
-    pub(super) fn warn_material(
-        &mut self,
-        m: &gltf::Material,
-        name: &str,
-        mr_drawn: bool,
-        normal_drawn: bool,
-    ) {
+    /// Warns about what material `m` uses that is not drawn; `drawn`: whether its
+    /// metallic-roughness, normal and emissive textures are.
+    pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str, drawn: [bool; 3]) {
+        let [mr_drawn, normal_drawn, glow_drawn] = drawn;
         let pbr = m.pbr_metallic_roughness();
         let mut ignored = Vec::new();
         if pbr.metallic_roughness_texture().is_some() && m.index().is_some() && !mr_drawn {
@@ -221,8 +241,12 @@ impl<'d> Loader<'d> {
                 pbr.roughness_factor()
             ));
         }
-        if m.emissive_texture().is_some() {
-            ignored.push("emissiveTexture (drawn with emissiveFactor alone)".into());
+        if m.emissive_texture().is_some() && !glow_drawn {
+            ignored.push(
+                "emissiveTexture, which maps texture coordinates unlike the material's other \
+                 textures (drawn with emissiveFactor alone)"
+                    .into(),
+            );
         }
         if m.normal_texture().is_some() && !normal_drawn {
             ignored.push(

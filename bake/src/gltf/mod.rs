@@ -105,20 +105,30 @@ fn load_bytes(
     Ok(import)
 }
 
-/// Warns, once per material, where environment geometry uses a material with a normal
-/// texture: normal textures turn the OSLF objects' normals (the store carries them with their
-/// tangents), not the environment's, which the path tracer draws with its interpolated
-/// normals.
+/// Warns, once per material, where environment geometry uses a material with a normal or
+/// emissive texture: those are drawn on the OSLF objects (the store carries them), not on the
+/// environment, which the path tracer draws with its interpolated normals and its emission
+/// factor.
 fn warn_environment_normal_textures(import: &mut Import, materials: &[Material]) {
     let mut seen = std::collections::BTreeSet::new();
     for shape in &import.shapes {
-        let mapped = materials
-            .get(shape.material as usize)
-            .is_some_and(|m| m.normal_texture.is_some());
-        if mapped && seen.insert(shape.material) {
+        let Some(m) = materials.get(shape.material as usize) else {
+            continue;
+        };
+        if (m.normal_texture.is_some() || m.emissive_texture.is_some())
+            && seen.insert(shape.material)
+        {
+            let mut what = Vec::new();
+            if m.normal_texture.is_some() {
+                what.push("normalTexture (this geometry is drawn with its interpolated normals)");
+            }
+            if m.emissive_texture.is_some() {
+                what.push("emissiveTexture (this geometry emits its emissiveFactor alone)");
+            }
             import.warnings.push(format!(
-                "{}: normalTexture is drawn on OSLF objects only; this environment geometry is drawn with its interpolated normals",
-                shape.name
+                "{}: drawn on OSLF objects only: {}",
+                shape.name,
+                what.join("; ")
             ));
         }
     }

@@ -226,6 +226,7 @@ impl Ctx<'_> {
             emission,
             metallic_roughness_texture: None,
             normal_texture: None,
+            emissive_texture: None,
         };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))

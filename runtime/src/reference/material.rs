@@ -49,6 +49,16 @@ pub fn bilinear(t: &TextureImage, uv: Vec2, srgb: bool) -> Vec3 {
     top.lerp(bottom, fy)
 }
 
+/// The inverse sRGB transfer function, linear [0, 1] to encoded (as `linear_to_srgb`).
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let x = c.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 /// WGSL's `pack2x16unorm`: each component clamped to [0, 1], times 65535, rounded to even.
 pub fn pack2x16unorm(a: f32, b: f32) -> u32 {
     let q = |c: f32| (c.clamp(0.0, 1.0) * 65535.0).round_ties_even() as u32;
@@ -75,17 +85,24 @@ pub fn material_texel(t: &ObjectTextures, uv: Vec2) -> [u32; 4] {
         .fold(0u32, |f, (bit, _)| f | 1 << bit);
     let mut base = Vec3::ZERO;
     let mut mr = Vec3::ZERO;
+    let mut glow = Vec3::ZERO;
     if let Some(img) = t.image(TextureKind::BaseColor) {
         base = bilinear(img, uv, true);
     }
     if let Some(img) = t.image(TextureKind::MetallicRoughness) {
         mr = bilinear(img, uv, false);
     }
+    if let Some(img) = t.image(TextureKind::Emissive) {
+        glow = bilinear(img, uv, true);
+    }
+    let code = glow
+        .to_array()
+        .map(|c| (linear_to_srgb(c) * 255.0).round_ties_even() as u32);
     [
         pack2x16unorm(base.x, base.y),
         pack2x16unorm(base.z, mr.z),
         pack2x16unorm(mr.y, 1.0),
-        flags,
+        flags | code[0] << 8 | code[1] << 16 | code[2] << 24,
     ]
 }
 

@@ -91,6 +91,9 @@ pub struct Shader<'a, C: CubeTexels> {
     /// Per sample map: its object's material for the pbr mode (`ObjectMesh::materials`;
     /// missing entries are no material).
     pub materials: &'a [[f32; 4]],
+    /// Per sample map: its object's emission (`ObjectMesh::emissions`; missing entries emit
+    /// nothing).
+    pub emissions: &'a [[f32; 4]],
     /// One sample map per map index (Bézier patch or atlas page).
     pub maps: &'a [SampleMapView<'a>],
     pub cubes: &'a C,

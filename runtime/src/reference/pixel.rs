@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::material::unpack2x16unorm;
+use super::material::{srgb_to_linear, unpack2x16unorm};
 use super::patch::{patch_du, patch_normal, tangent_frame};
 use super::random::pcg;
 use super::{CubeTexels, GTexel, Shader};
@@ -10,6 +10,13 @@ use super::{CubeTexels, GTexel, Shader};
 /// Replaces NaN and infinities by 0 (as `finite3`).
 pub(super) fn finite3(c: Vec3) -> Vec3 {
     Vec3::from_array(c.to_array().map(|x| if x.is_finite() { x } else { 0.0 }))
+}
+
+/// The emissive texture's RGB that the material target's `w` holds above the flags, decoded
+/// (as `emissive_of` in pixel.wgsl).
+pub(super) fn emissive_of(w: u32) -> Vec3 {
+    let c = |shift: u32| srgb_to_linear(((w >> shift) & 0xff) as f32 / 255.0);
+    Vec3::new(c(8), c(16), c(24))
 }
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
@@ -26,13 +33,17 @@ impl<C: CubeTexels> Shader<'_, C> {
 
     /// The pixel's base colour and pbr material (metallic, GGX α): its object's, with what the
     /// object's textures give (the G-buffer's material) in their place (as `surface_of`).
-    pub(super) fn surface_of(&self, patch: u32, g: &GTexel) -> (Vec3, glam::Vec2) {
+    pub(super) fn surface_of(&self, patch: u32, g: &GTexel) -> (Vec3, glam::Vec2, Vec3) {
         let mut base = self
             .colors
             .get(patch as usize)
             .copied()
             .unwrap_or(Vec3::ONE);
         let mut pbr = self.pbr_material(patch);
+        let mut emission = self
+            .emissions
+            .get(patch as usize)
+            .map_or(Vec3::ZERO, |e| Vec3::new(e[0], e[1], e[2]));
         let m = g.material;
         let rg = unpack2x16unorm(m[0]);
         let bm = unpack2x16unorm(m[1]);
@@ -47,7 +58,10 @@ impl<C: CubeTexels> Shader<'_, C> {
         if m[3] & 2 != 0 && self.uniform.object_material != 0 && own {
             pbr = glam::Vec2::new(bm.y, (ro.x * ro.x).max(crate::params::MIN_ALPHA));
         }
-        (base, pbr)
+        if m[3] & 8 != 0 {
+            emission *= emissive_of(m[3]);
+        }
+        (base, pbr, emission)
     }
 
     /// Shades pixel `(px, py)` with G-buffer texel `g`: the background with alpha 0 off the
@@ -73,7 +87,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
         let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
         let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
-        let (base, pbr) = self.surface_of(patch, g);
+        let (base, pbr, emission) = self.surface_of(patch, g);
         let mut spec = Vec3::ZERO;
         if u.terms & 2 != 0 {
             spec = self.mirror(&c, x, n, r);
@@ -91,6 +105,9 @@ impl<C: CubeTexels> Shader<'_, C> {
         let mut color = spec;
         if u.terms & 1 != 0 {
             color += self.recon(&c, x, n); // Eq. 3.12, 4.12
+        }
+        if u.terms & 16 != 0 {
+            color += emission; // the pbr mode draws the object's own emission
         }
         let c = finite3(color);
         [c.x, c.y, c.z, 1.0]

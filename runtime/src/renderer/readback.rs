@@ -138,6 +138,7 @@ impl Renderer {
             patches: &self.mesh.patches,
             colors: &self.mesh.colors,
             materials: &self.mesh.materials,
+            emissions: &self.mesh.emissions,
             maps: &maps,
             cubes,
             feedback: &feedback,

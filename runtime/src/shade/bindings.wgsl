@@ -99,6 +99,8 @@ struct PatchGpu {
     color: vec4<f32>,
     // Its object's material: metallic, GGX α, 1 if metallic-roughness (else 0), unused.
     material: vec4<f32>,
+    // Its object's emitted radiance (the material record's), linear RGB; w unused.
+    emission: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> P: Params;

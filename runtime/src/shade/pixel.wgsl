@@ -12,6 +12,18 @@ fn finite3(c: vec3<f32>) -> vec3<f32> {
     return o;
 }
 
+// The sRGB transfer function, encoded to linear (IEC 61966-2-1).
+fn srgb_to_linear(c: f32) -> f32 {
+    if (c <= 0.04045) { return c / 12.92; }
+    return pow((c + 0.055) / 1.055, 2.4);
+}
+
+// The emissive texture's RGB that gb_material's w holds above the flags, decoded.
+fn emissive_of(w: u32) -> vec3<f32> {
+    let c = vec3<f32>(vec3<u32>((w >> 8u) & 255u, (w >> 16u) & 255u, (w >> 24u) & 255u)) / 255.0;
+    return vec3<f32>(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z));
+}
+
 // The pbr mode's metallic and GGX α on map `pid`: its object's material's where the store has
 // one and the parameters take it (P.object_material), else the parameters'.
 fn pbr_material(pid: u32) -> vec2<f32> {
@@ -25,12 +37,14 @@ fn pbr_material(pid: u32) -> vec2<f32> {
 struct Surface {
     base: vec3<f32>,
     pbr: vec2<f32>,
+    emission: vec3<f32>,
 };
 
 fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
     var s: Surface;
     s.base = patches[pid].color.rgb;
     s.pbr = pbr_material(pid);
+    s.emission = patches[pid].emission.rgb;
     if (TEXTURED) {
         let m = textureLoad(gb_material, px, 0);
         let rg = unpack2x16unorm(m.x);
@@ -40,6 +54,7 @@ fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
         if ((m.w & 2u) != 0u && P.object_material != 0u && patches[pid].material.z > 0.5) {
             s.pbr = vec2<f32>(bm.y, max(ro.x * ro.x, MIN_ALPHA));
         }
+        if ((m.w & 8u) != 0u) { s.emission = s.emission * emissive_of(m.w); }
     }
     return s;
 }
@@ -82,6 +97,9 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     var color = spec;
     if ((TERMS & 1u) != 0u) {
         color += recon(x, n); // Eq. 3.12, 4.12
+    }
+    if ((TERMS & 16u) != 0u) {
+        color += surface.emission; // the pbr mode draws the object's own emission
     }
     flush_marks();
     textureStore(out_image, px, vec4<f32>(finite3(color), 1.0));
