@@ -94,7 +94,8 @@ fn gbuffer(in: VsOut) -> FsOut {
 
 // ---- the material of textured objects (format docs, "Object textures") ----
 
-// The object's textures: which it has (bit i: TextureKind::ALL[i]), and one texture per kind
+// The object's textures: which it has (bit i: BOUND_KINDS[i] of textures.rs: base colour,
+// metallic-roughness, normal, emissive), and one texture per kind
 // (1×1 where it has none).
 struct TextureParams {
     flags: u32,
