@@ -101,37 +101,30 @@ fn the_truth_reads_the_roughness_texture_at_each_pixel() {
     let rough = render(1.0, 38.0 / 255.0, false);
     // Same seed, same BRDF where the band's roughness equals the flag's: equal pixels in the
     // top band (0.05) and in the one below it (0.15).
-    let (mut top, mut bottom) = (0, 0);
+    // Inside a band's texel centres (v 0.78–0.97 and 0.53–0.72): the texture repeats, so at
+    // the poles it blends the top band with the bottom one.
+    let bands = [(0.8..0.95, &smooth, "top"), (0.55..0.7, &rough, "second")];
+    let mut counts = [0usize; 2];
     for y in 0..settings.height {
         for x in 0..settings.width {
             let Some((_, hit)) = truth.primary_hit(x, y, settings.width, settings.height) else {
                 continue;
             };
             let i = (y * settings.width + x) as usize;
-            let same = |a: [f32; 4], b: [f32; 4]| {
-                (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-4 * (1.0 + b[c]))
+            let Some(k) = bands.iter().position(|b| b.0.contains(&hit.uv.y)) else {
+                continue;
             };
-            // Inside a band's texel centres (v 0.78–0.97 and 0.53–0.72): the texture repeats,
-            // so at the poles it blends the top band with the bottom one.
-            if (0.8..0.95).contains(&hit.uv.y) {
-                assert!(
-                    same(own[i], smooth[i]),
-                    "top band pixel ({x}, {y}): {:?} vs {:?}",
-                    own[i],
-                    smooth[i]
-                );
-                top += 1;
-            } else if (0.55..0.7).contains(&hit.uv.y) {
-                assert!(
-                    same(own[i], rough[i]),
-                    "second band pixel ({x}, {y}): {:?} vs {:?}",
-                    own[i],
-                    rough[i]
-                );
-                bottom += 1;
-            }
+            let (_, want, name) = &bands[k];
+            let same = (0..3).all(|c| (own[i][c] - want[i][c]).abs() <= 1e-4 * (1.0 + want[i][c]));
+            assert!(
+                same,
+                "{name} band pixel ({x}, {y}): {:?} vs {:?}",
+                own[i], want[i]
+            );
+            counts[k] += 1;
         }
     }
+    let [top, bottom] = counts;
     assert!(
         top > 20 && bottom > 20,
         "{top} top and {bottom} second band pixels"
