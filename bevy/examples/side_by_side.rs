@@ -7,11 +7,13 @@
 //!
 //! ```text
 //! cargo run --release -p oslf-bevy --features viewer --example side_by_side --ignore-rust-version -- \
-//!     STORE OUT_DIR WIDTH HEIGHT ROUGHNESS [HALF_X HALF_Y HALF_Z]
+//!     STORE OUT_DIR WIDTH HEIGHT ROUGHNESS [HALF_X HALF_Y HALF_Z [VARIANTS]]
 //! ```
 //!
 //! `HALF_*`: the parallax box's half extents around the capture point (default: the room of
-//! `examples/room.toml`, 3 × 3 × 1.5 m).
+//! `examples/room.toml`, 3 × 3 × 1.5 m). Bevy centres a probe's box on its capture point, so a
+//! room whose capture point is off its centre is approximated. `VARIANTS`: which images, a
+//! comma-separated list of `probe`, `parallax` and `oslf` (default: all three).
 
 #[path = "shared/headless.rs"]
 mod headless;
@@ -221,7 +223,8 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.len() < 5 {
         eprintln!(
-            "usage: side_by_side STORE OUT_DIR WIDTH HEIGHT ROUGHNESS [HALF_X HALF_Y HALF_Z]"
+            "usage: side_by_side STORE OUT_DIR WIDTH HEIGHT ROUGHNESS [HALF_X HALF_Y HALF_Z \
+             [VARIANTS]]"
         );
         std::process::exit(2);
     }
@@ -275,7 +278,22 @@ fn main() {
     };
     let dir = store_path.parent().unwrap().canonicalize().unwrap();
     std::fs::create_dir_all(&out).unwrap();
-    for variant in [Variant::Probe, Variant::Parallax, Variant::Oslf] {
+    let wanted = args.get(8).map_or("probe,parallax,oslf", String::as_str);
+    if let Some(w) = wanted
+        .split(',')
+        .find(|w| !["probe", "parallax", "oslf"].contains(w))
+    {
+        eprintln!("side_by_side: unknown variant {w:?} (probe, parallax or oslf)");
+        std::process::exit(2);
+    }
+    for (variant, word) in [
+        (Variant::Probe, "probe"),
+        (Variant::Parallax, "parallax"),
+        (Variant::Oslf, "oslf"),
+    ] {
+        if !wanted.split(',').any(|w| w == word) {
+            continue;
+        }
         let Some(pixels) = run(
             Job {
                 variant,
