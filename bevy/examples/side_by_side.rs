@@ -13,7 +13,8 @@
 //! `HALF_*`: the parallax box's half extents around the capture point (default: the room of
 //! `examples/room.toml`, 3 × 3 × 1.5 m). Bevy centres a probe's box on its capture point, so a
 //! room whose capture point is off its centre is approximated. `VARIANTS`: which images, a
-//! comma-separated list of `probe`, `parallax` and `oslf` (default: all three).
+//! comma-separated list of `probe`, `parallax`, `probe-flat` (a reflection probe without
+//! parallax correction, the control) and `oslf` (default: all but `probe-flat`).
 
 #[path = "shared/headless.rs"]
 mod headless;
@@ -41,6 +42,9 @@ enum Variant {
     Probe,
     /// Bevy's metal in a reflection probe with parallax correction.
     Parallax,
+    /// Bevy's metal in a reflection probe without it (`ParallaxCorrection::None`): the control
+    /// that shows the probe itself draws what `Probe` draws.
+    ProbeFlat,
     /// The OSLF plugin.
     Oslf,
 }
@@ -109,11 +113,16 @@ fn setup(
         Variant::Probe => {
             camera.insert(environment);
         }
-        Variant::Parallax => {
+        Variant::Parallax | Variant::ProbeFlat => {
+            let correction = if job.variant == Variant::Parallax {
+                ParallaxCorrection::Custom(Vec3::splat(0.5))
+            } else {
+                ParallaxCorrection::None
+            };
             commands.spawn((
                 LightProbe::default(),
                 environment,
-                ParallaxCorrection::Custom(Vec3::splat(0.5)),
+                correction,
                 Transform::from_translation(job.centre).with_scale(job.half_extents * 2.0),
             ));
         }
@@ -163,11 +172,12 @@ fn run(job: Job, dir: &Path) -> Option<Vec<[f32; 4]>> {
         .add_systems(Startup, setup);
     app.finish();
     app.cleanup();
-    if job.variant == Variant::Parallax && !probes_usable(&app) {
+    if matches!(job.variant, Variant::Parallax | Variant::ProbeFlat) && !probes_usable(&app) {
         println!(
-            "bevy-probe-parallax: skipped: Bevy draws reflection probes only with binding arrays \
+            "{:?}: skipped: Bevy draws reflection probes only with binding arrays \
              (TEXTURE_BINDING_ARRAY and non-uniform indexing), which this adapter lacks; it \
-             ignores the probe"
+             ignores the probe",
+            job.variant
         );
         return None;
     }
@@ -281,14 +291,15 @@ fn main() {
     let wanted = args.get(8).map_or("probe,parallax,oslf", String::as_str);
     if let Some(w) = wanted
         .split(',')
-        .find(|w| !["probe", "parallax", "oslf"].contains(w))
+        .find(|w| !["probe", "parallax", "probe-flat", "oslf"].contains(w))
     {
-        eprintln!("side_by_side: unknown variant {w:?} (probe, parallax or oslf)");
+        eprintln!("side_by_side: unknown variant {w:?} (probe, parallax, probe-flat or oslf)");
         std::process::exit(2);
     }
     for (variant, word) in [
         (Variant::Probe, "probe"),
         (Variant::Parallax, "parallax"),
+        (Variant::ProbeFlat, "probe-flat"),
         (Variant::Oslf, "oslf"),
     ] {
         if !wanted.split(',').any(|w| w == word) {
@@ -306,6 +317,7 @@ fn main() {
         let name = match variant {
             Variant::Probe => "bevy-probe",
             Variant::Parallax => "bevy-probe-parallax",
+            Variant::ProbeFlat => "bevy-probe-flat",
             Variant::Oslf => "bevy-oslf",
         };
         let path = out.join(format!("{name}.exr"));

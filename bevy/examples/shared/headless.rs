@@ -125,13 +125,15 @@ pub fn capture(app: &mut App, target: &Handle<Image>) -> Vec<[f32; 4]> {
         .observe(move |ev: bevy::ecs::observer::On<ScreenshotCaptured>| {
             *sink.lock().unwrap() = Some(ev.image.clone());
         });
-    for _ in 0..10 {
+    // The read-back arrives some updates later: ten on lavapipe, where an update takes
+    // milliseconds; a hardware GPU's updates can all pass before the copy is mapped, so wait by
+    // the clock (up to 20 s), not by a count.
+    let start = std::time::Instant::now();
+    while shot.lock().unwrap().is_none() && start.elapsed().as_secs() < 20 {
         app.update();
-        if shot.lock().unwrap().is_some() {
-            break;
-        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
     }
-    let image = shot.lock().unwrap().take().expect("no screenshot arrived");
+    let image = shot.lock().unwrap().take().expect("no screenshot arrived in 20 s");
     assert_eq!(image.texture_descriptor.format, TextureFormat::Rgba16Float);
     let data = image.data.expect("screenshot without data");
     data.chunks_exact(8)
