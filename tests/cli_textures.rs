@@ -1,6 +1,6 @@
 //! A textured glTF object through the command line: examples/orb.toml (its roughness from a
 //! metallicRoughnessTexture) baked small, its texture listed by `oslf store info`, rendered in
-//! the pbr mode under `--strict` (nothing undrawn), and `oslf truth -m pbr` against it: the
+//! the pbr mode under `--strict`, and `oslf truth -m pbr` against it: the
 //! light field reads the same roughness bands as the truth, beating one roughness everywhere.
 
 mod common;

@@ -526,13 +526,14 @@ impl<'s> GroundTruth<'s> {
         }
         let mut c = sum / spp as f32;
         if let Term::Pbr { .. } = term {
-            // The pbr mode draws the object's own emission (a mesh object's emissive texture
-            // read at the hit), as the runtime does.
+            // The pbr mode scales the reflected light by a mesh object's occlusion texture
+            // and adds the object's own emission (its emissive texture read at the hit), as
+            // the runtime does.
             if let Some(m) = self.scene.materials.get(hit.material as usize) {
-                c += if patch.is_none() {
-                    m.emission_at(hit.uv)
+                c = if patch.is_none() {
+                    c * m.occlusion_at(hit.uv) + m.emission_at(hit.uv)
                 } else {
-                    m.emission
+                    c + m.emission
                 };
             }
         }

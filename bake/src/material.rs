@@ -33,6 +33,10 @@ pub struct Material {
     /// glTF's `emissiveTexture` (sRGB decoded): an OSLF mesh object emits `emission` times it
     /// ([`Material::emission_at`]); environment geometry emits `emission` alone.
     pub emissive_texture: Option<Texture>,
+    /// glTF's `occlusionTexture` (data, occlusion in red) and its strength: an OSLF mesh
+    /// object reflects [`Material::occlusion_at`] of the light that reaches it; environment
+    /// geometry has its occlusion from the path tracer alone.
+    pub occlusion_texture: Option<OcclusionTexture>,
 }
 
 /// A tangent-space normal texture with its scale (glTF `normalTexture.scale`).
@@ -40,6 +44,13 @@ pub struct Material {
 pub struct NormalTexture {
     pub texture: Texture,
     pub scale: f32,
+}
+
+/// An occlusion texture with its strength (glTF `occlusionTexture.strength`, in `[0, 1]`).
+#[derive(Clone, Debug)]
+pub struct OcclusionTexture {
+    pub texture: Texture,
+    pub strength: f32,
 }
 
 /// How a [`Material`] reflects.
@@ -61,6 +72,17 @@ impl Material {
             metallic_roughness_texture: None,
             normal_texture: None,
             emissive_texture: None,
+            occlusion_texture: None,
+        }
+    }
+
+    /// The factor a mesh object with this material scales the light it reflects at `uv` by:
+    /// `1 + strength · (occlusion − 1)`, the occlusion texture's red channel clamped to
+    /// [0, 1] (format docs, "Object textures"; glTF's `occlusionTexture`); 1 without one.
+    pub fn occlusion_at(&self, uv: Vec2) -> f32 {
+        match &self.occlusion_texture {
+            Some(o) => 1.0 + o.strength * (clamp01(o.texture.eval(uv).x) - 1.0),
+            None => 1.0,
         }
     }
 

@@ -1055,8 +1055,8 @@ fn metallic_roughness_textures_are_drawn_where_they_map_alike() {
     );
 }
 
-/// Normal and emissive textures on environment geometry are said to be drawn on OSLF objects
-/// only, naming the shape, once per material.
+/// Normal, emissive and occlusion textures on environment geometry are said to be drawn on
+/// OSLF objects only, naming the shape, once per material.
 #[test]
 fn normal_textures_on_environment_geometry_are_said_undrawn() {
     let mut b = Builder::new();
@@ -1068,7 +1068,8 @@ fn normal_textures_on_environment_geometry_are_said_undrawn() {
         "images": [{"bufferView": png, "mimeType": "image/png"}],
         "textures": [{"source": 0}],
         "materials": [{"name": "Brick", "normalTexture": {"index": 0},
-            "emissiveFactor": [1.0, 0.5, 0.0], "emissiveTexture": {"index": 0}}],
+            "emissiveFactor": [1.0, 0.5, 0.0], "emissiveTexture": {"index": 0},
+            "occlusionTexture": {"index": 0, "strength": 0.5}}],
         "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
             "material": 0}]}],
     });
@@ -1089,9 +1090,21 @@ fn normal_textures_on_environment_geometry_are_said_undrawn() {
         "{said:?}"
     );
     assert!(
-        said[0].contains("normalTexture") && said[0].contains("emissiveTexture"),
+        said[0].contains("normalTexture")
+            && said[0].contains("emissiveTexture")
+            && said[0].contains("occlusionTexture"),
         "{said:?}"
     );
     let m = &materials[import.shapes[0].material as usize];
     assert!(m.emissive_texture.is_some());
+    // The texel's red code 128 at strength 0.5: 1 + 0.5·(128/255 − 1).
+    let occlusion = m.occlusion_at(Vec2::new(0.3, 0.3));
+    assert!(
+        (occlusion - (1.0 + 0.5 * (128.0 / 255.0 - 1.0))).abs() < 1e-6,
+        "{occlusion}"
+    );
+    assert!(!import
+        .warnings
+        .iter()
+        .any(|w| w.contains("ignor") && w.contains("occlusion")));
 }

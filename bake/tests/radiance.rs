@@ -888,6 +888,7 @@ fn degenerate_hits_stay_finite() {
         metallic_roughness_texture: None,
         normal_texture: None,
         emissive_texture: None,
+        occlusion_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::splat(0.5),
@@ -970,6 +971,7 @@ fn test_scene() -> (Scene, Vec<Material>, Vec<Light>, Environment) {
             metallic_roughness_texture: None,
             normal_texture: None,
             emissive_texture: None,
+            occlusion_texture: None,
             model: Model::Lambertian,
             albedo: Texture::Checker {
                 a: Vec3::splat(0.8),
@@ -1075,6 +1077,7 @@ fn validation_rejects_bad_inputs() {
         metallic_roughness_texture: None,
         normal_texture: None,
         emissive_texture: None,
+        occlusion_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Checker {
             a: Vec3::ZERO,
@@ -1091,6 +1094,7 @@ fn validation_rejects_bad_inputs() {
         metallic_roughness_texture: None,
         normal_texture: None,
         emissive_texture: None,
+        occlusion_texture: None,
         model: Model::Lambertian,
         albedo: Texture::Image(Arc::new(img)),
     };
@@ -1146,6 +1150,7 @@ fn metallic_roughness(
         metallic_roughness_texture: None,
         normal_texture: None,
         emissive_texture: None,
+        occlusion_texture: None,
         albedo: Texture::Constant(base),
         model: Model::MetallicRoughness {
             metallic,

@@ -309,3 +309,63 @@ fn the_pbr_truth_adds_the_objects_emission() {
     }
     assert!(covered > 50, "{covered} orb pixels");
 }
+
+/// An occlusion texture scales the light the object reflects (glTF's `occlusionTexture`, as
+/// the runtime's pbr mode draws it): the store holds it with its strength, and with the same
+/// seed the truth's orb pixels are those without it times `1 + strength·(R − 1)`, its
+/// emission added unscaled.
+#[test]
+fn an_occlusion_texture_is_stored_and_scales_the_reflected_light() {
+    use oslf_bake::material::OcclusionTexture;
+    use oslf_bake::texture::{ImageTexture, Texture};
+    let mut scene = orb_scene();
+    let camera = scene.camera.expect("orb.toml has a camera");
+    let settings = TruthSettings {
+        width: 32,
+        height: 24,
+        spp: 8,
+        seed: 3,
+    };
+    let term = Term::Pbr {
+        metallic: 1.0,
+        roughness: 0.5,
+        object_material: true,
+    };
+    let render = |scene: &Scene| {
+        GroundTruth::new(scene, camera)
+            .unwrap()
+            .render(term, &settings)
+            .unwrap()
+            .pixels
+    };
+    let orb = scene.objects[0].material as usize;
+    let glow = glam::Vec3::new(0.05, 0.1, 0.0);
+    scene.materials[orb].emission = glow;
+    let open = render(&scene);
+    // Red 0.4 at strength 0.5: the orb reflects 0.7 of its light.
+    let image = ImageTexture::from_pixels(1, 1, vec![glam::Vec3::new(0.4, 0.8, 0.8)]).unwrap();
+    scene.materials[orb].occlusion_texture = Some(OcclusionTexture {
+        texture: Texture::Image(std::sync::Arc::new(image)),
+        strength: 0.5,
+    });
+    let occluded = render(&scene);
+    let mut covered = 0;
+    for (a, b) in occluded.iter().zip(&open) {
+        if b[3] < 0.5 {
+            assert_eq!(a, b, "off the orb nothing changes");
+            continue;
+        }
+        covered += 1;
+        for c in 0..3 {
+            let want = (b[c] - glow[c]) * 0.7 + glow[c];
+            assert!((a[c] - want).abs() <= 1e-5 * (1.0 + want), "{a:?} vs {b:?}");
+        }
+    }
+    assert!(covered > 50, "{covered} orb pixels");
+    let dir = tempfile::tempdir().unwrap();
+    let store = bake_store(&scene, &dir.path().join("orb.oslf"));
+    let t = store.meta().objects[0].textures.as_ref().unwrap();
+    assert_eq!(t.occlusion_strength, 0.5);
+    let image = t.image(TextureKind::Occlusion).expect("occlusion image");
+    assert_eq!(image.texels, [[102, 204, 204, 255]]);
+}

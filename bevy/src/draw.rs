@@ -102,12 +102,7 @@ pub(crate) fn prepare_oslf(
             })
             .and_then(|s| Ok(Renderer::new(gpu.clone(), s, settings.cache)?));
         let renderer = match renderer {
-            Ok(r) => {
-                for line in r.undrawn_textures() {
-                    messages.say(format!("OSLF store {id}: {line}"));
-                }
-                Some(Mutex::new(r))
-            }
+            Ok(r) => Some(Mutex::new(r)),
             Err(e) => {
                 messages.say(format!(
                     "OSLF store {id}: cannot be drawn on this device: {e}"

@@ -133,8 +133,10 @@
 //! (factors multiplied in), else the material record's factors; the normal =
 //! `normalize(t·x' + b·y' + n·z')` with `(x', y', z') = (2c − 1)·(scale, scale, 1)` of the
 //! normal texture, `t`, `n` the interpolated tangent and normal (`t` made orthogonal to `n`)
-//! and `b = w·(n × t)`; occlusion = `1 + strength·(R − 1)`, applied to the diffuse term;
-//! emission = the material record's emission × the emissive texture's RGB.
+//! and `b = w·(n × t)`; occlusion = `1 + strength·(R − 1)` (R clamped to `[0, 1]`), which
+//! scales all the light the object reflects, diffuse and specular (glTF's sample viewer does
+//! the same with image-based light), but not its emission; emission = the material record's
+//! emission × the emissive texture's RGB.
 //!
 //! ## Sample points section
 //!

@@ -95,7 +95,7 @@ fn gbuffer(in: VsOut) -> FsOut {
 // ---- the material of textured objects (format docs, "Object textures") ----
 
 // The object's textures: which it has (bit i: BOUND_KINDS[i] of textures.rs: base colour,
-// metallic-roughness, normal, emissive), and one texture per kind
+// metallic-roughness, normal, emissive, occlusion), and one texture per kind
 // (1×1 where it has none).
 struct TextureParams {
     flags: u32,
@@ -109,6 +109,7 @@ struct TextureParams {
 @group(1) @binding(2) var tex_metallic_roughness: texture_2d<f32>;
 @group(1) @binding(3) var tex_normal: texture_2d<f32>;
 @group(1) @binding(4) var tex_emissive: texture_2d<f32>;
+@group(1) @binding(5) var tex_occlusion: texture_2d<f32>;
 
 struct FsTexturedOut {
     @location(0) position_patch: vec4<f32>,
@@ -160,7 +161,8 @@ fn linear_to_srgb(c: f32) -> f32 {
 // The pixel's material, packed for shade.wgsl (`surface_of` there): base colour RGB,
 // metallic, roughness, occlusion as 16-bit unorm pairs; the texture flags in w's low byte and
 // the emissive texture's RGB, sRGB-encoded to 8 bits, above them. A kind the object lacks
-// reads 0 and shade.wgsl takes the object's own value for it.
+// reads 0 (occlusion 1) and shade.wgsl takes the object's own value for it. Occlusion is
+// 1 + strength·(R − 1) (format docs, "Object textures").
 fn material_texel(uv: vec2<f32>) -> vec4<u32> {
     var base = vec3<f32>(0.0);
     var mr = vec3<f32>(0.0);
@@ -168,11 +170,16 @@ fn material_texel(uv: vec2<f32>) -> vec4<u32> {
     if ((T.flags & 1u) != 0u) { base = bilinear(tex_base_color, uv, true); }
     if ((T.flags & 2u) != 0u) { mr = bilinear(tex_metallic_roughness, uv, false); }
     if ((T.flags & 8u) != 0u) { glow = bilinear(tex_emissive, uv, true); }
+    var occlusion = 1.0;
+    if ((T.flags & 16u) != 0u) {
+        let ao = clamp(bilinear(tex_occlusion, uv, false).x, 0.0, 1.0);
+        occlusion = 1.0 + T.occlusion_strength * (ao - 1.0);
+    }
     let code = vec3<u32>(round(vec3<f32>(linear_to_srgb(glow.x), linear_to_srgb(glow.y), linear_to_srgb(glow.z)) * 255.0));
     return vec4<u32>(
         pack2x16unorm(base.xy),
         pack2x16unorm(vec2<f32>(base.z, mr.z)),
-        pack2x16unorm(vec2<f32>(mr.y, 1.0)),
+        pack2x16unorm(vec2<f32>(mr.y, occlusion)),
         T.flags | (code.x << 8u) | (code.y << 16u) | (code.z << 24u),
     );
 }

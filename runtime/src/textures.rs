@@ -5,12 +5,14 @@
 use oslf_format::{StoreMeta, TextureImage, TextureKind};
 use wgpu::util::DeviceExt;
 
-/// The kinds gbuffer.wgsl reads, in the order of its group-1 texture bindings (1, 2, …).
-pub(crate) const BOUND_KINDS: [TextureKind; 4] = [
+/// The kinds gbuffer.wgsl reads, in the order of its group-1 texture bindings (1, 2, …) and
+/// of `TextureParams`' flag bits.
+pub(crate) const BOUND_KINDS: [TextureKind; 5] = [
     TextureKind::BaseColor,
     TextureKind::MetallicRoughness,
     TextureKind::Normal,
     TextureKind::Emissive,
+    TextureKind::Occlusion,
 ];
 
 /// gbuffer.wgsl's `TextureParams`.
@@ -161,79 +163,16 @@ fn group(
     })
 }
 
-/// What the store's objects carry that the renderer does not draw: textures of kinds other
-/// than [`BOUND_KINDS`] (occlusion), one line per object that has any.
-pub(crate) fn undrawn(meta: &StoreMeta) -> Vec<String> {
-    meta.objects
-        .iter()
-        .filter_map(|o| {
-            let kinds: Vec<&str> = o
-                .textures
-                .as_ref()?
-                .images
-                .iter()
-                .filter(|(k, _)| !BOUND_KINDS.contains(k))
-                .map(|(k, _)| k.name())
-                .collect();
-            (!kinds.is_empty()).then(|| {
-                format!(
-                    "object {:?}: its {} texture{} not drawn (this runtime draws base colour, metallic-roughness, normal and emissive textures)",
-                    o.name,
-                    kinds.join(", "),
-                    if kinds.len() == 1 { " is" } else { "s are" }
-                )
-            })
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use oslf_format::{ObjectInfo, ObjectTextures};
 
+    /// Every kind of texture the format holds is bound, so a store's textures are all drawn.
     #[test]
-    fn occlusion_textures_are_said_undrawn() {
-        let image = TextureImage {
-            width: 1,
-            height: 1,
-            texels: vec![[0; 4]],
-        };
-        let object = |name: &str, kinds: &[TextureKind]| ObjectInfo {
-            name: name.into(),
-            transform: glam::Mat4::IDENTITY.to_cols_array_2d(),
-            base_color: [1.0; 3],
-            first_patch: 0,
-            patch_count: 0,
-            mesh: None,
-            material: Default::default(),
-            textures: Some(ObjectTextures {
-                images: kinds.iter().map(|k| (*k, image.clone())).collect(),
-                ..Default::default()
-            }),
-        };
-        let meta = StoreMeta {
-            objects: vec![
-                object(
-                    "drawn",
-                    &[TextureKind::BaseColor, TextureKind::MetallicRoughness],
-                ),
-                object("bumpy", &[TextureKind::BaseColor, TextureKind::Normal]),
-                object("dim", &[TextureKind::Occlusion]),
-                object("glowing", &[TextureKind::Occlusion, TextureKind::Emissive]),
-                object("lit", &[TextureKind::Emissive]),
-            ],
-            patches: Vec::new(),
-            bake: Default::default(),
-            camera: None,
-            has_env_cube: false,
-        };
-        assert_eq!(
-            undrawn(&meta),
-            [
-                "object \"dim\": its occlusion texture is not drawn (this runtime draws base colour, metallic-roughness, normal and emissive textures)",
-                "object \"glowing\": its occlusion texture is not drawn (this runtime draws base colour, metallic-roughness, normal and emissive textures)",
-            ]
-        );
+    fn every_texture_kind_is_bound() {
+        for kind in TextureKind::ALL {
+            assert!(BOUND_KINDS.contains(&kind), "{kind:?} is not bound");
+        }
+        assert_eq!(BOUND_KINDS.len(), TextureKind::ALL.len());
     }
 }

@@ -121,7 +121,8 @@ fn texcoord_at(x: f32, y: f32) -> [f32; 2] {
 }
 
 /// A 5×3 base-colour texture of varied sRGB codes, a 3×2 metallic-roughness one (roughness
-/// 0.1–0.9, metallic 0–1), a 2×2 normal texture and a 3×3 emissive one over the grid.
+/// 0.1–0.9, metallic 0–1), a 2×2 normal texture, a 4×3 occlusion one (strength 0.6) and a
+/// 3×3 emissive one over the grid.
 fn grid_textures() -> oslf_format::ObjectTextures {
     use oslf_format::{TextureImage, TextureKind};
     let image = |w: u32, h: u32, f: &dyn Fn(u32) -> [u8; 4]| TextureImage {
@@ -152,17 +153,19 @@ fn grid_textures() -> oslf_format::ObjectTextures {
     let glow = image(3, 3, &|i| {
         [(i * 80 % 256) as u8, 200, (40 + i * 20) as u8, 255]
     });
+    let occlusion = image(4, 3, &|i| [(20 + i * 21) as u8, 0, 255, 255]);
     let uvs = grid_mesh().uvs;
     oslf_format::ObjectTextures {
         texcoords: uvs.iter().map(|uv| texcoord_at(uv[0], uv[1])).collect(),
         // Along +x, which the shaders make orthogonal to the bent grid's normals.
         tangents: vec![[1.0, 0.0, 0.0, 1.0]; uvs.len()],
         normal_scale: 0.8,
-        occlusion_strength: 1.0,
+        occlusion_strength: 0.6,
         images: vec![
             (TextureKind::BaseColor, base),
             (TextureKind::MetallicRoughness, mr),
             (TextureKind::Normal, normal),
+            (TextureKind::Occlusion, occlusion),
             (TextureKind::Emissive, glow),
         ],
     }
@@ -590,7 +593,7 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
     };
     let own = check(&mut r, &cubes, pbr, "pbr, textured");
     let gbuffer = r.read_gbuffer().unwrap();
-    let (mut checked, mut worst) = (0, 0f32);
+    let (mut checked, mut worst, mut darkest) = (0, 0f32, 1f32);
     for g in &gbuffer {
         let id = g.position_patch[3];
         if id < 1.5 {
@@ -611,11 +614,14 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
             let (a, b) = (unpack2x16unorm(*got), unpack2x16unorm(*want));
             worst = worst.max((a - b).abs().max_element());
         }
+        darkest = darkest.min(unpack2x16unorm(g.material[2]).y);
         checked += 1;
     }
     println!("{checked} textured pixels, largest material difference {worst:.2e}");
     assert!(checked > 500, "only {checked} textured pixels");
     assert!(worst < 1e-3, "material differs by {worst}");
+    // The occlusion texture (codes 20..251 at strength 0.6) reaches below 0.6.
+    assert!(darkest < 0.6, "occlusion never below {darkest}");
     // The textures change the picture: against the untextured store, most grid pixels differ.
     let (mut plain, _) = open();
     let options = RenderOptions {

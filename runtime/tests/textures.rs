@@ -1,13 +1,14 @@
 //! The runtime and the bake read an object's textures alike (format docs, "Object textures"):
 //! from the same 8-bit texels, the runtime's CPU twin of its G-buffer (`material_texel`,
 //! `mapped_normal`) and the bake's `Material` (which the truth shades the object with) give the
-//! same base colour, metallic, roughness, normal and emission on a table of texture coordinates,
+//! same base colour, metallic, roughness, occlusion, normal and emission on a table of texture
+//! coordinates,
 //! normals and tangents, repeating past [0, 1].
 
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
-use oslf_bake::material::{Material, Model, NormalTexture};
+use oslf_bake::material::{Material, Model, NormalTexture, OcclusionTexture};
 use oslf_bake::texture::{srgb_to_linear, ImageTexture, Texture};
 use oslf_format::{ObjectTextures, TextureImage, TextureKind};
 use oslf_runtime::reference::material::{mapped_normal, material_texel, unpack2x16unorm};
@@ -61,7 +62,8 @@ fn the_runtime_and_the_bake_read_textures_alike() {
         ][i as usize]
     });
     let glow = codes(3, 3, |i| [(i * 80 % 256) as u8, 200, (40 + i * 20) as u8]);
-    let scale = 0.8;
+    let occlusion = codes(4, 3, |i| [(30 + i * 19) as u8, 7, 250]);
+    let (scale, strength) = (0.8, 0.7);
     let bake = Material {
         albedo: bake_image(5, 3, &base, true),
         model: Model::MetallicRoughness {
@@ -75,20 +77,25 @@ fn the_runtime_and_the_bake_read_textures_alike() {
             scale,
         }),
         emissive_texture: Some(bake_image(3, 3, &glow, true)),
+        occlusion_texture: Some(OcclusionTexture {
+            texture: bake_image(4, 3, &occlusion, false),
+            strength,
+        }),
     };
     let store = ObjectTextures {
         texcoords: Vec::new(),
         tangents: Vec::new(),
         normal_scale: scale,
-        occlusion_strength: 1.0,
+        occlusion_strength: strength,
         images: vec![
             (TextureKind::BaseColor, store_image(5, 3, &base)),
             (TextureKind::MetallicRoughness, store_image(3, 2, &mr)),
             (TextureKind::Normal, store_image(2, 2, &normal)),
+            (TextureKind::Occlusion, store_image(4, 3, &occlusion)),
             (TextureKind::Emissive, store_image(3, 3, &glow)),
         ],
     };
-    let mut worst = (0f32, 0f32, 0f32);
+    let (mut worst, mut darkest) = ((0f32, 0f32, 0f32), 1f32);
     for k in 0..400 {
         let f = k as f32;
         let uv = Vec2::new((f * 0.137).sin() * 2.3, (f * 0.071).cos() * 1.7 + 0.4);
@@ -111,8 +118,10 @@ fn the_runtime_and_the_bake_read_textures_alike() {
         worst.0 = worst.0.max(
             (bm.y - want.metallic)
                 .abs()
-                .max((ro.x - want.roughness).abs()),
+                .max((ro.x - want.roughness).abs())
+                .max((ro.y - bake.occlusion_at(uv)).abs()),
         );
+        darkest = darkest.min(ro.y);
         // The emissive texture, kept to 8-bit sRGB codes in the G-buffer (w above the flags).
         let code = |shift: u32| srgb_to_linear(((texel[3] >> shift) & 0xff) as f32 / 255.0);
         let got_glow = Vec3::new(code(8), code(16), code(24));
@@ -128,6 +137,8 @@ fn the_runtime_and_the_bake_read_textures_alike() {
         "largest difference: material {:.2e}, normal {:.2e}, emission {:.2e}",
         worst.0, worst.1, worst.2
     );
+    // The occlusion texture darkens: codes 30..239 at strength 0.7 reach below 0.5.
+    assert!(darkest < 0.5, "occlusion never below {darkest}");
     // The G-buffer keeps 16 bits per value (1.5e-5); the normals are the same arithmetic.
     assert!(worst.0 < 2e-5, "material differs by {}", worst.0);
     assert!(worst.1 < 1e-5, "normals differ by {}", worst.1);

@@ -139,8 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let frame = renderer.render(&camera, &params, &options)?;
     let render_seconds = t.elapsed().as_secs_f64();
-    let mut degraded = fallback_report(&renderer, &frame, &params);
-    degraded.extend(renderer.undrawn_textures());
+    let degraded = fallback_report(&renderer, &frame, &params);
     if args.strict && !degraded.is_empty() {
         bail!(
             "the image would be degraded (--strict; nothing written):\n  {}",

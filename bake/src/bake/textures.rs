@@ -5,7 +5,7 @@
 use glam::Vec3;
 use oslf_format::{MeshInfo, ObjectTextures, TextureImage, TextureKind};
 
-use crate::material::{Material, NormalTexture};
+use crate::material::{Material, NormalTexture, OcclusionTexture};
 use crate::texture::{linear_to_srgb, ImageTexture, Texture};
 
 /// The textures of a mesh object whose material has image textures, with its store mesh:
@@ -33,6 +33,15 @@ pub fn object_textures(
         images.push((TextureKind::Normal, quantize(img, false)));
         normal_scale = *scale;
     }
+    let mut occlusion_strength = 1.0;
+    if let Some(OcclusionTexture {
+        texture: Texture::Image(img),
+        strength,
+    }) = &material.occlusion_texture
+    {
+        images.push((TextureKind::Occlusion, quantize(img, false)));
+        occlusion_strength = *strength;
+    }
     if let Some(Texture::Image(img)) = &material.emissive_texture {
         images.push((TextureKind::Emissive, quantize(img, true)));
     }
@@ -46,7 +55,7 @@ pub fn object_textures(
         texcoords,
         tangents,
         normal_scale,
-        occlusion_strength: 1.0,
+        occlusion_strength,
         images,
     };
     (mesh, Some(textures))

@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::loader::{label, material_label, Loader};
 use super::textures::{wrapped_image, UvMap};
-use crate::material::{Material, Model, NormalTexture};
+use crate::material::{Material, Model, NormalTexture, OcclusionTexture};
 use crate::texture::Texture;
 use crate::Result;
 
@@ -51,7 +51,7 @@ impl<'d> Loader<'d> {
         // The normal texture likewise, where it maps as the others do (and has no transform).
         let normal_map = match m.normal_texture().filter(|_| m.index().is_some()) {
             Some(nt) if nt.extension_value("KHR_texture_transform").is_none() => {
-                Some(self.normal_uv_map(&nt)?)
+                Some(self.plain_uv_map(&nt.texture(), nt.tex_coord())?)
             }
             _ => None,
         };
@@ -73,6 +73,17 @@ impl<'d> Loader<'d> {
             .as_ref()
             .is_some_and(|g| uv_map.as_ref().is_none_or(|u| u == g));
         let uv_map = uv_map.or(if glow_drawn { glow_map } else { None });
+        // And the occlusion texture (like the normal texture, without a transform).
+        let occlusion_map = match m.occlusion_texture().filter(|_| m.index().is_some()) {
+            Some(ot) if ot.extension_value("KHR_texture_transform").is_none() => {
+                Some(self.plain_uv_map(&ot.texture(), ot.tex_coord())?)
+            }
+            _ => None,
+        };
+        let occlusion_drawn = occlusion_map
+            .as_ref()
+            .is_some_and(|o| uv_map.as_ref().is_none_or(|u| u == o));
+        let uv_map = uv_map.or(if occlusion_drawn { occlusion_map } else { None });
         let key = (m.index(), uv_map.as_ref().map_or(0, |u| u.set));
         if let Some(&index) = self.materials.get(&key) {
             return Ok((index, uv_map));
@@ -93,7 +104,8 @@ impl<'d> Loader<'d> {
                 format!("{factor:?}: components must be in [0, 1]"),
             ));
         }
-        self.warn_material(m, &name, [mr_drawn, normal_drawn, glow_drawn]);
+        let drawn = [mr_drawn, normal_drawn, glow_drawn, occlusion_drawn];
+        self.warn_material(m, &name, drawn);
         let albedo = match &info {
             None => Texture::Constant(rgb),
             Some(info) => self.colour_texture(info, rgb)?,
@@ -110,6 +122,10 @@ impl<'d> Loader<'d> {
             None => None,
             Some(info) => Some(self.colour_texture(&info, Vec3::ONE)?),
         };
+        let occlusion_texture = match m.occlusion_texture().filter(|_| occlusion_drawn) {
+            None => None,
+            Some(ot) => Some(self.occlusion_texture(&ot, &at)?),
+        };
         let model = self.model(m, &at)?;
         let emission = self.emission(m, &at)?;
         materials.push(Material {
@@ -119,6 +135,7 @@ impl<'d> Loader<'d> {
             metallic_roughness_texture,
             normal_texture,
             emissive_texture,
+            occlusion_texture,
         });
         let index = (materials.len() - 1) as u32;
         self.materials.insert(key, index);
@@ -187,6 +204,30 @@ impl<'d> Loader<'d> {
         })
     }
 
+    /// glTF's `occlusionTexture` `ot` (of the material at JSON path `at`) as data (occlusion in
+    /// red), resampled for its wraps, with its strength (in [0, 1]).
+    fn occlusion_texture(
+        &mut self,
+        ot: &gltf::material::OcclusionTexture,
+        at: &str,
+    ) -> Result<OcclusionTexture> {
+        let strength = ot.strength();
+        if !(0.0..=1.0).contains(&strength) {
+            return Err(self.err(
+                format!("{at}.occlusionTexture.strength"),
+                format!("{strength}: must be in [0, 1]"),
+            ));
+        }
+        let texture = ot.texture();
+        let image = self.image(&texture.source(), false)?;
+        let sampler = texture.sampler();
+        let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
+        Ok(OcclusionTexture {
+            texture: Texture::Image(Arc::new(wrapped_image(&image, ws, wt, Vec3::ONE))),
+            strength,
+        })
+    }
+
     /// The reflection model of `m` (at JSON path `at`): its metallic and roughness factors,
     /// each in [0, 1]; glTF's default material (no index) is drawn white Lambertian.
     fn model(&self, m: &gltf::Material, at: &str) -> Result<Model> {
@@ -227,9 +268,9 @@ impl<'d> Loader<'d> {
     }
 
     /// Warns about what material `m` uses that is not drawn; `drawn`: whether its
-    /// metallic-roughness, normal and emissive textures are.
-    pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str, drawn: [bool; 3]) {
-        let [mr_drawn, normal_drawn, glow_drawn] = drawn;
+    /// metallic-roughness, normal, emissive and occlusion textures are.
+    pub(super) fn warn_material(&mut self, m: &gltf::Material, name: &str, drawn: [bool; 4]) {
+        let [mr_drawn, normal_drawn, glow_drawn, occlusion_drawn] = drawn;
         let pbr = m.pbr_metallic_roughness();
         let mut ignored = Vec::new();
         if pbr.metallic_roughness_texture().is_some() && m.index().is_some() && !mr_drawn {
@@ -255,8 +296,12 @@ impl<'d> Loader<'d> {
                     .into(),
             );
         }
-        if m.occlusion_texture().is_some() {
-            ignored.push("occlusionTexture".into());
+        if m.occlusion_texture().is_some() && !occlusion_drawn {
+            ignored.push(
+                "occlusionTexture, which maps texture coordinates unlike the material's other \
+                 textures (its TEXCOORD set, KHR_texture_transform or sampler wrap differs)"
+                    .into(),
+            );
         }
         if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
             ignored.push(format!("alphaMode {:?} (drawn opaque)", m.alpha_mode()));

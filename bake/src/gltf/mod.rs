@@ -1,6 +1,6 @@
 //! glTF 2.0 scenes: `.gltf` (JSON with external or data-URI buffers and images) and `.glb`
-//! (binary) files read into what a scene file's shapes become: triangle meshes with Lambertian
-//! materials, point, spot and directional lights, and perspective cameras.
+//! (binary) files read into what a scene file's shapes become: triangle meshes with
+//! metallic-roughness materials, point, spot and directional lights, and perspective cameras.
 //!
 //! The JSON document is parsed and validated by the `gltf` crate (which names the JSON path of
 //! what is wrong); the GLB container, buffers, accessors and images are read here, every
@@ -13,17 +13,19 @@
 //! - triangle primitives (`TRIANGLES`, and `TRIANGLE_STRIP` / `TRIANGLE_FAN` converted to
 //!   lists), indexed or not: `POSITION`, `NORMAL` (flat normals where absent, or computed by
 //!   [`Options::normals`] where the scene asks), the
-//!   `TEXCOORD_n` set the material's base-colour texture uses;
-//! - materials: `baseColorFactor` and `baseColorTexture` (sRGB decoded to linear), with
-//!   `KHR_texture_transform` and the sampler's wrap modes, as a Lambertian albedo;
+//!   `TEXCOORD_n` set the material's textures use;
+//! - materials (`materials.rs`): glTF's metallic-roughness model with its factors, emission
+//!   (`KHR_materials_emissive_strength`) and its base-colour, metallic-roughness, normal,
+//!   occlusion and emissive textures, with `KHR_texture_transform` and the sampler's wrap
+//!   modes, where they map texture coordinates alike;
 //! - `KHR_lights_punctual` point, spot and directional lights, photometric units converted
 //!   with [`Options::watts_per_lumen`];
 //! - perspective cameras.
 //!
-//! Everything else the file uses (skins, morph targets, animations, emission, metallic-roughness,
-//! normal and occlusion maps, alpha, vertex colours, other extensions, orthographic cameras,
-//! points and lines, light ranges) is reported in [`Import::warnings`], naming the node,
-//! mesh or material, and otherwise ignored.
+//! Everything else the file uses (skins, morph targets, animations, textures that map texture
+//! coordinates unlike the material's others, alpha, vertex colours, other extensions,
+//! orthographic cameras, points and lines, light ranges) is reported in [`Import::warnings`],
+//! naming the node, mesh or material, and otherwise ignored.
 //!
 //! Conventions: glTF is Y-up, right-handed, in metres; nothing here converts axes or units:
 //! the include's transform does (`rotate = [90, 0, 0]` turns glTF's +Y into the scene's +Z).
@@ -105,25 +107,29 @@ fn load_bytes(
     Ok(import)
 }
 
-/// Warns, once per material, where environment geometry uses a material with a normal or
-/// emissive texture: those are drawn on the OSLF objects (the store carries them), not on the
-/// environment, which the path tracer draws with its interpolated normals and its emission
-/// factor.
+/// Warns, once per material, where environment geometry uses a material with a normal,
+/// emissive or occlusion texture: those are drawn on the OSLF objects (the store carries
+/// them), not on the environment, which the path tracer draws with its interpolated normals
+/// and its emission factor, its occlusion traced.
 fn warn_environment_normal_textures(import: &mut Import, materials: &[Material]) {
     let mut seen = std::collections::BTreeSet::new();
     for shape in &import.shapes {
         let Some(m) = materials.get(shape.material as usize) else {
             continue;
         };
-        if (m.normal_texture.is_some() || m.emissive_texture.is_some())
-            && seen.insert(shape.material)
-        {
+        let textured = m.normal_texture.is_some()
+            || m.emissive_texture.is_some()
+            || m.occlusion_texture.is_some();
+        if textured && seen.insert(shape.material) {
             let mut what = Vec::new();
             if m.normal_texture.is_some() {
                 what.push("normalTexture (this geometry is drawn with its interpolated normals)");
             }
             if m.emissive_texture.is_some() {
                 what.push("emissiveTexture (this geometry emits its emissiveFactor alone)");
+            }
+            if m.occlusion_texture.is_some() {
+                what.push("occlusionTexture (the path tracer traces this geometry's occlusion)");
             }
             import.warnings.push(format!(
                 "{}: drawn on OSLF objects only: {}",

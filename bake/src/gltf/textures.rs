@@ -55,14 +55,13 @@ impl<'d> Loader<'d> {
         })
     }
 
-    /// How glTF's `normalTexture` `nt` maps texture coordinates (it has no
-    /// `KHR_texture_transform`): its set and its sampler's wraps.
-    pub(super) fn normal_uv_map(&mut self, nt: &gltf::material::NormalTexture) -> Result<UvMap> {
-        let texture = nt.texture();
+    /// How a texture without `KHR_texture_transform` (glTF's `normalTexture` or
+    /// `occlusionTexture`) maps texture coordinates: its set `set` and its sampler's wraps.
+    pub(super) fn plain_uv_map(&mut self, texture: &gltf::Texture, set: u32) -> Result<UvMap> {
         let image = self.image(&texture.source(), false)?;
         let sampler = texture.sampler();
         Ok(UvMap {
-            set: nt.tex_coord(),
+            set,
             offset: Vec2::ZERO,
             rotation: 0.0,
             scale: Vec2::ONE,

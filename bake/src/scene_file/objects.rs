@@ -227,6 +227,7 @@ impl Ctx<'_> {
             metallic_roughness_texture: None,
             normal_texture: None,
             emissive_texture: None,
+            occlusion_texture: None,
         };
         materials.push(material);
         Ok(((materials.len() - 1) as u32, mean))

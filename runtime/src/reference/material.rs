@@ -95,13 +95,18 @@ pub fn material_texel(t: &ObjectTextures, uv: Vec2) -> [u32; 4] {
     if let Some(img) = t.image(TextureKind::Emissive) {
         glow = bilinear(img, uv, true);
     }
+    let mut occlusion = 1.0;
+    if let Some(img) = t.image(TextureKind::Occlusion) {
+        let ao = bilinear(img, uv, false).x.clamp(0.0, 1.0);
+        occlusion = 1.0 + t.occlusion_strength * (ao - 1.0);
+    }
     let code = glow
         .to_array()
         .map(|c| (linear_to_srgb(c) * 255.0).round_ties_even() as u32);
     [
         pack2x16unorm(base.x, base.y),
         pack2x16unorm(base.z, mr.z),
-        pack2x16unorm(mr.y, 1.0),
+        pack2x16unorm(mr.y, occlusion),
         flags | code[0] << 8 | code[1] << 16 | code[2] << 24,
     ]
 }

@@ -19,6 +19,15 @@ pub(super) fn emissive_of(w: u32) -> Vec3 {
     Vec3::new(c(8), c(16), c(24))
 }
 
+/// The pixel's base colour, pbr material (metallic, GGX α), emission and occlusion (as
+/// `Surface`).
+pub(super) struct Surface {
+    pub base: Vec3,
+    pub pbr: glam::Vec2,
+    pub emission: Vec3,
+    pub occlusion: f32,
+}
+
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {
     /// The pbr mode's metallic and GGX α on map `patch` (as `pbr_material`): its object's
@@ -31,9 +40,9 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
     }
 
-    /// The pixel's base colour and pbr material (metallic, GGX α): its object's, with what the
-    /// object's textures give (the G-buffer's material) in their place (as `surface_of`).
-    pub(super) fn surface_of(&self, patch: u32, g: &GTexel) -> (Vec3, glam::Vec2, Vec3) {
+    /// The pixel's [`Surface`]: its object's, with what the object's textures give (the
+    /// G-buffer's material) in their place (as `surface_of`).
+    pub(super) fn surface_of(&self, patch: u32, g: &GTexel) -> Surface {
         let mut base = self
             .colors
             .get(patch as usize)
@@ -61,7 +70,13 @@ impl<C: CubeTexels> Shader<'_, C> {
         if m[3] & 8 != 0 {
             emission *= emissive_of(m[3]);
         }
-        (base, pbr, emission)
+        let occlusion = if m[3] & 16 != 0 { ro.y } else { 1.0 };
+        Surface {
+            base,
+            pbr,
+            emission,
+            occlusion,
+        }
     }
 
     /// Shades pixel `(px, py)` with G-buffer texel `g`: the background with alpha 0 off the
@@ -87,7 +102,8 @@ impl<C: CubeTexels> Shader<'_, C> {
         let v = (Vec3::from_slice(&u.camera_pos[..3]) - x).normalize();
         let r = 2.0 * n.dot(v) * n - v; // Eq. 2.4
         let pixel = pcg(px.wrapping_add(pcg(py.wrapping_add(pcg(u.seed)))));
-        let (base, pbr, emission) = self.surface_of(patch, g);
+        let surface = self.surface_of(patch, g);
+        let (base, pbr) = (surface.base, surface.pbr);
         let mut spec = Vec3::ZERO;
         if u.terms & 2 != 0 {
             spec = self.mirror(&c, x, n, r);
@@ -107,7 +123,8 @@ impl<C: CubeTexels> Shader<'_, C> {
             color += self.recon(&c, x, n); // Eq. 3.12, 4.12
         }
         if u.terms & 16 != 0 {
-            color += emission; // the pbr mode draws the object's own emission
+            // The pbr mode draws the object's occlusion texture and its own emission.
+            color = color * surface.occlusion + surface.emission;
         }
         let c = finite3(color);
         [c.x, c.y, c.z, 1.0]

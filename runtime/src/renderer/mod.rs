@@ -312,13 +312,6 @@ impl Renderer {
         &self.store
     }
 
-    /// What the store's objects carry that this renderer does not draw (their occlusion
-    /// textures, format version 8), one line per object: the image is
-    /// degraded where it is not empty.
-    pub fn undrawn_textures(&self) -> Vec<String> {
-        crate::textures::undrawn(self.store.meta())
-    }
-
     /// The tessellated object.
     pub fn mesh(&self) -> &ObjectMesh {
         &self.mesh

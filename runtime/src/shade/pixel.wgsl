@@ -32,12 +32,13 @@ fn pbr_material(pid: u32) -> vec2<f32> {
     return vec2<f32>(P.metallic, P.alpha);
 }
 
-// The pixel's base colour and pbr material (metallic, GGX α): its object's, with what the
-// object's textures give (gb_material, TEXTURED) in their place.
+// The pixel's base colour, pbr material (metallic, GGX α), emission and occlusion: its
+// object's, with what the object's textures give (gb_material, TEXTURED) in their place.
 struct Surface {
     base: vec3<f32>,
     pbr: vec2<f32>,
     emission: vec3<f32>,
+    occlusion: f32,
 };
 
 fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
@@ -45,6 +46,7 @@ fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
     s.base = patches[pid].color.rgb;
     s.pbr = pbr_material(pid);
     s.emission = patches[pid].emission.rgb;
+    s.occlusion = 1.0;
     if (TEXTURED) {
         let m = textureLoad(gb_material, px, 0);
         let rg = unpack2x16unorm(m.x);
@@ -55,6 +57,7 @@ fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
             s.pbr = vec2<f32>(bm.y, max(ro.x * ro.x, MIN_ALPHA));
         }
         if ((m.w & 8u) != 0u) { s.emission = s.emission * emissive_of(m.w); }
+        if ((m.w & 16u) != 0u) { s.occlusion = ro.y; }
     }
     return s;
 }
@@ -99,7 +102,8 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
         color += recon(x, n); // Eq. 3.12, 4.12
     }
     if ((TERMS & 16u) != 0u) {
-        color += surface.emission; // the pbr mode draws the object's own emission
+        // The pbr mode draws the object's occlusion texture and its own emission.
+        color = color * surface.occlusion + surface.emission;
     }
     flush_marks();
     textureStore(out_image, px, vec4<f32>(finite3(color), 1.0));
