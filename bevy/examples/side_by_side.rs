@@ -114,8 +114,13 @@ fn setup(
             camera.insert(environment);
         }
         Variant::Parallax | Variant::ProbeFlat => {
+            // A uniform scale (the probe's region, a cube around the box) with the box's half
+            // extents in light-probe space, as Bevy's `ParallaxCorrection` docs do it: Bevy
+            // reads the cube through the probe's transform, so a non-uniform scale would skew
+            // every reflected direction, with or without parallax correction.
+            let size = 2.0 * job.half_extents.max_element();
             let correction = if job.variant == Variant::Parallax {
-                ParallaxCorrection::Custom(Vec3::splat(0.5))
+                ParallaxCorrection::Custom(job.half_extents / size)
             } else {
                 ParallaxCorrection::None
             };
@@ -123,7 +128,7 @@ fn setup(
                 LightProbe::default(),
                 environment,
                 correction,
-                Transform::from_translation(job.centre).with_scale(job.half_extents * 2.0),
+                Transform::from_translation(job.centre).with_scale(Vec3::splat(size)),
             ));
         }
         Variant::Oslf => {

@@ -114,8 +114,9 @@ fn the_vertex_and_patch_records_match() {
 /// Every constant of shade.wgsl has the value of its Rust twin, and every one has a twin.
 #[test]
 fn shader_constants_are_the_rust_constants() {
-    let twins: [(&str, f64); 9] = [
+    let twins: [(&str, f64); 10] = [
         ("MIN_ALPHA", f64::from(crate::params::MIN_ALPHA)),
+        ("PBR_LOD_BIAS", f64::from(crate::reference::PBR_LOD_BIAS)),
         ("INVALID", f64::from(oslf_format::INVALID_INDEX)),
         ("PI", f64::from(std::f32::consts::PI)),
         ("FAR", f64::from(crate::face::FAR_DISTANCE)),

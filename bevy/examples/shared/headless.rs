@@ -133,7 +133,11 @@ pub fn capture(app: &mut App, target: &Handle<Image>) -> Vec<[f32; 4]> {
         app.update();
         std::thread::sleep(std::time::Duration::from_millis(1));
     }
-    let image = shot.lock().unwrap().take().expect("no screenshot arrived in 20 s");
+    let image = shot
+        .lock()
+        .unwrap()
+        .take()
+        .expect("no screenshot arrived in 20 s");
     assert_eq!(image.texture_descriptor.format, TextureFormat::Rgba16Float);
     let data = image.data.expect("screenshot without data");
     data.chunks_exact(8)

@@ -116,10 +116,12 @@ impl<C: CubeTexels> Shader<'_, C> {
         // D(h) with its denominator as α²(n·h)² + |n × h|² (exact at a narrow lobe's peak).
         let d = a2 * hl.z * hl.z + (hl.x * hl.x + hl.y * hl.y);
         let g1v = 2.0 * nv / (nv + (a2 + (1.0 - a2) * nv * nv).sqrt());
-        // p(l) = G₁(v) D(h) / (4 n·v).
+        // p(l) = G₁(v) D(h) / (4 n·v); the lookup reads PBR_LOD_BIAS levels off its share
+        // (sample_lod's ½ log2(1 / (M p)), so 2·bias off log2(M p)).
         let lpdf = (u.m as f32).log2() + g1v.max(1e-30).log2() + a2.log2()
             - (PI * d * d).max(1e-30).log2()
-            - (4.0 * nv.max(1e-30)).log2();
+            - (4.0 * nv.max(1e-30)).log2()
+            - 2.0 * super::PBR_LOD_BIAS;
         let mut weight = Vec3::ZERO;
         if vh > 0.0 && nl > 0.0 && nv > 0.0 {
             // f ⟨n,l⟩ / p(l) = F(⟨v,h⟩) G₁(l): separable Smith, G = G₁(l) G₁(v).

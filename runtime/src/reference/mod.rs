@@ -42,6 +42,12 @@ pub use random::{filter_rows, filter_xi, pcg};
 pub use seams::{seam_bilinear, seam_coords, seam_taps, SeamTaps};
 pub use store::StoreCubes;
 
+/// The mip-level bias of the pbr mode's specular (GGX) samples on its spiral of filtered
+/// samples (PBR_LOD_BIAS in shade.wgsl): half a level sharper than Křivánek & Colbert's share,
+/// the best of −1.5 … +1 on the room's metal teapot at M = 16 and every roughness
+/// (docs/measurements.md, "The filtered set of the pbr mode"). Its diffuse samples keep 0.
+pub(crate) const PBR_LOD_BIAS: f32 = -0.5;
+
 /// Bisection steps of a depth-corrected lookup (DEPTH_REFINE in shade.wgsl).
 pub(crate) const DEPTH_REFINE: u32 = 6;
 /// Steps of a glossy sample's depth correction (DEPTH_ITERATIONS in shade.wgsl).

@@ -19,11 +19,12 @@ pub(super) fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {
     /// (ξ1, ξ2) of sample `i` of integration `j`, numbers `k` and `k + 1` (as `sample_xi`):
-    /// random with ξ1 stratified, or when filtering the fixed set [`filter_xi`].
+    /// random with ξ1 stratified, or when filtering the fixed set [`filter_xi`] (the spiral
+    /// for the pbr mode's GGX samples, k = 0).
     pub(super) fn sample_xi(&self, pixel: u32, i: u32, j: u32, k: u32) -> [f32; 2] {
         let m = self.uniform.m;
         if self.uniform.mip_levels > 1 {
-            return filter_xi(i, m);
+            return filter_xi(i, m, self.uniform.terms & 16 != 0 && k == 0);
         }
         [
             (i as f32 + rand(pixel, i, j, k)) / m as f32,
@@ -35,8 +36,13 @@ impl<C: CubeTexels> Shader<'_, C> {
 /// (ξ1, ξ2) of filtered glossy sample `i` of `m` (as `filter_xi`): for m = n² the centres of
 /// an n × n grid of strata through Shirley & Chiu's concentric map to the disc, as polar
 /// coordinates (ξ1 = φ/2π, ξ2 = r²), so that each sample's cell is compact; else the
-/// Hammersley set.
-pub fn filter_xi(i: u32, m: u32) -> [f32; 2] {
+/// Hammersley set. With `spiral` (the pbr mode's GGX samples) the golden-angle spiral:
+/// ξ1 = frac(i (2 − φ)), ξ2 = (i + ½)/m, every sample on a radius of its own.
+pub fn filter_xi(i: u32, m: u32, spiral: bool) -> [f32; 2] {
+    if spiral {
+        let g = i as f32 * 0.381_966_02;
+        return [g - g.floor(), (i as f32 + 0.5) / m as f32];
+    }
     let n = (m as f32).sqrt().round() as u32;
     if n * n != m {
         return [

@@ -501,7 +501,7 @@ fn filtered_samples_are_concentric_stratum_centres() {
     for n in [1u32, 2, 3, 4, 5, 8, 16] {
         let m = n * n;
         for i in 0..m {
-            let [x1, x2] = filter_xi(i, m);
+            let [x1, x2] = filter_xi(i, m, false);
             assert!(
                 (0.0..1.0).contains(&x1) && (0.0..1.0).contains(&x2),
                 "{m} {i}"
@@ -529,7 +529,28 @@ fn filtered_samples_are_concentric_stratum_centres() {
             );
         }
     }
-    assert_eq!(filter_xi(3, 12), [3.5 / 12.0, 0.75]);
+    assert_eq!(filter_xi(3, 12, false), [3.5 / 12.0, 0.75]);
+}
+
+/// The pbr mode's filtered GGX samples are the golden-angle spiral: sample i on the radius of its
+/// own equal-area ring, ξ2 = (i + ½)/M, and the angles spread evenly, every eighth of the
+/// circle holding M/8 of them give or take two.
+#[test]
+fn the_pbr_modes_filtered_samples_are_a_golden_angle_spiral() {
+    for m in [4u32, 15, 16, 64, 256] {
+        let mut sectors = [0u32; 8];
+        for i in 0..m {
+            let [x1, x2] = filter_xi(i, m, true);
+            assert!((0.0..1.0).contains(&x1), "{m} {i}: ξ1 {x1}");
+            assert_eq!(x2, (i as f32 + 0.5) / m as f32);
+            sectors[(x1 * 8.0) as usize] += 1;
+        }
+        if m >= 16 {
+            for s in sectors {
+                assert!(s.abs_diff(m / 8) <= 2, "M {m}: sectors {sectors:?}");
+            }
+        }
+    }
 }
 
 /// The shading normal is the patch's own (as the geometry crate evaluates it, to f32

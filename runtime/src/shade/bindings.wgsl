@@ -136,6 +136,9 @@ const MIN_ALPHA: f32 = 1.0e-3;
 const PI: f32 = 3.14159265358979;
 // Distances at or above this mean "nothing this way" (face.rs FAR_DISTANCE, binary16's largest).
 const FAR: f32 = 65504.0;
+// The mip-level bias of the pbr mode's GGX samples on its spiral of filtered samples
+// (`sample_spec`; reference/mod.rs PBR_LOD_BIAS).
+const PBR_LOD_BIAS: f32 = -0.5;
 // Bisection steps that refine a depth-corrected hit (params.rs documents the search).
 const DEPTH_REFINE: u32 = 6u;
 // Steps of a glossy sample's depth correction (`depth_iterate`; reference/mod.rs

@@ -75,10 +75,11 @@ fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: v
     // D(h) with its denominator as α²(n·h)² + |n × h|² (exact at a narrow lobe's peak).
     let d = a2 * hl.z * hl.z + (hl.x * hl.x + hl.y * hl.y);
     let g1v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
-    // p(l) = G₁(v) D(h) / (4 n·v).
+    // p(l) = G₁(v) D(h) / (4 n·v); the lookup reads PBR_LOD_BIAS levels off its share
+    // (sample_lod's ½ log2(1 / (M p)), so 2·bias off log2(M p)).
     out.lpdf = log2(f32(P.m)) + log2(max(g1v, 1e-30)) + log2(a2)
         - log2(max(PI * d * d, 1e-30))
-        - log2(4.0 * max(nv, 1e-30));
+        - log2(4.0 * max(nv, 1e-30)) - 2.0 * PBR_LOD_BIAS;
     out.weight = vec3<f32>(0.0);
     if (vh > 0.0 && nl > 0.0 && nv > 0.0) {
         // f ⟨n,l⟩ / p(l) = F(⟨v,h⟩) G₁(l): separable Smith, G = G₁(l) G₁(v).
@@ -239,11 +240,12 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
         var spec_lod = 0.0;
         var diff_lod = 0.0;
         if (FILTER) {
-            let xi = filter_xi(i);
+            let xi = filter_xi(i, (TERMS & 16u) != 0u);
             spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
             spec_lod = sample_lod(spec.l, spec.lpdf);
             if (DIFFUSE) {
-                diff = sample_diff(xi.x, xi.y, n, t, b, v, nv, base, pbr);
+                let xd = filter_xi(i, false);
+                diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base, pbr);
                 diff_lod = sample_lod(diff.l, diff.lpdf);
             }
         }

@@ -20,7 +20,7 @@ fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
 // smooth instead of noisy (`filter_xi`).
 fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
     if (FILTER) {
-        return filter_xi(i);
+        return filter_xi(i, (TERMS & 16u) != 0u && k == 0u);
     }
     return vec2<f32>((f32(i) + rand(pixel, i, j, k)) / f32(P.m), rand(pixel, i, j, k + 1u));
 }
@@ -30,9 +30,16 @@ fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
 // ξ2 = r²: the disc's area measure is uniform in both): every sample's cell is compact, so
 // the isotropic filtered lookup of its area covers it (Hammersley's cells near the lobe's
 // peak are thin wedges, and a wide lobe's peak is then read too often). Other M: the
-// Hammersley set ((i + ½)/M, radical inverse of i). reference/random.rs `filter_xi` computes
-// the same.
-fn filter_xi(i: u32) -> vec2<f32> {
+// Hammersley set ((i + ½)/M, radical inverse of i). With `spiral` (the pbr mode's GGX
+// samples) the golden-angle spiral instead, ξ1 = frac(i (2 − φ)), ξ2 = (i + ½)/M: M distinct
+// radii on the disc of visible normals, where the grid has n/2 rings (two at M = 16, the
+// outer one standing for the GGX lobe's whole tail), with cells as compact (measurements.md,
+// "The filtered set of the pbr mode"). reference/random.rs `filter_xi` computes the same.
+fn filter_xi(i: u32, spiral: bool) -> vec2<f32> {
+    if (spiral) {
+        let g = f32(i) * 0.3819660112501051;
+        return vec2<f32>(g - floor(g), (f32(i) + 0.5) / f32(P.m));
+    }
     let n = u32(round(sqrt(f32(P.m))));
     if (n * n != P.m) {
         return vec2<f32>((f32(i) + 0.5) / f32(P.m), f32(reverseBits(i)) * 2.3283064365386963e-10);
@@ -57,8 +64,9 @@ fn filter_xi(i: u32) -> vec2<f32> {
 }
 
 // The samples per row of the filtered set: n for M = n² with FILTER (`filter_xi`'s grid, read
-// row by row), else 1 (every sample a row of its own). reference/random.rs `filter_rows`
-// likewise.
+// row by row; the pbr mode's spiral in runs of n neighbouring radii), else 1 (every sample a
+// row of its own). A row's later samples step once from its first one's depth.
+// reference/random.rs `filter_rows` likewise.
 fn filter_rows() -> u32 {
     let n = u32(round(sqrt(f32(P.m))));
     if (FILTER && n > 0u && n * n == P.m) {
