@@ -262,31 +262,35 @@ fn a_normal_texture_is_stored_with_tangents_and_turns_the_truths_normals() {
     );
 }
 
-/// The pbr truth adds the object's own emission (its factor times its emissive texture at the
-/// hit, as the runtime does): with the same seed, an emitting orb's pixels are the dark orb's
-/// plus its emission, plus the little its light adds to the table it reflects.
-#[test]
-fn the_pbr_truth_adds_the_objects_emission() {
-    let mut scene = orb_scene();
+/// The pbr truth of `scene` (the orb's, with its own material) at 32 × 24, 8 paths per pixel,
+/// with `seed`.
+fn small_pbr_truth(scene: &Scene, seed: u64) -> Vec<[f32; 4]> {
     let camera = scene.camera.expect("orb.toml has a camera");
     let settings = TruthSettings {
         width: 32,
         height: 24,
         spp: 8,
-        seed: 9,
+        seed,
     };
     let term = Term::Pbr {
         metallic: 1.0,
         roughness: 0.5,
         object_material: true,
     };
-    let render = |scene: &Scene| {
-        GroundTruth::new(scene, camera)
-            .unwrap()
-            .render(term, &settings)
-            .unwrap()
-            .pixels
-    };
+    GroundTruth::new(scene, camera)
+        .unwrap()
+        .render(term, &settings)
+        .unwrap()
+        .pixels
+}
+
+/// The pbr truth adds the object's own emission (its factor times its emissive texture at the
+/// hit, as the runtime does): with the same seed, an emitting orb's pixels are the dark orb's
+/// plus its emission, plus the little its light adds to the table it reflects.
+#[test]
+fn the_pbr_truth_adds_the_objects_emission() {
+    let mut scene = orb_scene();
+    let render = |scene: &Scene| small_pbr_truth(scene, 9);
     let dark = render(&scene);
     let glow = glam::Vec3::new(0.5, 0.25, 0.125);
     let orb = scene.objects[0].material as usize;
@@ -319,25 +323,7 @@ fn an_occlusion_texture_is_stored_and_scales_the_reflected_light() {
     use oslf_bake::material::OcclusionTexture;
     use oslf_bake::texture::{ImageTexture, Texture};
     let mut scene = orb_scene();
-    let camera = scene.camera.expect("orb.toml has a camera");
-    let settings = TruthSettings {
-        width: 32,
-        height: 24,
-        spp: 8,
-        seed: 3,
-    };
-    let term = Term::Pbr {
-        metallic: 1.0,
-        roughness: 0.5,
-        object_material: true,
-    };
-    let render = |scene: &Scene| {
-        GroundTruth::new(scene, camera)
-            .unwrap()
-            .render(term, &settings)
-            .unwrap()
-            .pixels
-    };
+    let render = |scene: &Scene| small_pbr_truth(scene, 3);
     let orb = scene.objects[0].material as usize;
     let glow = glam::Vec3::new(0.05, 0.1, 0.0);
     scene.materials[orb].emission = glow;

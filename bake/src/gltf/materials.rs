@@ -44,10 +44,7 @@ impl<'d> Loader<'d> {
                 Some(self.uv_map(m, map, false, i, mr_transform.as_ref(), set)?)
             }
         };
-        let mr_drawn = mr_map
-            .as_ref()
-            .is_some_and(|mr| color_map.as_ref().is_none_or(|c| c == mr));
-        let uv_map = color_map.or(if mr_drawn { mr_map } else { None });
+        let (uv_map, mr_drawn) = join(color_map, mr_map);
         // The normal texture likewise, where it maps as the others do (and has no transform).
         let normal_map = match m.normal_texture().filter(|_| m.index().is_some()) {
             Some(nt) if nt.extension_value("KHR_texture_transform").is_none() => {
@@ -55,10 +52,7 @@ impl<'d> Loader<'d> {
             }
             _ => None,
         };
-        let normal_drawn = normal_map
-            .as_ref()
-            .is_some_and(|nm| uv_map.as_ref().is_none_or(|u| u == nm));
-        let uv_map = uv_map.or(if normal_drawn { normal_map } else { None });
+        let (uv_map, normal_drawn) = join(uv_map, normal_map);
         // And the emissive texture.
         let glow_info = m.emissive_texture().filter(|_| m.index().is_some());
         let glow_transform = glow_info.as_ref().and_then(|i| i.texture_transform());
@@ -69,10 +63,7 @@ impl<'d> Loader<'d> {
                 Some(self.uv_map(m, "emissiveTexture", true, i, glow_transform.as_ref(), set)?)
             }
         };
-        let glow_drawn = glow_map
-            .as_ref()
-            .is_some_and(|g| uv_map.as_ref().is_none_or(|u| u == g));
-        let uv_map = uv_map.or(if glow_drawn { glow_map } else { None });
+        let (uv_map, glow_drawn) = join(uv_map, glow_map);
         // And the occlusion texture (like the normal texture, without a transform).
         let occlusion_map = match m.occlusion_texture().filter(|_| m.index().is_some()) {
             Some(ot) if ot.extension_value("KHR_texture_transform").is_none() => {
@@ -80,10 +71,7 @@ impl<'d> Loader<'d> {
             }
             _ => None,
         };
-        let occlusion_drawn = occlusion_map
-            .as_ref()
-            .is_some_and(|o| uv_map.as_ref().is_none_or(|u| u == o));
-        let uv_map = uv_map.or(if occlusion_drawn { occlusion_map } else { None });
+        let (uv_map, occlusion_drawn) = join(uv_map, occlusion_map);
         let key = (m.index(), uv_map.as_ref().map_or(0, |u| u.set));
         if let Some(&index) = self.materials.get(&key) {
             return Ok((index, uv_map));
@@ -318,6 +306,15 @@ impl<'d> Loader<'d> {
             ));
         }
     }
+}
+
+/// The material's texture mapping so far, `uv_map`, with texture mapping `map`: `map` is drawn
+/// where it maps texture coordinates as `uv_map` does, or where there is none yet.
+fn join(uv_map: Option<UvMap>, map: Option<UvMap>) -> (Option<UvMap>, bool) {
+    let drawn = map
+        .as_ref()
+        .is_some_and(|m| uv_map.as_ref().is_none_or(|u| u == m));
+    (uv_map.or(if drawn { map } else { None }), drawn)
 }
 
 /// The texture coordinate set `info` reads: `KHR_texture_transform`'s `texCoord` where given.

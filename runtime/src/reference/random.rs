@@ -78,3 +78,29 @@ pub fn filter_rows(m: u32, filtered: bool) -> u32 {
         1
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::filter_xi;
+
+    /// The pbr mode's filtered GGX samples are the golden-angle spiral: sample i on the radius of its
+    /// own equal-area ring, ξ2 = (i + ½)/M, and the angles spread evenly, every eighth of the
+    /// circle holding M/8 of them give or take two.
+    #[test]
+    fn the_pbr_modes_filtered_samples_are_a_golden_angle_spiral() {
+        for m in [4u32, 15, 16, 64, 256] {
+            let mut sectors = [0u32; 8];
+            for i in 0..m {
+                let [x1, x2] = filter_xi(i, m, true);
+                assert!((0.0..1.0).contains(&x1), "{m} {i}: ξ1 {x1}");
+                assert_eq!(x2, (i as f32 + 0.5) / m as f32);
+                sectors[(x1 * 8.0) as usize] += 1;
+            }
+            if m >= 16 {
+                for s in sectors {
+                    assert!(s.abs_diff(m / 8) <= 2, "M {m}: sectors {sectors:?}");
+                }
+            }
+        }
+    }
+}
