@@ -182,14 +182,24 @@ impl<'d> Loader<'d> {
                 format!("{scale}: must be finite"),
             ));
         }
-        let texture = nt.texture();
+        Ok(NormalTexture {
+            texture: self.data_texture(&nt.texture())?,
+            scale,
+        })
+    }
+
+    /// A data texture (`normalTexture`, `occlusionTexture`) as stored, not sRGB-decoded,
+    /// resampled for its sampler's wraps.
+    fn data_texture(&mut self, texture: &gltf::Texture) -> Result<Texture> {
         let image = self.image(&texture.source(), false)?;
         let sampler = texture.sampler();
         let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
-        Ok(NormalTexture {
-            texture: Texture::Image(Arc::new(wrapped_image(&image, ws, wt, Vec3::ONE))),
-            scale,
-        })
+        Ok(Texture::Image(Arc::new(wrapped_image(
+            &image,
+            ws,
+            wt,
+            Vec3::ONE,
+        ))))
     }
 
     /// glTF's `occlusionTexture` `ot` (of the material at JSON path `at`) as data (occlusion in
@@ -206,12 +216,8 @@ impl<'d> Loader<'d> {
                 format!("{strength}: must be in [0, 1]"),
             ));
         }
-        let texture = ot.texture();
-        let image = self.image(&texture.source(), false)?;
-        let sampler = texture.sampler();
-        let (ws, wt) = (sampler.wrap_s(), sampler.wrap_t());
         Ok(OcclusionTexture {
-            texture: Texture::Image(Arc::new(wrapped_image(&image, ws, wt, Vec3::ONE))),
+            texture: self.data_texture(&ot.texture())?,
             strength,
         })
     }
