@@ -93,9 +93,10 @@ pub fn headless_app(asset_dir: &Path, cache: CacheConfig) -> App {
 
 /// Updates `frames` times, or with `until_cached` until the cache's feedback reports a frame
 /// with no misses, then takes screenshots of the [`Target`] image (made by the app's start-up
-/// systems) until two in a row agree and every pixel was drawn (Bevy prepares meshes and
-/// pipelines over the first frames, later on a loaded machine): linear RGBA per pixel, top
-/// row first.
+/// systems) until two in a row agree and every pixel was drawn: linear RGBA per pixel, top
+/// row first. Bevy loads its shaders on the task pools that all apps of a process share, so
+/// an app can draw nothing for seconds while another loads a store: the screenshots are
+/// retaken, a few updates apart, for up to [`SETTLE_SECONDS`].
 pub fn settle_and_capture(app: &mut App, frames: usize, until_cached: bool) -> Vec<[f32; 4]> {
     for _ in 0..frames.max(1) {
         app.update();
@@ -105,15 +106,52 @@ pub fn settle_and_capture(app: &mut App, frames: usize, until_cached: bool) -> V
         }
     }
     let target = app.world().resource::<Target>().0.clone();
+    let start = std::time::Instant::now();
     let mut last = capture(app, &target);
-    for _ in 0..20 {
+    loop {
         let next = capture(app, &target);
         if next == last && next.iter().all(|p| p[3] == 1.0) {
             return next;
         }
+        if start.elapsed().as_secs() >= SETTLE_SECONDS {
+            panic!(
+                "the frame never settled in {SETTLE_SECONDS} s: of {} pixels, {}",
+                next.len(),
+                unsettled(&last, &next)
+            );
+        }
         last = next;
+        for _ in 0..4 {
+            app.update();
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
     }
-    panic!("the frame never settled: two screenshots in a row differ or leave pixels undrawn");
+}
+
+/// How long [`settle_and_capture`] retakes screenshots before it gives up.
+pub const SETTLE_SECONDS: u64 = 120;
+
+/// What keeps two screenshots from counting as settled, with an example of each fault.
+fn unsettled(last: &[[f32; 4]], next: &[[f32; 4]]) -> String {
+    let differ: Vec<usize> = (0..next.len())
+        .filter(|&i| last[i].map(f32::to_bits) != next[i].map(f32::to_bits))
+        .collect();
+    let undrawn: Vec<usize> = (0..next.len()).filter(|&i| next[i][3] != 1.0).collect();
+    let nonfinite = next.iter().flatten().filter(|c| !c.is_finite()).count();
+    let example = |what: &[usize]| {
+        what.first()
+            .map(|&i| format!(" (pixel {i}: {:?} then {:?})", last[i], next[i]))
+            .unwrap_or_default()
+    };
+    format!(
+        "{} differ between the last two screenshots{}, {} have alpha other than 1{}, and {} \
+         channels are not finite",
+        differ.len(),
+        example(&differ),
+        undrawn.len(),
+        example(&undrawn),
+        nonfinite
+    )
 }
 
 /// One screenshot of `target`, an `Rgba16Float` image.
