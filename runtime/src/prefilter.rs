@@ -140,30 +140,21 @@ fn level_side(level: &[Vec<Vec3>; FACES]) -> u32 {
     (level[0].len() as f64).sqrt() as u32
 }
 
-/// The cube's mip chain: level 0 as given, each next the mean of 2 × 2 texels.
+/// The cube's mip chain: level 0 as given, each next [`crate::face::downsample`] of the one
+/// before (the tent weighted by solid angle, as the mips the runtime's glossy samples read).
 fn mip_chain(cube: &CubeImage) -> Vec<[Vec<Vec3>; FACES]> {
     let n = cube.resolution.max(1);
-    let mut chain = vec![std::array::from_fn(|f| {
-        cube.faces[f]
-            .iter()
-            .map(|&c| Vec3::from_array(c))
-            .collect::<Vec<_>>()
-    })];
+    let mut chain: Vec<[Vec<[f32; 3]>; FACES]> = vec![cube.faces.clone()];
     for k in 1..level_count(n) {
-        let (side, prev) = (level_size(n, k), level_size(n, k - 1));
-        let last: &[Vec<Vec3>; FACES] = &chain[k as usize - 1];
-        let next = std::array::from_fn(|f| {
-            let at = |x: u32, y: u32| last[f][(y.min(prev - 1) * prev + x.min(prev - 1)) as usize];
-            (0..side * side)
-                .map(|i| {
-                    let (x, y) = (2 * (i % side), 2 * (i / side));
-                    (at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1)) * 0.25
-                })
-                .collect()
-        });
+        let prev = level_size(n, k - 1);
+        let next =
+            std::array::from_fn(|f| crate::face::downsample(&chain[k as usize - 1][f], prev));
         chain.push(next);
     }
     chain
+        .into_iter()
+        .map(|level| level.map(|face| face.into_iter().map(Vec3::from_array).collect()))
+        .collect()
 }
 
 /// Six faces of `side²` texels, each `f` of its centre's unit direction; in parallel.

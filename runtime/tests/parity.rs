@@ -250,6 +250,25 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
             label,
         );
     }
+    // The pbr mode's filtered GGX samples: each candidate its own turn of the spiral
+    // (`filter_xi`), with, below metallic 1, the diffuse samples' grid shared by all.
+    for (metallic, label) in [
+        (1.0, "pbr mip depth, metal, M = 16"),
+        (0.5, "pbr mip depth, half metal, M = 16"),
+    ] {
+        check(
+            &mut r,
+            &cubes,
+            ShadingParams {
+                mode: Mode::Pbr,
+                metallic,
+                roughness: 0.6,
+                m: 16,
+                ..glossy(GlossyFilter::Mip, Order::PerPoint, true, Source::Oslf)
+            },
+            label,
+        );
+    }
 }
 
 #[test]

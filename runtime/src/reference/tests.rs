@@ -501,7 +501,7 @@ fn filtered_samples_are_concentric_stratum_centres() {
     for n in [1u32, 2, 3, 4, 5, 8, 16] {
         let m = n * n;
         for i in 0..m {
-            let [x1, x2] = filter_xi(i, m, false);
+            let [x1, x2] = filter_xi(i, m, false, 0);
             assert!(
                 (0.0..1.0).contains(&x1) && (0.0..1.0).contains(&x2),
                 "{m} {i}"
@@ -529,7 +529,7 @@ fn filtered_samples_are_concentric_stratum_centres() {
             );
         }
     }
-    assert_eq!(filter_xi(3, 12, false), [3.5 / 12.0, 0.75]);
+    assert_eq!(filter_xi(3, 12, false, 0), [3.5 / 12.0, 0.75]);
 }
 
 /// The shading normal is the patch's own (as the geometry crate evaluates it, to f32

@@ -203,8 +203,8 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<
 // The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
 // once: entry k integrates over `cubes[k]` where `used[k]`, with the random numbers of
 // integration j0 + k; cube INVALID is the blend of the candidates per direction. With FILTER
-// every source takes the same fixed samples, so each is drawn once for all of them. The
-// diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
+// the diffuse and Ashikhmin–Shirley samples are one fixed set for every source, drawn once for
+// all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
 // call site: lavapipe pays for every inlined copy whether it runs or not.
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
@@ -224,56 +224,52 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
         }
     }
     // Per candidate and kind of sample, the distance `depth_iterate`'s fresh sample of the row
-    // converged to, and whether the row has had its fresh sample yet.
+    // converged to, and whether the row has had its fresh sample (its first one above the
+    // surface) yet.
     var spec_seed = vec4<f32>(0.0);
     var diff_seed = vec4<f32>(0.0);
-    var spec_fresh = true;
-    var diff_fresh = true;
+    var spec_fresh = vec4<bool>(true);
+    var diff_fresh = vec4<bool>(true);
     let rows = filter_rows();
+    // Random samples differ per candidate, and so do the pbr mode's filtered GGX spirals
+    // (`filter_xi`); the other filtered samples are drawn once, for the first candidate.
+    let spec_shared = FILTER && (TERMS & 16u) == 0u;
     for (var i = 0u; i < P.m; i++) {
         if (i % rows == 0u) {
-            spec_fresh = true;
-            diff_fresh = true;
+            spec_fresh = vec4<bool>(true);
+            diff_fresh = vec4<bool>(true);
         }
         var spec: AsSample;
         var diff: AsSample;
         var spec_lod = 0.0;
         var diff_lod = 0.0;
-        if (FILTER) {
-            let xi = filter_xi(i, (TERMS & 16u) != 0u);
-            spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
-            spec_lod = sample_lod(spec.l, spec.lpdf);
-            if (DIFFUSE) {
-                let xd = filter_xi(i, false);
+        var drawn = false;
+        for (var k = 0u; k < 4u; k++) {
+            if (!used[k]) { continue; }
+            if (!(spec_shared && drawn)) {
+                let xi = sample_xi(pixel, i, j0 + k, 0u);
+                spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
+                spec_lod = sample_lod(spec.l, spec.lpdf);
+            }
+            if (DIFFUSE && !(FILTER && drawn)) {
+                let xd = sample_xi(pixel, i, j0 + k, 2u);
                 diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base, pbr);
                 diff_lod = sample_lod(diff.l, diff.lpdf);
             }
-        }
-        for (var k = 0u; k < 4u; k++) {
-            if (!used[k]) { continue; }
-            if (!FILTER) {
-                let xi = sample_xi(pixel, i, j0 + k, 0u);
-                spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
-                if (DIFFUSE) {
-                    let xd = sample_xi(pixel, i, j0 + k, 2u);
-                    diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base, pbr);
-                }
-            }
+            drawn = true;
             if (max3(spec.weight) > 0.0) {
                 var seed = spec_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh, &seed);
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed);
                 spec_seed[k] = seed;
+                spec_fresh[k] = false;
             }
             if (DIFFUSE && max3(diff.weight) > 0.0) {
                 var seed = diff_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh, &seed);
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed);
                 diff_seed[k] = seed;
+                diff_fresh[k] = false;
             }
         }
-        // The weights do not depend on the candidate: a row's fresh sample is its first one
-        // above the surface.
-        spec_fresh = spec_fresh && !(max3(spec.weight) > 0.0);
-        diff_fresh = diff_fresh && !(DIFFUSE && max3(diff.weight) > 0.0);
     }
     return out;
 }

@@ -20,7 +20,7 @@ fn rand(pixel: u32, i: u32, j: u32, k: u32) -> f32 {
 // smooth instead of noisy (`filter_xi`).
 fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
     if (FILTER) {
-        return filter_xi(i, (TERMS & 16u) != 0u && k == 0u);
+        return filter_xi(i, (TERMS & 16u) != 0u && k == 0u, j);
     }
     return vec2<f32>((f32(i) + rand(pixel, i, j, k)) / f32(P.m), rand(pixel, i, j, k + 1u));
 }
@@ -31,14 +31,24 @@ fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
 // the isotropic filtered lookup of its area covers it (Hammersley's cells near the lobe's
 // peak are thin wedges, and a wide lobe's peak is then read too often). Other M: the
 // Hammersley set ((i + ½)/M, radical inverse of i). With `spiral` (the pbr mode's GGX
-// samples) the golden-angle spiral instead, ξ1 = frac(i (2 − φ)), ξ2 = (i + ½)/M: M distinct
-// radii on the disc of visible normals, where the grid has n/2 rings (two at M = 16, the
-// outer one standing for the GGX lobe's whole tail), with cells as compact (measurements.md,
-// "The filtered set of the pbr mode"). reference/random.rs `filter_xi` computes the same.
-fn filter_xi(i: u32, spiral: bool) -> vec2<f32> {
+// samples) the golden-angle spiral of integration j instead, ξ1 = frac(i (2 − φ) + t),
+// ξ2 = (i + ½ + s)/M: M distinct radii on the disc of visible normals, where the grid has n/2
+// rings (two at M = 16, the outer one standing for the GGX lobe's whole tail), with cells as
+// compact. Candidate j < 4 of a per-point integration turns it by t = j/4 and moves its radii
+// by s = j/4 − 3/8 of a stratum: the four candidates' sets interleave into one of 4M
+// directions, which their blend integrates for the lookups of M; integration 4 (per
+// direction, the environment) t = s = 0 (measurements.md, "The filtered set of the pbr
+// mode"). reference/random.rs `filter_xi` computes the same.
+fn filter_xi(i: u32, spiral: bool, j: u32) -> vec2<f32> {
     if (spiral) {
-        let g = f32(i) * 0.3819660112501051;
-        return vec2<f32>(g - floor(g), (f32(i) + 0.5) / f32(P.m));
+        var t = 0.0;
+        var s = 0.0;
+        if (j < 4u) {
+            t = 0.25 * f32(j);
+            s = 0.25 * f32(j) - 0.375;
+        }
+        let g = f32(i) * 0.3819660112501051 + t;
+        return vec2<f32>(g - floor(g), (f32(i) + 0.5 + s) / f32(P.m));
     }
     let n = u32(round(sqrt(f32(P.m))));
     if (n * n != P.m) {
