@@ -132,7 +132,7 @@ mod tests {
                     let turn = (x1 - y1).rem_euclid(1.0);
                     let off = (turn - 0.25 * j as f32).abs();
                     assert!(
-                        off < 1e-5 || off > 1.0 - 1e-5,
+                        !(1e-5..=1.0 - 1e-5).contains(&off),
                         "M {m} candidate {j}: turned {turn}"
                     );
                 }
