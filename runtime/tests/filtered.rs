@@ -11,7 +11,8 @@ use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParam
 /// which hold the mean radiance over the directions they cover (`face::downsample` weighs
 /// texels by their solid angle), and the four candidates' spirals interleave. With texel-space
 /// mips and one spiral for all candidates M = 16 sent 1.1 % less light here (5.7 % less on the
-/// room's `gpu-dense` bake, measurements.md "The filtered set of the pbr mode").
+/// room's `gpu-dense` bake, measurements.md "Mips weighted by solid angle, a spiral per
+/// candidate").
 #[test]
 fn a_wide_lobe_at_16_samples_sends_the_light_of_256() {
     let store = open_store();

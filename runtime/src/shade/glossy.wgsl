@@ -204,8 +204,9 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<
 // once: entry k integrates over `cubes[k]` where `used[k]`, with the random numbers of
 // integration j0 + k; cube INVALID is the blend of the candidates per direction. With FILTER
 // the diffuse and Ashikhmin–Shirley samples are one fixed set for every source, drawn once for
-// all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one
-// call site: lavapipe pays for every inlined copy whether it runs or not.
+// all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term
+// 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one call site:
+// lavapipe pays for every inlined copy whether it runs or not.
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);

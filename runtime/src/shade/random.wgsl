@@ -37,8 +37,8 @@ fn sample_xi(pixel: u32, i: u32, j: u32, k: u32) -> vec2<f32> {
 // compact. Candidate j < 4 of a per-point integration turns it by t = j/4 and moves its radii
 // by s = j/4 − 3/8 of a stratum: the four candidates' sets interleave into one of 4M
 // directions, which their blend integrates for the lookups of M; integration 4 (per
-// direction, the environment) t = s = 0 (measurements.md, "The filtered set of the pbr
-// mode"). reference/random.rs `filter_xi` computes the same.
+// direction, the environment) t = s = 0 (measurements.md, "Mips weighted by solid angle, a
+// spiral per candidate"). reference/random.rs `filter_xi` computes the same.
 fn filter_xi(i: u32, spiral: bool, j: u32) -> vec2<f32> {
     if (spiral) {
         var t = 0.0;
