@@ -279,3 +279,19 @@ fn merge_names_missing_repeated_and_mismatched_shards() {
     );
     check(&[], &["required"]);
 }
+
+/// A shard given where a store is read is named as a shard, with the command that joins it.
+#[test]
+fn a_shard_read_as_a_store_says_what_it_is() {
+    let (dir, scene, _) = setup();
+    let s = shard(&scene, dir.path(), 0, 2, &[]);
+    for sub in ["store verify", "store info", "render"] {
+        let e = run_err(oslf(sub).arg(&s));
+        assert!(
+            e.contains(&s.display().to_string())
+                && e.contains("this is a shard of a sharded bake")
+                && e.contains("oslf store merge"),
+            "{sub}: {e}"
+        );
+    }
+}

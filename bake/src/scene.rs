@@ -170,6 +170,9 @@ pub struct Scene {
     /// images), in reading order: a store records it, and `oslf truth --store` and `oslf
     /// tables` check it, so an edited include is a different scene.
     pub hash: [u8; 32],
+    /// Every file the scene was read from: the scene file, then each file it includes, in
+    /// reading order (what a command that reads the scene declares as its inputs).
+    pub files: Vec<PathBuf>,
     pub camera: Option<Camera>,
     pub environment: Environment,
     pub lights: Vec<Light>,

@@ -32,6 +32,13 @@ pub enum Error {
     /// The first 8 bytes are not [`crate::MAGIC`].
     #[error("not an OSLF store: magic is {found:02x?} (expected {expected:02x?})")]
     BadMagic { found: [u8; 8], expected: [u8; 8] },
+    /// The file is a shard of `oslf bake --shard I/N` (its magic is `OSLFSHRD`), not a store.
+    #[error("this is a shard of a sharded bake (magic \"OSLFSHRD\"), not a store: join all the shards into one store with `oslf store merge`")]
+    IsShard,
+    /// An input that is not a regular file (a FIFO, device, directory), refused before it is
+    /// opened for reading, or that cannot be opened.
+    #[error(transparent)]
+    Input(#[from] oslf_util::UtilError),
     /// A format version this reader does not understand.
     #[error(
         "unsupported OSLF store version {found} (this reader understands versions {oldest} to {newest})"

@@ -150,6 +150,9 @@ impl Header {
         };
         let mut magic = [0u8; 8];
         magic.copy_from_slice(&b[..8]);
+        if magic == crate::shard::SHARD_MAGIC {
+            return Err(Error::IsShard);
+        }
         if magic != MAGIC {
             return Err(Error::BadMagic {
                 found: magic,

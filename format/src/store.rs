@@ -65,7 +65,11 @@ enum Backing {
     /// refuse to write it in place while it is mapped.
     Mapped {
         map: memmap2::Mmap,
-        _file: std::fs::File,
+        file: std::fs::File,
+        path: std::path::PathBuf,
+        /// The file's size and modification time when it was mapped
+        /// ([`Store::changed_since_open`]).
+        opened: (u64, Option<std::time::SystemTime>),
     },
 }
 
@@ -256,8 +260,8 @@ impl Store {
     /// changes while open"). Little-endian hosts only ([`Error::BigEndianHost`] otherwise).
     pub fn open(path: &Path) -> Result<Self, Error> {
         check_little_endian()?;
-        let file = std::fs::File::open(path).map_err(io_at(path, "open"))?;
-        let len = file.metadata().map_err(io_at(path, "stat"))?.len();
+        // Refuses a FIFO, device or directory before opening it (nothing can block).
+        let (file, len) = oslf_util::input_file::open(path)?;
         if len < HEADER_BYTES as u64 {
             return Err(Error::Truncated {
                 section: "header",
@@ -306,17 +310,15 @@ impl Store {
     /// store holds a shared advisory lock (`flock`), so this project's writers, which lock the
     /// file they write exclusively, refuse to write it in place ([`Error::Busy`]); other
     /// programs are not bound by the lock. Where the file system has no such locks the store is
-    /// mapped without one. Choose it for stores that only this project's tools replace.
+    /// mapped without one. A file written in place without a truncation can serve pages of
+    /// both versions, each valid by its checksums: [`Store::changed_since_open`] tells, after
+    /// the reads, whether its size or modification time changed. Choose it for stores that only
+    /// this project's tools replace.
     pub fn open_mapped(path: &Path) -> Result<Self, Error> {
         check_little_endian()?;
-        let file = std::fs::File::open(path).map_err(io_at(path, "open"))?;
+        // Only a regular file is opened, and never blocking (a FIFO is refused at once).
+        let (file, _) = oslf_util::input_file::open(path)?;
         let meta = file.metadata().map_err(io_at(path, "stat"))?;
-        if !meta.is_file() {
-            return Err(Error::NotRegularFile {
-                path: path.to_path_buf(),
-                kind: "not a regular file (only regular files are mapped)",
-            });
-        }
         match file.try_lock_shared() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
@@ -343,7 +345,13 @@ impl Store {
         // documented risk of this function (a truncation raises SIGBUS), which the shared lock
         // keeps this project's own writers from causing.
         let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io_at(path, "map"))?;
-        Self::parse(Backing::Mapped { map, _file: file })
+        let opened = (meta.len(), meta.modified().ok());
+        Self::parse(Backing::Mapped {
+            map,
+            file,
+            path: path.to_path_buf(),
+            opened,
+        })
     }
 
     /// [`Store::open`] or [`Store::open_mapped`], as `access` says.
@@ -352,6 +360,35 @@ impl Store {
             StoreAccess::Positioned => Self::open(path),
             StoreAccess::Mapped => Self::open_mapped(path),
         }
+    }
+
+    /// For a memory-mapped store ([`Store::open_mapped`]): a description of the change if its
+    /// file was written in place since it was mapped (its size or modification time is not
+    /// what it was), in which case what was read from the mapping may be of neither version.
+    /// `None` when nothing is seen to have changed, and always for the other backings, which
+    /// read into memory or fail on a short read. What this cannot see: a writer that keeps the
+    /// size and sets the modification time back; a truncation raises SIGBUS before it can be
+    /// checked. A store replaced by rename is not a change: the mapping keeps the old file.
+    pub fn changed_since_open(&self) -> Option<String> {
+        let Backing::Mapped {
+            file, path, opened, ..
+        } = &self.backing
+        else {
+            return None;
+        };
+        let now = match file.metadata() {
+            Ok(m) => (m.len(), m.modified().ok()),
+            Err(e) => return Some(format!("{}: cannot stat the mapped file: {e}", path.display())),
+        };
+        (now != *opened).then(|| {
+            format!(
+                "{} was written in place while it was memory-mapped ({} bytes when opened, {} now{}): what was read may be of neither version",
+                path.display(),
+                opened.0,
+                now.0,
+                if now.0 == opened.0 { ", modification time changed" } else { "" }
+            )
+        })
     }
 
     /// How this store reads its file.

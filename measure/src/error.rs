@@ -14,6 +14,9 @@ pub enum MeasureError {
     /// The GPU capture a bake asked for cannot be had.
     #[error(transparent)]
     Gpu(#[from] oslf_bake_gpu::GpuBakeError),
+    /// An input or output refused or failed at the door ([`oslf_util::door`]).
+    #[error(transparent)]
+    File(#[from] oslf_util::UtilError),
     /// Writing an output file failed.
     #[error("{path}: {message}")]
     Output { path: PathBuf, message: String },

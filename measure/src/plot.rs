@@ -93,19 +93,28 @@ pub(crate) fn write_png_and_svg(
     size: (u32, u32),
 ) -> Result<()> {
     register_font()?;
+    let mut text = String::new();
     figure
-        .draw(SVGBackend::new(svg, size).into_drawing_area())
+        .draw(SVGBackend::with_string(&mut text, size).into_drawing_area())
         .map_err(draw_err(svg))?;
     let mut buffer = vec![0u8; size.0 as usize * size.1 as usize * 3];
     figure
         .draw(BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area())
         .map_err(draw_err(png))?;
-    image::save_buffer(png, &buffer, size.0, size.1, image::ColorType::Rgb8).map_err(|e| {
-        MeasureError::Output {
-            path: png.to_path_buf(),
-            message: format!("cannot write PNG: {e}"),
-        }
-    })
+    // Both through the one way out (oslf_util::output_file): checked, synced, renamed.
+    oslf_util::output_file::write_bytes(svg, text.as_bytes())?;
+    oslf_util::output_file::write_with(png, |w| {
+        image::write_buffer_with_format(
+            w,
+            &buffer,
+            size.0,
+            size.1,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(std::io::Error::other)
+    })?;
+    Ok(())
 }
 
 /// The trade-off's panels side by side.

@@ -245,6 +245,9 @@ pub struct SweepConfig<'a> {
     pub warm_frames: u32,
     /// Where the bakes report their progress; `Some` also prints a line per store.
     pub progress: Option<Arc<dyn Progress>>,
+    /// The command's inputs and outputs: each variant store and its record is checked against
+    /// them before it is baked or reused.
+    pub door: &'a oslf_util::door::Door,
 }
 
 /// One judged configuration.
@@ -321,7 +324,8 @@ fn bake_or_reuse(
     let hash = hex(&scene.hash);
     let record = record_path(path);
     if path.exists() {
-        if let Ok(text) = std::fs::read_to_string(&record) {
+        let limit = oslf_util::input_file::Limit::new(1 << 20, "the 1 MiB allowed for a record");
+        if let Ok(Ok(text)) = oslf_util::input_file::read(&record, &limit).map(String::from_utf8) {
             if let Ok(r) = serde_json::from_str::<StoreRecord>(&text) {
                 if r.settings == settings && r.scene_hash == hash {
                     return Ok(r);
@@ -352,10 +356,7 @@ fn bake_or_reuse(
     };
     let json =
         serde_json::to_string_pretty(&r).map_err(|e| MeasureError::Invalid(e.to_string()))?;
-    std::fs::write(&record, json).map_err(|e| MeasureError::Output {
-        path: record.clone(),
-        message: e.to_string(),
-    })?;
+    oslf_util::output_file::write_bytes(&record, json.as_bytes())?;
     Ok(r)
 }
 
@@ -428,6 +429,12 @@ pub fn run_sweep(
     let mut jobs = Vec::new();
     for (bc, scene, name) in variants {
         let path = config.store_dir.join(format!("{name}.oslf"));
+        config
+            .door
+            .check_output_in_dir("a variant store", &path)?;
+        config
+            .door
+            .check_output_in_dir("a variant store's record", &record_path(&path))?;
         let t = Instant::now();
         let record = bake_or_reuse(&scene, &path, config.progress.clone())?;
         if config.progress.is_some() {

@@ -141,9 +141,11 @@ impl ShadingArgs {
 pub struct StoreAccessArgs {
     /// Read the store through a memory map (sections and frames from the page cache, sample
     /// maps uploaded from the mapping) instead of positioned reads. Only for stores nothing
-    /// overwrites in place while they are open: a store truncated or overwritten in place
-    /// under the mapping ends the process with SIGBUS; one replaced by rename (as oslf's
-    /// writers do) is safe. See docs/store.md.
+    /// overwrites in place while they are open: a store truncated under the mapping ends the
+    /// process with SIGBUS, and one overwritten in place can give an image of neither
+    /// version (`render` checks the file's size and modification time after the frame: a
+    /// warning, an error under --strict); one replaced by rename (as oslf's writers do) is
+    /// safe. See docs/store.md.
     #[arg(long, global = true)]
     pub mmap: bool,
 }
@@ -289,13 +291,18 @@ pub fn parse_box(s: &str) -> std::result::Result<[[f32; 3]; 2], String> {
     }
 }
 
-/// An exposure multiplier: finite and positive (zero, negative or NaN would make every pixel
-/// black).
+/// The range of an exposure multiplier: beyond it every pixel of a PNG is black or white.
+pub const EXPOSURE_RANGE: std::ops::RangeInclusive<f32> = 1e-6..=1e6;
+
+/// An exposure multiplier: finite, positive and within [`EXPOSURE_RANGE`] (outside it, any
+/// radiance a scene holds maps to an all-black or all-white image).
 pub fn parse_exposure(s: &str) -> std::result::Result<f32, String> {
     match s.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) if EXPOSURE_RANGE.contains(&v) => Ok(v),
         _ => Err(format!(
-            "{s:?} is not a positive finite number (an exposure multiplies every pixel; 1 leaves them as they are)"
+            "{s:?} is not an exposure between {:e} and {:e} (it multiplies every pixel; 1 leaves them as they are; beyond that range every pixel is black or white)",
+            EXPOSURE_RANGE.start(),
+            EXPOSURE_RANGE.end()
         )),
     }
 }

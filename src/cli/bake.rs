@@ -4,25 +4,28 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use oslf_bake::bake::{bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport};
 use oslf_bake::bvh::TriangleScene;
 use oslf_bake::integrator::Integrator;
 use oslf_bake::scene::{Scene, GPU_PRESET};
 use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_format::ShardSpec;
+use oslf_util::door::Door;
 use oslf_util::image_file;
+
+use super::paths::{declare_scene, InputPath, OutputPath};
 
 /// Bake an offset surface light field: sample points ε above the object's Bézier patches, a
 /// ray-traced HDR cube map at each, and per-patch sample maps, all written to one store.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
-    scene: PathBuf,
+    scene: InputPath,
     /// The store to write [default: the scene's name with .oslf, in the current directory;
     /// with --shard I/N, the scene's name with .oslf.shard-I-of-N].
     #[arg(short, long)]
-    output: Option<PathBuf>,
+    output: Option<OutputPath>,
     /// Bake only shard I of N (0 ≤ I < N): the cube maps i with i % N == I, plus the sample
     /// points and maps, into a shard file; `oslf store merge` joins all N shards into the
     /// store a single bake writes, byte for byte. --resume and --max-cubes work per shard.
@@ -48,13 +51,13 @@ pub struct Args {
     /// Also render the scene camera with the bake's path tracer to this PNG (and an EXR beside
     /// it) (default: `<output>.preview.png`, none with --shard; "none" to skip).
     #[arg(long)]
-    preview: Option<PathBuf>,
+    preview: Option<OutputPath>,
     /// Samples per pixel of the preview.
     #[arg(long, default_value_t = 16)]
     preview_spp: u32,
     /// Write the bake summary as JSON to this file.
     #[arg(long)]
-    report_json: Option<PathBuf>,
+    report_json: Option<OutputPath>,
     /// Refuse a bake whose optimistic time estimate is longer than this many hours on this
     /// machine's threads (0: no limit). Memory and disk are always checked.
     #[arg(long, default_value_t = 12.0, value_name = "HOURS")]
@@ -107,14 +110,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn run_in_pool(args: Args) -> anyhow::Result<()> {
     let mut scene = load_scene(&args, args.preset.as_deref())?;
-    let output = args.output.clone().unwrap_or_else(|| default_output(&args));
+    let output = args
+        .output
+        .as_ref()
+        .map_or_else(|| default_output(&args), |o| o.0.clone());
     let preview = match &args.preview {
         Some(p) if p.as_os_str() == "none" => None,
-        Some(p) => Some(p.clone()),
+        Some(p) => Some(p.0.clone()),
         // Every shard would render the same preview.
         None if args.shard.is_some() => None,
         None => Some(PathBuf::from(format!("{}.preview.png", output.display()))),
     };
+    // Every input and output, declared and checked before any work.
+    let mut door = Door::new();
+    declare_scene(&mut door, "SCENE", &scene);
+    door.output("--output", &output).output(
+        "the partial store of --output",
+        &oslf_format::writer::partial_path(&output),
+    );
+    if let (Some(png), Some(_)) = (&preview, &scene.camera) {
+        door.output("--preview", png)
+            .output("the EXR beside --preview", &png.with_extension("exr"));
+    }
+    if let Some(path) = &args.report_json {
+        door.output("--report-json", path);
+    }
+    door.check()?;
     // Every output must be writable before the slow work starts.
     check_store_writable(&output)?;
     if let Some(path) = &args.report_json {
@@ -193,7 +214,7 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
     }
     if let Some(path) = &args.report_json {
         let json = serde_json::to_string_pretty(&report)?;
-        std::fs::write(path, json).with_context(|| format!("cannot write {}", path.display()))?;
+        oslf_util::output_file::write_bytes(path, json.as_bytes())?;
     }
 
     if let Some(png) = preview {

@@ -3,7 +3,7 @@
 //! hits, misses, miss rate, loads, evictions, bytes decoded and times per phase, as an aligned
 //! table (thesis Tables 6.3–6.7) and as CSV and JSON. See `oslf_runtime::replay`.
 
-use std::path::PathBuf;
+use super::paths::{InputPath, OutputPath};
 use std::time::Instant;
 
 use super::args::{CameraArgs, ShadingArgs};
@@ -54,7 +54,7 @@ use oslf_runtime::{
 #[command(allow_negative_numbers = true)]
 pub struct Args {
     /// The store (written by `oslf bake`).
-    store: PathBuf,
+    store: InputPath,
     #[command(flatten)]
     access: super::args::StoreAccessArgs,
     /// Modes, comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy.
@@ -104,10 +104,10 @@ pub struct Args {
     streaming: bool,
     /// Also write the rows as CSV to this file.
     #[arg(long)]
-    csv: Option<PathBuf>,
+    csv: Option<OutputPath>,
     /// Also write the rows and the settings as JSON to this file.
     #[arg(long)]
-    json: Option<PathBuf>,
+    json: Option<OutputPath>,
     /// No progress lines on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -144,6 +144,15 @@ struct StoreInfo {
 type Shading = (Mode, Option<Blend>, ShadingParams);
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut door = oslf_util::door::Door::new();
+    door.input("STORE", &args.store);
+    if let Some(path) = &args.csv {
+        door.output("--csv", path);
+    }
+    if let Some(path) = &args.json {
+        door.output("--json", path);
+    }
+    door.check()?;
     check_args(&args)?;
     let ram_bytes = cache::ram_bytes(args.ram_mb)?;
     let store = args.access.open(&args.store)?;
@@ -396,12 +405,12 @@ impl Report<'_> {
     /// `--csv FILE` (the rows) and `--json FILE` (rows and settings), where asked for.
     fn write_files(&self) -> anyhow::Result<()> {
         if let Some(path) = &self.args.csv {
-            std::fs::write(path, oslf_measure::cache_stats::to_csv(self.rows))
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            let csv = oslf_measure::cache_stats::to_csv(self.rows);
+            oslf_util::output_file::write_bytes(path, csv.as_bytes())?;
         }
         if let Some(path) = &self.args.json {
-            std::fs::write(path, serde_json::to_string_pretty(&self.json())?)
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            let json = serde_json::to_string_pretty(&self.json())?;
+            oslf_util::output_file::write_bytes(path, json.as_bytes())?;
         }
         Ok(())
     }
@@ -410,7 +419,7 @@ impl Report<'_> {
     fn json(&self) -> serde_json::Value {
         let (args, info) = (self.args, self.info);
         serde_json::json!({
-            "store": args.store,
+            "store": args.store.0,
             "adapter": self.adapter,
             "sample_points": info.points,
             "cube_maps": info.cubes,

@@ -1,21 +1,27 @@
 //! `oslf compare`: RMSE in CIELAB and linear RGB, and PSNR, between two OpenEXR images over a
 //! mask (thesis §6.1). See `oslf_measure::metrics` for the exact conversion.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{bail, Context};
 use glam::Vec3;
 use oslf_measure::metrics::{compare, Metrics};
 use oslf_util::image_file;
+use oslf_util::input_file::{byte_size, Limit};
+
+use super::paths::{InputPath, OutputPath};
+
+/// The most bytes of an OpenEXR image `oslf compare` reads: 4 GiB.
+const MAX_EXR_BYTES: u64 = 4 << 30;
 
 /// Compare a rendered image against a reference: RMSE of L*, a*, b* (raw and divided by 100,
 /// the thesis's scale), RMSE of linear R, G, B, and PSNR, over the reference's object mask.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The reference image (OpenEXR; linear RGB, alpha = object mask).
-    reference: PathBuf,
+    reference: InputPath,
     /// The image to judge (OpenEXR, same size).
-    test: PathBuf,
+    test: InputPath,
     /// Which pixels count: `reference` (its alpha > 0.5), `both` (both alphas), `all`.
     #[arg(long, default_value = "reference")]
     mask: String,
@@ -24,14 +30,14 @@ pub struct Args {
     white: f64,
     /// Also write the result as JSON to this file.
     #[arg(long)]
-    json: Option<PathBuf>,
+    json: Option<OutputPath>,
     /// Also append the result as one CSV row (header written when the file is new).
     #[arg(long)]
-    csv: Option<PathBuf>,
+    csv: Option<OutputPath>,
     /// Also write a PNG with the test image on the left and the reference on the right,
     /// tone mapped alike (whole images: background pixels too).
     #[arg(long, value_name = "PNG")]
-    side_by_side: Option<PathBuf>,
+    side_by_side: Option<OutputPath>,
     /// Exposure of --side-by-side.
     #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
@@ -58,13 +64,28 @@ fn side_by_side(test: &[[f32; 4]], reference: &[[f32; 4]], w: usize, h: usize) -
 }
 
 fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a]
-        },
-    )
+    use exr::prelude::traits::{ReadChannels as _, ReadLayers as _};
+    use exr::prelude::{RgbaChannels, Vec2};
+    type Pixels = (usize, Vec<[f32; 4]>);
+    fn create(res: Vec2<usize>, _: &RgbaChannels) -> Pixels {
+        (res.width(), vec![[0f32; 4]; res.width() * res.height()])
+    }
+    fn set((w, px): &mut Pixels, pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)) {
+        px[pos.y() * *w + pos.x()] = [r, g, b, a]
+    }
+    let limit = Limit::new(
+        MAX_EXR_BYTES,
+        format!("the {} allowed for an image", byte_size(MAX_EXR_BYTES)),
+    );
+    // Through the one door in: a regular file, never blocking, within the limit.
+    let file = oslf_util::input_file::open_within(path, &limit)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(create, set)
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::BufReader::new(file))
     // The exr crate's I/O error prints its cause and also gives it as its source: flattened to
     // its message, so the cause prints once.
     .map_err(|e| anyhow::anyhow!("cannot read OpenEXR {}: {e}", path.display()))?;
@@ -74,6 +95,19 @@ fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut door = oslf_util::door::Door::new();
+    door.input("REFERENCE", &args.reference)
+        .input("TEST", &args.test);
+    for (role, path) in [
+        ("--json", &args.json),
+        ("--csv", &args.csv),
+        ("--side-by-side", &args.side_by_side),
+    ] {
+        if let Some(path) = path {
+            door.output(role, path);
+        }
+    }
+    door.check()?;
     let (w, h, a) = read_exr(&args.reference)?;
     let (w2, h2, b) = read_exr(&args.test)?;
     if (w, h) != (w2, h2) {
@@ -128,38 +162,53 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&m)?)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        oslf_util::output_file::write_bytes(path, serde_json::to_string_pretty(&m)?.as_bytes())?;
     }
     if let Some(path) = &args.csv {
-        use std::io::Write;
-        let new = !path.exists();
-        let mut f = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        if new {
-            writeln!(f, "reference,test,pixels,rmse_l,rmse_a,rmse_b,rmse_l_norm,rmse_a_norm,rmse_b_norm,rmse_r,rmse_g,rmse_b_rgb,psnr_db,white")?;
-        }
-        writeln!(
-            f,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            args.reference.display(),
-            args.test.display(),
-            m.pixels,
-            m.rmse_lab[0],
-            m.rmse_lab[1],
-            m.rmse_lab[2],
-            m.rmse_lab_normalized[0],
-            m.rmse_lab_normalized[1],
-            m.rmse_lab_normalized[2],
-            m.rmse_rgb[0],
-            m.rmse_rgb[1],
-            m.rmse_rgb[2],
-            m.psnr_db.map_or("inf".to_string(), |p| p.to_string()),
-            m.white
-        )?;
+        append_csv_row(path, &args, &m)?;
     }
     Ok(())
+}
+
+/// The header of `--csv`, written when the file is new.
+const CSV_HEADER: &str = "reference,test,pixels,rmse_l,rmse_a,rmse_b,rmse_l_norm,rmse_a_norm,rmse_b_norm,rmse_r,rmse_g,rmse_b_rgb,psnr_db,white";
+
+/// The most bytes of a `--csv` file that a row is appended to: 256 MiB.
+const MAX_CSV_BYTES: u64 = 256 << 20;
+
+/// Appends one row for `m` to the CSV file at `path` (with the header if the file is new):
+/// the whole file is written anew through a temporary file and renamed into place, so an
+/// interrupted append leaves the old rows as they were.
+fn append_csv_row(path: &Path, args: &Args, m: &Metrics) -> anyhow::Result<()> {
+    let mut text = if path.exists() {
+        let limit = Limit::new(
+            MAX_CSV_BYTES,
+            format!("the {} allowed for a --csv file", byte_size(MAX_CSV_BYTES)),
+        );
+        oslf_util::input_file::read(path, &limit)?
+    } else {
+        format!("{CSV_HEADER}\n").into_bytes()
+    };
+    if text.last().is_some_and(|&b| b != b'\n') {
+        text.push(b'\n');
+    }
+    let row = format!(
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+        args.reference.display(),
+        args.test.display(),
+        m.pixels,
+        m.rmse_lab[0],
+        m.rmse_lab[1],
+        m.rmse_lab[2],
+        m.rmse_lab_normalized[0],
+        m.rmse_lab_normalized[1],
+        m.rmse_lab_normalized[2],
+        m.rmse_rgb[0],
+        m.rmse_rgb[1],
+        m.rmse_rgb[2],
+        m.psnr_db.map_or("inf".to_string(), |p| p.to_string()),
+        m.white
+    );
+    text.extend_from_slice(row.as_bytes());
+    Ok(oslf_util::output_file::write_bytes(path, &text)?)
 }

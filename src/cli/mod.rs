@@ -7,6 +7,7 @@ mod compare;
 mod completions;
 mod device;
 mod flags;
+mod paths;
 mod progress;
 mod render;
 mod store;
@@ -67,6 +68,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     };
     result.map_err(flags::name_flags)
 }
+
+#[cfg(all(test, unix))]
+mod door_tests;
 
 #[cfg(test)]
 mod tests {

@@ -3,10 +3,9 @@
 //! `--background` (the store's environment cube by default) in both images; in the EXR their
 //! alpha stays 0.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use glam::Vec3;
 use oslf_bake::bake::check_writable;
 use oslf_format::Store;
@@ -19,6 +18,7 @@ use oslf_runtime::{
 use oslf_util::image_file;
 
 use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
+use super::paths::{InputPath, OutputPath};
 
 /// Render an offset surface light field with wgpu: surface reconstruction, mirror reflections
 /// with every blend of thesis chapter 4, Monte Carlo Ashikhmin–Shirley (chapter 5), or the
@@ -27,13 +27,13 @@ use super::args::{BackgroundArgs, CameraArgs, ShadingArgs};
 #[command(allow_negative_numbers = true)]
 pub struct Args {
     /// The store (written by `oslf bake`).
-    store: PathBuf,
+    store: InputPath,
     #[command(flatten)]
     access: super::args::StoreAccessArgs,
     /// Output OpenEXR (linear f32 RGBA, alpha = object mask); a PNG of the RGB, background
     /// included, is written beside it.
     #[arg(short, long, default_value = "render.exr")]
-    output: PathBuf,
+    output: OutputPath,
     /// recon | mirror | recon-mirror | glossy | recon-glossy | pbr [default: pbr for a store
     /// whose objects carry a metallic-roughness material (format version 7), else
     /// recon-mirror].
@@ -86,7 +86,7 @@ pub struct Args {
     verify: bool,
     /// Write the frame's and the cumulative cache statistics as JSON to this file.
     #[arg(long)]
-    stats_json: Option<PathBuf>,
+    stats_json: Option<OutputPath>,
     /// Do not upload BC6H stores as BC6H blocks even where the GPU has BC texture
     /// compression: decode them on the CPU and upload RGB9E5.
     #[arg(long)]
@@ -139,10 +139,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let frame = renderer.render(&camera, &params, &options)?;
     let render_seconds = t.elapsed().as_secs_f64();
-    let degraded = fallback_report(&renderer, &frame, &params);
+    let mut degraded = fallback_report(&renderer, &frame, &params);
+    // A memory-mapped store written in place during the frame: what was read may be of
+    // neither version (docs/store.md, "Memory-mapped reads").
+    degraded.extend(renderer.store().changed_since_open());
     if args.strict && !degraded.is_empty() {
         bail!(
-            "the image would be degraded (--strict; nothing written):\n  {}",
+            "{}: the image would be degraded (--strict; nothing written):\n  {}",
+            args.store.display(),
             degraded.join("\n  ")
         );
     }
@@ -192,7 +196,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     print_stats("frame", &frame.stats);
     for line in &degraded {
-        eprintln!("warning: {line}");
+        eprintln!("warning: {}: {line}", args.store.display());
     }
     if let Some(path) = &args.stats_json {
         let json = serde_json::json!({
@@ -207,8 +211,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "gbuffer_gpu_seconds": frame.gbuffer_gpu_seconds,
             "adapter": adapter,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        oslf_util::output_file::write_bytes(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     Ok(())
 }
@@ -361,7 +364,7 @@ fn print_stats(label: &str, s: &CacheStats) {
 /// it, so `-o` cannot end in `.png`), and each file can be written.
 fn check_outputs(args: &Args) -> anyhow::Result<()> {
     let png = args.output.with_extension("png");
-    if png == args.output {
+    if png == args.output.0 {
         bail!(
             "-o {}: the render is written as OpenEXR to -o and as a tone-mapped PNG beside it, \
              which would be the same file; give an .exr path such as {}",
@@ -369,6 +372,14 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
             args.output.with_extension("exr").display()
         );
     }
+    let mut door = oslf_util::door::Door::new();
+    door.input("STORE", &args.store)
+        .output("--output", &args.output)
+        .output("the PNG beside --output", &png);
+    if let Some(path) = &args.stats_json {
+        door.output("--stats-json", path);
+    }
+    door.check()?;
     check_writable(&args.output, "the image")?;
     check_writable(&png, "the PNG")?;
     if let Some(path) = &args.stats_json {

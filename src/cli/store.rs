@@ -8,6 +8,8 @@ use oslf_format::cube::{FACES, FACE_NAMES};
 use oslf_format::{Encoding, SampleMaps, Store, StoreWriter, INVALID_INDEX};
 
 use super::args::StoreAccessArgs;
+use super::paths::{InputPath, OutputPath};
+use oslf_util::door::Door;
 
 /// Inspect, verify, convert and export OSLF stores.
 #[derive(clap::Args, Debug)]
@@ -22,23 +24,23 @@ pub struct Args {
 enum Command {
     /// Print a summary: header, counts, resolutions, bake parameters, sizes.
     Info {
-        store: PathBuf,
+        store: InputPath,
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
     },
     /// Check every checksum, that every padding byte is zero, and decode every face, checking
     /// the decoded texels against the store's checksum of them (non-zero exit on failure).
-    Verify { store: PathBuf },
+    Verify { store: InputPath },
     /// Join the shard files of `oslf bake --shard I/N` (all N of them, any order) into the
     /// store a single bake writes, byte for byte. Checks that they come from the same scene,
     /// settings and seed and that every shard index is there exactly once; writes
     /// OUTPUT.partial, syncs it and renames it to OUTPUT.
     Merge {
         #[arg(required = true)]
-        shards: Vec<PathBuf>,
+        shards: Vec<InputPath>,
         #[arg(short, long)]
-        output: PathBuf,
+        output: OutputPath,
     },
     /// Re-encode a store's cube maps in another encoding (e.g. bc6h), keeping everything else:
     /// metadata, bake parameters (but the encoding; mantissa_bits becomes 9 unless both
@@ -46,8 +48,8 @@ enum Command {
     /// planes. Writes OUT.partial and renames it to OUT. Prints the encode time and the
     /// converted texels' error against IN's (RMSLE, relative error per texel).
     Convert {
-        input: PathBuf,
-        output: PathBuf,
+        input: InputPath,
+        output: OutputPath,
         /// The encoding of OUT: rgb9e5, rgba16f, rgba32f or bc6h.
         #[arg(long, value_parser = parse_encoding)]
         encoding: Encoding,
@@ -59,10 +61,10 @@ enum Command {
     /// engines load environment maps from. The last cube of a store with an environment cube
     /// is that cube (`oslf store info` says which)
     ExportCube {
-        store: PathBuf,
+        store: InputPath,
         index: u32,
         #[arg(short, long)]
-        output: PathBuf,
+        output: OutputPath,
         /// exr, or ktx2: one cube-map texture (faces +X −X +Y −Y +Z −Z in Vulkan's cube-map
         /// convention, the scene's axes: a Y-up engine turns it by −90° about x for a scene
         /// that turned a Y-up file by +90°)
@@ -75,13 +77,13 @@ enum Command {
     /// Export one sample map as a false-colour PNG (colour from a hash of the index; missing
     /// entries black)
     ExportSampleMap {
-        store: PathBuf,
+        store: InputPath,
         /// The map: a Bézier patch, or a page of a mesh object's atlas (`oslf store info` lists
         /// each object's maps).
         #[arg(value_name = "MAP")]
         patch: u32,
         #[arg(short, long)]
-        output: PathBuf,
+        output: OutputPath,
         /// Which of the 4 entries to show (0 = nearest).
         #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..4))]
         channel: u8,
@@ -135,7 +137,54 @@ pub(super) fn verify_for_render(store: &Store, path: &Path, strict: bool) -> Res
     Ok(())
 }
 
+/// Every file the subcommand reads and writes, checked before any work.
+fn door(command: &Command) -> Door {
+    let mut door = Door::new();
+    let partial = |o: &Path| oslf_format::writer::partial_path(o);
+    match command {
+        Command::Info { store, .. } | Command::Verify { store } => {
+            door.input("STORE", store);
+        }
+        Command::Merge { shards, output } => {
+            for shard in shards {
+                door.input("SHARDS", shard);
+            }
+            door.output("--output", output)
+                .output("the partial store of --output", &partial(output));
+        }
+        Command::Convert { input, output, .. } => {
+            door.input("INPUT", input)
+                .output("OUTPUT", output)
+                .output("the partial store of OUTPUT", &partial(output));
+        }
+        Command::ExportCube {
+            store,
+            output,
+            format,
+            layout,
+            ..
+        } => {
+            door.input("STORE", store);
+            match (format, layout) {
+                (CubeFormat::Exr, Some(Layout::Faces)) => {
+                    for (name, path) in FACE_NAMES.iter().zip(face_paths(output)) {
+                        door.output(format!("the {name} face file of --output"), &path);
+                    }
+                }
+                _ => {
+                    door.output("--output", output);
+                }
+            }
+        }
+        Command::ExportSampleMap { store, output, .. } => {
+            door.input("STORE", store).output("--output", output);
+        }
+    }
+    door
+}
+
 pub fn run(cli: Args) -> Result<()> {
+    door(&cli.command).check()?;
     let access = cli.access;
     match cli.command {
         Command::Info { store, json } => info(&store, &access.open(&store)?, json),
@@ -164,7 +213,8 @@ pub fn run(cli: Args) -> Result<()> {
             Ok(())
         }
         Command::Merge { shards, output } => {
-            let s = oslf_format::shard::merge(&shards, &output)
+            let paths: Vec<PathBuf> = shards.iter().map(|s| s.0.clone()).collect();
+            let s = oslf_format::shard::merge(&paths, &output)
                 .map_err(|e| match e {
                     oslf_format::Error::UnfinishedShard { .. } => {
                         anyhow::anyhow!("{e}; finish its bake with --resume")
@@ -566,22 +616,29 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
     );
 }
 
+/// The six files of `export-cube --layout faces`: OUT_px.exr … OUT_nz.exr (OUT without its
+/// extension), in layer order.
+fn face_paths(out: &Path) -> Vec<PathBuf> {
+    let stem = out.with_extension("");
+    FACE_NAMES
+        .iter()
+        .map(|name| {
+            let mut file = stem.as_os_str().to_os_string();
+            file.push(format!("_{name}.exr"));
+            PathBuf::from(file)
+        })
+        .collect()
+}
+
 fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> {
     let cube = s.read_cube(index)?;
     let n = cube.resolution as usize;
     match layout {
         Layout::Faces => {
-            let stem = out.with_extension("");
-            for (face, name) in FACE_NAMES.iter().enumerate() {
-                let mut file = stem.as_os_str().to_os_string();
-                file.push(format!("_{name}.exr"));
-                let path = PathBuf::from(file);
-                let texels = &cube.faces[face];
-                exr::prelude::write_rgb_file(&path, n, n, |x, y| {
-                    let [r, g, b] = texels.get(y * n + x).copied().unwrap_or([0.0; 3]);
-                    (r, g, b)
-                })
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            for (face, path) in face_paths(out).iter().enumerate() {
+                let texels: Vec<glam::Vec3> =
+                    cube.faces[face].iter().map(|&t| glam::Vec3::from(t)).collect();
+                oslf_util::image_file::write_exr(path, n as u32, n as u32, &texels)?;
                 println!("wrote {}", path.display());
             }
         }
@@ -589,16 +646,19 @@ fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> 
             // (column, row) of each face in the 4x3 cross, faces in layer order.
             const CELLS: [(usize, usize); FACES] = [(2, 1), (0, 1), (1, 0), (1, 2), (1, 1), (3, 1)];
             let (w, h) = (4 * n, 3 * n);
-            exr::prelude::write_rgb_file(out, w, h, |x, y| {
-                let (cx, cy) = (x / n.max(1), y / n.max(1));
-                let face = CELLS.iter().position(|c| *c == (cx, cy));
-                let [r, g, b] = face
-                    .and_then(|f| cube.faces[f].get((y % n) * n + x % n))
-                    .copied()
-                    .unwrap_or([0.0; 3]);
-                (r, g, b)
-            })
-            .with_context(|| format!("cannot write {}", out.display()))?;
+            let pixels: Vec<glam::Vec3> = (0..w * h)
+                .map(|i| {
+                    let (x, y) = (i % w, i / w);
+                    let (cx, cy) = (x / n.max(1), y / n.max(1));
+                    let face = CELLS.iter().position(|c| *c == (cx, cy));
+                    let t = face
+                        .and_then(|f| cube.faces[f].get((y % n) * n + x % n))
+                        .copied()
+                        .unwrap_or([0.0; 3]);
+                    glam::Vec3::from(t)
+                })
+                .collect();
+            oslf_util::image_file::write_exr(out, w as u32, h as u32, &pixels)?;
             println!("wrote {}", out.display());
         }
     }
@@ -646,8 +706,12 @@ fn export_sample_map(s: &Store, patch: u32, out: &Path, channel: usize, scale: u
             index_colour(i)
         })
     });
-    img.save(out)
+    let format = image::ImageFormat::from_path(out)
         .with_context(|| format!("cannot write {}", out.display()))?;
+    // Through the one way out: a temporary file beside it, every write checked, renamed.
+    oslf_util::output_file::write_with(out, |w| {
+        img.write_to(w, format).map_err(std::io::Error::other)
+    })?;
     println!("wrote {}", out.display());
     Ok(())
 }

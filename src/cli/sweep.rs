@@ -1,7 +1,11 @@
 //! `oslf sweep`: the speed/accuracy sweep and the sensitivity analysis (see
 //! `oslf_measure::sweep`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use oslf_util::door::Door;
+
+use super::paths::{declare_scene, InputPath, OutputDir};
 
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
@@ -27,7 +31,7 @@ use oslf_util::image_file;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The scene file; its settings (with --preset) are the defaults.
-    scene: PathBuf,
+    scene: InputPath,
     #[arg(short, long)]
     preset: Option<String>,
     /// What captures the default store's cube maps (and every variation's but
@@ -80,7 +84,7 @@ pub struct Args {
     /// Output directory (the variant stores go to OUT/stores and are reused by later runs
     /// when their settings match).
     #[arg(short, long, default_value = "sweep")]
-    out: PathBuf,
+    out: OutputDir,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -93,6 +97,15 @@ const DEFAULT_VARY: [&str; 6] = [
     "phi_samplemap=60",
     "phi_shader=45,85",
     "blend=distance,angle,avg,r4,envmap",
+];
+
+/// The files of the sweep's results, in --out.
+const OUTPUTS: [&str; 5] = [
+    "sweep.csv",
+    "sensitivity.md",
+    "sweep.json",
+    "tradeoff.png",
+    "tradeoff.svg",
 ];
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -144,6 +157,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         changes.extend(parse_vary(s).map_err(vary_flag)?);
     }
     check_changes(&scene, &changes).map_err(vary_flag)?;
+    let truth_path = args.out.join(format!("truth-{}.exr", params.mode.name()));
+    let mut door = Door::new();
+    declare_scene(&mut door, "SCENE", &scene);
+    door.output_dir("--out", &args.out)
+        .output("the truth image in --out", &truth_path);
+    for name in OUTPUTS {
+        door.output(format!("{name} in --out"), &args.out.join(name));
+    }
+    door.check()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
 
@@ -155,7 +177,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let gt = GroundTruth::new(&scene, camera)?.with_progress(super::progress::bars(!args.quiet));
     let truth = render_truth(&gt, &params, &truth_settings)?;
-    let truth_path = args.out.join(format!("truth-{}.exr", params.mode.name()));
     image_file::write_exr_rgba(&truth_path, truth.width, truth.height, &truth.pixels)?;
     if !args.quiet {
         eprintln!(
@@ -172,6 +193,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         store_dir: args.out.join("stores"),
         warm_frames: args.frames,
         progress: super::progress::bars(!args.quiet),
+        door: &door,
     };
     let quiet = args.quiet;
     let rows = run_sweep(&config, &truth, |r| {
@@ -269,7 +291,7 @@ impl Outputs<'_> {
         )?;
         let json = serde_json::json!({
             "mode": params.mode.name(),
-            "scene": args.scene,
+            "scene": args.scene.0,
             "width": args.width,
             "height": args.height,
             "truth_spp": args.spp,
@@ -487,7 +509,7 @@ fn yes_no(on: Option<bool>) -> String {
 }
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {
-    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+    Ok(oslf_util::output_file::write_bytes(path, text.as_bytes())?)
 }
 
 /// `e`, where a variation cannot be applied, naming the `--vary` flag that gave it.

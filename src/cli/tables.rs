@@ -4,6 +4,10 @@
 
 use std::path::PathBuf;
 
+use oslf_util::door::Door;
+
+use super::paths::{declare_scene, InputPath, OutputDir};
+
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthImage, TruthSettings};
 use oslf_bake::scene::Scene;
@@ -27,10 +31,10 @@ use oslf_util::image_file;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The scene the stores were baked from.
-    scene: PathBuf,
+    scene: InputPath,
     /// Stores to compare (baked from SCENE), e.g. two cube-map resolutions. Repeatable.
     #[arg(long = "store", required = true)]
-    stores: Vec<PathBuf>,
+    stores: Vec<InputPath>,
     /// The preset the stores were baked with.
     #[arg(short, long)]
     preset: Option<String>,
@@ -58,7 +62,7 @@ pub struct Args {
     #[arg(long, default_value_t = 5)]
     frames: u32,
     #[arg(short, long, default_value = "tables")]
-    out: PathBuf,
+    out: OutputDir,
     #[arg(short, long)]
     quiet: bool,
 }
@@ -221,6 +225,9 @@ fn base_params() -> ShadingParams {
     }
 }
 
+/// The files of the tables themselves, in --out.
+const OUTPUTS: [&str; 3] = ["tables.md", "tables.csv", "tables.json"];
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let Some(camera) = scene.camera else {
@@ -229,6 +236,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.scene.display()
         );
     };
+    let mut door = Door::new();
+    declare_scene(&mut door, "SCENE", &scene);
+    for store in &args.stores {
+        door.input("--store", store);
+    }
+    door.output_dir("--out", &args.out);
+    for name in OUTPUTS {
+        door.output(format!("{name} in --out"), &args.out.join(name));
+    }
+    door.check()?;
     let stores = open_stores(&args, &scene)?;
     let lobes = parse_lobes(&args.lobes)?;
     std::fs::create_dir_all(&args.out)
@@ -251,6 +268,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
         let t = render_truth(&gt, &p, &settings)?;
         let path = args.out.join(format!("truth-{name}.exr"));
+        door.check_output_in_dir("a truth image in --out", &path)?;
         image_file::write_exr_rgba(&path, t.width, t.height, &t.pixels)?;
         if !args.quiet {
             eprintln!("truth {:<40} {:.1} s", path.display(), t.seconds);
@@ -360,7 +378,7 @@ fn open_stores(args: &Args, scene: &Scene) -> anyhow::Result<Vec<(PathBuf, Store
                 path.display()
             );
         }
-        stores.push((path.clone(), store));
+        stores.push((path.0.clone(), store));
     }
     stores.sort_by_key(|(_, s)| s.cube_resolution());
     Ok(stores)
@@ -591,12 +609,15 @@ fn write_outputs(args: &Args, tables: &[Table], records: &[Record]) -> anyhow::R
     let md: Vec<String> = tables.iter().map(Table::to_markdown).collect();
     println!("{}", text.join("\n"));
     let write = |name: &str, s: &str| -> anyhow::Result<()> {
-        let p = args.out.join(name);
-        std::fs::write(&p, s).with_context(|| format!("cannot write {}", p.display()))
+        Ok(oslf_util::output_file::write_bytes(
+            &args.out.join(name),
+            s.as_bytes(),
+        )?)
     };
-    write("tables.md", &format!("{}\n", md.join("\n")))?;
-    write("tables.csv", &records_csv(records))?;
-    write("tables.json", &serde_json::to_string_pretty(records)?)?;
+    let [md_name, csv_name, json_name] = OUTPUTS;
+    write(md_name, &format!("{}\n", md.join("\n")))?;
+    write(csv_name, &records_csv(records))?;
+    write(json_name, &serde_json::to_string_pretty(records)?)?;
     println!(
         "wrote {}/tables.md, tables.csv, tables.json",
         args.out.display()

@@ -8,7 +8,10 @@ use glam::Vec3;
 use oslf_bake::ashikhmin_shirley::AsLobe;
 use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
 use oslf_bake::scene::Scene;
+use oslf_util::door::Door;
 use oslf_util::image_file;
+
+use super::paths::{declare_scene, InputPath, OutputPrefix};
 
 /// Render the ground truth a runtime image is judged against: the scene's camera, one ray per
 /// pixel centre onto the OSLF object alone, shaded with the bake's path tracer in the scene the
@@ -16,19 +19,19 @@ use oslf_util::image_file;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The scene file the store was baked from.
-    scene: PathBuf,
+    scene: InputPath,
     /// The preset the store was baked with (it may change `bounces`).
     #[arg(short, long)]
     preset: Option<String>,
     /// Check that this store was baked from this scene (scene hash and bounces).
     #[arg(long)]
-    store: Option<PathBuf>,
+    store: Option<InputPath>,
     /// Comma-separated: recon, mirror, recon-mirror, glossy, recon-glossy, pbr (the runtime's modes).
     #[arg(short, long, default_value = "recon,mirror,recon-mirror")]
     modes: String,
     /// Output prefix: writes PREFIX-MODE.exr and PREFIX-MODE.png.
     #[arg(short, long, default_value = "truth")]
-    output: PathBuf,
+    output: OutputPrefix,
     /// Samples per pixel (paths for recon and mirror, lobe samples for glossy).
     #[arg(long, default_value_t = 256)]
     spp: u32,
@@ -93,7 +96,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn render_all(args: &Args) -> anyhow::Result<()> {
-    let modes: Vec<&str> = args.modes.split(',').map(str::trim).collect();
+    let mut modes: Vec<&str> = Vec::new();
+    // Each mode once, in the order first named.
+    for m in args.modes.split(',').map(str::trim) {
+        if !modes.contains(&m) {
+            modes.push(m);
+        }
+    }
     for m in &modes {
         if !MODES.contains(m) {
             bail!(
@@ -103,6 +112,20 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         }
     }
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
+    let mut door = Door::new();
+    declare_scene(&mut door, "SCENE", &scene);
+    if let Some(path) = &args.store {
+        door.input("--store", path);
+    }
+    for m in &modes {
+        let exr = output_path(&args.output, m, "exr");
+        door.output(format!("the --output image of mode {m}"), &exr)
+            .output(
+                format!("the PNG of mode {m}"),
+                &exr.with_extension("png"),
+            );
+    }
+    door.check()?;
     if let Some(path) = &args.store {
         let store = oslf_format::Store::open(path)?;
         let bake = &store.meta().bake;

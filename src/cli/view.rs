@@ -123,7 +123,7 @@ struct App {
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The store (written by `oslf bake`).
-    store: PathBuf,
+    store: super::paths::InputPath,
     #[command(flatten)]
     access: super::args::StoreAccessArgs,
     #[command(flatten)]
@@ -131,7 +131,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let store = args.store;
+    oslf_util::door::Door::new()
+        .input("STORE", &args.store)
+        .check()?;
+    let store = args.store.0;
     let event_loop = EventLoop::new().context("cannot open a window (no display?)")?;
     let mut app = App {
         store,

@@ -28,6 +28,43 @@ pub enum UtilError {
         limit: u64,
         bound: String,
     },
+    /// An output file that could not be written: the open, a write, the flush, the sync or the
+    /// rename failed ([`crate::output_file`]).
+    #[error("cannot write {}: {error}", .path.display())]
+    Output {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// An output path that exists and is not a regular file; it is left as it is.
+    #[error("{role} {}: exists and is not a regular file ({kind}); outputs are written to new or regular files only, and this one is left as it is", .path.display())]
+    OutputNotRegular {
+        role: String,
+        path: PathBuf,
+        kind: &'static str,
+    },
+    /// An output directory path that exists and is not a directory.
+    #[error("{role} {}: exists and is not a directory ({kind})", .path.display())]
+    OutputNotDirectory {
+        role: String,
+        path: PathBuf,
+        kind: &'static str,
+    },
+    /// An output that is an input of the same command ([`crate::door::Door`]).
+    #[error("{output_role} {} is {input_role} {} (the same file): a command never writes over its own input; give the output another path", .output.display(), .input.display())]
+    OutputIsInput {
+        output_role: String,
+        output: PathBuf,
+        input_role: String,
+        input: PathBuf,
+    },
+    /// Two outputs of one command that are one file ([`crate::door::Door`]).
+    #[error("{first_role} {} and {second_role} {} are the same file: each output needs a path of its own", .first.display(), .second.display())]
+    SameOutput {
+        first_role: String,
+        first: PathBuf,
+        second_role: String,
+        second: PathBuf,
+    },
 }
 
 pub type Result<T> = std::result::Result<T, UtilError>;

@@ -1,9 +1,9 @@
 //! Writing rendered images: OpenEXR (linear f32, for measurement) and tone-mapped PNG (for eyes).
 //!
-//! Every image is written to a temporary file beside its path and renamed into place, so a
-//! failed write leaves whatever was at the path as it was and removes only the temporary file
-//! it created. A path that exists and is not a regular file (a device, a FIFO, a directory) is
-//! refused before anything is written.
+//! Every image is written through [`crate::output_file::write_with`]: to a temporary file beside
+//! its path, checked and synced, then renamed into place, so a failed write leaves whatever was
+//! at the path as it was and removes only the temporary file it created. A path that exists and
+//! is not a regular file (a device, a FIFO, a directory) is refused before anything is written.
 
 use std::path::Path;
 
@@ -11,6 +11,7 @@ use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableI
 use glam::Vec3;
 
 use crate::error::{Result, UtilError};
+use crate::output_file::write_with;
 
 /// Writes linear RGB as a 32-bit float OpenEXR file. `pixels` is row-major, top row first.
 pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Result<()> {
@@ -20,11 +21,11 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Vec3]) -> Resul
         let p = pixels[y * w + x];
         (p.x, p.y, p.z)
     });
-    write_atomically(path, |tmp| {
+    write_with(path, |out| {
         Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
             .write()
-            .to_file(tmp)
-            .map_err(|e| format!("cannot write OpenEXR: {e}"))
+            .to_buffered(out)
+            .map_err(|e| std::io::Error::other(format!("OpenEXR: {e}")))
     })
 }
 
@@ -37,11 +38,11 @@ pub fn write_exr_rgba(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]])
         let p = pixels[y * w + x];
         (p[0], p[1], p[2], p[3])
     });
-    write_atomically(path, |tmp| {
+    write_with(path, |out| {
         Image::from_encoded_channels((w, height as usize), exr_encoding(), channels)
             .write()
-            .to_file(tmp)
-            .map_err(|e| format!("cannot write OpenEXR: {e}"))
+            .to_buffered(out)
+            .map_err(|e| std::io::Error::other(format!("OpenEXR: {e}")))
     })
 }
 
@@ -75,47 +76,10 @@ pub fn write_png(
         path: path.to_path_buf(),
         message: format!("cannot write PNG: {e}"),
     })?;
-    write_atomically(path, |tmp| {
-        image::save_buffer_with_format(tmp, &bytes, width, height, image::ColorType::Rgb8, format)
-            .map_err(|e| format!("cannot write PNG: {e}"))
+    write_with(path, |out| {
+        image::write_buffer_with_format(out, &bytes, width, height, image::ColorType::Rgb8, format)
+            .map_err(|e| std::io::Error::other(format!("PNG: {e}")))
     })
-}
-
-/// Runs `write` on a temporary file beside `path` (in the same directory, so the rename stays
-/// on one volume), then renames it to `path`. On any failure the temporary file is removed and
-/// `path` is left as it was. Refuses a `path` that exists and is not a regular file; a symbolic
-/// link is followed, and the file it names replaced.
-pub(crate) fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
-) -> Result<()> {
-    let fail = |message: String| UtilError::Image {
-        path: path.to_path_buf(),
-        message,
-    };
-    let target = match std::fs::metadata(path) {
-        Ok(m) if !m.is_file() => {
-            return Err(fail(
-                "exists and is not a regular file (a directory, device or FIFO); images are \
-                 written to regular files only"
-                    .into(),
-            ))
-        }
-        Ok(_) => std::fs::canonicalize(path).map_err(|e| fail(e.to_string()))?,
-        Err(_) => path.to_path_buf(),
-    };
-    let name = target
-        .file_name()
-        .ok_or_else(|| fail("names no file".into()))?
-        .to_string_lossy();
-    let tmp = target.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, &target).map_err(|e| format!("cannot rename into place: {e}"))
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(fail)
 }
 
 fn check_size(path: &Path, width: u32, height: u32, pixels: usize) -> Result<()> {

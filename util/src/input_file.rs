@@ -54,6 +54,16 @@ pub fn read(path: &Path, limit: &Limit) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// The regular file at `path`, opened for reading, if it has at most `limit.bytes` bytes (for
+/// readers that stream a file rather than take it whole).
+pub fn open_within(path: &Path, limit: &Limit) -> Result<File> {
+    let (file, len) = open(path)?;
+    if len > limit.bytes {
+        return Err(too_large(path, len, limit));
+    }
+    Ok(file)
+}
+
 /// The regular file at `path`, opened for reading, and its length in bytes.
 pub fn open(path: &Path) -> Result<(File, u64)> {
     let before = std::fs::metadata(path).map_err(|error| input_error(path, error))?;

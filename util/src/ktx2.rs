@@ -23,7 +23,7 @@ use std::path::Path;
 
 use half::f16;
 
-use crate::image_file::write_atomically;
+use crate::output_file::write_with;
 use crate::Result;
 
 /// The largest finite half float.
@@ -128,14 +128,8 @@ pub fn write_cube_file(
     writer: &str,
 ) -> Result<u64> {
     let mut clamped = 0;
-    write_atomically(path, |tmp| {
-        let write = || -> std::io::Result<u64> {
-            let mut file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
-            let clamped = write_cube(&mut file, n, faces, writer)?;
-            file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-            Ok(clamped)
-        };
-        clamped = write().map_err(|e| e.to_string())?;
+    write_with(path, |out| {
+        clamped = write_cube(out, n, faces, writer)?;
         Ok(())
     })?;
     Ok(clamped)

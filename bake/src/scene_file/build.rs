@@ -68,9 +68,13 @@ impl Ctx<'_> {
         }
 
         let hash = scene_hash(self.text.as_bytes(), &self.included.borrow())?;
+        let files = std::iter::once(self.path.to_path_buf())
+            .chain(self.included.borrow().iter().cloned())
+            .collect();
         Ok(Scene {
             path: self.path.to_path_buf(),
             hash,
+            files,
             camera,
             environment,
             lights,

@@ -172,6 +172,9 @@ impl Scene {
         Ok(Scene {
             path: path.to_path_buf(),
             hash: scene_hash(&bytes, &import.files)?,
+            files: std::iter::once(path.to_path_buf())
+                .chain(import.files.iter().cloned())
+                .collect(),
             camera,
             environment: Environment::Constant(Vec3::splat(GLTF_SCENE_ENVIRONMENT)),
             lights: import.lights,

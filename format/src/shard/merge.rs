@@ -29,8 +29,7 @@ fn open_shard(path: &Path) -> Result<OpenShard, Error> {
         path: path.to_path_buf(),
         detail,
     };
-    let file = File::open(path).map_err(io_at(path, "open"))?;
-    let file_len = file.metadata().map_err(io_at(path, "stat"))?.len();
+    let (file, file_len) = oslf_util::input_file::open(path)?;
     // Small buffers: the merge holds every shard open at once.
     let mut reader = BufReader::with_capacity(64 << 10, file);
     let mut b = [0u8; SHARD_HEADER_BYTES];
