@@ -181,7 +181,7 @@ fn refused(tokens: &[Token], limit: Duration) -> String {
 /// two OpenEXR images. Made through the CLI, in this process.
 fn fixtures(dir: &Path) {
     let scene = format!(
-        "{}\n[[mesh]]\npath = \"floor.obj\"\n\n[bake]\nsample_count = 12\ncube_resolution = 2\nsample_map_resolution = 4\nsamples_per_texel = 1\n",
+        "{}\n[[mesh]]\npath = \"floor.obj\"\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n\n[bake]\nsample_count = 12\ncube_resolution = 2\nsample_map_resolution = 4\nsamples_per_texel = 1\n",
         include_str!("../../tests/fixtures/teapot-lid.toml")
     );
     std::fs::write(dir.join("scene.toml"), scene).unwrap();
