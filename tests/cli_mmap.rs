@@ -61,3 +61,71 @@ fn mapped_and_positioned_stores_give_the_same_outputs() {
     assert_eq!(images[0], images[1], "GPU");
     assert_eq!(images[2], images[3], "CPU reference");
 }
+
+/// A store written in place while `render --mmap` has it mapped (by a program the lock does not
+/// bind: the same size, its last byte written again, its modification time moved; the bytes
+/// stay valid so that the open's own checks, which may still be running, pass): a warning naming
+/// the store, and under `--strict` a failure with no image written. The write is made once
+/// the process has mapped the store (seen in /proc/PID/maps), while it is still starting its
+/// GPU device, so before the frame reads the mapping and before the check after it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_store_written_in_place_during_a_mapped_render_is_said_and_refused_under_strict() {
+    use std::io::{Seek, SeekFrom, Write};
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, LID_SCENE).unwrap();
+    let store = dir.join("lid.oslf");
+    let ok = oslf("bake")
+        .arg(&scene)
+        .args(["-q", "--preview", "none", "-o"])
+        .arg(&store)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    for strict in [false, true] {
+        let image = dir.join(format!("strict-{strict}.exr"));
+        let mut c = oslf("render");
+        c.arg(&store)
+            .args(["--mmap", "--width", "48", "--height", "32", "-o"])
+            .arg(&image)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        if strict {
+            c.arg("--strict");
+        }
+        let child = c.spawn().unwrap();
+        let maps = format!("/proc/{}/maps", child.id());
+        let name = store.display().to_string();
+        let start = std::time::Instant::now();
+        while !std::fs::read_to_string(&maps).is_ok_and(|m| m.contains(&name)) {
+            assert!(
+                start.elapsed() < std::time::Duration::from_secs(60),
+                "the store was never mapped"
+            );
+            std::thread::sleep(std::time::Duration::from_micros(200));
+        }
+        let last = *std::fs::read(&store).unwrap().last().unwrap();
+        let len = std::fs::metadata(&store).unwrap().len();
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&store)
+            .unwrap();
+        f.seek(SeekFrom::Start(len - 1)).unwrap();
+        f.write_all(&[last]).unwrap();
+        f.set_modified(std::time::SystemTime::now() + std::time::Duration::from_secs(5))
+            .unwrap();
+        drop(f);
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(&format!(
+                "{name} was written in place while it was memory-mapped"
+            )),
+            "strict {strict}: {err}"
+        );
+        assert_eq!(out.status.success(), !strict, "strict {strict}: {err}");
+        assert_eq!(image.exists(), !strict, "strict {strict}");
+    }
+}

@@ -45,7 +45,9 @@ fn exposures_fields_of_view_and_thread_counts_that_make_nonsense_are_refused() {
         stderr(&o)
     };
     // Beyond 1e-6..=1e6 every pixel is black or white: refused, and said so.
-    for e in ["NaN", "-1", "0", "inf", "1e30", "3e38", "1e-30", "2e6", "9e-7"] {
+    for e in [
+        "NaN", "-1", "0", "inf", "1e30", "3e38", "1e-30", "2e6", "9e-7",
+    ] {
         let err = render(&["--exposure", e]);
         assert!(
             err.contains("is not an exposure between 1e-6 and 1e6"),

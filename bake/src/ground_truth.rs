@@ -71,6 +71,40 @@ pub enum Term {
     },
 }
 
+/// The largest Ashikhmin–Shirley exponent a term takes: the runtime's bound on n_u and n_v
+/// (`ShadingParams::validate`), beyond which the lobe is a mirror within f32.
+pub const MAX_AS_EXPONENT: f64 = 1e7;
+
+impl Term {
+    /// Errors, naming the values, when the term's material is out of range: metallic and
+    /// roughness in [0, 1]; R_s in [0, 1] and n_u, n_v in [0, [`MAX_AS_EXPONENT`]]. A command
+    /// checks its terms with it before any work; [`GroundTruth::render`] checks again.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            Term::Pbr {
+                metallic,
+                roughness,
+                ..
+            } if !((0.0..=1.0).contains(&metallic) && (0.0..=1.0).contains(&roughness)) => {
+                Err(BakeError::Invalid(format!(
+                    "metallic {metallic} and roughness {roughness} must be in [0, 1]"
+                )))
+            }
+            Term::Glossy(lobe) => {
+                let exponent_ok = |n: f64| (0.0..=MAX_AS_EXPONENT).contains(&n);
+                if (0.0..=1.0).contains(&lobe.rs) && exponent_ok(lobe.nu) && exponent_ok(lobe.nv) {
+                    Ok(())
+                } else {
+                    Err(BakeError::Invalid(format!(
+                        "Ashikhmin–Shirley lobe {lobe:?}: R_s must be in [0, 1] and n_u, n_v in [0, {MAX_AS_EXPONENT:e}]"
+                    )))
+                }
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 impl Term {
     fn tag(&self) -> u64 {
         match self {
@@ -221,26 +255,7 @@ impl<'s> GroundTruth<'s> {
                 "ground-truth image size {w}x{h} must be at least 1x1"
             )));
         }
-        if let Term::Pbr {
-            metallic,
-            roughness,
-            ..
-        } = term
-        {
-            if !((0.0..=1.0).contains(&metallic) && (0.0..=1.0).contains(&roughness)) {
-                return Err(BakeError::Invalid(format!(
-                    "metallic {metallic} and roughness {roughness} must be in [0, 1]"
-                )));
-            }
-        }
-        if let Term::Glossy(lobe) = term {
-            let exponent_ok = |n: f64| n.is_finite() && n >= 0.0;
-            if !((0.0..=1.0).contains(&lobe.rs) && exponent_ok(lobe.nu) && exponent_ok(lobe.nv)) {
-                return Err(BakeError::Invalid(format!(
-                    "Ashikhmin–Shirley lobe {lobe:?}: R_s must be in [0, 1] and n_u, n_v finite and ≥ 0"
-                )));
-            }
-        }
+        term.validate()?;
         let start = Instant::now();
         let progress = progress::or_silent(&self.progress);
         progress.start("rows", u64::from(h), 0);

@@ -359,3 +359,14 @@ pub(crate) fn io_at(path: &std::path::Path, op: &str) -> impl FnOnce(std::io::Er
     let context = format!("{} ({op})", path.display());
     move |error| Error::Io { context, error }
 }
+
+/// An [`Error`] for a failed [`oslf_util::input_file::open`] of `path`: a file that cannot be
+/// opened is [`Error::Io`] as for any other operation; one that is not a regular file is
+/// [`Error::Input`], which says what it is.
+pub(crate) fn open_error(path: &std::path::Path) -> impl FnOnce(oslf_util::UtilError) -> Error {
+    let context = format!("{} (open)", path.display());
+    move |e| match e {
+        oslf_util::UtilError::Input { error, .. } => Error::Io { context, error },
+        e => Error::Input(e),
+    }
+}

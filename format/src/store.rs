@@ -261,7 +261,8 @@ impl Store {
     pub fn open(path: &Path) -> Result<Self, Error> {
         check_little_endian()?;
         // Refuses a FIFO, device or directory before opening it (nothing can block).
-        let (file, len) = oslf_util::input_file::open(path)?;
+        let (file, len) =
+            oslf_util::input_file::open(path).map_err(crate::error::open_error(path))?;
         if len < HEADER_BYTES as u64 {
             return Err(Error::Truncated {
                 section: "header",
@@ -317,7 +318,8 @@ impl Store {
     pub fn open_mapped(path: &Path) -> Result<Self, Error> {
         check_little_endian()?;
         // Only a regular file is opened, and never blocking (a FIFO is refused at once).
-        let (file, _) = oslf_util::input_file::open(path)?;
+        let (file, _) =
+            oslf_util::input_file::open(path).map_err(crate::error::open_error(path))?;
         let meta = file.metadata().map_err(io_at(path, "stat"))?;
         match file.try_lock_shared() {
             Ok(()) => {}
@@ -378,7 +380,12 @@ impl Store {
         };
         let now = match file.metadata() {
             Ok(m) => (m.len(), m.modified().ok()),
-            Err(e) => return Some(format!("{}: cannot stat the mapped file: {e}", path.display())),
+            Err(e) => {
+                return Some(format!(
+                    "{}: cannot stat the mapped file: {e}",
+                    path.display()
+                ))
+            }
         };
         (now != *opened).then(|| {
             format!(

@@ -141,12 +141,23 @@ fn a_mapped_store_is_not_written_in_place_by_a_writer() {
 #[test]
 fn only_regular_files_are_mapped() {
     let dir = tempfile::tempdir().unwrap();
-    for path in [dir.path(), Path::new("/dev/null")] {
-        let e = Store::open_mapped(path).err().unwrap();
-        assert!(
-            matches!(e, Error::NotRegularFile { .. } | Error::Io { .. }),
-            "{e}"
-        );
+    // Refused before they are opened (nothing blocks on a FIFO), each named and called what
+    // it is; the positioned reader alike.
+    for (path, kind) in [
+        (dir.path(), "(a directory)"),
+        (Path::new("/dev/null"), "(a character device)"),
+    ] {
+        for e in [
+            Store::open_mapped(path).err().unwrap(),
+            Store::open(path).err().unwrap(),
+        ] {
+            assert!(
+                matches!(e, Error::Input(oslf_util::UtilError::NotRegular { .. }))
+                    && e.to_string()
+                        .contains(&format!("{} {kind}", path.display())),
+                "{e}"
+            );
+        }
     }
     let empty = dir.path().join("empty.oslf");
     std::fs::write(&empty, b"").unwrap();
@@ -154,4 +165,45 @@ fn only_regular_files_are_mapped() {
         Store::open_mapped(&empty),
         Err(Error::Truncated { .. })
     ));
+}
+
+/// A store written in place while mapped (another program's write: the same size, other
+/// bytes) is seen by `changed_since_open`; one replaced by rename, or left alone, is not; the
+/// positioned reader never reports one.
+#[test]
+fn a_store_written_in_place_while_mapped_is_seen_after_the_reads() {
+    use std::io::{Seek, SeekFrom, Write};
+    let (_dir, path) = temp_store("s.oslf");
+    write(&path, &fixture(Spec::default()));
+    let mapped = Store::open_mapped(&path).unwrap();
+    let positioned = Store::open(&path).unwrap();
+    assert_eq!(mapped.changed_since_open(), None);
+    // Replaced by rename: the mapping keeps the old file, which did not change.
+    write(
+        &path,
+        &fixture(Spec {
+            seed: 3,
+            ..Spec::default()
+        }),
+    );
+    assert_eq!(mapped.changed_since_open(), None);
+    drop(mapped);
+    let mapped = Store::open_mapped(&path).unwrap();
+    // Written in place, past the lock (other programs are not bound by it), size unchanged;
+    // the modification time is set forward so that a coarse clock cannot hide the write.
+    let len = std::fs::metadata(&path).unwrap().len();
+    let mut f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+    f.seek(SeekFrom::Start(len - 1)).unwrap();
+    f.write_all(&[0xAB]).unwrap();
+    f.set_modified(std::time::SystemTime::now() + std::time::Duration::from_secs(5))
+        .unwrap();
+    drop(f);
+    let said = mapped
+        .changed_since_open()
+        .expect("an in-place write was not seen");
+    assert!(
+        said.contains(&path.display().to_string()) && said.contains("written in place"),
+        "{said}"
+    );
+    assert_eq!(positioned.changed_since_open(), None);
 }

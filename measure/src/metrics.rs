@@ -81,9 +81,10 @@ pub fn compare(
             test.len()
         )));
     }
-    if !(white.is_finite() && white > 0.0) {
+    // Beyond this range every pixel is L* 0 or L* 100 and the metric says nothing.
+    if !(1e-6..=1e6).contains(&white) {
         return Err(MeasureError::Invalid(format!(
-            "invalid parameter: reference white {white} must be positive"
+            "invalid parameter: reference white {white} must be between 1e-6 and 1e6 (the linear value that is L* = 100)"
         )));
     }
     let check = |which: &str, i: usize, p: &[f32; 4]| {

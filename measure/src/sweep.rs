@@ -429,9 +429,7 @@ pub fn run_sweep(
     let mut jobs = Vec::new();
     for (bc, scene, name) in variants {
         let path = config.store_dir.join(format!("{name}.oslf"));
-        config
-            .door
-            .check_output_in_dir("a variant store", &path)?;
+        config.door.check_output_in_dir("a variant store", &path)?;
         config
             .door
             .check_output_in_dir("a variant store's record", &record_path(&path))?;

@@ -666,5 +666,12 @@ pub fn ram_bytes(mb: f64) -> crate::Result<u64> {
             problem: format!("{mb} must be a non-negative number"),
         });
     }
+    // No silent clamp to u64::MAX: a budget past 2^63 bytes is no budget any machine has.
+    if mb * 1e6 >= 2f64.powi(63) {
+        return Err(crate::RuntimeError::InvalidParam {
+            param: Param::RamMegabytes,
+            problem: format!("{mb} is more memory than any machine has (at most 9.2e12 MB)"),
+        });
+    }
     Ok((mb * 1e6) as u64)
 }

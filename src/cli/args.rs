@@ -200,8 +200,8 @@ impl CameraArgs {
 #[derive(Args, Clone, Debug)]
 pub struct BackgroundArgs {
     /// What pixels off the object show (their alpha stays 0): none (black), env (the store's
-    /// environment cube along each pixel's ray) or a linear colour R,G,B [default: env; none,
-    /// with a note, for a store without an environment cube].
+    /// environment cube along each pixel's ray) or a linear colour R,G,B, each in [0, 1e6]
+    /// [default: env; none, with a note, for a store without an environment cube].
     #[arg(long, value_name = "VALUE", value_parser = parse_background)]
     pub background: Option<Background>,
 }
@@ -231,7 +231,11 @@ impl BackgroundArgs {
     }
 }
 
-/// `none`, `env`, or a linear colour `R,G,B` of three finite, non-negative numbers.
+/// The largest component of a `--background` colour.
+pub const MAX_BACKGROUND: f32 = 1e6;
+
+/// `none`, `env`, or a linear colour `R,G,B` of three finite, non-negative numbers, each at
+/// most [`MAX_BACKGROUND`].
 pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
     match s.trim() {
         "none" => Ok(Background::None),
@@ -246,6 +250,10 @@ pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
             let c = parse_vec3(s).map_err(bad)?;
             if c.min_element() < 0.0 {
                 return Err(bad("a component is negative".into()));
+            }
+            // As for --exposure: past this every tone-mapped pixel of it is white.
+            if c.max_element() > MAX_BACKGROUND {
+                return Err(bad(format!("a component is above {MAX_BACKGROUND:e}")));
             }
             Ok(Background::Color(c.to_array()))
         }
@@ -360,6 +368,7 @@ mod tests {
             ("1,-2,3", "negative"),
             ("1,inf,3", "three finite"),
             ("1,NaN,3", "three finite"),
+            ("1,1e30,3", "above 1e6"),
             ("sky", "\"sky\""),
         ] {
             let e = parse_background(bad).unwrap_err();

@@ -25,7 +25,7 @@ pub struct Args {
     /// Which pixels count: `reference` (its alpha > 0.5), `both` (both alphas), `all`.
     #[arg(long, default_value = "reference")]
     mask: String,
-    /// The linear value that is reference white (L* = 100).
+    /// The linear value that is reference white (L* = 100), 1e-6 to 1e6.
     #[arg(long, default_value_t = 1.0)]
     white: f64,
     /// Also write the result as JSON to this file.
@@ -38,7 +38,7 @@ pub struct Args {
     /// tone mapped alike (whole images: background pixels too).
     #[arg(long, value_name = "PNG")]
     side_by_side: Option<OutputPath>,
-    /// Exposure of --side-by-side.
+    /// Exposure of --side-by-side, 1e-6 to 1e6.
     #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
 }
@@ -86,9 +86,9 @@ fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
         .first_valid_layer()
         .all_attributes()
         .from_buffered(std::io::BufReader::new(file))
-    // The exr crate's I/O error prints its cause and also gives it as its source: flattened to
-    // its message, so the cause prints once.
-    .map_err(|e| anyhow::anyhow!("cannot read OpenEXR {}: {e}", path.display()))?;
+        // The exr crate's I/O error prints its cause and also gives it as its source: flattened to
+        // its message, so the cause prints once.
+        .map_err(|e| anyhow::anyhow!("cannot read OpenEXR {}: {e}", path.display()))?;
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
     Ok((size.width(), size.height(), pixels))

@@ -85,7 +85,10 @@ fn kind_of(parser: &ValueParser) -> Option<Kind> {
     [
         (parses(clap::value_parser!(InputPath).into()), Kind::Input),
         (parses(clap::value_parser!(OutputPath).into()), Kind::Output),
-        (parses(clap::value_parser!(OutputPrefix).into()), Kind::Prefix),
+        (
+            parses(clap::value_parser!(OutputPrefix).into()),
+            Kind::Prefix,
+        ),
         (parses(clap::value_parser!(OutputDir).into()), Kind::Dir),
     ]
     .into_iter()
@@ -95,11 +98,7 @@ fn kind_of(parser: &ValueParser) -> Option<Kind> {
 /// Every leaf subcommand (`"store info"`) with its path arguments: id → kind. Fails on a path
 /// argument whose type is none of the door's.
 fn leaves() -> BTreeMap<String, BTreeMap<String, Kind>> {
-    fn walk(
-        cmd: &clap::Command,
-        prefix: &str,
-        out: &mut BTreeMap<String, BTreeMap<String, Kind>>,
-    ) {
+    fn walk(cmd: &clap::Command, prefix: &str, out: &mut BTreeMap<String, BTreeMap<String, Kind>>) {
         for sub in cmd.get_subcommands() {
             if sub.get_name() == "help" {
                 continue;
@@ -522,7 +521,10 @@ fn derived_outputs_and_included_files_are_doors_too() {
         "--report-json",
         "/x.exr",
     ]);
-    assert!(e.contains("the EXR beside --preview") && e.contains("--report-json"), "{e}");
+    assert!(
+        e.contains("the EXR beside --preview") && e.contains("--report-json"),
+        "{e}"
+    );
     assert_eq!(snapshot(dir), before_png);
     std::fs::remove_file(dir.join("st.png")).unwrap();
     assert_eq!(snapshot(dir), before);

@@ -70,7 +70,7 @@ pub struct Args {
     /// G-buffer); decodes every cube of the store.
     #[arg(long)]
     cpu: bool,
-    /// PNG exposure multiplier.
+    /// PNG exposure multiplier, 1e-6 to 1e6 (beyond, every pixel is black or white).
     #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
     /// Fail (exit 1, no image written) when the image would be degraded: any sample point

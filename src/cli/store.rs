@@ -636,8 +636,10 @@ fn export_cube(s: &Store, index: u32, out: &Path, layout: Layout) -> Result<()> 
     match layout {
         Layout::Faces => {
             for (face, path) in face_paths(out).iter().enumerate() {
-                let texels: Vec<glam::Vec3> =
-                    cube.faces[face].iter().map(|&t| glam::Vec3::from(t)).collect();
+                let texels: Vec<glam::Vec3> = cube.faces[face]
+                    .iter()
+                    .map(|&t| glam::Vec3::from(t))
+                    .collect();
                 oslf_util::image_file::write_exr(path, n as u32, n as u32, &texels)?;
                 println!("wrote {}", path.display());
             }

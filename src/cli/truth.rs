@@ -59,7 +59,7 @@ pub struct Args {
     roughness: Option<f32>,
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Exposure of the PNG previews.
+    /// Exposure of the PNG previews, 1e-6 to 1e6.
     #[arg(long, default_value_t = 1.0, value_parser = super::args::parse_exposure)]
     exposure: f32,
     /// What pixels off the object show: `none` (black, the default) or `scene` (the scene
@@ -111,6 +111,25 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
             );
         }
     }
+    // The terms' materials, checked before any work.
+    let lobe = AsLobe {
+        rs: args.rs,
+        nu: args.nu,
+        nv: args.nv,
+    };
+    let defaults = oslf_runtime::ShadingParams::default();
+    let pbr_term = Term::Pbr {
+        metallic: args.metallic.unwrap_or(defaults.metallic),
+        roughness: args.roughness.unwrap_or(defaults.roughness),
+        object_material: args.metallic.is_none() && args.roughness.is_none(),
+    };
+    let wants = |m: &str| modes.contains(&m);
+    if wants("glossy") || wants("recon-glossy") {
+        Term::Glossy(lobe).validate()?;
+    }
+    if wants("pbr") {
+        pbr_term.validate()?;
+    }
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
     let mut door = Door::new();
     declare_scene(&mut door, "SCENE", &scene);
@@ -120,10 +139,7 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
     for m in &modes {
         let exr = output_path(&args.output, m, "exr");
         door.output(format!("the --output image of mode {m}"), &exr)
-            .output(
-                format!("the PNG of mode {m}"),
-                &exr.with_extension("png"),
-            );
+            .output(format!("the PNG of mode {m}"), &exr.with_extension("png"));
     }
     door.check()?;
     if let Some(path) = &args.store {
@@ -159,12 +175,6 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         spp: args.spp,
         seed: args.seed,
     };
-    let lobe = AsLobe {
-        rs: args.rs,
-        nu: args.nu,
-        nv: args.nv,
-    };
-    let wants = |m: &str| modes.contains(&m);
     let recon = if wants("recon") || wants("recon-mirror") || wants("recon-glossy") {
         Some(timed("recon", || truth.render(Term::Recon, &settings))?)
     } else {
@@ -183,13 +193,7 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         None
     };
     let pbr = if wants("pbr") {
-        let defaults = oslf_runtime::ShadingParams::default();
-        let term = Term::Pbr {
-            metallic: args.metallic.unwrap_or(defaults.metallic),
-            roughness: args.roughness.unwrap_or(defaults.roughness),
-            object_material: args.metallic.is_none() && args.roughness.is_none(),
-        };
-        Some(timed("pbr", || truth.render(term, &settings))?)
+        Some(timed("pbr", || truth.render(pbr_term, &settings))?)
     } else {
         None
     };

@@ -211,7 +211,10 @@ mod tests {
         std::fs::create_dir(&sub).unwrap();
         for (path, kind) in [(&fifo, "a FIFO"), (&sub, "a directory")] {
             let e = write_bytes(path, b"x").unwrap_err().to_string();
-            assert!(e.contains(&path.display().to_string()) && e.contains(kind), "{e}");
+            assert!(
+                e.contains(&path.display().to_string()) && e.contains(kind),
+                "{e}"
+            );
             assert!(check_target(path).is_err());
         }
         let link = dir.join("to-fifo");

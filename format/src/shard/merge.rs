@@ -29,7 +29,8 @@ fn open_shard(path: &Path) -> Result<OpenShard, Error> {
         path: path.to_path_buf(),
         detail,
     };
-    let (file, file_len) = oslf_util::input_file::open(path)?;
+    let (file, file_len) =
+        oslf_util::input_file::open(path).map_err(crate::error::open_error(path))?;
     // Small buffers: the merge holds every shard open at once.
     let mut reader = BufReader::with_capacity(64 << 10, file);
     let mut b = [0u8; SHARD_HEADER_BYTES];
