@@ -292,13 +292,13 @@ fn unwritable_outputs_fail_before_the_bake() {
     let err = run(&["-o", d]);
     assert_eq!(
         err.trim_end(),
-        format!("error: cannot write the store {d}: {d} exists and is not a regular file (a directory); give a path for a new or regular file")
+        format!("error: --output {d}: exists and is not a regular file (a directory); outputs are written to new or regular files only, and this one is left as it is")
     );
     // A device is not replaced by the store (the rename would replace the device node).
     let err = run(&["-o", "/dev/null"]);
     assert_eq!(
         err.trim_end(),
-        "error: cannot write the store /dev/null: /dev/null exists and is not a regular file (a character device); give a path for a new or regular file"
+        "error: --output /dev/null: exists and is not a regular file (a character device); outputs are written to new or regular files only, and this one is left as it is"
     );
     assert!(std::fs::metadata("/dev/null")
         .unwrap()

@@ -150,7 +150,7 @@ impl Header {
         };
         let mut magic = [0u8; 8];
         magic.copy_from_slice(&b[..8]);
-        if magic == crate::shard::SHARD_MAGIC {
+        if magic == crate::SHARD_MAGIC {
             return Err(Error::IsShard);
         }
         if magic != MAGIC {

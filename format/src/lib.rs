@@ -456,6 +456,7 @@ pub mod distance;
 pub mod encoding;
 mod encoding_kind;
 mod error;
+mod file_stamp;
 pub mod filter;
 pub mod header;
 pub mod meta;
@@ -487,6 +488,9 @@ pub use writer::{StoreSummary, StoreWriter};
 
 /// The first 8 bytes of every store.
 pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
+/// The first 8 bytes of every shard file ([`shard`]); a store reader that finds them says the
+/// file is a shard.
+pub const SHARD_MAGIC: [u8; 8] = *b"OSLFSHRD";
 /// The format version this crate writes (and the newest it reads).
 pub const VERSION: u32 = 8;
 /// The oldest format version this crate reads (version 1: no `mantissa_bits` in the

@@ -8,6 +8,7 @@ use crate::bytes::align8;
 use crate::cube::{face_raw_size, CubeImage, FACES};
 use crate::encoding::{decode_distances, decode_face_texels};
 use crate::error::io_at;
+use crate::file_stamp::FileStamp;
 use crate::filter::{unfilter_face_quantized, Filter};
 use crate::header::{Header, Section, HEADER_BYTES};
 use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
@@ -66,10 +67,9 @@ enum Backing {
     Mapped {
         map: memmap2::Mmap,
         file: std::fs::File,
-        path: std::path::PathBuf,
         /// The file's size and modification time when it was mapped
         /// ([`Store::changed_since_open`]).
-        opened: (u64, Option<std::time::SystemTime>),
+        opened: FileStamp,
     },
 }
 
@@ -347,13 +347,8 @@ impl Store {
         // documented risk of this function (a truncation raises SIGBUS), which the shared lock
         // keeps this project's own writers from causing.
         let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io_at(path, "map"))?;
-        let opened = (meta.len(), meta.modified().ok());
-        Self::parse(Backing::Mapped {
-            map,
-            file,
-            path: path.to_path_buf(),
-            opened,
-        })
+        let opened = FileStamp::of(path, &meta);
+        Self::parse(Backing::Mapped { map, file, opened })
     }
 
     /// [`Store::open`] or [`Store::open_mapped`], as `access` says.
@@ -372,30 +367,10 @@ impl Store {
     /// size and sets the modification time back; a truncation raises SIGBUS before it can be
     /// checked. A store replaced by rename is not a change: the mapping keeps the old file.
     pub fn changed_since_open(&self) -> Option<String> {
-        let Backing::Mapped {
-            file, path, opened, ..
-        } = &self.backing
-        else {
-            return None;
-        };
-        let now = match file.metadata() {
-            Ok(m) => (m.len(), m.modified().ok()),
-            Err(e) => {
-                return Some(format!(
-                    "{}: cannot stat the mapped file: {e}",
-                    path.display()
-                ))
-            }
-        };
-        (now != *opened).then(|| {
-            format!(
-                "{} was written in place while it was memory-mapped ({} bytes when opened, {} now{}): what was read may be of neither version",
-                path.display(),
-                opened.0,
-                now.0,
-                if now.0 == opened.0 { ", modification time changed" } else { "" }
-            )
-        })
+        match &self.backing {
+            Backing::Mapped { file, opened, .. } => opened.changed(file),
+            _ => None,
+        }
     }
 
     /// How this store reads its file.

@@ -430,6 +430,10 @@ pub fn run_sweep(
     for (bc, scene, name) in variants {
         let path = config.store_dir.join(format!("{name}.oslf"));
         config.door.check_output_in_dir("a variant store", &path)?;
+        config.door.check_output_in_dir(
+            "a variant store's partial file",
+            &oslf_format::writer::partial_path(&path),
+        )?;
         config
             .door
             .check_output_in_dir("a variant store's record", &record_path(&path))?;

@@ -304,6 +304,204 @@ fn path_at(tokens: &[Token], index: usize) -> &Path {
     }
 }
 
+/// One subcommand under test: its base invocation, the kinds of its path arguments, the
+/// directory of the fixtures and what it held before.
+struct Case<'a> {
+    name: &'a str,
+    tokens: Vec<Token>,
+    args: &'a BTreeMap<String, Kind>,
+    dir: &'a Path,
+    before: &'a BTreeMap<String, Option<Vec<u8>>>,
+    /// A refusal comes before any work: seconds at most, even on a loaded machine.
+    limit: Duration,
+    tried: usize,
+}
+
+impl Case<'_> {
+    /// The indices of the tokens whose argument is of one of `kinds`.
+    fn slots(&self, kinds: &[Kind]) -> Vec<usize> {
+        self.tokens
+            .iter()
+            .enumerate()
+            .filter_map(|(i, t)| match t {
+                Token::Path { id, .. } if kinds.contains(&self.args[id]) => Some(i),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn kind(&self, index: usize) -> Kind {
+        match &self.tokens[index] {
+            Token::Path { id, .. } => self.args[id],
+            Token::Word(_) => unreachable!(),
+        }
+    }
+
+    /// Runs the base invocation with token `index` set to `path`: its refusal.
+    fn refused_with(&mut self, index: usize, path: &Path) -> String {
+        self.tried += 1;
+        refused(&with_path(&self.tokens, index, path), self.limit)
+    }
+
+    /// The fixtures' directory is as it was (after removing what the case made).
+    fn unchanged(&self) {
+        tidy(self.dir);
+        assert_eq!(
+            &snapshot(self.dir),
+            self.before,
+            "`oslf {}` changed the directory",
+            self.name
+        );
+    }
+
+    /// Every base path argument is of a door type and tried; every typed argument is in it.
+    fn check_coverage(&self) {
+        let mut seen = BTreeMap::new();
+        for t in &self.tokens {
+            if let Token::Path { id, .. } = t {
+                let kind = self.args.get(id).unwrap_or_else(|| {
+                    panic!(
+                        "`oslf {}` has no path argument {id} (door_tests::BASE)",
+                        self.name
+                    )
+                });
+                seen.insert(id.clone(), *kind);
+            }
+        }
+        for (id, kind) in self.args {
+            assert!(
+                seen.contains_key(id),
+                "`oslf {}`: its {kind:?} argument {id} is not tried (add it to door_tests::BASE)",
+                self.name
+            );
+        }
+    }
+
+    /// Each output pointed at each input (five spellings), and at each other output.
+    fn outputs_over_inputs(&mut self) {
+        let (inputs, outputs) = (self.slots(&[Kind::Input]), self.slots(&[Kind::Output]));
+        for &o in &outputs {
+            for &i in &inputs {
+                let input = path_at(&self.tokens, i).to_path_buf();
+                for (n, spelled) in spellings(self.dir, &input, self.tried)
+                    .into_iter()
+                    .enumerate()
+                {
+                    let e = self.refused_with(o, &spelled);
+                    assert!(
+                        e.contains(&spelled.display().to_string())
+                            && e.contains(&input.display().to_string())
+                            && e.contains("the same file"),
+                        "`oslf {}`, output {o} as input {i} (spelling {n}): {e}",
+                        self.name
+                    );
+                }
+                self.unchanged();
+            }
+            for &p in outputs.iter().filter(|&&p| p > o) {
+                let same = path_at(&self.tokens, o).to_path_buf();
+                let e = self.refused_with(p, &same);
+                assert!(
+                    e.contains("are the same file") && e.contains(&same.display().to_string()),
+                    "`oslf {}`: outputs {o} and {p}: {e}",
+                    self.name
+                );
+            }
+        }
+    }
+
+    /// Each output (file, prefix, directory) at a FIFO, a full device and a directory:
+    /// refused, named, kept.
+    fn outputs_at_nodes(&mut self) {
+        for o in self.slots(&[Kind::Output, Kind::Prefix, Kind::Dir]) {
+            let kind = self.kind(o);
+            for what in ["fifo", "device", "dir"] {
+                if kind == Kind::Dir && what == "dir" {
+                    continue;
+                }
+                let (given, at) = match kind {
+                    // The first file a prefix names: PREFIX-recon.exr (truth's default modes).
+                    Kind::Prefix => (self.dir.join("node-p"), self.dir.join("node-p-recon.exr")),
+                    _ => (self.dir.join("node-x.exr"), self.dir.join("node-x.exr")),
+                };
+                let called = node(&at, what, false);
+                let e = self.refused_with(o, &given);
+                let says = if kind == Kind::Dir {
+                    "not a directory"
+                } else {
+                    called
+                };
+                assert!(
+                    e.contains(&at.display().to_string()) && e.contains(says),
+                    "`oslf {}`: output {o} at a {what}: {e}",
+                    self.name
+                );
+                let meta = std::fs::symlink_metadata(&at).expect("the node was removed");
+                assert!(!meta.is_file(), "the {what} was replaced by a file");
+                self.unchanged();
+            }
+        }
+    }
+
+    /// A prefix whose first file is an input (a hard link to it); a directory at an input.
+    fn prefixes_and_directories_over_inputs(&mut self) {
+        let inputs = self.slots(&[Kind::Input]);
+        for o in self.slots(&[Kind::Prefix]) {
+            for &i in &inputs {
+                let input = path_at(&self.tokens, i).to_path_buf();
+                let first = self.dir.join("node-q-recon.exr");
+                std::fs::hard_link(&input, &first).unwrap();
+                let e = self.refused_with(o, &self.dir.join("node-q"));
+                assert!(
+                    e.contains(&first.display().to_string())
+                        && e.contains(&input.display().to_string())
+                        && e.contains("the same file"),
+                    "`oslf {}`: prefix {o} over input {i}: {e}",
+                    self.name
+                );
+                self.unchanged();
+            }
+        }
+        for o in self.slots(&[Kind::Dir]) {
+            for &i in &inputs {
+                let input = path_at(&self.tokens, i).to_path_buf();
+                let e = self.refused_with(o, &input);
+                assert!(
+                    e.contains(&input.display().to_string()) && e.contains("not a directory"),
+                    "`oslf {}`: directory {o} at input {i}: {e}",
+                    self.name
+                );
+            }
+        }
+    }
+
+    /// Each input at a FIFO (refused within a second), a device and a directory.
+    fn inputs_at_nodes(&mut self) {
+        for i in self.slots(&[Kind::Input]) {
+            for what in ["fifo", "device", "dir"] {
+                let at = self.dir.join("node-in");
+                let called = node(&at, what, true);
+                let t = std::time::Instant::now();
+                let e = self.refused_with(i, &at);
+                if what == "fifo" {
+                    assert!(
+                        t.elapsed() < Duration::from_secs(1),
+                        "`oslf {}` took {:?} to refuse a FIFO",
+                        self.name,
+                        t.elapsed()
+                    );
+                }
+                assert!(
+                    e.contains(&at.display().to_string()) && e.contains(called),
+                    "`oslf {}`: input {i} at a {what}: {e}",
+                    self.name
+                );
+                self.unchanged();
+            }
+        }
+    }
+}
+
 #[test]
 fn every_door_refuses_outputs_over_inputs_nodes_and_fifos() {
     let tmp = tempfile::tempdir().unwrap();
@@ -318,158 +516,26 @@ fn every_door_refuses_outputs_over_inputs_nodes_and_fifos() {
         );
     }
     let before = snapshot(dir);
-    let second = Duration::from_secs(1);
-    // A refusal comes before any work: seconds at most, even on a loaded machine.
-    let limit = Duration::from_secs(60);
-    let mut cases = 0;
+    let mut tried = 0;
     for (name, args) in &leaves {
-        let tokens = parse_base(base[name.as_str()], dir);
-        let mut seen = BTreeMap::new();
-        for t in &tokens {
-            if let Token::Path { id, .. } = t {
-                let kind = args.get(id).unwrap_or_else(|| {
-                    panic!("`oslf {name}` has no path argument {id} (door_tests::BASE)")
-                });
-                seen.insert(id.clone(), *kind);
-            }
-        }
-        for (id, kind) in args {
-            assert!(
-                seen.contains_key(id),
-                "`oslf {name}`: its {kind:?} argument {id} is not tried (add it to door_tests::BASE)"
-            );
-        }
-        let slots = |k: &[Kind]| -> Vec<usize> {
-            tokens
-                .iter()
-                .enumerate()
-                .filter_map(|(i, t)| match t {
-                    Token::Path { id, .. } if k.contains(&args[id]) => Some(i),
-                    _ => None,
-                })
-                .collect()
+        let mut case = Case {
+            name,
+            tokens: parse_base(base[name.as_str()], dir),
+            args,
+            dir,
+            before: &before,
+            limit: Duration::from_secs(60),
+            tried,
         };
-        let inputs = slots(&[Kind::Input]);
-        let outputs = slots(&[Kind::Output]);
-
-        // Each output pointed at each input, five spellings.
-        for &o in &outputs {
-            for &i in &inputs {
-                let input = path_at(&tokens, i).to_path_buf();
-                for (n, spelled) in spellings(dir, &input, cases).into_iter().enumerate() {
-                    let e = refused(&with_path(&tokens, o, &spelled), limit);
-                    assert!(
-                        e.contains(&spelled.display().to_string())
-                            && e.contains(&input.display().to_string())
-                            && e.contains("the same file"),
-                        "`oslf {name}`, output {o} as input {i} (spelling {n}): {e}"
-                    );
-                    cases += 1;
-                }
-                tidy(dir);
-                assert_eq!(snapshot(dir), before, "`oslf {name}` changed the directory");
-            }
-            // Two outputs that are one file.
-            for &p in &outputs {
-                if p <= o {
-                    continue;
-                }
-                let same = path_at(&tokens, o).to_path_buf();
-                let e = refused(&with_path(&tokens, p, &same), limit);
-                assert!(
-                    e.contains("are the same file") && e.contains(&same.display().to_string()),
-                    "`oslf {name}`: outputs {o} and {p}: {e}"
-                );
-                cases += 1;
-            }
-        }
-        // Outputs at nodes: refused, named, kept.
-        for &o in &slots(&[Kind::Output, Kind::Prefix, Kind::Dir]) {
-            for what in ["fifo", "device", "dir"] {
-                let kind = args[match &tokens[o] {
-                    Token::Path { id, .. } => id,
-                    Token::Word(_) => unreachable!(),
-                }];
-                if kind == Kind::Dir && what == "dir" {
-                    continue;
-                }
-                let (given, at) = match kind {
-                    // The first file a prefix names: PREFIX-recon.exr (truth's default modes).
-                    Kind::Prefix => (dir.join("node-p"), dir.join("node-p-recon.exr")),
-                    _ => (dir.join("node-x.exr"), dir.join("node-x.exr")),
-                };
-                let called = node(&at, what, false);
-                let e = refused(&with_path(&tokens, o, &given), limit);
-                let says = if kind == Kind::Dir {
-                    "not a directory"
-                } else {
-                    called
-                };
-                assert!(
-                    e.contains(&at.display().to_string()) && e.contains(says),
-                    "`oslf {name}`: output {o} at a {what}: {e}"
-                );
-                let meta = std::fs::symlink_metadata(&at).expect("the node was removed");
-                assert!(!meta.is_file(), "the {what} was replaced by a file");
-                tidy(dir);
-                assert_eq!(snapshot(dir), before, "`oslf {name}` changed the directory");
-                cases += 1;
-            }
-        }
-        // A prefix whose first file is an input (a hard link to it).
-        for &o in &slots(&[Kind::Prefix]) {
-            for &i in &inputs {
-                let input = path_at(&tokens, i).to_path_buf();
-                let first = dir.join("node-q-recon.exr");
-                std::fs::hard_link(&input, &first).unwrap();
-                let e = refused(&with_path(&tokens, o, &dir.join("node-q")), limit);
-                assert!(
-                    e.contains(&first.display().to_string())
-                        && e.contains(&input.display().to_string())
-                        && e.contains("the same file"),
-                    "`oslf {name}`: prefix {o} over input {i}: {e}"
-                );
-                tidy(dir);
-                cases += 1;
-            }
-        }
-        // Output directories at an input file.
-        for &o in &slots(&[Kind::Dir]) {
-            for &i in &inputs {
-                let input = path_at(&tokens, i).to_path_buf();
-                let e = refused(&with_path(&tokens, o, &input), limit);
-                assert!(
-                    e.contains(&input.display().to_string()) && e.contains("not a directory"),
-                    "`oslf {name}`: directory {o} at input {i}: {e}"
-                );
-                cases += 1;
-            }
-        }
-        // Inputs at nodes: refused at once (a FIFO within a second), named.
-        for &i in &inputs {
-            for what in ["fifo", "device", "dir"] {
-                let at = dir.join("node-in");
-                let called = node(&at, what, true);
-                let t = std::time::Instant::now();
-                let e = refused(&with_path(&tokens, i, &at), limit);
-                if what == "fifo" {
-                    assert!(
-                        t.elapsed() < second,
-                        "`oslf {name}` took {:?} to refuse a FIFO",
-                        t.elapsed()
-                    );
-                }
-                assert!(
-                    e.contains(&at.display().to_string()) && e.contains(called),
-                    "`oslf {name}`: input {i} at a {what}: {e}"
-                );
-                tidy(dir);
-                cases += 1;
-            }
-        }
-        assert_eq!(snapshot(dir), before, "`oslf {name}` changed the directory");
+        case.check_coverage();
+        case.outputs_over_inputs();
+        case.outputs_at_nodes();
+        case.prefixes_and_directories_over_inputs();
+        case.inputs_at_nodes();
+        case.unchanged();
+        tried = case.tried;
     }
-    assert!(cases > 150, "only {cases} cases were tried");
+    assert!(tried > 150, "only {tried} cases were tried");
 }
 
 /// The forms the issue named, which the table cannot derive: outputs beside an output (the

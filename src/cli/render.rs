@@ -139,10 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let frame = renderer.render(&camera, &params, &options)?;
     let render_seconds = t.elapsed().as_secs_f64();
-    let mut degraded = fallback_report(&renderer, &frame, &params);
-    // A memory-mapped store written in place during the frame: what was read may be of
-    // neither version (docs/store.md, "Memory-mapped reads").
-    degraded.extend(renderer.store().changed_since_open());
+    let degraded = fallback_report(&renderer, &frame, &params);
     if args.strict && !degraded.is_empty() {
         bail!(
             "{}: the image would be degraded (--strict; nothing written):\n  {}",
@@ -330,6 +327,9 @@ fn fallback_report(renderer: &Renderer, frame: &Frame, params: &ShadingParams) -
             frame.fallbacks
         ));
     }
+    // A memory-mapped store written in place since it was opened: what was read may be of
+    // neither version (docs/store.md, "Two readers").
+    lines.extend(store.changed_since_open());
     lines
 }
 

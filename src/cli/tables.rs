@@ -236,15 +236,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.scene.display()
         );
     };
-    let mut door = Door::new();
-    declare_scene(&mut door, "SCENE", &scene);
-    for store in &args.stores {
-        door.input("--store", store);
-    }
-    door.output_dir("--out", &args.out);
-    for name in OUTPUTS {
-        door.output(format!("{name} in --out"), &args.out.join(name));
-    }
+    let door = door(&args, &scene);
     door.check()?;
     let stores = open_stores(&args, &scene)?;
     let lobes = parse_lobes(&args.lobes)?;
@@ -355,6 +347,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ));
     }
     write_outputs(&args, &tables, &bench.records)
+}
+
+/// Every file `oslf tables` reads, and those it writes into --out that it can name up front
+/// (the truth images are checked as they are named).
+fn door(args: &Args, scene: &Scene) -> Door {
+    let mut door = Door::new();
+    declare_scene(&mut door, "SCENE", scene);
+    for store in &args.stores {
+        door.input("--store", store);
+    }
+    door.output_dir("--out", &args.out);
+    for name in OUTPUTS {
+        door.output(format!("{name} in --out"), &args.out.join(name));
+    }
+    door
 }
 
 /// Opens the stores, checks each was baked from `scene` and has an environment cube, and sorts

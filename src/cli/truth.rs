@@ -96,21 +96,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn render_all(args: &Args) -> anyhow::Result<()> {
-    let mut modes: Vec<&str> = Vec::new();
-    // Each mode once, in the order first named.
-    for m in args.modes.split(',').map(str::trim) {
-        if !modes.contains(&m) {
-            modes.push(m);
-        }
-    }
-    for m in &modes {
-        if !MODES.contains(m) {
-            bail!(
-                "--modes: unknown mode {m:?} (expected one of {})",
-                MODES.join(", ")
-            );
-        }
-    }
+    let modes = parse_modes(&args.modes)?;
     // The terms' materials, checked before any work.
     let lobe = AsLobe {
         rs: args.rs,
@@ -131,17 +117,7 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         pbr_term.validate()?;
     }
     let scene = Scene::load(&args.scene, args.preset.as_deref())?;
-    let mut door = Door::new();
-    declare_scene(&mut door, "SCENE", &scene);
-    if let Some(path) = &args.store {
-        door.input("--store", path);
-    }
-    for m in &modes {
-        let exr = output_path(&args.output, m, "exr");
-        door.output(format!("the --output image of mode {m}"), &exr)
-            .output(format!("the PNG of mode {m}"), &exr.with_extension("png"));
-    }
-    door.check()?;
+    door(args, &scene, &modes).check()?;
     if let Some(path) = &args.store {
         let store = oslf_format::Store::open(path)?;
         let bake = &store.meta().bake;
@@ -234,6 +210,38 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         println!("{m:<13} {}", exr.display());
     }
     Ok(())
+}
+
+/// `--modes`: each mode once, in the order first named; an unknown one is an error.
+fn parse_modes(list: &str) -> anyhow::Result<Vec<&str>> {
+    let mut modes: Vec<&str> = Vec::new();
+    for m in list.split(',').map(str::trim) {
+        if !MODES.contains(&m) {
+            bail!(
+                "--modes: unknown mode {m:?} (expected one of {})",
+                MODES.join(", ")
+            );
+        }
+        if !modes.contains(&m) {
+            modes.push(m);
+        }
+    }
+    Ok(modes)
+}
+
+/// Every file `oslf truth` reads and writes: the scene's, the store, each mode's EXR and PNG.
+fn door(args: &Args, scene: &Scene, modes: &[&str]) -> Door {
+    let mut door = Door::new();
+    declare_scene(&mut door, "SCENE", scene);
+    if let Some(path) = &args.store {
+        door.input("--store", path);
+    }
+    for m in modes {
+        let exr = output_path(&args.output, m, "exr");
+        door.output(format!("the --output image of mode {m}"), &exr)
+            .output(format!("the PNG of mode {m}"), &exr.with_extension("png"));
+    }
+    door
 }
 
 fn timed(

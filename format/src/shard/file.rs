@@ -11,8 +11,7 @@ use crate::header::{Header, HEADER_BYTES};
 use crate::shard::spec::ShardSpec;
 use crate::toc::{RecordHeader, RECORD_HEADER_BYTES};
 
-/// The first 8 bytes of every shard file.
-pub const SHARD_MAGIC: [u8; 8] = *b"OSLFSHRD";
+pub use crate::SHARD_MAGIC;
 /// The shard format version this crate writes and reads.
 pub const SHARD_VERSION: u32 = 1;
 /// Bytes of the shard header.
