@@ -38,7 +38,7 @@ pub enum Error {
     /// An input that is not a regular file (a FIFO, device, directory), refused before it is
     /// opened for reading, or that cannot be opened.
     #[error(transparent)]
-    Input(#[from] oslf_util::UtilError),
+    Input(Box<oslf_util::UtilError>),
     /// A format version this reader does not understand.
     #[error(
         "unsupported OSLF store version {found} (this reader understands versions {oldest} to {newest})"
@@ -367,6 +367,12 @@ pub(crate) fn open_error(path: &std::path::Path) -> impl FnOnce(oslf_util::UtilE
     let context = format!("{} (open)", path.display());
     move |e| match e {
         oslf_util::UtilError::Input { error, .. } => Error::Io { context, error },
-        e => Error::Input(e),
+        e => Error::from(e),
+    }
+}
+
+impl From<oslf_util::UtilError> for Error {
+    fn from(e: oslf_util::UtilError) -> Error {
+        Error::Input(Box::new(e))
     }
 }

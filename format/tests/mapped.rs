@@ -152,7 +152,7 @@ fn only_regular_files_are_mapped() {
             Store::open(path).err().unwrap(),
         ] {
             assert!(
-                matches!(e, Error::Input(oslf_util::UtilError::NotRegular { .. }))
+                matches!(&e, Error::Input(u) if matches!(**u, oslf_util::UtilError::NotRegular { .. }))
                     && e.to_string()
                         .contains(&format!("{} {kind}", path.display())),
                 "{e}"

@@ -111,7 +111,7 @@ fn leaves() -> BTreeMap<String, BTreeMap<String, Kind>> {
             let mut args = BTreeMap::new();
             for arg in sub.get_arguments() {
                 let parser = arg.get_value_parser();
-                let path_buf: ValueParser = clap::value_parser!(PathBuf).into();
+                let path_buf: ValueParser = clap::value_parser!(PathBuf);
                 assert!(
                     parser.type_id() != path_buf.type_id(),
                     "`oslf {name}` {}: a PathBuf argument; give it a door type (InputPath, OutputPath, OutputPrefix or OutputDir) and declare it",

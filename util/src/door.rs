@@ -21,7 +21,7 @@ use std::ffi::OsString;
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 
-use crate::error::{Result, UtilError};
+use crate::error::{Conflict, Result, UtilError};
 use crate::input_file::kind;
 
 /// Whether a declared file is read or written.
@@ -106,14 +106,7 @@ impl Door {
                 match other.direction {
                     Direction::Input => return Err(output_is_input(out, other)),
                     // Each pair once, the first declared named first.
-                    _ if j > i => {
-                        return Err(UtilError::SameOutput {
-                            first_role: out.role.clone(),
-                            first: out.path.clone(),
-                            second_role: other.role.clone(),
-                            second: other.path.clone(),
-                        })
-                    }
+                    _ if j > i => return Err(UtilError::SameOutput(conflict(out, other))),
                     _ => {}
                 }
             }
@@ -140,12 +133,7 @@ impl Door {
             }
             return Err(match f.direction {
                 Direction::Input => output_is_input(&out, f),
-                _ => UtilError::SameOutput {
-                    first_role: f.role.clone(),
-                    first: f.path.clone(),
-                    second_role: out.role.clone(),
-                    second: out.path.clone(),
-                },
+                _ => UtilError::SameOutput(conflict(f, &out)),
             });
         }
         Ok(())
@@ -153,12 +141,16 @@ impl Door {
 }
 
 fn output_is_input(out: &Declared, input: &Declared) -> UtilError {
-    UtilError::OutputIsInput {
-        output_role: out.role.clone(),
-        output: out.path.clone(),
-        input_role: input.role.clone(),
-        input: input.path.clone(),
-    }
+    UtilError::OutputIsInput(conflict(out, input))
+}
+
+fn conflict(first: &Declared, second: &Declared) -> Box<Conflict> {
+    Box::new(Conflict {
+        first_role: first.role.clone(),
+        first: first.path.clone(),
+        second_role: second.role.clone(),
+        second: second.path.clone(),
+    })
 }
 
 /// An input that exists must be a regular file (a missing one is left to its reader, which

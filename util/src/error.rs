@@ -2,6 +2,16 @@
 
 use std::path::PathBuf;
 
+/// Two declared files of one command that are one file: their roles ("--output", "SCENE")
+/// and paths as given.
+#[derive(Debug)]
+pub struct Conflict {
+    pub first_role: String,
+    pub first: PathBuf,
+    pub second_role: String,
+    pub second: PathBuf,
+}
+
 /// What went wrong, and with which file.
 #[derive(Debug, thiserror::Error)]
 pub enum UtilError {
@@ -49,22 +59,13 @@ pub enum UtilError {
         path: PathBuf,
         kind: &'static str,
     },
-    /// An output that is an input of the same command ([`crate::door::Door`]).
-    #[error("{output_role} {} is {input_role} {} (the same file): a command never writes over its own input; give the output another path", .output.display(), .input.display())]
-    OutputIsInput {
-        output_role: String,
-        output: PathBuf,
-        input_role: String,
-        input: PathBuf,
-    },
+    /// An output that is an input of the same command ([`crate::door::Door`]): `first` is the
+    /// output, `second` the input.
+    #[error("{} {} is {} {} (the same file): a command never writes over its own input; give the output another path", .0.first_role, .0.first.display(), .0.second_role, .0.second.display())]
+    OutputIsInput(Box<Conflict>),
     /// Two outputs of one command that are one file ([`crate::door::Door`]).
-    #[error("{first_role} {} and {second_role} {} are the same file: each output needs a path of its own", .first.display(), .second.display())]
-    SameOutput {
-        first_role: String,
-        first: PathBuf,
-        second_role: String,
-        second: PathBuf,
-    },
+    #[error("{} {} and {} {} are the same file: each output needs a path of its own", .0.first_role, .0.first.display(), .0.second_role, .0.second.display())]
+    SameOutput(Box<Conflict>),
 }
 
 pub type Result<T> = std::result::Result<T, UtilError>;

@@ -25,4 +25,4 @@ pub mod ktx2;
 pub mod machine;
 pub mod output_file;
 
-pub use error::{Result, UtilError};
+pub use error::{Conflict, Result, UtilError};
