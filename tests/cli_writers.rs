@@ -174,3 +174,29 @@ fn an_output_that_is_an_input_is_refused_however_it_is_spelled() {
     assert!(err.contains("(the same file)"), "{err}");
     assert_eq!(std::fs::read(&shards[0]).unwrap(), shard0);
 }
+
+/// The store `bake` writes by default (the scene's name with .oslf, in the current directory)
+/// is refused when it is the scene itself, and the scene is kept.
+#[test]
+fn a_default_output_that_is_the_input_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(dir.join("lid.oslf"), common::LID_SCENE).unwrap();
+    let o = oslf("bake")
+        .arg("lid.oslf")
+        .args(["-q", "--preview", "none"])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--output lid.oslf is SCENE lid.oslf (the same file)"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("lid.oslf")).unwrap(),
+        common::LID_SCENE
+    );
+    assert_eq!(std::fs::read_dir(dir).unwrap().count(), 1);
+}

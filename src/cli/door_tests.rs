@@ -593,5 +593,22 @@ fn derived_outputs_and_included_files_are_doors_too() {
     );
     assert_eq!(snapshot(dir), before_png);
     std::fs::remove_file(dir.join("st.png")).unwrap();
+    // One of the six face files of `export-cube --layout faces` is the store (a hard link).
+    std::fs::hard_link(dir.join("st.oslf"), dir.join("cube_nz.exr")).unwrap();
+    let e = run(&[
+        "store",
+        "export-cube",
+        "/st.oslf",
+        "0",
+        "--layout",
+        "faces",
+        "-o",
+        "/cube.exr",
+    ]);
+    assert!(
+        e.contains("the nz face file of --output") && e.contains(&path("cube_nz.exr")),
+        "{e}"
+    );
+    std::fs::remove_file(dir.join("cube_nz.exr")).unwrap();
     assert_eq!(snapshot(dir), before);
 }
