@@ -5,10 +5,8 @@ mod common;
 
 use common::{oslf, LID_SCENE};
 
-#[test]
-fn mapped_and_positioned_stores_give_the_same_outputs() {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path();
+/// The lid scene of tests/common baked into `dir`: the store's path.
+fn bake_lid(dir: &std::path::Path) -> std::path::PathBuf {
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, LID_SCENE).unwrap();
     let store = dir.join("lid.oslf");
@@ -19,6 +17,14 @@ fn mapped_and_positioned_stores_give_the_same_outputs() {
         .status()
         .unwrap();
     assert!(ok.success());
+    store
+}
+
+#[test]
+fn mapped_and_positioned_stores_give_the_same_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let store = bake_lid(dir);
     let stdout = |args: &[&str]| {
         let o = oslf(args[0]).args(&args[1..]).output().unwrap();
         assert!(
@@ -74,16 +80,7 @@ fn a_store_written_in_place_during_a_mapped_render_is_said_and_refused_under_str
     use std::io::{Seek, SeekFrom, Write};
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = dir.join("lid.toml");
-    std::fs::write(&scene, LID_SCENE).unwrap();
-    let store = dir.join("lid.oslf");
-    let ok = oslf("bake")
-        .arg(&scene)
-        .args(["-q", "--preview", "none", "-o"])
-        .arg(&store)
-        .status()
-        .unwrap();
-    assert!(ok.success());
+    let store = bake_lid(dir);
     for strict in [false, true] {
         let image = dir.join(format!("strict-{strict}.exr"));
         let mut c = oslf("render");
