@@ -6,10 +6,10 @@ use anyhow::{bail, Context, Result};
 use clap::{Subcommand, ValueEnum};
 use oslf_format::cube::{FACES, FACE_NAMES};
 use oslf_format::{Encoding, SampleMaps, Store, StoreWriter, INVALID_INDEX};
+use oslf_util::door::Door;
 
 use super::args::StoreAccessArgs;
 use super::paths::{InputPath, OutputPath};
-use oslf_util::door::Door;
 
 /// Inspect, verify, convert and export OSLF stores.
 #[derive(clap::Args, Debug)]

@@ -3,10 +3,6 @@
 
 use std::path::Path;
 
-use oslf_util::door::Door;
-
-use super::paths::{declare_scene, InputPath, OutputDir};
-
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
 use oslf_bake::scene::Scene;
@@ -19,7 +15,10 @@ use oslf_measure::sweep::{
 };
 use oslf_measure::table::Table;
 use oslf_runtime::{Mode, Order, ShadingParams};
+use oslf_util::door::Door;
 use oslf_util::image_file;
+
+use super::paths::{declare_scene, InputPath, OutputDir};
 
 /// Bake variants of a scene and render them with variants of the runtime settings, one setting
 /// changed at a time from the defaults; judge every combination against the ray-traced ground

@@ -4,10 +4,6 @@
 
 use std::path::PathBuf;
 
-use oslf_util::door::Door;
-
-use super::paths::{declare_scene, InputPath, OutputDir};
-
 use anyhow::{bail, Context};
 use oslf_bake::ground_truth::{GroundTruth, TruthImage, TruthSettings};
 use oslf_bake::scene::Scene;
@@ -18,7 +14,10 @@ use oslf_measure::table::{csv_cell, Table};
 use oslf_runtime::{
     Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, ShadingParams, Source,
 };
+use oslf_util::door::Door;
 use oslf_util::image_file;
+
+use super::paths::{declare_scene, InputPath, OutputDir};
 
 /// Reproduce the thesis's tables on a scene: Table 6.1 (reconstruction error) and Table 6.2
 /// (mirror-reflection error of the environment map and of every OSLF blend) for each store
