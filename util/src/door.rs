@@ -204,12 +204,8 @@ fn identity(path: &Path) -> Option<Identity> {
     match std::fs::metadata(path) {
         Ok(m) => Some(Identity::File(dev(&m), ino(&m))),
         Err(e) if e.kind() == ErrorKind::NotFound => {
-            let path = match std::fs::read_link(path) {
-                // A dangling symbolic link: the file it names.
-                Ok(to) if to.is_absolute() => to,
-                Ok(to) => path.parent().unwrap_or_else(|| Path::new(".")).join(to),
-                Err(_) => path.to_path_buf(),
-            };
+            // A dangling symbolic link: the file it names.
+            let path = crate::output_file::resolve_dangling(path);
             let name = path.file_name()?.to_os_string();
             let dir = match path.parent() {
                 Some(p) if !p.as_os_str().is_empty() => p,

@@ -99,8 +99,9 @@ fn target(path: &Path) -> Result<PathBuf> {
     Ok(target)
 }
 
-/// The path a dangling symbolic link `path` names (relative to its directory).
-fn resolve_dangling(path: &Path) -> PathBuf {
+/// The path a dangling symbolic link `path` names (relative to its directory); `path` itself
+/// if it is no link.
+pub(crate) fn resolve_dangling(path: &Path) -> PathBuf {
     match std::fs::read_link(path) {
         Ok(to) if to.is_absolute() => to,
         Ok(to) => path.parent().unwrap_or_else(|| Path::new(".")).join(to),
