@@ -14,7 +14,18 @@ pub const CAPTURE: &str = include_str!("shader/capture.wgsl");
 /// The bake's preview: the scene camera's image.
 const PREVIEW: &str = include_str!("shader/preview.wgsl");
 
-/// The whole module's source.
+/// The whole module's source: oslf-shading's WGSL modules (GGX, Fresnel, colour), then the
+/// capture shader's files.
 pub fn source() -> String {
-    [RNG, BVH, SCENE, INTEGRATOR, CAPTURE, PREVIEW].join("\n")
+    let shading = oslf_shading::wgsl::source();
+    [
+        shading.as_str(),
+        RNG,
+        BVH,
+        SCENE,
+        INTEGRATOR,
+        CAPTURE,
+        PREVIEW,
+    ]
+    .join("\n")
 }

@@ -192,10 +192,6 @@ fn the_shader_constants_are_the_crates() {
         value("SELF_TOLERANCE"),
         f64::from(oslf_bake::bvh::SELF_TOLERANCE)
     );
-    assert_eq!(
-        value("MIN_ALPHA"),
-        f64::from(oslf_bake::metallic_roughness::MIN_ALPHA)
-    );
     assert_eq!(value("STACK") as usize, oslf_bake_gpu::scene::MAX_DEPTH);
     assert_eq!(
         value("ONE_MINUS_EPSILON"),

@@ -30,7 +30,9 @@ use crate::sampling::{
     invert_uniform_sphere, sample_uniform_sphere, uniform_sphere_pdf, Distribution2D,
     ONE_MINUS_EPSILON,
 };
-use crate::texture::{load_linear_rgb, luminance};
+use oslf_shading::color::luminance;
+
+use crate::texture::load_linear_rgb;
 use crate::{BakeError, Result};
 
 /// Angular radius of the real sun seen from the earth, radians.

@@ -20,25 +20,21 @@
 //! Fresnel at the half vector, not the view, so at grazing views it reflects more than arrives
 //! (a smooth one seen 78° from the normal, 1.30 of a white furnace; `tests/metallic_roughness.rs`).
 //!
-//! `α` is at least [`MIN_ALPHA`]: a lobe narrower than that (roughness below 0.03) is drawn at
-//! that width, about 0.06° across, finer than any cube map the bake writes resolves.
+//! `α` is at least [`MIN_ALPHA`](oslf_shading::ggx::MIN_ALPHA) ([`oslf_shading::ggx`], where `D`, `V`, `G₁` and the
+//! visible-normal sampling are written once for every path).
 //!
 //! Sampling: with probability `p = ½ + ½·metallic` a microfacet normal is drawn from the
 //! distribution of visible normals (Heitz 2018, "Sampling the GGX Distribution of Visible
 //! Normals") and `v` reflected about it, else a cosine-weighted direction; the density is the
 //! mixture's, so one sample serves both lobes without bias.
 
-use std::f32::consts::{FRAC_1_PI, PI};
+use std::f32::consts::FRAC_1_PI;
 
 use glam::{Vec2, Vec3};
+use oslf_shading::fresnel::{schlick, schlick_weight};
+use oslf_shading::ggx::{self, DIELECTRIC_F0};
 
 use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame};
-
-/// The smallest `α = roughness²` drawn (see the module documentation).
-pub const MIN_ALPHA: f32 = 1e-3;
-
-/// Specular reflectance at normal incidence of glTF's dielectrics (index of refraction 1.5).
-const DIELECTRIC_F0: f32 = 0.04;
 
 /// A metallic-roughness surface at one point: glTF's factors times its textures.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,9 +59,9 @@ pub struct BrdfSample {
 }
 
 impl MetallicRoughness {
-    /// `α = roughness²`, at least [`MIN_ALPHA`].
+    /// `α = roughness²`, at least [`MIN_ALPHA`](oslf_shading::ggx::MIN_ALPHA).
     pub fn alpha(&self) -> f32 {
-        (self.roughness * self.roughness).max(MIN_ALPHA)
+        ggx::alpha(self.roughness)
     }
 
     /// Probability of drawing from the specular lobe.
@@ -85,11 +81,11 @@ impl MetallicRoughness {
         };
         let a2 = self.alpha() * self.alpha();
         let vh = wo.dot(h).abs();
-        let specular = visibility(a2, nl, nv) * distribution(a2, n, h);
-        let schlick = (1.0 - vh).clamp(0.0, 1.0).powi(5);
+        let specular = ggx::visibility(a2, nl, nv) * distribution(a2, n, h);
+        let k5 = schlick_weight(vh);
         let c = self.base_color;
-        let metal = specular * (c + (Vec3::ONE - c) * schlick);
-        let fr = DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick;
+        let metal = specular * (c + (Vec3::ONE - c) * k5);
+        let fr = schlick(DIELECTRIC_F0, vh);
         let dielectric = c * FRAC_1_PI * (1.0 - fr) + Vec3::splat(specular * fr);
         dielectric.lerp(metal, self.metallic)
     }
@@ -105,7 +101,7 @@ impl MetallicRoughness {
         };
         let a2 = self.alpha() * self.alpha();
         // Visible normals: D_v(h) = G₁(v) (v·h)⁺ D(h) / (n·v); reflection: / (4 v·h).
-        let specular = smith_g1(a2, nv) * distribution(a2, n, h) / (4.0 * nv);
+        let specular = ggx::smith_g1(a2, nv) * distribution(a2, n, h) / (4.0 * nv);
         let p = self.specular_probability();
         p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl)
     }
@@ -119,7 +115,7 @@ impl MetallicRoughness {
             return None;
         }
         let wi = if lobe < self.specular_probability() {
-            let m = frame.to_world(sample_visible_normal(v, self.alpha(), u));
+            let m = frame.to_world(ggx::sample_visible_normal(v, self.alpha(), u.x, u.y));
             (2.0 * wo.dot(m) * m - wo).try_normalize()?
         } else {
             frame.to_world(sample_cosine_hemisphere(u))
@@ -134,60 +130,7 @@ impl MetallicRoughness {
     }
 }
 
-/// Trowbridge–Reitz `D` for `α²`, the normal `n` and the half vector `h` (unit; glTF
-/// Appendix B). The denominator `(n·h)²(α² − 1) + 1` is computed as `α²(n·h)² + |n × h|²`: at
-/// the peak of a narrow lobe `1 − (n·h)²` would lose the digits that `α²` needs.
+/// [`ggx::distribution`] at the half vector `h` about `n` (both unit).
 fn distribution(a2: f32, n: Vec3, h: Vec3) -> f32 {
-    let nh = n.dot(h);
-    if nh <= 0.0 {
-        return 0.0;
-    }
-    let d = a2 * nh * nh + n.cross(h).length_squared();
-    a2 / (PI * d * d)
-}
-
-/// The separable Smith visibility `V = G / (4 n·l n·v)` (glTF Appendix B).
-fn visibility(a2: f32, nl: f32, nv: f32) -> f32 {
-    let lambda = |c: f32| c + (a2 + (1.0 - a2) * c * c).sqrt();
-    1.0 / (lambda(nl) * lambda(nv))
-}
-
-/// Smith's masking `G₁` for `α²` and `n·v`.
-fn smith_g1(a2: f32, nv: f32) -> f32 {
-    2.0 * nv / (nv + (a2 + (1.0 - a2) * nv * nv).sqrt())
-}
-
-/// A microfacet normal (local frame, `z` the surface normal) drawn from the GGX distribution
-/// of normals visible from `v` (Heitz 2018, listing 1).
-fn sample_visible_normal(v: Vec3, alpha: f32, u: Vec2) -> Vec3 {
-    let vh = Vec3::new(alpha * v.x, alpha * v.y, v.z).normalize();
-    let len2 = vh.x * vh.x + vh.y * vh.y;
-    let t1 = if len2 > 0.0 {
-        Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt()
-    } else {
-        Vec3::X
-    };
-    let t2 = vh.cross(t1);
-    let r = u.x.sqrt();
-    let phi = 2.0 * PI * u.y;
-    let p1 = r * phi.cos();
-    let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
-    let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-    Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize_or(Vec3::Z)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn visible_normals_face_the_viewer() {
-        let v = Vec3::new(0.6, 0.0, 0.8);
-        for i in 0..64 {
-            let u = Vec2::new((i % 8) as f32 / 8.0 + 0.06, (i / 8) as f32 / 8.0 + 0.06);
-            let m = sample_visible_normal(v, 0.3, u);
-            assert!((m.length() - 1.0).abs() < 1e-5 && m.z >= 0.0 && m.dot(v) >= 0.0);
-        }
-    }
+    ggx::distribution(a2, n.dot(h), n.cross(h).length_squared())
 }

@@ -9,37 +9,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
+use oslf_shading::color::srgb_to_linear;
 
 use crate::input::{read_input, InputKind, MAX_IMAGE_PIXELS};
 use crate::{BakeError, Result};
-
-/// sRGB transfer function (IEC 61966-2-1), encoded `[0,1]` → linear `[0,1]`.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// Inverse sRGB transfer function, linear → encoded. Values outside `[0,1]` are clamped.
-pub fn linear_to_srgb(c: f32) -> f32 {
-    let c = if c.is_finite() {
-        c.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Rec. 709 / sRGB luminance of linear RGB.
-pub fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
 
 /// A texture evaluated at surface texture coordinates.
 #[derive(Clone, Debug)]
@@ -176,7 +149,7 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// - OpenEXR (via the `exr` crate; the first layer with R, G and B channels, alpha ignored) and
 ///   Radiance HDR (`.hdr`, RGBE) are linear already;
 /// - PNG and JPEG (8 or 16 bit, grey or colour, alpha ignored) are sRGB-encoded and are
-///   converted to linear with [`srgb_to_linear`].
+///   converted to linear with [`srgb_to_linear`](oslf_shading::color::srgb_to_linear).
 ///
 /// Errors: [`BakeError::Input`] if the file cannot be read, is not a regular file or is too
 /// large, [`BakeError::Image`] if it cannot be decoded, is empty or declares too many pixels,
@@ -280,18 +253,6 @@ fn load_exr(bytes: &[u8]) -> std::result::Result<(u32, u32, Vec<Vec3>), exr::err
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_round_trip_and_reference_values() {
-        for i in 0..=255 {
-            let c = i as f32 / 255.0;
-            assert!((linear_to_srgb(srgb_to_linear(c)) - c).abs() < 1e-5);
-        }
-        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
-        assert_eq!(srgb_to_linear(0.0), 0.0);
-        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
-        assert_eq!(linear_to_srgb(f32::NAN), 0.0);
-    }
 
     #[test]
     fn checker_squares() {

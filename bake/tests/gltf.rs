@@ -15,7 +15,7 @@ use oslf_bake::integrator::Integrator;
 use oslf_bake::light::Light;
 use oslf_bake::material::Material;
 use oslf_bake::scene::Scene;
-use oslf_bake::texture::srgb_to_linear;
+use oslf_shading::color::srgb_to_linear;
 use serde_json::json;
 
 /// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.

@@ -15,10 +15,10 @@ use oslf_bake::bake::{bake, BakeOptions, BakeReport};
 use oslf_bake::ground_truth::{GroundTruth, Term, TruthSettings};
 use oslf_bake::scene::Scene;
 use oslf_bake::surface::{Surfaces, ATLAS_TEXELS_PER_SPACING};
-use oslf_bake::texture::srgb_to_linear;
 use oslf_bake::BakeError;
 use oslf_format::{Store, INVALID_INDEX};
 use oslf_geometry::atlas::UvSource;
+use oslf_shading::color::srgb_to_linear;
 use serde_json::{json, Value};
 
 // ---------------------------------------------------------------------------------------------

@@ -15,10 +15,9 @@ use oslf_bake::material::{Material, Model};
 use oslf_bake::preview::render;
 use oslf_bake::ray::{Intersector, Ray, SurfaceHit};
 use oslf_bake::sampling::*;
-use oslf_bake::texture::{
-    linear_to_srgb, load_linear_rgb, luminance, srgb_to_linear, ImageTexture, Texture,
-};
+use oslf_bake::texture::{load_linear_rgb, ImageTexture, Texture};
 use oslf_bake::BakeError;
+use oslf_shading::color::{linear_to_srgb, luminance, srgb_to_linear};
 
 // ---------------------------------------------------------------------------------------------
 // Analytic geometry

@@ -184,15 +184,3 @@ pub fn render_truth(
         )?,
     })
 }
-
-#[cfg(test)]
-mod tests {
-    /// The runtime's pbr mode and the truth draw the same GGX lobe: the same floor on α.
-    #[test]
-    fn runtime_and_truth_floor_alpha_alike() {
-        assert_eq!(
-            oslf_runtime::params::MIN_ALPHA,
-            oslf_bake::metallic_roughness::MIN_ALPHA
-        );
-    }
-}

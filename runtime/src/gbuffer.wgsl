@@ -117,12 +117,6 @@ struct FsTexturedOut {
     @location(2) material: vec4<u32>,
 };
 
-// The sRGB transfer function, encoded to linear (IEC 61966-2-1).
-fn srgb_to_linear(c: f32) -> f32 {
-    if (c <= 0.04045) { return c / 12.92; }
-    return pow((c + 0.055) / 1.055, 2.4);
-}
-
 // Texel (x, y) of `t` with repeat, its RGB decoded from sRGB when `srgb`.
 fn texel(t: texture_2d<f32>, x: i32, y: i32, srgb: bool) -> vec3<f32> {
     let size = vec2<i32>(textureDimensions(t));
@@ -149,13 +143,6 @@ fn bilinear(t: texture_2d<f32>, uv: vec2<f32>, srgb: bool) -> vec3<f32> {
     let top = mix(texel(t, ix, iy, srgb), texel(t, ix + 1, iy, srgb), fx);
     let bottom = mix(texel(t, ix, iy + 1, srgb), texel(t, ix + 1, iy + 1, srgb), fx);
     return mix(top, bottom, fy);
-}
-
-// The inverse sRGB transfer function, linear [0, 1] to encoded.
-fn linear_to_srgb(c: f32) -> f32 {
-    let x = clamp(c, 0.0, 1.0);
-    if (x <= 0.0031308) { return 12.92 * x; }
-    return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
 }
 
 // The pixel's material, packed for shade.wgsl (`surface_of` there): base colour RGB,

@@ -47,7 +47,7 @@ pub struct ObjectMesh {
     /// The base colour C_s of each map's object (indexed by map).
     pub colors: Vec<Vec3>,
     /// The pbr mode's material of each map's object (indexed by map): metallic, GGX α (at
-    /// least `MIN_ALPHA`), 1 for a metallic-roughness material (else 0: the parameters'
+    /// least `oslf_shading::ggx::MIN_ALPHA`), 1 for a metallic-roughness material (else 0: the parameters'
     /// factors apply), 0.
     pub materials: Vec<[f32; 4]>,
     /// The emitted radiance of each map's object (indexed by map; linear RGB, w 0): its
@@ -247,7 +247,7 @@ fn map_materials(meta: &oslf_format::StoreMeta) -> Vec<[f32; 4]> {
         .iter()
         .flat_map(|o| {
             let m = o.material;
-            let alpha = (m.roughness * m.roughness).max(crate::params::MIN_ALPHA);
+            let alpha = oslf_shading::ggx::alpha(m.roughness);
             let entry = if m.is_metallic_roughness() {
                 [m.metallic, alpha, 1.0, 0.0]
             } else {

@@ -484,7 +484,7 @@ pub struct ShadeUniform {
     pub box_max: [f32; 4],
     /// [`ShadingParams::metallic`].
     pub metallic: f32,
-    /// GGX α = roughness², at least [`MIN_ALPHA`].
+    /// GGX α = roughness², at least [`oslf_shading::ggx::MIN_ALPHA`].
     pub alpha: f32,
     /// 1: the pbr mode takes an object's metallic and α from its material in the store where
     /// it has one ([`ShadingParams::object_material`] and a store with such objects).
@@ -499,10 +499,6 @@ pub struct ShadeUniform {
     pub pad1: u32,
     pub pad2: u32,
 }
-
-/// The smallest GGX α the pbr mode draws (roughness below 0.03 is drawn at it): the bake's
-/// `oslf_bake::metallic_roughness::MIN_ALPHA`, so the runtime and the truth draw the same lobe.
-pub const MIN_ALPHA: f32 = 1e-3;
 
 /// What the uniform needs from the store and the cache besides the parameters.
 #[derive(Clone, Copy, Debug)]
@@ -590,7 +586,7 @@ impl ShadeUniform {
             box_min: [0.0; 4],
             box_max: [0.0; 4],
             metallic: p.metallic,
-            alpha: (p.roughness * p.roughness).max(MIN_ALPHA),
+            alpha: oslf_shading::ggx::alpha(p.roughness),
             object_material: u32::from(p.object_material && k.min_object_metallic.is_some()),
             min_metallic: match k.min_object_metallic {
                 Some(m) if p.object_material => m.min(p.metallic),

@@ -22,11 +22,9 @@ pub(crate) const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba3
 /// shade.wgsl's `@workgroup_size` on each side.
 pub(crate) const WORKGROUP: u32 = 8;
 
-/// shade.wgsl, the shading pass: the files of shade/ joined, the bindings first, then the
-/// functions by concept in the order of their CPU twins (the files of the same names under
-/// reference/). Each file opens with a `// ---- shade/NAME.wgsl ----` banner, so a line that a
-/// naga error quotes can be found in its file.
-pub(crate) const SHADE_WGSL: &str = concat!(
+/// The files of shade/, the bindings first, then the functions by concept in the order of their
+/// CPU twins (the files of the same names under reference/).
+const SHADE_FILES: &str = concat!(
     include_str!("shade/bindings.wgsl"),
     include_str!("shade/random.wgsl"),
     include_str!("shade/feedback.wgsl"),
@@ -42,6 +40,22 @@ pub(crate) const SHADE_WGSL: &str = concat!(
     include_str!("shade/background.wgsl"),
     include_str!("shade/pixel.wgsl"),
 );
+
+/// shade.wgsl, the shading pass: oslf-shading's WGSL modules (GGX, Fresnel, colour), then the
+/// files of shade/. Each file opens with a `// ---- NAME.wgsl ----` banner, so a line that a
+/// naga error quotes can be found in its file.
+pub(crate) fn shade_wgsl() -> String {
+    [oslf_shading::wgsl::source().as_str(), SHADE_FILES].join("\n")
+}
+
+/// gbuffer.wgsl, the G-buffer pass: oslf-shading's WGSL modules, then gbuffer.wgsl.
+pub(crate) fn gbuffer_wgsl() -> String {
+    [
+        oslf_shading::wgsl::source().as_str(),
+        include_str!("gbuffer.wgsl"),
+    ]
+    .join("\n")
+}
 
 /// A read-only or read-write storage buffer at `binding`.
 fn storage_entry(
@@ -150,7 +164,7 @@ impl GBufferPipeline {
     ) -> wgpu::RenderPipeline {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("gbuffer.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("gbuffer.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(gbuffer_wgsl().into()),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer"),
@@ -344,7 +358,7 @@ impl ShadePipelines {
         let layout = Self::bind_group_layout(device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("shade.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADE_WGSL.into()),
+            source: wgpu::ShaderSource::Wgsl(shade_wgsl().into()),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shade"),

@@ -21,9 +21,9 @@
 
 use glam::Vec3;
 use oslf_format::cube::{face_st_to_direction, CubeImage, FACES};
+use oslf_shading::ggx;
 use rayon::prelude::*;
 
-use crate::params::MIN_ALPHA;
 use crate::reference::{face_st, seam_bilinear, seam_taps, PrefilteredTexels};
 
 /// GGX samples per texel of a specular level.
@@ -202,7 +202,7 @@ fn hammersley(i: u32, count: u32) -> (f32, f32) {
 
 /// The environment around `r` convolved with GGX at `roughness`, n = v = r.
 fn ggx_convolve(mips: &[[Vec<Vec3>; FACES]], r: Vec3, roughness: f32) -> Vec3 {
-    let a = (roughness * roughness).max(MIN_ALPHA);
+    let a = ggx::alpha(roughness);
     let a2 = a * a;
     let (t, b) = r.any_orthonormal_pair();
     let n = level_side(&mips[0]) as f32;
@@ -212,7 +212,7 @@ fn ggx_convolve(mips: &[[Vec<Vec3>; FACES]], r: Vec3, roughness: f32) -> Vec3 {
     for i in 0..SPECULAR_SAMPLES {
         let (xi1, xi2) = hammersley(i, SPECULAR_SAMPLES);
         let phi = 2.0 * std::f32::consts::PI * xi1;
-        let cos_h = ((1.0 - xi2) / (1.0 + (a2 - 1.0) * xi2)).max(0.0).sqrt();
+        let cos_h = ggx::sample_distribution_cos(a2, xi2);
         let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
         let h = t * (sin_h * phi.cos()) + b * (sin_h * phi.sin()) + r * cos_h;
         let l = 2.0 * r.dot(h) * h - r;
@@ -221,8 +221,7 @@ fn ggx_convolve(mips: &[[Vec<Vec3>; FACES]], r: Vec3, roughness: f32) -> Vec3 {
             continue;
         }
         // p(l) = D(h) ⟨n,h⟩ / (4 ⟨v,h⟩) = D(h) / 4 with n = v.
-        let d_den = cos_h * cos_h * (a2 - 1.0) + 1.0;
-        let d = a2 / (std::f32::consts::PI * d_den * d_den);
+        let d = ggx::distribution(a2, cos_h, sin_h * sin_h);
         let sample = 1.0 / (SPECULAR_SAMPLES as f32 * d * 0.25).max(1e-30);
         let lod = 0.5 * (sample / texel).log2();
         sum += trilinear(mips, l, lod) * nl;

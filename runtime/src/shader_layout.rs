@@ -7,7 +7,7 @@ use std::mem::size_of;
 
 use crate::geometry::GVertex;
 use crate::params::ShadeUniform;
-use crate::pipelines::{SHADE_WGSL, WORKGROUP};
+use crate::pipelines::{gbuffer_wgsl, shade_wgsl, WORKGROUP};
 use crate::wgsl_fields as fields;
 use crate::wgsl_layout::{check_struct, constant_value, parse, wgsl_struct, Field};
 
@@ -60,9 +60,9 @@ fn shade_fields() -> Vec<Field> {
 #[test]
 fn the_uniform_block_is_shade_uniform() {
     let size = size_of::<ShadeUniform>();
-    let shade = parse("shade.wgsl", SHADE_WGSL);
+    let shade = parse("shade.wgsl", &shade_wgsl());
     check_struct(&shade, "Params", &shade_fields(), size, false);
-    let gbuffer = parse("gbuffer.wgsl", include_str!("gbuffer.wgsl"));
+    let gbuffer = parse("gbuffer.wgsl", &gbuffer_wgsl());
     check_struct(&gbuffer, "Params", &shade_fields(), size, true);
 }
 
@@ -71,7 +71,7 @@ fn the_uniform_block_is_shade_uniform() {
 /// material).
 #[test]
 fn the_vertex_and_patch_records_match() {
-    let gbuffer = parse("gbuffer.wgsl", include_str!("gbuffer.wgsl"));
+    let gbuffer = parse("gbuffer.wgsl", &gbuffer_wgsl());
     let vertex = fields!(GVertex {
         position_patch,
         normal_u,
@@ -93,7 +93,7 @@ fn the_vertex_and_patch_records_match() {
         size_of::<TextureParams>(),
         false,
     );
-    let shade = parse("shade.wgsl", SHADE_WGSL);
+    let shade = parse("shade.wgsl", &shade_wgsl());
     let (members, span) = wgsl_struct(&shade, "PatchGpu");
     assert_eq!(span as usize, crate::buffers::PATCH_VEC4S * 16);
     let names: Vec<_> = members
@@ -114,11 +114,9 @@ fn the_vertex_and_patch_records_match() {
 /// Every constant of shade.wgsl has the value of its Rust twin, and every one has a twin.
 #[test]
 fn shader_constants_are_the_rust_constants() {
-    let twins: [(&str, f64); 10] = [
-        ("MIN_ALPHA", f64::from(crate::params::MIN_ALPHA)),
+    let twins: [(&str, f64); 8] = [
         ("PBR_LOD_BIAS", f64::from(crate::reference::PBR_LOD_BIAS)),
         ("INVALID", f64::from(oslf_format::INVALID_INDEX)),
-        ("PI", f64::from(std::f32::consts::PI)),
         ("FAR", f64::from(crate::face::FAR_DISTANCE)),
         ("DEPTH_REFINE", f64::from(crate::reference::DEPTH_REFINE)),
         (
@@ -129,9 +127,17 @@ fn shader_constants_are_the_rust_constants() {
         ("HIT_AGREE", f64::from(crate::reference::HIT_AGREE)),
         ("WORKGROUP", f64::from(WORKGROUP)),
     ];
-    // The seam table is checked against the projection it encodes (reference::tests).
-    let elsewhere = ["SEAM_LO", "SEAM_HI"];
-    let shade = parse("shade.wgsl", SHADE_WGSL);
+    // The seam table is checked against the projection it encodes (reference::tests);
+    // oslf-shading's constants are generated from their Rust values (oslf_shading::wgsl).
+    let elsewhere = [
+        "SEAM_LO",
+        "SEAM_HI",
+        "PI",
+        "FRAC_1_PI",
+        "GGX_MIN_ALPHA",
+        "GGX_DIELECTRIC_F0",
+    ];
+    let shade = parse("shade.wgsl", &shade_wgsl());
     let mut seen = Vec::new();
     for (_, c) in shade.constants.iter() {
         let name = c.name.as_deref().unwrap_or_default();
@@ -160,7 +166,7 @@ fn shader_constants_are_the_rust_constants() {
 /// The pipelines set exactly shade.wgsl's override constants.
 #[test]
 fn pipeline_overrides_are_the_shaders() {
-    let shade = parse("shade.wgsl", SHADE_WGSL);
+    let shade = parse("shade.wgsl", &shade_wgsl());
     let mut wgsl: Vec<_> = shade
         .overrides
         .iter()

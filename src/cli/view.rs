@@ -196,7 +196,7 @@ impl App {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("viewer_blit.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("view_blit.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(blit_wgsl().into()),
         });
         let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("blit"),
@@ -541,5 +541,33 @@ impl ApplicationHandler for App {
             }
             _ => {}
         }
+    }
+}
+
+/// The blit shader: oslf-shading's WGSL modules (its tone curve and sRGB encoding), then
+/// view_blit.wgsl.
+fn blit_wgsl() -> String {
+    [
+        oslf_shading::wgsl::source().as_str(),
+        include_str!("view_blit.wgsl"),
+    ]
+    .join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    /// The blit shader, as assembled, parses and validates.
+    #[test]
+    fn blit_shader_validates() {
+        use wgpu::naga;
+        let src = super::blit_wgsl();
+        let module = naga::front::wgsl::parse_str(&src)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap();
     }
 }

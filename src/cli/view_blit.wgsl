@@ -1,6 +1,7 @@
-// Viewer: draws the renderer's linear Rgba32Float image to the window, tone mapped (exposure,
-// the ACES fit of Narkowicz 2015 as in oslf_bake::image_file, then sRGB unless the surface
-// format encodes it). Bindings in the order of `view.rs`'s blit layout.
+// Viewer: draws the renderer's linear Rgba32Float image to the window, tone mapped as the PNG
+// previews are (exposure, oslf-shading's `aces`, then `linear_to_srgb` unless the surface
+// format encodes it). Bindings in the order of `view.rs`'s blit layout; view.rs puts
+// oslf-shading's WGSL modules before this file.
 
 struct Blit {
     exposure: f32,
@@ -18,16 +19,6 @@ fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     return vec4<f32>(x * 2.0 - 1.0, 1.0 - y * 2.0, 0.0, 1.0);
 }
 
-fn aces(x: f32) -> f32 {
-    let v = min(max(x, 0.0), 1e6);
-    return clamp((v * (2.51 * v + 0.03)) / (v * (2.43 * v + 0.59) + 0.14), 0.0, 1.0);
-}
-
-fn srgb(c: f32) -> f32 {
-    if (c <= 0.0031308) { return 12.92 * c; }
-    return 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
-
 @fragment
 fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
     let size = textureDimensions(image);
@@ -35,7 +26,7 @@ fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
     let c = textureLoad(image, vec2<i32>(px), 0);
     var rgb = vec3<f32>(aces(c.r * B.exposure), aces(c.g * B.exposure), aces(c.b * B.exposure));
     if (B.encode_srgb == 1u) {
-        rgb = vec3<f32>(srgb(rgb.r), srgb(rgb.g), srgb(rgb.b));
+        rgb = vec3<f32>(linear_to_srgb(rgb.r), linear_to_srgb(rgb.g), linear_to_srgb(rgb.b));
     }
     return vec4<f32>(rgb, 1.0);
 }

@@ -10,6 +10,8 @@ use std::path::Path;
 use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableImage as _};
 use glam::Vec3;
 
+use oslf_shading::color::{aces, linear_to_srgb};
+
 use crate::error::{Result, UtilError};
 use crate::output_file::write_with;
 
@@ -92,28 +94,9 @@ fn check_size(path: &Path, width: u32, height: u32, pixels: usize) -> Result<()>
     Ok(())
 }
 
-/// ACES filmic tone curve (Narkowicz 2015 fit); maps [0, ∞) to [0, 1).
-pub fn aces(x: f32) -> f32 {
-    if x.is_nan() || x <= 0.0 {
-        return 0.0;
-    }
-    let x = x.min(1e6);
-    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
-}
-
-/// Linear [0, 1] to an 8-bit sRGB value.
+/// Linear `[0, 1]` to an 8-bit sRGB value (NaN as 0, the rest clamped).
 pub fn to_srgb8(linear: f32) -> u8 {
-    let l = if linear.is_nan() {
-        0.0
-    } else {
-        linear.clamp(0.0, 1.0)
-    };
-    let s = if l <= 0.003_130_8 {
-        12.92 * l
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
+    (linear_to_srgb(linear) * 255.0 + 0.5) as u8
 }
 
 #[cfg(test)]
@@ -121,16 +104,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tone_curve_is_monotone_and_bounded() {
-        assert_eq!(aces(f32::NAN), 0.0);
-        assert_eq!(aces(-1.0), 0.0);
-        assert!(aces(f32::INFINITY) <= 1.0);
-        let mut last = 0.0;
-        for i in 0..1000 {
-            let v = aces(i as f32 * 0.05);
-            assert!(v >= last);
-            last = v;
-        }
+    fn srgb8_codes_are_bounded_and_rounded() {
+        assert_eq!(to_srgb8(f32::NAN), 0);
+        assert_eq!(to_srgb8(-1.0), 0);
+        assert_eq!(to_srgb8(f32::INFINITY), 255);
         assert_eq!(to_srgb8(0.0), 0);
         assert_eq!(to_srgb8(1.0), 255);
         assert_eq!(to_srgb8(0.5), 188);

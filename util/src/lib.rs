@@ -12,8 +12,10 @@
 //! | [`input_file`] | reading inputs with bounds: regular files only (never a FIFO, device or directory), at most a given number of bytes |
 //! | [`machine`] | what the machine offers: memory available for new allocations, free space on a volume |
 //!
-//! It depends on no other oslf crate, so any of them can use it. Without its default feature
-//! `images` (what the store library takes) it is the doors alone: no image or EXR crates.
+//! It depends on no other oslf crate but `oslf-shading` (for the PNG's tone curve and sRGB
+//! encoding, with the `images` feature), so any of them can use it. Without its default
+//! feature `images` (what the store library takes) it is the doors alone: no image or EXR
+//! crates.
 
 pub mod door;
 pub mod error;

@@ -167,9 +167,6 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     return vec3<f32>(1.0, 0.0, 0.0);
 }
 
-fn luminance(c: vec3<f32>) -> f32 {
-    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
-}
 
 const WORKGROUP: u32 = 64u;
 

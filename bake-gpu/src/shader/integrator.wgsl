@@ -3,15 +3,13 @@
 // light, one environment sample and one BSDF sample combined by MIS (power heuristic), the
 // BSDF sample continuing the path, Russian roulette from the 4th vertex. Its BRDFs are those
 // of bake/src/material.rs: Lambertian and glTF metallic-roughness
-// (bake/src/metallic_roughness.rs).
+// (bake/src/metallic_roughness.rs), with GGX and Fresnel from oslf-shading's WGSL.
 
 const FRAC_PI_4: f32 = 0.785398163397448;
 const FRAC_PI_2: f32 = 1.5707963267949;
 // 2⁻¹⁹ (integrator::OFFSET_RELATIVE).
 const OFFSET_RELATIVE: f32 = 1.9073486e-6;
 const RUSSIAN_ROULETTE_START: u32 = 3u;
-const MIN_ALPHA: f32 = 1e-3;
-const DIELECTRIC_F0: f32 = 0.04;
 
 fn sample_uniform_disk_concentric(u: vec2<f32>) -> vec2<f32> {
     let o = 2.0 * u - vec2<f32>(1.0);
@@ -94,26 +92,15 @@ struct Lobe {
     roughness: f32,
 }
 
+// `MetallicRoughness::alpha`.
 fn mr_alpha(l: Lobe) -> f32 {
-    return max(l.roughness * l.roughness, MIN_ALPHA);
+    return ggx_alpha(l.roughness);
 }
 
-fn ggx_distribution(a2: f32, n: vec3<f32>, h: vec3<f32>) -> f32 {
-    let nh = dot(n, h);
-    if nh <= 0.0 {
-        return 0.0;
-    }
+// `distribution` of bake/src/metallic_roughness.rs: D at the half vector h about n.
+fn mr_distribution(a2: f32, n: vec3<f32>, h: vec3<f32>) -> f32 {
     let c = cross(n, h);
-    let d = a2 * nh * nh + dot(c, c);
-    return a2 / (PI * d * d);
-}
-
-fn smith_lambda(a2: f32, c: f32) -> f32 {
-    return c + sqrt(a2 + (1.0 - a2) * c * c);
-}
-
-fn smith_g1(a2: f32, nv: f32) -> f32 {
-    return 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
+    return ggx_distribution(a2, dot(n, h), dot(c, c));
 }
 
 // `MetallicRoughness::eval`.
@@ -130,11 +117,11 @@ fn mr_eval(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let alpha = mr_alpha(l);
     let a2 = alpha * alpha;
     let vh = abs(dot(wo, h));
-    let specular = 1.0 / (smith_lambda(a2, nl) * smith_lambda(a2, nv)) * ggx_distribution(a2, n, h);
-    let schlick = pow(clamp(1.0 - vh, 0.0, 1.0), 5.0);
+    let specular = ggx_visibility(a2, nl, nv) * mr_distribution(a2, n, h);
+    let k5 = fresnel_schlick_weight(vh);
     let c = l.albedo;
-    let metal = specular * (c + (vec3<f32>(1.0) - c) * schlick);
-    let fr = DIELECTRIC_F0 + (1.0 - DIELECTRIC_F0) * schlick;
+    let metal = specular * (c + (vec3<f32>(1.0) - c) * k5);
+    let fr = fresnel_schlick(GGX_DIELECTRIC_F0, vh);
     let dielectric = c * FRAC_1_PI * (1.0 - fr) + vec3<f32>(specular * fr);
     return mix(dielectric, metal, l.metallic);
 }
@@ -152,31 +139,9 @@ fn mr_pdf(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     }
     let alpha = mr_alpha(l);
     let a2 = alpha * alpha;
-    let specular = smith_g1(a2, nv) * ggx_distribution(a2, n, h) / (4.0 * nv);
+    let specular = ggx_smith_g1(a2, nv) * mr_distribution(a2, n, h) / (4.0 * nv);
     let p = 0.5 + 0.5 * l.metallic;
     return p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl);
-}
-
-// `sample_visible_normal` (Heitz 2018).
-fn sample_visible_normal(v: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
-    let vh = normalize(vec3<f32>(alpha * v.x, alpha * v.y, v.z));
-    let len2 = vh.x * vh.x + vh.y * vh.y;
-    var t1 = vec3<f32>(1.0, 0.0, 0.0);
-    if len2 > 0.0 {
-        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(len2);
-    }
-    let t2 = cross(vh, t1);
-    let r = sqrt(u.x);
-    let phi = 2.0 * PI * u.y;
-    let p1 = r * cos(phi);
-    let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
-    let nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
-    let m = safe_normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
-    if all(m == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0, 0.0, 1.0);
-    }
-    return m;
 }
 
 // The lobe of material `m` at `uv` (`Lobe::at`); `valid` false for a black Lambertian one.
@@ -241,7 +206,7 @@ fn lobe_sample(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, rng: ptr<function, Rng>) -
     }
     var wi: vec3<f32>;
     if choice < 0.5 + 0.5 * l.metallic {
-        let m = to_world(frame, sample_visible_normal(v, mr_alpha(l), u));
+        let m = to_world(frame, ggx_sample_visible_normal(v, mr_alpha(l), u.x, u.y));
         wi = safe_normalize(2.0 * dot(wo, m) * m - wo);
         if all(wi == vec3<f32>(0.0)) {
             return s;

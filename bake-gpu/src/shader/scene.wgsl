@@ -2,8 +2,6 @@
 // environment, each the CPU's function of the same name (bake/src/{ray,texture,material,
 // light,environment}.rs) on the data of scene.rs.
 
-const PI: f32 = 3.14159265358979;
-const FRAC_1_PI: f32 = 0.318309886183791;
 const ONE_MINUS_EPSILON: f32 = 0.99999994;
 
 struct SurfaceHit {

@@ -6,7 +6,9 @@ use glam::Vec3;
 use oslf_format::{MeshInfo, ObjectTextures, TextureImage, TextureKind};
 
 use crate::material::{Material, NormalTexture, OcclusionTexture};
-use crate::texture::{linear_to_srgb, ImageTexture, Texture};
+use oslf_shading::color::linear_to_srgb;
+
+use crate::texture::{ImageTexture, Texture};
 
 /// The textures of a mesh object whose material has image textures, with its store mesh:
 /// `atlas` (the atlas's mesh, whose triangle `i` is `source`'s triangle `i`) with each vertex
@@ -145,7 +147,7 @@ mod tests {
         let codes = [0u8, 1, 54, 128, 187, 255];
         let pixels = codes
             .iter()
-            .map(|&b| Vec3::splat(crate::texture::srgb_to_linear(f32::from(b) / 255.0)))
+            .map(|&b| Vec3::splat(oslf_shading::color::srgb_to_linear(f32::from(b) / 255.0)))
             .collect();
         let img = ImageTexture::from_pixels(3, 2, pixels).unwrap();
         let mut material = Material::lambertian(Vec3::ONE);

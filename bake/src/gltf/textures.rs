@@ -9,7 +9,9 @@ use gltf::texture::WrappingMode;
 
 use super::loader::Loader;
 use crate::input::{InputKind, MAX_IMAGE_PIXELS};
-use crate::texture::{srgb_to_linear, ImageTexture};
+use oslf_shading::color::srgb_to_linear;
+
+use crate::texture::ImageTexture;
 use crate::Result;
 
 impl<'d> Loader<'d> {

@@ -5,6 +5,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 use oslf_format::INVALID_INDEX;
+use oslf_shading::fresnel::{schlick, schlick_weight};
+use oslf_shading::ggx;
 
 use super::blend::Candidates;
 use super::random::filter_rows;
@@ -15,13 +17,6 @@ pub(super) struct AsSample {
     pub(super) weight: Vec3,
     /// log2(M p(l)).
     pub(super) lpdf: f32,
-}
-
-pub(super) fn fresnel(rs: f32, c: f32) -> f32 {
-    // Eq. 5.7 (Schlick)
-    let k = (1.0 - c).clamp(0.0, 1.0);
-    let k2 = k * k;
-    rs + (1.0 - rs) * k2 * k2 * k
 }
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
@@ -63,7 +58,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             - (4.0 * vh.max(1e-30)).log2();
         let nl = n.dot(l);
         let weight = if vh > 0.0 && nl > 0.0 {
-            fresnel(u.rs, vh) * nl / nv.max(nl)
+            schlick(u.rs, vh) * nl / nv.max(nl)
         } else {
             0.0
         };
@@ -93,29 +88,15 @@ impl<C: CubeTexels> Shader<'_, C> {
         let a = pbr.y;
         let a2 = a * a;
         let vl = Vec3::new(v.dot(t), v.dot(b), nv);
-        let vs = Vec3::new(a * vl.x, a * vl.y, vl.z).normalize();
-        let len2 = vs.x * vs.x + vs.y * vs.y;
-        let t1 = if len2 > 0.0 {
-            Vec3::new(-vs.y, vs.x, 0.0) / len2.sqrt()
-        } else {
-            Vec3::X
-        };
-        let t2 = vs.cross(t1);
         // (ξ1, ξ2) = (φ/2π, r²) on the disc, as `filter_xi` lays its strata out.
-        let r = xi2.sqrt();
-        let phi = 2.0 * PI * xi1;
-        let p1 = r * phi.cos();
-        let s = 0.5 * (1.0 + vs.z);
-        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
-        let hs = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vs;
-        let hl = Vec3::new(a * hs.x, a * hs.y, hs.z.max(0.0)).normalize();
+        let hl = ggx::sample_visible_normal(vl, a, xi2, xi1);
         let h = t * hl.x + b * hl.y + n * hl.z;
         let vh = v.dot(h);
         let l = 2.0 * vh * h - v;
         let nl = n.dot(l);
         // D(h) with its denominator as α²(n·h)² + |n × h|² (exact at a narrow lobe's peak).
-        let d = a2 * hl.z * hl.z + (hl.x * hl.x + hl.y * hl.y);
-        let g1v = 2.0 * nv / (nv + (a2 + (1.0 - a2) * nv * nv).sqrt());
+        let d = ggx::distribution_denominator(a2, hl.z, hl.x * hl.x + hl.y * hl.y);
+        let g1v = ggx::smith_g1(a2, nv);
         // p(l) = G₁(v) D(h) / (4 n·v); the lookup reads PBR_LOD_BIAS levels off its share
         // (sample_lod's ½ log2(1 / (M p)), so 2·bias off log2(M p)).
         let lpdf = (u.m as f32).log2() + g1v.max(1e-30).log2() + a2.log2()
@@ -125,11 +106,10 @@ impl<C: CubeTexels> Shader<'_, C> {
         let mut weight = Vec3::ZERO;
         if vh > 0.0 && nl > 0.0 && nv > 0.0 {
             // f ⟨n,l⟩ / p(l) = F(⟨v,h⟩) G₁(l): separable Smith, G = G₁(l) G₁(v).
-            let g1l = 2.0 * nl / (nl + (a2 + (1.0 - a2) * nl * nl).sqrt());
-            let k = (1.0 - vh).clamp(0.0, 1.0);
-            let k5 = k * k * k * k * k;
+            let g1l = ggx::smith_g1(a2, nl);
+            let k5 = schlick_weight(vh);
             let metal = base + (Vec3::ONE - base) * k5;
-            let dielectric = Vec3::splat(0.04 + 0.96 * k5);
+            let dielectric = Vec3::splat(schlick(ggx::DIELECTRIC_F0, vh));
             weight = dielectric.lerp(metal, pbr.x) * g1l;
         }
         AsSample { l, weight, lpdf }
@@ -167,8 +147,7 @@ impl<C: CubeTexels> Shader<'_, C> {
     ) -> AsSample {
         let mut out = self.cosine_sample(xi1, r2, n, t, b);
         let h = (v + out.l).normalize_or(n);
-        let k = (1.0 - v.dot(h).abs()).clamp(0.0, 1.0);
-        let fr = 0.04 + 0.96 * (k * k * k * k * k);
+        let fr = schlick(ggx::DIELECTRIC_F0, v.dot(h).abs());
         if n.dot(out.l) > 0.0 && n.dot(v) > 0.0 {
             out.weight = base * ((1.0 - pbr.x) * (1.0 - fr));
         }

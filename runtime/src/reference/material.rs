@@ -4,17 +4,9 @@
 
 use glam::{Vec2, Vec3, Vec4};
 use oslf_format::{ObjectTextures, TextureImage, TextureKind};
+use oslf_shading::color::{linear_to_srgb, srgb_to_linear};
 
 use crate::textures::BOUND_KINDS;
-
-/// The sRGB transfer function, encoded to linear (IEC 61966-2-1).
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 /// Texel `(x, y)` of `t` with repeat, its RGB decoded from sRGB when `srgb` (as `texel`).
 fn texel(t: &TextureImage, x: i32, y: i32, srgb: bool) -> Vec3 {
@@ -47,16 +39,6 @@ pub fn bilinear(t: &TextureImage, uv: Vec2, srgb: bool) -> Vec3 {
     let top = texel(t, ix, iy, srgb).lerp(texel(t, ix + 1, iy, srgb), fx);
     let bottom = texel(t, ix, iy + 1, srgb).lerp(texel(t, ix + 1, iy + 1, srgb), fx);
     top.lerp(bottom, fy)
-}
-
-/// The inverse sRGB transfer function, linear [0, 1] to encoded (as `linear_to_srgb`).
-pub fn linear_to_srgb(c: f32) -> f32 {
-    let x = c.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
 }
 
 /// WGSL's `pack2x16unorm`: each component clamped to [0, 1], times 65535, rounded to even.

@@ -2,7 +2,9 @@
 
 use glam::Vec3;
 
-use super::material::{srgb_to_linear, unpack2x16unorm};
+use oslf_shading::color::srgb_to_linear;
+
+use super::material::unpack2x16unorm;
 use super::patch::{patch_du, patch_normal, tangent_frame};
 use super::random::pcg;
 use super::{CubeTexels, GTexel, Shader};
@@ -65,7 +67,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             .get(patch as usize)
             .is_some_and(|o| o[2] > 0.5);
         if m[3] & 2 != 0 && self.uniform.object_material != 0 && own {
-            pbr = glam::Vec2::new(bm.y, (ro.x * ro.x).max(crate::params::MIN_ALPHA));
+            pbr = glam::Vec2::new(bm.y, oslf_shading::ggx::alpha(ro.x));
         }
         if m[3] & 8 != 0 {
             emission *= emissive_of(m[3]);

@@ -3,9 +3,9 @@ use std::f32::consts::PI;
 use oslf_format::INVALID_INDEX;
 
 use super::blend::Candidates;
-use super::glossy::fresnel;
 use super::*;
 use crate::face::FAR_DISTANCE;
+use oslf_shading::fresnel::schlick as fresnel;
 
 /// The constants of a store without sample points, maps or distances: environment cube
 /// `env_cube`, faces of `cube_res`².
@@ -149,7 +149,7 @@ fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
 /// one off a face's edge (corners aside), on faces of 1 to 1024 texels.
 #[test]
 fn shader_seam_table_matches_the_projection() {
-    let src = crate::pipelines::SHADE_WGSL;
+    let src = crate::pipelines::shade_wgsl();
     let table = |name: &str| -> [u32; 4] {
         let head = format!("const {name} = vec4<u32>(");
         let at = src.find(&head).expect(name) + head.len();
@@ -788,7 +788,7 @@ fn gltf_brdf_cos(
     let len = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
     let h = h.map(|c| c / len);
     let a2 = (roughness * roughness)
-        .max(crate::params::MIN_ALPHA as f64)
+        .max(oslf_shading::ggx::MIN_ALPHA as f64)
         .powi(2);
     let nh = h[2];
     let vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];

@@ -56,7 +56,7 @@ struct Params {
     probe_pos: vec4<f32>,
     box_min: vec4<f32>,
     box_max: vec4<f32>,
-    // pbr: glTF's metallic factor, and GGX α = roughness² (at least MIN_ALPHA).
+    // pbr: glTF's metallic factor, and GGX α = roughness² (at least GGX_MIN_ALPHA).
     metallic: f32,
     alpha: f32,
     // 1: an object's metallic and α from its material (PatchGpu.material) where it has one.
@@ -131,9 +131,6 @@ struct PatchGpu {
 @group(0) @binding(19) var gb_material: texture_2d<u32>;
 
 const INVALID: u32 = 0xffffffffu;
-// The smallest GGX α (params.rs MIN_ALPHA).
-const MIN_ALPHA: f32 = 1.0e-3;
-const PI: f32 = 3.14159265358979;
 // Distances at or above this mean "nothing this way" (face.rs FAR_DISTANCE, binary16's largest).
 const FAR: f32 = 65504.0;
 // The mip-level bias of the pbr mode's GGX samples on its spiral of filtered samples

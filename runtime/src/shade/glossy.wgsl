@@ -11,15 +11,8 @@ struct AsSample {
     lpdf: f32,
 };
 
-fn fresnel(rs: f32, c: f32) -> f32 {
-    // Eq. 5.7 (Schlick)
-    let k = clamp(1.0 - c, 0.0, 1.0);
-    let k2 = k * k;
-    return rs + (1.0 - rs) * k2 * k2 * k;
-}
-
 // The specular lobe's sample at (ξ1, ξ2): ξ1 picks the quadrant and φ in it (Eq. 5.9 with the
-// exponent in φ, see NOTES.md), ξ2 the angle from n, reflected about h (5.10). With k = v the estimator
+// exponent in φ), ξ2 the angle from n, reflected about h (5.10). With k = v the estimator
 // f_sr ⟨n,l⟩ / p(l) of 5.5, 5.8, 5.11 reduces to F(⟨v,h⟩) ⟨n,l⟩ / max(⟨n,v⟩, ⟨n,l⟩):
 // no exponent, no 0/0 at h = n, finite for any n_u, n_v.
 fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32) -> AsSample {
@@ -44,7 +37,7 @@ fn sample_as(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: ve
         + e / (e + 1.0) * log2(1.0 - xi2) - log2(4.0 * max(vh, 1e-30));
     let nl = dot(n, out.l);
     if (vh > 0.0 && nl > 0.0) {
-        out.weight = vec3<f32>(fresnel(P.rs, vh) * nl / max(nv, nl));
+        out.weight = vec3<f32>(fresnel_schlick(P.rs, vh) * nl / max(nv, nl));
     }
     return out;
 }
@@ -55,26 +48,15 @@ fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: v
     let a = pbr.y;
     let a2 = a * a;
     let vl = vec3<f32>(dot(v, t), dot(v, b), nv);
-    let vs = normalize(vec3<f32>(a * vl.x, a * vl.y, vl.z));
-    let len2 = vs.x * vs.x + vs.y * vs.y;
-    var t1 = vec3<f32>(1.0, 0.0, 0.0);
-    if (len2 > 0.0) { t1 = vec3<f32>(-vs.y, vs.x, 0.0) / sqrt(len2); }
-    let t2 = cross(vs, t1);
     // (ξ1, ξ2) = (φ/2π, r²) on the disc, as `filter_xi` lays its strata out.
-    let r = sqrt(xi2);
-    let phi = 2.0 * PI * xi1;
-    let p1 = r * cos(phi);
-    let s = 0.5 * (1.0 + vs.z);
-    let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
-    let hs = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vs;
-    let hl = normalize(vec3<f32>(a * hs.x, a * hs.y, max(hs.z, 0.0)));
+    let hl = ggx_sample_visible_normal(vl, a, xi2, xi1);
     let h = t * hl.x + b * hl.y + n * hl.z;
     let vh = dot(v, h);
     out.l = 2.0 * vh * h - v;
     let nl = dot(n, out.l);
     // D(h) with its denominator as α²(n·h)² + |n × h|² (exact at a narrow lobe's peak).
-    let d = a2 * hl.z * hl.z + (hl.x * hl.x + hl.y * hl.y);
-    let g1v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
+    let d = ggx_distribution_denominator(a2, hl.z, hl.x * hl.x + hl.y * hl.y);
+    let g1v = ggx_smith_g1(a2, nv);
     // p(l) = G₁(v) D(h) / (4 n·v); the lookup reads PBR_LOD_BIAS levels off its share
     // (sample_lod's ½ log2(1 / (M p)), so 2·bias off log2(M p)).
     out.lpdf = log2(f32(P.m)) + log2(max(g1v, 1e-30)) + log2(a2)
@@ -83,11 +65,10 @@ fn sample_ggx(xi1: f32, xi2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: v
     out.weight = vec3<f32>(0.0);
     if (vh > 0.0 && nl > 0.0 && nv > 0.0) {
         // f ⟨n,l⟩ / p(l) = F(⟨v,h⟩) G₁(l): separable Smith, G = G₁(l) G₁(v).
-        let g1l = 2.0 * nl / (nl + sqrt(a2 + (1.0 - a2) * nl * nl));
-        let k = clamp(1.0 - vh, 0.0, 1.0);
-        let k5 = k * k * k * k * k;
+        let g1l = ggx_smith_g1(a2, nl);
+        let k5 = fresnel_schlick_weight(vh);
         let metal = base + (vec3<f32>(1.0) - base) * k5;
-        let dielectric = vec3<f32>(0.04 + 0.96 * k5);
+        let dielectric = vec3<f32>(fresnel_schlick(GGX_DIELECTRIC_F0, vh));
         out.weight = mix(dielectric, metal, pbr.x) * g1l;
     }
     return out;
@@ -115,8 +96,7 @@ fn sample_pbr_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32
     var h = n;
     let hv = v + out.l;
     if (dot(hv, hv) > 0.0) { h = normalize(hv); }
-    let k = clamp(1.0 - abs(dot(v, h)), 0.0, 1.0);
-    let fr = 0.04 + 0.96 * (k * k * k * k * k);
+    let fr = fresnel_schlick(GGX_DIELECTRIC_F0, abs(dot(v, h)));
     if (nl > 0.0 && dot(n, v) > 0.0) {
         out.weight = base * ((1.0 - pbr.x) * (1.0 - fr));
     }

@@ -12,12 +12,6 @@ fn finite3(c: vec3<f32>) -> vec3<f32> {
     return o;
 }
 
-// The sRGB transfer function, encoded to linear (IEC 61966-2-1).
-fn srgb_to_linear(c: f32) -> f32 {
-    if (c <= 0.04045) { return c / 12.92; }
-    return pow((c + 0.055) / 1.055, 2.4);
-}
-
 // The emissive texture's RGB that gb_material's w holds above the flags, decoded.
 fn emissive_of(w: u32) -> vec3<f32> {
     let c = vec3<f32>(vec3<u32>((w >> 8u) & 255u, (w >> 16u) & 255u, (w >> 24u) & 255u)) / 255.0;
@@ -54,7 +48,7 @@ fn surface_of(pid: u32, px: vec2<i32>) -> Surface {
         let ro = unpack2x16unorm(m.z);
         if ((m.w & 1u) != 0u) { s.base = vec3<f32>(rg.x, rg.y, bm.x); }
         if ((m.w & 2u) != 0u && P.object_material != 0u && patches[pid].material.z > 0.5) {
-            s.pbr = vec2<f32>(bm.y, max(ro.x * ro.x, MIN_ALPHA));
+            s.pbr = vec2<f32>(bm.y, ggx_alpha(ro.x));
         }
         if ((m.w & 8u) != 0u) { s.emission = s.emission * emissive_of(m.w); }
         if ((m.w & 16u) != 0u) { s.occlusion = ro.y; }
