@@ -1,4 +1,4 @@
-//! Inputs without bounds and their messages (issue 27), as the user sees them: files that are
+//! Inputs without bounds and their messages, as the user sees them: files that are
 //! not regular files are refused at once, naming what they are, and an error's cause prints
 //! once.
 

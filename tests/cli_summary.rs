@@ -1,4 +1,4 @@
-//! The bake summary explains itself (issue 28): per object, where and why sample-map texels
+//! The bake summary explains itself: per object, where and why sample-map texels
 //! are short; how noisy the cube maps are and, when it shows, what to raise at what cost; and
 //! (JSON) the same in `--report-json`.
 

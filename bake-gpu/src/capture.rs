@@ -26,8 +26,8 @@ const ROW_GROUPS: u32 = 4096;
 /// second on a desktop GPU, whose driver may reset a device that runs one for seconds).
 const PATHS_PER_DISPATCH: u64 = 1 << 22;
 /// Fewest invocations per dispatch, whatever the samples per texel: a large GPU holds about
-/// 2¹⁸ threads at once (an H200: 132 multiprocessors × 2 048), and a dispatch of fewer leaves
-/// most of it idle while the slowest paths finish (at 256 samples per texel, 2²² paths were
+/// 2¹⁸ threads at once (132 multiprocessors × 2 048 threads), and a dispatch of fewer leaves
+/// most of it idle while the slowest paths finish (at 256 samples per texel, 2²² paths are
 /// only 2¹⁴ texels).
 const MIN_INVOCATIONS_PER_DISPATCH: u64 = 1 << 18;
 /// Texels a batch aims for, so that the GPU has enough work in flight.

@@ -1,8 +1,6 @@
 //! The capture shader: its WGSL files joined in dependency order (bindings and entry points
 //! then, each file naming the functions of bake/src it mirrors).
 
-/// The random numbers (PCG32 and the stream hash).
-const RNG: &str = include_str!("shader/rng.wgsl");
 /// The BVH traversal and the triangle test.
 const BVH: &str = include_str!("shader/bvh.wgsl");
 /// Hits, textures, materials, lights, environment.
@@ -14,18 +12,9 @@ pub const CAPTURE: &str = include_str!("shader/capture.wgsl");
 /// The bake's preview: the scene camera's image.
 const PREVIEW: &str = include_str!("shader/preview.wgsl");
 
-/// The whole module's source: oslf-shading's WGSL modules (GGX, Fresnel, colour), then the
-/// capture shader's files.
+/// The whole module's source: oslf-shading's WGSL modules (GGX, Fresnel, colour, random
+/// streams, warps), then the capture shader's files.
 pub fn source() -> String {
     let shading = oslf_shading::wgsl::source();
-    [
-        shading.as_str(),
-        RNG,
-        BVH,
-        SCENE,
-        INTEGRATOR,
-        CAPTURE,
-        PREVIEW,
-    ]
-    .join("\n")
+    [shading.as_str(), BVH, SCENE, INTEGRATOR, CAPTURE, PREVIEW].join("\n")
 }

@@ -195,7 +195,7 @@ fn the_shader_constants_are_the_crates() {
     assert_eq!(value("STACK") as usize, oslf_bake_gpu::scene::MAX_DEPTH);
     assert_eq!(
         value("ONE_MINUS_EPSILON"),
-        f64::from(oslf_bake::sampling::ONE_MINUS_EPSILON)
+        f64::from(oslf_shading::random::ONE_MINUS_EPSILON)
     );
     assert_eq!(value("WORKGROUP") as u32, oslf_bake_gpu::capture::WORKGROUP);
     assert_eq!(

@@ -25,12 +25,12 @@ use oslf_bake::integrator::Integrator;
 use oslf_bake::light::Light;
 use oslf_bake::material::{Material, Model};
 use oslf_bake::ray::ENVIRONMENT_OBJECT;
-use oslf_bake::sampling::Rng;
 use oslf_bake::shapes;
 use oslf_bake::texture::{ImageTexture, Texture};
 use oslf_bake_gpu::scene::GpuScene;
 use oslf_bake_gpu::GpuCapture;
 use oslf_format::CubeImage;
+use oslf_shading::random::Rng;
 
 /// A case: geometry, materials, lights, environment.
 struct Case {

@@ -8,11 +8,12 @@ use glam::Vec3;
 use oslf_bake::bvh::{Instance, TriangleScene};
 use oslf_bake::material::Material;
 use oslf_bake::ray::{Intersector, Ray, ENVIRONMENT_OBJECT};
-use oslf_bake::sampling::{sample_uniform_sphere, Rng};
 use oslf_bake::shapes;
 use oslf_bake_gpu::capture::QueryRay;
 use oslf_bake_gpu::scene::GpuScene;
 use oslf_bake_gpu::GpuCapture;
+use oslf_shading::random::Rng;
+use oslf_shading::warp::sample_uniform_sphere;
 
 fn instances() -> Vec<Instance> {
     let mut post = shapes::cylinder(0.1, 3.0, 24, true).unwrap();

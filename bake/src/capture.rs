@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use crate::integrator::{Integrator, RayStats};
 use crate::noise::{luminance, NoiseStats};
 use crate::ray::{Intersector, Ray};
-use crate::sampling::{hash_u64, Rng};
+use oslf_shading::random::{hash_u64, Rng};
 
 /// Strata per texel side for `samples_per_texel`: the smallest k with k² ≥ the request.
 pub fn strata_per_side(samples_per_texel: u32) -> u32 {

@@ -1,4 +1,4 @@
-//! Why sample-map texels are short (issue 28): each texel that found fewer than four sample
+//! Why sample-map texels are short: each texel that found fewer than four sample
 //! points ([`crate::sample_map`]) is given a cause and a place, per object, in words a user
 //! can act on.
 //!

@@ -26,11 +26,10 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use crate::light::Light;
-use crate::sampling::{
-    invert_uniform_sphere, sample_uniform_sphere, uniform_sphere_pdf, Distribution2D,
-    ONE_MINUS_EPSILON,
-};
+use crate::sampling::Distribution2D;
 use oslf_shading::color::luminance;
+use oslf_shading::random::ONE_MINUS_EPSILON;
+use oslf_shading::warp::{invert_uniform_sphere, sample_uniform_sphere, uniform_sphere_pdf};
 
 use crate::texture::load_linear_rgb;
 use crate::{BakeError, Result};

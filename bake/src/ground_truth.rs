@@ -49,11 +49,12 @@ use crate::metallic_roughness::MetallicRoughness;
 use crate::preview::primary_ray;
 use crate::progress::{self, Progress};
 use crate::ray::{Intersector, Ray, SurfaceHit};
-use crate::sampling::{hash_u64, stratified_2d, Frame, Rng};
 use crate::scene::Scene;
 use crate::tolerance::TESSELLATION_ERROR;
 use crate::{BakeError, Result};
 use oslf_geometry::Camera;
+use oslf_shading::random::{hash_u64, stratified_2d, Rng};
+use oslf_shading::warp::Frame;
 
 /// Which term a ground-truth image holds (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -68,7 +68,8 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::metallic_roughness::MetallicRoughness;
 use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
-use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame, Rng};
+use oslf_shading::random::Rng;
+use oslf_shading::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame};
 
 /// Vertex index from which Russian roulette may end a path.
 const RUSSIAN_ROULETTE_START: u32 = 3;

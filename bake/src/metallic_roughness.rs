@@ -34,7 +34,7 @@ use glam::{Vec2, Vec3};
 use oslf_shading::fresnel::{schlick, schlick_weight};
 use oslf_shading::ggx::{self, DIELECTRIC_F0};
 
-use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame};
+use oslf_shading::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame};
 
 /// A metallic-roughness surface at one point: glTF's factors times its textures.
 #[derive(Clone, Copy, Debug, PartialEq)]

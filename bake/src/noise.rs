@@ -1,4 +1,4 @@
-//! The Monte Carlo noise of the captured cube maps (issue 28): how far the cube texels' values
+//! The Monte Carlo noise of the captured cube maps: how far the cube texels' values
 //! (each the mean of its `samples_per_texel` stratified samples) may lie from the radiance
 //! they estimate, relative to it, gathered over the capture without changing what it writes.
 //!

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use crate::integrator::{Integrator, RayStats};
 use crate::ray::{Intersector, Ray};
-use crate::sampling::{hash_u64, stratified_2d, Rng};
+use oslf_shading::random::{hash_u64, stratified_2d, Rng};
 
 use oslf_geometry::Camera;
 

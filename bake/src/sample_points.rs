@@ -19,10 +19,10 @@ use oslf_format::SamplePoint;
 
 use crate::error::{BakeError, Result};
 use crate::ray::{Intersector, Ray};
-use crate::sampling::Rng;
 use crate::scene::{BakeSettings, SampleDensity};
 pub use crate::surface::Surfaces;
 use crate::surface::{MapDomain, SurfacePoint};
+use oslf_shading::random::Rng;
 /// Candidates drawn per requested point.
 const CANDIDATES_PER_POINT: usize = 6;
 /// Directions probed around each sample point by the free-space tests.

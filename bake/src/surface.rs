@@ -24,8 +24,8 @@ use oslf_geometry::atlas::{Atlas, AtlasOptions};
 
 use crate::bezier::BezierPatch;
 use crate::error::{BakeError, Result};
-use crate::sampling::Rng;
 use crate::scene::{BakeSettings, OslfObject, SampleDensity};
+use oslf_shading::random::Rng;
 
 /// Cells per patch side used to tabulate surface area.
 const AREA_GRID: usize = 32;

@@ -1,4 +1,4 @@
-//! The bake's coverage report (issue 28, "a summary that explains itself"): per object, its
+//! The bake's coverage report (a summary that explains itself): per object, its
 //! short and empty sample-map texels, each group with its cause, the surface it touches and
 //! where it lies.
 

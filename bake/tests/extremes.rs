@@ -1,4 +1,4 @@
-//! Geometry extremes of the bake (issue 6): the teapot 10⁵ units from the origin and scaled by
+//! Geometry extremes of the bake: the teapot 10⁵ units from the origin and scaled by
 //! 10⁻³ and 10³, ε from 10⁻⁶ to 10× the object's size. The transformed scenes are checked
 //! against the unit scene point by point: the same ray origins (mapped back), the same random
 //! streams, so a correct bake gives the same radiance and distances up to rounding, while a

@@ -204,7 +204,7 @@ fn the_pbr_term_is_the_brdf_albedo_times_the_sky() {
                     continue;
                 };
                 let n = patch.normal(hit.uv.x, hit.uv.y);
-                let frame = oslf_bake::sampling::Frame::from_normal(n);
+                let frame = oslf_shading::warp::Frame::from_normal(n);
                 let view = -ray.dir;
                 let (nt, np) = (300, 300);
                 let mut albedo = DVec3::ZERO;

@@ -1,4 +1,4 @@
-//! Inputs without bounds (issue 27): every file a scene names is read only if it is a regular
+//! Inputs without bounds: every file a scene names is read only if it is a regular
 //! file, and never beyond the limit of its kind; glTF references stay relative to their file.
 //! Each read that could block (a FIFO) runs on a thread with a deadline, so that a regression
 //! fails the test instead of hanging it.

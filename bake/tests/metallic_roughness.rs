@@ -3,7 +3,8 @@
 
 use glam::{Vec2, Vec3};
 use oslf_bake::metallic_roughness::MetallicRoughness;
-use oslf_bake::sampling::{sample_uniform_sphere, Rng};
+use oslf_shading::random::Rng;
+use oslf_shading::warp::sample_uniform_sphere;
 
 fn mr(c: [f32; 3], metallic: f32, roughness: f32) -> MetallicRoughness {
     MetallicRoughness {

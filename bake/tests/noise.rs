@@ -1,4 +1,4 @@
-//! The noise estimate of the captured cubes (issue 28): it falls as 1/√samples, it asks for
+//! The noise estimate of the captured cubes: it falls as 1/√samples, it asks for
 //! more samples per texel where the noise shows and not where it does not, and it leaves the
 //! store as it was.
 

@@ -1,4 +1,4 @@
-//! Preflight (issue 15): the hostile settings of the issue are refused before any slow work,
+//! Preflight: hostile settings are refused before any slow work,
 //! naming the setting to change; the gazebo's quick preset passes; estimates grow with every
 //! setting; and a tiny real bake lands within a factor of 2 of its estimate (store size and
 //! the heap peak, counted by a counting allocator). No test reads the real machine's limits.

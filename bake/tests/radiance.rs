@@ -18,6 +18,8 @@ use oslf_bake::sampling::*;
 use oslf_bake::texture::{load_linear_rgb, ImageTexture, Texture};
 use oslf_bake::BakeError;
 use oslf_shading::color::{linear_to_srgb, luminance, srgb_to_linear};
+use oslf_shading::random::*;
+use oslf_shading::warp::*;
 
 // ---------------------------------------------------------------------------------------------
 // Analytic geometry

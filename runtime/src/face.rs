@@ -269,9 +269,9 @@ const TENT: [f32; 4] = [1.0, 3.0, 3.0, 1.0];
 /// across the face), normalised, summed in a fixed order: the mean radiance over the
 /// directions the tent covers. A texel-space mean weighs a face's corner texels, which subtend
 /// up to 5.2× less than its centre's, as much as those: the coarse levels a wide lobe's few
-/// filtered samples read then held the wrong mix of directions, and the pbr mode at M = 16,
-/// roughness 0.6, came out 5.7 % darker than at M = 256 (measurements.md, "Mips weighted by
-/// solid angle, a spiral per candidate"). The tent rather than the 2×2 box because filtered importance sampling reads
+/// filtered samples read then held the wrong mix of directions, and a wide lobe at small M
+/// came out darker than at large M (docs/measurements.md, "Mips weighted by solid angle, a
+/// spiral per candidate"). The tent rather than the 2×2 box because filtered importance sampling reads
 /// a few coarse levels bilinearly with a fixed set of directions: the box's blocks show there
 /// as bands across a wide lobe's reflection.
 pub fn downsample(src: &[[f32; 3]], side: u32) -> Vec<[f32; 3]> {

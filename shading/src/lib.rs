@@ -9,6 +9,8 @@
 //! | --- | --- | --- |
 //! | [`ggx`] | Trowbridge–Reitz `D`, Smith `G₁` and `V`, visible-normal sampling, Schlick's weight | `ggx.wgsl`: `ggx_distribution`, `ggx_smith_g1`, … |
 //! | [`fresnel`] | Schlick's approximation (thesis Eq. 5.7) | `fresnel.wgsl`: `fresnel_schlick`, `fresnel_schlick_weight` |
+//! | [`random`] | PCG32, the stream hash, stratified samples | `random.wgsl`: the same streams bit for bit (`rng_new`, `rng_f32`, `hash4`) |
+//! | [`warp`] | disc, cosine-hemisphere and sphere warps with densities and inverses; the frame about a normal | `warp.wgsl`: the warps and the frame |
 //! | [`color`] | the sRGB transfer functions, the ACES tone curve, luminance | `color.wgsl`: `srgb_to_linear`, `linear_to_srgb`, `aces`, `luminance` |
 //!
 //! Each WGSL function is the Rust function of the same module with the module's name as a
@@ -23,4 +25,6 @@
 pub mod color;
 pub mod fresnel;
 pub mod ggx;
+pub mod random;
+pub mod warp;
 pub mod wgsl;

@@ -2,7 +2,7 @@
 //! the runtime, the GPU bake and the viewer put before their own files ([`source`]). Its
 //! constants are generated from the Rust ones, so they cannot drift.
 
-use std::f32::consts::{FRAC_1_PI, PI};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 use crate::ggx::{DIELECTRIC_F0, MIN_ALPHA};
 
@@ -12,6 +12,10 @@ const GGX: &str = include_str!("ggx.wgsl");
 const FRESNEL: &str = include_str!("fresnel.wgsl");
 /// `color.wgsl`: the twin of [`crate::color`].
 const COLOR: &str = include_str!("color.wgsl");
+/// `random.wgsl`: the twin of [`crate::random`].
+const RANDOM: &str = include_str!("random.wgsl");
+/// `warp.wgsl`: the twin of [`crate::warp`].
+const WARP: &str = include_str!("warp.wgsl");
 
 /// The constants the WGSL modules use, written from the Rust values (Rust's shortest
 /// round-trip formatting, which WGSL parses back to the same `f32`).
@@ -21,6 +25,8 @@ pub fn constants() -> String {
         "// ---- oslf-shading constants (generated from the Rust values) ----\n".to_string(),
         c("PI", PI),
         c("FRAC_1_PI", FRAC_1_PI),
+        c("FRAC_PI_2", FRAC_PI_2),
+        c("FRAC_PI_4", FRAC_PI_4),
         c("GGX_MIN_ALPHA", MIN_ALPHA),
         c("GGX_DIELECTRIC_F0", DIELECTRIC_F0),
     ]
@@ -29,7 +35,7 @@ pub fn constants() -> String {
 
 /// Every WGSL module of this crate, constants first, to put before a shader's own files.
 pub fn source() -> String {
-    [constants().as_str(), GGX, FRESNEL, COLOR].join("\n")
+    [constants().as_str(), GGX, FRESNEL, COLOR, RANDOM, WARP].join("\n")
 }
 
 #[cfg(test)]
@@ -74,6 +80,32 @@ mod tests {
                 .to_string();
             let text = line.rsplit(' ').next().unwrap().trim_end_matches(';');
             assert_eq!(text.parse::<f32>().unwrap(), v, "{line}");
+        }
+    }
+
+    /// The warps the GPU draws are Rust's, in Rust's order (`frame_from_normal` is
+    /// `Frame::from_normal`; the inverses and most densities are Rust only).
+    #[test]
+    fn warps_follow_the_rust_order() {
+        let rust: Vec<String> = include_str!("warp.rs")
+            .split("#[cfg(test)]")
+            .next()
+            .unwrap()
+            .lines()
+            .filter_map(|l| l.trim_start().strip_prefix("pub fn "))
+            .map(|l| l.split('(').next().unwrap().to_string())
+            .collect();
+        let wgsl: Vec<String> = functions(WARP, "fn ")
+            .into_iter()
+            .map(|f| f.trim_start_matches("frame_").to_string())
+            .collect();
+        assert_eq!(wgsl.len(), 7, "{wgsl:?}");
+        let mut at = 0;
+        for f in &wgsl {
+            let found = rust[at..].iter().position(|r| r == f);
+            let found =
+                found.unwrap_or_else(|| panic!("{f} is not in warp.rs after {at}: {rust:?}"));
+            at += found + 1;
         }
     }
 }

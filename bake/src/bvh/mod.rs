@@ -675,8 +675,8 @@ fn prefetch<T>(p: *const T) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Rng;
     use crate::shapes;
+    use oslf_shading::random::Rng;
 
     fn same_hit(a: Option<TriHit>, b: Option<TriHit>) -> bool {
         match (a, b) {
@@ -820,7 +820,7 @@ mod tests {
         let mut blocked = 0;
         for k in 0..20_000 {
             let origin = Vec3::new(u() * 5.0 - 2.5, u() * 5.0 - 2.5, u() * 5.0 - 2.5);
-            let dir = crate::sampling::sample_uniform_sphere(glam::Vec2::new(u(), u()));
+            let dir = oslf_shading::warp::sample_uniform_sphere(glam::Vec2::new(u(), u()));
             let ray = Ray::new(origin, dir);
             let t_max = if k % 3 == 0 { f32::MAX } else { u() * 4.0 };
             let expected = s.intersect_brute_force(&ray, t_max).is_some();

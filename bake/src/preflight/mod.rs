@@ -1,4 +1,4 @@
-//! Preflight (issue 15): before any slow work, estimate what a bake will cost — peak memory,
+//! Preflight: before any slow work, estimate what a bake will cost — peak memory,
 //! store size, time — from the scene and its settings alone, and refuse a bake that cannot
 //! fit the machine, naming the setting to change.
 //!

@@ -308,7 +308,7 @@ impl Atlas {
     /// geometric normal `(p1 − p0) × (p2 − p0)`, turned to the side of `shading` (the shading
     /// normal decides which side is outside); for a degenerate triangle, `shading` itself.
     /// Offsetting along the face's own normal keeps a point exactly ε from its face, so points
-    /// near a hard edge do not tilt towards the neighbouring face (issue 28).
+    /// near a hard edge do not tilt towards the neighbouring face.
     ///
     /// # Panics
     ///

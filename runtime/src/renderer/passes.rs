@@ -9,9 +9,9 @@ use crate::pipelines::{DEPTH_CLEAR, WORKGROUP};
 impl Renderer {
     /// Encodes the G-buffer pass: clears depth and rasterizes the mesh into the targets. The
     /// colour targets are not cleared: the shading pass and `read_gbuffer` take a pixel as
-    /// covered where its depth is below [`DEPTH_CLEAR`] and ignore the colour elsewhere (an
-    /// NVIDIA H200 spent most of the pass clearing the two Rgba32Float targets:
-    /// docs/measurements.md). `timed`: with the renderer's GPU timestamps, when it has them.
+    /// covered where its depth is below [`DEPTH_CLEAR`] and ignore the colour elsewhere, so
+    /// the pass does not spend its time clearing two Rgba32Float targets. `timed`: with the
+    /// renderer's GPU timestamps, when it has them.
     pub(super) fn encode_gbuffer(
         &self,
         encoder: &mut wgpu::CommandEncoder,

@@ -5,9 +5,8 @@
 // The faces this invocation has read, gathered per cube (`mark_face`) and written to the
 // feedback buffer once at its end (`flush_marks`) instead of one atomic per read: the four
 // candidates' cubes (`mark_cube`, set after `candidates`) and the environment cube; any other
-// cube is marked at once. The buffer ends the frame with the same bits either way. (Atomics
-// on the few cubes every pixel reads dominated glossy frames on an NVIDIA H200:
-// docs/measurements.md.)
+// cube is marked at once. The buffer ends the frame with the same bits either way. Why: one
+// atomic per read contends on the few cubes every pixel reads.
 var<private> mark_cube: vec4<u32>;
 var<private> mark_bits: vec4<u32>;
 var<private> mark_env: u32;

@@ -1,5 +1,6 @@
-// PCG32 and the stream hash of the CPU path tracer (bake/src/sampling.rs), bit for bit: 64-bit
-// integers as vec2<u32> (x = low word, y = high word), so a texel draws the CPU's numbers.
+// ---- oslf-shading random.wgsl ----
+// The twin of oslf-shading's random.rs: PCG32 and the stream hash, bit for bit, with 64-bit
+// integers as vec2<u32> (x = low word, y = high word), so a GPU texel draws the CPU's numbers.
 
 fn mul32x32(a: u32, b: u32) -> vec2<u32> {
     let a0 = a & 0xffffu;
