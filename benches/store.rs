@@ -23,10 +23,10 @@ use std::path::{Path, PathBuf};
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::scene::Scene;
 use oslf_format::{
     encode_cube, encode_cube_with_filter, Encoding, Filter, SampleMaps, Store, StoreWriter,
 };
+use oslf_scene::scene::Scene;
 
 fn data_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
 
 /// The teapot test scene (tests/fixtures/teapot.toml) at toy resolutions, and a preset with
 /// finer cube maps.

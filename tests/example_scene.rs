@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
 
 fn load(preset: Option<&str>) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gazebo.toml");

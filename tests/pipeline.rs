@@ -4,11 +4,11 @@ use std::path::Path;
 
 use glam::{Affine3A, Mat4, Vec3};
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::bezier::BezierPatch;
-use oslf_bake::bvh::TriangleScene;
-use oslf_bake::ray::Ray;
-use oslf_bake::scene::Scene;
 use oslf_format::{Store, INVALID_INDEX};
+use oslf_geometry::bezier::BezierPatch;
+use oslf_scene::scene::Scene;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::ray::Ray;
 
 /// A small but complete scene: the teapot's lid and body on a table, a wall, a point light and
 /// a uniform sky (tests/fixtures/teapot.toml), baked at toy resolutions.
@@ -107,7 +107,12 @@ fn sample_maps_hold_the_nearest_visible_in_hemisphere_points() {
     let params = &meta.bake;
     let points = store.sample_points();
     let cos_phi = params.phi_samplemap_deg.to_radians().cos();
-    let geometry = TriangleScene::build(scene.instances(true, params.epsilon / 50.0)).unwrap();
+    let geometry = TriangleScene::build(oslf_trace::bvh::scene_instances(
+        &scene,
+        true,
+        params.epsilon / 50.0,
+    ))
+    .unwrap();
 
     let object = &meta.objects[0];
     let transform = Affine3A::from_mat4(Mat4::from_cols_array_2d(&object.transform));

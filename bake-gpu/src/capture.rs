@@ -4,13 +4,13 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use oslf_bake::capture::{strata_per_side, CaptureSettings};
 use oslf_bake::device::{CaptureDevice, CapturedCube, CubeJob};
-use oslf_bake::integrator::RayStats;
-use oslf_bake::noise::NoiseStats;
-use oslf_bake::scene::Scene;
 use oslf_format::CubeImage;
 use oslf_runtime::Gpu;
+use oslf_scene::scene::Scene;
+use oslf_trace::capture::{strata_per_side, CaptureSettings};
+use oslf_trace::integrator::RayStats;
+use oslf_trace::noise::NoiseStats;
 use wgpu::util::DeviceExt;
 
 use crate::error::{GpuBakeError, Result};
@@ -192,8 +192,10 @@ impl GpuCapture {
     /// objects tessellated within ε × `TESSELLATION_ERROR`), its materials, lights,
     /// environment and bounces.
     pub fn for_scene(gpu: Gpu, scene: &Scene) -> Result<Self> {
-        let max_error = scene.bake.epsilon * oslf_bake::tolerance::TESSELLATION_ERROR;
-        let geometry = oslf_bake::bvh::TriangleScene::build(scene.instances(true, max_error))?;
+        let max_error = scene.bake.epsilon * oslf_scene::tolerance::TESSELLATION_ERROR;
+        let geometry = oslf_trace::bvh::TriangleScene::build(oslf_trace::bvh::scene_instances(
+            scene, true, max_error,
+        ))?;
         let packed = GpuScene::new(
             &geometry.triangles(),
             &scene.materials,
@@ -383,7 +385,7 @@ impl GpuCapture {
             .clamp(1, MAX_BATCH_CUBES) as usize
     }
 
-    /// Captures the cubes of `jobs` (each as `oslf_bake::capture::capture_cube_with_noise`
+    /// Captures the cubes of `jobs` (each as `oslf_trace::capture::capture_cube_with_noise`
     /// does; no noise for the environment-map baseline's cube), in order.
     pub fn capture_cubes(
         &self,
@@ -666,9 +668,9 @@ impl CaptureDevice for GpuCapture {
         &self,
         jobs: &[CubeJob],
         settings: &CaptureSettings,
-    ) -> oslf_bake::Result<Vec<CapturedCube>> {
+    ) -> oslf_scene::Result<Vec<CapturedCube>> {
         self.capture_cubes(jobs, settings)
-            .map_err(|e| oslf_bake::BakeError::Device {
+            .map_err(|e| oslf_scene::BakeError::Device {
                 device: self.describe(),
                 message: e.to_string(),
             })

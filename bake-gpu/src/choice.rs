@@ -3,8 +3,8 @@
 
 use std::sync::Arc;
 
-use oslf_bake::scene::{DeviceChoice, Scene};
 use oslf_runtime::Gpu;
+use oslf_scene::scene::{DeviceChoice, Scene};
 
 use crate::capture::GpuCapture;
 use crate::error::Result;

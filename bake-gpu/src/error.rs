@@ -16,7 +16,7 @@ pub enum GpuBakeError {
     Gpu { adapter: String, message: String },
     /// The bake's own error (building the scene's triangles).
     #[error(transparent)]
-    Bake(#[from] oslf_bake::BakeError),
+    Bake(#[from] oslf_scene::BakeError),
 }
 
 /// Shorthand used across the crate.

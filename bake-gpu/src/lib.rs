@@ -3,7 +3,7 @@
 //! The cube maps are what a bake spends its time on (thesis §3.2: an HDR cube map ray traced
 //! at every sample point), and their Monte Carlo noise is what limits a bake's accuracy
 //! indoors. This crate runs that capture as a wgpu compute shader, with the estimator of the
-//! CPU path tracer (`oslf_bake::integrator`) ported line by line:
+//! CPU path tracer (`oslf_trace::integrator`) ported line by line:
 //!
 //! - [`scene`]: the scene packed for the GPU: an obvhs BVH2 over the bake's own triangles
 //!   (the objects tessellated as for the CPU BVH), materials (Lambertian and glTF

@@ -1,10 +1,10 @@
 //! The bake's preview on the GPU: the scene camera's image path traced by
-//! shader/preview.wgsl with the capture's integrator, as `oslf_bake::preview::render` does on
+//! shader/preview.wgsl with the capture's integrator, as `oslf_trace::preview::render` does on
 //! the CPU (the same strata and random streams, so the same image up to rounding).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use oslf_bake::camera::Camera;
+use oslf_geometry::camera::Camera;
 
 use crate::capture::{GpuCapture, Params};
 use crate::error::Result;

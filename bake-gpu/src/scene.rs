@@ -5,11 +5,11 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use obvhs::aabb::Aabb;
-use oslf_bake::bvh::TriangleRecord;
-use oslf_bake::environment::{Environment, EnvironmentModel};
-use oslf_bake::light::Light;
-use oslf_bake::material::{Material, Model};
-use oslf_bake::texture::Texture;
+use oslf_scene::environment::{Environment, EnvironmentModel};
+use oslf_scene::light::Light;
+use oslf_scene::material::{Material, Model};
+use oslf_scene::texture::Texture;
+use oslf_trace::bvh::TriangleRecord;
 
 use crate::error::{GpuBakeError, Result};
 
@@ -340,7 +340,7 @@ fn gpu_light(l: &Light) -> GpuLight {
     g
 }
 
-/// The CPU BVH's binary tree over `triangles` ([`oslf_bake::bvh::build_bvh2`], one
+/// The CPU BVH's binary tree over `triangles` ([`oslf_trace::bvh::build_bvh2`], one
 /// triangle per leaf): its nodes, the triangles' order in the leaves and the deepest leaf's
 /// depth. Errors if that depth exceeds [`MAX_DEPTH`].
 fn build_bvh(triangles: &[TriangleRecord]) -> Result<(Vec<Node>, Vec<u32>, usize)> {
@@ -348,7 +348,7 @@ fn build_bvh(triangles: &[TriangleRecord]) -> Result<(Vec<Node>, Vec<u32>, usize
         .iter()
         .map(|t| Aabb::from_points(&t.corners.map(glam::Vec3A::from)))
         .collect();
-    let bvh2 = oslf_bake::bvh::build_bvh2(&aabbs);
+    let bvh2 = oslf_trace::bvh::build_bvh2(&aabbs);
     let nodes: Vec<Node> = bvh2
         .nodes
         .iter()

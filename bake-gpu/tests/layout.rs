@@ -186,11 +186,11 @@ fn the_shader_constants_are_the_crates() {
     };
     assert_eq!(
         value("OFFSET_RELATIVE"),
-        f64::from(oslf_bake::integrator::OFFSET_RELATIVE)
+        f64::from(oslf_trace::integrator::OFFSET_RELATIVE)
     );
     assert_eq!(
         value("SELF_TOLERANCE"),
-        f64::from(oslf_bake::bvh::SELF_TOLERANCE)
+        f64::from(oslf_trace::bvh::SELF_TOLERANCE)
     );
     assert_eq!(value("STACK") as usize, oslf_bake_gpu::scene::MAX_DEPTH);
     assert_eq!(
@@ -200,7 +200,7 @@ fn the_shader_constants_are_the_crates() {
     assert_eq!(value("WORKGROUP") as u32, oslf_bake_gpu::capture::WORKGROUP);
     assert_eq!(
         value("ENVIRONMENT_OBJECT") as u32,
-        oslf_bake::ray::ENVIRONMENT_OBJECT
+        oslf_trace::ray::ENVIRONMENT_OBJECT
     );
     assert_eq!(value("F32_MAX"), f64::from(f32::MAX));
 }

@@ -17,20 +17,20 @@ mod common;
 
 use common::sphere_on_ground;
 use glam::Vec3;
-use oslf_bake::bvh::{Instance, TriangleScene};
-use oslf_bake::capture::{capture_cube_with_noise, CaptureSettings};
 use oslf_bake::device::CubeJob;
-use oslf_bake::environment::{Environment, LatLongMap, Sky};
-use oslf_bake::integrator::Integrator;
-use oslf_bake::light::Light;
-use oslf_bake::material::{Material, Model};
-use oslf_bake::ray::ENVIRONMENT_OBJECT;
-use oslf_bake::shapes;
-use oslf_bake::texture::{ImageTexture, Texture};
 use oslf_bake_gpu::scene::GpuScene;
 use oslf_bake_gpu::GpuCapture;
 use oslf_format::CubeImage;
+use oslf_scene::environment::{Environment, LatLongMap, Sky};
+use oslf_scene::light::Light;
+use oslf_scene::material::{Material, Model};
+use oslf_scene::shapes;
+use oslf_scene::texture::{ImageTexture, Texture};
 use oslf_shading::random::Rng;
+use oslf_trace::bvh::{Instance, TriangleScene};
+use oslf_trace::capture::{capture_cube_with_noise, CaptureSettings};
+use oslf_trace::integrator::Integrator;
+use oslf_trace::ray::ENVIRONMENT_OBJECT;
 
 /// A case: geometry, materials, lights, environment.
 struct Case {
@@ -379,7 +379,7 @@ fn gpu_and_cpu_captures_agree_within_their_noise_on_independent_seeds() {
 
 #[test]
 fn gpu_preview_is_the_cpu_preview_pixel_by_pixel() {
-    let camera = oslf_bake::camera::Camera {
+    let camera = oslf_geometry::camera::Camera {
         position: Vec3::new(3.5, -2.5, 1.8),
         target: Vec3::new(0.0, 0.0, 0.0),
         up: Vec3::Z,
@@ -396,7 +396,7 @@ fn gpu_preview_is_the_cpu_preview_pixel_by_pixel() {
             1,
         );
         // 5 samples per pixel: strata of a 3 × 2 grid, one left out.
-        let (cpu, _) = oslf_bake::preview::render(&integrator, &camera, w, h, 5, 9);
+        let (cpu, _) = oslf_trace::preview::render(&integrator, &camera, w, h, 5, 9);
         let gpu = d.gpu.preview(&camera, w, h, 5, 9).unwrap();
         assert_eq!(gpu.len(), cpu.len());
         let differ = cpu

@@ -5,15 +5,15 @@
 mod common;
 
 use glam::Vec3;
-use oslf_bake::bvh::{Instance, TriangleScene};
-use oslf_bake::material::Material;
-use oslf_bake::ray::{Intersector, Ray, ENVIRONMENT_OBJECT};
-use oslf_bake::shapes;
 use oslf_bake_gpu::capture::QueryRay;
 use oslf_bake_gpu::scene::GpuScene;
 use oslf_bake_gpu::GpuCapture;
+use oslf_scene::material::Material;
+use oslf_scene::shapes;
 use oslf_shading::random::Rng;
 use oslf_shading::warp::sample_uniform_sphere;
+use oslf_trace::bvh::{Instance, TriangleScene};
+use oslf_trace::ray::{Intersector, Ray, ENVIRONMENT_OBJECT};
 
 fn instances() -> Vec<Instance> {
     let mut post = shapes::cylinder(0.1, 3.0, 24, true).unwrap();
@@ -35,7 +35,7 @@ fn instances() -> Vec<Instance> {
 fn gpu_closest_hits_are_the_cpu_bvhs() {
     let scene = TriangleScene::build(instances()).unwrap();
     let materials = vec![Material::lambertian(Vec3::splat(0.5)); 2];
-    let env = oslf_bake::environment::Environment::Constant(Vec3::ONE);
+    let env = oslf_scene::environment::Environment::Constant(Vec3::ONE);
     let packed = GpuScene::new(&scene.triangles(), &materials, &[], &env).unwrap();
     let gpu = oslf_runtime::Gpu::headless().expect("a wgpu adapter (lavapipe in CI)");
     let capture = GpuCapture::new(gpu, &packed, 0).unwrap();

@@ -8,10 +8,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::Vec3;
-use oslf_bake::bvh::TriangleScene;
-use oslf_bake::capture::{capture_cube, CaptureSettings};
-use oslf_bake::integrator::{Integrator, RayStats};
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::capture::{capture_cube, CaptureSettings};
+use oslf_trace::integrator::{Integrator, RayStats};
 
 /// CPU nanoseconds run by this thread (Linux `schedstat`).
 fn thread_cpu_ns() -> u64 {
@@ -27,9 +27,10 @@ fn main() -> anyhow::Result<()> {
     let n: usize = args.get(2).map_or(Ok(16), |s| s.parse())?;
     let first: usize = args.get(3).map_or(Ok(0), |s| s.parse())?;
     let settings = &scene.bake;
-    let geometry = TriangleScene::build(scene.instances(
+    let geometry = TriangleScene::build(oslf_trace::bvh::scene_instances(
+        &scene,
         true,
-        settings.epsilon * oslf_bake::tolerance::TESSELLATION_ERROR,
+        settings.epsilon * oslf_scene::tolerance::TESSELLATION_ERROR,
     ))?;
     let placement = oslf_bake::sample_points::place(
         &oslf_bake::surface::Surfaces::new(&scene.objects, settings)?,

@@ -37,7 +37,7 @@ fn main() {
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/blob.glb"),
         PathBuf::from,
     );
-    let sphere = oslf_bake::mesh::Mesh::icosphere(3);
+    let sphere = oslf_geometry::mesh::Mesh::icosphere(3);
     let (dirs, faces) = (sphere.positions, sphere.triangles);
     // Lift so the lowest point rests on the table top.
     let lowest = dirs

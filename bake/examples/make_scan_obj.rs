@@ -32,7 +32,7 @@ fn main() {
         eprintln!("usage: make_scan_obj OUTPUT.obj");
         std::process::exit(2);
     };
-    let sphere = oslf_bake::mesh::Mesh::icosphere(6);
+    let sphere = oslf_geometry::mesh::Mesh::icosphere(6);
     let positions: Vec<Vec3> = sphere.positions.iter().map(|&d| d * radius(d)).collect();
     let lowest = positions.iter().map(|p| p.z).fold(f32::MAX, f32::min);
     let mut text = String::with_capacity(64 * positions.len());

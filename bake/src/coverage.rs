@@ -26,11 +26,11 @@ use glam::Vec3;
 use oslf_format::{SampleMaps, SamplePoint, INVALID_INDEX};
 use rayon::prelude::*;
 
-use crate::bvh::Instance;
-use crate::ray::{Intersector, Ray};
 use crate::sample_map::{self, PointIndex, VISIBILITY_LIFT};
 use crate::sample_points::{fibonacci_sphere, through_point, FREE_SPACE_TOLERANCE};
 use crate::surface::MapDomain;
+use oslf_trace::bvh::Instance;
+use oslf_trace::ray::{Intersector, Ray};
 
 /// Places shown per object, largest first; the others are summed in
 /// [`ObjectCoverage::other_short`].
@@ -70,7 +70,7 @@ impl Cause {
 }
 
 /// The names of the scene's triangles: which instance a global triangle index
-/// ([`crate::ray::SurfaceHit::triangle`]) belongs to, as the scene names it.
+/// ([`oslf_trace::ray::SurfaceHit::triangle`]) belongs to, as the scene names it.
 #[derive(Clone, Debug, Default)]
 pub struct SurfaceNames {
     /// Per instance: one past its last global triangle index, and its name.
@@ -78,7 +78,7 @@ pub struct SurfaceNames {
 }
 
 impl SurfaceNames {
-    /// The names of `instances`, in the order [`crate::bvh::TriangleScene::build`] numbers
+    /// The names of `instances`, in the order [`oslf_trace::bvh::TriangleScene::build`] numbers
     /// their triangles.
     pub fn of(instances: &[Instance]) -> Self {
         let mut end = 0u64;
@@ -470,9 +470,9 @@ pub fn decimals_for(epsilon: f32) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bezier::BezierPatch;
-    use crate::bvh::TriangleScene;
-    use crate::shapes;
+    use oslf_geometry::bezier::BezierPatch;
+    use oslf_scene::shapes;
+    use oslf_trace::bvh::TriangleScene;
 
     /// A flat patch over [0, 1]² at z = 0 facing +z; a thin wall standing on it at x = 0.5;
     /// sample points ε above it only beyond the wall (x ≥ 0.52). Beside the wall, texels are in
@@ -512,7 +512,7 @@ mod tests {
                 name: "wall".into(),
                 mesh: wall,
                 material: 0,
-                object: crate::ray::ENVIRONMENT_OBJECT,
+                object: oslf_trace::ray::ENVIRONMENT_OBJECT,
             },
         ];
         let names = SurfaceNames::of(&instances);
@@ -532,7 +532,7 @@ mod tests {
             patch: &patch,
         }];
         let phi = 80.0;
-        let silent = crate::progress::or_silent(&None);
+        let silent = oslf_trace::progress::or_silent(&None);
         let (maps, stats) = sample_map::build(&domains, &points, &geometry, 64, phi, eps, silent);
         let probe = Probe {
             geometry: &geometry,
@@ -575,7 +575,7 @@ mod tests {
 
     #[test]
     fn a_triangle_is_named_by_the_instance_that_holds_it() {
-        let mesh = |n: usize| crate::mesh::Mesh {
+        let mesh = |n: usize| oslf_geometry::mesh::Mesh {
             triangles: vec![[0, 1, 2]; n],
             ..Default::default()
         };

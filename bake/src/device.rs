@@ -1,5 +1,5 @@
 //! Capture devices: what captures the cube maps of a bake when it is not this crate's CPU path
-//! tracer ([`crate::capture`]). The GPU path tracer (crate `oslf-bake-gpu`, which this crate
+//! tracer ([`oslf_trace::capture`]). The GPU path tracer (crate `oslf-bake-gpu`, which this crate
 //! never depends on: the bake has no wgpu) implements [`CaptureDevice`]; the bake hands it
 //! batches of cubes in store order ([`crate::bake::BakeOptions::device`]), so resuming,
 //! sharding and merging work as with the CPU path.
@@ -7,10 +7,10 @@
 use glam::Vec3;
 use oslf_format::CubeImage;
 
-use crate::capture::CaptureSettings;
-use crate::integrator::RayStats;
-use crate::noise::NoiseStats;
-use crate::Result;
+use oslf_scene::Result;
+use oslf_trace::capture::CaptureSettings;
+use oslf_trace::integrator::RayStats;
+use oslf_trace::noise::NoiseStats;
 
 /// One cube to capture.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,7 +26,7 @@ pub struct CubeJob {
 }
 
 /// A captured cube: its texels (and distance plane), the rays traced for it, and the noise of
-/// its texels ([`crate::noise`]; empty for the environment-map baseline's cube).
+/// its texels ([`oslf_trace::noise`]; empty for the environment-map baseline's cube).
 pub type CapturedCube = (CubeImage, RayStats, NoiseStats);
 
 /// A cube-map capture backend for a scene it was built for.
@@ -48,7 +48,7 @@ pub trait CaptureDevice: Send + Sync + std::fmt::Debug {
         None
     }
 
-    /// The cubes of `jobs`, in order, each the capture [`crate::capture::capture_cube`]
+    /// The cubes of `jobs`, in order, each the capture [`oslf_trace::capture::capture_cube`]
     /// computes (the same estimator, so the same expected texels). The bake calls it from a
     /// thread of its own while it encodes the previous batch, so the device never waits for
     /// the encoder.

@@ -11,8 +11,8 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::{SampleMaps, SamplePoint, INVALID_INDEX};
 use rayon::prelude::*;
 
-use crate::ray::{Intersector, Ray};
 use crate::surface::MapDomain;
+use oslf_trace::ray::{Intersector, Ray};
 
 /// Visibility rays start this fraction of ε above the texel's point on the patch: above the
 /// tessellation error (at most ε/50), well below the sample points at ε.
@@ -188,7 +188,7 @@ pub fn build(
     resolution: u32,
     phi_samplemap_deg: f32,
     epsilon: f32,
-    progress: &dyn crate::progress::Progress,
+    progress: &dyn oslf_trace::progress::Progress,
 ) -> (SampleMaps, SampleMapStats) {
     let index = PointIndex::new(points);
     let cos_phi = phi_samplemap_deg.to_radians().cos();

@@ -17,12 +17,12 @@ use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::SamplePoint;
 
-use crate::error::{BakeError, Result};
-use crate::ray::{Intersector, Ray};
-use crate::scene::{BakeSettings, SampleDensity};
 pub use crate::surface::Surfaces;
 use crate::surface::{MapDomain, SurfacePoint};
+use oslf_scene::error::{BakeError, Result};
+use oslf_scene::scene::{BakeSettings, SampleDensity};
 use oslf_shading::random::Rng;
+use oslf_trace::ray::{Intersector, Ray};
 /// Candidates drawn per requested point.
 const CANDIDATES_PER_POINT: usize = 6;
 /// Directions probed around each sample point by the free-space tests.
@@ -397,7 +397,7 @@ pub fn through_point(
     position: Vec3,
     dir: Vec3,
     near: f32,
-) -> Option<crate::ray::SurfaceHit> {
+) -> Option<oslf_trace::ray::SurfaceHit> {
     let origin = position - dir * near;
     geometry
         .intersect(&Ray::new(origin, dir), 2.0 * near)

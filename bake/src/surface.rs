@@ -22,9 +22,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use oslf_geometry::atlas::{Atlas, AtlasOptions};
 
-use crate::bezier::BezierPatch;
-use crate::error::{BakeError, Result};
-use crate::scene::{BakeSettings, OslfObject, SampleDensity};
+use oslf_geometry::bezier::BezierPatch;
+use oslf_scene::error::{BakeError, Result};
+use oslf_scene::scene::{BakeSettings, OslfObject, SampleDensity};
 use oslf_shading::random::Rng;
 
 /// Cells per patch side used to tabulate surface area.

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
 use oslf_bake::coverage::{Cause, ObjectCoverage};
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
 
 /// The unit cube [0, 1]³ without normals: 8 vertices, 6 quads wound outwards.
 const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\

@@ -7,13 +7,13 @@
 use std::path::Path;
 
 use glam::{DVec3, Vec3};
-use oslf_bake::bvh::TriangleScene;
-use oslf_bake::capture::{capture_cube, CaptureSettings};
-use oslf_bake::integrator::Integrator;
 use oslf_bake::sample_map;
 use oslf_bake::sample_points::{self, Surfaces};
-use oslf_bake::scene::Scene;
-use oslf_bake::tolerance::TESSELLATION_ERROR;
+use oslf_scene::scene::Scene;
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::capture::{capture_cube, CaptureSettings};
+use oslf_trace::integrator::Integrator;
 
 /// The teapot (28 patches) under a uniform sky and a point light, nothing else: radiance is
 /// invariant under translation and under scaling when the light's intensity scales with s².
@@ -54,7 +54,7 @@ seed = 5
     )
 }
 
-fn load(text: &str) -> Result<Scene, oslf_bake::BakeError> {
+fn load(text: &str) -> Result<Scene, oslf_scene::BakeError> {
     Scene::from_str(text, Path::new("extremes.toml"), None)
 }
 
@@ -75,7 +75,12 @@ fn scene_pair(translate: DVec3, scale: f64, eps_unit: f64, count: u32) -> (Scene
 }
 
 fn geometry(scene: &Scene) -> TriangleScene {
-    TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR)).unwrap()
+    TriangleScene::build(oslf_trace::bvh::scene_instances(
+        scene,
+        true,
+        scene.bake.epsilon * TESSELLATION_ERROR,
+    ))
+    .unwrap()
 }
 
 fn integrator<'a>(scene: &'a Scene, geometry: &'a TriangleScene) -> Integrator<'a, TriangleScene> {
@@ -121,7 +126,7 @@ fn compare_with_unit_scene(
             16,
             85.0,
             s.bake.epsilon,
-            &oslf_bake::progress::Silent,
+            &oslf_trace::progress::Silent,
         );
         (placement, stats)
     };
@@ -222,7 +227,7 @@ fn an_epsilon_f32_or_the_tessellation_cannot_resolve_is_rejected() {
     let text = scene_text(far, 1.0, 0.05, 10);
     let line = text.lines().position(|l| l.starts_with("epsilon")).unwrap() + 1;
     match load(&text) {
-        Err(oslf_bake::BakeError::Parse {
+        Err(oslf_scene::BakeError::Parse {
             line: l, message, ..
         }) => {
             assert_eq!(l, line, "{message}");
@@ -294,7 +299,7 @@ fn bake_and_check(text: &str, name: &str) -> oslf_bake::bake::BakeReport {
 
 #[test]
 fn epsilon_from_the_smallest_allowed_to_ten_times_the_object() {
-    use oslf_bake::ray::{Intersector, Ray};
+    use oslf_trace::ray::{Intersector, Ray};
     // The teapot spans 6.4 units (spout tip to handle): ε = 64 is 10× its size.
     for eps in [3.1e-3, 0.1, 6.4, 64.0] {
         let text = scene_text(DVec3::ZERO, 1.0, eps, 300)
@@ -371,7 +376,7 @@ material = { color = [0.1, 0.42, 0.12] }
     // The sky alone (no geometry): radiance varies with direction and with each texel's
     // stratified sample, and tracing it is cheap.
     let integrator = Integrator::new(
-        &oslf_bake::ray::EmptyScene,
+        &oslf_trace::ray::EmptyScene,
         &scene.materials,
         &scene.lights,
         &scene.environment,
@@ -383,8 +388,8 @@ material = { color = [0.1, 0.42, 0.12] }
         distance_channel: false,
         seed: 9,
     };
-    assert_eq!(oslf_bake::capture::chunk_cubes(1024, false), 1);
-    assert_eq!(oslf_bake::capture::chunk_cubes(128, false), 32);
+    assert_eq!(oslf_trace::capture::chunk_cubes(1024, false), 1);
+    assert_eq!(oslf_trace::capture::chunk_cubes(128, false), 32);
     let capture = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

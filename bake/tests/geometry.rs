@@ -5,11 +5,11 @@ use std::f32::consts::PI;
 use std::path::Path;
 
 use glam::{Affine3A, Vec2, Vec3};
-use oslf_bake::bezier::{newell_teapot, parse_patch_file, TEAPOT_BODY_PATCHES};
-use oslf_bake::bvh::{Instance, TriangleScene};
-use oslf_bake::mesh::Mesh;
-use oslf_bake::ray::{Intersector, Ray, ENVIRONMENT_OBJECT};
-use oslf_bake::{shapes, BakeError};
+use oslf_geometry::bezier::{newell_teapot, parse_patch_file, TEAPOT_BODY_PATCHES};
+use oslf_geometry::mesh::Mesh;
+use oslf_scene::{shapes, BakeError};
+use oslf_trace::bvh::{Instance, TriangleScene};
+use oslf_trace::ray::{Intersector, Ray, ENVIRONMENT_OBJECT};
 
 /// Small deterministic generator (xorshift64*), uniform floats in [0, 1).
 struct Rng(u64);

@@ -8,14 +8,14 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Vec2, Vec3};
 use gltf_builder::{Builder, U8};
-use oslf_bake::bvh::TriangleScene;
-use oslf_bake::environment::Environment;
-use oslf_bake::gltf::{load, Import, Options};
-use oslf_bake::integrator::Integrator;
-use oslf_bake::light::Light;
-use oslf_bake::material::Material;
-use oslf_bake::scene::Scene;
+use oslf_scene::environment::Environment;
+use oslf_scene::gltf::{load, Import, Options};
+use oslf_scene::light::Light;
+use oslf_scene::material::Material;
+use oslf_scene::scene::Scene;
 use oslf_shading::color::srgb_to_linear;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::integrator::Integrator;
 use serde_json::json;
 
 /// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
@@ -397,9 +397,10 @@ fn spot_light_shades_a_floor_in_a_path_traced_view() {
     );
     assert!(close(camera.target, Vec3::new(0.0, 0.0, 3.0)));
     scene.environment = Environment::Constant(Vec3::ZERO);
-    let geometry = TriangleScene::build(scene.instances(false, 0.01)).unwrap();
+    let geometry =
+        TriangleScene::build(oslf_trace::bvh::scene_instances(&scene, false, 0.01)).unwrap();
     let integrator = Integrator::for_scene(&scene, &geometry);
-    let (pixels, _) = oslf_bake::preview::render(&integrator, &camera, 9, 9, 4, 1);
+    let (pixels, _) = oslf_trace::preview::render(&integrator, &camera, 9, 9, 4, 1);
     // Centre (inside the inner cone): E = 4 W/sr / 2² = 1 W/m², L = f E, less cos³ over the
     // pixel's 0.11 half-width on the floor (under 0.5 %). The material is glTF's dielectric
     // at roughness 1 (the default): at normal incidence Fresnel is 0.04, D = 1/π, V = 1/4, so
@@ -940,7 +941,7 @@ fn accessors_without_a_buffer_view_are_zeros() {
 
 #[test]
 fn metallic_roughness_factors_become_the_material() {
-    use oslf_bake::material::Model;
+    use oslf_scene::material::Model;
     let doc = |metallic: f32| {
         let mut b = Builder::new();
         let pos = b.positions(&TRIANGLE);

@@ -6,9 +6,9 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::DVec3;
-use oslf_bake::ashikhmin_shirley::AsLobe;
-use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthSettings};
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
+use oslf_trace::ashikhmin_shirley::AsLobe;
+use oslf_trace::ground_truth::{compose, GroundTruth, Term, TruthSettings};
 
 const ENV: [f32; 3] = [0.5, 0.6, 0.8];
 const ALBEDO: [f32; 3] = [0.6, 0.5, 0.4];
@@ -175,7 +175,7 @@ fn the_glossy_term_is_the_lobe_albedo_times_the_sky() {
 /// sampling).
 #[test]
 fn the_pbr_term_is_the_brdf_albedo_times_the_sky() {
-    use oslf_bake::metallic_roughness::MetallicRoughness;
+    use oslf_scene::metallic_roughness::MetallicRoughness;
     let scene = plane_scene();
     let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
     let patch = scene.objects[0].patches[0];

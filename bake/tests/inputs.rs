@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use gltf_builder::Builder;
-use oslf_bake::gltf::{load, Options};
-use oslf_bake::input::{MAX_IMAGE_BYTES, MAX_TEXT_BYTES};
-use oslf_bake::scene::Scene;
+use oslf_scene::gltf::{load, Options};
+use oslf_scene::input::{MAX_IMAGE_BYTES, MAX_TEXT_BYTES};
+use oslf_scene::scene::Scene;
 use serde_json::json;
 
 const TRIANGLE: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
@@ -308,7 +308,7 @@ fn shapes_are_named_by_table_and_file() {
     let scene = Scene::load(&path, None).unwrap();
     let names: Vec<&str> = scene.shapes.iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["[[box]] 0", "[[box]] 1", "[[mesh]] \"tri.obj\""]);
-    let instances = scene.instances(true, 0.01);
+    let instances = oslf_trace::bvh::scene_instances(&scene, true, 0.01);
     assert_eq!(instances.last().unwrap().name, "object \"object0\"");
 }
 

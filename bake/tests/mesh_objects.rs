@@ -12,13 +12,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use glam::{Vec2, Vec3};
 use gltf_builder::Builder;
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
-use oslf_bake::ground_truth::{GroundTruth, Term, TruthSettings};
-use oslf_bake::scene::Scene;
 use oslf_bake::surface::{Surfaces, ATLAS_TEXELS_PER_SPACING};
-use oslf_bake::BakeError;
 use oslf_format::{Store, INVALID_INDEX};
 use oslf_geometry::atlas::UvSource;
+use oslf_scene::scene::Scene;
+use oslf_scene::BakeError;
 use oslf_shading::color::srgb_to_linear;
+use oslf_trace::ground_truth::{GroundTruth, Term, TruthSettings};
 use serde_json::{json, Value};
 
 // ---------------------------------------------------------------------------------------------
@@ -55,7 +55,7 @@ fn scene_in(dir: &Path, text: &str) -> Result<Scene, BakeError> {
 
 /// The unit icosphere subdivided `levels` times: its vertices (unit directions) and triangles.
 fn icosphere(levels: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let m = oslf_bake::mesh::Mesh::icosphere(levels);
+    let m = oslf_geometry::mesh::Mesh::icosphere(levels);
     (m.positions, m.triangles)
 }
 
@@ -146,7 +146,7 @@ fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 }
 
 /// Distance from `p` to the mesh, and the unit geometric normal of the nearest triangle.
-fn distance_to_mesh(p: Vec3, mesh: &oslf_bake::mesh::Mesh) -> (f32, Vec3) {
+fn distance_to_mesh(p: Vec3, mesh: &oslf_geometry::mesh::Mesh) -> (f32, Vec3) {
     let mut best = (f32::INFINITY, Vec3::Z);
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
@@ -345,7 +345,7 @@ fn a_named_gltf_node_becomes_a_mesh_object_in_world_space() {
     // Vertex 1 = (1, 0, −5) → Rz90 (0, 1, −5) → (10, 1, −5).
     assert!(close(shape.positions[1], Vec3::new(10.0, 1.0, -5.0), 1e-5));
     // The object is in the ray-traced scene once, as itself.
-    let instances = scene.instances(true, 1e-3);
+    let instances = oslf_trace::bvh::scene_instances(&scene, true, 1e-3);
     assert_eq!(instances.len(), 2);
     assert_eq!(instances[1].object, 0);
     assert_eq!(instances[1].mesh.positions, source.mesh.positions);

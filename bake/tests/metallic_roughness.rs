@@ -2,7 +2,7 @@
 //! (white furnace), and its sampling against uniform sampling of the same integral.
 
 use glam::{Vec2, Vec3};
-use oslf_bake::metallic_roughness::MetallicRoughness;
+use oslf_scene::metallic_roughness::MetallicRoughness;
 use oslf_shading::random::Rng;
 use oslf_shading::warp::sample_uniform_sphere;
 

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
-use oslf_bake::noise::VISIBLE_RELATIVE_ERROR;
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
+use oslf_trace::noise::VISIBLE_RELATIVE_ERROR;
 
 /// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
 fn dir(test: &str) -> PathBuf {

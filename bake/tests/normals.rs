@@ -12,10 +12,10 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::Vec3;
 use gltf_builder::Builder;
-use oslf_bake::mesh::Mesh;
-use oslf_bake::normals::{NormalRule, DEFAULT_CREASE_DEG};
-use oslf_bake::scene::Scene;
-use oslf_bake::BakeError;
+use oslf_geometry::mesh::Mesh;
+use oslf_scene::normals::{NormalRule, DEFAULT_CREASE_DEG};
+use oslf_scene::scene::Scene;
+use oslf_scene::BakeError;
 use serde_json::json;
 
 // ---------------------------------------------------------------------------------------------

@@ -9,12 +9,12 @@ mod gltf_builder;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use oslf_bake::bvh::TriangleScene;
 use oslf_bake::preflight::estimate;
 use oslf_bake::sample_points::{self, Surfaces};
-use oslf_bake::scene::Scene;
-use oslf_bake::tolerance::TESSELLATION_ERROR;
-use oslf_bake::BakeError;
+use oslf_scene::scene::Scene;
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_scene::BakeError;
+use oslf_trace::bvh::TriangleScene;
 use serde_json::json;
 
 /// A fresh directory for one test, under Cargo's target tmp; the next run replaces it.
@@ -28,7 +28,7 @@ fn dir(test: &str) -> PathBuf {
 
 /// An icosphere OBJ (no normals, no uvs) of `radius` at `x` on the x axis.
 fn sphere_obj(radius: f32, x: f32) -> String {
-    let m = oslf_bake::mesh::Mesh::icosphere(2);
+    let m = oslf_geometry::mesh::Mesh::icosphere(2);
     let mut text = String::new();
     for p in &m.positions {
         let p = *p * radius;
@@ -75,8 +75,12 @@ sample_map_resolution = 64
 /// Sample points placed on each of the two objects.
 fn points_per_object(scene: &Scene) -> [usize; 2] {
     let settings = &scene.bake;
-    let geometry =
-        TriangleScene::build(scene.instances(true, settings.epsilon * TESSELLATION_ERROR)).unwrap();
+    let geometry = TriangleScene::build(oslf_trace::bvh::scene_instances(
+        scene,
+        true,
+        settings.epsilon * TESSELLATION_ERROR,
+    ))
+    .unwrap();
     let surfaces = Surfaces::new(&scene.objects, settings).unwrap();
     let placement = sample_points::place(&surfaces, settings, &geometry).unwrap();
     let mut counts = [0; 2];
@@ -137,7 +141,7 @@ fn a_bad_object_spacing_is_a_located_error() {
 
 /// A `.glb` of one node "Small": the small ball of [`sphere_obj`] (flat normals).
 fn small_glb() -> Vec<u8> {
-    let m = oslf_bake::mesh::Mesh::icosphere(2);
+    let m = oslf_geometry::mesh::Mesh::icosphere(2);
     let positions: Vec<[f32; 3]> = m
         .positions
         .iter()

@@ -5,10 +5,10 @@
 use std::path::Path;
 
 use glam::Vec3;
-use oslf_bake::bvh::TriangleScene;
 use oslf_bake::sample_points::{place, Placement, Surfaces};
-use oslf_bake::scene::Scene;
-use oslf_bake::tolerance::TESSELLATION_ERROR;
+use oslf_scene::scene::Scene;
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_trace::bvh::TriangleScene;
 
 /// The unit cube [0, 1]³ without normals: 8 vertices, 6 quads wound outwards.
 const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
@@ -28,9 +28,12 @@ fn box_scene(d: &Path, translate: [f32; 3], extra: &str, more: &str) -> Scene {
 }
 
 fn placement(scene: &Scene) -> Placement {
-    let geometry =
-        TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))
-            .unwrap();
+    let geometry = TriangleScene::build(oslf_trace::bvh::scene_instances(
+        scene,
+        true,
+        scene.bake.epsilon * TESSELLATION_ERROR,
+    ))
+    .unwrap();
     let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
     place(&surfaces, &scene.bake, &geometry).unwrap()
 }
@@ -121,9 +124,12 @@ fn a_point_lying_on_another_surface_is_too_close() {
     let path = d.join("scene.toml");
     std::fs::write(&path, text).unwrap();
     let scene = Scene::load(&path, None).unwrap_or_else(|e| panic!("{e}"));
-    let geometry =
-        TriangleScene::build(scene.instances(true, scene.bake.epsilon * TESSELLATION_ERROR))
-            .unwrap();
+    let geometry = TriangleScene::build(oslf_trace::bvh::scene_instances(
+        &scene,
+        true,
+        scene.bake.epsilon * TESSELLATION_ERROR,
+    ))
+    .unwrap();
     let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
     let e = place(&surfaces, &scene.bake, &geometry).unwrap_err();
     assert!(

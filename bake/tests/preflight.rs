@@ -10,12 +10,12 @@ use std::sync::Mutex;
 
 use glam::Vec3;
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::bvh::TriangleScene;
-use oslf_bake::light::Light;
 use oslf_bake::preflight::{self, check, estimate, Estimate, Limits, PreflightError};
 use oslf_bake::sample_points::{self, Surfaces};
-use oslf_bake::scene::Scene;
-use oslf_bake::tolerance::TESSELLATION_ERROR;
+use oslf_scene::light::Light;
+use oslf_scene::scene::Scene;
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_trace::bvh::TriangleScene;
 
 // --- a counting allocator: current and peak heap bytes ---------------------------------------
 
@@ -369,7 +369,12 @@ fn bvh_and_placement_constants_cover_the_allocations() {
     let settings = &scene.bake;
     let before = CURRENT.load(Ordering::Relaxed);
     let (geometry, bvh_heap) = heap_peak(|| {
-        TriangleScene::build(scene.instances(true, settings.epsilon * TESSELLATION_ERROR)).unwrap()
+        TriangleScene::build(oslf_trace::bvh::scene_instances(
+            &scene,
+            true,
+            settings.epsilon * TESSELLATION_ERROR,
+        ))
+        .unwrap()
     });
     let resident = CURRENT.load(Ordering::Relaxed).saturating_sub(before) as f64
         / geometry.triangle_count() as f64;
@@ -423,6 +428,6 @@ fn the_machine_is_read_and_errors_convert() {
     }
     let e = estimate(&gazebo_with("sample_map_resolution = 16384"), THREADS);
     let err = check(&e, &machine()).unwrap_err();
-    let bake_error: oslf_bake::BakeError = err.clone().into();
+    let bake_error: oslf_scene::BakeError = err.clone().into();
     assert_eq!(bake_error.to_string(), err.to_string());
 }

@@ -4,9 +4,9 @@
 use std::path::Path;
 
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::scene::Scene;
 use oslf_format::encoding::{decode_rgb9e5, quantize_rgb9e5};
 use oslf_format::Store;
+use oslf_scene::scene::Scene;
 
 /// The teapot's lid under a sky (tests/fixtures/teapot-lid.toml).
 const SCENE: &str = concat!(

@@ -7,19 +7,19 @@ use std::f32::consts::{FRAC_1_PI, PI};
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
-use oslf_bake::camera::Camera;
-use oslf_bake::environment::{Environment, LatLongMap, Sky, SUN_ANGULAR_RADIUS};
-use oslf_bake::integrator::{Integrator, RayStats};
-use oslf_bake::light::Light;
-use oslf_bake::material::{Material, Model};
-use oslf_bake::preview::render;
-use oslf_bake::ray::{Intersector, Ray, SurfaceHit};
-use oslf_bake::sampling::*;
-use oslf_bake::texture::{load_linear_rgb, ImageTexture, Texture};
-use oslf_bake::BakeError;
+use oslf_geometry::camera::Camera;
+use oslf_scene::environment::{Environment, LatLongMap, Sky, SUN_ANGULAR_RADIUS};
+use oslf_scene::light::Light;
+use oslf_scene::material::{Material, Model};
+use oslf_scene::sampling::*;
+use oslf_scene::texture::{load_linear_rgb, ImageTexture, Texture};
+use oslf_scene::BakeError;
 use oslf_shading::color::{linear_to_srgb, luminance, srgb_to_linear};
 use oslf_shading::random::*;
 use oslf_shading::warp::*;
+use oslf_trace::integrator::{Integrator, RayStats};
+use oslf_trace::preview::render;
+use oslf_trace::ray::{Intersector, Ray, SurfaceHit};
 
 // ---------------------------------------------------------------------------------------------
 // Analytic geometry
@@ -928,13 +928,13 @@ fn camera_rays() {
         vfov_deg: 90.0,
     };
     assert!(cam.validate().is_ok());
-    let centre = oslf_bake::preview::primary_ray(&cam, 50.0, 25.0, 100, 50);
+    let centre = oslf_trace::preview::primary_ray(&cam, 50.0, 25.0, 100, 50);
     assert!((centre.dir - Vec3::Y).length() < 1e-6);
     assert_eq!(centre.origin, cam.position);
     // Top edge centre: 45° up. Right edge centre: atan(2) to the right (aspect 2).
-    let top = oslf_bake::preview::primary_ray(&cam, 50.0, 0.0, 100, 50);
+    let top = oslf_trace::preview::primary_ray(&cam, 50.0, 0.0, 100, 50);
     assert!((top.dir - Vec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-6);
-    let right = oslf_bake::preview::primary_ray(&cam, 100.0, 25.0, 100, 50);
+    let right = oslf_trace::preview::primary_ray(&cam, 100.0, 25.0, 100, 50);
     assert!((right.dir - Vec3::new(2.0, 1.0, 0.0).normalize()).length() < 1e-6);
     // Degenerate cameras are reported but still produce unit rays.
     let bad = Camera {
@@ -944,7 +944,7 @@ fn camera_rays() {
     };
     assert!(bad.validate().is_err());
     assert!(
-        (oslf_bake::preview::primary_ray(&bad, 1.0, 1.0, 0, 0)
+        (oslf_trace::preview::primary_ray(&bad, 1.0, 1.0, 0, 0)
             .dir
             .length()
             - 1.0)
@@ -1144,7 +1144,7 @@ fn metallic_roughness(
     roughness: f32,
 ) -> (
     Vec<Material>,
-    oslf_bake::metallic_roughness::MetallicRoughness,
+    oslf_scene::metallic_roughness::MetallicRoughness,
 ) {
     let materials = vec![Material {
         emission: Vec3::ZERO,
@@ -1158,7 +1158,7 @@ fn metallic_roughness(
             roughness,
         },
     }];
-    let brdf = oslf_bake::metallic_roughness::MetallicRoughness {
+    let brdf = oslf_scene::metallic_roughness::MetallicRoughness {
         base_color: base,
         metallic,
         roughness,

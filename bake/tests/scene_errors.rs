@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use oslf_bake::scene::Scene;
-use oslf_bake::BakeError;
+use oslf_scene::scene::Scene;
+use oslf_scene::BakeError;
 
 const GOOD: &str = r#"
 [environment]
@@ -130,7 +130,7 @@ fn presets_override_and_unknown_presets_are_named() {
     assert_eq!(scene.bake.cube_resolution, 64);
     assert_eq!(
         scene.bake.sample_count,
-        oslf_bake::scene::SampleDensity::Spacing(0.2)
+        oslf_scene::scene::SampleDensity::Spacing(0.2)
     );
     let err = Scene::from_str(&text, Path::new("t.toml"), Some("huge")).unwrap_err();
     assert!(err.to_string().contains("big"), "{err}");
@@ -249,7 +249,7 @@ fn camera_target_at_its_position_and_bad_vfov() {
 
 #[test]
 fn metallic_roughness_materials_parse_and_are_checked() {
-    use oslf_bake::material::Model;
+    use oslf_scene::material::Model;
     let floor = "\n[[plane]]\nsize = [4.0, 4.0]\nmaterial = { color = [0.9, 0.7, 0.4], metallic = 1.0, roughness = 0.3 }\n";
     let scene = parse(&format!("{GOOD}{floor}")).unwrap();
     let models: Vec<Model> = scene.materials.iter().map(|m| m.model).collect();

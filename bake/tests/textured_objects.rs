@@ -10,15 +10,15 @@ mod gltf_builder;
 use std::path::Path;
 
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::ground_truth::{GroundTruth, Term, TruthSettings};
-use oslf_bake::scene::Scene;
 use oslf_format::{Store, TextureKind};
+use oslf_scene::scene::Scene;
+use oslf_trace::ground_truth::{GroundTruth, Term, TruthSettings};
 
 fn orb_scene() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/orb.toml");
     let mut scene = Scene::load(&path, None).expect("examples/orb.toml");
     // Small and fast: the store's layout, not its accuracy, is checked here.
-    scene.bake.sample_count = oslf_bake::scene::SampleDensity::Count(60);
+    scene.bake.sample_count = oslf_scene::scene::SampleDensity::Count(60);
     scene.bake.cube_resolution = 8;
     scene.bake.sample_map_resolution = 16;
     scene.bake.samples_per_texel = 1;
@@ -320,8 +320,8 @@ fn the_pbr_truth_adds_the_objects_emission() {
 /// emission added unscaled.
 #[test]
 fn an_occlusion_texture_is_stored_and_scales_the_reflected_light() {
-    use oslf_bake::material::OcclusionTexture;
-    use oslf_bake::texture::{ImageTexture, Texture};
+    use oslf_scene::material::OcclusionTexture;
+    use oslf_scene::texture::{ImageTexture, Texture};
     let mut scene = orb_scene();
     let render = |scene: &Scene| small_pbr_truth(scene, 3);
     let orb = scene.objects[0].material as usize;

@@ -308,8 +308,8 @@ fn damaged_and_missing_stores_are_said_once_and_draw_nothing() {
 /// texture the store carries (format version 8).
 fn bake_orb(dir: &Path) -> std::path::PathBuf {
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/orb.toml");
-    let mut scene = oslf_bake::scene::Scene::load(&scene_path, None).unwrap();
-    scene.bake.sample_count = oslf_bake::scene::SampleDensity::Count(80);
+    let mut scene = oslf_scene::scene::Scene::load(&scene_path, None).unwrap();
+    scene.bake.sample_count = oslf_scene::scene::SampleDensity::Count(80);
     scene.bake.cube_resolution = 16;
     scene.bake.sample_map_resolution = 32;
     scene.bake.samples_per_texel = 1;

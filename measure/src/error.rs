@@ -6,7 +6,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum MeasureError {
     #[error(transparent)]
-    Bake(#[from] oslf_bake::BakeError),
+    Bake(#[from] oslf_scene::BakeError),
     #[error(transparent)]
     Runtime(#[from] oslf_runtime::RuntimeError),
     #[error(transparent)]

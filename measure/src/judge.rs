@@ -4,10 +4,10 @@
 use std::time::Instant;
 
 use crate::metrics::{compare, Metrics};
-use oslf_bake::ashikhmin_shirley::AsLobe;
-use oslf_bake::camera::Camera;
-use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
+use oslf_geometry::camera::Camera;
 use oslf_runtime::{Frame, Mode, RenderOptions, Renderer, ShadingParams};
+use oslf_trace::ashikhmin_shirley::AsLobe;
+use oslf_trace::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
 use serde::Serialize;
 
 use crate::error::{MeasureError, Result};

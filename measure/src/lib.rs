@@ -3,7 +3,7 @@
 //! Users of offset surface light fields trade speed for accuracy: cube-map resolution, sample
 //! density, ε, the blend and its power N, Monte Carlo samples M, the cache. This crate measures
 //! that trade on a user's own scene, against the ray-traced ground truth of
-//! [`oslf_bake::ground_truth`], with the image metrics of [`metrics`] (RMSE in
+//! [`oslf_trace::ground_truth`], with the image metrics of [`metrics`] (RMSE in
 //! CIELAB and linear RGB, PSNR; thesis §6.1).
 //!
 //! | module | what |

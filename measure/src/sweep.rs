@@ -12,11 +12,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
-use oslf_bake::ground_truth::TruthImage;
-use oslf_bake::progress::Progress;
-use oslf_bake::scene::{BakeSettings, SampleDensity, Scene};
 use oslf_format::Store;
 use oslf_runtime::{Blend, CacheConfig, Gpu, Order, Renderer, ShadingParams, Source};
+use oslf_scene::scene::{BakeSettings, SampleDensity, Scene};
+use oslf_trace::ground_truth::TruthImage;
+use oslf_trace::progress::Progress;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{MeasureError, Result};

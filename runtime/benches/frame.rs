@@ -26,9 +26,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::scene::Scene;
 use oslf_format::Store;
 use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams, Source};
+use oslf_scene::scene::Scene;
 
 fn store_path() -> PathBuf {
     if let Ok(p) = std::env::var("OSLF_STORE") {

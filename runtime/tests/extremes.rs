@@ -216,7 +216,7 @@ seed = {seed}
     );
     let scene_path = dir.join(format!("{name}.toml"));
     std::fs::write(&scene_path, text).unwrap();
-    let scene = oslf_bake::scene::Scene::load(&scene_path, None).unwrap();
+    let scene = oslf_scene::scene::Scene::load(&scene_path, None).unwrap();
     let output = dir.join(format!("{name}.oslf"));
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),
@@ -345,7 +345,7 @@ fn two_texel_cube_maps_render() {
 fn bake_text(dir: &Path, name: &str, text: &str) -> (PathBuf, oslf_bake::bake::BakeReport) {
     let scene_path = dir.join(format!("{name}.toml"));
     std::fs::write(&scene_path, text).unwrap();
-    let scene = oslf_bake::scene::Scene::load(&scene_path, None).unwrap();
+    let scene = oslf_scene::scene::Scene::load(&scene_path, None).unwrap();
     let output = dir.join(format!("{name}.oslf"));
     let options = oslf_bake::bake::BakeOptions {
         output: output.clone(),

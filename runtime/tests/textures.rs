@@ -8,10 +8,10 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
-use oslf_bake::material::{Material, Model, NormalTexture, OcclusionTexture};
-use oslf_bake::texture::{ImageTexture, Texture};
 use oslf_format::{ObjectTextures, TextureImage, TextureKind};
 use oslf_runtime::reference::material::{mapped_normal, material_texel, unpack2x16unorm};
+use oslf_scene::material::{Material, Model, NormalTexture, OcclusionTexture};
+use oslf_scene::texture::{ImageTexture, Texture};
 use oslf_shading::color::srgb_to_linear;
 
 /// A `w`×`h` image of codes `f(i)`.

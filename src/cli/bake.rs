@@ -6,11 +6,11 @@ use std::time::Instant;
 
 use anyhow::bail;
 use oslf_bake::bake::{bake_shard, check_store_writable, check_writable, BakeOptions, BakeReport};
-use oslf_bake::bvh::TriangleScene;
-use oslf_bake::integrator::Integrator;
-use oslf_bake::scene::{Scene, GPU_PRESET};
-use oslf_bake::tolerance::TESSELLATION_ERROR;
 use oslf_format::ShardSpec;
+use oslf_scene::scene::{Scene, GPU_PRESET};
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::integrator::Integrator;
 use oslf_util::door::Door;
 use oslf_util::image_file;
 
@@ -66,7 +66,7 @@ pub struct Args {
     /// or gpu [default: the scene's `[bake] device`, else auto]. Both compute the same
     /// estimator; their stores differ only by rounding.
     #[arg(long, value_parser = parse_device)]
-    device: Option<oslf_bake::scene::DeviceChoice>,
+    device: Option<oslf_scene::scene::DeviceChoice>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -96,7 +96,7 @@ fn default_output(args: &Args) -> PathBuf {
     }
 }
 
-fn parse_device(s: &str) -> Result<oslf_bake::scene::DeviceChoice, String> {
+fn parse_device(s: &str) -> Result<oslf_scene::scene::DeviceChoice, String> {
     s.parse()
 }
 
@@ -269,10 +269,11 @@ fn write_preview(
         Some(gpu) => gpu.preview(cam, w, h, preview_spp, scene.bake.seed)?,
         None => {
             let max_error = scene.bake.epsilon * TESSELLATION_ERROR;
-            let geometry = TriangleScene::build(scene.instances(true, max_error))?;
+            let geometry =
+                TriangleScene::build(oslf_trace::bvh::scene_instances(scene, true, max_error))?;
             let integrator = Integrator::for_scene(scene, &geometry);
             let seed = scene.bake.seed;
-            oslf_bake::preview::render(&integrator, cam, w, h, preview_spp, seed).0
+            oslf_trace::preview::render(&integrator, cam, w, h, preview_spp, seed).0
         }
     };
     image_file::write_png(png, w, h, &pixels, 1.0)?;
@@ -491,16 +492,16 @@ fn print_coverage(r: &BakeReport) {
 
 /// `e`, where the store writer could not resume a partial store or `--strict` refused the
 /// sample maps, with what to do in this command's flags.
-fn with_flag_hints(e: oslf_bake::BakeError) -> anyhow::Error {
+fn with_flag_hints(e: oslf_scene::BakeError) -> anyhow::Error {
     use oslf_format::Error::{ResumeMismatch, ResumeSettings};
     let hint = match &e {
-        oslf_bake::BakeError::Format(ResumeSettings { .. }) => {
+        oslf_scene::BakeError::Format(ResumeSettings { .. }) => {
             "; bake without --resume to start over, or pass the settings it was started with"
         }
-        oslf_bake::BakeError::Format(ResumeMismatch { .. }) => {
+        oslf_scene::BakeError::Format(ResumeMismatch { .. }) => {
             "; bake without --resume to start over"
         }
-        oslf_bake::BakeError::EmptyTexels { .. } => {
+        oslf_scene::BakeError::EmptyTexels { .. } => {
             return anyhow::anyhow!("{e} (--strict); {EMPTY_TEXELS_REMEDY}")
         }
         _ => return e.into(),
@@ -515,7 +516,7 @@ fn estimate(
     device: Option<&dyn oslf_bake::device::CaptureDevice>,
 ) -> oslf_bake::preflight::Estimate {
     let estimate = oslf_bake::preflight::estimate(scene, rayon::current_num_threads());
-    let capture = oslf_bake::capture::CaptureSettings::from_bake(&scene.bake);
+    let capture = oslf_trace::capture::CaptureSettings::from_bake(&scene.bake);
     let estimate = oslf_bake::preflight::for_device(estimate, device, &capture);
     match shard {
         Some(s) => estimate.for_shard(s.count()),

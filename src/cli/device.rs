@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use anyhow::Context;
-use oslf_bake::scene::{DeviceChoice, Scene};
 use oslf_bake_gpu::GpuCapture;
+use oslf_scene::scene::{DeviceChoice, Scene};
 
 /// The GPU capture for `scene` by `choice` (`None`: the CPU path tracer), and the reason, for
 /// the summary; said on stderr unless `quiet`. The GPU also renders the bake's preview.

@@ -57,7 +57,7 @@ path_type!(
 pub fn declare_scene(
     door: &mut oslf_util::door::Door,
     role: &str,
-    scene: &oslf_bake::scene::Scene,
+    scene: &oslf_scene::scene::Scene,
 ) {
     for (i, file) in scene.files.iter().enumerate() {
         if i == 0 {

@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use oslf_bake::progress::Progress;
+use oslf_trace::progress::Progress;
 
 /// A bar with ETA for each stage in turn, counting the stage's units.
 #[derive(Default)]

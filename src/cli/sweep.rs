@@ -4,8 +4,6 @@
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use oslf_bake::ground_truth::{GroundTruth, TruthSettings};
-use oslf_bake::scene::Scene;
 use oslf_measure::error::MeasureError;
 use oslf_measure::judge::render_truth;
 use oslf_measure::pareto::pareto_front;
@@ -15,6 +13,8 @@ use oslf_measure::sweep::{
 };
 use oslf_measure::table::Table;
 use oslf_runtime::{Mode, Order, ShadingParams};
+use oslf_scene::scene::Scene;
+use oslf_trace::ground_truth::{GroundTruth, TruthSettings};
 use oslf_util::door::Door;
 use oslf_util::image_file;
 
@@ -36,7 +36,7 @@ pub struct Args {
     /// What captures the default store's cube maps (and every variation's but
     /// `--vary device=…`): auto, cpu or gpu [default: the scene's `[bake] device`].
     #[arg(long, value_parser = parse_device)]
-    device: Option<oslf_bake::scene::DeviceChoice>,
+    device: Option<oslf_scene::scene::DeviceChoice>,
     /// KEY=V1,V2,...: bake keys epsilon, sample_count, cube_resolution, phi_samplemap,
     /// samples_per_texel, sample_map_resolution, mantissa_bits, device; runtime keys phi_shader, blend (distance,
     /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction). Repeatable.
@@ -526,6 +526,6 @@ fn vary_flag(e: MeasureError) -> anyhow::Error {
     }
 }
 
-fn parse_device(s: &str) -> Result<oslf_bake::scene::DeviceChoice, String> {
+fn parse_device(s: &str) -> Result<oslf_scene::scene::DeviceChoice, String> {
     s.parse()
 }

@@ -5,8 +5,6 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use oslf_bake::ground_truth::{GroundTruth, TruthImage, TruthSettings};
-use oslf_bake::scene::Scene;
 use oslf_format::Store;
 use oslf_measure::judge::{judge, render_truth, time_interleaved, Judgement, TimedJob};
 use oslf_measure::sweep::blend_label;
@@ -14,6 +12,8 @@ use oslf_measure::table::{csv_cell, Table};
 use oslf_runtime::{
     Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, ShadingParams, Source,
 };
+use oslf_scene::scene::Scene;
+use oslf_trace::ground_truth::{GroundTruth, TruthImage, TruthSettings};
 use oslf_util::door::Door;
 use oslf_util::image_file;
 

@@ -1,13 +1,13 @@
 //! `oslf truth`: ray-traced ground truth for the runtime's modes (see
-//! `oslf_bake::ground_truth`).
+//! `oslf_trace::ground_truth`).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::bail;
 use glam::Vec3;
-use oslf_bake::ashikhmin_shirley::AsLobe;
-use oslf_bake::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
+use oslf_trace::ashikhmin_shirley::AsLobe;
+use oslf_trace::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
 use oslf_util::door::Door;
 use oslf_util::image_file;
 
@@ -246,7 +246,7 @@ fn door(args: &Args, scene: &Scene, modes: &[&str]) -> Door {
 
 fn timed(
     name: &str,
-    f: impl FnOnce() -> oslf_bake::Result<TruthImage>,
+    f: impl FnOnce() -> oslf_scene::Result<TruthImage>,
 ) -> anyhow::Result<TruthImage> {
     let image = f()?;
     let rays = image.rays.total() as f64;

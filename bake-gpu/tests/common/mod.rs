@@ -3,9 +3,9 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use oslf_bake::bvh::Instance;
-use oslf_bake::ray::ENVIRONMENT_OBJECT;
-use oslf_bake::shapes;
+use oslf_scene::shapes;
+use oslf_trace::bvh::Instance;
+use oslf_trace::ray::ENVIRONMENT_OBJECT;
 
 /// A unit sphere of `segments` (OSLF object 0, material 0) resting above an 8 × 8 ground slab
 /// (environment, material 1), then `extra`.

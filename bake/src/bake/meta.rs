@@ -3,9 +3,9 @@
 use glam::{Affine3A, Mat4, Vec3};
 use oslf_format::{BakeParams, CameraInfo, MeshInfo, ObjectInfo, Patch, StoreMeta};
 
-use crate::capture::strata_per_side;
 use crate::sample_points::Surfaces;
-use crate::scene::Scene;
+use oslf_scene::scene::Scene;
+use oslf_trace::capture::strata_per_side;
 
 /// Everything the store says about the scene and the bake, besides the points, maps and cubes.
 /// A mesh object is stored in world space (identity transform) with its atlas's vertices.
@@ -95,13 +95,18 @@ pub fn object_centre(scene: &Scene) -> Vec3 {
 
 /// What the store records of object `o`'s material: its model, factors and emission (a mesh
 /// object's image textures go to its texture record, [`super::textures`]).
-fn object_material(scene: &Scene, o: &crate::scene::OslfObject) -> oslf_format::ObjectMaterial {
+fn object_material(
+    scene: &Scene,
+    o: &oslf_scene::scene::OslfObject,
+) -> oslf_format::ObjectMaterial {
     let Some(m) = scene.materials.get(o.material as usize) else {
         return Default::default();
     };
     let (model, metallic, roughness) = match m.model {
-        crate::material::Model::Lambertian => (oslf_format::meta::MATERIAL_LAMBERTIAN, 0.0, 0.0),
-        crate::material::Model::MetallicRoughness {
+        oslf_scene::material::Model::Lambertian => {
+            (oslf_format::meta::MATERIAL_LAMBERTIAN, 0.0, 0.0)
+        }
+        oslf_scene::material::Model::MetallicRoughness {
             metallic,
             roughness,
         } => (

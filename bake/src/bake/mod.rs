@@ -22,14 +22,14 @@ use std::time::Instant;
 
 use oslf_format::ShardSpec;
 
-use crate::capture::strata_per_side;
 use crate::coverage::{decimals_for, ObjectCoverage};
-use crate::error::{BakeError, Result};
 use crate::preflight::Limits;
-use crate::progress::{self, Progress};
-use crate::scene::Scene;
 pub use meta::{object_centre, store_meta};
 pub use noise_report::{NoiseReport, NoiseSuggestion};
+use oslf_scene::error::{BakeError, Result};
+use oslf_scene::scene::Scene;
+use oslf_trace::capture::strata_per_side;
+use oslf_trace::progress::{self, Progress};
 pub use report::{AtlasReport, BakeReport, NormalsReport};
 use sink::Sink;
 use stages::process_cpu_ns;
@@ -52,7 +52,7 @@ pub struct BakeOptions {
     /// from). `false`: bake anyway; the report counts them.
     pub refuse_empty_texels: bool,
     /// What captures the cube maps: `None`, this crate's CPU path tracer
-    /// ([`crate::capture`]); else another device for this scene (the GPU,
+    /// ([`oslf_trace::capture`]); else another device for this scene (the GPU,
     /// `oslf-bake-gpu`), given the cubes in batches of its size.
     pub device: Option<Arc<dyn crate::device::CaptureDevice>>,
 }
@@ -156,7 +156,7 @@ pub fn bake_shard(
     )?;
     if written.texels > 0 {
         let estimate = crate::preflight::estimate(scene, rayon::current_num_threads());
-        let capture = crate::capture::CaptureSettings::from_bake(&scene.bake);
+        let capture = oslf_trace::capture::CaptureSettings::from_bake(&scene.bake);
         let estimate = crate::preflight::for_device(estimate, options.device.as_deref(), &capture);
         let estimate = match shard {
             Some(s) => estimate.for_shard(s.count()),

@@ -1,10 +1,10 @@
-//! The noise of the captured cubes, for the report: the estimate of [`crate::noise`] and, when
+//! The noise of the captured cubes, for the report: the estimate of [`oslf_trace::noise`] and, when
 //! the noise will show, the samples per texel to ask for and what they cost by the
 //! preflight's model ([`crate::preflight`]).
 
-use crate::capture::strata_per_side;
-use crate::noise::{samples_for, NoiseStats, VISIBLE_RELATIVE_ERROR};
 use crate::preflight::Estimate;
+use oslf_trace::capture::strata_per_side;
+use oslf_trace::noise::{samples_for, NoiseStats, VISIBLE_RELATIVE_ERROR};
 
 /// How noisy this run's cubes are.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

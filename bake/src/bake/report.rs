@@ -6,10 +6,10 @@ use oslf_geometry::atlas::UvSource;
 
 use super::noise_report::NoiseReport;
 use crate::coverage::ObjectCoverage;
-use crate::normals::{NormalRule, NormalsUsed};
 use crate::sample_map::SampleMapStats;
 use crate::sample_points::Surfaces;
-use crate::scene::Scene;
+use oslf_scene::normals::{NormalRule, NormalsUsed};
+use oslf_scene::scene::Scene;
 
 /// What a bake did, for the summary and for tools (`--report-json`).
 #[derive(Clone, Debug, Default, serde::Serialize)]

@@ -8,7 +8,7 @@ use oslf_format::{
     EncodedCube, SampleMaps, SamplePoint, ShardSpec, ShardWriter, StoreMeta, StoreWriter,
 };
 
-use crate::error::Result;
+use oslf_scene::error::Result;
 
 /// Where the cubes go: the store, or one shard of it.
 pub(super) enum Sink {

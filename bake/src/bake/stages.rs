@@ -13,20 +13,20 @@ use super::meta::object_centre;
 use super::report::{atlas_reports, normals_reports, BakeReport};
 use super::sink::Sink;
 use super::writable::check_store_writable;
-use crate::bvh::TriangleScene;
-use crate::capture::{capture_cube, capture_cube_with_noise, chunk_cubes, CaptureSettings};
 use crate::coverage::{self, SurfaceNames};
 use crate::device::{CaptureDevice, CapturedCube, CubeJob};
-use crate::error::Result;
-use crate::integrator::{Integrator, RayStats};
-use crate::noise::NoiseStats;
 use crate::preflight::{self, Limits};
-use crate::progress::Progress;
-use crate::ray::EmptyScene;
 use crate::sample_map;
 use crate::sample_points::{self, Placement, Surfaces};
-use crate::scene::{BakeSettings, Scene};
-use crate::tolerance::TESSELLATION_ERROR;
+use oslf_scene::error::Result;
+use oslf_scene::scene::{BakeSettings, Scene};
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::capture::{capture_cube, capture_cube_with_noise, chunk_cubes, CaptureSettings};
+use oslf_trace::integrator::{Integrator, RayStats};
+use oslf_trace::noise::NoiseStats;
+use oslf_trace::progress::Progress;
+use oslf_trace::ray::EmptyScene;
 
 /// Prepare: fails now, not after the sample maps, if the store at `output` cannot be
 /// written; refuses (the preflight) what cannot fit `limits`, naming the setting to change;
@@ -51,7 +51,8 @@ pub(super) fn prepare(
     };
     preflight::check(&estimate, limits)?;
     let settings = &scene.bake;
-    let instances = scene.instances(true, settings.epsilon * TESSELLATION_ERROR);
+    let instances =
+        oslf_trace::bvh::scene_instances(scene, true, settings.epsilon * TESSELLATION_ERROR);
     let names = SurfaceNames::of(&instances);
     let geometry = TriangleScene::build(instances)?;
     report.triangles = geometry.triangle_count();
@@ -156,7 +157,7 @@ pub(super) fn build_maps(
 }
 
 /// What the capture appended: compressed bytes and texels of this run's cubes, and the noise
-/// of this run's sample-point cubes ([`crate::noise`]).
+/// of this run's sample-point cubes ([`oslf_trace::noise`]).
 #[derive(Clone, Debug, Default)]
 pub(super) struct Captured {
     bytes: u64,
@@ -192,7 +193,9 @@ pub(super) fn capture(
     let integrator = Integrator::for_scene(scene, geometry);
     // The environment-map baseline sees the scene without the OSLF objects.
     let env_geometry = if device.is_none() && meta.has_env_cube && !scene.shapes.is_empty() {
-        Some(TriangleScene::build(scene.instances(false, 0.0))?)
+        Some(TriangleScene::build(oslf_trace::bvh::scene_instances(
+            scene, false, 0.0,
+        ))?)
     } else {
         None
     };
@@ -336,7 +339,7 @@ fn capture_on_device(
             });
             let next = next.map(|(batch, handle)| {
                 let cubes = handle.join().unwrap_or_else(|_| {
-                    Err(crate::BakeError::Device {
+                    Err(oslf_scene::BakeError::Device {
                         device: device.describe(),
                         message: "the capture thread panicked".into(),
                     })
@@ -371,7 +374,7 @@ fn device_capture(
 ) -> Result<Vec<CapturedCube>> {
     let cubes = device.capture(jobs, capture)?;
     if cubes.len() != jobs.len() {
-        return Err(crate::BakeError::Device {
+        return Err(oslf_scene::BakeError::Device {
             device: device.describe(),
             message: format!("{} cubes returned for {}", cubes.len(), jobs.len()),
         });

@@ -5,10 +5,10 @@
 use glam::Vec3;
 use oslf_format::{MeshInfo, ObjectTextures, TextureImage, TextureKind};
 
-use crate::material::{Material, NormalTexture, OcclusionTexture};
+use oslf_scene::material::{Material, NormalTexture, OcclusionTexture};
 use oslf_shading::color::linear_to_srgb;
 
-use crate::texture::{ImageTexture, Texture};
+use oslf_scene::texture::{ImageTexture, Texture};
 
 /// The textures of a mesh object whose material has image textures, with its store mesh:
 /// `atlas` (the atlas's mesh, whose triangle `i` is `source`'s triangle `i`) with each vertex

@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use crate::error::{BakeError, Result};
 use oslf_format::writer::partial_path;
+use oslf_scene::error::{BakeError, Result};
 
 /// Checks, without changing any file, that `path` can be written: its directory exists and
 /// accepts a new file (a probe file is created there and removed at once), or, if `path`

@@ -4,7 +4,7 @@
 //!
 //! [`estimate`] is a pure function of the scene and a thread count: it reads no file and
 //! traces no ray (it tessellates nothing either: triangle counts come from
-//! [`crate::bezier::BezierPatch::tessellation_level`], patch areas from a 16 × 16 grid of evaluations).
+//! [`oslf_geometry::bezier::BezierPatch::tessellation_level`], patch areas from a 16 × 16 grid of evaluations).
 //! [`check`] compares an [`Estimate`] with [`Limits`] — what the machine offers, read by
 //! [`Limits::of_machine`] ([`machine::available_memory`], [`machine::free_space`]) or given by the caller (tests) —
 //! and with hard limits that no machine lifts ([`hard_limits`]).
@@ -28,9 +28,9 @@ use std::path::{Path, PathBuf};
 
 use oslf_util::machine;
 
-use crate::error::BakeError;
-use crate::scene::Scene;
 pub use costs::*;
+use oslf_scene::error::BakeError;
+use oslf_scene::scene::Scene;
 use terms::*;
 pub use terms::{Term, TimeTerm};
 
@@ -309,7 +309,7 @@ pub fn duration(s: f64) -> String {
 pub fn for_device(
     estimate: Estimate,
     device: Option<&dyn crate::device::CaptureDevice>,
-    capture: &crate::capture::CaptureSettings,
+    capture: &oslf_trace::capture::CaptureSettings,
 ) -> Estimate {
     let Some(device) = device else {
         return estimate;

@@ -2,9 +2,9 @@
 //! texels, cubes), and from them each memory, store and time term.
 
 use super::costs::*;
-use crate::capture::{chunk_cubes, strata_per_side};
-use crate::scene::{BakeSettings, SampleDensity, Scene};
-use crate::tolerance::TESSELLATION_ERROR;
+use oslf_scene::scene::{BakeSettings, SampleDensity, Scene};
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_trace::capture::{chunk_cubes, strata_per_side};
 
 // ---------------------------------------------------------------------------------------------
 
@@ -34,7 +34,7 @@ pub struct TimeTerm {
 }
 
 /// Area of a patch from a 16 × 16 grid of its points (two triangles a cell).
-pub(super) fn patch_area(p: &crate::bezier::BezierPatch) -> f64 {
+pub(super) fn patch_area(p: &oslf_geometry::bezier::BezierPatch) -> f64 {
     const N: usize = 16;
     let pt = |i: usize, j: usize| p.eval(i as f32 / N as f32, j as f32 / N as f32);
     let mut area = 0.0;
@@ -87,7 +87,7 @@ pub(super) struct Counts {
 /// the objects without a `sample_spacing` of their own, plus each other object's area over
 /// its own spacing.
 pub(super) fn requested_points(scene: &Scene) -> u64 {
-    let area = |o: &crate::scene::OslfObject| {
+    let area = |o: &oslf_scene::scene::OslfObject| {
         o.patches.iter().map(patch_area).sum::<f64>()
             + o.mesh.as_ref().map_or(0.0, |m| m.mesh.area())
     };
@@ -113,7 +113,7 @@ pub(super) fn requested_points(scene: &Scene) -> u64 {
 /// Triangles of the scene's BVH, and of the environment cube's second BVH (0 without one).
 pub(super) fn triangle_counts(scene: &Scene) -> (u64, u64) {
     let s = &scene.bake;
-    // Triangles (bake/stages.rs: `scene.instances(true, epsilon × TESSELLATION_ERROR)`; scene.rs:
+    // Triangles (bake/stages.rs: `scene_instances(scene, true, epsilon × TESSELLATION_ERROR)`; scene.rs:
     // each patch at its `tessellation_level`, two triangles a quad).
     let shape_triangles: u64 = scene
         .shapes
@@ -297,7 +297,7 @@ pub(super) fn memory_terms(s: &BakeSettings, c: &Counts) -> (&'static str, Vec<T
     let bvh = bvh_term(s, c);
     let light_term = Term {
         name: "lights",
-        bytes: lights * std::mem::size_of::<crate::light::Light>() as u64,
+        bytes: lights * std::mem::size_of::<oslf_scene::light::Light>() as u64,
         detail: format!("{lights} lights"),
         remedy: "use fewer point lights".into(),
     };

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use oslf_geometry::BezierPatch;
 
-// f32 twins of shade.wgsl's Bernstein polynomials; `oslf_bake::bezier` evaluates in f64, which
+// f32 twins of shade.wgsl's Bernstein polynomials; `oslf_geometry::bezier` evaluates in f64, which
 // the GPU cannot match.
 pub(super) fn bern3(t: f32) -> [f32; 4] {
     let s = 1.0 - t;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use oslf_bake::bake::{bake, BakeOptions};
-use oslf_bake::scene::Scene;
+use oslf_scene::scene::Scene;
 
 /// The teapot on a checkered table beside a wall, under a point light and a uniform sky
 /// (tests/fixtures/teapot.toml), at toy resolutions: small enough to bake in a second, rich

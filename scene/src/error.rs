@@ -43,13 +43,13 @@ pub enum BakeError {
     #[error("{0}")]
     Invalid(String),
     /// Sample-map texels without any visible sample point, refused before the capture
-    /// ([`crate::bake::BakeOptions::refuse_empty_texels`]).
+    /// (`oslf_bake::bake::BakeOptions::refuse_empty_texels`).
     #[error("{empty} of {texels} sample-map texels have no visible sample point ({points} sample points in all), so the store could not reconstruct them; nothing was captured{where_}")]
     EmptyTexels {
         empty: u64,
         texels: u64,
         points: u64,
-        /// Where they lie and why, per object ([`crate::coverage`]): `; where: object "box":
+        /// Where they lie and why, per object (`oslf_bake::coverage`): `; where: object "box":
         /// 3496 texels facing down (−z) at …`, or empty.
         where_: String,
     },
@@ -60,7 +60,7 @@ pub enum BakeError {
         path: PathBuf,
         detail: String,
     },
-    /// The capture device ([`crate::device::CaptureDevice`], the GPU) failed: `device` names
+    /// The capture device (`oslf_bake::device::CaptureDevice`, the GPU) failed: `device` names
     /// it.
     #[error("capture on {device}: {message}")]
     Device { device: String, message: String },

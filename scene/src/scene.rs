@@ -14,20 +14,18 @@ use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use crate::bezier::{self, BezierPatch};
-use crate::bvh::Instance;
 use crate::environment::Environment;
 use crate::error::{BakeError, Result};
 use crate::light::Light;
 use crate::material::Material;
-use crate::mesh::Mesh;
 use crate::normals::NormalsUsed;
-use crate::ray::ENVIRONMENT_OBJECT;
 use crate::tolerance::TESSELLATION_ERROR;
+use oslf_geometry::bezier::{self, BezierPatch};
+use oslf_geometry::mesh::Mesh;
 
 /// The smallest ε relative to an object's largest coordinate magnitude, 2⁻²⁰ (twice
-/// [`crate::bvh::SELF_TOLERANCE`]); see `check_epsilon`.
-pub const MIN_EPSILON_RELATIVE: f32 = 2.0 * crate::bvh::SELF_TOLERANCE;
+/// [`crate::tolerance::SELF_TOLERANCE`]); see `check_epsilon`.
+pub const MIN_EPSILON_RELATIVE: f32 = 2.0 * crate::tolerance::SELF_TOLERANCE;
 
 /// The largest ε, relative to the diagonal of the object's bounding box. Bakes at 10× the
 /// object's size still find points for every texel (bake/tests/extremes.rs); at 10³⁰ every
@@ -267,47 +265,12 @@ impl MeshSource {
     }
 }
 
-impl Scene {
-    /// Every triangle of the scene for ray tracing: environment shapes and the OSLF objects
-    /// tessellated finely enough that the tessellation error stays below `max_error`.
-    pub fn instances(&self, include_objects: bool, max_error: f32) -> Vec<Instance> {
-        let mut out: Vec<Instance> = self
-            .shapes
-            .iter()
-            .map(|s| Instance {
-                name: s.name.clone(),
-                mesh: s.mesh.clone(),
-                material: s.material,
-                object: ENVIRONMENT_OBJECT,
-            })
-            .collect();
-        if include_objects {
-            for (i, object) in self.objects.iter().enumerate() {
-                let mut mesh = Mesh::default();
-                for patch in &object.patches {
-                    mesh.append(&patch.tessellate(patch.tessellation_level(max_error)));
-                }
-                if let Some(source) = &object.mesh {
-                    mesh.append(&source.mesh);
-                }
-                out.push(Instance {
-                    name: format!("object {:?}", object.name),
-                    mesh,
-                    material: object.material,
-                    object: i as u32,
-                });
-            }
-        }
-        out
-    }
-}
-
 /// Why the bake cannot honour `epsilon` for `object`, if it cannot. ε must be at most
 /// [`MAX_EPSILON_RELATIVE`] × the diagonal of the object's bounding box, and at least two
 /// limits, both reported with the smallest ε that works:
 /// - f32: a sample point must lie at least [`MIN_EPSILON_RELATIVE`] × the object's largest
 ///   coordinate magnitude above its surface, twice the ray–triangle test's self-intersection
-///   tolerance ([`crate::bvh::SELF_TOLERANCE`]); below it, rays from a sample point pass
+///   tolerance ([`crate::tolerance::SELF_TOLERANCE`]); below it, rays from a sample point pass
 ///   through the surface under it. (10⁵ units from the origin: ε ≥ 0.095.)
 /// - tessellation: the ray-traced triangles must follow the patches within ε/50
 ///   ([`TESSELLATION_ERROR`]), which the finest grid ([`bezier::MAX_TESSELLATION_LEVEL`]²

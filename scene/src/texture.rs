@@ -149,7 +149,7 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// - OpenEXR (via the `exr` crate; the first layer with R, G and B channels, alpha ignored) and
 ///   Radiance HDR (`.hdr`, RGBE) are linear already;
 /// - PNG and JPEG (8 or 16 bit, grey or colour, alpha ignored) are sRGB-encoded and are
-///   converted to linear with [`srgb_to_linear`](oslf_shading::color::srgb_to_linear).
+///   converted to linear with [`srgb_to_linear`].
 ///
 /// Errors: [`BakeError::Input`] if the file cannot be read, is not a regular file or is too
 /// large, [`BakeError::Image`] if it cannot be decoded, is empty or declares too many pixels,

@@ -11,14 +11,14 @@ use toml::Spanned;
 
 use super::context::Ctx;
 use super::raw::{RawMaterial, RawObject, RawScene, RawTransform};
-use crate::bezier::{self, BezierPatch};
 use crate::error::{BakeError, Result};
 use crate::input::{read_input, InputKind};
 use crate::material::{Material, Model};
-use crate::mesh::Mesh;
 use crate::scene::{epsilon_problem, MeshSource, OslfObject, Shape};
 use crate::texture::{ImageTexture, Texture};
 use crate::{obj, shapes};
+use oslf_geometry::bezier::{self, BezierPatch};
+use oslf_geometry::mesh::Mesh;
 
 impl Ctx<'_> {
     /// The `[[object]]`s, in order, each checked against ε (located at `epsilon_span`, or at

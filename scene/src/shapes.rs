@@ -9,8 +9,8 @@ use std::f32::consts::TAU;
 
 use glam::{Vec2, Vec3};
 
-use crate::mesh::Mesh;
 use crate::{BakeError, Result};
+use oslf_geometry::mesh::Mesh;
 
 /// Largest accepted segment count.
 pub const MAX_SEGMENTS: u32 = 1 << 16;

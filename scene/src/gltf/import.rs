@@ -7,9 +7,9 @@ use oslf_geometry::atlas::UvSource;
 use oslf_geometry::Camera;
 
 use crate::light::Light;
-use crate::mesh::Mesh;
 use crate::normals::{NormalRule, NormalsUsed};
 use crate::scene::Shape;
+use oslf_geometry::mesh::Mesh;
 
 /// Watts per lumen at 555 nm, the peak of the photopic luminous efficiency: the default
 /// conversion of glTF's photometric light units to the scene's radiometric ones.

@@ -1,8 +1,8 @@
 //! glTF 2.0's metallic-roughness BRDF (the specification's Appendix B): a Trowbridge–Reitz
 //! (GGX) specular lobe with separable Smith masking-shadowing and Schlick's Fresnel, over a
 //! Lambertian base for dielectrics (F₀ = 0.04, index of refraction 1.5), mixed by `metallic`.
-//! The path tracer draws environment materials with it ([`crate::integrator`]) and the ground
-//! truth the OSLF object in the `pbr` mode ([`crate::ground_truth::Term::Pbr`]); the runtime's
+//! The path tracer draws environment materials with it (`oslf_trace::integrator`) and the ground
+//! truth the OSLF object in the `pbr` mode (`oslf_trace::ground_truth::Term::Pbr`); the runtime's
 //! `pbr` mode evaluates the same formulas in its shader and CPU reference.
 //!
 //! With `α = roughness²`, `h` the half vector of `v` (towards the viewer) and `l` (towards the

@@ -11,10 +11,10 @@ use super::import::{Import, ImportedObject};
 use super::loader::{label, Loader};
 use super::textures::UvMap;
 use crate::material::Material;
-use crate::mesh::Mesh;
 use crate::normals::{shade, NormalRule, NormalsUsed};
 use crate::scene::Shape;
 use crate::Result;
+use oslf_geometry::mesh::Mesh;
 
 impl<'d> Loader<'d> {
     /// Reads `node`'s mesh into `import.shapes`, or, when `object` is set, into one

@@ -4,11 +4,9 @@
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::node::CwBvhNode;
 
-use crate::ray::Ray;
+use oslf_scene::tolerance::SELF_TOLERANCE;
 
-/// Relative self-intersection tolerance: 4 ulps (2⁻²¹) of the origin's largest coordinate
-/// (≈1.4e-6 for a teapot at the origin, so ε down to 1e-6 of its size still works).
-pub const SELF_TOLERANCE: f32 = 1.0 / (1u32 << 21) as f32;
+use crate::ray::Ray;
 
 /// Byte offsets in [`CwBvhNode`] of the quantised child planes.
 pub(super) const CHILD_MIN_X: usize = std::mem::offset_of!(CwBvhNode, child_min_x);

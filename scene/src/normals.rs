@@ -10,7 +10,7 @@ use std::collections::HashMap;
 
 use glam::{Vec2, Vec3};
 
-use crate::mesh::Mesh;
+use oslf_geometry::mesh::Mesh;
 
 /// The crease angle OBJ meshes without normals get (degrees): faces meeting at more than this
 /// stay sharp. 30° keeps a box's and a cylinder's cap edges sharp and smooths a cylinder of

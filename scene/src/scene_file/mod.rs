@@ -124,7 +124,7 @@ impl Scene {
     /// A scene made from a glTF file alone, with defaults for the rest. Its OSLF objects are
     /// the mesh nodes whose `extras` hold `"oslf": true` (triangle-mesh objects); without one
     /// it cannot be baked ([`Scene::load`] refuses it) but serves path-traced views such as
-    /// [`crate::preview::render`]. The defaults:
+    /// `oslf_trace::preview::render`. The defaults:
     /// - the file rotated from glTF's Y-up to the scene's Z-up (`rotate = [90, 0, 0]`), its
     ///   lights converted with [`crate::gltf::WATTS_PER_LUMEN`];
     /// - the camera: the file's first perspective camera, else one framing the bounds of its

@@ -41,18 +41,18 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::ashikhmin_shirley::AsLobe;
-use crate::bezier::BezierPatch;
 use crate::bvh::{Instance, TriangleScene};
 use crate::integrator::{offset_origin, Integrator, RayStats};
-use crate::material::Model;
-use crate::metallic_roughness::MetallicRoughness;
 use crate::preview::primary_ray;
 use crate::progress::{self, Progress};
 use crate::ray::{Intersector, Ray, SurfaceHit};
-use crate::scene::Scene;
-use crate::tolerance::TESSELLATION_ERROR;
-use crate::{BakeError, Result};
+use oslf_geometry::bezier::BezierPatch;
 use oslf_geometry::Camera;
+use oslf_scene::material::Model;
+use oslf_scene::metallic_roughness::MetallicRoughness;
+use oslf_scene::scene::Scene;
+use oslf_scene::tolerance::TESSELLATION_ERROR;
+use oslf_scene::{BakeError, Result};
 use oslf_shading::random::{hash_u64, stratified_2d, Rng};
 use oslf_shading::warp::Frame;
 
@@ -182,7 +182,7 @@ impl<'s> GroundTruth<'s> {
     pub fn new(scene: &'s Scene, camera: Camera) -> Result<Self> {
         camera.validate()?;
         let max_error = scene.bake.epsilon * TESSELLATION_ERROR;
-        let geometry = TriangleScene::build(scene.instances(true, max_error))?;
+        let geometry = TriangleScene::build(crate::bvh::scene_instances(scene, true, max_error))?;
         let mut instances = Vec::new();
         let mut patches = Vec::new();
         let mut colors = Vec::new();
@@ -415,8 +415,8 @@ impl<'s> GroundTruth<'s> {
         object_material: bool,
     ) -> MetallicRoughness {
         let own = self.scene.materials.get(hit.material as usize);
-        let textured = |t: Option<&crate::texture::Texture>| {
-            mesh && matches!(t, Some(crate::texture::Texture::Image(_)))
+        let textured = |t: Option<&oslf_scene::texture::Texture>| {
+            mesh && matches!(t, Some(oslf_scene::texture::Texture::Image(_)))
         };
         let base_color = match own {
             Some(m) if textured(Some(&m.albedo)) => m.eval(hit.uv),

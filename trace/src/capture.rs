@@ -50,7 +50,7 @@ pub struct CaptureSettings {
 
 impl CaptureSettings {
     /// The capture a bake with `settings` does.
-    pub fn from_bake(settings: &crate::scene::BakeSettings) -> Self {
+    pub fn from_bake(settings: &oslf_scene::scene::BakeSettings) -> Self {
         CaptureSettings {
             resolution: settings.cube_resolution,
             samples_per_texel: settings.samples_per_texel,
@@ -224,11 +224,11 @@ pub fn capture_cube_with_noise<I: Intersector>(
 mod tests {
     use super::*;
     use crate::bvh::{Instance, TriangleScene};
-    use crate::environment::Environment;
-    use crate::light::Light;
-    use crate::material::Material;
     use crate::ray::SurfaceHit;
-    use crate::shapes;
+    use oslf_scene::environment::Environment;
+    use oslf_scene::light::Light;
+    use oslf_scene::material::Material;
+    use oslf_scene::shapes;
 
     /// The scene's single-ray queries only (the trait's default `intersect_packet`).
     struct SingleRays<'a>(&'a TriangleScene);

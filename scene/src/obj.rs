@@ -6,9 +6,9 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use crate::input::{read_input, InputKind};
-use crate::mesh::Mesh;
 use crate::normals::{shade, NormalRule, NormalsUsed, DEFAULT_CREASE_DEG};
 use crate::{BakeError, Result};
+use oslf_geometry::mesh::Mesh;
 
 /// A `BufRead` over a byte slice that remembers how far the parser has read, so a parse error
 /// can be located at the line where it was detected.

@@ -42,19 +42,21 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::BvhBuildParams;
 
+mod instances;
 mod node;
 mod prepared_ray;
 mod triangle;
 
+pub use instances::scene_instances;
 pub use node::PACKET;
 use node::*;
+pub use oslf_scene::tolerance::SELF_TOLERANCE;
 use prepared_ray::PreparedRay;
-pub use prepared_ray::SELF_TOLERANCE;
 use triangle::*;
 
-use crate::mesh::Mesh;
 use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
-use crate::{BakeError, Result};
+use oslf_geometry::mesh::Mesh;
+use oslf_scene::{BakeError, Result};
 
 /// A world-space mesh with the material and OSLF object its triangles belong to.
 #[derive(Clone, Debug, Default)]
@@ -675,7 +677,7 @@ fn prefetch<T>(p: *const T) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shapes;
+    use oslf_scene::shapes;
     use oslf_shading::random::Rng;
 
     fn same_hit(a: Option<TriHit>, b: Option<TriHit>) -> bool {

@@ -2,7 +2,7 @@
 //!
 //! # Estimator
 //! At every surface vertex (two-sided; Lambertian, BRDF `albedo / π`, or glTF's
-//! metallic-roughness, [`crate::metallic_roughness`], whose BRDF and sampling density replace
+//! metallic-roughness, [`oslf_scene::metallic_roughness`], whose BRDF and sampling density replace
 //! the Lambertian ones below):
 //! - **Delta lights** (point, sun): one shadow ray each, contribution `f · E · cos θ`.
 //!   Delta lights cannot be hit by scattered rays, so this is their only path.
@@ -63,11 +63,11 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 
-use crate::environment::Environment;
-use crate::light::Light;
-use crate::material::Material;
-use crate::metallic_roughness::MetallicRoughness;
 use crate::ray::{Intersector, Ray, SurfaceHit, OCCLUSION_STREAMS};
+use oslf_scene::environment::Environment;
+use oslf_scene::light::Light;
+use oslf_scene::material::Material;
+use oslf_scene::metallic_roughness::MetallicRoughness;
 use oslf_shading::random::Rng;
 use oslf_shading::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Frame};
 
@@ -145,7 +145,7 @@ fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
 impl<'a, I: Intersector> Integrator<'a, I> {
     /// The integrator of `scene` (its materials, lights, environment and bounces) over
     /// `geometry`.
-    pub fn for_scene(scene: &'a crate::scene::Scene, geometry: &'a I) -> Self {
+    pub fn for_scene(scene: &'a oslf_scene::scene::Scene, geometry: &'a I) -> Self {
         Self::new(
             geometry,
             &scene.materials,
