@@ -1,5 +1,5 @@
 // Closest-hit and any-hit queries: a stack traversal of the obvhs BVH2 (nearer child first)
-// and the CPU's watertight ray–triangle test (bake/src/bvh/triangle.rs: Woop, Benthin and
+// and the CPU's watertight ray–triangle test (trace/src/bvh/triangle.rs: Woop, Benthin and
 // Wald 2013 with pbrt-v3's conservative bound on t, and the self-intersection guard).
 
 const F32_MAX: f32 = 3.40282347e+38;

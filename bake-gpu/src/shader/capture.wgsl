@@ -1,4 +1,4 @@
-// The cube-map capture of bake/src/capture.rs: one invocation per texel of a batch of cubes,
+// The cube-map capture of trace/src/capture.rs: one invocation per texel of a batch of cubes,
 // its samples stratified k × k, its random stream keyed by (seed, cube, face, texel) as on the
 // CPU; and `trace`, the closest-hit queries the traversal tests compare with the CPU's BVH.
 

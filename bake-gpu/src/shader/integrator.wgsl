@@ -1,9 +1,9 @@
-// The path tracer of bake/src/integrator.rs, step for step and drawing its random numbers in
+// The path tracer of trace/src/integrator.rs, step for step and drawing its random numbers in
 // the same order: emission wherever the path meets a surface, one shadow ray per delta
 // light, one environment sample and one BSDF sample combined by MIS (power heuristic), the
 // BSDF sample continuing the path, Russian roulette from the 4th vertex. Its BRDFs are those
-// of bake/src/material.rs: Lambertian and glTF metallic-roughness
-// (bake/src/metallic_roughness.rs), with GGX and Fresnel from oslf-shading's WGSL.
+// of scene/src/material.rs: Lambertian and glTF metallic-roughness
+// (scene/src/metallic_roughness.rs), with GGX and Fresnel from oslf-shading's WGSL.
 
 // 2⁻¹⁹ (integrator::OFFSET_RELATIVE).
 const OFFSET_RELATIVE: f32 = 1.9073486e-6;
@@ -36,7 +36,7 @@ fn mr_alpha(l: Lobe) -> f32 {
     return ggx_alpha(l.roughness);
 }
 
-// `distribution` of bake/src/metallic_roughness.rs: D at the half vector h about n.
+// `distribution` of scene/src/metallic_roughness.rs: D at the half vector h about n.
 fn mr_distribution(a2: f32, n: vec3<f32>, h: vec3<f32>) -> f32 {
     let c = cross(n, h);
     return ggx_distribution(a2, dot(n, h), dot(c, c));

@@ -1,4 +1,4 @@
-// The bake's preview (bake/src/preview.rs): the scene camera's image path traced with the
+// The bake's preview (trace/src/preview.rs): the scene camera's image path traced with the
 // capture's integrator, one invocation per pixel, its samples stratified and its random
 // stream keyed by (seed, x, y) as on the CPU.
 

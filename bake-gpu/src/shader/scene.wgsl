@@ -1,6 +1,6 @@
 // The scene the path tracer shades: surface hits, textures, materials, delta lights and the
-// environment, each the CPU's function of the same name (bake/src/{ray,texture,material,
-// light,environment}.rs) on the data of scene.rs.
+// environment, each the CPU's function of the same name (trace/src/ray.rs,
+// scene/src/{texture,material,light,environment}.rs) on the data of scene.rs.
 
 const ONE_MINUS_EPSILON: f32 = 0.99999994;
 
