@@ -206,7 +206,7 @@ fn unknown_limits_check_nothing_but_hard_limits() {
 
 // --- the example passes, estimates grow --------------------------------------------------
 
-/// The quick preset's store measured once: 14.21 MB (docs/measurements.md, "Bake").
+/// The quick preset's store measured once: 14.21 MB (docs/measurements.md, "Quick preset").
 const QUICK_STORE_BYTES: f64 = 14.21e6;
 
 #[test]

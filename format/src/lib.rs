@@ -303,7 +303,7 @@
 //! dominated by Monte Carlo noise, which no lossless filter removes; coarser lattices (k < 9)
 //! leave less noise, and at k ≤ 6 filter 3's packed codes beat filter 2's zero-filled
 //! mantissas, so writers use filter 3 there. Bytes per texel for every encoding, filter and k
-//! are measured in docs/measurements.md ("Store sizes and read speed", "Quantized RGB9E5";
+//! are measured in docs/measurements.md ("Store sizes", "Quantized RGB9E5";
 //! `cargo bench --bench store`).
 //!
 //! ## Encodings and measured accuracy

@@ -53,11 +53,11 @@ pub enum Param {
     CacheMegabytes,
     /// The RAM level's budget in megabytes ([`crate::cache::ram_bytes`]).
     RamMegabytes,
-    /// The frames of a still path ([`crate::replay::CameraPath::still`]).
+    /// The frames of a still path (`replay::CameraPath::still`, feature `tooling`).
     StillFrames,
-    /// The frames of an orbit ([`crate::replay::CameraPath::orbit`]).
+    /// The frames of an orbit (`replay::CameraPath::orbit`, feature `tooling`).
     OrbitFrames,
-    /// The angle an orbit turns through ([`crate::replay::CameraPath::orbit`]).
+    /// The angle an orbit turns through (`replay::CameraPath::orbit`, feature `tooling`).
     OrbitDegrees,
     /// The parallax proxy box ([`crate::ShadingParams::proxy_box`]).
     ProxyBox,

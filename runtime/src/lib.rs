@@ -54,10 +54,11 @@
 //! * **CPU reference** ([`reference`](mod@reference)): the same shading in Rust, function for function, used
 //!   by the parity tests against the GPU.
 //!
-//! * **Cache replay** ([`replay`]): camera paths (a still view, an orbit), the replay of a path
-//!   with a fresh renderer, and its cache counters summed per phase (cold start, steady state,
-//!   whole path) into rows: what `oslf cache-stats` reports (thesis Tables 6.3–6.7; the table
-//!   and CSV text are `oslf_measure::cache_stats`'s).
+//! * **Tooling** (feature `tooling`, off by default: not what an embedding application
+//!   uses): cache replays (`replay`: camera paths, a still view or an orbit, replayed with a
+//!   fresh renderer and its cache counters summed per phase into rows, what `oslf cache-stats`
+//!   reports, thesis Tables 6.3–6.7) and the checks of WGSL struct layouts against Rust
+//!   (`wgsl_layout`).
 //!
 //! Image error metrics (RMSE in CIELAB, PSNR) are `oslf_measure::metrics`'s.
 //!
@@ -94,10 +95,14 @@ pub mod prefilter;
 pub mod probe;
 pub mod reference;
 pub mod renderer;
+/// Cache replays along camera paths: measurement tooling (feature `tooling`).
+#[cfg(feature = "tooling")]
 pub mod replay;
 #[cfg(test)]
 mod shader_layout;
 mod textures;
+/// WGSL struct layouts checked against Rust: test tooling (feature `tooling`).
+#[cfg(any(test, feature = "tooling"))]
 pub mod wgsl_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};

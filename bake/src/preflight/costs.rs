@@ -58,8 +58,8 @@ pub const STORE_FIXED_BYTES: u64 = 64 << 10;
 pub const STORE_CUBE_OVERHEAD_BYTES: u64 = 6 * 32 + 160 + 6 * 16;
 
 /// Compressed bytes per cube-map texel (colour only), by encoding and `mantissa_bits`:
-/// the mean of the 32² and 128² gazebo bakes of docs/measurements.md, "Store sizes and read
-/// speed" (lossless table: RGB9E5 3.443 and 3.121 of 4 raw bytes; RGBA16F 4.658 and 3.985 of
+/// the mean of the 32² and 128² gazebo bakes of docs/measurements.md, "Store sizes"
+/// (lossless table: RGB9E5 3.443 and 3.121 of 4 raw bytes; RGBA16F 4.658 and 3.985 of
 /// 8; RGBA32F 9.207 of 16 — the 32² column, the only one baked from unquantised radiance;
 /// quantized RGB9E5 table for `mantissa_bits` < 9; BC6H 0.973 and 0.920 of 1 raw byte, the
 /// quick preset's 32² cubes and a 128² bake of the same scene converted from RGBA32F, filter
