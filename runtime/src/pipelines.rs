@@ -41,7 +41,7 @@ const SHADE_FILES: &str = concat!(
     include_str!("shade/pixel.wgsl"),
 );
 
-/// shade.wgsl, the shading pass: oslf-shading's WGSL modules (GGX, Fresnel, colour), then the
+/// shade.wgsl, the shading pass: oslf-shading's WGSL modules ([`oslf_shading::wgsl`]), then the
 /// files of shade/. Each file opens with a `// ---- NAME.wgsl ----` banner, so a line that a
 /// naga error quotes can be found in its file.
 pub(crate) fn shade_wgsl() -> String {

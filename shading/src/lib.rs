@@ -7,7 +7,7 @@
 //!
 //! | module | Rust | WGSL ([`wgsl`]) |
 //! | --- | --- | --- |
-//! | [`ggx`] | Trowbridge–Reitz `D`, Smith `G₁` and `V`, visible-normal sampling, Schlick's weight | `ggx.wgsl`: `ggx_distribution`, `ggx_smith_g1`, … |
+//! | [`ggx`] | Trowbridge–Reitz `D`, Smith `G₁` and `V`, visible-normal sampling, glTF's `α` floor and dielectric `F₀` | `ggx.wgsl`: `ggx_distribution`, `ggx_smith_g1`, … |
 //! | [`fresnel`] | Schlick's approximation (thesis Eq. 5.7) | `fresnel.wgsl`: `fresnel_schlick`, `fresnel_schlick_weight` |
 //! | [`random`] | PCG32, the stream hash, stratified samples | `random.wgsl`: the same streams bit for bit (`rng_new`, `rng_f32`, `hash4`) |
 //! | [`warp`] | disc, cosine-hemisphere and sphere warps with densities and inverses; the frame about a normal | `warp.wgsl`: the warps and the frame |
