@@ -81,7 +81,7 @@ impl MetallicRoughness {
         };
         let a2 = self.alpha() * self.alpha();
         let vh = wo.dot(h).abs();
-        let specular = ggx::visibility(a2, nl, nv) * distribution(a2, n, h);
+        let specular = ggx::visibility(a2, nl, nv) * ggx::distribution_at(a2, n, h);
         let k5 = schlick_weight(vh);
         let c = self.base_color;
         let metal = specular * (c + (Vec3::ONE - c) * k5);
@@ -101,7 +101,7 @@ impl MetallicRoughness {
         };
         let a2 = self.alpha() * self.alpha();
         // Visible normals: D_v(h) = G₁(v) (v·h)⁺ D(h) / (n·v); reflection: / (4 v·h).
-        let specular = ggx::smith_g1(a2, nv) * distribution(a2, n, h) / (4.0 * nv);
+        let specular = ggx::smith_g1(a2, nv) * ggx::distribution_at(a2, n, h) / (4.0 * nv);
         let p = self.specular_probability();
         p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl)
     }
@@ -128,9 +128,4 @@ impl MetallicRoughness {
         let weight = self.eval(n, wo, wi) * (nl / pdf);
         weight.is_finite().then_some(BrdfSample { wi, weight, pdf })
     }
-}
-
-/// [`ggx::distribution`] at the half vector `h` about `n` (both unit).
-fn distribution(a2: f32, n: Vec3, h: Vec3) -> f32 {
-    ggx::distribution(a2, n.dot(h), n.cross(h).length_squared())
 }

@@ -40,6 +40,11 @@ pub fn distribution(a2: f32, nh: f32, sin2: f32) -> f32 {
     a2 / (PI * d * d)
 }
 
+/// [`distribution`] at the half vector `h` about the normal `n` (both unit, in any frame).
+pub fn distribution_at(a2: f32, n: Vec3, h: Vec3) -> f32 {
+    distribution(a2, n.dot(h), n.cross(h).length_squared())
+}
+
 /// Smith's `Λ(c) = c + √(α² + (1 − α²) c²)` (`2c / G₁(c)`).
 pub fn smith_lambda(a2: f32, c: f32) -> f32 {
     c + (a2 + (1.0 - a2) * c * c).sqrt()

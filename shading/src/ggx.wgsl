@@ -22,6 +22,12 @@ fn ggx_distribution(a2: f32, nh: f32, sin2: f32) -> f32 {
     return a2 / (PI * d * d);
 }
 
+// ggx_distribution at the half vector h about the normal n (both unit, in any frame).
+fn ggx_distribution_at(a2: f32, n: vec3<f32>, h: vec3<f32>) -> f32 {
+    let c = cross(n, h);
+    return ggx_distribution(a2, dot(n, h), dot(c, c));
+}
+
 // Smith's Λ(c) = c + √(α² + (1 − α²) c²).
 fn ggx_smith_lambda(a2: f32, c: f32) -> f32 {
     return c + sqrt(a2 + (1.0 - a2) * c * c);

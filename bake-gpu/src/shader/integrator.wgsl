@@ -36,12 +36,6 @@ fn mr_alpha(l: Lobe) -> f32 {
     return ggx_alpha(l.roughness);
 }
 
-// `distribution` of scene/src/metallic_roughness.rs: D at the half vector h about n.
-fn mr_distribution(a2: f32, n: vec3<f32>, h: vec3<f32>) -> f32 {
-    let c = cross(n, h);
-    return ggx_distribution(a2, dot(n, h), dot(c, c));
-}
-
 // `MetallicRoughness::eval`.
 fn mr_eval(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let nv = dot(n, wo);
@@ -56,7 +50,7 @@ fn mr_eval(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let alpha = mr_alpha(l);
     let a2 = alpha * alpha;
     let vh = abs(dot(wo, h));
-    let specular = ggx_visibility(a2, nl, nv) * mr_distribution(a2, n, h);
+    let specular = ggx_visibility(a2, nl, nv) * ggx_distribution_at(a2, n, h);
     let k5 = fresnel_schlick_weight(vh);
     let c = l.albedo;
     let metal = specular * (c + (vec3<f32>(1.0) - c) * k5);
@@ -78,7 +72,7 @@ fn mr_pdf(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     }
     let alpha = mr_alpha(l);
     let a2 = alpha * alpha;
-    let specular = ggx_smith_g1(a2, nv) * mr_distribution(a2, n, h) / (4.0 * nv);
+    let specular = ggx_smith_g1(a2, nv) * ggx_distribution_at(a2, n, h) / (4.0 * nv);
     let p = 0.5 + 0.5 * l.metallic;
     return p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl);
 }
