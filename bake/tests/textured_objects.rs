@@ -1,4 +1,4 @@
-//! A textured glTF object end to end on the bake side (format version 8): examples/orb.toml's
+//! A textured glTF object end to end on the bake side: examples/orb.toml's
 //! gold orb, whose metallicRoughnessTexture bands its roughness, bakes into a store that carries
 //! the texture with the file's own codes and one texture coordinate per store vertex; and the
 //! ground truth shades each pixel with the roughness the texture holds there. A normal

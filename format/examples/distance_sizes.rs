@@ -4,7 +4,7 @@
 //! distance planes' share. `cargo run --release -p oslf-format --example distance_sizes --
 //! STORE...` (docs/measurements.md, "Compact distances").
 use oslf_format::filter::{filter_face_quantized, filtered_face_size};
-use oslf_format::Store;
+use oslf_format::{DistancePlane, Store};
 
 fn main() {
     for path in std::env::args().skip(1) {
@@ -13,7 +13,13 @@ fn main() {
         let bake = &store.meta().bake;
         let (enc, res) = (h.encoding, h.cube_resolution);
         let color_bytes = enc.face_bytes(res).expect("face size");
-        let filtered = filtered_face_size(h.filter, enc, res, false, bake.mantissa_bits);
+        let filtered = filtered_face_size(
+            h.filter,
+            enc,
+            res,
+            DistancePlane::Absent,
+            bake.mantissa_bits,
+        );
         let mut out = vec![0u8; filtered.expect("filtered size")];
         let mut raw = vec![0u8; store.face_raw_size()];
         let (mut total, mut color) = (0u64, 0u64);
@@ -26,7 +32,7 @@ fn main() {
                     h.filter,
                     enc,
                     res,
-                    false,
+                    DistancePlane::Absent,
                     bake.mantissa_bits,
                     texels,
                     &mut out,
@@ -40,8 +46,7 @@ fn main() {
         let texels = f64::from(store.cube_count()) * 6.0 * f64::from(res).powi(2);
         let file = store.file_size() as f64;
         println!(
-            "{path}: version {} {enc} {res}², distance {}: cube data {:.3} B/texel (colour {:.3}, distance {:.3}); whole file {:.3} B/texel ({} bytes, {} texels)",
-            h.version,
+            "{path}: {enc} {res}², distance {}: cube data {:.3} B/texel (colour {:.3}, distance {:.3}); whole file {:.3} B/texel ({} bytes, {} texels)",
             h.distance_plane(),
             total as f64 / texels,
             color as f64 / texels,

@@ -57,7 +57,7 @@ fn main() {
         filter,
         h.encoding,
         h.cube_resolution,
-        h.has_distance(),
+        h.distance_plane(),
         bits,
     )
     .unwrap();
@@ -67,7 +67,7 @@ fn main() {
             filter,
             h.encoding,
             h.cube_resolution,
-            h.has_distance(),
+            h.distance_plane(),
             bits,
             filtered,
             out,

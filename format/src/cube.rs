@@ -21,7 +21,7 @@
 use crate::distance::DistancePlane;
 use crate::encoding::{encode_distances, encode_face_texels, quantize_rgb9e5_bytes, Encoding};
 use crate::filter::{filter_face_quantized, Filter};
-use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION, VERSION};
+use crate::{BakeParams, Error, MAX_CUBE_RESOLUTION};
 
 /// Number of faces of a cube map.
 pub const FACES: usize = 6;
@@ -158,8 +158,7 @@ pub struct EncodedCube {
     pub(crate) encoding: Encoding,
     pub(crate) filter: Filter,
     pub(crate) resolution: u32,
-    /// How the frames hold the distance plane (the lattice of [`VERSION`] for
-    /// [`encode_cube`]'s cubes).
+    /// How the frames hold the distance plane.
     pub(crate) distance: DistancePlane,
     pub(crate) mantissa_bits: u32,
     pub(crate) raw_size: u64,
@@ -189,71 +188,6 @@ impl EncodedCube {
     /// Compressed bytes of all six faces.
     pub fn compressed_bytes(&self) -> u64 {
         self.frames.iter().map(|f| f.len() as u64).sum()
-    }
-
-    /// The cube with its distance planes filtered as `plane` holds them, its frames
-    /// recompressed at `zstd_level`: for continuing a partial file of format version 2 to 5
-    /// ([`crate::StoreWriter::resume`]), whose faces hold `f32` planes, with cubes that
-    /// [`encode_cube`] put on the distance lattice. The raw faces (and so their checksums)
-    /// stay the same: a lattice distance is an `f32`. Any other change of plane is returned
-    /// unchanged, for the writer to refuse.
-    pub(crate) fn with_distance_plane(
-        self,
-        plane: DistancePlane,
-        zstd_level: i32,
-    ) -> Result<Self, Error> {
-        if !(matches!(self.distance, DistancePlane::Lattice { .. }) && plane == DistancePlane::F32)
-        {
-            return Ok(self);
-        }
-        if self.filter == Filter::None {
-            // Filter 0 stores the raw face as it is: the same bytes for both planes.
-            return Ok(EncodedCube {
-                distance: plane,
-                ..self
-            });
-        }
-        let (enc, res, bits) = (self.encoding, self.resolution, self.mantissa_bits);
-        let fail = |face: usize, detail: String| Error::Compress {
-            cube: self.cube_index,
-            face,
-            detail,
-        };
-        let size = |p: DistancePlane| {
-            crate::filter::filtered_face_size(self.filter, enc, res, p, bits).ok_or(Error::Limit {
-                what: "cube resolution",
-                value: u64::from(res),
-                max: u64::from(MAX_CUBE_RESOLUTION),
-            })
-        };
-        let mut from = vec![0u8; size(self.distance)?];
-        let mut raw = vec![0u8; self.raw_size as usize];
-        let mut to = vec![0u8; size(plane)?];
-        let mut frames: [Vec<u8>; FACES] = Default::default();
-        let mut checksums = [0u64; FACES];
-        for (face, frame) in self.frames.iter().enumerate() {
-            zstd::bulk::decompress_to_buffer(frame, &mut from)
-                .map_err(|e| fail(face, e.to_string()))?;
-            crate::filter::unfilter_face_quantized(
-                self.filter,
-                enc,
-                res,
-                self.distance,
-                bits,
-                &from,
-                &mut raw,
-            )?;
-            filter_face_quantized(self.filter, enc, res, plane, bits, &raw, &mut to)?;
-            frames[face] =
-                zstd::bulk::compress(&to, zstd_level).map_err(|e| fail(face, e.to_string()))?;
-            checksums[face] = xxhash_rust::xxh3::xxh3_64(&frames[face]);
-        }
-        Ok(EncodedCube {
-            distance: plane,
-            frames,
-            checksums,
-            ..self
-        })
     }
 }
 
@@ -296,7 +230,7 @@ pub fn encode_cube_with_filter(
     })?;
     let raw_size = face_raw_size(enc, res, params.distance_channel)?;
     let mut raw = vec![0u8; raw_size as usize];
-    let plane = DistancePlane::for_store(VERSION, res, params.distance_channel);
+    let plane = DistancePlane::for_store(res, params.distance_channel);
     let filtered_size =
         crate::filter::filtered_face_size(filter, enc, res, plane, params.mantissa_bits).ok_or(
             Error::Limit {
@@ -453,12 +387,8 @@ fn encode_raw_face(
                 value: d.get(i).copied().unwrap_or(f32::NAN),
             });
         }
-        if plane == DistancePlane::F32 {
-            encode_distances(d, dist_out)?;
-        } else {
-            let q: Vec<f32> = d.iter().map(|v| plane.quantize(*v)).collect();
-            encode_distances(&q, dist_out)?;
-        }
+        let q: Vec<f32> = d.iter().map(|v| plane.quantize(*v)).collect();
+        encode_distances(&q, dist_out)?;
     }
     Ok(clamped)
 }

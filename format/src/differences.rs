@@ -150,7 +150,7 @@ pub(crate) fn prefix_difference(old: &[u8], new: &[u8], new_label: &str) -> Stri
         let h = Header::parse(b).ok()?;
         let start = usize::try_from(h.meta.offset).ok()?;
         let end = usize::try_from(h.meta.end()).ok()?;
-        let meta = decode_meta(b.get(start..end)?, h.meta.offset, h.version).ok()?;
+        let meta = decode_meta(b.get(start..end)?, h.meta.offset).ok()?;
         Some((h, meta))
     };
     let (Some((oh, om)), Some((nh, nm))) = (parse(old), parse(new)) else {

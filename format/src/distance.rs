@@ -1,9 +1,8 @@
-//! The distance plane's forms: how a store of each format version holds the distance to the
-//! first hit per texel (crate docs, "Distance plane").
+//! The distance plane: how a store holds the distance to the first hit per texel
+//! (`docs/format.md`, "Distance plane").
 //!
-//! In every version the *raw* face ends in `n²` little-endian `f32` distances (`f32::MAX`
-//! where the ray escaped), so readers decode distances the same way in all versions. From
-//! version 6 the writer first rounds every distance to a *distance lattice* of `k` mantissa
+//! The *raw* face ends in `n²` little-endian `f32` distances (`f32::MAX` where the ray
+//! escaped). The writer first rounds every distance to a *distance lattice* of `k` mantissa
 //! bits (bfloat-like: the `f32` bit pattern with its low `23 − k` mantissa bits zero), `k`
 //! chosen from the cube resolution so that the relative error stays below a quarter of a
 //! texel's angular size ([`distance_bits`]); the face filters 1 to 3 then store each distance
@@ -17,43 +16,26 @@ pub const NO_HIT: f32 = f32::MAX;
 /// Largest distance-lattice mantissa bits (8 + 8 = 16-bit codes).
 pub const MAX_DISTANCE_BITS: u32 = 8;
 
-/// The first format version whose distance planes are quantized to the distance lattice.
-pub const LATTICE_VERSION: u32 = 6;
-
 /// How a store's faces hold their distance plane.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DistancePlane {
     /// No distance channel.
     Absent,
-    /// Any `f32` distances, filtered as four byte planes of their bit patterns (format
-    /// versions 1 to 5).
-    F32,
     /// Distances on the lattice of `bits` mantissa bits (or [`NO_HIT`]), filtered as two byte
-    /// planes of their codes (format version 6 and later; `bits` from [`distance_bits`]).
+    /// planes of their codes (`bits` from [`distance_bits`]).
     Lattice { bits: u32 },
 }
 
-impl From<bool> for DistancePlane {
-    /// `true`: a plane of any `f32` distances ([`DistancePlane::F32`]); `false`: none.
-    fn from(present: bool) -> Self {
-        if present {
-            DistancePlane::F32
+impl DistancePlane {
+    /// The plane of a store with cube faces of side `resolution`, with or without a distance
+    /// channel.
+    pub fn for_store(resolution: u32, distance_channel: bool) -> Self {
+        if distance_channel {
+            DistancePlane::Lattice {
+                bits: distance_bits(resolution),
+            }
         } else {
             DistancePlane::Absent
-        }
-    }
-}
-
-impl DistancePlane {
-    /// The plane of a store of format `version` with cube faces of side `resolution`, with or
-    /// without a distance channel.
-    pub fn for_store(version: u32, resolution: u32, distance_channel: bool) -> Self {
-        match (distance_channel, version >= LATTICE_VERSION) {
-            (false, _) => DistancePlane::Absent,
-            (true, false) => DistancePlane::F32,
-            (true, true) => DistancePlane::Lattice {
-                bits: distance_bits(resolution),
-            },
         }
     }
 
@@ -62,17 +44,16 @@ impl DistancePlane {
         self != DistancePlane::Absent
     }
 
-    /// Bytes per texel of the plane after face filter 1, 2 or 3: 0, 4, or 2 for the lattice.
+    /// Bytes per texel of the plane after face filter 1, 2 or 3: 0, or 2 for the lattice.
     pub fn filtered_bytes_per_texel(self) -> usize {
         match self {
             DistancePlane::Absent => 0,
-            DistancePlane::F32 => 4,
             DistancePlane::Lattice { .. } => 2,
         }
     }
 
     /// Rounds `d` (finite and non-negative, or [`NO_HIT`]) to the plane's lattice; the identity
-    /// for [`DistancePlane::F32`].
+    /// without a plane.
     pub fn quantize(self, d: f32) -> f32 {
         match self {
             DistancePlane::Lattice { bits } => quantize_distance(d, bits),
@@ -85,13 +66,12 @@ impl std::fmt::Display for DistancePlane {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             DistancePlane::Absent => f.write_str("none"),
-            DistancePlane::F32 => f.write_str("f32"),
             DistancePlane::Lattice { bits } => write!(f, "{bits}-bit lattice"),
         }
     }
 }
 
-/// The distance-lattice mantissa bits of a version-6 store with cube faces of side
+/// The distance-lattice mantissa bits of a store with cube faces of side
 /// `resolution`: `clamp(⌈log2 n⌉, 1, 8)` (n = 32 → 5, 64 → 6, 128 → 7, 256 and above → 8),
 /// the fewest with `2^−(k+1) ≤ 1 / (2n)`. A texel at the face centre subtends `α ≈ 2 / n`
 /// radians, so the rounding changes a distance `d` by at most `d · α / 4`; a lookup from a
@@ -215,17 +195,16 @@ mod tests {
     }
 
     #[test]
-    fn planes_of_each_version() {
-        assert_eq!(DistancePlane::for_store(5, 32, true), DistancePlane::F32);
+    fn planes_of_a_store() {
         assert_eq!(
-            DistancePlane::for_store(6, 32, true),
+            DistancePlane::for_store(32, true),
             DistancePlane::Lattice { bits: 5 }
         );
         assert_eq!(
-            DistancePlane::for_store(6, 32, false),
-            DistancePlane::Absent
+            DistancePlane::for_store(256, true),
+            DistancePlane::Lattice { bits: 8 }
         );
-        assert_eq!(DistancePlane::from(true), DistancePlane::F32);
-        assert_eq!(DistancePlane::F32.quantize(1.2345), 1.2345);
+        assert_eq!(DistancePlane::for_store(32, false), DistancePlane::Absent);
+        assert_eq!(DistancePlane::Absent.quantize(1.2345), 1.2345);
     }
 }

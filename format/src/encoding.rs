@@ -12,7 +12,7 @@
 //! * [`Encoding::Rgba32f`]: four IEEE binary32 values R, G, B, A with A = 1. Exact.
 //! * [`Encoding::Bc6h`]: unsigned BC6H blocks (`BC6H_UF16`), 16 bytes per 4×4 texels; a face
 //!   is encoded whole (padded by edge replication to a multiple of 4), see [`crate::bc6h`].
-//!   Largest value [`MAX_F16`] = 65504. Format version 4 and later.
+//!   Largest value [`MAX_F16`] = 65504.
 //!
 //! Radiance must be finite and non-negative. Values above an encoding's largest finite value
 //! are clamped to it (never encoded as infinity) and counted.

@@ -1,5 +1,5 @@
 //! Which texel encoding a store uses ([`Encoding`]) and what follows from it: bytes per
-//! texel and per face, the largest value, the first format version that holds it. A leaf:
+//! texel and per face, the largest value. A leaf:
 //! the codecs ([`crate::encoding`]) and the errors that name an encoding build on it.
 
 /// Largest finite RGB9E5 value: `511/512 * 2^16`.
@@ -18,7 +18,7 @@ pub enum Encoding {
     /// Float RGBA, 16 bytes per texel.
     Rgba32f,
     /// Unsigned BC6H blocks, 16 bytes per 4×4 texels (1 byte per texel when the face side is
-    /// a multiple of 4). Stores of format version 4 and later.
+    /// a multiple of 4).
     Bc6h,
 }
 
@@ -60,14 +60,6 @@ impl Encoding {
             _ => (resolution as usize)
                 .checked_mul(resolution as usize)?
                 .checked_mul(self.bytes_per_texel()),
-        }
-    }
-
-    /// The oldest store format version that may hold this encoding: 4 for BC6H, 1 otherwise.
-    pub fn min_version(self) -> u32 {
-        match self {
-            Encoding::Bc6h => 4,
-            _ => 1,
         }
     }
 

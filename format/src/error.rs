@@ -39,15 +39,11 @@ pub enum Error {
     /// opened for reading, or that cannot be opened.
     #[error(transparent)]
     Input(Box<oslf_util::UtilError>),
-    /// A format version this reader does not understand.
-    #[error(
-        "unsupported OSLF store version {found} (this reader understands versions {oldest} to {newest})"
-    )]
-    UnsupportedVersion {
-        found: u32,
-        oldest: u32,
-        newest: u32,
-    },
+    /// A format version other than 1.0 at header bytes 8..12: a store of a pre-1.0
+    /// development build (1 to [`crate::LAST_DEVELOPMENT_VERSION`]), to be baked again, or of
+    /// a format this reader does not know.
+    #[error("{}", unsupported_version(*found))]
+    UnsupportedVersion { found: u32 },
     /// The file ends before a structure it must contain.
     #[error(
         "truncated store: {section} needs bytes {offset}..{end} but the file has {file_size} bytes"
@@ -187,7 +183,9 @@ pub enum Error {
     /// A distance that is not on the distance lattice of `bits` mantissa bits (nor the no-hit
     /// value `f32::MAX`), given to filters 1 to 3 of a version-6 distance plane
     /// ([`crate::distance::quantize_distance`] puts it there).
-    #[error("texel {texel}: distance {value} is not on the {bits}-bit distance lattice that format version 6 stores")]
+    #[error(
+        "texel {texel}: distance {value} is not on the {bits}-bit distance lattice the store holds"
+    )]
     UnquantizedDistance { texel: usize, value: f32, bits: u32 },
     /// A cube image whose shape does not match the bake parameters.
     #[error("cube {cube}: {detail}")]
@@ -274,7 +272,7 @@ pub enum Error {
         value: u8,
     },
     /// The faces decode (decompressed and unfiltered) to other bytes than the writer encoded:
-    /// the checksum of the decoded faces (header bytes 180..188, format version 3) does not
+    /// the checksum of the decoded faces (header bytes 180..188) does not
     /// match.
     #[error("the decoded cube faces do not match their checksum at header byte offset 180 (stored {stored:#018x}, computed {computed:#018x}): the frames decode to other texels than were written, e.g. the face filter id at byte 176 or the metadata's mantissa_bits was changed")]
     DecodedChecksum { stored: u64, computed: u64 },
@@ -300,13 +298,6 @@ pub enum Error {
     #[error("{encoding} encodes whole faces in 4×4 blocks, not single texels (use encode_face_texels / decode_face_texels)")]
     WholeFaceEncoding {
         encoding: crate::encoding_kind::Encoding,
-    },
-    /// An encoding the store's format version cannot hold (BC6H needs version 4).
-    #[error("encoding {encoding} at header byte offset 16 needs format version {needs} or later, but the store is version {version}")]
-    EncodingVersion {
-        encoding: crate::encoding_kind::Encoding,
-        version: u32,
-        needs: u32,
     },
     /// A shard argument that is not `I/N` with `N ≥ 1` and `I < N`.
     #[error("invalid shard {0:?}: expected I/N with N at least 1 and I in 0..N (e.g. 0/4)")]
@@ -374,5 +365,19 @@ pub(crate) fn open_error(path: &std::path::Path) -> impl FnOnce(oslf_util::UtilE
 impl From<oslf_util::UtilError> for Error {
     fn from(e: oslf_util::UtilError) -> Error {
         Error::Input(Box::new(e))
+    }
+}
+
+/// The message of [`Error::UnsupportedVersion`].
+fn unsupported_version(found: u32) -> String {
+    if (1..=crate::LAST_DEVELOPMENT_VERSION).contains(&found) {
+        format!(
+            "store of development format version {found} (header bytes 8..12), from before format 1.0, which this oslf reads only: bake the scene again (`oslf bake`)"
+        )
+    } else {
+        format!(
+            "unsupported OSLF store version {found:#010x} at header bytes 8..12 (this reader understands format {} only)",
+            crate::version_name(crate::VERSION)
+        )
     }
 }

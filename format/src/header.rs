@@ -1,10 +1,10 @@
-//! The fixed 256-byte file header (layout in the crate docs).
+//! The fixed 256-byte file header (layout in `docs/format.md`, "Header").
 
 use crate::bytes::{align8, le_u32, le_u64};
 use crate::encoding::Encoding;
 use crate::filter::Filter;
 use crate::sample_map::IndexWidth;
-use crate::{Error, MAGIC, MIN_VERSION, VERSION};
+use crate::{Error, MAGIC, VERSION};
 use xxhash_rust::xxh3::xxh3_64;
 
 /// Bytes of the header.
@@ -14,12 +14,9 @@ pub const HEADER_CHECKSUM_OFFSET: usize = 248;
 
 /// Byte offset of the face filter id (`u32`).
 pub const FILTER_OFFSET: usize = 176;
-/// Byte offset of the checksum of the decoded faces (`u64`, format version 3 and later;
-/// reserved zero bytes in versions 1 and 2).
+/// Byte offset of the checksum of the decoded faces (`u64`).
 pub const DECODED_CHECKSUM_OFFSET: usize = 180;
-/// First reserved (zero) byte of a version-1 or version-2 header.
-const RESERVED_START_V1: usize = 180;
-/// First reserved (zero) byte of a header of version 3 and later.
+/// First reserved (zero) byte of the header.
 const RESERVED_START: usize = 188;
 
 /// Flag bit: every face carries an `f32` distance plane.
@@ -60,7 +57,6 @@ impl Section {
 /// The parsed header.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Header {
-    pub version: u32,
     pub flags: u32,
     pub encoding: Encoding,
     /// The face filter (bytes 176..180).
@@ -81,8 +77,8 @@ pub struct Header {
     pub meta_checksum: u64,
     pub points_checksum: u64,
     pub maps_checksum: u64,
-    /// Checksum of the decoded faces (bytes 180..188; see the crate docs): set by `finish()`,
-    /// 0 in a partial file and in stores of format versions 1 and 2, which do not record it.
+    /// Checksum of the decoded faces (bytes 180..188; see `docs/format.md`): set by
+    /// `finish()`, 0 in a partial file.
     pub decoded_checksum: u64,
 }
 
@@ -90,10 +86,10 @@ impl Header {
     pub fn has_distance(&self) -> bool {
         self.flags & FLAG_DISTANCE != 0
     }
-    /// How the faces hold their distance plane: none, `f32` (versions 1 to 5) or on the
-    /// distance lattice of the cube resolution (version 6 and later).
+    /// How the faces hold their distance plane: none, or on the distance lattice of the cube
+    /// resolution.
     pub fn distance_plane(&self) -> crate::DistancePlane {
-        crate::DistancePlane::for_store(self.version, self.cube_resolution, self.has_distance())
+        crate::DistancePlane::for_store(self.cube_resolution, self.has_distance())
     }
     pub fn has_env_cube(&self) -> bool {
         self.flags & FLAG_ENV_CUBE != 0
@@ -107,7 +103,7 @@ impl Header {
         let mut b = [0u8; HEADER_BYTES];
         let mut put = |off: usize, v: &[u8]| b[off..off + v.len()].copy_from_slice(v);
         put(0, &MAGIC);
-        put(8, &self.version.to_le_bytes());
+        put(8, &VERSION.to_le_bytes());
         put(12, &self.flags.to_le_bytes());
         put(16, &self.encoding.tag().to_le_bytes());
         put(20, &(self.index_width.bytes() as u32).to_le_bytes());
@@ -137,7 +133,7 @@ impl Header {
     }
 
     /// Parses and checks the header: magic, version, checksum, flags, tags, reserved bytes
-    /// (180..248 in versions 1 and 2, 188..248 from version 3).
+    /// 188..248.
     /// Section positions are checked against the file by [`Header::check_layout`].
     pub fn parse(bytes: &[u8]) -> Result<Header, Error> {
         let Some(b) = bytes.get(..HEADER_BYTES) else {
@@ -160,12 +156,8 @@ impl Header {
             });
         }
         let version = le_u32(b, 8);
-        if !(MIN_VERSION..=VERSION).contains(&version) {
-            return Err(Error::UnsupportedVersion {
-                found: version,
-                oldest: MIN_VERSION,
-                newest: VERSION,
-            });
+        if version != VERSION {
+            return Err(Error::UnsupportedVersion { found: version });
         }
         let stored = le_u64(b, HEADER_CHECKSUM_OFFSET);
         let computed = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
@@ -193,13 +185,6 @@ impl Header {
         let tag = le_u32(b, 16);
         let encoding = Encoding::from_tag(tag)
             .ok_or_else(|| invalid("encoding", 16, format!("unknown encoding tag {tag}")))?;
-        if version < encoding.min_version() {
-            return Err(Error::EncodingVersion {
-                encoding,
-                version,
-                needs: encoding.min_version(),
-            });
-        }
         let index_width = match le_u32(b, 20) {
             2 => IndexWidth::U16,
             4 => IndexWidth::U32,
@@ -210,18 +195,13 @@ impl Header {
             id: filter_id,
             offset: FILTER_OFFSET as u64,
         })?;
-        let (reserved, decoded_checksum) = if version >= 3 {
-            (RESERVED_START, le_u64(b, DECODED_CHECKSUM_OFFSET))
-        } else {
-            (RESERVED_START_V1, 0)
-        };
-        if let Some(i) = b[reserved..HEADER_CHECKSUM_OFFSET]
+        if let Some(i) = b[RESERVED_START..HEADER_CHECKSUM_OFFSET]
             .iter()
             .position(|v| *v != 0)
         {
             return Err(invalid(
                 "reserved",
-                (reserved + i) as u64,
+                (RESERVED_START + i) as u64,
                 "reserved bytes must be zero".into(),
             ));
         }
@@ -230,7 +210,6 @@ impl Header {
             size: le_u64(b, 72 + 16 * i),
         };
         Ok(Header {
-            version,
             flags,
             encoding,
             filter,
@@ -250,7 +229,7 @@ impl Header {
             meta_checksum: le_u64(b, 152),
             points_checksum: le_u64(b, 160),
             maps_checksum: le_u64(b, 168),
-            decoded_checksum,
+            decoded_checksum: le_u64(b, DECODED_CHECKSUM_OFFSET),
         })
     }
 

@@ -491,11 +491,18 @@ pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The first 8 bytes of every shard file ([`shard`]); a store reader that finds them says the
 /// file is a shard.
 pub const SHARD_MAGIC: [u8; 8] = *b"OSLFSHRD";
-/// The format version this crate writes (and the newest it reads).
-pub const VERSION: u32 = 8;
-/// The oldest format version this crate reads (version 1: no `mantissa_bits` in the
-/// metadata, read as 9).
-pub const MIN_VERSION: u32 = 1;
+/// The format version, header bytes 8..12: format 1.0, major version 1 in the high 16 bits,
+/// minor 0 in the low 16. The only version this crate writes and reads.
+pub const VERSION: u32 = 0x0001_0000;
+/// Version numbers 1 to 8 in header bytes 8..12 mark stores written by development builds
+/// before format 1.0; readers refuse them with [`Error::UnsupportedVersion`], which says to
+/// bake the scene again.
+pub const LAST_DEVELOPMENT_VERSION: u32 = 8;
+
+/// `version` as "major.minor" (`VERSION` is "1.0").
+pub fn version_name(version: u32) -> String {
+    format!("{}.{}", version >> 16, version & 0xffff)
+}
 /// Largest cube-map face resolution a store may declare.
 pub const MAX_CUBE_RESOLUTION: u32 = 16384;
 /// Largest sample-map resolution a store may declare.

@@ -3,8 +3,8 @@
 
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::encoding::{Encoding, RGB9E5_FULL_MANTISSA_BITS};
-use crate::textures::{decode_textures, encode_textures, ObjectTextures, TEXTURES_VERSION};
-use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTION, VERSION};
+use crate::textures::{decode_textures, encode_textures, ObjectTextures};
+use crate::{Error, MAX_CUBE_RESOLUTION, MAX_NAME_BYTES, MAX_SAMPLE_MAP_RESOLUTION};
 
 /// One sample point: where a cube map was captured. 40 bytes, `#[repr(C)]`, stored as is.
 #[repr(C)]
@@ -51,24 +51,24 @@ pub struct ObjectInfo {
     /// Number of sample maps of the object: its Bézier patches, or the `k²` pages of its
     /// atlas.
     pub patch_count: u32,
-    /// The triangle mesh of a mesh object (format version 5 and later); `None` for an object
+    /// The triangle mesh of a mesh object; `None` for an object
     /// made of Bézier patches.
     pub mesh: Option<MeshInfo>,
-    /// How the surface reflects (format version 7 and later; older stores read as
-    /// [`ObjectMaterial::default`], a Lambertian surface of `base_color`).
+    /// How the surface reflects ([`ObjectMaterial::default`]: a Lambertian surface of
+    /// `base_color`).
     pub material: ObjectMaterial,
-    /// A mesh object's material textures with their texture coordinates and tangents (format
-    /// version 8 and later; `None` for untextured objects and older stores).
+    /// A mesh object's material textures with their texture coordinates and tangents (`None`
+    /// for untextured objects).
     pub textures: Option<ObjectTextures>,
 }
 
-/// Material model tag of a Lambertian object (format version 7): only `base_color` matters.
+/// Material model tag of a Lambertian object: only `base_color` matters.
 pub const MATERIAL_LAMBERTIAN: u32 = 0;
-/// Material model tag of glTF's metallic-roughness model (format version 7): `base_color`,
+/// Material model tag of glTF's metallic-roughness model: `base_color`,
 /// `metallic` and `roughness` as in the glTF 2.0 specification's Appendix B.
 pub const MATERIAL_METALLIC_ROUGHNESS: u32 = 1;
 
-/// An object's material (format version 7): its model and factors; the base colour is
+/// An object's material: its model and factors; the base colour is
 /// [`ObjectInfo::base_color`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ObjectMaterial {
@@ -89,7 +89,7 @@ impl ObjectMaterial {
     }
 }
 
-/// A triangle-mesh object (format version 5): vertices in object space and an atlas of
+/// A triangle-mesh object: vertices in object space and an atlas of
 /// `atlas_grid`² pages, each an ordinary m×m sample map. Atlas uv `(s, t) ∈ [0, 1]²` spans the
 /// whole grid; page `(px, py)` with `px = min(⌊s·k⌋, k−1)`, `py = min(⌊t·k⌋, k−1)` is map
 /// `first_patch + py·k + px`, at local uv `(s·k − px, t·k − py)`.
@@ -109,9 +109,9 @@ pub struct MeshInfo {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Object kind tag of a Bézier object (format version 5).
+/// Object kind tag of a Bézier object.
 pub const OBJECT_KIND_BEZIER: u32 = 0;
-/// Object kind tag of a triangle-mesh object (format version 5).
+/// Object kind tag of a triangle-mesh object.
 pub const OBJECT_KIND_MESH: u32 = 1;
 /// Bytes of one mesh vertex record.
 const VERTEX_BYTES: usize = 32;
@@ -152,8 +152,7 @@ pub struct BakeParams {
     /// Hash of the scene description (opaque to this crate).
     pub scene_hash: [u8; 32],
     /// RGB9E5 mantissa bits kept per channel, 1..=9 ([`crate::encoding::quantize_rgb9e5`],
-    /// applied by [`crate::encode_cube`]); 9 (lossless) for the other encodings and for
-    /// stores of format version 1, which do not record it.
+    /// applied by [`crate::encode_cube`]); 9 (lossless) for the other encodings.
     pub mantissa_bits: u32,
 }
 
@@ -219,8 +218,9 @@ impl StoreMeta {
     }
 }
 
-/// Minimum bytes of one object record (empty name, version 4).
-const OBJECT_MIN_BYTES: usize = 4 + 64 + 12 + 8;
+/// Minimum bytes of one object record (empty name, a Bézier object: name length, transform,
+/// base colour, map range, kind).
+const OBJECT_MIN_BYTES: usize = 4 + 64 + 12 + 8 + 4;
 /// Bytes of one patch record.
 const PATCH_BYTES: usize = 16 * 3 * 4;
 
@@ -239,12 +239,9 @@ pub fn check_mantissa_bits(encoding: Encoding, bits: u32) -> Result<(), String> 
     Ok(())
 }
 
-/// Serialises metadata in the layout of format version `version` (versions 2 and later
-/// record `mantissa_bits` after the scene hash; version 1 does not, so it can only express 9;
-/// versions 5 and later record each object's kind and mesh, which older ones cannot express). No
-/// validation: [`decode_meta`] validates, and the writer checks its input by decoding what it
-/// encoded.
-pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
+/// Serialises the metadata section (layout in `docs/format.md`, "Metadata"). No validation:
+/// [`decode_meta`] validates, and the writer checks its input by decoding what it encoded.
+pub(crate) fn encode_meta(meta: &StoreMeta) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u32(meta.objects.len() as u32);
     w.u32(u32::try_from(meta.map_count()).unwrap_or(u32::MAX));
@@ -261,9 +258,7 @@ pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
     w.i32(b.zstd_level);
     w.u32(u32::from(meta.has_env_cube));
     w.bytes(&b.scene_hash);
-    if version >= 2 {
-        w.u32(b.mantissa_bits);
-    }
+    w.u32(b.mantissa_bits);
     match &meta.camera {
         Some(c) => {
             w.u32(1);
@@ -287,42 +282,36 @@ pub(crate) fn encode_meta(meta: &StoreMeta, version: u32) -> Vec<u8> {
         }
         w.u32(o.first_patch);
         w.u32(o.patch_count);
-        if version >= 5 {
-            match &o.mesh {
-                None => w.u32(OBJECT_KIND_BEZIER),
-                Some(m) => {
-                    w.u32(OBJECT_KIND_MESH);
-                    w.u32(m.atlas_grid);
-                    let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
-                    w.u32(count(m.positions.len()));
-                    w.u32(count(m.triangles.len()));
-                    // Vertices whose arrays disagree in length are written short; decode_meta
-                    // (run by the writer on what it encodes) then refuses them.
-                    for ((p, n), uv) in m.positions.iter().zip(&m.normals).zip(&m.uvs) {
-                        for v in p.iter().chain(n).chain(uv) {
-                            w.f32(*v);
-                        }
+        match &o.mesh {
+            None => w.u32(OBJECT_KIND_BEZIER),
+            Some(m) => {
+                w.u32(OBJECT_KIND_MESH);
+                w.u32(m.atlas_grid);
+                let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+                w.u32(count(m.positions.len()));
+                w.u32(count(m.triangles.len()));
+                // Vertices whose arrays disagree in length are written short; decode_meta
+                // (run by the writer on what it encodes) then refuses them.
+                for ((p, n), uv) in m.positions.iter().zip(&m.normals).zip(&m.uvs) {
+                    for v in p.iter().chain(n).chain(uv) {
+                        w.f32(*v);
                     }
-                    for t in &m.triangles {
-                        for i in t {
-                            w.u32(*i);
-                        }
+                }
+                for t in &m.triangles {
+                    for i in t {
+                        w.u32(*i);
                     }
                 }
             }
         }
-        if version >= MATERIAL_VERSION {
-            let m = &o.material;
-            w.u32(m.model);
-            w.f32(m.metallic);
-            w.f32(m.roughness);
-            for v in m.emission {
-                w.f32(v);
-            }
+        let m = &o.material;
+        w.u32(m.model);
+        w.f32(m.metallic);
+        w.f32(m.roughness);
+        for v in m.emission {
+            w.f32(v);
         }
-        if version >= TEXTURES_VERSION {
-            encode_textures(&mut w, o.textures.as_ref(), meta.bake.zstd_level);
-        }
+        encode_textures(&mut w, o.textures.as_ref(), meta.bake.zstd_level);
     }
     for p in &meta.patches {
         for v in p.control_points.iter().flatten() {
@@ -339,17 +328,15 @@ fn bad(offset: u64, detail: impl Into<String>) -> Error {
     }
 }
 
-/// Parses and validates the metadata section of a store of format `version` (1 to 5); `base`
-/// is its byte offset in the file (for error messages).
-pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<StoreMeta, Error> {
-    debug_assert!((1..=VERSION).contains(&version));
+/// Parses and validates the metadata section; `base` is its byte offset in the file (for
+/// error messages).
+pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
     let mut r = ByteReader::new(bytes, base, "metadata");
     let object_count = r.u32()? as usize;
     let patch_count = r.u32()? as usize;
-    let (bake, has_env_cube) = decode_bake_params(&mut r, version)?;
+    let (bake, has_env_cube) = decode_bake_params(&mut r)?;
     let camera = decode_camera(&mut r)?;
-    let object_min = OBJECT_MIN_BYTES + if version >= 5 { 4 } else { 0 };
-    if object_count > r.remaining() / object_min {
+    if object_count > r.remaining() / OBJECT_MIN_BYTES {
         return Err(bad(
             base,
             format!(
@@ -358,7 +345,7 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
             ),
         ));
     }
-    let objects = decode_objects(&mut r, version, object_count, patch_count)?;
+    let objects = decode_objects(&mut r, object_count, patch_count)?;
     let bezier_patches: u64 = objects
         .iter()
         .filter(|o| o.mesh.is_none())
@@ -391,9 +378,8 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<Store
     })
 }
 
-/// Parses and validates the bake parameters and the environment-cube flag of a store of
-/// format `version`.
-fn decode_bake_params(r: &mut ByteReader<'_>, version: u32) -> Result<(BakeParams, bool), Error> {
+/// Parses and validates the bake parameters and the environment-cube flag.
+fn decode_bake_params(r: &mut ByteReader<'_>) -> Result<(BakeParams, bool), Error> {
     let at = r.offset();
     let epsilon = r.finite_f32("epsilon")?;
     if epsilon <= 0.0 {
@@ -432,15 +418,6 @@ fn decode_bake_params(r: &mut ByteReader<'_>, version: u32) -> Result<(BakeParam
     let tag = r.u32()?;
     let encoding =
         Encoding::from_tag(tag).ok_or_else(|| bad(at, format!("unknown encoding tag {tag}")))?;
-    if version < encoding.min_version() {
-        return Err(bad(
-            at,
-            format!(
-                "encoding {encoding} needs format version {} or later (the store is version {version})",
-                encoding.min_version()
-            ),
-        ));
-    }
     let distance_channel = r.bool("distance_channel")?;
     let at = r.offset();
     let zstd_level = r.i32()?;
@@ -450,14 +427,9 @@ fn decode_bake_params(r: &mut ByteReader<'_>, version: u32) -> Result<(BakeParam
     let has_env_cube = r.bool("has_env_cube")?;
     let mut scene_hash = [0u8; 32];
     scene_hash.copy_from_slice(r.take(32)?);
-    let mantissa_bits = if version >= 2 {
-        let at = r.offset();
-        let bits = r.u32()?;
-        check_mantissa_bits(encoding, bits).map_err(|detail| bad(at, detail))?;
-        bits
-    } else {
-        RGB9E5_FULL_MANTISSA_BITS
-    };
+    let at = r.offset();
+    let mantissa_bits = r.u32()?;
+    check_mantissa_bits(encoding, mantissa_bits).map_err(|detail| bad(at, detail))?;
     let bake = BakeParams {
         epsilon,
         phi_samplemap_deg,
@@ -504,11 +476,10 @@ fn decode_camera(r: &mut ByteReader<'_>) -> Result<Option<CameraInfo>, Error> {
     }
 }
 
-/// Parses and validates the `object_count` object records of a store of format `version`, whose map
-/// ranges must tile `0..patch_count` in order.
+/// Parses and validates the `object_count` object records, whose map ranges must tile
+/// `0..patch_count` in order.
 fn decode_objects(
     r: &mut ByteReader<'_>,
-    version: u32,
     object_count: usize,
     patch_count: usize,
 ) -> Result<Vec<ObjectInfo>, Error> {
@@ -547,21 +518,9 @@ fn decode_objects(
             ));
         }
         prev_end = end;
-        let mesh = if version >= 5 {
-            decode_mesh(r, i, count)?
-        } else {
-            None
-        };
-        let material = if version >= MATERIAL_VERSION {
-            decode_material(r, i)?
-        } else {
-            ObjectMaterial::default()
-        };
-        let textures = if version >= TEXTURES_VERSION {
-            decode_textures(r, i, mesh.as_ref().map(|m| m.positions.len()))?
-        } else {
-            None
-        };
+        let mesh = decode_mesh(r, i, count)?;
+        let material = decode_material(r, i)?;
+        let textures = decode_textures(r, i, mesh.as_ref().map(|m| m.positions.len()))?;
         objects.push(ObjectInfo {
             name,
             transform,
@@ -584,10 +543,7 @@ fn decode_objects(
     Ok(objects)
 }
 
-/// The first format version with object materials.
-pub const MATERIAL_VERSION: u32 = 7;
-
-/// Parses the version-7 material record of object `i`: model, factors, emission.
+/// Parses the material record of object `i`: model, factors, emission.
 fn decode_material(r: &mut ByteReader<'_>, i: usize) -> Result<ObjectMaterial, Error> {
     let at = r.offset();
     let model = r.u32()?;
@@ -631,7 +587,7 @@ fn decode_material(r: &mut ByteReader<'_>, i: usize) -> Result<ObjectMaterial, E
     }
 }
 
-/// Parses the version-5 tail of object `i`'s record (its kind, and a mesh object's atlas
+/// Parses the kind and mesh record of object `i` (its kind, and a mesh object's atlas
 /// grid, vertices and triangles); `maps` is the object's map count.
 fn decode_mesh(r: &mut ByteReader<'_>, i: usize, maps: u32) -> Result<Option<MeshInfo>, Error> {
     let at = r.offset();

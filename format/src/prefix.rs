@@ -9,7 +9,7 @@ use crate::meta::{
     SAMPLE_POINT_BYTES,
 };
 use crate::sample_map::{encode_maps, SampleMaps};
-use crate::{Error, Filter, VERSION};
+use crate::{Error, Filter};
 use xxhash_rust::xxh3::xxh3_64;
 
 /// Everything before the cube payload, as `create()` writes it.
@@ -28,54 +28,11 @@ impl Prefix {
         maps: &SampleMaps,
         filter: Filter,
     ) -> Result<Self, Error> {
-        Self::build_version(meta, points, maps, filter, VERSION)
-    }
-
-    /// [`Prefix::build`] in the layout of format `version` (4, 5, 6 or [`VERSION`], the older
-    /// ones for continuing older partial files; a version-4 layout cannot hold mesh objects).
-    pub(crate) fn build_version(
-        meta: &StoreMeta,
-        points: &[SamplePoint],
-        maps: &SampleMaps,
-        filter: Filter,
-        version: u32,
-    ) -> Result<Self, Error> {
         let meta_offset = HEADER_BYTES as u64;
-        if version < 5 {
-            if let Some(i) = meta.objects.iter().position(|o| o.mesh.is_some()) {
-                return Err(Error::InvalidMetadata {
-                    offset: meta_offset,
-                    detail: format!(
-                        "object {i} is a triangle mesh, which format version {version} cannot hold"
-                    ),
-                });
-            }
-        }
-        if version < crate::meta::MATERIAL_VERSION {
-            let lambertian = crate::meta::ObjectMaterial::default();
-            if let Some(i) = meta.objects.iter().position(|o| o.material != lambertian) {
-                return Err(Error::InvalidMetadata {
-                    offset: meta_offset,
-                    detail: format!(
-                        "object {i} has a material other than Lambertian, which format version {version} cannot hold"
-                    ),
-                });
-            }
-        }
-        if version < crate::textures::TEXTURES_VERSION {
-            if let Some(i) = meta.objects.iter().position(|o| o.textures.is_some()) {
-                return Err(Error::InvalidMetadata {
-                    offset: meta_offset,
-                    detail: format!(
-                        "object {i} has textures, which format version {version} cannot hold"
-                    ),
-                });
-            }
-        }
         check_textures(meta, meta_offset)?;
-        let meta_bytes = encode_meta(meta, version);
+        let meta_bytes = encode_meta(meta);
         // Validate by decoding what was encoded (same checks as the reader).
-        let decoded = decode_meta(&meta_bytes, meta_offset, version)?;
+        let decoded = decode_meta(&meta_bytes, meta_offset)?;
         if decoded != *meta {
             return Err(Error::InvalidMetadata {
                 offset: meta_offset,
@@ -116,7 +73,6 @@ impl Prefix {
             flags |= FLAG_ENV_CUBE;
         }
         let header = Header {
-            version,
             flags,
             encoding: meta.bake.encoding,
             filter,

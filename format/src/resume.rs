@@ -14,10 +14,9 @@ use crate::header::{
     Header, Section, DECODED_CHECKSUM_FIELD, FINISH_FIELDS, FLAGS_FIELD, FLAG_COMPLETE,
     HEADER_BYTES, SECTION_CHECKSUMS,
 };
-use crate::meta::{decode_meta, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
+use crate::meta::{decode_meta, StoreMeta, SAMPLE_POINT_BYTES};
 use crate::output_file::{open_partial, Open};
 use crate::prefix::Prefix;
-use crate::sample_map::SampleMaps;
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES};
 use crate::{Error, MAGIC, VERSION};
 use xxhash_rust::xxh3::{xxh3_64, Xxh3};
@@ -32,17 +31,14 @@ pub(crate) struct Reopened {
     pub(crate) recovered: Recovered,
 }
 
-/// Reopens the partial file `partial` for the bake of `meta`, `points` and `maps`, whose
-/// fixed sections `create()` writes as `prefix`; errors as [`crate::StoreWriter::resume`].
+/// Reopens the partial file `partial` for the bake of `meta`, whose fixed sections
+/// `create()` writes as `prefix`; errors as [`crate::StoreWriter::resume`].
 pub(crate) fn reopen(
     path: &Path,
     partial: &Path,
     meta: &StoreMeta,
-    points: &[SamplePoint],
-    maps: &SampleMaps,
-    mut prefix: Prefix,
+    prefix: Prefix,
 ) -> Result<Reopened, Error> {
-    let filter = prefix.header.filter;
     let mut file = open_partial(path, partial, Open::Resume)?;
     let file_len = file.metadata().map_err(io_at(partial, "stat"))?.len();
     let mut rd = PartialReader {
@@ -51,20 +47,6 @@ pub(crate) fn reopen(
         file_len,
     };
     let (got, old) = rd.header()?;
-    if old.version < VERSION {
-        // Versions 2 to 4 share version 4's metadata layout: continue as version 4. Version 5
-        // differs from version 6 only in its distance planes (f32 rather than on the distance
-        // lattice): continue as version 5 (StoreWriter::append refilters the new cubes'
-        // planes as f32). Version 6 differs from 7 only in the objects' material records, 7
-        // from 8 only in their texture records.
-        let version = old.version.max(4);
-        prefix = Prefix::build_version(meta, points, maps, filter, version).map_err(|e| {
-            rd.mismatch(format!(
-                "it is format version {}, which this bake cannot continue ({e})",
-                old.version
-            ))
-        })?;
-    }
     let old_meta_bytes = rd.metadata(&old, &prefix.header, meta)?;
     rd.compare_header_and_metadata(got, &old_meta_bytes, &prefix)?;
     drop(old_meta_bytes);
@@ -170,7 +152,7 @@ impl PartialReader<'_> {
                 old.meta.offset, old.meta_checksum
             )));
         }
-        let old_meta = decode_meta(&old_meta_bytes, old.meta.offset, old.version)
+        let old_meta = decode_meta(&old_meta_bytes, old.meta.offset)
             .map_err(|e| self.mismatch(format!("its metadata section is damaged: {e}")))?;
         let differences = setting_differences(old, &old_meta, new_header, meta, "this bake");
         if !differences.is_empty() {
@@ -192,10 +174,7 @@ impl PartialReader<'_> {
     ) -> Result<(), Error> {
         // finish() may have patched the header before a crash: compare without those fields.
         // The section checksums are left out too: the sections themselves are compared next.
-        // A version-2 or version-3 partial file is continued as version 4, the layout it
-        // shares; a version-5 one as version 5.
         let mut want = prefix.header.to_bytes();
-        got[8..12].copy_from_slice(&prefix.header.version.to_le_bytes());
         let normalise = |b: &mut [u8; HEADER_BYTES]| {
             b[FINISH_FIELDS].fill(0);
             b[SECTION_CHECKSUMS].fill(0);
@@ -443,8 +422,8 @@ fn restore_partial(
     Ok(())
 }
 
-/// Parses the header of a partial file for [`crate::StoreWriter::resume`]: an OSLF header of a
-/// resumable version (2 to [`VERSION`]) whose fixed sections lie in the order and at the
+/// Parses the header of a partial file for [`crate::StoreWriter::resume`]: an OSLF header of
+/// format [`VERSION`] whose fixed sections lie in the order and at the
 /// places `create()` puts them. The error says what is wrong with it.
 fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
     if bytes[..8] != MAGIC {
@@ -454,9 +433,15 @@ fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
         ));
     }
     let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-    if !(2..=VERSION).contains(&version) {
+    if version != VERSION {
         return Err(format!(
-            "it is format version {version}, and this writer continues only versions 2 to {VERSION}"
+            "it is {}, and this writer continues only format {} files",
+            match version {
+                1..=crate::LAST_DEVELOPMENT_VERSION =>
+                    format!("of development format version {version}, from before format 1.0"),
+                _ => format!("of format version {version:#010x}"),
+            },
+            crate::version_name(VERSION)
         ));
     }
     let h = Header::parse(bytes).map_err(|e| format!("its header is damaged: {e}"))?;

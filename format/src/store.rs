@@ -185,9 +185,6 @@ pub struct VerifyReport {
     pub raw_bytes: u64,
     /// Padding bytes checked to be zero (between sections and after each cube record).
     pub padding_bytes: u64,
-    /// Whether the decoded faces were checked against the store's checksum of them (format
-    /// version 3 and later; older stores do not record it).
-    pub decoded_checksum: bool,
 }
 
 /// How [`Store::open_with`] reads a store's file.
@@ -404,7 +401,7 @@ impl Store {
         let meta_bytes = backing.read(h.meta)?;
         let meta_bytes = &meta_bytes[..];
         check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
-        let meta = decode_meta(meta_bytes, h.meta.offset, h.version)?;
+        let meta = decode_meta(meta_bytes, h.meta.offset)?;
         check_against_meta(h, &meta)?;
         check_counts(h)?;
 
@@ -749,7 +746,7 @@ impl Store {
     /// the metadata, sample points and sample maps, and after each cube record's frames;
     /// [`Error::NonZeroPadding`] names the byte offset), every cube record header agrees with
     /// the table of contents, every frame matches its checksum and decompresses to exactly
-    /// its filtered size, and (format version 3 and later) the decoded faces match the
+    /// its filtered size, and the decoded faces match the
     /// header's checksum of them ([`Error::DecodedChecksum`]), which catches a changed face
     /// filter id or `mantissa_bits`.
     pub fn verify(&self) -> Result<VerifyReport, Error> {
@@ -801,15 +798,12 @@ impl Store {
                 self.check_padding(end, &format!("after the frames of cube {cube}"))?;
             report.cubes += 1;
         }
-        if h.version >= 3 {
-            let computed = decoded.digest();
-            if computed != h.decoded_checksum {
-                return Err(Error::DecodedChecksum {
-                    stored: h.decoded_checksum,
-                    computed,
-                });
-            }
-            report.decoded_checksum = true;
+        let computed = decoded.digest();
+        if computed != h.decoded_checksum {
+            return Err(Error::DecodedChecksum {
+                stored: h.decoded_checksum,
+                computed,
+            });
         }
         Ok(report)
     }

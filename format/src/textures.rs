@@ -1,12 +1,10 @@
-//! An object's material textures (format version 8): the texture record that ends a mesh
-//! object's record, with its texture coordinates, tangents and images (see the crate docs,
+//! An object's material textures: the texture record that ends a mesh
+//! object's record, with its texture coordinates, tangents and images (see `docs/format.md`,
 //! "Texture record").
 
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::Error;
 
-/// The first format version with object textures.
-pub const TEXTURES_VERSION: u32 = 8;
 /// Largest width or height of a stored texture.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 /// How far from 1 a stored tangent's length may be (as a mesh record's normals).

@@ -2,7 +2,7 @@
 //!
 //! [`StoreWriter::create`] writes `<path>.partial` beside the target: the header (with the
 //! COMPLETE flag clear), metadata, sample points and sample maps, then syncs. Cubes are
-//! appended as records (see the crate docs); the file is synced every
+//! appended as records (see `docs/format.md`); the file is synced every
 //! [`SYNC_EVERY_CUBES`] cubes or [`SYNC_EVERY_BYTES`] bytes. [`StoreWriter::finish`] writes the
 //! table of contents, patches the header, syncs, renames the partial file over `path` and
 //! syncs the directory. A crash at any moment leaves either no store or a complete one under
@@ -89,9 +89,6 @@ pub struct StoreWriter {
     header: Header,
     /// RGB9E5 mantissa bits of the store (the metadata's); appended cubes must match.
     mantissa_bits: u32,
-    /// The metadata's zstd level, for refiltering cubes' distance planes
-    /// ([`EncodedCube::with_distance_plane`]).
-    zstd_level: i32,
     /// The TOC entries so far (192 bytes per cube).
     toc: Vec<u8>,
     pos: u64,
@@ -154,7 +151,6 @@ impl StoreWriter {
             pos: prefix.header.payload.offset,
             header: prefix.header,
             mantissa_bits: meta.bake.mantissa_bits,
-            zstd_level: meta.bake.zstd_level,
             toc: Vec::new(),
             next: 0,
             total: prefix.total,
@@ -193,7 +189,6 @@ impl StoreWriter {
             pos: header.payload.offset,
             header,
             mantissa_bits: bake.mantissa_bits,
-            zstd_level: bake.zstd_level,
             toc: Vec::new(),
             next: 0,
             total,
@@ -215,14 +210,8 @@ impl StoreWriter {
     /// no finished cube maps, so create the store again; [`Error::ResumeMismatch`] if it was
     /// started with different settings (naming each bake parameter, count or object that
     /// differs, the partial's value and this bake's), is damaged, or is not a partial store of
-    /// format version 2 to [`crate::VERSION`]. Partial files of versions 2 to 4 are continued and
-    /// finished as version 4 (version 2's layout differs from version 4's only in the header's
-    /// decoded-faces checksum, which `finish()` writes; version 3's only in the version number,
-    /// version 4 adding the BC6H encoding), so they cannot take mesh objects, whose object
-    /// records need version 5; version-5 partial files are finished as version 5, version-6
-    /// ones as version 6 (neither holds materials), version-7 ones as version 7. Files before version 6 keep `f32` distance planes: [`Self::append`]
-    /// refilters the planes of the cubes [`crate::encode_cube`] put on the distance lattice
-    /// (their raw faces, and so the checksum of the decoded faces, stay the same).
+    /// format [`crate::VERSION`] (a partial file of a development version from before format
+    /// 1.0 is refused: bake it again).
     pub fn resume(
         path: &Path,
         meta: &StoreMeta,
@@ -237,14 +226,13 @@ impl StoreWriter {
             file,
             prefix,
             recovered,
-        } = reopen(path, &partial, meta, points, maps, prefix)?;
+        } = reopen(path, &partial, meta, prefix)?;
         Ok(StoreWriter {
             path: path.to_path_buf(),
             partial,
             file: BufWriter::with_capacity(1 << 20, file),
             header: prefix.header,
             mantissa_bits: meta.bake.mantissa_bits,
-            zstd_level: meta.bake.zstd_level,
             toc: recovered.toc,
             pos: recovered.pos,
             next: recovered.next,
@@ -297,8 +285,6 @@ impl StoreWriter {
                 got: index,
             });
         }
-        // A version-5 (or older) partial file continued by resume() holds f32 planes.
-        let cube = cube.with_distance_plane(self.header.distance_plane(), self.zstd_level)?;
         check_cube_params(&cube, &self.header, self.mantissa_bits)?;
         let faces = std::array::from_fn(|f| {
             (

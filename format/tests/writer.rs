@@ -521,57 +521,21 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     assert!(refused(&b).starts_with("it is not an OSLF store"));
     let mut b = good.clone();
     b[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
-    assert!(refused(&b).starts_with(&format!(
-        "it is format version {}, and this writer continues only versions 2 to {VERSION}",
-        VERSION + 1
-    )));
+    assert_eq!(
+        refused(&b),
+        "it is of format version 0x00010001, and this writer continues only format 1.0 files"
+    );
+    b[8..12].copy_from_slice(&8u32.to_le_bytes());
+    assert_eq!(
+        refused(&b),
+        "it is of development format version 8, from before format 1.0, and this writer continues only format 1.0 files"
+    );
     let mut b = good.clone();
     b[30] ^= 1;
     assert!(refused(&b).starts_with("its header is damaged: header checksum mismatch"));
     let mut b = good.clone();
     b[300] ^= 1;
     assert!(refused(&b).starts_with("its metadata section (byte offset 256) is damaged"));
-}
-
-/// A partial file written by the version-2 writer (version 4's layout, without the checksum
-/// of the decoded faces; here the complete version-2 fixture, whose finish() was interrupted
-/// as far as resume can tell) is continued and finished as version 4: the version-2 bytes
-/// with version 4's header (version number, decoded-faces checksum). A bake with a mesh
-/// object cannot continue it (version 4 cannot hold meshes).
-#[test]
-fn a_version_2_partial_is_finished_as_version_4() {
-    let spec2 = Spec {
-        distance: true,
-        seed: 3,
-        mantissa_bits: 5,
-        ..Spec::default()
-    };
-    let f = fixture(spec2);
-    let fixture_path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v2-rgb9e5-5bits.oslf");
-    let old = std::fs::read(&fixture_path).unwrap();
-    let (_dir, path) = temp_store("v2.oslf");
-    std::fs::copy(&fixture_path, partial_path(&path)).unwrap();
-    complete(&path, &f);
-    let now = std::fs::read(&path).unwrap();
-    let store = Store::open(&path).unwrap();
-    assert_eq!(store.header().version, 4);
-    assert!(store.verify().unwrap().decoded_checksum);
-    assert_eq!(store.meta(), Store::open(&fixture_path).unwrap().meta());
-    assert_eq!(old[12..180], now[12..180]);
-    assert_eq!(old[188..248], now[188..248]);
-    assert_eq!(old[256..], now[256..]);
-
-    let m = with_mesh(fixture(spec2), spec2);
-    let (_dir, path) = temp_store("v2m.oslf");
-    std::fs::copy(&fixture_path, partial_path(&path)).unwrap();
-    let e = StoreWriter::resume(&path, &m.meta, &m.points, &m.maps)
-        .err()
-        .unwrap();
-    assert!(
-        matches!(&e, Error::ResumeMismatch { what, .. } if what.contains("format version 2") && what.contains("triangle mesh")),
-        "{e}"
-    );
 }
 
 /// A shard whose bake never finished it is refused by the merge, naming the file and the
@@ -609,7 +573,7 @@ fn merging_an_unfinished_shard_names_it() {
     assert!(!e.to_string().contains("--"), "{e}");
 }
 
-/// Format version 6's distance lattice at the extremes, through a whole store: zero, the
+/// The distance lattice at the extremes, through a whole store: zero, the
 /// smallest subnormal, tiny and huge values, the largest finite `f32` below the no-hit value,
 /// and no hit (`f32::MAX`) read back as [`DistancePlane::quantize`] says (no hit and zero
 /// exactly); NaN, infinite and negative distances are refused at encode, naming the texel.
@@ -643,10 +607,9 @@ fn distance_extremes_round_trip_and_bad_distances_are_refused() {
     }
     w.finish().unwrap();
     let store = Store::open(&path).unwrap();
-    assert_eq!(store.header().version, VERSION);
     let plane = store.header().distance_plane();
     assert_eq!(plane, DistancePlane::Lattice { bits: 3 }); // 8² faces
-    assert!(store.verify().unwrap().decoded_checksum);
+    assert!(store.verify().is_ok());
     let got = store.read_cube(0).unwrap().distance.unwrap();
     for (face, plane_got) in got.iter().enumerate() {
         for (i, g) in plane_got.iter().enumerate() {
@@ -691,58 +654,6 @@ fn distance_extremes_round_trip_and_bad_distances_are_refused() {
             ),
             "{name}: {e}"
         );
-    }
-}
-
-/// A partial file of format version 3 with distance planes (f32 in its records) is continued
-/// as version 4: the appended cubes, which `encode_cube` puts on the distance lattice, are
-/// written with f32 planes (refiltered), the store verifies, the recovered cubes are those
-/// of the partial file byte for byte and the appended ones hold the lattice's distances.
-#[test]
-fn an_old_partial_with_distances_is_continued_with_f32_planes() {
-    let spec3 = Spec {
-        encoding: Encoding::Rgba16f,
-        distance: true,
-        seed: 4,
-        ..Spec::default()
-    };
-    let f = fixture(spec3);
-    let fixture_path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v3-rgba16f.oslf");
-    let old_store = Store::open(&fixture_path).unwrap();
-    // Cut the partial file inside cube 2's record: cubes 0 and 1 are recovered.
-    let cut = old_store.face_entry(2, 3).unwrap().offset as usize;
-    let old = std::fs::read(&fixture_path).unwrap();
-    let (_dir, path) = temp_store("v3.oslf");
-    std::fs::write(partial_path(&path), &old[..cut]).unwrap();
-    let w = StoreWriter::resume(&path, &f.meta, &f.points, &f.maps).unwrap();
-    assert_eq!(w.next_cube(), 2);
-    drop(w);
-    complete(&path, &f);
-    let store = Store::open(&path).unwrap();
-    assert_eq!(store.header().version, 4);
-    assert_eq!(store.header().distance_plane(), DistancePlane::F32);
-    assert!(store.verify().unwrap().decoded_checksum);
-    let (mut a, mut b) = (
-        vec![0u8; store.face_raw_size()],
-        vec![0u8; store.face_raw_size()],
-    );
-    for c in 0..store.cube_count() {
-        for face in 0..6 {
-            store.read_face_raw(c, face, &mut a).unwrap();
-            old_store.read_face_raw(c, face, &mut b).unwrap();
-            if c < 2 {
-                assert_eq!(a, b, "recovered cube {c} face {face}");
-            }
-        }
-        let got = store.read_cube(c).unwrap().distance;
-        let lattice = DistancePlane::Lattice { bits: 2 }; // what encode_cube gives 4² faces
-        let want = if c < 2 {
-            old_store.read_cube(c).unwrap().distance
-        } else {
-            stored_distances(lattice, &f.cubes[c as usize].distance)
-        };
-        assert_eq!(got, want, "cube {c}");
     }
 }
 

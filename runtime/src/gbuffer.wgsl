@@ -1,7 +1,7 @@
 // G-buffer pass: rasterizes the tessellated Bézier patches and the triangle meshes
 // (geometry.rs) and writes, per pixel, the world position with the sample-map id, and the
 // octahedral-encoded shading normal with the map parameters (u, v). shade.wgsl reads these.
-// A store with textured objects (format version 8) draws with fs_textured instead, which also
+// A store with textured objects draws with fs_textured instead, which also
 // writes each pixel's material from the object's textures (group 1, bound per object; the
 // functions below fs_main have their CPU twins in reference/material.rs, in the same order).
 // Bindings in the order of `GBufferPipeline::bind_group_layout` and `ObjectTextures`

@@ -1,5 +1,5 @@
 //! The store's objects as triangles for the G-buffer pass: Bézier patches tessellated, and
-//! triangle-mesh objects (format version 5) as they are. Every vertex carries its sample-map
+//! triangle-mesh objects as they are. Every vertex carries its sample-map
 //! id and parameters (u, v) — a patch's (u, v), or a mesh's atlas uv with the atlas grid, from
 //! which the G-buffer shader picks the page per fragment — so the shading pass can find its
 //! sample-map texel.
@@ -190,7 +190,7 @@ struct WorldMesh {
     triangles: Vec<[u32; 3]>,
     first_map: u32,
     grid: u32,
-    /// Its texture coordinates (format version 8), if it has textures.
+    /// Its texture coordinates, if it has textures.
     texcoords: Option<Vec<[f32; 2]>>,
     /// Its tangents in world space (unit, w the bitangent's sign), if it has a normal texture.
     tangents: Option<Vec<[f32; 4]>>,

@@ -5,7 +5,7 @@
 //!
 //! * **Geometry** ([`geometry`]): the object's bicubic Bézier patches, tessellated into
 //!   triangles that carry patch id and (u, v), with normals taken from the limit at collapsed
-//!   patch edges; and triangle-mesh objects (format version 5), whose vertices carry the
+//!   patch edges; and triangle-mesh objects, whose vertices carry the
 //!   object's first map id, the atlas uv and the atlas grid, from which the G-buffer pass
 //!   picks the atlas page (sample map) and page-local uv per pixel. Meshes shade with the
 //!   interpolated vertex normal.

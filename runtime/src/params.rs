@@ -265,7 +265,7 @@ pub struct ShadingParams {
     #[serde(default = "default_roughness")]
     pub roughness: f32,
     /// [`Mode::Pbr`] shades each object with a metallic-roughness material in the store
-    /// (format version 7) with that material's factors; `metallic` and `roughness` then serve
+    /// with that material's factors; `metallic` and `roughness` then serve
     /// only the objects without one. `false`: `metallic` and `roughness` for every object.
     #[serde(default = "default_object_material")]
     pub object_material: bool,

@@ -1,4 +1,4 @@
-//! The textured objects' material textures on the GPU (format version 8): one bind group per
+//! The textured objects' material textures on the GPU: one bind group per
 //! textured object for gbuffer.wgsl's group 1 (`T`, `tex_base_color`, …), and one of 1×1
 //! textures with no flags for the objects without textures.
 

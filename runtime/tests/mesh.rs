@@ -1,4 +1,4 @@
-//! Triangle-mesh objects (format version 5): a synthetic store holding a Bézier plane and a
+//! Triangle-mesh objects: a synthetic store holding a Bézier plane and a
 //! bent grid whose 2×2 atlas pages point at sample points with distinct cube colours. The GPU
 //! matches the CPU reference in every mode and blend; each pixel reads the sample map of the
 //! atlas page its atlas uv falls in; both objects render.
@@ -107,7 +107,7 @@ fn mesh_store() -> std::path::PathBuf {
     PATH.get_or_init(|| write_mesh_store(None)).clone()
 }
 
-/// The same store with the grid textured ([`grid_textures`]; format version 8).
+/// The same store with the grid textured ([`grid_textures`]).
 fn textured_store() -> std::path::PathBuf {
     static PATH: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
     PATH.get_or_init(|| write_mesh_store(Some(grid_textures())))
@@ -205,7 +205,7 @@ fn write_mesh_store(textures: Option<oslf_format::ObjectTextures>) -> std::path:
                 first_patch: 1,
                 patch_count: K * K,
                 mesh: Some(grid_mesh()),
-                // A rough, partly metallic glTF material (format version 7): the pbr mode
+                // A rough, partly metallic glTF material: the pbr mode
                 // shades this object with it, the plane with the parameters' factors.
                 material: oslf_format::ObjectMaterial {
                     model: oslf_format::meta::MATERIAL_METALLIC_ROUGHNESS,
@@ -575,7 +575,7 @@ fn a_bezier_object_and_a_mesh_object_both_render() {
     assert!(plane > 300 && mesh > 300, "plane {plane}, mesh {mesh}");
 }
 
-/// A textured object (format version 8): the G-buffer's material at each of its pixels is the
+/// A textured object: the G-buffer's material at each of its pixels is the
 /// CPU reference's `material_texel` at the pixel's texture coordinates (within 1e-3 per value),
 /// its normal the CPU's `mapped_normal` (within 1e-3), and the GPU matches the CPU reference in the pbr mode with and without the store's
 /// material, and in the glossy modes.

@@ -100,9 +100,8 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         store.header().has_distance(),
         "the test store bakes distances"
     );
-    // Today's writer: distances on the distance lattice (format version 6), which the GPU
-    // payload and the CPU reference both read through FaceLayout.
-    assert_eq!(store.header().version, oslf_format::VERSION);
+    // Distances on the distance lattice, which the GPU payload and the CPU reference both
+    // read through FaceLayout.
     assert_eq!(
         store.header().distance_plane(),
         oslf_format::DistancePlane::Lattice { bits: 3 }
@@ -393,54 +392,47 @@ fn a_pool_spread_over_four_texture_arrays_renders_the_same() {
 }
 
 /// The distance planes the GPU samples and the CPU reference reads are the store's decoded
-/// distances as binary16, for a store of today's format (distances on the lattice) and a
-/// version-5 store (f32 planes; format/tests/data/v5-bc6h.oslf), face by face: the payload
+/// distances as binary16, face by face, with and without BC6H on the adapter: the payload
 /// FaceLayout builds for the GPU pool, the CPU reference's planes (StoreCubes, built from
-/// the same payloads) and `depth_to_f16` of `Store::read_face`'s distances agree bit for bit.
-/// No GPU needed.
+/// the same payloads) and `depth_to_f16` of `Store::read_face`'s distances agree bit for bit,
+/// and every distance read lies on the store's distance lattice. No GPU needed.
 #[test]
-fn distance_planes_of_every_format_version_reach_gpu_and_cpu_alike() {
+fn distance_planes_reach_gpu_and_cpu_alike() {
     use oslf_runtime::face::{depth_to_f16, FaceLayout};
     use oslf_runtime::reference::CubeTexels;
-    let v5 =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../format/tests/data/v5-bc6h.oslf");
-    let v5 = oslf_format::Store::open(&v5).unwrap();
-    assert_eq!(v5.header().version, 5);
-    assert_eq!(
-        v5.header().distance_plane(),
-        oslf_format::DistancePlane::F32
-    );
-    let v6 = open_store();
-    let mut off_lattice = 0;
-    for store in [&v5, &v6] {
-        let n = store.cube_resolution();
-        let t = (n * n) as usize;
-        for has_bc in [true, false] {
-            let layout = FaceLayout::for_store(store, has_bc);
-            let cubes = StoreCubes::decode_as(store, layout).unwrap();
-            let mut rgb = vec![[0f32; 3]; t];
-            let mut d = vec![0f32; t];
-            for cube in 0..store.cube_count() {
-                for face in 0..6u8 {
-                    store
-                        .read_face(cube, face as usize, &mut rgb, Some(&mut d))
-                        .unwrap();
-                    let payload = layout.build(store, cube, face).unwrap();
-                    let gpu = layout.decode_depth(&payload);
-                    for (i, v) in d.iter().enumerate() {
-                        let want = depth_to_f16(*v).to_f32();
-                        let (x, y) = (i as u32 % n, i as u32 / n);
-                        assert_eq!(gpu[i].to_bits(), want.to_bits(), "cube {cube} face {face}");
-                        let cpu = cubes.depth(cube, face as usize, x, y).unwrap();
-                        assert_eq!(cpu.to_bits(), want.to_bits(), "cube {cube} face {face}");
-                        off_lattice += usize::from(v.to_bits() & 0x7fff != 0 && *v != f32::MAX);
-                    }
+    let store = open_store();
+    let plane = store.header().distance_plane();
+    let oslf_format::DistancePlane::Lattice { bits } = plane else {
+        panic!("the test store bakes distances: {plane}");
+    };
+    let n = store.cube_resolution();
+    let t = (n * n) as usize;
+    let mut hits = 0;
+    for has_bc in [true, false] {
+        let layout = FaceLayout::for_store(&store, has_bc);
+        let cubes = StoreCubes::decode_as(&store, layout).unwrap();
+        let mut rgb = vec![[0f32; 3]; t];
+        let mut d = vec![0f32; t];
+        for cube in 0..store.cube_count() {
+            for face in 0..6u8 {
+                store
+                    .read_face(cube, face as usize, &mut rgb, Some(&mut d))
+                    .unwrap();
+                let payload = layout.build(&store, cube, face).unwrap();
+                let gpu = layout.decode_depth(&payload);
+                for (i, v) in d.iter().enumerate() {
+                    let want = depth_to_f16(*v).to_f32();
+                    let (x, y) = (i as u32 % n, i as u32 / n);
+                    assert_eq!(gpu[i].to_bits(), want.to_bits(), "cube {cube} face {face}");
+                    let cpu = cubes.depth(cube, face as usize, x, y).unwrap();
+                    assert_eq!(cpu.to_bits(), want.to_bits(), "cube {cube} face {face}");
+                    assert_eq!(plane.quantize(*v), *v, "cube {cube} face {face} texel {i}");
+                    hits += usize::from(*v != f32::MAX);
                 }
             }
         }
     }
-    // The version-5 store's distances are f32 values off any lattice, read as they are.
-    assert!(off_lattice > 0);
+    assert!(hits > 0 && bits > 0);
 }
 
 /// The split-sum baseline of the pbr mode (the environment cube prefiltered per roughness)

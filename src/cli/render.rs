@@ -35,7 +35,7 @@ pub struct Args {
     #[arg(short, long, default_value = "render.exr")]
     output: OutputPath,
     /// recon | mirror | recon-mirror | glossy | recon-glossy | pbr [default: pbr for a store
-    /// whose objects carry a metallic-roughness material (format version 7), else
+    /// whose objects carry a metallic-roughness material, else
     /// recon-mirror].
     #[arg(long)]
     mode: Option<Mode>,

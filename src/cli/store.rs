@@ -113,15 +113,9 @@ fn parse_encoding(s: &str) -> std::result::Result<Encoding, String> {
 
 /// `oslf render --verify`: [`Store::verify`] (every frame, padding byte and the checksum of
 /// the decoded faces) before the render. A failure is an error under `strict`, else a
-/// warning on stderr; a store of format version 1 or 2, which records no checksum of its
-/// decoded faces, gets a note.
+/// warning on stderr.
 pub(super) fn verify_for_render(store: &Store, path: &Path, strict: bool) -> Result<()> {
     match store.verify() {
-        Ok(r) if !r.decoded_checksum => eprintln!(
-            "note: {}: format version {} records no checksum of the decoded faces; only the frames were checked",
-            path.display(),
-            store.header().version
-        ),
         Ok(_) => {}
         Err(e) if strict => {
             bail!(
@@ -194,21 +188,13 @@ pub fn run(cli: Args) -> Result<()> {
                 .verify()
                 .with_context(|| format!("{} failed verification", store.display()))?;
             println!(
-                "{}: OK — {} cubes, {} faces, {} compressed bytes, {} raw bytes, {} padding bytes checked; {}",
+                "{}: OK — {} cubes, {} faces, {} compressed bytes, {} raw bytes, {} padding bytes checked; the decoded faces match their checksum",
                 store.display(),
                 r.cubes,
                 r.faces,
                 r.compressed_bytes,
                 r.raw_bytes,
                 r.padding_bytes,
-                if r.decoded_checksum {
-                    "the decoded faces match their checksum".to_string()
-                } else {
-                    format!(
-                        "format version {} records no checksum of the decoded faces",
-                        s.header().version
-                    )
-                }
             );
             Ok(())
         }
@@ -441,7 +427,7 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
     let b = &m.bake;
     serde_json::json!({
         "path": path.display().to_string(),
-        "version": h.version,
+        "format": oslf_format::version_name(oslf_format::VERSION),
         "flags": h.flags,
         "encoding": b.encoding.name(),
         "mantissa_bits": b.mantissa_bits,
@@ -451,7 +437,7 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
         "env_cube_index": s.env_cube_index(),
         "sample_points": h.sample_count,
         "cubes": s.cube_count(),
-        // Sample maps: Bézier patches plus mesh atlas pages (format version 5).
+        // Sample maps: Bézier patches plus mesh atlas pages.
         "patches": m.map_count(),
         "sample_maps": m.map_count(),
         "bezier_patches": m.patches.len(),
@@ -507,7 +493,11 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
     let m = s.meta();
     let b = &m.bake;
     println!("store            {}", path.display());
-    println!("format version   {} (flags {:#x})", h.version, h.flags);
+    println!(
+        "format           {} (flags {:#x})",
+        oslf_format::version_name(oslf_format::VERSION),
+        h.flags
+    );
     println!("face filter      {} (id {})", h.filter, h.filter.id());
     println!(
         "encoding         {} ({} bytes/texel raw){}",

@@ -1,4 +1,4 @@
-//! A mesh object's material textures as the store holds them (format version 8): the images
+//! A mesh object's material textures as the store holds them: the images
 //! the bake itself shades the object with, and per store vertex their texture coordinates and,
 //! with a normal texture, MikkTSpace tangents.
 

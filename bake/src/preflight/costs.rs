@@ -79,7 +79,7 @@ pub fn compressed_texel_bytes(encoding: oslf_format::Encoding, mantissa_bits: u3
     }
 }
 
-/// Compressed bytes per texel of the distance plane: format version 6 stores each distance on
+/// Compressed bytes per texel of the distance plane: the store holds each distance on
 /// the distance lattice as a 16-bit code in two predicted byte planes; measured 0.450 (gazebo)
 /// and 0.427 (meshes) at 32² (docs/measurements.md, "Compact distances"; the f32 planes of
 /// version 5 took 2.35).

@@ -1,5 +1,5 @@
-//! Filters 1 to 3 on a distance plane quantized to the distance lattice (format version 6
-//! and later; crate docs, "Face filters"): each distance's lattice code predicted from its
+//! Filters 1 to 3 on a distance plane quantized to the distance lattice (`docs/format.md`,
+//! "Face filters"): each distance's lattice code predicted from its
 //! left, upper and upper-left neighbours by the median edge detector, the zig-zagged 16-bit
 //! residuals in two byte planes.
 

@@ -1,5 +1,5 @@
 //! Reversible, lossless filters applied to a face's raw bytes before zstd and undone after
-//! decompression (the byte layout and the exact predictors are in the crate docs, "Face
+//! decompression (the byte layout and the exact predictors are in `docs/format.md`, "Face
 //! filters").
 //!
 //! The filters never fail on content: [`unfilter_face`] maps any input of the right size to
@@ -16,7 +16,7 @@ use crate::distance::DistancePlane;
 use crate::encoding::Encoding;
 use crate::Error;
 use distance::{lattice_forward, lattice_inverse};
-use ints::{distance_forward, distance_inverse, ints_forward, ints_inverse};
+use ints::{ints_forward, ints_inverse};
 use predict::{rgb9e5_forward, rgb9e5_inverse};
 pub use rows::packed_planes;
 use rows::{packed_forward, packed_inverse, rows_forward, rows_inverse, Lattice, Packed, Planes9};
@@ -77,7 +77,7 @@ impl Filter {
     /// filter 3's code splits residuals across bytes and compresses worse: docs/measurements.md,
     /// "Quantized RGB9E5"). BC6H stores get [`Filter::PredictRows`] too: filters 1 to 3 leave
     /// BC6H blocks as they are (regrouping their bytes into planes compressed worse: 1.004
-    /// against 0.973 bytes per texel on the example scene; crate docs, "BC6H") and predict the
+    /// against 0.973 bytes per texel on the example scene; `docs/format.md`, "BC6H") and predict the
     /// distance plane.
     pub fn for_store(encoding: Encoding, mantissa_bits: u32) -> Self {
         if encoding == Encoding::Rgb9e5 && mantissa_bits <= 6 {
@@ -107,17 +107,16 @@ impl std::fmt::Display for Filter {
 /// Size in bytes of one face after `filter`, i.e. what its zstd frame decompresses to: the
 /// raw face size ([`crate::Store::face_raw_size`]), except filter 3 on RGB9E5, whose texel
 /// part is `n² × ⌈(5 + 3k) / 8⌉` bytes for `k = mantissa_bits`, and filters 1 to 3 on a
-/// distance plane on the distance lattice ([`DistancePlane::Lattice`], format version 6),
-/// which takes `n² × 2` bytes instead of `n² × 4`. `distance` is the face's distance plane
-/// (`true` / `false`: [`DistancePlane::F32`] / none). `None` if the size overflows `usize`.
+/// distance plane on the distance lattice ([`DistancePlane::Lattice`]), which takes `n² × 2`
+/// bytes instead of `n² × 4`. `distance` is the face's distance plane. `None` if the size
+/// overflows `usize`.
 pub fn filtered_face_size(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: impl Into<DistancePlane>,
+    distance: DistancePlane,
     mantissa_bits: u32,
 ) -> Option<usize> {
-    let distance = distance.into();
     let texels = (resolution as usize).checked_mul(resolution as usize)?;
     let color = match (filter, encoding) {
         (Filter::PredictPacked, Encoding::Rgb9e5) => {
@@ -182,7 +181,7 @@ pub fn filter_face(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: impl Into<DistancePlane>,
+    distance: DistancePlane,
     raw: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
@@ -192,7 +191,7 @@ pub fn filter_face(
 /// [`filter_face`] for a store keeping `mantissa_bits` (1..=9) RGB9E5 mantissa bits. `out`
 /// is [`filtered_face_size`] bytes (the raw size except for filter 3).
 ///
-/// Filter 2 rounds its RGB9E5 predictions to the store's mantissa lattice (crate docs, "Face
+/// Filter 2 rounds its RGB9E5 predictions to the store's mantissa lattice (`docs/format.md`, "Face
 /// filters"): lossless for every input whatever `mantissa_bits` is, compact when the texels
 /// were quantized to those bits. Filter 3 stores residuals in lattice steps, so its RGB9E5
 /// input must be quantized ([`crate::encoding::quantize_rgb9e5`]): a mantissa off the
@@ -201,12 +200,11 @@ pub fn filter_face_quantized(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: impl Into<DistancePlane>,
+    distance: DistancePlane,
     mantissa_bits: u32,
     raw: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
-    let distance = distance.into();
     let (t, rc_len, oc_len) = check_sizes(
         filter,
         encoding,
@@ -239,7 +237,6 @@ pub fn filter_face_quantized(
     }
     match distance {
         DistancePlane::Absent => {}
-        DistancePlane::F32 => distance_forward(n, t, rd, od),
         DistancePlane::Lattice { bits } => lattice_forward(n, t, bits, rd, od)?,
     }
     Ok(())
@@ -268,7 +265,7 @@ pub fn unfilter_face(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: impl Into<DistancePlane>,
+    distance: DistancePlane,
     filtered: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
@@ -281,12 +278,11 @@ pub fn unfilter_face_quantized(
     filter: Filter,
     encoding: Encoding,
     resolution: u32,
-    distance: impl Into<DistancePlane>,
+    distance: DistancePlane,
     mantissa_bits: u32,
     filtered: &[u8],
     out: &mut [u8],
 ) -> Result<(), Error> {
-    let distance = distance.into();
     let (t, oc_len, fc_len) = check_sizes(
         filter,
         encoding,
@@ -317,7 +313,6 @@ pub fn unfilter_face_quantized(
     }
     match distance {
         DistancePlane::Absent => {}
-        DistancePlane::F32 => distance_inverse(n, t, fd, od),
         DistancePlane::Lattice { bits } => lattice_inverse(n, t, bits, fd, od),
     }
     Ok(())
@@ -360,18 +355,20 @@ mod tests {
         let mut rng = Rng(0x1234_5678_9abc_def1);
         for enc in Encoding::ALL {
             for res in [1u32, 2, 3, 5, 16] {
-                for distance in [false, true] {
+                for distance in [DistancePlane::Absent, DistancePlane::Lattice { bits: 5 }] {
                     let len = filtered_face_size(Filter::None, enc, res, distance, 9).unwrap();
                     for kind in 0..3 {
-                        let raw: Vec<u8> = (0..len)
+                        let mut raw: Vec<u8> = (0..len)
                             .map(|i| match kind {
                                 0 => rng.next() as u8,
                                 1 => (i / 7) as u8,
                                 _ => [0u8, 0xff][(rng.next() & 1) as usize],
                             })
                             .collect();
+                        on_distance_lattice(&mut raw, enc, res, distance);
                         for f in Filter::ALL {
-                            let mut filtered = vec![0u8; len];
+                            let size = filtered_face_size(f, enc, res, distance, 9).unwrap();
+                            let mut filtered = vec![0u8; size];
                             filter_face(f, enc, res, distance, &raw, &mut filtered).unwrap();
                             let mut back = vec![0u8; len];
                             unfilter_face(f, enc, res, distance, &filtered, &mut back).unwrap();
@@ -424,7 +421,20 @@ mod tests {
         }
     }
 
-    /// Filter 2's RGB9E5 residuals computed texel by texel from the spec in lib.rs ("Face
+    /// Puts the distance part of the raw face `raw` (any bytes) on `plane`'s lattice: each
+    /// pattern made finite and non-negative, then rounded.
+    fn on_distance_lattice(raw: &mut [u8], enc: Encoding, res: u32, plane: DistancePlane) {
+        if !plane.is_present() {
+            return;
+        }
+        let texel_bytes = enc.face_bytes(res).unwrap();
+        for d in raw[texel_bytes..].chunks_exact_mut(4) {
+            let v = u32::from_le_bytes([d[0], d[1], d[2], d[3]]) & 0x7f7f_ffff;
+            d.copy_from_slice(&plane.quantize(f32::from_bits(v)).to_le_bytes());
+        }
+    }
+
+    /// Filter 2's RGB9E5 residuals computed texel by texel from the spec in `docs/format.md` ("Face
     /// filters"), independently of the row code.
     fn predict_rows_reference(n: usize, tex: &[u32], bits: u32) -> Vec<u8> {
         let t = n * n;
@@ -574,13 +584,26 @@ mod tests {
                         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                         .collect();
                     let n = res as u32;
-                    let size =
-                        filtered_face_size(Filter::PredictPacked, Encoding::Rgb9e5, n, false, bits);
+                    let size = filtered_face_size(
+                        Filter::PredictPacked,
+                        Encoding::Rgb9e5,
+                        n,
+                        DistancePlane::Absent,
+                        bits,
+                    );
                     assert_eq!(size, Some(t * packed_planes(bits)));
                     let mut filtered = vec![0u8; t * packed_planes(bits)];
                     let f = Filter::PredictPacked;
-                    filter_face_quantized(f, Encoding::Rgb9e5, n, false, bits, &raw, &mut filtered)
-                        .unwrap();
+                    filter_face_quantized(
+                        f,
+                        Encoding::Rgb9e5,
+                        n,
+                        DistancePlane::Absent,
+                        bits,
+                        &raw,
+                        &mut filtered,
+                    )
+                    .unwrap();
                     let want = predict_packed_reference(res, &tex, bits);
                     assert_eq!(filtered, want, "res {res} kind {kind} bits {bits}");
                     let mut back = vec![0u8; raw.len()];
@@ -588,7 +611,7 @@ mod tests {
                         f,
                         Encoding::Rgb9e5,
                         n,
-                        false,
+                        DistancePlane::Absent,
                         bits,
                         &filtered,
                         &mut back,
@@ -597,8 +620,16 @@ mod tests {
                     assert_eq!(back, raw, "res {res} kind {kind} bits {bits}");
                     // Any bytes decode to texels on the lattice.
                     let junk: Vec<u8> = (0..filtered.len()).map(|_| rng.next() as u8).collect();
-                    unfilter_face_quantized(f, Encoding::Rgb9e5, n, false, bits, &junk, &mut back)
-                        .unwrap();
+                    unfilter_face_quantized(
+                        f,
+                        Encoding::Rgb9e5,
+                        n,
+                        DistancePlane::Absent,
+                        bits,
+                        &junk,
+                        &mut back,
+                    )
+                    .unwrap();
                     assert_eq!(lattice_floor(&back, t, bits), back, "res {res} bits {bits}");
                 }
             }
@@ -624,7 +655,7 @@ mod tests {
                     Filter::PredictRows,
                     Encoding::Rgb9e5,
                     n,
-                    false,
+                    DistancePlane::Absent,
                     bits,
                     &raw,
                     &mut filtered,
@@ -655,7 +686,7 @@ mod tests {
                     Filter::PredictRows,
                     Encoding::Rgb9e5,
                     n,
-                    false,
+                    DistancePlane::Absent,
                     bits,
                     &filtered,
                     &mut back,
@@ -676,7 +707,7 @@ mod tests {
             Filter::PredictRows,
             Encoding::Rgb9e5,
             n,
-            false,
+            DistancePlane::Absent,
             &raw,
             &mut filtered,
         )
@@ -698,7 +729,7 @@ mod tests {
                 Filter::Predict,
                 Encoding::Rgb9e5,
                 2,
-                false,
+                DistancePlane::Absent,
                 &[0; 15],
                 &mut out
             ),
@@ -709,7 +740,7 @@ mod tests {
                 Filter::Predict,
                 Encoding::Rgb9e5,
                 2,
-                true,
+                DistancePlane::Lattice { bits: 2 },
                 &[0; 16],
                 &mut out
             ),

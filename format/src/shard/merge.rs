@@ -95,16 +95,14 @@ fn read_prefix(s: &mut OpenShard) -> Result<Vec<u8>, Error> {
 }
 
 /// Checks that `prefix` is what `create()` writes before the first cube of a store: a
-/// store header (COMPLETE clear) of the current version, sections in order ending at the
+/// store header (COMPLETE clear), sections in order ending at the
 /// payload offset `prefix.len()`, valid section checksums and metadata. Returns the header
 /// and the metadata.
 fn check_prefix(prefix: &[u8]) -> Result<(Header, StoreMeta), String> {
     let h = Header::parse(prefix).map_err(|e| format!("its store header is damaged: {e}"))?;
-    if h.version != crate::VERSION || h.is_complete() {
+    if h.is_complete() {
         return Err(format!(
-            "its store header is not an unfinished store of format version {} (version {}, flags {:#x})",
-            crate::VERSION,
-            h.version,
+            "its store header is not an unfinished store (flags {:#x})",
             h.flags
         ));
     }
@@ -134,7 +132,6 @@ fn check_prefix(prefix: &[u8]) -> Result<(Header, StoreMeta), String> {
     let meta = decode_meta(
         &prefix[h.meta.offset as usize..h.meta.end() as usize],
         h.meta.offset,
-        h.version,
     )
     .map_err(|e| format!("its metadata is damaged: {e}"))?;
     Ok((h, meta))

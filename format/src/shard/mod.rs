@@ -30,7 +30,7 @@
 //! [`crate::StoreWriter::create`] writes them — store header with the COMPLETE flag clear,
 //! metadata, sample points, sample maps and their padding; `P` is the cube payload offset.
 //! Then, for each cube of the shard in increasing index, the store's cube record (record
-//! header, six frames, zero padding to a multiple of 8; see the crate docs) followed by a
+//! header, six frames, zero padding to a multiple of 8; see `docs/format.md`) followed by a
 //! 56-byte *trailer*: the six `u64` checksums of the raw faces (what the store's
 //! decoded-faces checksum hashes) and a `u64` checksum of those 48 bytes.
 //!

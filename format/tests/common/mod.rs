@@ -247,7 +247,7 @@ pub fn close_bits(enc: Encoding, bits: u32, want: [f32; 3], got: [f32; 3]) -> bo
 }
 
 /// The distance planes a store with distance plane `plane` holds for a bake's `distance`:
-/// each value on the plane's lattice (format version 6), or itself (`f32` planes).
+/// each value on the plane's lattice.
 pub fn stored_distances(
     plane: DistancePlane,
     distance: &Option<[Vec<f32>; 6]>,
@@ -255,58 +255,6 @@ pub fn stored_distances(
     distance
         .as_ref()
         .map(|d| std::array::from_fn(|f| d[f].iter().map(|v| plane.quantize(*v)).collect()))
-}
-
-/// Asserts that two stores hold the same faces: the same raw texel bytes, and distance
-/// planes that are the same once `old`'s are put on `new`'s plane (the same for two stores
-/// of versions 1 to 5; a version-6 store holds an older one's distances rounded to its
-/// lattice).
-pub fn assert_same_faces(old: &Store, new: &Store) {
-    assert_eq!(old.cube_count(), new.cube_count());
-    let plane = new.header().distance_plane();
-    let texel_bytes = old.face_raw_size()
-        - old.header().has_distance() as usize * 4 * old.cube_resolution().pow(2) as usize;
-    let (mut a, mut b) = (
-        vec![0u8; old.face_raw_size()],
-        vec![0u8; new.face_raw_size()],
-    );
-    for c in 0..old.cube_count() {
-        for face in 0..6 {
-            old.read_face_raw(c, face, &mut a).unwrap();
-            new.read_face_raw(c, face, &mut b).unwrap();
-            assert_eq!(a[..texel_bytes], b[..texel_bytes], "cube {c} face {face}");
-            let want: Vec<u8> = a[texel_bytes..]
-                .chunks_exact(4)
-                .flat_map(|v| {
-                    plane
-                        .quantize(f32::from_le_bytes(v.try_into().unwrap()))
-                        .to_le_bytes()
-                })
-                .collect();
-            assert_eq!(want, b[texel_bytes..], "distances of cube {c} face {face}");
-        }
-    }
-}
-
-/// Asserts that two complete stores hold the same sample points and sample maps, and, when
-/// `payload`, the same cube payload bytes (their headers, metadata layouts — format version
-/// 5 adds each object's kind — and so table-of-contents offsets may differ; format version 6
-/// stores distance planes differently, see [`assert_same_faces`]).
-pub fn assert_same_sections(old: &[u8], new: &[u8], payload: bool) {
-    let (ho, hn) = (
-        oslf_format::header::Header::parse(old).unwrap(),
-        oslf_format::header::Header::parse(new).unwrap(),
-    );
-    let get = |b: &'_ [u8], s: oslf_format::header::Section| -> Vec<u8> {
-        b[s.offset as usize..s.end() as usize].to_vec()
-    };
-    assert_eq!(get(old, ho.points), get(new, hn.points), "sample points");
-    assert_eq!(get(old, ho.maps), get(new, hn.maps), "sample maps");
-    if payload {
-        assert_eq!(get(old, ho.payload), get(new, hn.payload), "cube payload");
-    }
-    assert_eq!(ho.points_checksum, hn.points_checksum);
-    assert_eq!(ho.maps_checksum, hn.maps_checksum);
 }
 
 /// The mesh object [`with_mesh`] adds: a bent quad of 5 vertices and 4 triangles over a 2×2
