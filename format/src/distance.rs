@@ -95,7 +95,8 @@ pub fn quantize_distance(d: f32, bits: u32) -> f32 {
         return d;
     }
     let shift = 23 - bits.clamp(1, MAX_DISTANCE_BITS);
-    let b = d.to_bits();
+    // −0.0 is the distance 0: its sign bit would otherwise read as the largest pattern.
+    let b = if d == 0.0 { 0 } else { d.to_bits() };
     let r = ((b + (1 << (shift - 1)) - 1 + ((b >> shift) & 1)) >> shift) << shift;
     let inf = f32::INFINITY.to_bits();
     f32::from_bits(if r >= inf { inf - (1 << shift) } else { r })
@@ -191,6 +192,15 @@ mod tests {
                 let d = f32::from_bits(code_pattern(code, bits));
                 assert!(d.is_finite() && d >= 0.0, "{code:#x}");
             }
+        }
+    }
+
+    #[test]
+    fn negative_zero_is_the_distance_zero() {
+        for bits in 1..=MAX_DISTANCE_BITS {
+            let q = quantize_distance(-0.0, bits);
+            assert_eq!(q.to_bits(), 0, "{bits}");
+            assert_eq!(distance_code(q.to_bits(), bits), Some(0));
         }
     }
 
