@@ -5,11 +5,12 @@
 use std::path::Path;
 
 /// Bottom to top. A crate may depend (normally, not only for its tests) on crates before it.
-const LAYERS: [&str; 12] = [
+const LAYERS: [&str; 13] = [
     "oslf-shading",
     "oslf-util",
     "oslf-geometry",
     "oslf-format",
+    "oslf-gpu",
     "oslf-scene",
     "oslf-trace",
     "oslf-bake",
@@ -21,7 +22,7 @@ const LAYERS: [&str; 12] = [
 ];
 
 /// Dependencies a crate must never have, whatever the layers allow.
-const NEVER: [(&str, &[&str]); 5] = [
+const NEVER: [(&str, &[&str]); 7] = [
     ("oslf-scene", &["oslf-trace", "oslf-bake", "wgpu"]),
     ("oslf-trace", &["oslf-bake", "wgpu"]),
     ("oslf-bake", &["wgpu", "oslf-runtime"]),
@@ -30,6 +31,19 @@ const NEVER: [(&str, &[&str]); 5] = [
         &["oslf-scene", "oslf-trace", "oslf-bake", "oslf-bake-gpu"],
     ),
     ("oslf-format", &["clap", "anyhow", "indicatif"]),
+    (
+        "oslf-gpu",
+        &[
+            "oslf-shading",
+            "oslf-util",
+            "oslf-geometry",
+            "oslf-format",
+            "oslf-scene",
+            "oslf-trace",
+            "oslf-bake",
+        ],
+    ),
+    ("oslf-bake-gpu", &["oslf-runtime"]),
 ];
 
 /// The `[package] name` and the names under `[dependencies]` (and target-specific

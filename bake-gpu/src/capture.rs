@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use oslf_bake::device::{CaptureDevice, CapturedCube, CubeJob};
 use oslf_format::CubeImage;
-use oslf_runtime::Gpu;
+use oslf_gpu::Gpu;
 use oslf_scene::scene::Scene;
 use oslf_trace::capture::{strata_per_side, CaptureSettings};
 use oslf_trace::integrator::RayStats;

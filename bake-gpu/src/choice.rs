@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use oslf_runtime::Gpu;
+use oslf_gpu::Gpu;
 use oslf_scene::scene::{DeviceChoice, Scene};
 
 use crate::capture::GpuCapture;

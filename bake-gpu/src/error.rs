@@ -5,9 +5,9 @@ use thiserror::Error;
 /// What can go wrong on the GPU path.
 #[derive(Debug, Error)]
 pub enum GpuBakeError {
-    /// No adapter, or a device that cannot be created (from `oslf_runtime::Gpu`).
+    /// No adapter, or a device that cannot be created or failed (from `oslf_gpu::Gpu`).
     #[error(transparent)]
-    Device(#[from] oslf_runtime::RuntimeError),
+    Device(#[from] oslf_gpu::GpuError),
     /// The scene cannot be uploaded (too large for the device's limits, too deep a BVH, ...).
     #[error("{0}")]
     Scene(String),

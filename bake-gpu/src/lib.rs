@@ -23,6 +23,9 @@
 //! multiply-adds, transcendental functions), first change a decision; CPU and GPU stores
 //! differ by that, within the Monte Carlo noise (tests/parity.rs). On one adapter the same
 //! scene and seed give the same bytes, however the cubes are batched.
+//!
+//! It captures on `oslf-gpu`'s device, the one the renderer uses too, and must never depend on
+//! the runtime (`oslf-runtime`): a bake does not need the renderer.
 
 pub mod capture;
 pub mod choice;

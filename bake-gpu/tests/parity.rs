@@ -203,7 +203,7 @@ fn devices(case: &Case, bounces: u32) -> Devices {
         &case.environment,
     )
     .unwrap();
-    let gpu = oslf_runtime::Gpu::headless().expect("a wgpu adapter (lavapipe in CI)");
+    let gpu = oslf_gpu::Gpu::headless().expect("a wgpu adapter (lavapipe in CI)");
     Devices {
         cpu_full,
         cpu_without_objects,

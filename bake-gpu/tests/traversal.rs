@@ -37,7 +37,7 @@ fn gpu_closest_hits_are_the_cpu_bvhs() {
     let materials = vec![Material::lambertian(Vec3::splat(0.5)); 2];
     let env = oslf_scene::environment::Environment::Constant(Vec3::ONE);
     let packed = GpuScene::new(&scene.triangles(), &materials, &[], &env).unwrap();
-    let gpu = oslf_runtime::Gpu::headless().expect("a wgpu adapter (lavapipe in CI)");
+    let gpu = oslf_gpu::Gpu::headless().expect("a wgpu adapter (lavapipe in CI)");
     let capture = GpuCapture::new(gpu, &packed, 0).unwrap();
     let mut rng = Rng::new(3, 9);
     let mut rays = Vec::new();

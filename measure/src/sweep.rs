@@ -452,7 +452,11 @@ pub fn run_sweep(
             );
         }
         let store = Store::open(&path)?;
-        let mut renderer = Renderer::new(Gpu::headless()?, store, CacheConfig::default())?;
+        let mut renderer = Renderer::new(
+            Gpu::headless().map_err(oslf_runtime::RuntimeError::from)?,
+            store,
+            CacheConfig::default(),
+        )?;
         let camera = renderer.default_view();
         for rc in &runtime_changes {
             let mut params = config.params;

@@ -46,6 +46,19 @@ pub enum RuntimeError {
     InvalidParam { param: Param, problem: String },
 }
 
+impl From<oslf_gpu::GpuError> for RuntimeError {
+    /// The device's errors as the runtime's variants of the same name.
+    fn from(e: oslf_gpu::GpuError) -> Self {
+        match e {
+            oslf_gpu::GpuError::NoAdapter(tried) => RuntimeError::NoAdapter(tried),
+            oslf_gpu::GpuError::Device { adapter, message } => {
+                RuntimeError::Device { adapter, message }
+            }
+            oslf_gpu::GpuError::Gpu(message) => RuntimeError::Gpu(message),
+        }
+    }
+}
+
 /// Parameters that [`RuntimeError::InvalidParam`] names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Param {

@@ -87,7 +87,6 @@ pub mod cache;
 mod error;
 pub mod face;
 pub mod geometry;
-pub mod gpu;
 pub mod params;
 mod pipelines;
 mod pool;
@@ -107,7 +106,7 @@ pub mod wgsl_layout;
 
 pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
 pub use error::{Param, Result, RuntimeError};
-pub use gpu::Gpu;
 pub use oslf_geometry::Camera;
+pub use oslf_gpu::{Gpu, GpuError};
 pub use params::{Background, Blend, GlossyFilter, Mode, Order, ShadingParams, Source};
 pub use renderer::{Frame, FrameBytes, HostTarget, HostView, RenderOptions, Renderer};

@@ -265,7 +265,7 @@ impl Renderer {
         // Kept only once the device took it (a colour format it cannot render to fails here).
         let pipeline = self
             .gpu
-            .scoped(|| Ok(composite_pipeline(device, layout, key)))?;
+            .scoped(|| Ok::<_, RuntimeError>(composite_pipeline(device, layout, key)))?;
         self.composites.pipelines.insert(key, pipeline.clone());
         Ok((u, pipeline))
     }

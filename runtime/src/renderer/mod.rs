@@ -16,7 +16,6 @@ use crate::cache::{CacheConfig, CacheStats, CubeCache};
 use crate::error::{Param, Result, RuntimeError};
 use crate::face::FaceLayout;
 use crate::geometry::ObjectMesh;
-use crate::gpu::Gpu;
 use crate::params::{
     Background, GlossyFilter, ShadeUniform, ShadingParams, Source, StoreConstants,
 };
@@ -24,6 +23,7 @@ use crate::pipelines::{GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines}
 use crate::pool::{CubePool, PoolLayout};
 use crate::prefilter::PrefilteredEnv;
 use crate::textures::ObjectTextureGroups;
+use crate::Gpu;
 
 pub use crate::pool::DEFAULT_POOL_BYTES;
 

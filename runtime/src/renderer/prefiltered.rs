@@ -2,8 +2,8 @@
 //! time a frame asks for the split-sum baseline, then kept ([`crate::prefilter`]).
 
 use crate::error::{Result, RuntimeError};
-use crate::gpu::Gpu;
 use crate::prefilter::{level_size, PrefilteredEnv};
+use crate::Gpu;
 
 use super::Renderer;
 

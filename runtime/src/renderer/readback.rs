@@ -7,10 +7,10 @@ use oslf_geometry::Camera;
 use super::targets::{padded_row, SizedTargets};
 use super::Renderer;
 use crate::error::{Result, RuntimeError};
-use crate::gpu::Gpu;
 use crate::params::ShadingParams;
 use crate::pipelines::DEPTH_CLEAR;
 use crate::reference::GTexel;
+use crate::Gpu;
 
 impl Renderer {
     /// Reads one of the targets (an `Rgba32Float` texture) back to the CPU, row-major.
@@ -159,5 +159,5 @@ impl Renderer {
 
 /// Maps a MAP_READ buffer, waits, and copies its bytes out ([`Gpu::read_buffer`]).
 pub(super) fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
-    gpu.read_buffer(buffer)
+    Ok(gpu.read_buffer(buffer)?)
 }

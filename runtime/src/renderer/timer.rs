@@ -1,7 +1,7 @@
 //! GPU timestamps of the frame's passes (where the device has `TIMESTAMP_QUERY`).
 
 use crate::buffers::TIMESTAMP_BYTES;
-use crate::gpu::Gpu;
+use crate::Gpu;
 
 /// Timestamps at the start and end of the G-buffer pass (queries 0, 1) and of the shading pass
 /// (2, 3), resolved into `resolve` (one pair per 256-byte resolve offset) and copied behind

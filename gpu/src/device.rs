@@ -1,9 +1,11 @@
 //! The GPU: a headless wgpu device, or one the application owns, and the error sink that turns
-//! wgpu's validation errors into [`RuntimeError::Gpu`].
+//! wgpu's validation errors into [`GpuError::Gpu`].
 
 use std::sync::{Arc, Mutex};
 
-use crate::error::{Result, RuntimeError};
+use crate::GpuError;
+
+type Result<T> = std::result::Result<T, GpuError>;
 
 /// A wgpu device and queue with the limits the renderer may use.
 ///
@@ -44,9 +46,9 @@ impl Gpu {
     /// The device gets `TEXTURE_COMPRESSION_BC` when the adapter offers it (lavapipe and
     /// desktop GPUs do), so BC6H stores are uploaded as they are ([`Gpu::has_bc`]), and
     /// `TIMESTAMP_QUERY` when offered, so frames report their shading pass's GPU time
-    /// ([`crate::Frame::shade_gpu_seconds`]).
+    /// (the runtime's `Frame::shade_gpu_seconds`).
     ///
-    /// Errors with [`RuntimeError::NoAdapter`], naming what to install, when there is none.
+    /// Errors with [`GpuError::NoAdapter`], naming what to install, when there is none.
     pub fn headless() -> Result<Self> {
         Self::headless_with_bc(true)
     }
@@ -80,7 +82,7 @@ impl Gpu {
                 Err(e) => last = format!("{backends:?}: {e}"),
             }
         }
-        Err(RuntimeError::NoAdapter(last))
+        Err(GpuError::NoAdapter(last))
     }
 
     /// Creates a device on `adapter` with the adapter's limits, and BC texture compression
@@ -94,14 +96,14 @@ impl Gpu {
     pub fn on_adapter_with_bc(adapter: &wgpu::Adapter, bc: bool) -> Result<Self> {
         let info = adapter.get_info();
         let adapter_name = format!("{} ({}, {:?})", info.name, info.driver, info.backend);
-        // The G-buffer and the output are Rgba32Float render targets (renderer.rs); GL adapters
+        // The runtime's G-buffer and output are Rgba32Float render targets; GL adapters
         // such as llvmpipe over EGL cannot render to them, so stop here with the fix.
         let float_target = wgpu::TextureFormat::Rgba32Float;
         let usages = adapter
             .get_texture_format_features(float_target)
             .allowed_usages;
         if !usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) {
-            return Err(RuntimeError::Device {
+            return Err(GpuError::Device {
                 adapter: adapter_name,
                 message: format!(
                     "it cannot render to {float_target:?} textures, which the G-buffer needs; \
@@ -123,7 +125,7 @@ impl Gpu {
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))
-        .map_err(|e| RuntimeError::Device {
+        .map_err(|e| GpuError::Device {
             adapter: adapter_name.clone(),
             message: e.to_string(),
         })?;
@@ -133,7 +135,7 @@ impl Gpu {
     }
 
     /// Wraps a device and queue the application owns. Create it with the limits the store
-    /// needs ([`crate::Renderer::new`] says which it lacks). BC6H stores are uploaded as blocks
+    /// needs (the runtime's `Renderer::new` says which it lacks). BC6H stores are uploaded as blocks
     /// when the device has `TEXTURE_COMPRESSION_BC` enabled ([`Gpu::without_bc`] turns that
     /// off).
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_name: String) -> Self {
@@ -174,9 +176,12 @@ impl Gpu {
     }
 
     /// Runs `f` and returns the validation and out-of-memory errors the device reported while
-    /// it ran as [`RuntimeError::Gpu`] (else `f`'s result): in error scopes on a host's device
+    /// it ran as [`GpuError::Gpu`] (else `f`'s result): in error scopes on a host's device
     /// ([`Gpu::from_host_device`]), otherwise from the error list ([`Gpu::take_errors`]).
-    pub fn scoped<T>(&self, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    pub fn scoped<T, E: From<GpuError>>(
+        &self,
+        f: impl FnOnce() -> std::result::Result<T, E>,
+    ) -> std::result::Result<T, E> {
         if !self.host_watched {
             let out = f();
             self.take_errors()?;
@@ -189,7 +194,7 @@ impl Gpu {
         let invalid = pollster::block_on(validation.pop());
         let memory = pollster::block_on(out_of_memory.pop());
         match invalid.or(memory) {
-            Some(e) => Err(RuntimeError::Gpu(e.to_string())),
+            Some(e) => Err(GpuError::Gpu(e.to_string()).into()),
             None => out,
         }
     }
@@ -208,7 +213,7 @@ impl Gpu {
     }
 
     /// Whether the device has `TIMESTAMP_QUERY` enabled: renderers on it then time their
-    /// shading passes on the GPU ([`crate::Frame::shade_gpu_seconds`]).
+    /// shading passes on the GPU (the runtime's `Frame::shade_gpu_seconds`).
     pub fn has_timestamps(&self) -> bool {
         self.device
             .features()
@@ -222,15 +227,16 @@ impl Gpu {
 
     /// Returns an error if wgpu reported any since the last call.
     pub fn take_errors(&self) -> Result<()> {
-        let mut v = self.errors.lock().map_err(|_| {
-            RuntimeError::Gpu("the GPU error log was poisoned by a panic".to_string())
-        })?;
+        let mut v = self
+            .errors
+            .lock()
+            .map_err(|_| GpuError::Gpu("the GPU error log was poisoned by a panic".to_string()))?;
         if v.is_empty() {
             Ok(())
         } else {
             let all = v.join("; ");
             v.clear();
-            Err(RuntimeError::Gpu(all))
+            Err(GpuError::Gpu(all))
         }
     }
 
@@ -242,12 +248,12 @@ impl Gpu {
         });
         self.wait()?;
         rx.recv()
-            .map_err(|_| RuntimeError::Gpu("buffer mapping was dropped".into()))?
-            .map_err(|e| RuntimeError::Gpu(format!("cannot map a buffer: {e}")))?;
+            .map_err(|_| GpuError::Gpu("buffer mapping was dropped".into()))?
+            .map_err(|e| GpuError::Gpu(format!("cannot map a buffer: {e}")))?;
         let bytes = {
             let view = buffer
                 .get_mapped_range(..)
-                .map_err(|e| RuntimeError::Gpu(format!("cannot read a mapped buffer: {e}")))?;
+                .map_err(|e| GpuError::Gpu(format!("cannot read a mapped buffer: {e}")))?;
             view.to_vec()
         };
         buffer.unmap();
@@ -258,7 +264,7 @@ impl Gpu {
     pub fn wait(&self) -> Result<()> {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| RuntimeError::Gpu(e.to_string()))?;
+            .map_err(|e| GpuError::Gpu(e.to_string()))?;
         Ok(())
     }
 }
