@@ -1,7 +1,7 @@
 //! The GPU adapter as a user meets it: no stray `error:` lines from layers or backends the
 //! program does not use.
 
-mod common;
+use crate::common;
 
 use common::{oslf, runtime_fixture};
 

@@ -1,6 +1,6 @@
 //! The `oslf bake` command: a small bake end to end, and bad input.
 
-mod common;
+use crate::common;
 
 use std::os::unix::fs::FileTypeExt;
 use std::path::Path;

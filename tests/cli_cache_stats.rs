@@ -1,6 +1,6 @@
 //! `oslf cache-stats`: the table agrees with its CSV and JSON, and bad input is a clear error.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 

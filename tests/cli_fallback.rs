@@ -1,7 +1,7 @@
 //! `oslf render` says exactly what fell back and why, and `--strict` turns any fallback into a
 //! failure that writes nothing: a budget too small for the frame, a damaged environment cube.
 
-mod common;
+use crate::common;
 
 use common::{oslf, runtime_fixture};
 

@@ -4,7 +4,7 @@
 //! interrupted GPU bake resumes into it; the summary names the device, and `[bake] device`
 //! is read and checked.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

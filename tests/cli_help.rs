@@ -1,7 +1,7 @@
 //! The command tree: every subcommand answers `--help`, `oslf --help` lists them, completion
 //! scripts cover them, a wrong subcommand is a clear error, and a closed output pipe is no panic.
 
-mod common;
+use crate::common;
 
 use common::oslf;
 

@@ -2,7 +2,7 @@
 //! not regular files are refused at once, naming what they are, and an error's cause prints
 //! once.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output, Stdio};

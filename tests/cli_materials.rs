@@ -3,7 +3,7 @@
 //! `oslf render` draws such a store in the pbr mode by default with the object's factors (the
 //! flags override them), and `oslf truth -m pbr` renders the object with them.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //! skip, without an adapter): `oslf tables` and `oslf sweep` run, their CSV, JSON and Markdown
 //! agree, and bad input is a clear error.
 
-mod common;
+use crate::common;
 
 use common::oslf;
 

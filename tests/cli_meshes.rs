@@ -3,7 +3,7 @@
 //! in every mode, and its mirror term compared with `oslf truth`: the light field beats the
 //! environment map, as it does for patches.
 
-mod common;
+use crate::common;
 
 use std::fmt::Write as _;
 use std::path::Path;

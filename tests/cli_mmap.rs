@@ -1,7 +1,7 @@
 //! `--mmap`: the commands that read a store give the same output through a memory map as
 //! through positioned reads.
 
-mod common;
+use crate::common;
 
 use common::{oslf, LID_SCENE};
 

@@ -1,6 +1,6 @@
 //! `oslf render` end to end: outputs, statistics, and errors that say what and where.
 
-mod common;
+use crate::common;
 
 use common::{oslf, read_exr, runtime_fixture};
 

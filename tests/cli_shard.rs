@@ -1,7 +1,7 @@
 //! `oslf bake --shard I/N` and `oslf store merge`: the merged store is byte-identical to a
 //! single bake, shards resume like a bake, and bad shard sets are refused with named reasons.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 //! what a store without a distance channel gets (a plain warning, `--strict` fails, parallax
 //! needs a given box).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -1,6 +1,6 @@
 //! `oslf store`: info, verify, exports, and clear errors.
 
-mod common;
+use crate::common;
 
 use common::oslf;
 use common::store_fixture::*;

@@ -2,7 +2,7 @@
 //! are short; how noisy the cube maps are and, when it shows, what to raise at what cost; and
 //! (JSON) the same in `--report-json`.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

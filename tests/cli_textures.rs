@@ -3,7 +3,7 @@
 //! the pbr mode under `--strict`, and `oslf truth -m pbr` against it: the
 //! light field reads the same roughness bands as the truth, beating one roughness everywhere.
 
-mod common;
+use crate::common;
 
 use common::{oslf, read_exr, run_ok};
 

@@ -1,7 +1,7 @@
 //! `oslf truth --background scene` and `oslf compare --side-by-side`: the scene behind the
 //! object changes no object pixel and no metric, and the pair is written as one PNG.
 
-mod common;
+use crate::common;
 
 use common::{oslf, read_exr};
 

@@ -1,7 +1,7 @@
 //! Values that would make nonsense with exit 0 are refused (flags and scene settings), or, for
 //! a bake whose sample maps have empty texels, warned about and refused under `--strict`.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Output;

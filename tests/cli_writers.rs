@@ -2,7 +2,7 @@
 //! (bake, resume, convert, merge) is refused with the first's process named, and the first's
 //! store is exactly what it would have been alone.
 
-mod common;
+use crate::common;
 
 use std::os::unix::fs::MetadataExt;
 use std::path::Path;

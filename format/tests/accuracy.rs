@@ -1,5 +1,5 @@
 //! Encoding accuracy over the HDR range 1e-4..6e4 (log-spaced), including colour ratios.
-//! The figures printed by `cargo test -p oslf-format --test accuracy -- --nocapture` are the
+//! The figures printed by `cargo test -p oslf-format --test integration accuracy:: -- --nocapture` are the
 //! ones recorded in the crate docs.
 
 use oslf_format::encoding::*;

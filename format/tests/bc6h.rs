@@ -1,7 +1,7 @@
 //! BC6H faces and stores: error bounds, padding, HDR range, clamping, reserved modes, damaged
 //! stores.
 
-mod common;
+use crate::common;
 
 use common::*;
 use oslf_format::bc6h::{self, face_error, Quality, BLOCK_BYTES, MAX_BC6H};

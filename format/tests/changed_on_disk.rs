@@ -1,7 +1,7 @@
 //! A store overwritten in place while it is open (`cp` over it, a truncation) gives errors
 //! that name the offset: the reader never trusts a mapping to stay valid, so no SIGBUS.
 
-mod common;
+use crate::common;
 
 use common::*;
 use oslf_format::*;

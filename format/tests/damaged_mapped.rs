@@ -3,7 +3,7 @@
 
 #[path = "damaged/cases.rs"]
 mod cases;
-mod common;
+use crate::common;
 
 use oslf_format::{Error, Store, StoreAccess};
 

@@ -2,7 +2,7 @@
 //! `tests/data`, written by those builds) are refused with one clear error that says to bake
 //! the scene again: the reader, `verify` and `StoreWriter::resume` never misread them.
 
-mod common;
+use crate::common;
 
 use common::*;
 use oslf_format::writer::partial_path;

@@ -2,7 +2,7 @@
 //! bytes for every section and frame of every kind of store, the old store kept when a new one
 //! is renamed over it, and this project's writers refused while it is mapped.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Triangle-mesh objects round-trip; damaged mesh records give typed errors
 //! naming the offset, object, vertex or triangle, never a panic.
 
-mod common;
+use crate::common;
 
 use common::*;
 use oslf_format::header::{Header, Section, HEADER_BYTES, HEADER_CHECKSUM_OFFSET};

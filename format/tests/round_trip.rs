@@ -1,6 +1,6 @@
 //! Write with `StoreWriter`, read back with `Store::open` and `Store::from_bytes`, compare.
 
-mod common;
+use crate::common;
 
 use common::*;
 use oslf_format::distance::quantize_distance;

@@ -1,6 +1,6 @@
 //! Writer behaviour: validation, resume after a kill, byte-identical output.
 
-mod common;
+use crate::common;
 
 use common::*;
 use oslf_format::writer::partial_path;

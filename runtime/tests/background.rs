@@ -3,7 +3,7 @@
 //! same on the GPU as in the CPU reference; and a typed error for the environment cube of a
 //! store that has none.
 
-mod common;
+use crate::common;
 
 use common::{all_finite, compare, open_store, store_path_without_env_cube};
 use glam::Vec3;

@@ -3,7 +3,7 @@
 //! off), each against the CPU reference built with the same layout. On lavapipe (or whatever
 //! adapter the machine has: these tests fail, never skip, without one).
 
-mod common;
+use crate::common;
 
 use common::{compare, mean, open_store, store_path_bc6h};
 use oslf_format::{Encoding, Store};

@@ -1,6 +1,6 @@
 //! The LRU cube-map cache: budgets, granularity, fallback, statistics.
 
-mod common;
+use crate::common;
 
 use common::{all_finite, compare, mean, open_store};
 use oslf_runtime::reference::StoreCubes;

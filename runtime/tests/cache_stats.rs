@@ -2,7 +2,7 @@
 //! more, and whole cubes decode at least what faces do. The `oslf cache-stats` command is tested in
 //! the top-level `tests/cli_cache_stats.rs`.
 
-mod common;
+use crate::common;
 
 use oslf_runtime::replay::{self, CameraPath, Phase, Row, RowKey};
 use oslf_runtime::{CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams};

@@ -3,7 +3,7 @@
 //! from 0 and 1e-20 up to the RGB9E5 maximum, and, baked, stored and rendered, 2048² cube maps
 //! and 4096² sample maps.
 
-mod common;
+use crate::common;
 
 use common::{all_finite, compare, mean};
 use oslf_format::{

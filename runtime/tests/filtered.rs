@@ -1,7 +1,7 @@
 //! The pbr mode's filtered importance sampling at a few samples against many, on lavapipe (or
 //! whatever adapter the machine has: this test fails, never skips, without one).
 
-mod common;
+use crate::common;
 
 use common::{mean, open_store};
 use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams};

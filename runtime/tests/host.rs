@@ -5,7 +5,7 @@
 //! The object's pixels equal the CPU reference of the same G-buffer, as for
 //! `Renderer::render`.
 
-mod common;
+use crate::common;
 
 use std::sync::{Arc, Mutex};
 

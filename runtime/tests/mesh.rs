@@ -3,7 +3,7 @@
 //! matches the CPU reference in every mode and blend; each pixel reads the sample map of the
 //! atlas page its atlas uv falls in; both objects render.
 
-mod common;
+use crate::common;
 
 use oslf_format::{
     encode_cube, BakeParams, CameraInfo, CubeImage, Encoding, MeshInfo, ObjectInfo, Patch,

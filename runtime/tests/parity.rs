@@ -1,7 +1,7 @@
 //! The GPU shader against the CPU reference, mode by mode, on lavapipe (or whatever adapter
 //! the machine has: these tests fail, never skip, without one).
 
-mod common;
+use crate::common;
 
 use common::{compare, open_store};
 use oslf_runtime::reference::StoreCubes;
