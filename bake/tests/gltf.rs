@@ -1,7 +1,6 @@
 //! glTF 2.0 scenes: files written here, read back, checked against hand-computed values.
 
-#[path = "data/gltf_builder.rs"]
-mod gltf_builder;
+use crate::gltf_builder;
 
 use std::f32::consts::FRAC_PI_2;
 use std::path::{Path, PathBuf};

@@ -3,8 +3,7 @@
 //! Each read that could block (a FIFO) runs on a thread with a deadline, so that a regression
 //! fails the test instead of hanging it.
 
-#[path = "data/gltf_builder.rs"]
-mod gltf_builder;
+use crate::gltf_builder;
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;

@@ -12,6 +12,8 @@ mod extremes;
 mod geometry;
 #[path = "gltf.rs"]
 mod gltf;
+#[path = "data/gltf_builder.rs"]
+mod gltf_builder;
 #[path = "ground_truth.rs"]
 mod ground_truth;
 #[path = "inputs.rs"]

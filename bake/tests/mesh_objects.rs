@@ -3,8 +3,7 @@
 //! whole scene, the bake over mesh objects (atlas pages as sample maps, sample points on the
 //! mesh, determinism), and the ground truth of a mesh sphere.
 
-#[path = "data/gltf_builder.rs"]
-mod gltf_builder;
+use crate::gltf_builder;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};

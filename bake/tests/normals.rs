@@ -3,8 +3,7 @@
 //! key (which overrides a file's own normals), its located errors, and what the scene records
 //! for the bake summary.
 
-#[path = "data/gltf_builder.rs"]
-mod gltf_builder;
+use crate::gltf_builder;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -3,8 +3,7 @@
 //! covering the other objects; the preflight counts the same points. `[[gltf]] sample_spacing`
 //! does the same for the include's objects.
 
-#[path = "data/gltf_builder.rs"]
-mod gltf_builder;
+use crate::gltf_builder;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

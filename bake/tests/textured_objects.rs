@@ -4,8 +4,7 @@
 //! ground truth shades each pixel with the roughness the texture holds there. A normal
 //! texture goes into the store with MikkTSpace tangents, and turns the truth's normals.
 
-#[path = "data/gltf_builder.rs"]
-mod gltf_builder;
+use crate::gltf_builder;
 
 use std::path::Path;
 

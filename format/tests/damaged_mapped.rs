@@ -1,6 +1,8 @@
 //! The damaged-store cases (damaged/cases.rs) against a store file opened with
 //! `Store::open_mapped`: everything from a memory map.
 
+// The same cases against each reader: the file is meant to be a module three times.
+#[allow(clippy::duplicate_mod)]
 #[path = "damaged/cases.rs"]
 mod cases;
 use crate::common;
