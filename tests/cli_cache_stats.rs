@@ -5,7 +5,7 @@ use crate::common;
 use std::collections::HashMap;
 
 use common::{oslf, runtime_fixture};
-use oslf_runtime::replay::Row;
+use oslf_measure::replay::Row;
 
 fn cache_stats(args: &[&str]) -> std::process::Output {
     oslf("cache-stats").args(args).output().unwrap()

@@ -1,9 +1,9 @@
-//! The cache-statistics rows of [`oslf_runtime::replay`] as text: CSV at full precision and an
+//! The cache-statistics rows of [`crate::replay`] as text: CSV at full precision and an
 //! aligned table (what `oslf cache-stats` writes and prints).
 
 use std::fmt::Write as _;
 
-use oslf_runtime::replay::Row;
+use crate::replay::Row;
 
 /// The CSV columns, in [`Row`] field order.
 pub const CSV_HEADER: &str = "mode,blend,granularity,size,slots,path,phase,first_frame,\
@@ -145,43 +145,11 @@ pub fn format_table(rows: &[Row]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use oslf_runtime::replay::{rows, CameraPath, FrameRecord, Replay, RowKey};
-    use oslf_runtime::{Blend, CacheStats, Camera, Granularity, Mode};
+    use crate::replay::rows;
 
     #[test]
     fn csv_and_table_carry_the_rows_numbers() {
-        let camera = Camera {
-            position: glam::Vec3::new(3.0, 0.0, 1.0),
-            target: glam::Vec3::new(0.0, 0.0, 1.0),
-            up: glam::Vec3::Z,
-            vfov_deg: 40.0,
-        };
-        let path = CameraPath::orbit(camera, 4, 720.0).unwrap();
-        let frame = |requests: u64, misses: u64| FrameRecord {
-            stats: CacheStats {
-                frames: 1,
-                requests,
-                hits: requests - misses,
-                misses,
-                loads: misses,
-                bytes_decoded: misses * 1000,
-                unresolved: 1,
-                ..Default::default()
-            },
-            seconds: 0.01,
-            passes: 2,
-        };
-        let replay = Replay {
-            frames: vec![frame(10, 9), frame(12, 4), frame(10, 0), frame(12, 0)],
-            setup_seconds: 0.0,
-        };
-        let key = RowKey {
-            mode: Mode::Mirror,
-            blend: Some(Blend::Normal),
-            granularity: Granularity::Face,
-            size: "25%".into(),
-            slots: 30,
-        };
+        let (path, replay, key) = crate::replay::tests::four_frame_orbit();
         let rows = rows(&key, &path, &replay);
         let csv = to_csv(&rows);
         assert_eq!(csv.lines().count(), 4);

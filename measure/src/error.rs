@@ -32,6 +32,33 @@ pub enum MeasureError {
     /// An argument or input that cannot be measured.
     #[error("{0}")]
     Invalid(String),
+    /// A parameter of a replay outside its range, named by [`ReplayParam`] so that a caller
+    /// can name it its own way (the CLI names its flag).
+    #[error("invalid parameter: {} {problem}", param.name())]
+    InvalidParam { param: ReplayParam, problem: String },
+}
+
+/// Parameters of a replay that [`MeasureError::InvalidParam`] names, so that a caller can name
+/// them its own way (the CLI names its flags).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReplayParam {
+    /// The frames of a still path (`replay::CameraPath::still`).
+    StillFrames,
+    /// The frames of an orbit (`replay::CameraPath::orbit`).
+    OrbitFrames,
+    /// The angle an orbit turns through (`replay::CameraPath::orbit`).
+    OrbitDegrees,
+}
+
+impl ReplayParam {
+    /// The parameter's name in the library's words.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReplayParam::StillFrames => "still path frames",
+            ReplayParam::OrbitFrames => "orbit frames",
+            ReplayParam::OrbitDegrees => "orbit degrees",
+        }
+    }
 }
 
 /// Results of this crate.

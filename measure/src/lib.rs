@@ -13,8 +13,11 @@
 //! | [`table`] | result tables as aligned text, Markdown and CSV |
 //! | [`pareto`] | the Pareto front of (time, error) |
 //! | [`plot`] | the error-against-time plot with its front (PNG and SVG) |
-//! | [`cache_stats`] | the cache replays' rows ([`oslf_runtime::replay`]) as CSV and as a table |
+//! | [`replay`] | renders a store along a camera path through the cache and sums its counters per phase (thesis §6.6) |
+//! | [`cache_stats`] | the cache replays' rows as CSV and as a table |
 //! | [`sweep`] | bake variants of a scene, judge every variant with every runtime setting |
+//! | [`sweep_report`] | the sweep's Pareto fronts, its tables and the panels of its plot |
+//! | [`thesis_tables`] | the thesis's Tables 6.1 and 6.2 and the Ashikhmin–Shirley table on a scene |
 //!
 //! Commands: `oslf tables` reproduces the thesis's Tables 6.1 and 6.2 and a new
 //! Ashikhmin–Shirley table on a scene; `oslf sweep` runs the speed/accuracy sweep and the
@@ -27,8 +30,11 @@ pub mod judge;
 pub mod metrics;
 pub mod pareto;
 pub mod plot;
+pub mod replay;
 pub mod series_plot;
 pub mod sweep;
+pub mod sweep_report;
 pub mod table;
+pub mod thesis_tables;
 
 pub use error::{MeasureError, Result};

@@ -66,12 +66,6 @@ pub enum Param {
     CacheMegabytes,
     /// The RAM level's budget in megabytes ([`crate::cache::ram_bytes`]).
     RamMegabytes,
-    /// The frames of a still path (`replay::CameraPath::still`, feature `tooling`).
-    StillFrames,
-    /// The frames of an orbit (`replay::CameraPath::orbit`, feature `tooling`).
-    OrbitFrames,
-    /// The angle an orbit turns through (`replay::CameraPath::orbit`, feature `tooling`).
-    OrbitDegrees,
     /// The parallax proxy box ([`crate::ShadingParams::proxy_box`]).
     ProxyBox,
 }
@@ -82,9 +76,6 @@ impl Param {
         match self {
             Param::CacheMegabytes => "GPU cache budget (MB)",
             Param::RamMegabytes => "RAM budget (MB)",
-            Param::StillFrames => "still path frames",
-            Param::OrbitFrames => "orbit frames",
-            Param::OrbitDegrees => "orbit degrees",
             Param::ProxyBox => "proxy box",
         }
     }

@@ -55,12 +55,10 @@
 //!   by the parity tests against the GPU.
 //!
 //! * **Tooling** (feature `tooling`, off by default: not what an embedding application
-//!   uses): cache replays (`replay`: camera paths, a still view or an orbit, replayed with a
-//!   fresh renderer and its cache counters summed per phase into rows, what `oslf cache-stats`
-//!   reports, thesis Tables 6.3–6.7) and the checks of WGSL struct layouts against Rust
-//!   (`wgsl_layout`).
+//!   uses): the checks of WGSL struct layouts against Rust (`wgsl_layout`).
 //!
-//! Image error metrics (RMSE in CIELAB, PSNR) are `oslf_measure::metrics`'s.
+//! Measurement lives in `oslf-measure`: image error metrics (RMSE in CIELAB, PSNR) and the
+//! cache replays along camera paths that `oslf cache-stats` reports (thesis Tables 6.3–6.7).
 //!
 //! The crate depends on `oslf-format` (the store), `oslf-geometry` (patches and the camera it
 //! shares with the bake), wgpu and a few small crates; never on the bake, and it has no command
@@ -94,9 +92,6 @@ pub mod prefilter;
 pub mod probe;
 pub mod reference;
 pub mod renderer;
-/// Cache replays along camera paths: measurement tooling (feature `tooling`).
-#[cfg(feature = "tooling")]
-pub mod replay;
 #[cfg(test)]
 mod shader_layout;
 mod textures;

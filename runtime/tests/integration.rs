@@ -9,8 +9,6 @@ mod background;
 mod bc6h;
 #[path = "cache.rs"]
 mod cache;
-#[path = "cache_stats.rs"]
-mod cache_stats;
 mod common;
 #[path = "extremes.rs"]
 mod extremes;

@@ -153,13 +153,17 @@ pub struct StoreAccessArgs {
 impl StoreAccessArgs {
     /// Opens and validates the store at `path` as the flag says.
     pub fn open(&self, path: &std::path::Path) -> anyhow::Result<oslf_format::Store> {
-        let access = if self.mmap {
+        oslf_format::Store::open_with(path, self.access())
+            .with_context(|| format!("cannot open store {}", path.display()))
+    }
+
+    /// How `--mmap` says to read stores.
+    pub fn access(&self) -> oslf_format::StoreAccess {
+        if self.mmap {
             oslf_format::StoreAccess::Mapped
         } else {
             oslf_format::StoreAccess::Positioned
-        };
-        oslf_format::Store::open_with(path, access)
-            .with_context(|| format!("cannot open store {}", path.display()))
+        }
     }
 }
 

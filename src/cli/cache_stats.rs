@@ -1,20 +1,19 @@
 //! `oslf cache-stats`: replays renders of a store (a still view and an orbit) for lists of
 //! modes, blends, cache granularities and GPU cache sizes, and reports the cache's requests,
 //! hits, misses, miss rate, loads, evictions, bytes decoded and times per phase, as an aligned
-//! table (thesis Tables 6.3–6.7) and as CSV and JSON. See `oslf_runtime::replay`.
+//! table (thesis Tables 6.3–6.7) and as CSV and JSON. See `oslf_measure::replay`.
 
 use super::paths::{InputPath, OutputPath};
 use std::time::Instant;
 
 use super::args::{CameraArgs, ShadingArgs};
-use anyhow::{bail, Context};
+use anyhow::bail;
 use oslf_format::Store;
-use oslf_runtime::cache;
-use oslf_runtime::replay::{self, CacheSize, CameraPath, PathKind, Row, RowKey};
-use oslf_runtime::{
-    Blend, CacheConfig, Camera, Gpu, Granularity, Mode, Param, RenderOptions, Renderer,
-    ShadingParams,
+use oslf_measure::replay::{
+    self, CacheSize, CameraPath, PathKind, ReplayInfo, ReplayParam, ReplayPlan, Row, Shading,
 };
+use oslf_runtime::cache;
+use oslf_runtime::{Blend, CacheConfig, Camera, Gpu, Granularity, Mode, RenderOptions, Renderer};
 
 /// Replay renders of an OSLF store through the LRU cube-map cache and report its statistics,
 /// per mode, blend, granularity and cache size, for a still view and an orbiting camera (the
@@ -117,21 +116,6 @@ pub struct Args {
     no_bc: bool,
 }
 
-/// One renderer's worth of work, with what it cost to set up.
-#[derive(serde::Serialize)]
-struct ReplayInfo {
-    mode: String,
-    blend: String,
-    granularity: String,
-    size: String,
-    slots: u32,
-    path: String,
-    /// `Renderer::new`: tessellation, uploads, the pool.
-    renderer_ms: f64,
-    /// The priming frame (pipeline compile).
-    setup_ms: f64,
-}
-
 /// The store's size figures the report prints.
 struct StoreInfo {
     points: usize,
@@ -139,9 +123,6 @@ struct StoreInfo {
     resolution: u32,
     cube_bytes: u64,
 }
-
-/// Every (mode, blend) to replay, with its parameters: recon does not blend.
-type Shading = (Mode, Option<Blend>, ShadingParams);
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut door = oslf_util::door::Door::new();
@@ -161,94 +142,62 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let budgets = budgets(&args, &store, gpu.has_bc())?;
     let shadings = shadings(&args)?;
 
-    let (device, queue, adapter, bc) = (
-        gpu.device.clone(),
-        gpu.queue.clone(),
-        gpu.adapter_name.clone(),
-        gpu.has_bc(),
-    );
-    let config = |granularity, gpu_slots| CacheConfig {
-        gpu_slots,
+    let adapter = gpu.adapter_name.clone();
+    // The paths, from the store's camera (a renderer knows the default view).
+    let probe_gpu = Gpu::from_device(gpu.device.clone(), gpu.queue.clone(), adapter.clone());
+    let probe_config = CacheConfig {
+        gpu_slots: Some(1),
         ram_bytes,
-        granularity,
+        granularity: Granularity::Cube,
         slots_per_texture: None,
     };
-    // The paths, from the store's camera (a renderer knows the default view).
-    let probe = Renderer::new(gpu, store, config(Granularity::Cube, Some(1)))?;
+    let probe = Renderer::new(probe_gpu, store, probe_config)?;
     let start = args.camera.apply(probe.default_view())?;
     let info = StoreInfo {
         points: probe.store().sample_points().len(),
         cubes: probe.store().cube_count(),
         resolution: probe.store().cube_resolution(),
-        cube_bytes: cache::cube_bytes(probe.store(), bc),
+        cube_bytes: cache::cube_bytes(probe.store(), gpu.has_bc()),
     };
     drop(probe);
     let paths = camera_paths(&args, start)?;
-    let options = RenderOptions {
-        width: args.width,
-        height: args.height,
-        resolve_misses: !args.streaming,
-        read_pixels: false,
-        ..Default::default()
+    let plan = ReplayPlan {
+        shadings: &shadings,
+        granularities: &args.granularity,
+        budgets: &budgets,
+        paths: &paths,
+        options: RenderOptions {
+            width: args.width,
+            height: args.height,
+            resolve_misses: !args.streaming,
+            read_pixels: false,
+            ..Default::default()
+        },
+        ram_bytes,
     };
-
-    let total = shadings.len() * args.granularity.len() * budgets.len() * paths.len();
-    let mut rows: Vec<Row> = Vec::new();
-    let mut infos = Vec::new();
     let run_start = Instant::now();
-    for (mode, blend, params) in &shadings {
-        for &granularity in &args.granularity {
-            for (label, gpu_slots) in &budgets {
-                for path in &paths {
-                    let t = Instant::now();
-                    let mut renderer = Renderer::new(
-                        Gpu::from_device(device.clone(), queue.clone(), adapter.clone()),
-                        args.access.open(&args.store)?,
-                        config(granularity, *gpu_slots),
-                    )
-                    .with_context(|| format!("cache size {label}"))?;
-                    let renderer_ms = t.elapsed().as_secs_f64() * 1e3;
-                    let result = replay::replay(&mut renderer, path, params, &options)?;
-                    let key = RowKey {
-                        mode: *mode,
-                        blend: *blend,
-                        granularity,
-                        size: label.clone(),
-                        slots: renderer.cache().slots(),
-                    };
-                    for e in &renderer.cache().errors {
-                        eprintln!("warning: {e} (that sample point fell back)");
-                    }
-                    let new_rows = replay::rows(&key, path, &result);
-                    if !args.quiet {
-                        eprintln!(
-                            "[{}/{total}] {} {} {} {} {}: {} frames, {:.1}% misses, {:.2} s",
-                            infos.len() + 1,
-                            mode.name(),
-                            blend.map_or("-", Blend::name),
-                            key.granularity_name(),
-                            label,
-                            path.kind.name(),
-                            result.frames.len(),
-                            new_rows.last().map_or(0.0, |r| 100.0 * r.miss_rate),
-                            t.elapsed().as_secs_f64()
-                        );
-                    }
-                    infos.push(ReplayInfo {
-                        mode: mode.name().into(),
-                        blend: blend.map_or("-", Blend::name).into(),
-                        granularity: key.granularity_name().into(),
-                        size: label.clone(),
-                        slots: key.slots,
-                        path: path.kind.name().into(),
-                        renderer_ms,
-                        setup_ms: result.setup_seconds * 1e3,
-                    });
-                    rows.extend(new_rows);
-                }
-            }
+    let open = || Ok(Store::open_with(&args.store, args.access.access())?);
+    let (rows, infos) = replay::replay_all(&gpu, open, &plan, |done| {
+        for e in &done.failures {
+            eprintln!("warning: {e} (that sample point fell back)");
         }
-    }
+        if !args.quiet {
+            let i = done.info;
+            eprintln!(
+                "[{}/{}] {} {} {} {} {}: {} frames, {:.1}% misses, {:.2} s",
+                done.index,
+                done.total,
+                i.mode,
+                i.blend,
+                i.granularity,
+                i.size,
+                i.path,
+                done.frames,
+                done.rows.last().map_or(0.0, |r| 100.0 * r.miss_rate),
+                done.seconds
+            );
+        }
+    })?;
     let elapsed = run_start.elapsed().as_secs_f64();
     let report = Report {
         args: &args,
@@ -292,8 +241,8 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     if args.paths.is_empty() {
         bail!("--paths needs at least one of still, orbit");
     }
-    replay::check_frames(args.still_frames, Param::StillFrames)?;
-    replay::check_frames(args.frames, Param::OrbitFrames)?;
+    replay::check_frames(args.still_frames, ReplayParam::StillFrames)?;
+    replay::check_frames(args.frames, ReplayParam::OrbitFrames)?;
     replay::check_degrees(args.orbit_degrees)?;
     if args.width == 0 || args.height == 0 {
         bail!("--width and --height must be at least 1");

@@ -6,12 +6,9 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use oslf_measure::error::MeasureError;
 use oslf_measure::judge::render_truth;
-use oslf_measure::pareto::pareto_front;
-use oslf_measure::plot::{plot_tradeoff, Panel, PlotPoint, PlotText};
-use oslf_measure::sweep::{
-    blend_label, check_changes, parse_vary, run_sweep, SweepConfig, SweepRow,
-};
-use oslf_measure::table::Table;
+use oslf_measure::plot::plot_tradeoff;
+use oslf_measure::sweep::{check_changes, parse_vary, run_sweep, SweepConfig, SweepRow};
+use oslf_measure::sweep_report::{front_members, panels, rows_table, sensitivity_table, Fronts};
 use oslf_runtime::{Mode, Order, ShadingParams};
 use oslf_scene::scene::Scene;
 use oslf_trace::ground_truth::{GroundTruth, TruthSettings};
@@ -205,59 +202,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     })
     .map_err(vary_flag)?;
-    // Frame time is what the runtime settings trade: their front is over the default bake's
-    // rows. Bake time is what the bake settings trade: over the default runtime settings' rows.
-    let frame_front = front_of(&rows, |r| r.bake_change.is_none(), |r| r.judgement.frame_ms);
-    let bake_front = front_of(&rows, |r| r.runtime_change.is_none(), bake_cost);
+    let fronts = Fronts::of(&rows);
     Outputs {
         args: &args,
         params: &params,
         rows: &rows,
-        frame_front: &frame_front,
-        bake_front: &bake_front,
+        fronts: &fronts,
     }
     .write()
-}
-
-/// Pareto membership (error against `cost`) among the rows `member` selects; `None` for the
-/// rows it leaves out.
-fn front_of(
-    rows: &[SweepRow],
-    member: impl Fn(&SweepRow) -> bool,
-    cost: impl Fn(&SweepRow) -> f64,
-) -> Vec<Option<bool>> {
-    let members: Vec<usize> = (0..rows.len()).filter(|&i| member(&rows[i])).collect();
-    let points: Vec<(f64, f64)> = members
-        .iter()
-        .map(|&i| (cost(&rows[i]), rows[i].judgement.metrics.rmse_lab[0]))
-        .collect();
-    let mut out = vec![None; rows.len()];
-    for (&i, on) in members.iter().zip(pareto_front(&points)) {
-        out[i] = Some(on);
-    }
-    out
-}
-
-/// The bake's CPU seconds (all threads), or its wall seconds where CPU time is not known or
-/// the cube maps were captured on a GPU (whose time the CPU's does not count).
-fn bake_cost(r: &SweepRow) -> f64 {
-    if r.capture_device.starts_with("GPU") {
-        return r.bake_seconds;
-    }
-    r.bake_cpu_seconds.unwrap_or(r.bake_seconds)
-}
-
-/// The bake panel's x axis: what [`bake_cost`] measures for these rows.
-fn bake_cost_label(rows: &[SweepRow]) -> &'static str {
-    let gpu = rows
-        .iter()
-        .filter(|r| r.capture_device.starts_with("GPU"))
-        .count();
-    match gpu {
-        0 => "bake, CPU seconds",
-        n if n == rows.len() => "bake, seconds (wall, cube maps captured on a GPU)",
-        _ => "bake, CPU seconds (wall seconds for GPU bakes)",
-    }
 }
 
 /// What `oslf sweep` writes: the rows with their places on the two Pareto fronts.
@@ -266,8 +218,7 @@ struct Outputs<'a> {
     args: &'a Args,
     params: &'a ShadingParams,
     rows: &'a [SweepRow],
-    frame_front: &'a [Option<bool>],
-    bake_front: &'a [Option<bool>],
+    fronts: &'a Fronts,
 }
 
 impl Outputs<'_> {
@@ -276,10 +227,15 @@ impl Outputs<'_> {
             args,
             params,
             rows,
-            frame_front,
-            bake_front,
+            fronts,
         } = *self;
-        let all = self.table();
+        let all = rows_table(
+            params,
+            &args.scene.display().to_string(),
+            (args.width, args.height),
+            rows,
+            fronts,
+        );
         let sensitivity = sensitivity_table(rows);
         print!("{}\n{}", all.to_text(), sensitivity.to_text());
         self.print_fronts();
@@ -294,7 +250,7 @@ impl Outputs<'_> {
             "width": args.width,
             "height": args.height,
             "truth_spp": args.spp,
-            "rows": rows.iter().zip(frame_front).zip(bake_front).map(|((r, f), b)| serde_json::json!({
+            "rows": rows.iter().zip(&fronts.frame).zip(&fronts.bake).map(|((r, f), b)| serde_json::json!({
                 "label": r.label(), "front_frame_time": f, "front_bake_time": b, "row": r,
             })).collect::<Vec<_>>(),
         });
@@ -310,92 +266,19 @@ impl Outputs<'_> {
         Ok(())
     }
 
-    /// Every row with its times, errors and whether it is on each Pareto front.
-    fn table(&self) -> Table {
-        let Outputs {
-            args,
-            params,
-            rows,
-            frame_front,
-            bake_front,
-        } = *self;
-        let mut all = Table::new(
-            &format!(
-                "Sweep: mode {}, defaults {} (blend {}, φ_shader {}°), {}x{}",
-                params.mode.name(),
-                args.scene.display(),
-                blend_label(params),
-                params.phi_shader_deg,
-                args.width,
-                args.height
-            ),
-            &[
-                "configuration",
-                "sample points",
-                "bake s",
-                "bake CPU-s",
-                "capture on",
-                "store MB",
-                "frame ms",
-                "RMSE L*",
-                "RMSE a*",
-                "RMSE b*",
-                "RMSE R",
-                "RMSE G",
-                "RMSE B",
-                "PSNR dB",
-                "pixels",
-                "front: frame",
-                "front: bake",
-            ],
-        );
-        for ((r, on), on_bake) in rows.iter().zip(frame_front).zip(bake_front) {
-            let m = &r.judgement.metrics;
-            all.push(vec![
-                r.label(),
-                r.sample_points.to_string(),
-                format!("{:.1}", r.bake_seconds),
-                r.bake_cpu_seconds.map_or("–".into(), |c| format!("{c:.1}")),
-                r.capture_device.clone(),
-                format!("{:.2}", r.store_bytes as f64 / 1e6),
-                format!("{:.1}", r.judgement.frame_ms),
-                format!("{:.3}", m.rmse_lab[0]),
-                format!("{:.3}", m.rmse_lab[1]),
-                format!("{:.3}", m.rmse_lab[2]),
-                format!("{:.4}", m.rmse_rgb[0]),
-                format!("{:.4}", m.rmse_rgb[1]),
-                format!("{:.4}", m.rmse_rgb[2]),
-                m.psnr_db.map_or("–".into(), |p| format!("{p:.2}")),
-                m.pixels.to_string(),
-                yes_no(*on),
-                yes_no(*on_bake),
-            ]);
-        }
-        all
-    }
-
     /// The two Pareto fronts, and whether the defaults are on them.
     fn print_fronts(&self) {
-        let Outputs {
-            rows,
-            frame_front,
-            bake_front,
-            ..
-        } = *self;
         for (name, front) in [
-            ("frame time (runtime settings, default bake)", frame_front),
-            ("bake CPU time (bake settings, default runtime)", bake_front),
+            (
+                "frame time (runtime settings, default bake)",
+                &self.fronts.frame,
+            ),
+            (
+                "bake CPU time (bake settings, default runtime)",
+                &self.fronts.bake,
+            ),
         ] {
-            let labels: Vec<String> = rows
-                .iter()
-                .zip(front)
-                .filter(|(_, f)| **f == Some(true))
-                .map(|(r, _)| r.label())
-                .collect();
-            let default_on = rows
-                .iter()
-                .zip(front)
-                .any(|(r, f)| r.is_default() && *f == Some(true));
+            let (labels, default_on) = front_members(self.rows, front);
             println!(
                 "\nPareto front of RMSE L* against {name}: {}\nthe defaults are {}on it",
                 labels.join("; "),
@@ -406,104 +289,13 @@ impl Outputs<'_> {
 
     /// tradeoff.png and tradeoff.svg: error against frame time and against bake time.
     fn plot_fronts(&self) -> anyhow::Result<()> {
-        let Outputs {
-            args,
-            params,
-            rows,
-            frame_front,
-            bake_front,
-        } = *self;
-        let panel =
-            |front: &[Option<bool>], time: &dyn Fn(&SweepRow) -> f64, x: &str, what: &str| Panel {
-                points: rows
-                    .iter()
-                    .zip(front)
-                    .filter_map(|(r, f)| {
-                        f.map(|on| PlotPoint {
-                            label: r.label(),
-                            time_ms: time(r),
-                            error: r.judgement.metrics.rmse_lab[0],
-                            on_front: on,
-                            is_default: r.is_default(),
-                        })
-                    })
-                    .collect(),
-                text: PlotText {
-                    caption: format!("{}: {what}", params.mode.name()),
-                    x: x.into(),
-                    y: "RMSE of L* against the ground truth".into(),
-                },
-            };
         plot_tradeoff(
-            &[
-                panel(
-                    frame_front,
-                    &|r| r.judgement.frame_ms,
-                    "frame time, ms",
-                    "runtime settings, default bake",
-                ),
-                panel(
-                    bake_front,
-                    &bake_cost,
-                    bake_cost_label(self.rows),
-                    "bake settings, default runtime",
-                ),
-            ],
-            &args.out.join("tradeoff.png"),
-            &args.out.join("tradeoff.svg"),
+            &panels(self.params, self.rows, self.fronts),
+            &self.args.out.join("tradeoff.png"),
+            &self.args.out.join("tradeoff.svg"),
             (1500, 640),
         )?;
         Ok(())
-    }
-}
-
-/// Rows with at most one change, grouped by the changed key: how the error moves around the
-/// defaults (thesis §8.1.1).
-fn sensitivity_table(rows: &[SweepRow]) -> Table {
-    let mut t = Table::new(
-        "Sensitivity: one setting changed from the defaults",
-        &[
-            "setting",
-            "value",
-            "RMSE L*",
-            "Δ L*",
-            "frame ms",
-            "bake CPU-s",
-            "store MB",
-        ],
-    );
-    let Some(base) = rows.iter().find(|r| r.is_default()) else {
-        return t;
-    };
-    let e0 = base.judgement.metrics.rmse_lab[0];
-    let mut push = |key: &str, value: &str, r: &SweepRow| {
-        let e = r.judgement.metrics.rmse_lab[0];
-        t.push(vec![
-            key.into(),
-            value.into(),
-            format!("{e:.3}"),
-            format!("{:+.3}", e - e0),
-            format!("{:.1}", r.judgement.frame_ms),
-            format!("{:.1}", bake_cost(r)),
-            format!("{:.2}", r.store_bytes as f64 / 1e6),
-        ]);
-    };
-    push("(defaults)", "", base);
-    for r in rows {
-        let change = match (&r.bake_change, &r.runtime_change) {
-            (Some(c), None) | (None, Some(c)) => c,
-            _ => continue,
-        };
-        push(&change.key, &change.value, r);
-    }
-    t
-}
-
-fn yes_no(on: Option<bool>) -> String {
-    match on {
-        Some(true) => "yes".into(),
-        Some(false) => "no".into(),
-        None => "–".into(),
     }
 }
 

@@ -1,10 +1,11 @@
-//! Cache replay (`oslf_runtime::replay`): the counters add up, an unlimited cache stops missing once the orbit comes round, a smaller cache misses
+//! Cache replay (`oslf_measure::replay`): the counters add up, an unlimited cache stops missing once the orbit comes round, a smaller cache misses
 //! more, and whole cubes decode at least what faces do. The `oslf cache-stats` command is tested in
 //! the top-level `tests/cli_cache_stats.rs`.
 
-use crate::common;
+#[path = "../../runtime/tests/common/mod.rs"]
+mod common;
 
-use oslf_runtime::replay::{self, CameraPath, Phase, Row, RowKey};
+use oslf_measure::replay::{self, CameraPath, Phase, Row, RowKey};
 use oslf_runtime::{CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams};
 
 fn options(resolve_misses: bool) -> RenderOptions {

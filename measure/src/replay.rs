@@ -34,10 +34,10 @@ use glam::{Quat, Vec3};
 use oslf_geometry::Camera;
 use serde::{Deserialize, Serialize};
 
-use crate::cache::{CacheStats, Granularity};
-use crate::error::{Param, Result, RuntimeError};
-use crate::params::{Blend, Mode, ShadingParams};
-use crate::renderer::{RenderOptions, Renderer};
+use oslf_runtime::{Blend, CacheStats, Granularity, Mode, RenderOptions, Renderer, ShadingParams};
+
+pub use crate::error::ReplayParam;
+use crate::error::{MeasureError, Result};
 
 /// The kind of camera path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,12 +63,12 @@ impl PathKind {
 }
 
 impl std::str::FromStr for PathKind {
-    type Err = RuntimeError;
+    type Err = MeasureError;
     fn from_str(s: &str) -> Result<Self> {
         Self::ALL
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| RuntimeError::Parameter(format!("unknown path {s:?} (still or orbit)")))
+            .ok_or_else(|| MeasureError::Invalid(format!("unknown path {s:?} (still or orbit)")))
     }
 }
 
@@ -111,7 +111,7 @@ pub struct CameraPath {
 impl CameraPath {
     /// `frames` frames of `camera`; the steady state is every frame after the first.
     pub fn still(camera: Camera, frames: u32) -> Result<Self> {
-        check_frames(frames, Param::StillFrames)?;
+        check_frames(frames, ReplayParam::StillFrames)?;
         let n = frames as usize;
         Ok(Self {
             kind: PathKind::Still,
@@ -134,7 +134,7 @@ impl CameraPath {
     /// takes a whole number of frames (`360 · frames / degrees`), the second revolution shows
     /// exactly the first's cameras, so a budget holding every cube misses nothing there.
     pub fn orbit(start: Camera, frames: u32, degrees: f32) -> Result<Self> {
-        check_frames(frames, Param::OrbitFrames)?;
+        check_frames(frames, ReplayParam::OrbitFrames)?;
         check_degrees(degrees)?;
         let axis = start.up.try_normalize().unwrap_or(Vec3::Z);
         let offset = start.position - start.target;
@@ -196,9 +196,9 @@ impl CameraPath {
 }
 
 /// Errors when a path asks for no frames (`param` names which).
-pub fn check_frames(frames: u32, param: Param) -> Result<()> {
+pub fn check_frames(frames: u32, param: ReplayParam) -> Result<()> {
     if frames == 0 {
-        return Err(RuntimeError::InvalidParam {
+        return Err(MeasureError::InvalidParam {
             param,
             problem: "0: a path needs at least one frame".into(),
         });
@@ -209,8 +209,8 @@ pub fn check_frames(frames: u32, param: Param) -> Result<()> {
 /// Errors when the orbit's angle is not a finite number.
 pub fn check_degrees(degrees: f32) -> Result<()> {
     if !degrees.is_finite() {
-        return Err(RuntimeError::InvalidParam {
-            param: Param::OrbitDegrees,
+        return Err(MeasureError::InvalidParam {
+            param: ReplayParam::OrbitDegrees,
             problem: format!("{degrees} must be a finite number"),
         });
     }
@@ -231,11 +231,11 @@ pub enum CacheSize {
 }
 
 impl std::str::FromStr for CacheSize {
-    type Err = RuntimeError;
+    type Err = MeasureError;
     /// `N` slots, `P%` of the store's cubes, `all`.
     fn from_str(s: &str) -> Result<Self> {
         let bad = |why: &str| {
-            RuntimeError::Parameter(format!(
+            MeasureError::Invalid(format!(
                 "cache size {s:?}: {why} (a number of slots, a percentage such as 25%, or all)"
             ))
         };
@@ -268,8 +268,8 @@ impl CacheSize {
         }
     }
 
-    /// The [`crate::CacheConfig::gpu_slots`] for `store` (`None` = all) on an adapter with
-    /// (`adapter_has_bc`, [`crate::Gpu::has_bc`]) or without BC texture compression, which
+    /// The [`oslf_runtime::CacheConfig::gpu_slots`] for `store` (`None` = all) on an adapter
+    /// with (`adapter_has_bc`, [`oslf_runtime::Gpu::has_bc`]) or without BC texture compression, which
     /// decides how many cube maps a megabyte buys.
     pub fn gpu_slots(
         &self,
@@ -281,7 +281,7 @@ impl CacheSize {
             Self::Percent(p) => {
                 Some(((p / 100.0 * f64::from(store.cube_count())).ceil() as u32).max(1))
             }
-            Self::Megabytes(mb) => Some(crate::cache::slots_for_megabytes(
+            Self::Megabytes(mb) => Some(oslf_runtime::cache::slots_for_megabytes(
                 store,
                 mb,
                 adapter_has_bc,
@@ -294,7 +294,7 @@ impl CacheSize {
 /// One rendered frame of a replay.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FrameRecord {
-    /// The frame's cache counters ([`crate::Frame::stats`]).
+    /// The frame's cache counters ([`oslf_runtime::Frame::stats`]).
     pub stats: CacheStats,
     /// Wall time of [`Renderer::render`], to GPU completion (image not read back).
     pub seconds: f64,
@@ -327,7 +327,7 @@ pub fn replay(
     let first = path
         .cameras
         .first()
-        .ok_or_else(|| RuntimeError::Parameter("a path needs at least one frame".into()))?;
+        .ok_or_else(|| MeasureError::Invalid("a path needs at least one frame".into()))?;
     // The same camera turned round: the object is behind it, so nothing is rasterized.
     let away = Camera {
         target: first.position + (first.position - first.target),
@@ -342,7 +342,7 @@ pub fn replay(
             Granularity::Face => 6,
         };
     if primed.stats.requests > pinned {
-        return Err(RuntimeError::Parameter(format!(
+        return Err(MeasureError::Invalid(format!(
             "the priming frame, looking away from the object, requested {} units",
             primed.stats.requests
         )));
@@ -492,7 +492,7 @@ pub fn rows(key: &RowKey, path: &CameraPath, replay: &Replay) -> Vec<Row> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn camera() -> Camera {
@@ -536,8 +536,9 @@ mod tests {
             .contains("at least one frame"));
     }
 
-    #[test]
-    fn rows_sum_their_phase() {
+    /// Four frames of an orbit and their cache counters (misses 9, 4, 0, 0), and a row key:
+    /// the rows' tests here and in [`crate::cache_stats`].
+    pub(crate) fn four_frame_orbit() -> (CameraPath, Replay, RowKey) {
         let path = CameraPath::orbit(camera(), 4, 720.0).unwrap();
         let frame = |requests: u64, misses: u64| FrameRecord {
             stats: CacheStats {
@@ -564,6 +565,12 @@ mod tests {
             size: "25%".into(),
             slots: 30,
         };
+        (path, replay, key)
+    }
+
+    #[test]
+    fn rows_sum_their_phase() {
+        let (path, replay, key) = four_frame_orbit();
         let rows = rows(&key, &path, &replay);
         assert_eq!(rows.len(), 3);
         let all = &rows[2];
@@ -573,4 +580,121 @@ mod tests {
         assert_eq!((rows[1].first_frame, rows[1].last_frame), (3, 4));
         assert_eq!(rows[1].misses, 0);
     }
+}
+
+/// One (mode, blend) to replay, with its parameters; recon does not blend (`None`).
+pub type Shading = (Mode, Option<Blend>, ShadingParams);
+
+/// One renderer's worth of work, with what it cost to set up.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplayInfo {
+    pub mode: String,
+    pub blend: String,
+    pub granularity: String,
+    pub size: String,
+    pub slots: u32,
+    pub path: String,
+    /// `Renderer::new`: tessellation, uploads, the pool.
+    pub renderer_ms: f64,
+    /// The priming frame (pipeline compile).
+    pub setup_ms: f64,
+}
+
+/// What [`replay_all`] replays: every shading × granularity × GPU budget × path.
+pub struct ReplayPlan<'a> {
+    pub shadings: &'a [Shading],
+    pub granularities: &'a [Granularity],
+    /// GPU cache budgets as (label, slots; `None` for every cube).
+    pub budgets: &'a [(String, Option<u32>)],
+    pub paths: &'a [CameraPath],
+    pub options: RenderOptions,
+    /// The RAM level's budget in bytes.
+    pub ram_bytes: u64,
+}
+
+/// A replay of [`replay_all`] that has ended.
+pub struct ReplayDone<'a> {
+    /// Its number, from 1, and how many there are.
+    pub index: usize,
+    pub total: usize,
+    pub info: &'a ReplayInfo,
+    pub rows: &'a [Row],
+    pub frames: usize,
+    /// Wall time, renderer set-up included.
+    pub seconds: f64,
+    /// Cube maps that failed to decode (their sample points fell back).
+    pub failures: Vec<String>,
+}
+
+/// Replays every combination of `plan`, each with a fresh renderer (a cold cache) on `gpu`'s
+/// device and the store as `open` opens it; `done` hears of each replay as it ends. Returns the
+/// rows of every replay and what each cost to set up.
+pub fn replay_all(
+    gpu: &oslf_runtime::Gpu,
+    open: impl Fn() -> Result<oslf_format::Store>,
+    plan: &ReplayPlan,
+    mut done: impl FnMut(ReplayDone<'_>),
+) -> Result<(Vec<Row>, Vec<ReplayInfo>)> {
+    let total =
+        plan.shadings.len() * plan.granularities.len() * plan.budgets.len() * plan.paths.len();
+    let (mut rows, mut infos) = (Vec::new(), Vec::new());
+    for (mode, blend, params) in plan.shadings {
+        for &granularity in plan.granularities {
+            for (label, gpu_slots) in plan.budgets {
+                for path in plan.paths {
+                    let t = Instant::now();
+                    let config = oslf_runtime::CacheConfig {
+                        gpu_slots: *gpu_slots,
+                        ram_bytes: plan.ram_bytes,
+                        granularity,
+                        slots_per_texture: None,
+                    };
+                    let device = oslf_runtime::Gpu::from_device(
+                        gpu.device.clone(),
+                        gpu.queue.clone(),
+                        gpu.adapter_name.clone(),
+                    );
+                    let mut renderer = Renderer::new(device, open()?, config)
+                        .map_err(|e| MeasureError::Invalid(format!("cache size {label}: {e}")))?;
+                    let renderer_ms = t.elapsed().as_secs_f64() * 1e3;
+                    let result = replay(&mut renderer, path, params, &plan.options)?;
+                    let key = RowKey {
+                        mode: *mode,
+                        blend: *blend,
+                        granularity,
+                        size: label.clone(),
+                        slots: renderer.cache().slots(),
+                    };
+                    let new_rows = self::rows(&key, path, &result);
+                    let info = ReplayInfo {
+                        mode: mode.name().into(),
+                        blend: blend.map_or("-", Blend::name).into(),
+                        granularity: key.granularity_name().into(),
+                        size: label.clone(),
+                        slots: key.slots,
+                        path: path.kind.name().into(),
+                        renderer_ms,
+                        setup_ms: result.setup_seconds * 1e3,
+                    };
+                    done(ReplayDone {
+                        index: infos.len() + 1,
+                        total,
+                        info: &info,
+                        rows: &new_rows,
+                        frames: result.frames.len(),
+                        seconds: t.elapsed().as_secs_f64(),
+                        failures: renderer
+                            .cache()
+                            .errors
+                            .iter()
+                            .map(|e| e.to_string())
+                            .collect(),
+                    });
+                    infos.push(info);
+                    rows.extend(new_rows);
+                }
+            }
+        }
+    }
+    Ok((rows, infos))
 }
