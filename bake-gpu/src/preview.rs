@@ -9,18 +9,20 @@ use oslf_geometry::camera::Camera;
 use crate::capture::{GpuCapture, Params};
 use crate::error::Result;
 
-/// The shader's `PreviewCamera`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct PreviewCamera {
-    pub position: [f32; 3],
-    pub width: u32,
-    pub right: [f32; 3],
-    pub height: u32,
-    pub up: [f32; 3],
-    pub tan_half: f32,
-    pub forward: [f32; 3],
-    pub spp: u32,
+oslf_gpu::gpu_struct! {
+    /// The shader's `PreviewCamera`.
+    /// The camera's basis and lens: right, up, forward; tan(vfov / 2).
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct PreviewCamera as "PreviewCamera" {
+        pub position: [f32; 3],
+        pub width: u32,
+        pub right: [f32; 3],
+        pub height: u32,
+        pub up: [f32; 3],
+        pub tan_half: f32,
+        pub forward: [f32; 3],
+        pub spp: u32,
+    }
 }
 
 impl GpuCapture {

@@ -16,89 +16,95 @@ use crate::error::{GpuBakeError, Result};
 /// Deepest BVH the shader's traversal stack holds (`STACK` in shader/bvh.wgsl).
 pub const MAX_DEPTH: usize = 64;
 
-/// A BVH2 node: an inner node (`count` 0) has its children at `first` and `first + 1`, a leaf
-/// the triangles `first .. first + count`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct Node {
-    pub min: [f32; 3],
-    pub count: u32,
-    pub max: [f32; 3],
-    pub first: u32,
+oslf_gpu::gpu_struct! {
+    /// A BVH2 node: an inner node (`count` 0) has its children at `first` and `first + 1`, a leaf
+    /// the triangles `first .. first + count`.
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct Node as "Node" {
+        pub min: [f32; 3],
+        pub count: u32,
+        pub max: [f32; 3],
+        pub first: u32,
+    }
 }
 
-/// A triangle's corners (`v0[3]`: the largest coordinate magnitude of the corners, the hit's
-/// `extent`) and its unnormalised plane normal with that normal's length.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct Tri {
-    pub v0: [f32; 4],
-    pub v1: [f32; 4],
-    pub v2: [f32; 4],
-    pub plane: [f32; 4],
+oslf_gpu::gpu_struct! {
+    /// A triangle's corners (`v0[3]`: the largest coordinate magnitude of the corners, the hit's
+    /// `extent`) and its unnormalised plane normal with that normal's length.
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct Tri as "Tri" {
+        pub v0: [f32; 4],
+        pub v1: [f32; 4],
+        pub v2: [f32; 4],
+        pub plane: [f32; 4],
+    }
 }
 
-/// What a hit on a triangle reports besides its distance.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct TriAttr {
-    pub n0: [f32; 3],
-    pub material: u32,
-    pub n1: [f32; 3],
-    pub object: u32,
-    pub n2: [f32; 3],
-    pub global: u32,
-    pub gn: [f32; 3],
-    pub _pad0: u32,
-    pub uv01: [f32; 4],
-    pub uv2: [f32; 2],
-    pub _pad1: [u32; 2],
+oslf_gpu::gpu_struct! {
+    /// What a hit on a triangle reports besides its distance.
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct TriAttr as "TriAttr" {
+        pub n0: [f32; 3],
+        pub material: u32,
+        pub n1: [f32; 3],
+        pub object: u32,
+        pub n2: [f32; 3],
+        pub global: u32,
+        pub gn: [f32; 3],
+        pub _pad0: u32,
+        pub uv01: [f32; 4],
+        pub uv2: [f32; 2],
+        pub _pad1: [u32; 2],
+    }
 }
 
-/// A texture: constant (`a`), checker (`a`, `b`, `scale`) or an image of `width × height`
-/// RGB texels from texel `offset` of the texel buffer.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct Tex {
-    pub kind: u32,
-    pub width: u32,
-    pub height: u32,
-    pub offset: u32,
-    pub a: [f32; 3],
-    pub scale: f32,
-    pub b: [f32; 3],
-    pub _pad: f32,
+oslf_gpu::gpu_struct! {
+    /// A texture: constant (`a`), checker (`a`, `b`, `scale`) or an image of `width × height`
+    /// RGB texels from texel `offset` of the texel buffer.
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct Tex as "Tex" {
+        pub kind: u32,
+        pub width: u32,
+        pub height: u32,
+        pub offset: u32,
+        pub a: [f32; 3],
+        pub scale: f32,
+        pub b: [f32; 3],
+        pub _pad: f32,
+    }
 }
 
-/// A material: model 0 Lambertian, 1 glTF metallic-roughness.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct Mat {
-    pub albedo: Tex,
-    pub mr_texture: Tex,
-    pub model: u32,
-    pub metallic: f32,
-    pub roughness: f32,
-    pub _pad: u32,
-    pub emission: [f32; 3],
-    pub has_mr_texture: u32,
+oslf_gpu::gpu_struct! {
+    /// A material: model 0 Lambertian, 1 glTF metallic-roughness.
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct Mat as "Mat" {
+        pub albedo: Tex,
+        pub mr_texture: Tex,
+        pub model: u32,
+        pub metallic: f32,
+        pub roughness: f32,
+        pub _pad: u32,
+        pub emission: [f32; 3],
+        pub has_mr_texture: u32,
+    }
 }
 
-/// A delta light: kind 0 point, 1 spot, 2 sun; `power` is the intensity (point, spot) or the
-/// irradiance (sun).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuLight {
-    pub position: [f32; 3],
-    pub kind: u32,
-    pub direction: [f32; 3],
-    pub inner: f32,
-    pub power: [f32; 3],
-    pub outer: f32,
-    pub angular_radius: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
+oslf_gpu::gpu_struct! {
+    /// A delta light: kind 0 point, 1 spot, 2 sun; `power` is the intensity (point, spot) or the
+    /// irradiance (sun).
+    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+    pub struct GpuLight as "Light" {
+        pub position: [f32; 3],
+        pub kind: u32,
+        pub direction: [f32; 3],
+        pub inner: f32,
+        pub power: [f32; 3],
+        pub outer: f32,
+        pub angular_radius: f32,
+        pub _pad0: u32,
+        pub _pad1: u32,
+        pub _pad2: u32,
+    }
 }
 
 /// The environment's part of the shader's `Params` (the rest is per capture).

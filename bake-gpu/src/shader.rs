@@ -13,8 +13,40 @@ pub const CAPTURE: &str = include_str!("shader/capture.wgsl");
 const PREVIEW: &str = include_str!("shader/preview.wgsl");
 
 /// The whole module's source: oslf-shading's WGSL modules (GGX, Fresnel, colour, random
-/// streams, warps), then the capture shader's files.
+/// streams, warps), the structs generated from their Rust definitions, then the capture
+/// shader's files.
 pub fn source() -> String {
     let shading = oslf_shading::wgsl::source();
-    [shading.as_str(), BVH, SCENE, INTEGRATOR, CAPTURE, PREVIEW].join("\n")
+    [
+        shading,
+        structs(),
+        BVH.into(),
+        SCENE.into(),
+        INTEGRATOR.into(),
+        CAPTURE.into(),
+        PREVIEW.into(),
+    ]
+    .join("\n")
+}
+
+/// The WGSL declarations of the structs the host fills, generated from the Rust
+/// ([`oslf_gpu::gpu_struct!`]).
+fn structs() -> String {
+    use crate::capture::{Job, Params, TexelOut, TraceHit, TraceRay};
+    use crate::scene::{GpuLight, Mat, Node, Tex, Tri, TriAttr};
+    [
+        Params::wgsl(),
+        Node::wgsl(),
+        Tri::wgsl(),
+        TriAttr::wgsl(),
+        Tex::wgsl(),
+        Mat::wgsl(),
+        GpuLight::wgsl(),
+        Job::wgsl(),
+        TexelOut::wgsl(),
+        TraceRay::wgsl(),
+        TraceHit::wgsl(),
+        crate::preview::PreviewCamera::wgsl(),
+    ]
+    .concat()
 }

@@ -7,21 +7,11 @@
 // Bindings in the order of `GBufferPipeline::bind_group_layout` and `ObjectTextures`
 // (pipelines.rs, textures.rs).
 
-struct Params {
-    view_proj: mat4x4<f32>,
-    camera_pos: vec4<f32>,
-};
+// `struct Params` (the shading pass's uniform; this pass reads view_proj and camera_pos),
+// `struct GVertex` and `struct TextureParams` are generated from the Rust `ShadeUniform`,
+// `GVertex` and `TextureParams` (params.rs, geometry.rs, textures.rs) and placed before this
+// file (pipelines.rs).
 
-// One vertex: position and map id + 1 (as f32, exact below 2^24); normal and u; v, the
-// atlas grid k (0 for a Bézier patch; for a mesh the id is its first map and (u, v) its atlas
-// uv, made page-local per fragment) and a textured mesh's texture coordinates.
-struct GVertex {
-    position_patch: vec4<f32>,
-    normal_u: vec4<f32>,
-    v: vec4<f32>,
-    // A mesh's tangent and the bitangent's sign, where it has a normal texture; else zero.
-    tangent: vec4<f32>,
-};
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> vertices: array<GVertex>;
@@ -97,12 +87,6 @@ fn gbuffer(in: VsOut) -> FsOut {
 // The object's textures: which it has (bit i: BOUND_KINDS[i] of textures.rs: base colour,
 // metallic-roughness, normal, emissive, occlusion), and one texture per kind
 // (1×1 where it has none).
-struct TextureParams {
-    flags: u32,
-    normal_scale: f32,
-    occlusion_strength: f32,
-    pad: u32,
-};
 
 @group(1) @binding(0) var<uniform> T: TextureParams;
 @group(1) @binding(1) var tex_base_color: texture_2d<f32>;

@@ -8,21 +8,23 @@ use glam::{DAffine3, DMat4, DVec3, Vec3};
 use oslf_format::Store;
 use oslf_geometry::BezierPatch;
 
-/// One vertex as `GVertex` in gbuffer.wgsl: position and map id + 1 (exact as `f32` below
-/// 2²⁴), the unit normal and u, then v, the atlas grid `k` (`v[1]`) and a textured mesh's
-/// texture coordinates (`v[2..4]`; 0 for a Bézier patch's `k` and coordinates, then the
-/// tangent of a mesh with a normal texture,
-/// whose id is its map. For a mesh, the id is the object's first map and (u, v) its atlas uv:
-/// the G-buffer shader adds the page `py·k + px` per fragment and makes (u, v) page-local).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GVertex {
-    pub position_patch: [f32; 4],
-    pub normal_u: [f32; 4],
-    pub v: [f32; 4],
-    /// A textured mesh's tangent (world space, unit) with the bitangent's sign in `w`, where
-    /// it has a normal texture; zero elsewhere.
-    pub tangent: [f32; 4],
+oslf_gpu::gpu_struct! {
+    /// One vertex as `GVertex` in gbuffer.wgsl: position and map id + 1 (exact as `f32` below
+    /// 2²⁴), the unit normal and u, then v, the atlas grid `k` (`v[1]`) and a textured mesh's
+    /// texture coordinates (`v[2..4]`; 0 for a Bézier patch's `k` and coordinates, then the
+    /// tangent of a mesh with a normal texture,
+    /// whose id is its map. For a mesh, the id is the object's first map and (u, v) its atlas uv:
+    /// the G-buffer shader adds the page `py·k + px` per fragment and makes (u, v) page-local).
+    /// gbuffer.wgsl's `GVertex`, declared from these fields ([`GVertex::wgsl`]).
+    #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+    pub struct GVertex as "GVertex" {
+        pub position_patch: [f32; 4],
+        pub normal_u: [f32; 4],
+        pub v: [f32; 4],
+        /// A textured mesh's tangent (world space, unit) with the bitangent's sign in `w`,
+        /// where it has a normal texture; zero elsewhere.
+        pub tangent: [f32; 4],
+    }
 }
 
 /// Largest tessellation grid per patch.

@@ -433,71 +433,79 @@ fn ray_frame(camera: &oslf_geometry::Camera) -> ([f32; 4], [f32; 4], [f32; 4]) {
     )
 }
 
-/// The shader's uniform block (`Params` in shade.wgsl; gbuffer.wgsl declares its first two
-/// members). The shader_layout tests check the WGSL against it field by field.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadeUniform {
-    pub view_proj: [[f32; 4]; 4],
-    pub camera_pos: [f32; 4],
-    pub size: [u32; 2],
-    pub terms: u32,
-    pub blend: u32,
-    pub blend_n: f32,
-    pub source: u32,
-    pub m: u32,
-    pub order: u32,
-    pub rs: f32,
-    pub rd: f32,
-    pub nu: f32,
-    pub nv: f32,
-    pub cos_phi_shader: f32,
-    pub seed: u32,
-    pub sample_count: u32,
-    pub env_cube: u32,
-    pub map_res: u32,
-    pub index16: u32,
-    pub cube_res: u32,
-    pub slots_per_texture: u32,
-    /// The camera's right vector; `w` = tan(vfov/2). With `cam_up` and `cam_forward`, the ray
-    /// through each background pixel ([`Background::Env`]).
-    pub cam_right: [f32; 4],
-    /// The camera's up vector (`w` unused).
-    pub cam_up: [f32; 4],
-    /// The camera's viewing direction (`w` unused).
-    pub cam_forward: [f32; 4],
-    /// The colour of [`Background::Color`] (`w` unused).
-    pub bg_color: [f32; 4],
-    /// [`Background::tag`].
-    pub background: u32,
-    /// Mip levels the glossy term filters over; 1 = point sampling.
-    pub mip_levels: u32,
-    /// Most linear-search steps of a depth-corrected lookup; 0 = plain lookups.
-    pub depth_steps: u32,
-    /// [`DEPTH_THICKNESS_TEXELS`] as a fraction of the distance.
-    pub depth_thickness: f32,
-    /// The environment cube's centre, in the shader's coordinates (`w` unused).
-    pub probe_pos: [f32; 4],
-    /// The parallax proxy box, in the shader's coordinates (`w` unused).
-    pub box_min: [f32; 4],
-    /// See `box_min`.
-    pub box_max: [f32; 4],
-    /// [`ShadingParams::metallic`].
-    pub metallic: f32,
-    /// GGX α = roughness², at least [`oslf_shading::ggx::MIN_ALPHA`].
-    pub alpha: f32,
-    /// 1: the pbr mode takes an object's metallic and α from its material in the store where
-    /// it has one ([`ShadingParams::object_material`] and a store with such objects).
-    pub object_material: u32,
-    /// The smallest metallic factor any pixel can have (`metallic`, and the store's
-    /// materials' with `object_material`): below 1 the pbr mode has a diffuse part.
-    pub min_metallic: f32,
-    /// 1: [`GlossyFilter::SplitSum`].
-    pub split_sum: u32,
-    /// Pad the block to WGSL's 16-byte struct alignment.
-    pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
+oslf_gpu::gpu_struct! {
+    /// The shader's uniform block, `Params` in shade.wgsl and gbuffer.wgsl: its WGSL
+    /// declaration is generated from these fields ([`ShadeUniform::wgsl`]), and the
+    /// shader_layout tests check that WGSL places each at the Rust offset.
+    #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+    pub struct ShadeUniform as "Params" {
+        pub view_proj: [[f32; 4]; 4],
+        pub camera_pos: [f32; 4],
+        pub size: [u32; 2],
+        /// [`Mode::terms`]: 1 F_recon, 2 the mirror F_refl, 4 the glossy term, 8 scale the
+        /// reflection by C_s (Eq. 4.12), 16 the glossy term is glTF's BRDF.
+        pub terms: u32,
+        /// 0 closest distance (4.3), 1 closest angle (4.4), 2 B^avg (4.9), 3 B^r (4.10), 4 B^n
+        /// (4.11).
+        pub blend: u32,
+        pub blend_n: f32,
+        /// 0 the OSLF's sample points, 1 the environment cube, 2 that cube parallax-corrected.
+        pub source: u32,
+        pub m: u32,
+        /// 0 integrate per sample point, then blend; 1 blend per direction, then integrate (§5.2).
+        pub order: u32,
+        pub rs: f32,
+        pub rd: f32,
+        pub nu: f32,
+        pub nv: f32,
+        pub cos_phi_shader: f32,
+        pub seed: u32,
+        pub sample_count: u32,
+        pub env_cube: u32,
+        pub map_res: u32,
+        pub index16: u32,
+        pub cube_res: u32,
+        pub slots_per_texture: u32,
+        /// The camera's right vector; `w` = tan(vfov/2). With `cam_up` and `cam_forward`, the ray
+        /// through each background pixel ([`Background::Env`]).
+        pub cam_right: [f32; 4],
+        /// The camera's up vector (`w` unused).
+        pub cam_up: [f32; 4],
+        /// The camera's viewing direction (`w` unused).
+        pub cam_forward: [f32; 4],
+        /// The colour of [`Background::Color`] (`w` unused).
+        pub bg_color: [f32; 4],
+        /// [`Background::tag`].
+        pub background: u32,
+        /// Mip levels the glossy term filters over; 1 = point sampling.
+        pub mip_levels: u32,
+        /// Most linear-search steps of a depth-corrected lookup; 0 = plain lookups.
+        pub depth_steps: u32,
+        /// [`DEPTH_THICKNESS_TEXELS`] as a fraction of the distance.
+        pub depth_thickness: f32,
+        /// The environment cube's centre, in the shader's coordinates (`w` unused).
+        pub probe_pos: [f32; 4],
+        /// The parallax proxy box, in the shader's coordinates (`w` unused).
+        pub box_min: [f32; 4],
+        /// See `box_min`.
+        pub box_max: [f32; 4],
+        /// [`ShadingParams::metallic`].
+        pub metallic: f32,
+        /// GGX α = roughness², at least [`oslf_shading::ggx::MIN_ALPHA`].
+        pub alpha: f32,
+        /// 1: the pbr mode takes an object's metallic and α from its material in the store where
+        /// it has one ([`ShadingParams::object_material`] and a store with such objects).
+        pub object_material: u32,
+        /// The smallest metallic factor any pixel can have (`metallic`, and the store's
+        /// materials' with `object_material`): below 1 the pbr mode has a diffuse part.
+        pub min_metallic: f32,
+        /// 1: [`GlossyFilter::SplitSum`].
+        pub split_sum: u32,
+        /// Pad the block to WGSL's 16-byte struct alignment.
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
+    }
 }
 
 /// What the uniform needs from the store and the cache besides the parameters.

@@ -41,17 +41,26 @@ const SHADE_FILES: &str = concat!(
     include_str!("shade/pixel.wgsl"),
 );
 
-/// shade.wgsl, the shading pass: oslf-shading's WGSL modules ([`oslf_shading::wgsl`]), then the
-/// files of shade/. Each file opens with a `// ---- NAME.wgsl ----` banner, so a line that a
+/// shade.wgsl, the shading pass: oslf-shading's WGSL modules ([`oslf_shading::wgsl`]), the
+/// uniform's struct generated from [`crate::params::ShadeUniform`], then the files of shade/. Each file opens with a `// ---- NAME.wgsl ----` banner, so a line that a
 /// naga error quotes can be found in its file.
 pub(crate) fn shade_wgsl() -> String {
-    [oslf_shading::wgsl::source().as_str(), SHADE_FILES].join("\n")
+    [
+        oslf_shading::wgsl::source().as_str(),
+        &crate::params::ShadeUniform::wgsl(),
+        SHADE_FILES,
+    ]
+    .join("\n")
 }
 
-/// gbuffer.wgsl, the G-buffer pass: oslf-shading's WGSL modules, then gbuffer.wgsl.
+/// gbuffer.wgsl, the G-buffer pass: oslf-shading's WGSL modules, the structs generated from
+/// Rust (the uniform, the vertex, the texture parameters), then gbuffer.wgsl.
 pub(crate) fn gbuffer_wgsl() -> String {
     [
         oslf_shading::wgsl::source().as_str(),
+        &crate::params::ShadeUniform::wgsl(),
+        &crate::geometry::GVertex::wgsl(),
+        &crate::textures::TextureParams::wgsl(),
         include_str!("gbuffer.wgsl"),
     ]
     .join("\n")

@@ -15,15 +15,18 @@ pub(crate) const BOUND_KINDS: [TextureKind; 5] = [
     TextureKind::Occlusion,
 ];
 
-/// gbuffer.wgsl's `TextureParams`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct TextureParams {
-    /// Bit `i` set when the object has [`BOUND_KINDS`]`[i]`.
-    pub flags: u32,
-    pub normal_scale: f32,
-    pub occlusion_strength: f32,
-    pub pad: u32,
+oslf_gpu::gpu_struct! {
+    /// gbuffer.wgsl's `TextureParams`, declared from these fields ([`TextureParams::wgsl`]):
+    /// which textures the object has, and the normal texture's scale and the occlusion
+    /// texture's strength.
+    #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+    pub(crate) struct TextureParams as "TextureParams" {
+        /// Bit `i` set when the object has [`BOUND_KINDS`]`[i]`.
+        pub flags: u32,
+        pub normal_scale: f32,
+        pub occlusion_strength: f32,
+        pub pad: u32,
+    }
 }
 
 /// The bind groups of the store's textured objects.

@@ -1,138 +1,15 @@
 // The cube-map capture of trace/src/capture.rs: one invocation per texel of a batch of cubes,
 // its samples stratified k × k, its random stream keyed by (seed, cube, face, texel) as on the
 // CPU; and `trace`, the closest-hit queries the traversal tests compare with the CPU's BVH.
-
-struct Params {
-    resolution: u32,
-    strata: u32,
-    max_bounces: u32,
-    light_count: u32,
-    seed: vec2<u32>,
-    env_kind: u32,
-    flags: u32,
-    // Texels of the batch (cubes × 6 × resolution²), and the invocations per dispatch row.
-    texels: u32,
-    row_invocations: u32,
-    // The dispatch's first texel.
-    first: u32,
-    _pad1: u32,
-    // Lat-long map: width, height, first texel in `texels`; sampling tables: width, height.
-    env_size: vec4<u32>,
-    env_tables: vec4<u32>,
-    // cos and sin of the map's rotation about z.
-    env_rotation: vec4<f32>,
-    env_constant: vec4<f32>,
-    // The sky's Perez coefficients A–D of Y, x and y, their E, normalisation, sun and ground.
-    perez_y: vec4<f32>,
-    perez_x: vec4<f32>,
-    perez_yc: vec4<f32>,
-    perez_e: vec4<f32>,
-    norm: vec4<f32>,
-    model_sun: vec4<f32>,
-    ground: vec4<f32>,
-}
+//
+// The structs the host fills (Params, Node, Tri, TriAttr, Tex, Mat, Light, Job, TexelOut,
+// TraceRay, TraceHit and the preview's PreviewCamera) are generated from their Rust
+// definitions (capture.rs, scene.rs, preview.rs, whose docs say what each field holds) and
+// placed before these files (shader.rs).
 
 const FLAG_ENV_ACTIVE: u32 = 1u;
 const FLAG_EMITTERS: u32 = 2u;
 const FLAG_DISTANCE: u32 = 4u;
-
-struct Node {
-    min: vec3<f32>,
-    count: u32,
-    max: vec3<f32>,
-    first: u32,
-}
-
-// Corners (w of v0: the largest coordinate magnitude of the corners) and the unnormalised
-// plane normal with its length.
-struct Tri {
-    v0: vec4<f32>,
-    v1: vec4<f32>,
-    v2: vec4<f32>,
-    plane: vec4<f32>,
-}
-
-struct TriAttr {
-    n0: vec3<f32>,
-    material: u32,
-    n1: vec3<f32>,
-    object: u32,
-    n2: vec3<f32>,
-    global: u32,
-    gn: vec3<f32>,
-    _pad0: u32,
-    uv01: vec4<f32>,
-    uv2: vec2<f32>,
-    _pad1: vec2<u32>,
-}
-
-struct Tex {
-    kind: u32,
-    width: u32,
-    height: u32,
-    offset: u32,
-    a: vec3<f32>,
-    scale: f32,
-    b: vec3<f32>,
-    _pad: f32,
-}
-
-struct Mat {
-    albedo: Tex,
-    mr_texture: Tex,
-    model: u32,
-    metallic: f32,
-    roughness: f32,
-    _pad: u32,
-    emission: vec3<f32>,
-    has_mr_texture: u32,
-}
-
-struct Light {
-    position: vec3<f32>,
-    kind: u32,
-    direction: vec3<f32>,
-    inner: f32,
-    power: vec3<f32>,
-    outer: f32,
-    angular_radius: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
-
-struct Job {
-    origin: vec3<f32>,
-    index: u32,
-    sees_objects: u32,
-    _pad: array<u32, 3>,
-}
-
-// One texel's result: radiance, distance, its samples' luminance sum and sum of squares, the
-// closest-hit rays, and (shadow rays << 1) | whether a sample hit a surface.
-struct TexelOut {
-    radiance: vec3<f32>,
-    distance: f32,
-    lum_sum: f32,
-    lum_sq: f32,
-    closest: u32,
-    shadow_hit: u32,
-}
-
-struct TraceRay {
-    origin: vec3<f32>,
-    t_max: f32,
-    dir: vec3<f32>,
-    objects: u32,
-}
-
-// t, the hit triangle's global index (0xffffffff: none), barycentrics b1, b2.
-struct TraceHit {
-    t: f32,
-    triangle: u32,
-    b1: f32,
-    b2: f32,
-}
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> nodes: array<Node>;

@@ -2,18 +2,6 @@
 // capture's integrator, one invocation per pixel, its samples stratified and its random
 // stream keyed by (seed, x, y) as on the CPU.
 
-// The camera's basis and lens: right, up, forward; tan(vfov / 2) and the aspect ratio.
-struct PreviewCamera {
-    position: vec3<f32>,
-    width: u32,
-    right: vec3<f32>,
-    height: u32,
-    up: vec3<f32>,
-    tan_half: f32,
-    forward: vec3<f32>,
-    spp: u32,
-}
-
 @group(0) @binding(12) var<uniform> camera: PreviewCamera;
 @group(0) @binding(13) var<storage, read_write> pixels: array<vec4<f32>>;
 

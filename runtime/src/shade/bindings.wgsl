@@ -8,67 +8,8 @@
 // the two. Bindings are declared in the order of `ShadePipelines::bind_group_layout`
 // (pipelines.rs).
 
-struct Params {
-    view_proj: mat4x4<f32>,
-    camera_pos: vec4<f32>,
-    size: vec2<u32>,
-    // Bit flags: 1 = F_recon, 2 = mirror F_refl, 4 = glossy (Ashikhmin–Shirley),
-    // 8 = scale the reflection term by C_s (Eq. 4.12).
-    terms: u32,
-    // 0 closest distance (4.3), 1 closest angle (4.4), 2 B^avg (4.9), 3 B^r (4.10), 4 B^n (4.11)
-    blend: u32,
-    blend_n: f32,
-    // 0 = the OSLF sample points, 1 = the environment-map baseline (one cube at the centre),
-    // 2 = that cube parallax-corrected against the proxy box
-    source: u32,
-    m: u32,
-    // 0 = integrate per sample point, then blend; 1 = blend per direction, then integrate (§5.2)
-    order: u32,
-    rs: f32,
-    rd: f32,
-    nu: f32,
-    nv: f32,
-    cos_phi_shader: f32,
-    seed: u32,
-    sample_count: u32,
-    env_cube: u32,
-    map_res: u32,
-    index16: u32,
-    cube_res: u32,
-    slots_per_texture: u32,
-    // The camera's basis for the rays through background pixels (oslf_geometry::Camera::
-    // direction); cam_right.w = tan(vfov/2).
-    cam_right: vec4<f32>,
-    cam_up: vec4<f32>,
-    cam_forward: vec4<f32>,
-    // Linear RGB of the colour background.
-    bg_color: vec4<f32>,
-    // 0 none (transparent black), 1 the environment cube, 2 bg_color (RenderOptions::background)
-    background: u32,
-    // Mip levels the glossy term filters over (1 = point sampling; FILTER).
-    mip_levels: u32,
-    // Most linear-search steps of a depth-corrected lookup (0 = off; DEPTH).
-    depth_steps: u32,
-    // How far behind the surface a refined hit may lie, as a fraction of its distance.
-    depth_thickness: f32,
-    // The environment cube's centre and the parallax proxy box (SOURCE 2), all in the shader's
-    // coordinates.
-    probe_pos: vec4<f32>,
-    box_min: vec4<f32>,
-    box_max: vec4<f32>,
-    // pbr: glTF's metallic factor, and GGX α = roughness² (at least GGX_MIN_ALPHA).
-    metallic: f32,
-    alpha: f32,
-    // 1: an object's metallic and α from its material (PatchGpu.material) where it has one.
-    object_material: u32,
-    // The smallest metallic any pixel can have (below 1: DIFFUSE).
-    min_metallic: f32,
-    // 1: the pbr mode's split-sum baseline (SPLIT_SUM): the prefiltered environment.
-    split_sum: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
-};
+// `struct Params` is generated from the Rust `ShadeUniform` (params.rs, whose docs say what
+// each field holds) and placed before this file (pipelines.rs).
 
 // The mode's switches are pipeline-overridable constants (set from the same values as the
 // uniform's `terms`, `blend`, `source`, `order`): one pipeline per combination, so code a mode
