@@ -14,6 +14,7 @@ use oslf_trace::noise::NoiseStats;
 use wgpu::util::DeviceExt;
 
 use crate::error::{GpuBakeError, Result};
+pub use crate::layouts::{Job, Params, TexelOut, TraceHit, TraceRay};
 use crate::scene::GpuScene;
 use crate::shader;
 
@@ -37,97 +38,10 @@ const BATCH_BYTES: u64 = 64 << 20;
 /// Most cubes per batch.
 const MAX_BATCH_CUBES: u64 = 256;
 
-oslf_gpu::gpu_struct! {
-    /// The shader's `Params` (shader/capture.wgsl).
-    /// Declared in WGSL from these fields ([`Params::wgsl`]).
-    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-    pub struct Params as "Params" {
-        pub resolution: u32,
-        pub strata: u32,
-        pub max_bounces: u32,
-        pub light_count: u32,
-        pub seed: [u32; 2],
-        pub env_kind: u32,
-        pub flags: u32,
-        /// Texels of the batch (cubes × 6 × resolution²).
-        pub texels: u32,
-        /// Invocations per dispatch row.
-        pub row_invocations: u32,
-        /// The dispatch's first texel.
-        pub first: u32,
-        pub _pad1: u32,
-        /// Lat-long map: width, height, first texel in `texels`.
-        pub env_size: [u32; 4],
-        /// Sampling tables: width, height.
-        pub env_tables: [u32; 4],
-        /// cos and sin of the map's rotation about z.
-        pub env_rotation: [f32; 4],
-        pub env_constant: [f32; 4],
-        /// The sky's Perez coefficients A–D of Y, x and y, their E, normalisation, sun and
-        /// ground.
-        pub perez_y: [f32; 4],
-        pub perez_x: [f32; 4],
-        pub perez_yc: [f32; 4],
-        pub perez_e: [f32; 4],
-        pub norm: [f32; 4],
-        pub model_sun: [f32; 4],
-        pub ground: [f32; 4],
-    }
-}
-
 /// `FLAG_*` of shader/capture.wgsl.
 const FLAG_ENV_ACTIVE: u32 = 1;
 const FLAG_EMITTERS: u32 = 2;
 const FLAG_DISTANCE: u32 = 4;
-
-oslf_gpu::gpu_struct! {
-    /// The shader's `Job`.
-    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-    pub struct Job as "Job" {
-        pub origin: [f32; 3],
-        pub index: u32,
-        pub sees_objects: u32,
-        pub _pad: [u32; 3],
-    }
-}
-
-oslf_gpu::gpu_struct! {
-    /// The shader's `TexelOut`.
-    /// One texel's result: radiance, distance, its samples' luminance sum and sum of squares,
-    /// the closest-hit rays, and (shadow rays << 1) | whether a sample hit a surface.
-    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-    pub struct TexelOut as "TexelOut" {
-        pub radiance: [f32; 3],
-        pub distance: f32,
-        pub lum_sum: f32,
-        pub lum_sq: f32,
-        pub closest: u32,
-        pub shadow_hit: u32,
-    }
-}
-
-oslf_gpu::gpu_struct! {
-    /// The shader's `TraceRay`.
-    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-    pub struct TraceRay as "TraceRay" {
-        pub origin: [f32; 3],
-        pub t_max: f32,
-        pub dir: [f32; 3],
-        pub objects: u32,
-    }
-}
-
-oslf_gpu::gpu_struct! {
-    /// The shader's `TraceHit`.
-    /// t, the hit triangle's global index (0xffffffff: none), barycentrics b1, b2.
-    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-    pub struct TraceHit as "TraceHit" {
-        pub t: f32,
-        pub triangle: u32,
-        pub b1: f32,
-        pub b2: f32,
-    }
-}
 
 /// A ray of [`GpuCapture::trace`]: origin, unit direction, `t_max`, and whether the OSLF
 /// objects take part.

@@ -14,6 +14,8 @@
 //!   `CaptureDevice`, so `oslf bake --device gpu` resumes, shards and merges as the CPU bake;
 //! - [`choice`]: `--device auto|cpu|gpu` decided and explained, for the CLI and the sweep;
 //! - [`preview`]: the bake's preview (the scene camera's image) with the same integrator;
+//! - [`layouts`]: the structs the host fills and the shader reads, each declared once for Rust
+//!   and WGSL;
 //! - [`shader`]: the WGSL, split as the CPU code is (random numbers, traversal, scene,
 //!   integrator, capture).
 //!
@@ -30,6 +32,7 @@
 pub mod capture;
 pub mod choice;
 pub mod error;
+pub mod layouts;
 pub mod preview;
 pub mod scene;
 pub mod shader;

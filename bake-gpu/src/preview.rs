@@ -2,28 +2,12 @@
 //! shader/preview.wgsl with the capture's integrator, as `oslf_trace::preview::render` does on
 //! the CPU (the same strata and random streams, so the same image up to rounding).
 
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use oslf_geometry::camera::Camera;
 
 use crate::capture::{GpuCapture, Params};
 use crate::error::Result;
-
-oslf_gpu::gpu_struct! {
-    /// The shader's `PreviewCamera`.
-    /// The camera's basis and lens: right, up, forward; tan(vfov / 2).
-    #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-    pub struct PreviewCamera as "PreviewCamera" {
-        pub position: [f32; 3],
-        pub width: u32,
-        pub right: [f32; 3],
-        pub height: u32,
-        pub up: [f32; 3],
-        pub tan_half: f32,
-        pub forward: [f32; 3],
-        pub spp: u32,
-    }
-}
+pub use crate::layouts::PreviewCamera;
 
 impl GpuCapture {
     /// `camera`'s `width × height` image, `spp` samples per pixel (at least 1), random

@@ -19,7 +19,7 @@ pub fn source() -> String {
     let shading = oslf_shading::wgsl::source();
     [
         shading,
-        structs(),
+        crate::layouts::wgsl(),
         BVH.into(),
         SCENE.into(),
         INTEGRATOR.into(),
@@ -27,26 +27,4 @@ pub fn source() -> String {
         PREVIEW.into(),
     ]
     .join("\n")
-}
-
-/// The WGSL declarations of the structs the host fills, generated from the Rust
-/// ([`oslf_gpu::gpu_struct!`]).
-fn structs() -> String {
-    use crate::capture::{Job, Params, TexelOut, TraceHit, TraceRay};
-    use crate::scene::{GpuLight, Mat, Node, Tex, Tri, TriAttr};
-    [
-        Params::wgsl(),
-        Node::wgsl(),
-        Tri::wgsl(),
-        TriAttr::wgsl(),
-        Tex::wgsl(),
-        Mat::wgsl(),
-        GpuLight::wgsl(),
-        Job::wgsl(),
-        TexelOut::wgsl(),
-        TraceRay::wgsl(),
-        TraceHit::wgsl(),
-        crate::preview::PreviewCamera::wgsl(),
-    ]
-    .concat()
 }

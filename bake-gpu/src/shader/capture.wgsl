@@ -4,7 +4,7 @@
 //
 // The structs the host fills (Params, Node, Tri, TriAttr, Tex, Mat, Light, Job, TexelOut,
 // TraceRay, TraceHit and the preview's PreviewCamera) are generated from their Rust
-// definitions (capture.rs, scene.rs, preview.rs, whose docs say what each field holds) and
+// definitions (layouts.rs and scene.rs, whose docs say what each field holds) and
 // placed before these files (shader.rs).
 
 const FLAG_ENV_ACTIVE: u32 = 1u;
