@@ -9,7 +9,7 @@
 //! trusts it: a damaged, truncated or hostile file is a typed [`Error`] naming the section and
 //! byte offset, never a panic or an out-of-bounds read.
 //!
-//! **The specification is [`docs/format.md`](../../docs/format.md)**, format 1.0, byte by byte,
+//! **The specification is `docs/format.md`** in the repository: format 1.0, byte by byte,
 //! written for a person implementing a reader in another language. This crate is its reference
 //! implementation: where a module implements a part of it, its docs name the section.
 //!
