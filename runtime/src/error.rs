@@ -22,21 +22,13 @@ pub enum RuntimeError {
         cube: u32,
         error: oslf_format::Error,
     },
-    /// No GPU adapter could be found.
-    #[error(
-        "no GPU adapter found ({0}). On Linux without a GPU install Mesa's software Vulkan \
-         driver (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`)"
-    )]
-    NoAdapter(String),
-    /// The adapter refused the device we asked for.
-    #[error("cannot create a GPU device on {adapter}: {message}")]
-    Device { adapter: String, message: String },
     /// The store needs more than this GPU allows (texture size, array layers, buffer size).
     #[error("this GPU cannot hold the store: {0}")]
     Limits(String),
-    /// wgpu reported a validation or out-of-memory error.
-    #[error("GPU error: {0}")]
-    Gpu(String),
+    /// The device (`oslf_gpu::GpuError` says what): no adapter, a device that cannot be
+    /// created, or a wgpu validation or out-of-memory error, ours or the device's.
+    #[error(transparent)]
+    Gpu(#[from] oslf_gpu::GpuError),
     /// A parameter outside its documented range (names the parameter).
     #[error("invalid parameter: {0}")]
     Parameter(String),
@@ -46,16 +38,10 @@ pub enum RuntimeError {
     InvalidParam { param: Param, problem: String },
 }
 
-impl From<oslf_gpu::GpuError> for RuntimeError {
-    /// The device's errors as the runtime's variants of the same name.
-    fn from(e: oslf_gpu::GpuError) -> Self {
-        match e {
-            oslf_gpu::GpuError::NoAdapter(tried) => RuntimeError::NoAdapter(tried),
-            oslf_gpu::GpuError::Device { adapter, message } => {
-                RuntimeError::Device { adapter, message }
-            }
-            oslf_gpu::GpuError::Gpu(message) => RuntimeError::Gpu(message),
-        }
+impl RuntimeError {
+    /// [`RuntimeError::Gpu`] with `message` ([`oslf_gpu::GpuError::Gpu`]).
+    pub(crate) fn gpu(message: impl Into<String>) -> Self {
+        RuntimeError::Gpu(oslf_gpu::GpuError::Gpu(message.into()))
     }
 }
 

@@ -300,7 +300,7 @@ impl Renderer {
         let targets = self
             .targets
             .as_ref()
-            .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
+            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
         // Untimed: a host frame's timestamps would never be read back.
         self.encode_gbuffer(encoder, targets, false);
         self.encode_shading(encoder, targets, false)?;
@@ -347,14 +347,14 @@ impl Renderer {
         self.gpu
             .device
             .poll(wgpu::PollType::Poll)
-            .map_err(|e| RuntimeError::Gpu(format!("polling the device: {e}")))?;
+            .map_err(|e| RuntimeError::gpu(format!("polling the device: {e}")))?;
         let mut booked: Option<CacheStats> = None;
         while let Some(slot) = self.oldest_mapped() {
             let masks = {
                 let buffer = &self.feedback_slots[slot].buffer;
                 let bytes = buffer
                     .get_mapped_range(..)
-                    .map_err(|e| RuntimeError::Gpu(format!("reading the feedback: {e}")))?
+                    .map_err(|e| RuntimeError::gpu(format!("reading the feedback: {e}")))?
                     .to_vec();
                 buffer.unmap();
                 let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
@@ -473,7 +473,7 @@ impl Renderer {
         let targets = self
             .targets
             .as_ref()
-            .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
+            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
         let shaded = targets.output.create_view(&Default::default());
         let depth = targets.depth.create_view(&Default::default());
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -531,7 +531,7 @@ impl Renderer {
         let targets = self
             .targets
             .as_ref()
-            .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
+            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.buffers.feedback, 0, None);

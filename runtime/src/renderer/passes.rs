@@ -114,7 +114,7 @@ impl Renderer {
         let pipeline = self
             .shade
             .get(&self.current)
-            .ok_or_else(|| RuntimeError::Gpu("no shading pipeline for this mode".into()))?;
+            .ok_or_else(|| RuntimeError::gpu("no shading pipeline for this mode"))?;
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &targets.shade_group, &[]);
         pass.dispatch_workgroups(

@@ -31,7 +31,7 @@ impl Renderer {
         let targets = self
             .targets
             .as_ref()
-            .ok_or_else(|| RuntimeError::Gpu("render targets missing".into()))?;
+            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
         let (w, h) = (targets.width, targets.height);
         let row = padded_row(w, texel as u32);
         let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
