@@ -13,7 +13,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use oslf_runtime::{
-    Background, Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams,
+    Background, Blend, CacheConfig, Gpu, Lookup, ReconMirror, RenderOptions, Renderer,
+    ShadingParams,
 };
 
 fn main() -> anyhow::Result<()> {
@@ -28,11 +29,11 @@ fn main() -> anyhow::Result<()> {
     // Every cube map may stay resident; give `gpu_slots` / `ram_bytes` to stream under a budget.
     let mut renderer = Renderer::new(gpu, store, CacheConfig::default())?;
     let camera = renderer.default_view();
-    let params = ShadingParams {
-        mode: Mode::ReconMirror,
-        blend: Blend::Normal,
-        ..ShadingParams::default()
-    };
+    // Reconstruction plus mirror reflection, the four sample points blended by B^n (N = 4).
+    let params = ShadingParams::ReconMirror(ReconMirror {
+        lookup: Lookup::oslf(Blend::Normal, 4.0),
+        ..Default::default()
+    });
     // The object in its scene: the store's environment cube behind it, where the store has one.
     let background = match renderer.store().env_cube_index() {
         Some(_) => Background::Env,

@@ -115,6 +115,17 @@ fn bad_source_flags_are_named() {
             "needs mode pbr and source env or parallax",
         ),
         (
+            vec![
+                "--mode",
+                "glossy",
+                "--source",
+                "env",
+                "--glossy-filter",
+                "split-sum",
+            ],
+            "needs mode pbr and source env or parallax",
+        ),
+        (
             vec!["--envmap", "--source", "parallax"],
             "cannot be used with",
         ),

@@ -1,30 +1,32 @@
-//! The capture shader: its WGSL files joined in dependency order (bindings and entry points
-//! then, each file naming the functions of bake/src it mirrors).
+//! The capture shader as embedded: assembled from the WGSL modules of shader/ (the BVH
+//! traversal, the scene, the path tracer, the preview's camera, and the root module
+//! capture.wgsl with the bindings and the `capture`, `trace` and `preview` entry points),
+//! oslf-shading's modules and the structs generated from Rust ([`modules`]); the tests check
+//! that it is what they assemble to.
 
-/// The BVH traversal and the triangle test.
-const BVH: &str = include_str!("shader/bvh.wgsl");
-/// Hits, textures, materials, lights, environment.
-const SCENE: &str = include_str!("shader/scene.wgsl");
-/// Sampling, BRDFs and the path tracer.
-const INTEGRATOR: &str = include_str!("shader/integrator.wgsl");
-/// Bindings, the layout structs and the `capture` and `trace` entry points.
-pub const CAPTURE: &str = include_str!("shader/capture.wgsl");
-/// The bake's preview: the scene camera's image.
-const PREVIEW: &str = include_str!("shader/preview.wgsl");
+/// The whole module's source, as embedded.
+pub fn source() -> &'static str {
+    include_str!("generated/capture.wgsl")
+}
 
-/// The whole module's source: oslf-shading's WGSL modules (GGX, Fresnel, colour, random
-/// streams, warps), the structs generated from their Rust definitions, then the capture
-/// shader's files.
-pub fn source() -> String {
-    let shading = oslf_shading::wgsl::source();
-    [
-        shading,
-        crate::layouts::wgsl(),
-        BVH.into(),
-        SCENE.into(),
-        INTEGRATOR.into(),
-        CAPTURE.into(),
-        PREVIEW.into(),
-    ]
-    .join("\n")
+/// The root module's path.
+pub const ROOT: &str = "capture";
+
+/// The modules of the shader as (path under `package::`, source).
+pub fn modules() -> Vec<(String, String)> {
+    let files = [
+        ("bvh", include_str!("shader/bvh.wgsl")),
+        ("scene", include_str!("shader/scene.wgsl")),
+        ("integrator", include_str!("shader/integrator.wgsl")),
+        ("capture", include_str!("shader/capture.wgsl")),
+        ("preview", include_str!("shader/preview.wgsl")),
+    ];
+    let mut modules = oslf_shading::wgsl::modules();
+    modules.push(("layouts".into(), crate::layouts::wgsl()));
+    modules.extend(
+        files
+            .into_iter()
+            .map(|(name, src)| (name.to_string(), src.to_string())),
+    );
+    modules
 }

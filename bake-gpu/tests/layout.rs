@@ -11,7 +11,7 @@ use oslf_runtime::wgsl_layout::{check_struct, constant_value, parse};
 
 #[test]
 fn the_shader_structs_are_the_rust_structs() {
-    let module = parse("capture shader", &oslf_bake_gpu::shader::source());
+    let module = parse("capture shader", oslf_bake_gpu::shader::source());
     let check = |name: &str, fields: Vec<oslf_runtime::wgsl_layout::Field>, size: usize| {
         check_struct(&module, name, &fields, size, false)
     };
@@ -175,7 +175,7 @@ fn the_shader_structs_are_the_rust_structs() {
 
 #[test]
 fn the_shader_constants_are_the_crates() {
-    let module = parse("capture shader", &oslf_bake_gpu::shader::source());
+    let module = parse("capture shader", oslf_bake_gpu::shader::source());
     let value = |name: &str| {
         let (_, c) = module
             .constants
@@ -203,4 +203,16 @@ fn the_shader_constants_are_the_crates() {
         oslf_trace::ray::ENVIRONMENT_OBJECT
     );
     assert_eq!(value("F32_MAX"), f64::from(f32::MAX));
+}
+
+/// The embedded shader is what its modules assemble to (`OSLF_BLESS=1` writes it).
+#[test]
+fn the_embedded_shader_is_its_modules_assembled() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/generated/capture.wgsl");
+    oslf_shading::wgsl::check_assembled(
+        &file,
+        oslf_bake_gpu::shader::ROOT,
+        &oslf_bake_gpu::shader::modules(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
 }

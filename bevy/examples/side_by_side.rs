@@ -32,7 +32,7 @@ use bevy::render::render_resource::{
     Extent3d, TextureDimension, TextureFormat, TextureViewDescriptor, TextureViewDimension,
 };
 use headless::{headless_app, settle_and_capture, spawn_linear_camera};
-use oslf_bevy::{Mode, OslfObject, ShadingParams};
+use oslf_bevy::{OslfObject, Pbr, PbrMaterial, ShadingParams};
 use oslf_format::cube::{direction_to_face_st, texel_direction};
 
 /// What one run draws.
@@ -132,13 +132,14 @@ fn setup(
             ));
         }
         Variant::Oslf => {
-            let params = ShadingParams {
-                mode: Mode::Pbr,
-                metallic: 1.0,
-                roughness: job.roughness,
-                object_material: false,
+            let params = ShadingParams::Pbr(Pbr {
+                material: PbrMaterial {
+                    metallic: 1.0,
+                    roughness: job.roughness,
+                    object_material: false,
+                },
                 ..default()
-            };
+            });
             commands
                 .spawn(OslfObject::new(assets.load(job.store_file.clone())).with_params(params));
         }

@@ -53,7 +53,11 @@ pub use asset::{OslfStore, OslfStoreLoader};
 pub use error::OslfBevyError;
 pub use messages::OslfMessages;
 pub use object::OslfObject;
-pub use oslf_runtime::{Blend, CacheConfig, GlossyFilter, Mode, Order, ShadingParams, Source};
+pub use oslf_runtime::{
+    AshikhminShirley, Blend, CacheConfig, Glossy, Lookup, Mirror, Mode, MonteCarlo, Order, Pbr,
+    PbrIntegration, PbrMaterial, Probe, Recon, ReconGlossy, ReconMirror, SampleFilter,
+    ShadingParams, Source,
+};
 pub use stats::OslfCacheStats;
 
 use bevy::app::{App, Plugin, Update};

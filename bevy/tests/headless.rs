@@ -108,10 +108,7 @@ fn run_and_capture(app: &mut App, frames: usize) -> Vec<[f32; 4]> {
 }
 
 fn params() -> ShadingParams {
-    ShadingParams {
-        mode: Mode::ReconMirror,
-        ..Default::default()
-    }
+    ShadingParams::of_mode(Mode::ReconMirror)
 }
 
 /// The store's default camera and the runtime's own render of it at W×H (as `oslf render`
@@ -335,11 +332,8 @@ fn a_textured_object_in_a_bevy_frame_equals_the_runtimes_render() {
     assert!(oslf_format::Store::open(&store).unwrap().meta().objects[0]
         .textures
         .is_some());
-    let params = ShadingParams {
-        mode: Mode::Pbr,
-        m: 8,
-        ..Default::default()
-    };
+    let mut params = ShadingParams::of_mode(Mode::Pbr);
+    params.monte_carlo_mut().unwrap().m = 8;
     let (camera, reference) = reference(&store, &params);
     let setup = Setup {
         store: Some("orb.oslf".into()),

@@ -152,17 +152,19 @@ pub fn render_truth(
     params: &ShadingParams,
     settings: &TruthSettings,
 ) -> Result<TruthImage> {
-    if params.rd > 0.0 && matches!(params.mode, Mode::Glossy | Mode::ReconGlossy) {
+    let as_lobe = params.lobe().unwrap_or_default();
+    if as_lobe.rd > 0.0 {
         return Err(MeasureError::Invalid(
             "the ground truth has the Ashikhmin–Shirley specular term only: use R_d = 0".into(),
         ));
     }
     let lobe = Term::Glossy(AsLobe {
-        rs: params.rs.into(),
-        nu: params.nu.into(),
-        nv: params.nv.into(),
+        rs: as_lobe.rs.into(),
+        nu: as_lobe.nu.into(),
+        nv: as_lobe.nv.into(),
     });
-    Ok(match params.mode {
+    let material = params.material().unwrap_or_default();
+    Ok(match params.mode() {
         Mode::Recon => truth.render(Term::Recon, settings)?,
         Mode::Mirror => truth.render(Term::Mirror, settings)?,
         Mode::Glossy => truth.render(lobe, settings)?,
@@ -176,9 +178,9 @@ pub fn render_truth(
         )?,
         Mode::Pbr => truth.render(
             Term::Pbr {
-                metallic: params.metallic,
-                roughness: params.roughness,
-                object_material: params.object_material,
+                metallic: material.metallic,
+                roughness: material.roughness,
+                object_material: material.object_material,
             },
             settings,
         )?,

@@ -13,7 +13,9 @@ use std::time::Instant;
 
 use oslf_bake::bake::{bake, BakeOptions, BakeReport};
 use oslf_format::Store;
-use oslf_runtime::{Blend, CacheConfig, Gpu, Order, Renderer, ShadingParams, Source};
+use oslf_runtime::{
+    Blend, CacheConfig, Gpu, Lookup, Mode, Order, Probe, Renderer, ShadingParams, Source,
+};
 use oslf_scene::scene::{BakeSettings, SampleDensity, Scene};
 use oslf_trace::ground_truth::TruthImage;
 use oslf_trace::progress::Progress;
@@ -84,7 +86,8 @@ pub fn parse_vary(spec: &str) -> Result<Vec<Change>> {
         if BAKE_KEYS.contains(&key) {
             apply_bake(&mut BakeSettings::clone(&default_settings()), c)?;
         } else {
-            apply_runtime(&mut ShadingParams::default(), c)?;
+            // The value's syntax, on a mode that has every runtime key.
+            apply_runtime(&mut ShadingParams::of_mode(Mode::ReconGlossy), c)?;
         }
     }
     Ok(changes)
@@ -169,13 +172,13 @@ pub fn apply_bake(s: &mut BakeSettings, c: &Change) -> Result<()> {
     Ok(())
 }
 
-/// Applies a runtime change to `p`.
+/// Applies a runtime change to `p`; a setting the mode does not have is an error naming both.
 pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
     match c.key.as_str() {
-        "phi_shader" => p.phi_shader_deg = parse(c)?,
-        "m" => p.m = parse(c)?,
+        "phi_shader" => p.set_phi_shader_deg(parse(c)?)?,
+        "m" => p.monte_carlo_mut()?.m = parse(c)?,
         "order" => {
-            p.order = match c.value.as_str() {
+            p.monte_carlo_mut()?.order = match c.value.as_str() {
                 "per-point" => Order::PerPoint,
                 "per-direction" => Order::PerDirection,
                 _ => return check(c, false, "{per-point, per-direction}"),
@@ -183,27 +186,29 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
         }
         "blend" => {
             let v = c.value.as_str();
-            p.source = Source::Oslf;
-            match v {
-                "distance" => p.blend = Blend::Distance,
-                "angle" => p.blend = Blend::Angle,
-                "avg" => p.blend = Blend::Average,
-                "envmap" => p.source = Source::EnvMap,
-                "parallax" => p.source = Source::Parallax,
+            let blend_n = p.blend().map_or(4.0, |(_, n)| n);
+            let lookup = match v {
+                "distance" => Lookup::oslf(Blend::Distance, blend_n),
+                "angle" => Lookup::oslf(Blend::Angle, blend_n),
+                "avg" => Lookup::oslf(Blend::Average, blend_n),
+                "envmap" => Lookup::Probe(Probe::EnvMap),
+                "parallax" => Lookup::Probe(Probe::Parallax { proxy_box: None }),
                 _ if v.len() > 1 && (v.starts_with('r') || v.starts_with('n')) => {
-                    p.blend = if v.starts_with('r') {
+                    let blend = if v.starts_with('r') {
                         Blend::Reflection
                     } else {
                         Blend::Normal
                     };
-                    p.blend_n = v[1..]
+                    let n = v[1..]
                         .parse()
                         .map_err(|_| c.problem(format!("{v:?}: expected rN or nN")))?;
+                    Lookup::oslf(blend, n)
                 }
                 _ => {
                     return check(c, false, "{distance, angle, avg, rN, nN, envmap, parallax}");
                 }
-            }
+            };
+            p.set_lookup(lookup)?;
         }
         k => {
             return Err(MeasureError::Invalid(format!(
@@ -215,19 +220,20 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
     Ok(())
 }
 
-/// A short name of a blend setting, as a `blend=` variation takes it.
+/// A short name of a blend setting, as a `blend=` variation takes it ("-" for the modes
+/// without a lookup).
 pub fn blend_label(p: &ShadingParams) -> String {
-    match p.source {
-        Source::EnvMap => return "envmap".into(),
-        Source::Parallax => return "parallax".into(),
-        Source::Oslf => {}
-    }
-    match p.blend {
-        Blend::Distance => "distance".into(),
-        Blend::Angle => "angle".into(),
-        Blend::Average => "avg".into(),
-        Blend::Reflection => format!("r{}", p.blend_n),
-        Blend::Normal => format!("n{}", p.blend_n),
+    match p.lookup() {
+        None => "-".into(),
+        Some(Lookup::Probe(Probe::EnvMap)) => "envmap".into(),
+        Some(Lookup::Probe(Probe::Parallax { .. })) => "parallax".into(),
+        Some(Lookup::Oslf { blend, blend_n }) => match blend {
+            Blend::Distance => "distance".into(),
+            Blend::Angle => "angle".into(),
+            Blend::Average => "avg".into(),
+            Blend::Reflection => format!("r{blend_n}"),
+            Blend::Normal => format!("n{blend_n}"),
+        },
     }
 }
 
@@ -463,7 +469,7 @@ pub fn run_sweep(
             if let Some(c) = rc {
                 apply_runtime(&mut params, c)?;
             }
-            if params.source == Source::EnvMap && renderer.store().env_cube_index().is_none() {
+            if params.source() == Source::EnvMap && renderer.store().env_cube_index().is_none() {
                 return Err(MeasureError::Invalid(format!(
                     "{} has no environment cube for blend=envmap (env_cube = true)",
                     path.display()
@@ -564,8 +570,22 @@ mod tests {
         )
         .unwrap();
         assert_eq!(
-            (p.blend, p.blend_n, blend_label(&p)),
-            (Blend::Reflection, 8.0, "r8".to_string())
+            (p.blend(), blend_label(&p)),
+            (Some((Blend::Reflection, 8.0)), "r8".to_string())
+        );
+        // A setting the mode does not have is refused, naming it.
+        let e = apply_runtime(
+            &mut p,
+            &Change {
+                key: "m".into(),
+                value: "4".into(),
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("recon-mirror") && e.contains("Monte Carlo"),
+            "{e}"
         );
     }
 }

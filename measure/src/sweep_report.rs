@@ -83,11 +83,13 @@ pub fn rows_table(
     let (frame_front, bake_front) = (&fronts.frame, &fronts.bake);
     let mut all = Table::new(
         &format!(
-            "Sweep: mode {}, defaults {} (blend {}, φ_shader {}°), {}x{}",
-            params.mode.name(),
+            "Sweep: mode {}, defaults {} (blend {}, φ_shader {}), {}x{}",
+            params.mode().name(),
             defaults,
             blend_label(params),
-            params.phi_shader_deg,
+            params
+                .phi_shader_deg()
+                .map_or_else(|| "-".into(), |d| format!("{d}°")),
             size.0,
             size.1
         ),
@@ -170,7 +172,7 @@ pub fn panels(params: &ShadingParams, rows: &[SweepRow], fronts: &Fronts) -> [Pa
                 })
                 .collect(),
             text: PlotText {
-                caption: format!("{}: {what}", params.mode.name()),
+                caption: format!("{}: {what}", params.mode().name()),
                 x: x.into(),
                 y: "RMSE of L* against the ground truth".into(),
             },

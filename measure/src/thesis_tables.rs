@@ -9,8 +9,8 @@ use std::path::PathBuf;
 
 use oslf_format::Store;
 use oslf_runtime::{
-    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, RuntimeError, ShadingParams,
-    Source,
+    AshikhminShirley, Blend, CacheConfig, Glossy, GlossyFilter, Gpu, Lookup, Mirror, Mode,
+    MonteCarlo, Order, Renderer, RuntimeError, SampleFilter, ShadingParams, Source,
 };
 use oslf_trace::ground_truth::TruthImage;
 
@@ -49,12 +49,10 @@ fn truth_of(
     nv: f32,
     name: &str,
 ) -> Result<TruthImage> {
-    let p = ShadingParams {
-        mode,
-        nu,
-        nv,
-        ..base_params()
-    };
+    let mut p = ShadingParams::of_mode(mode);
+    if let Ok(lobe) = p.lobe_mut() {
+        (lobe.nu, lobe.nv) = (nu, nv);
+    }
     truth(&p, name)
 }
 
@@ -95,10 +93,7 @@ pub fn measure_tables(
     // Table 6.1 and 6.2: every store.
     let mirror = mirror_methods();
     for r in 0..n_stores {
-        let recon = ShadingParams {
-            mode: Mode::Recon,
-            ..base_params()
-        };
+        let recon = ShadingParams::of_mode(Mode::Recon);
         bench.measure("6.1", r, "recon", recon, &recon_truth)?;
         for (name, p) in &mirror {
             bench.measure("6.2", r, name, *p, &mirror_truth)?;
@@ -107,22 +102,27 @@ pub fn measure_tables(
 
     // The Ashikhmin–Shirley table: the finest store.
     let finest = n_stores - 1;
+    let (default_blend, default_n) = default_blend();
     for &(nu, nv) in &config.lobes {
         let name = format!("glossy-{nu}-{nv}");
         let glossy_truth = truth_of(&mut truth, Mode::Glossy, nu, nv, &name)?;
         for &m in &config.glossy_m {
-            for (order, source, glossy_filter, depth, label) in GLOSSY_METHODS {
-                let p = ShadingParams {
-                    mode: Mode::Glossy,
-                    nu,
-                    nv,
-                    m,
-                    order,
-                    source,
-                    glossy_filter,
+            for (order, source, filter, depth, label) in GLOSSY_METHODS {
+                let p = ShadingParams::Glossy(Glossy {
+                    lookup: Lookup::of_source(source, default_blend, default_n, None),
                     depth,
-                    ..base_params()
-                };
+                    lobe: AshikhminShirley {
+                        nu,
+                        nv,
+                        ..Default::default()
+                    },
+                    integration: MonteCarlo {
+                        m,
+                        order,
+                        filter,
+                        ..Default::default()
+                    },
+                });
                 let method = as_name(nu, nv, m, label);
                 bench.measure("AS", finest, &method, p, &glossy_truth)?;
             }
@@ -257,46 +257,46 @@ fn ms(j: Option<&Judgement>) -> String {
 /// The glossy table's methods: (integration order, source, filter, depth correction, label).
 /// The first is the thesis's (point sampling, plain lookups); the rest use filtered importance
 /// sampling.
-const GLOSSY_METHODS: [(Order, Source, GlossyFilter, bool, &str); 6] = [
+const GLOSSY_METHODS: [(Order, Source, SampleFilter, bool, &str); 6] = [
     (
         Order::PerPoint,
         Source::Oslf,
-        GlossyFilter::Point,
+        SampleFilter::Point,
         false,
         "thesis",
     ),
     (
         Order::PerPoint,
         Source::Oslf,
-        GlossyFilter::Mip,
+        SampleFilter::Mip,
         false,
         "FIS",
     ),
     (
         Order::PerPoint,
         Source::Oslf,
-        GlossyFilter::Mip,
+        SampleFilter::Mip,
         true,
         "FIS + depth",
     ),
     (
         Order::PerDirection,
         Source::Oslf,
-        GlossyFilter::Mip,
+        SampleFilter::Mip,
         true,
         "per direction",
     ),
     (
         Order::PerPoint,
         Source::EnvMap,
-        GlossyFilter::Mip,
+        SampleFilter::Mip,
         false,
         "EnvMap",
     ),
     (
         Order::PerPoint,
         Source::Parallax,
-        GlossyFilter::Mip,
+        SampleFilter::Mip,
         false,
         "Parallax",
     ),
@@ -307,11 +307,11 @@ fn as_name(nu: f32, nv: f32, m: u32, label: &str) -> String {
     format!("AS {nu}:{nv} M={m} {label}")
 }
 
-/// The shading every table starts from: no diffuse term, so errors are the specular term's.
-pub fn base_params() -> ShadingParams {
-    ShadingParams {
-        rd: 0.0,
-        ..ShadingParams::default()
+/// The default lookup's blend and power N, which the tables' OSLF rows start from.
+fn default_blend() -> (Blend, f32) {
+    match Lookup::default() {
+        Lookup::Oslf { blend, blend_n } => (blend, blend_n),
+        Lookup::Probe(_) => (Blend::Normal, 4.0),
     }
 }
 
@@ -319,15 +319,13 @@ pub fn base_params() -> ShadingParams {
 /// then every blend of §4 (B^r and B^n at N = 1, 4, 8, 16). Each OSLF row is measured twice:
 /// with plain lookups as the thesis did, and depth-corrected (records named "… depth").
 fn mirror_methods() -> Vec<(String, ShadingParams)> {
-    let mirror = |blend: Blend, blend_n: f32, source: Source, depth: bool| ShadingParams {
-        mode: Mode::Mirror,
-        blend,
-        blend_n,
-        source,
-        depth,
-        ..base_params()
+    let mirror = |blend: Blend, blend_n: f32, source: Source, depth: bool| {
+        ShadingParams::Mirror(Mirror {
+            lookup: Lookup::of_source(source, blend, blend_n, None),
+            depth,
+        })
     };
-    let default_n = base_params().blend_n;
+    let (_, default_n) = default_blend();
     let mut methods = vec![
         (
             "EnvMap".to_string(),
@@ -487,23 +485,24 @@ pub fn records_csv(records: &[Record]) -> String {
     );
     for r in records {
         let m = &r.judgement.metrics;
+        let (lobe, mc) = (r.params.lobe(), r.params.monte_carlo());
         csv += &format!(
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.5},{:.5},{:.5},{:.6},{:.6},{:.6},{},{:.3},{:.3}\n",
             r.table,
             csv_cell(&r.store.display().to_string()),
             r.cube_resolution,
             csv_cell(&r.method),
-            r.params.mode.name(),
+            r.params.mode().name(),
             blend_label(&r.params),
-            r.params.depth,
-            r.params.glossy_filter.name(),
-            r.params.nu,
-            r.params.nv,
-            r.params.m,
-            if r.params.order == Order::PerPoint {
-                "per-point"
-            } else {
-                "per-direction"
+            r.params.depth(),
+            r.params.glossy_filter().map_or("", GlossyFilter::name),
+            lobe.map_or(String::new(), |l| l.nu.to_string()),
+            lobe.map_or(String::new(), |l| l.nv.to_string()),
+            mc.map_or(String::new(), |mc| mc.m.to_string()),
+            match mc.map(|mc| mc.order) {
+                Some(Order::PerPoint) => "per-point",
+                Some(Order::PerDirection) => "per-direction",
+                None => "",
             },
             m.pixels,
             m.rmse_lab[0],

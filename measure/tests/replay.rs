@@ -36,16 +36,15 @@ fn run(
     resolve: bool,
 ) -> Vec<Row> {
     let mut r = renderer(slots, granularity);
-    let params = ShadingParams {
-        mode,
-        m: 4,
-        ..Default::default()
-    };
+    let mut params = ShadingParams::of_mode(mode);
+    if let Ok(mc) = params.monte_carlo_mut() {
+        mc.m = 4;
+    }
     let replay = replay::replay(&mut r, path, &params, &options(resolve)).unwrap();
     assert_eq!(replay.frames.len(), path.cameras.len());
     let key = RowKey {
         mode,
-        blend: Some(params.blend),
+        blend: params.blend().map(|(b, _)| b),
         granularity,
         size: slots.map_or("all".into(), |s| s.to_string()),
         slots: r.cache().slots(),

@@ -27,8 +27,12 @@ use std::time::Instant;
 
 use oslf_bake::bake::{bake, BakeOptions};
 use oslf_format::Store;
-use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams, Source};
+use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, Source};
 use oslf_scene::scene::Scene;
+
+#[path = "../tests/common/knobs.rs"]
+mod knobs;
+use knobs::Knobs;
 
 fn store_path() -> PathBuf {
     if let Ok(p) = std::env::var("OSLF_STORE") {
@@ -88,18 +92,18 @@ fn main() {
     let gpu = Gpu::headless().unwrap();
     // OSLF_BENCH_FILTER=text runs only the modes whose label contains it.
     let filter = std::env::var("OSLF_BENCH_FILTER").unwrap_or_default();
-    let base = ShadingParams::default();
-    let cases: Vec<(&str, ShadingParams)> = vec![
+    let base = Knobs::default();
+    let cases: Vec<(&str, Knobs)> = vec![
         (
             "recon",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Recon,
                 ..base
             },
         ),
         (
             "mirror, envmap baseline",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 source: Source::EnvMap,
                 ..base
@@ -107,14 +111,14 @@ fn main() {
         ),
         (
             "mirror, B^n N=4",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 ..base
             },
         ),
         (
             "mirror, closest distance",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 blend: Blend::Distance,
                 ..base
@@ -122,7 +126,7 @@ fn main() {
         ),
         (
             "mirror, closest angle",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 blend: Blend::Angle,
                 ..base
@@ -130,7 +134,7 @@ fn main() {
         ),
         (
             "mirror, B^r N=4",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 blend: Blend::Reflection,
                 ..base
@@ -138,14 +142,14 @@ fn main() {
         ),
         (
             "recon + mirror, B^n N=4",
-            ShadingParams {
+            Knobs {
                 mode: Mode::ReconMirror,
                 ..base
             },
         ),
         (
             "recon + mirror, closest distance",
-            ShadingParams {
+            Knobs {
                 mode: Mode::ReconMirror,
                 blend: Blend::Distance,
                 ..base
@@ -153,7 +157,7 @@ fn main() {
         ),
         (
             "recon + mirror, B^r N=4",
-            ShadingParams {
+            Knobs {
                 mode: Mode::ReconMirror,
                 blend: Blend::Reflection,
                 ..base
@@ -161,7 +165,7 @@ fn main() {
         ),
         (
             "glossy M=16, per point",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 m: 16,
                 ..base
@@ -169,7 +173,7 @@ fn main() {
         ),
         (
             "glossy M=16, per point, plain lookups (FIS only)",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 m: 16,
                 depth: false,
@@ -178,7 +182,7 @@ fn main() {
         ),
         (
             "glossy M=16, per point, plain lookups, point sampling",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 m: 16,
                 depth: false,
@@ -188,7 +192,7 @@ fn main() {
         ),
         (
             "glossy M=16, per direction",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 m: 16,
                 order: oslf_runtime::Order::PerDirection,
@@ -197,7 +201,7 @@ fn main() {
         ),
         (
             "recon + glossy M=16",
-            ShadingParams {
+            Knobs {
                 mode: Mode::ReconGlossy,
                 m: 16,
                 ..base
@@ -205,7 +209,7 @@ fn main() {
         ),
         (
             "glossy envmap M=16",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 m: 16,
                 source: Source::EnvMap,
@@ -247,13 +251,13 @@ fn main() {
                 ..Default::default()
             };
             let t = Instant::now();
-            let cold = r.render(&camera, params, &opts).unwrap();
+            let cold = r.render(&camera, &params.params(), &opts).unwrap();
             let cold_ms = t.elapsed().as_secs_f64() * 1e3;
             let mut warm = Vec::new();
             let mut cache = Vec::new();
             for _ in 0..7 {
                 let t = Instant::now();
-                let f = r.render(&camera, params, &opts).unwrap();
+                let f = r.render(&camera, &params.params(), &opts).unwrap();
                 warm.push(t.elapsed().as_secs_f64() * 1e3);
                 cache.push(f.stats.cache_seconds * 1e3);
                 assert_eq!(f.stats.misses, 0);
@@ -281,32 +285,32 @@ fn main() {
     println!("| --- | --- | ---: | ---: | ---: |");
     for (w, h) in [(655u32, 460u32), (1280, 720)] {
         let opts = frame_options(w, h);
-        let env = ShadingParams {
+        let env = Knobs {
             mode: Mode::Mirror,
             source: Source::EnvMap,
             ..base
         };
         let mut r_env = renderer(&gpu, &path);
         let camera = r_env.default_view();
-        r_env.render(&camera, &env, &opts).unwrap();
+        r_env.render(&camera, &env.params(), &opts).unwrap();
         for blend in Blend::ALL {
             if !filter.is_empty() && !"mirror ratio".contains(filter.as_str()) {
                 continue;
             }
-            let oslf = ShadingParams {
+            let oslf = Knobs {
                 mode: Mode::Mirror,
                 blend,
                 ..base
             };
             let mut r = renderer(&gpu, &path);
-            r.render(&camera, &oslf, &opts).unwrap();
+            r.render(&camera, &oslf.params(), &opts).unwrap();
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..21 {
                 let t = Instant::now();
-                r.render(&camera, &oslf, &opts).unwrap();
+                r.render(&camera, &oslf.params(), &opts).unwrap();
                 a.push(t.elapsed().as_secs_f64() * 1e3);
                 let t = Instant::now();
-                r_env.render(&camera, &env, &opts).unwrap();
+                r_env.render(&camera, &env.params(), &opts).unwrap();
                 b.push(t.elapsed().as_secs_f64() * 1e3);
             }
             let (a, b) = (median(a), median(b));
@@ -350,7 +354,7 @@ fn main() {
             (1000.0, 1000.0),
             (10.0, 1000.0),
         ] {
-            let fis = ShadingParams {
+            let fis = Knobs {
                 mode: Mode::Glossy,
                 m: 16,
                 nu,
@@ -358,13 +362,13 @@ fn main() {
                 ..base
             };
             let configs = [
-                ShadingParams {
+                Knobs {
                     m: 256,
                     depth: false,
                     glossy_filter: oslf_runtime::GlossyFilter::Point,
                     ..fis
                 },
-                ShadingParams {
+                Knobs {
                     depth: false,
                     ..fis
                 },
@@ -374,12 +378,12 @@ fn main() {
             let mut gpu_times = vec![Vec::new(); configs.len()];
             let mut gbuffer_times = Vec::new();
             for c in &configs {
-                r.render(&camera, c, &opts).unwrap();
+                r.render(&camera, &c.params(), &opts).unwrap();
             }
             for _ in 0..rounds {
                 for ((c, t), g) in configs.iter().zip(&mut times).zip(&mut gpu_times) {
                     let start = Instant::now();
-                    let frame = r.render(&camera, c, &opts).unwrap();
+                    let frame = r.render(&camera, &c.params(), &opts).unwrap();
                     t.push(start.elapsed().as_secs_f64() * 1e3);
                     g.extend(frame.shade_gpu_seconds.map(|s| s * 1e3));
                     gbuffer_times.extend(frame.gbuffer_gpu_seconds.map(|s| s * 1e3));

@@ -8,7 +8,7 @@ use wgpu::util::DeviceExt;
 
 use crate::error::{Result, RuntimeError};
 use crate::geometry::ObjectMesh;
-use crate::params::ShadeUniform;
+use crate::uniform::ShadeUniform;
 use crate::Gpu;
 
 /// The vec4s of one patch in the `patches` buffer (shade.wgsl's `PatchGpu`): its 16 control

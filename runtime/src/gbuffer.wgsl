@@ -7,6 +7,9 @@
 // Bindings in the order of `GBufferPipeline::bind_group_layout` and `ObjectTextures`
 // (pipelines.rs, textures.rs).
 
+import package::layouts::{GVertex, Params, TextureParams};
+import package::shading::color::{linear_to_srgb, srgb_to_linear};
+
 // `struct Params` (the shading pass's uniform; this pass reads view_proj and camera_pos),
 // `struct GVertex` and `struct TextureParams` are generated from the Rust `ShadeUniform`,
 // `GVertex` and `TextureParams` (params.rs, geometry.rs, textures.rs) and placed before this
@@ -82,7 +85,6 @@ fn gbuffer(in: VsOut) -> FsOut {
     return out;
 }
 
-// ---- the material of textured objects (format docs, "Object textures") ----
 
 // The object's textures: which it has (bit i: BOUND_KINDS[i] of textures.rs: base colour,
 // metallic-roughness, normal, emissive, occlusion), and one texture per kind

@@ -27,7 +27,7 @@
 //!     and the baseline engines use, that cube parallax-corrected against a proxy box fitted
 //!     to its distances ([`probe`]); for the pbr mode also as engines light from one probe,
 //!     the cube prefiltered per roughness with the split-sum approximation ([`prefilter`]).
-//!     See [`params`].
+//!     See [`ShadingParams`].
 //!
 //!   Beyond the thesis, with a store's distance channel (§6.3's RGBZ; a twin R16Float pool),
 //!   every mirror and glossy lookup is *depth-corrected*: each sample point's cube is traced as
@@ -94,7 +94,9 @@ pub mod reference;
 pub mod renderer;
 #[cfg(test)]
 mod shader_layout;
+mod shading;
 mod textures;
+mod uniform;
 /// WGSL struct layouts checked against Rust: test tooling (feature `tooling`).
 #[cfg(any(test, feature = "tooling"))]
 pub mod wgsl_layout;
@@ -103,5 +105,9 @@ pub use cache::{CacheConfig, CacheStats, CubeCache, DecodeFailure, Granularity};
 pub use error::{Param, Result, RuntimeError};
 pub use oslf_geometry::Camera;
 pub use oslf_gpu::{Gpu, GpuError};
-pub use params::{Background, Blend, GlossyFilter, Mode, Order, ShadingParams, Source};
+pub use params::{Background, Blend, GlossyFilter, Mode, Order, Source};
 pub use renderer::{Frame, FrameBytes, HostTarget, HostView, RenderOptions, Renderer};
+pub use shading::{
+    AshikhminShirley, Box3, Glossy, Lookup, Mirror, MonteCarlo, Pbr, PbrIntegration, PbrMaterial,
+    Probe, Recon, ReconGlossy, ReconMirror, SampleFilter, ShadingParams,
+};

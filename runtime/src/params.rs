@@ -1,6 +1,5 @@
-//! Shading parameters: which terms to render, how to blend the four sample points, and the
-//! Ashikhmin–Shirley settings. Shared by the GPU shader (as [`ShadeUniform`]) and the CPU
-//! reference.
+//! The names of the shading choices (mode, blend, source, filter, order) and the background:
+//! the vocabulary of [`crate::ShadingParams`], with the names the CLI takes.
 
 use serde::{Deserialize, Serialize};
 
@@ -101,7 +100,7 @@ impl Blend {
         }
     }
 
-    fn tag(self) -> u32 {
+    pub(crate) fn tag(self) -> u32 {
         match self {
             Blend::Distance => 0,
             Blend::Angle => 1,
@@ -124,7 +123,7 @@ pub enum Source {
     /// The baseline engines use today: the same cube map, parallax-corrected against a proxy box
     /// (Lagarde & Zanuttini 2012): the reflected ray is intersected with the box from the
     /// shaded point and the cube looked up towards that hit from the cube's centre.
-    /// [`ShadingParams::proxy_box`] gives the box; by default it is fitted to the cube's own
+    /// [`crate::Probe::Parallax`] gives the box; by default it is fitted to the cube's own
     /// distance channel (see `Renderer::proxy_box`).
     Parallax,
 }
@@ -143,7 +142,7 @@ impl Source {
     }
 
     /// The shader's tag.
-    fn tag(self) -> u32 {
+    pub(crate) fn tag(self) -> u32 {
         match self {
             Source::Oslf => 0,
             Source::EnvMap => 1,
@@ -152,7 +151,8 @@ impl Source {
     }
 }
 
-/// How the glossy term reads the cube maps for each Monte Carlo sample.
+/// How the glossy term reads the cube maps: the name of a [`SampleFilter`], or the split-sum
+/// baseline ([`crate::PbrIntegration::SplitSum`]); [`ShadingParams::glossy_filter`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum GlossyFilter {
@@ -162,11 +162,7 @@ pub enum GlossyFilter {
     Mip,
     /// One bilinear read at full resolution per sample, as the thesis did.
     Point,
-    /// No Monte Carlo: the engines' baseline of [`Mode::Pbr`] with [`Source::EnvMap`] or
-    /// [`Source::Parallax`]. The environment cube prefiltered per roughness, read once towards
-    /// the (parallax-corrected) reflection vector and scaled by GGX's directional albedo (the
-    /// split-sum approximation, Karis 2013); the diffuse base from the cube's irradiance
-    /// ([`crate::prefilter`]).
+    /// No Monte Carlo: the engines' baseline of [`Mode::Pbr`] ([`crate::PbrIntegration`]).
     SplitSum,
 }
 
@@ -224,154 +220,6 @@ from_str_by_name!(Blend, "blend");
 from_str_by_name!(Source, "source");
 from_str_by_name!(GlossyFilter, "glossy filter");
 
-/// Most steps of the linear search of a depth-corrected lookup (`depth_search` in shade.wgsl):
-/// about one per texel of the arc the ray sweeps in the sample point's cube, at most this many.
-pub const DEPTH_STEPS: u32 = 16;
-/// How far behind the surface a sample point sees the refined hit may lie, in texel angles times
-/// the distance, before the ray counts as passing behind an occluder's silhouette (a hit that
-/// sample point cannot see).
-pub const DEPTH_THICKNESS_TEXELS: f32 = 4.0;
-
-/// Everything a frame's shading depends on besides the camera.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ShadingParams {
-    /// Which terms.
-    pub mode: Mode,
-    /// The blend of the four sample points.
-    pub blend: Blend,
-    /// The lobe power N of B^r and B^n (0 gives B^avg); 0..=1e6.
-    pub blend_n: f32,
-    /// OSLF or the environment-map baseline.
-    pub source: Source,
-    /// φ_shader in degrees (§6.3): reconstruction uses the nearest sample point within this
-    /// angle of the shaded normal; 0..=180.
-    pub phi_shader_deg: f32,
-    /// Monte Carlo samples per integration (M); 1..=65536.
-    pub m: u32,
-    /// The integration order of §5.2.
-    pub order: Order,
-    /// Specular reflectance at normal incidence R_s, in [0, 1].
-    pub rs: f32,
-    /// Diffuse reflectance R_d of the optional diffuse term 5.4, in [0, 1].
-    pub rd: f32,
-    /// Phong-like exponents n_u (along ∂x/∂u) and n_v, in [0, 1e7].
-    pub nu: f32,
-    /// See `nu`.
-    pub nv: f32,
-    /// `metallic` of [`Mode::Pbr`] (glTF's metallic factor), in [0, 1].
-    #[serde(default = "default_metallic")]
-    pub metallic: f32,
-    /// `roughness` of [`Mode::Pbr`] (glTF's perceptual roughness; α = roughness²), in [0, 1].
-    #[serde(default = "default_roughness")]
-    pub roughness: f32,
-    /// [`Mode::Pbr`] shades each object with a metallic-roughness material in the store
-    /// with that material's factors; `metallic` and `roughness` then serve
-    /// only the objects without one. `false`: `metallic` and `roughness` for every object.
-    #[serde(default = "default_object_material")]
-    pub object_material: bool,
-    /// Seed of the per-pixel random numbers.
-    pub seed: u32,
-    /// Depth-corrected lookups (needs a store with a distance channel): each sample point's
-    /// reflection and glossy lookups go towards where the ray from the *shaded point* meets
-    /// the scene as that sample point's distances describe it, instead of along the ray's
-    /// direction from the sample point (§6.3, RGBZ; see shade.wgsl `depth_search` for
-    /// reflections and per-direction glossy, `depth_iterate` for per-point glossy samples).
-    pub depth: bool,
-    /// How the glossy term reads the cube maps.
-    pub glossy_filter: GlossyFilter,
-    /// The proxy box of [`Source::Parallax`] in world space, `[min, max]`; `None` fits it to the
-    /// environment cube's distances.
-    pub proxy_box: Option<[[f32; 3]; 2]>,
-}
-
-fn default_metallic() -> f32 {
-    1.0
-}
-
-fn default_roughness() -> f32 {
-    0.3
-}
-
-fn default_object_material() -> bool {
-    true
-}
-
-impl Default for ShadingParams {
-    /// The thesis's settings: reconstruction plus mirror reflection blended with B^n, N = 4;
-    /// φ_shader = 65°; Ashikhmin–Shirley R_s = 1, R_d = 0, n_u = n_v = 100, M = 16. Beyond the
-    /// thesis: depth-corrected lookups and filtered importance sampling on.
-    fn default() -> Self {
-        Self {
-            mode: Mode::ReconMirror,
-            blend: Blend::Normal,
-            blend_n: 4.0,
-            source: Source::Oslf,
-            phi_shader_deg: 65.0,
-            m: 16,
-            order: Order::PerPoint,
-            rs: 1.0,
-            rd: 0.0,
-            nu: 100.0,
-            nv: 100.0,
-            metallic: default_metallic(),
-            roughness: default_roughness(),
-            object_material: default_object_material(),
-            seed: 0,
-            depth: true,
-            glossy_filter: GlossyFilter::Mip,
-            proxy_box: None,
-        }
-    }
-}
-
-impl ShadingParams {
-    /// Errors naming the first parameter outside its range (NaN included).
-    pub fn validate(&self) -> Result<()> {
-        let check = |name: &str, v: f32, lo: f32, hi: f32| {
-            if v.is_finite() && v >= lo && v <= hi {
-                Ok(())
-            } else {
-                Err(RuntimeError::Parameter(format!(
-                    "{name} = {v} must be in [{lo}, {hi}]"
-                )))
-            }
-        };
-        check("N", self.blend_n, 0.0, 1e6)?;
-        check("phi_shader", self.phi_shader_deg, 0.0, 180.0)?;
-        check("R_s", self.rs, 0.0, 1.0)?;
-        check("R_d", self.rd, 0.0, 1.0)?;
-        check("n_u", self.nu, 0.0, 1e7)?;
-        check("n_v", self.nv, 0.0, 1e7)?;
-        check("metallic", self.metallic, 0.0, 1.0)?;
-        check("roughness", self.roughness, 0.0, 1.0)?;
-        if let Some([lo, hi]) = self.proxy_box {
-            let ok = (0..3).all(|k| lo[k].is_finite() && hi[k].is_finite() && lo[k] < hi[k]);
-            if !ok {
-                return Err(RuntimeError::Parameter(format!(
-                    "proxy box {lo:?}..{hi:?} must be finite with min < max on every axis"
-                )));
-            }
-        }
-        if self.glossy_filter == GlossyFilter::SplitSum
-            && (self.mode != Mode::Pbr || self.source == Source::Oslf)
-        {
-            return Err(RuntimeError::Parameter(format!(
-                "glossy filter split-sum is the engines' baseline of the pbr mode: it needs mode \
-                 pbr and source env or parallax, not mode {} and source {}",
-                self.mode.name(),
-                self.source.name()
-            )));
-        }
-        if !(1..=65536).contains(&self.m) {
-            return Err(RuntimeError::Parameter(format!(
-                "M = {} must be in [1, 65536]",
-                self.m
-            )));
-        }
-        Ok(())
-    }
-}
-
 /// What the pixels the object does not cover show. Their alpha stays 0 whatever is chosen:
 /// alpha is the object mask, which the metrics use.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -415,212 +263,6 @@ impl Background {
     }
 }
 
-/// A camera ray's frame as the shader rebuilds it (`camera_ray` in shade.wgsl): the basis of
-/// [`oslf_geometry::Camera::basis`] and tan(vfov/2) clamped as
-/// [`oslf_geometry::Camera::direction`] clamps it.
-fn ray_frame(camera: &oslf_geometry::Camera) -> ([f32; 4], [f32; 4], [f32; 4]) {
-    let (right, up, forward) = camera.basis();
-    let vfov = if camera.vfov_deg.is_finite() {
-        camera.vfov_deg.clamp(1e-3, 179.0)
-    } else {
-        60.0
-    };
-    let tan_half = (0.5 * vfov.to_radians()).tan();
-    (
-        right.extend(tan_half).to_array(),
-        up.extend(0.0).to_array(),
-        forward.extend(0.0).to_array(),
-    )
-}
-
-oslf_gpu::gpu_struct! {
-    /// The shader's uniform block, `Params` in shade.wgsl and gbuffer.wgsl: its WGSL
-    /// declaration is generated from these fields ([`ShadeUniform::wgsl`]), and the
-    /// shader_layout tests check that WGSL places each at the Rust offset.
-    #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-    pub struct ShadeUniform as "Params" {
-        pub view_proj: [[f32; 4]; 4],
-        pub camera_pos: [f32; 4],
-        pub size: [u32; 2],
-        /// [`Mode::terms`]: 1 F_recon, 2 the mirror F_refl, 4 the glossy term, 8 scale the
-        /// reflection by C_s (Eq. 4.12), 16 the glossy term is glTF's BRDF.
-        pub terms: u32,
-        /// 0 closest distance (4.3), 1 closest angle (4.4), 2 B^avg (4.9), 3 B^r (4.10), 4 B^n
-        /// (4.11).
-        pub blend: u32,
-        pub blend_n: f32,
-        /// 0 the OSLF's sample points, 1 the environment cube, 2 that cube parallax-corrected.
-        pub source: u32,
-        pub m: u32,
-        /// 0 integrate per sample point, then blend; 1 blend per direction, then integrate (§5.2).
-        pub order: u32,
-        pub rs: f32,
-        pub rd: f32,
-        pub nu: f32,
-        pub nv: f32,
-        pub cos_phi_shader: f32,
-        pub seed: u32,
-        pub sample_count: u32,
-        pub env_cube: u32,
-        pub map_res: u32,
-        pub index16: u32,
-        pub cube_res: u32,
-        pub slots_per_texture: u32,
-        /// The camera's right vector; `w` = tan(vfov/2). With `cam_up` and `cam_forward`, the ray
-        /// through each background pixel ([`Background::Env`]).
-        pub cam_right: [f32; 4],
-        /// The camera's up vector (`w` unused).
-        pub cam_up: [f32; 4],
-        /// The camera's viewing direction (`w` unused).
-        pub cam_forward: [f32; 4],
-        /// The colour of [`Background::Color`] (`w` unused).
-        pub bg_color: [f32; 4],
-        /// [`Background::tag`].
-        pub background: u32,
-        /// Mip levels the glossy term filters over; 1 = point sampling.
-        pub mip_levels: u32,
-        /// Most linear-search steps of a depth-corrected lookup; 0 = plain lookups.
-        pub depth_steps: u32,
-        /// [`DEPTH_THICKNESS_TEXELS`] as a fraction of the distance.
-        pub depth_thickness: f32,
-        /// The environment cube's centre, in the shader's coordinates (`w` unused).
-        pub probe_pos: [f32; 4],
-        /// The parallax proxy box, in the shader's coordinates (`w` unused).
-        pub box_min: [f32; 4],
-        /// See `box_min`.
-        pub box_max: [f32; 4],
-        /// [`ShadingParams::metallic`].
-        pub metallic: f32,
-        /// GGX α = roughness², at least [`oslf_shading::ggx::MIN_ALPHA`].
-        pub alpha: f32,
-        /// 1: the pbr mode takes an object's metallic and α from its material in the store where
-        /// it has one ([`ShadingParams::object_material`] and a store with such objects).
-        pub object_material: u32,
-        /// The smallest metallic factor any pixel can have (`metallic`, and the store's
-        /// materials' with `object_material`): below 1 the pbr mode has a diffuse part.
-        pub min_metallic: f32,
-        /// 1: [`GlossyFilter::SplitSum`].
-        pub split_sum: u32,
-        /// Pad the block to WGSL's 16-byte struct alignment.
-        pub pad0: u32,
-        pub pad1: u32,
-        pub pad2: u32,
-    }
-}
-
-/// What the uniform needs from the store and the cache besides the parameters.
-#[derive(Clone, Copy, Debug)]
-pub struct StoreConstants {
-    pub sample_count: u32,
-    /// The environment cube's index, or `u32::MAX`.
-    pub env_cube: u32,
-    pub map_res: u32,
-    pub index16: bool,
-    pub cube_res: u32,
-    pub slots_per_texture: u32,
-    /// Mip levels of the pool's faces.
-    pub mip_levels: u32,
-    /// Whether the pool has distance planes.
-    pub has_depth: bool,
-    /// World position of the shader's coordinate origin (the object's centre, where the
-    /// environment cube was captured).
-    pub origin: [f32; 3],
-    /// The proxy box fitted to the environment cube's distances (world space), if it has them.
-    pub fitted_box: Option<[[f32; 3]; 2]>,
-    /// The smallest metallic factor of the store's metallic-roughness objects (format version
-    /// 7), `None` if it has none.
-    pub min_object_metallic: Option<f32>,
-}
-
-impl ShadeUniform {
-    /// Packs parameters, camera (in the coordinates the shader works in), image size, store
-    /// constants and background for the shader.
-    pub fn new(
-        p: &ShadingParams,
-        view_proj: glam::Mat4,
-        camera: &oslf_geometry::Camera,
-        size: [u32; 2],
-        k: &StoreConstants,
-        background: Background,
-    ) -> Self {
-        let (cam_right, cam_up, cam_forward) = ray_frame(camera);
-        let bg_color = match background {
-            Background::Color([r, g, b]) => [r, g, b, 0.0],
-            Background::None | Background::Env => [0.0; 4],
-        };
-        Self {
-            view_proj: view_proj.to_cols_array_2d(),
-            camera_pos: camera.position.extend(1.0).to_array(),
-            size,
-            terms: p.mode.terms(),
-            blend: p.blend.tag(),
-            blend_n: p.blend_n,
-            source: p.source.tag(),
-            m: p.m,
-            order: match p.order {
-                Order::PerPoint => 0,
-                Order::PerDirection => 1,
-            },
-            rs: p.rs,
-            rd: p.rd,
-            nu: p.nu,
-            nv: p.nv,
-            cos_phi_shader: p.phi_shader_deg.to_radians().cos(),
-            seed: p.seed,
-            sample_count: k.sample_count,
-            env_cube: k.env_cube,
-            map_res: k.map_res,
-            index16: u32::from(k.index16),
-            cube_res: k.cube_res,
-            slots_per_texture: k.slots_per_texture,
-            cam_right,
-            cam_up,
-            cam_forward,
-            bg_color,
-            background: background.tag(),
-            mip_levels: if p.glossy_filter == GlossyFilter::Mip {
-                k.mip_levels
-            } else {
-                1
-            },
-            depth_steps: if p.depth && k.has_depth {
-                DEPTH_STEPS
-            } else {
-                0
-            },
-            depth_thickness: DEPTH_THICKNESS_TEXELS * std::f32::consts::FRAC_PI_2
-                / k.cube_res.max(1) as f32,
-            probe_pos: [0.0; 4],
-            box_min: [0.0; 4],
-            box_max: [0.0; 4],
-            metallic: p.metallic,
-            alpha: oslf_shading::ggx::alpha(p.roughness),
-            object_material: u32::from(p.object_material && k.min_object_metallic.is_some()),
-            min_metallic: match k.min_object_metallic {
-                Some(m) if p.object_material => m.min(p.metallic),
-                _ => p.metallic,
-            },
-            split_sum: u32::from(p.glossy_filter == GlossyFilter::SplitSum),
-            pad0: 0,
-            pad1: 0,
-            pad2: 0,
-        }
-        .with_proxy_box(p.proxy_box.or(k.fitted_box), k.origin)
-    }
-
-    /// Sets the proxy box (world space) in the shader's coordinates; none gives an empty box
-    /// (every lookup then keeps its direction).
-    fn with_proxy_box(mut self, b: Option<[[f32; 3]; 2]>, origin: [f32; 3]) -> Self {
-        if let Some([lo, hi]) = b {
-            for k in 0..3 {
-                self.box_min[k] = lo[k] - origin[k];
-                self.box_max[k] = hi[k] - origin[k];
-            }
-        }
-        self
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -653,15 +295,21 @@ mod tests {
         }
         let e = "shiny".parse::<Mode>().unwrap_err().to_string();
         assert!(e.contains("shiny") && e.contains("recon-mirror"), "{e}");
-        let p = ShadingParams {
-            nu: f32::NAN,
+        let p = crate::ShadingParams::Glossy(crate::Glossy {
+            lobe: crate::AshikhminShirley {
+                nu: f32::NAN,
+                ..Default::default()
+            },
             ..Default::default()
-        };
+        });
         assert!(p.validate().unwrap_err().to_string().contains("n_u"));
-        let p = ShadingParams {
-            m: 0,
+        let p = crate::ShadingParams::Glossy(crate::Glossy {
+            integration: crate::MonteCarlo {
+                m: 0,
+                ..Default::default()
+            },
             ..Default::default()
-        };
+        });
         assert!(p.validate().unwrap_err().to_string().contains("M = 0"));
     }
 }

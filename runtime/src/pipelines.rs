@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use crate::params::ShadeUniform;
+use crate::uniform::ShadeUniform;
 
 /// The G-buffer's colour targets: position and patch id; octahedral normal and (u, v).
 pub(crate) const GBUFFER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -22,48 +22,69 @@ pub(crate) const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba3
 /// shade.wgsl's `@workgroup_size` on each side.
 pub(crate) const WORKGROUP: u32 = 8;
 
-/// The files of shade/, the bindings first, then the functions by concept in the order of their
-/// CPU twins (the files of the same names under reference/).
-const SHADE_FILES: &str = concat!(
-    include_str!("shade/bindings.wgsl"),
-    include_str!("shade/random.wgsl"),
-    include_str!("shade/feedback.wgsl"),
-    include_str!("shade/cube.wgsl"),
-    include_str!("shade/depth.wgsl"),
-    include_str!("shade/patch.wgsl"),
-    include_str!("shade/blend.wgsl"),
-    include_str!("shade/reconstruct.wgsl"),
-    include_str!("shade/mirror.wgsl"),
-    include_str!("shade/glossy.wgsl"),
-    include_str!("shade/seams.wgsl"),
-    include_str!("shade/split_sum.wgsl"),
-    include_str!("shade/background.wgsl"),
-    include_str!("shade/pixel.wgsl"),
-);
-
-/// shade.wgsl, the shading pass: oslf-shading's WGSL modules ([`oslf_shading::wgsl`]), the
-/// uniform's struct generated from [`crate::params::ShadeUniform`], then the files of shade/. Each file opens with a `// ---- NAME.wgsl ----` banner, so a line that a
-/// naga error quotes can be found in its file.
-pub(crate) fn shade_wgsl() -> String {
-    [
-        oslf_shading::wgsl::source().as_str(),
-        &crate::params::ShadeUniform::wgsl(),
-        SHADE_FILES,
-    ]
-    .join("\n")
+/// shade.wgsl, the shading pass, as embedded: assembled from the WGSL modules of shade/ (root
+/// `shade::pixel`), oslf-shading's modules and the structs generated from Rust
+/// ([`shade_modules`]); the tests check that it is what they assemble to.
+pub(crate) fn shade_wgsl() -> &'static str {
+    include_str!("generated/shade.wgsl")
 }
 
-/// gbuffer.wgsl, the G-buffer pass: oslf-shading's WGSL modules, the structs generated from
-/// Rust (the uniform, the vertex, the texture parameters), then gbuffer.wgsl.
-pub(crate) fn gbuffer_wgsl() -> String {
-    [
-        oslf_shading::wgsl::source().as_str(),
-        &crate::params::ShadeUniform::wgsl(),
-        &crate::geometry::GVertex::wgsl(),
-        &crate::textures::TextureParams::wgsl(),
-        include_str!("gbuffer.wgsl"),
+/// gbuffer.wgsl, the G-buffer pass, as embedded: assembled from gbuffer.wgsl (root `gbuffer`),
+/// oslf-shading's modules and the structs generated from Rust ([`gbuffer_modules`]).
+pub(crate) fn gbuffer_wgsl() -> &'static str {
+    include_str!("generated/gbuffer.wgsl")
+}
+
+/// The module of the structs generated from Rust: the uniform, the vertex, the texture
+/// parameters.
+#[cfg(test)]
+fn layouts_module() -> (String, String) {
+    let src = [
+        crate::uniform::ShadeUniform::wgsl(),
+        crate::geometry::GVertex::wgsl(),
+        crate::textures::TextureParams::wgsl(),
     ]
-    .join("\n")
+    .concat();
+    ("layouts".into(), src)
+}
+
+/// The modules of shade.wgsl as (path under `package::`, source): shade/'s files by concept,
+/// in the order of their CPU twins (the files of the same names under reference/).
+#[cfg(test)]
+pub(crate) fn shade_modules() -> Vec<(String, String)> {
+    let files = [
+        ("bindings", include_str!("shade/bindings.wgsl")),
+        ("random", include_str!("shade/random.wgsl")),
+        ("feedback", include_str!("shade/feedback.wgsl")),
+        ("cube", include_str!("shade/cube.wgsl")),
+        ("depth", include_str!("shade/depth.wgsl")),
+        ("patch", include_str!("shade/patch.wgsl")),
+        ("blend", include_str!("shade/blend.wgsl")),
+        ("reconstruct", include_str!("shade/reconstruct.wgsl")),
+        ("mirror", include_str!("shade/mirror.wgsl")),
+        ("glossy", include_str!("shade/glossy.wgsl")),
+        ("seams", include_str!("shade/seams.wgsl")),
+        ("split_sum", include_str!("shade/split_sum.wgsl")),
+        ("background", include_str!("shade/background.wgsl")),
+        ("pixel", include_str!("shade/pixel.wgsl")),
+    ];
+    let mut modules = oslf_shading::wgsl::modules();
+    modules.push(layouts_module());
+    modules.extend(
+        files
+            .into_iter()
+            .map(|(name, src)| (format!("shade::{name}"), src.to_string())),
+    );
+    modules
+}
+
+/// The modules of gbuffer.wgsl, as [`shade_modules`].
+#[cfg(test)]
+pub(crate) fn gbuffer_modules() -> Vec<(String, String)> {
+    let mut modules = oslf_shading::wgsl::modules();
+    modules.push(layouts_module());
+    modules.push(("gbuffer".into(), include_str!("gbuffer.wgsl").into()));
+    modules
 }
 
 /// A read-only or read-write storage buffer at `binding`.

@@ -6,8 +6,8 @@
 use std::mem::size_of;
 
 use crate::geometry::GVertex;
-use crate::params::ShadeUniform;
 use crate::pipelines::{gbuffer_wgsl, shade_wgsl, WORKGROUP};
+use crate::uniform::ShadeUniform;
 use crate::wgsl_fields as fields;
 use crate::wgsl_layout::{check_struct, constant_value, parse, wgsl_struct, Field};
 
@@ -61,9 +61,9 @@ fn shade_fields() -> Vec<Field> {
 #[test]
 fn the_uniform_block_is_shade_uniform() {
     let size = size_of::<ShadeUniform>();
-    let shade = parse("shade.wgsl", &shade_wgsl());
+    let shade = parse("shade.wgsl", shade_wgsl());
     check_struct(&shade, "Params", &shade_fields(), size, false);
-    let gbuffer = parse("gbuffer.wgsl", &gbuffer_wgsl());
+    let gbuffer = parse("gbuffer.wgsl", gbuffer_wgsl());
     check_struct(&gbuffer, "Params", &shade_fields(), size, false);
 }
 
@@ -72,7 +72,7 @@ fn the_uniform_block_is_shade_uniform() {
 /// material).
 #[test]
 fn the_vertex_and_patch_records_match() {
-    let gbuffer = parse("gbuffer.wgsl", &gbuffer_wgsl());
+    let gbuffer = parse("gbuffer.wgsl", gbuffer_wgsl());
     let vertex = fields!(GVertex {
         position_patch,
         normal_u,
@@ -94,7 +94,7 @@ fn the_vertex_and_patch_records_match() {
         size_of::<TextureParams>(),
         false,
     );
-    let shade = parse("shade.wgsl", &shade_wgsl());
+    let shade = parse("shade.wgsl", shade_wgsl());
     let (members, span) = wgsl_struct(&shade, "PatchGpu");
     assert_eq!(span as usize, crate::buffers::PATCH_VEC4S * 16);
     let names: Vec<_> = members
@@ -130,7 +130,7 @@ fn shader_constants_are_the_rust_constants() {
     ];
     // The seam table is checked against the projection it encodes (reference::tests);
     // oslf-shading's constants are its own (generated from their Rust values there).
-    let shading = parse("oslf-shading", &oslf_shading::wgsl::source());
+    let shading = parse("oslf-shading", &oslf_shading::wgsl::constants());
     let mut elsewhere = vec!["SEAM_LO", "SEAM_HI"];
     elsewhere.extend(
         shading
@@ -138,7 +138,7 @@ fn shader_constants_are_the_rust_constants() {
             .iter()
             .filter_map(|(_, c)| c.name.as_deref()),
     );
-    let shade = parse("shade.wgsl", &shade_wgsl());
+    let shade = parse("shade.wgsl", shade_wgsl());
     let mut seen = Vec::new();
     for (_, c) in shade.constants.iter() {
         let name = c.name.as_deref().unwrap_or_default();
@@ -167,7 +167,7 @@ fn shader_constants_are_the_rust_constants() {
 /// The pipelines set exactly shade.wgsl's override constants.
 #[test]
 fn pipeline_overrides_are_the_shaders() {
-    let shade = parse("shade.wgsl", &shade_wgsl());
+    let shade = parse("shade.wgsl", shade_wgsl());
     let mut wgsl: Vec<_> = shade
         .overrides
         .iter()
@@ -181,4 +181,18 @@ fn pipeline_overrides_are_the_shaders() {
     wgsl.sort();
     rust.sort();
     assert_eq!(wgsl, rust);
+}
+
+/// The embedded shaders are what their modules assemble to (`OSLF_BLESS=1` writes them).
+#[test]
+fn embedded_shaders_are_their_modules_assembled() {
+    use crate::pipelines::{gbuffer_modules, shade_modules};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/generated");
+    for (file, root, modules) in [
+        ("shade.wgsl", "shade::pixel", shade_modules()),
+        ("gbuffer.wgsl", "gbuffer", gbuffer_modules()),
+    ] {
+        oslf_shading::wgsl::check_assembled(&dir.join(file), root, &modules)
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
 }

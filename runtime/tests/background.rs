@@ -4,13 +4,13 @@
 //! store that has none.
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use common::{all_finite, compare, open_store, store_path_without_env_cube};
 use glam::Vec3;
 use oslf_runtime::reference::StoreCubes;
 use oslf_runtime::{
     Background, CacheConfig, Camera, Frame, Gpu, Mode, RenderOptions, Renderer, RuntimeError,
-    ShadingParams,
 };
 
 const W: u32 = 96;
@@ -55,13 +55,13 @@ fn compare_background(gpu: &[[f32; 4]], cpu: &[[f32; 4]], tol: f32) -> (usize, f
 fn check(
     r: &mut Renderer,
     cubes: &StoreCubes,
-    params: ShadingParams,
+    params: Knobs,
     bg: Background,
     label: &str,
 ) -> Frame {
     let camera = r.default_view();
-    let frame = r.render(&camera, &params, &options(bg)).unwrap();
-    let (cpu, _) = r.reference_image(&camera, &params, cubes).unwrap();
+    let frame = r.render(&camera, &params.params(), &options(bg)).unwrap();
+    let (cpu, _) = r.reference_image(&camera, &params.params(), cubes).unwrap();
     assert!(all_finite(&frame.pixels), "{label}: non-finite GPU pixel");
     assert!(all_finite(&cpu), "{label}: non-finite CPU pixel");
     assert!(
@@ -94,10 +94,10 @@ fn env_and_colour_backgrounds_match_the_cpu_reference() {
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
-    let base = ShadingParams::default();
+    let base = Knobs::default();
     for params in [
         base,
-        ShadingParams {
+        Knobs {
             mode: Mode::Glossy,
             m: 4,
             ..base
@@ -167,7 +167,7 @@ fn env_backgrounds_across_face_edges_and_corners_match_the_cpu_reference() {
 
 /// Renders the views of `env_backgrounds_across_face_edges_and_corners_match_the_cpu_reference`.
 fn views(r: &mut Renderer, cubes: &StoreCubes, label: &str) {
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     // The default view's position, looking away from the object.
     let position = r.default_view().position;
     for (dir, up) in [
@@ -184,9 +184,9 @@ fn views(r: &mut Renderer, cubes: &StoreCubes, label: &str) {
             vfov_deg: 60.0,
         };
         let frame = r
-            .render(&camera, &params, &options(Background::Env))
+            .render(&camera, &params.params(), &options(Background::Env))
             .unwrap();
-        let (cpu, _) = r.reference_image(&camera, &params, cubes).unwrap();
+        let (cpu, _) = r.reference_image(&camera, &params.params(), cubes).unwrap();
         assert!(
             all_finite(&frame.pixels) && all_finite(&cpu),
             "{label} {dir}"
@@ -213,7 +213,7 @@ fn the_background_changes_neither_the_object_nor_the_mask_nor_the_cache_counters
     )
     .unwrap();
     let camera = r.default_view();
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     let frames: Vec<Frame> = [
         Background::None,
         Background::Env,
@@ -221,7 +221,7 @@ fn the_background_changes_neither_the_object_nor_the_mask_nor_the_cache_counters
         Background::None,
     ]
     .into_iter()
-    .map(|bg| r.render(&camera, &params, &options(bg)).unwrap())
+    .map(|bg| r.render(&camera, &params.params(), &options(bg)).unwrap())
     .collect();
     let none = &frames[0];
     assert!(
@@ -266,12 +266,12 @@ fn a_frame_keeps_nothing_of_the_previous_view() {
         position: near.target + (near.position - near.target) * 3.0,
         ..near
     };
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     let opts = options(Background::None);
-    let first = r.render(&near, &params, &opts).unwrap();
-    let second = r.render(&far, &params, &opts).unwrap();
+    let first = r.render(&near, &params.params(), &opts).unwrap();
+    let second = r.render(&far, &params.params(), &opts).unwrap();
     let mut fresh = new();
-    let alone = fresh.render(&far, &params, &opts).unwrap();
+    let alone = fresh.render(&far, &params.params(), &opts).unwrap();
     let covered = |f: &Frame| f.pixels.iter().filter(|p| p[3] == 1.0).count();
     assert!(
         covered(&first) > 2 * covered(&alone),
@@ -298,13 +298,17 @@ fn an_env_background_without_an_environment_cube_is_a_parameter_error() {
     assert_eq!(store.env_cube_index(), None);
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
     let camera = r.default_view();
-    let params = ShadingParams::default();
-    match r.render(&camera, &params, &options(Background::Env)) {
+    let params = Knobs::default();
+    match r.render(&camera, &params.params(), &options(Background::Env)) {
         Err(RuntimeError::Parameter(m)) => assert!(m.contains("no environment cube"), "{m}"),
         other => panic!("expected a parameter error, got {other:?}"),
     }
     let colour = r
-        .render(&camera, &params, &options(Background::Color(COLOR)))
+        .render(
+            &camera,
+            &params.params(),
+            &options(Background::Color(COLOR)),
+        )
         .unwrap();
     let bg = background(&colour.pixels);
     assert!(!bg.is_empty());
@@ -315,7 +319,7 @@ fn an_env_background_without_an_environment_cube_is_a_parameter_error() {
         [0.0, f32::INFINITY, 0.0],
     ] {
         let e = r
-            .render(&camera, &params, &options(Background::Color(bad)))
+            .render(&camera, &params.params(), &options(Background::Color(bad)))
             .unwrap_err();
         assert!(matches!(e, RuntimeError::Parameter(_)), "{e:?}");
     }

@@ -4,15 +4,14 @@
 //! adapter the machine has: these tests fail, never skip, without one).
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use common::{compare, mean, open_store, store_path_bc6h};
 use oslf_format::{Encoding, Store};
 use oslf_runtime::cache::{cube_bytes, slots_for_megabytes};
 use oslf_runtime::face::{bc6h_levels, mip_levels, FaceLayout};
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{
-    CacheConfig, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer, ShadingParams,
-};
+use oslf_runtime::{CacheConfig, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer};
 
 const W: u32 = 96;
 const H: u32 = 72;
@@ -33,25 +32,20 @@ fn open_bc6h() -> Store {
 }
 
 /// [`common::check_parity`] at this file's frame size.
-fn check(
-    renderer: &mut Renderer,
-    cubes: &StoreCubes,
-    params: ShadingParams,
-    label: &str,
-) -> Vec<[f32; 4]> {
+fn check(renderer: &mut Renderer, cubes: &StoreCubes, params: Knobs, label: &str) -> Vec<[f32; 4]> {
     common::check_parity(renderer, cubes, params, (W, H), label)
 }
 
 /// Every mode on `renderer` against the CPU reference built with the renderer's own layout.
 fn every_mode(renderer: &mut Renderer, what: &str) -> Vec<Vec<[f32; 4]>> {
     let cubes = StoreCubes::decode_as(renderer.store(), renderer.face_layout()).unwrap();
-    let base = ShadingParams::default();
+    let base = Knobs::default();
     let mut images = Vec::new();
     for mode in [Mode::Recon, Mode::Mirror, Mode::ReconMirror] {
         images.push(check(
             renderer,
             &cubes,
-            ShadingParams { mode, ..base },
+            Knobs { mode, ..base },
             &format!("{what}: {}", mode.name()),
         ));
     }
@@ -60,7 +54,7 @@ fn every_mode(renderer: &mut Renderer, what: &str) -> Vec<Vec<[f32; 4]>> {
             check(
                 renderer,
                 &cubes,
-                ShadingParams {
+                Knobs {
                     mode: Mode::Glossy,
                     order,
                     glossy_filter: filter,
@@ -76,7 +70,7 @@ fn every_mode(renderer: &mut Renderer, what: &str) -> Vec<Vec<[f32; 4]>> {
     check(
         renderer,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::ReconGlossy,
             rs: 0.3,
             rd: 0.5,
@@ -89,7 +83,7 @@ fn every_mode(renderer: &mut Renderer, what: &str) -> Vec<Vec<[f32; 4]>> {
     check(
         renderer,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::Pbr,
             source: oslf_runtime::Source::EnvMap,
             glossy_filter: GlossyFilter::SplitSum,
@@ -150,7 +144,7 @@ fn bc6h_without_bc_falls_back_to_rgb9e5_and_matches_its_reference() {
     check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::ReconMirror,
             ..Default::default()
         },
@@ -190,12 +184,18 @@ fn bc6h_renders_close_to_rgb9e5() {
     .unwrap();
     let camera = rgb9e5.default_view();
     for mode in [Mode::Recon, Mode::Mirror, Mode::ReconMirror, Mode::Glossy] {
-        let params = ShadingParams {
+        let params = Knobs {
             mode,
             ..Default::default()
         };
-        let a = bc6h.render(&camera, &params, &options()).unwrap().pixels;
-        let b = rgb9e5.render(&camera, &params, &options()).unwrap().pixels;
+        let a = bc6h
+            .render(&camera, &params.params(), &options())
+            .unwrap()
+            .pixels;
+        let b = rgb9e5
+            .render(&camera, &params.params(), &options())
+            .unwrap()
+            .pixels;
         let rel = relative_rms(&a, &b);
         let (n, share, mae) = compare(&a, &b, 0.05);
         println!(
@@ -252,11 +252,11 @@ fn the_cache_counts_one_byte_per_texel_of_bc6h() {
     .unwrap();
     assert_eq!(r.face_layout(), bc);
     let camera = r.default_view();
-    let params = ShadingParams {
+    let params = Knobs {
         mode: Mode::ReconMirror,
         ..Default::default()
     };
-    r.render(&camera, &params, &options()).unwrap();
+    r.render(&camera, &params.params(), &options()).unwrap();
     let s = &r.cache().cumulative;
     let payload = bc.payload_bytes() as u64;
     println!(

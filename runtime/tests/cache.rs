@@ -1,10 +1,11 @@
 //! The LRU cube-map cache: budgets, granularity, fallback, statistics.
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use common::{all_finite, compare, mean, open_store};
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer, ShadingParams};
+use oslf_runtime::{CacheConfig, Gpu, Granularity, Mode, RenderOptions, Renderer};
 
 fn options() -> RenderOptions {
     RenderOptions {
@@ -26,10 +27,10 @@ fn renderer(slots: Option<u32>, granularity: Granularity) -> Renderer {
 
 #[test]
 fn a_budget_holding_the_working_set_gives_the_unlimited_image_and_less_degrades_gracefully() {
-    let params = ShadingParams::default(); // recon + C_s mirror, B^n N=4
+    let params = Knobs::default(); // recon + C_s mirror, B^n N=4
     let mut full = renderer(None, Granularity::Cube);
     let camera = full.default_view();
-    let exact = full.render(&camera, &params, &options()).unwrap();
+    let exact = full.render(&camera, &params.params(), &options()).unwrap();
     let working_set = exact.stats.requests as u32;
     assert!(working_set > 10 && working_set < full.store().cube_count());
     assert_eq!(
@@ -40,14 +41,14 @@ fn a_budget_holding_the_working_set_gives_the_unlimited_image_and_less_degrades_
 
     // Exactly the working set: the same image, bit for bit.
     let mut fit = renderer(Some(working_set), Granularity::Cube);
-    let frame = fit.render(&camera, &params, &options()).unwrap();
+    let frame = fit.render(&camera, &params.params(), &options()).unwrap();
     assert_eq!(frame.stats.unresolved, 0);
     assert_eq!(
         frame.pixels, exact.pixels,
         "a budget that holds the working set changes the image"
     );
     // Warm: the next frame hits everything and loads nothing.
-    let warm = fit.render(&camera, &params, &options()).unwrap();
+    let warm = fit.render(&camera, &params.params(), &options()).unwrap();
     assert_eq!(
         (warm.stats.hits, warm.stats.misses, warm.stats.loads),
         (warm.stats.requests, 0, 0)
@@ -56,7 +57,7 @@ fn a_budget_holding_the_working_set_gives_the_unlimited_image_and_less_degrades_
 
     // Half the working set: finite, close, and the shortfall reported.
     let mut half = renderer(Some(working_set / 2), Granularity::Cube);
-    let frame = half.render(&camera, &params, &options()).unwrap();
+    let frame = half.render(&camera, &params.params(), &options()).unwrap();
     assert!(frame.stats.unresolved > 0, "{:?}", frame.stats);
     assert!(all_finite(&frame.pixels));
     assert_ne!(frame.pixels, exact.pixels);
@@ -70,22 +71,24 @@ fn a_budget_holding_the_working_set_gives_the_unlimited_image_and_less_degrades_
     // The CPU reference with the same residency reproduces the fallback image.
     let mut cubes = StoreCubes::decode(half.store()).unwrap();
     cubes.masks = Some(half.cache().indirection());
-    let (cpu, _) = half.reference_image(&camera, &params, &cubes).unwrap();
+    let (cpu, _) = half
+        .reference_image(&camera, &params.params(), &cubes)
+        .unwrap();
     let (_, share, _) = compare(&frame.pixels, &cpu, 2e-3);
     assert!(share >= 0.995, "fallback parity {share}");
 }
 
 #[test]
 fn cube_granularity_loads_whole_cubes_and_face_granularity_only_what_is_read() {
-    let params = ShadingParams {
+    let params = Knobs {
         mode: Mode::Recon,
         ..Default::default()
     };
     let mut cube = renderer(None, Granularity::Cube);
     let mut face = renderer(None, Granularity::Face);
     let camera = cube.default_view();
-    let a = cube.render(&camera, &params, &options()).unwrap();
-    let b = face.render(&camera, &params, &options()).unwrap();
+    let a = cube.render(&camera, &params.params(), &options()).unwrap();
+    let b = face.render(&camera, &params.params(), &options()).unwrap();
     assert_eq!(a.pixels, b.pixels);
     println!("cube: {:?}\nface: {:?}", a.stats, b.stats);
     assert!(b.stats.bytes_uploaded < a.stats.bytes_uploaded);
@@ -99,13 +102,13 @@ fn cube_granularity_loads_whole_cubes_and_face_granularity_only_what_is_read() {
 
 #[test]
 fn lru_evicts_the_least_recently_used_and_statistics_add_up() {
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     let mut r = renderer(Some(40), Granularity::Cube);
     let camera = r.default_view();
     let mut other = camera;
     other.position = camera.target + (camera.target - camera.position); // the far side
     for c in [camera, other, camera] {
-        let f = r.render(&c, &params, &options()).unwrap();
+        let f = r.render(&c, &params.params(), &options()).unwrap();
         assert!(all_finite(&f.pixels));
         assert_eq!(f.stats.hits + f.stats.misses, f.stats.requests);
     }
@@ -141,7 +144,7 @@ fn impossible_budgets_and_sizes_are_refused_with_the_reason() {
     let e = r
         .render(
             &camera,
-            &ShadingParams::default(),
+            &Knobs::default().params(),
             &RenderOptions {
                 width: 0,
                 ..options()
@@ -167,7 +170,7 @@ fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
     let store = oslf_format::Store::open(&damaged).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
     let camera = r.default_view();
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     let mut total_errors = 0;
     // Orbit until cube 3 is needed; every frame must render.
     for k in 0..8 {
@@ -180,7 +183,7 @@ fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
                 d.x * a.sin() + d.y * a.cos(),
                 d.z,
             );
-        let f = r.render(&c, &params, &options()).unwrap();
+        let f = r.render(&c, &params.params(), &options()).unwrap();
         assert!(all_finite(&f.pixels));
         total_errors += f.stats.decode_errors;
     }
@@ -201,17 +204,19 @@ fn a_damaged_cube_map_falls_back_and_is_reported_while_the_render_goes_on() {
 
 #[test]
 fn streaming_decodes_off_the_render_thread_and_converges_to_the_exact_image() {
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     let mut exact_r = renderer(None, Granularity::Cube);
     let camera = exact_r.default_view();
-    let exact = exact_r.render(&camera, &params, &options()).unwrap();
+    let exact = exact_r
+        .render(&camera, &params.params(), &options())
+        .unwrap();
 
     let mut r = renderer(None, Granularity::Cube);
     let stream = RenderOptions {
         resolve_misses: false,
         ..options()
     };
-    let first = r.render(&camera, &params, &stream).unwrap();
+    let first = r.render(&camera, &params.params(), &stream).unwrap();
     assert_eq!(first.passes, 1);
     assert!(first.stats.misses > 0);
     assert_eq!(
@@ -222,7 +227,7 @@ fn streaming_decodes_off_the_render_thread_and_converges_to_the_exact_image() {
     let mut frames = 1;
     loop {
         std::thread::sleep(std::time::Duration::from_millis(20));
-        let f = r.render(&camera, &params, &stream).unwrap();
+        let f = r.render(&camera, &params.params(), &stream).unwrap();
         frames += 1;
         if f.stats.misses == 0 {
             assert_eq!(
@@ -250,7 +255,7 @@ fn renders_on_a_device_the_application_owns() {
     let mut r = Renderer::new(gpu, open_store(), CacheConfig::default()).unwrap();
     let camera = r.default_view();
     let frame = r
-        .render(&camera, &ShadingParams::default(), &options())
+        .render(&camera, &Knobs::default().params(), &options())
         .unwrap();
     assert!(mean(&frame.pixels) > 1e-3);
     // The application's handle still works beside the renderer.

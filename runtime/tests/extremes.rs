@@ -4,6 +4,7 @@
 //! and 4096² sample maps.
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use common::{all_finite, compare, mean};
 use oslf_format::{
@@ -11,7 +12,7 @@ use oslf_format::{
     SamplePoint, Store, StoreMeta, StoreWriter,
 };
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams};
+use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer};
 use std::path::{Path, PathBuf};
 
 /// A flat unit patch facing +z with `points` sample points ε above it, 1² cube
@@ -123,16 +124,18 @@ fn more_than_65535_sample_points_with_one_texel_cube_maps_and_a_small_cache() {
         ..Default::default()
     };
     for mode in [Mode::Recon, Mode::ReconMirror, Mode::Glossy] {
-        let params = ShadingParams {
+        let params = Knobs {
             mode,
             m: 4,
             ..Default::default()
         };
-        let frame = r.render(&camera, &params, &opts).unwrap();
+        let frame = r.render(&camera, &params.params(), &opts).unwrap();
         assert!(all_finite(&frame.pixels), "{mode:?}");
         let mut resident = StoreCubes::decode(r.store()).unwrap();
         resident.masks = Some(r.cache().indirection());
-        let (cpu, _) = r.reference_image(&camera, &params, &resident).unwrap();
+        let (cpu, _) = r
+            .reference_image(&camera, &params.params(), &resident)
+            .unwrap();
         let (n, share, _) = compare(&frame.pixels, &cpu, 2e-3);
         println!(
             "{mode:?}: {n} pixels, {share} agree, mean {}, {:?}",
@@ -143,7 +146,9 @@ fn more_than_65535_sample_points_with_one_texel_cube_maps_and_a_small_cache() {
         assert!(share >= 0.995, "{mode:?}: {share}");
         assert!(mean(&cpu) > 0.0, "{mode:?}: black");
         // With every cube available the reference is finite too.
-        let (full, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+        let (full, _) = r
+            .reference_image(&camera, &params.params(), &cubes)
+            .unwrap();
         assert!(all_finite(&full));
     }
 }
@@ -162,9 +167,11 @@ fn one_texel_sample_maps_render() {
         height: 32,
         ..Default::default()
     };
-    let params = ShadingParams::default();
-    let frame = r.render(&camera, &params, &opts).unwrap();
-    let (cpu, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+    let params = Knobs::default();
+    let frame = r.render(&camera, &params.params(), &opts).unwrap();
+    let (cpu, _) = r
+        .reference_image(&camera, &params.params(), &cubes)
+        .unwrap();
     let (n, share, _) = compare(&frame.pixels, &cpu, 2e-3);
     assert!(n > 50 && share >= 0.995, "{n} {share}");
 }
@@ -232,7 +239,7 @@ seed = {seed}
 
 /// Renders `path` from its camera on the GPU, checks it against the CPU reference, and returns
 /// the GPU image.
-fn render_checked(path: &Path, params: &ShadingParams, w: u32, h: u32) -> Vec<[f32; 4]> {
+fn render_checked(path: &Path, params: &Knobs, w: u32, h: u32) -> Vec<[f32; 4]> {
     let store = Store::open(path).unwrap();
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
@@ -242,8 +249,10 @@ fn render_checked(path: &Path, params: &ShadingParams, w: u32, h: u32) -> Vec<[f
         height: h,
         ..Default::default()
     };
-    let frame = r.render(&camera, params, &opts).unwrap();
-    let (cpu, _) = r.reference_image(&camera, params, &cubes).unwrap();
+    let frame = r.render(&camera, &params.params(), &opts).unwrap();
+    let (cpu, _) = r
+        .reference_image(&camera, &params.params(), &cubes)
+        .unwrap();
     assert!(all_finite(&frame.pixels) && all_finite(&cpu));
     let (n, share, diff) = compare(&frame.pixels, &cpu, 2e-3);
     println!(
@@ -280,7 +289,7 @@ fn a_teapot_far_from_the_origin_renders_as_at_the_origin() {
     let reseeded = teapot_store(tmp.path(), "reseeded", [0.0; 3], 4);
     let far = teapot_store(tmp.path(), "far", [1e5, -1e5, 1e5], 3);
     for mode in [Mode::Recon, Mode::ReconMirror] {
-        let params = ShadingParams {
+        let params = Knobs {
             mode,
             ..Default::default()
         };
@@ -321,12 +330,14 @@ fn two_texel_cube_maps_render() {
         ..Default::default()
     };
     for mode in [Mode::Recon, Mode::Mirror, Mode::ReconMirror] {
-        let params = ShadingParams {
+        let params = Knobs {
             mode,
             ..Default::default()
         };
-        let frame = r.render(&camera, &params, &opts).unwrap();
-        let (cpu, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+        let frame = r.render(&camera, &params.params(), &opts).unwrap();
+        let (cpu, _) = r
+            .reference_image(&camera, &params.params(), &cubes)
+            .unwrap();
         assert!(all_finite(&frame.pixels) && all_finite(&cpu), "{mode:?}");
         let (n, share, diff) = compare(&frame.pixels, &cpu, 2e-3);
         println!(
@@ -367,7 +378,7 @@ fn bake_text(dir: &Path, name: &str, text: &str) -> (PathBuf, oslf_bake::bake::B
 fn check_parity(
     r: &mut Renderer,
     cubes: &mut StoreCubes,
-    params: &ShadingParams,
+    params: &Knobs,
     (w, h): (u32, u32),
     min_pixels: usize,
     what: &str,
@@ -379,11 +390,11 @@ fn check_parity(
         ..Default::default()
     };
     let t = std::time::Instant::now();
-    let frame = r.render(&camera, params, &opts).unwrap();
+    let frame = r.render(&camera, &params.params(), &opts).unwrap();
     let gpu_s = t.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
     cubes.masks = Some(r.cache().indirection());
-    let (cpu, _) = r.reference_image(&camera, params, cubes).unwrap();
+    let (cpu, _) = r.reference_image(&camera, &params.params(), cubes).unwrap();
     let cpu_s = t.elapsed().as_secs_f64();
     assert!(all_finite(&frame.pixels), "{what}: GPU pixel not finite");
     assert!(all_finite(&cpu), "{what}: CPU pixel not finite");
@@ -473,7 +484,7 @@ fn cube_maps_of_2048_squared_bake_store_and_render() {
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
     assert_eq!(r.cache().slots(), r.store().cube_count());
     for mode in [Mode::Recon, Mode::Mirror] {
-        let params = ShadingParams {
+        let params = Knobs {
             mode,
             ..Default::default()
         };
@@ -495,7 +506,7 @@ fn cube_maps_of_2048_squared_bake_store_and_render() {
     };
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, config).unwrap();
     assert_eq!(r.cache().slots(), 1);
-    let params = ShadingParams {
+    let params = Knobs {
         mode: Mode::Mirror,
         ..Default::default()
     };
@@ -613,7 +624,7 @@ fn sample_maps_of_4096_squared_bake_store_and_render() {
     let mut cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
     for mode in [Mode::Recon, Mode::Mirror] {
-        let params = ShadingParams {
+        let params = Knobs {
             mode,
             ..Default::default()
         };

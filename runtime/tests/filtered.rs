@@ -2,9 +2,10 @@
 //! whatever adapter the machine has: this test fails, never skips, without one).
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use common::{mean, open_store};
-use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams};
+use oslf_runtime::{CacheConfig, Gpu, Mode, RenderOptions, Renderer};
 
 /// A rough metal (roughness 0.6) at M = 16 sends the light it sends at M = 256 within 0.5 %,
 /// and per pixel differs from it by a few percent: its sixteen lookups read coarse mip levels,
@@ -24,14 +25,16 @@ fn a_wide_lobe_at_16_samples_sends_the_light_of_256() {
         ..Default::default()
     };
     let render = |r: &mut Renderer, m: u32| {
-        let params = ShadingParams {
+        let params = Knobs {
             mode: Mode::Pbr,
             metallic: 1.0,
             roughness: 0.6,
             m,
             ..Default::default()
         };
-        r.render(&camera, &params, &options).unwrap().pixels
+        r.render(&camera, &params.params(), &options)
+            .unwrap()
+            .pixels
     };
     let few = render(&mut r, 16);
     let many = render(&mut r, 256);

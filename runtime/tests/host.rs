@@ -6,6 +6,7 @@
 //! `Renderer::render`.
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use std::sync::{Arc, Mutex};
 
@@ -14,7 +15,7 @@ use glam::camera::rh::proj::directx;
 use glam::camera::rh::view::look_at_mat4;
 use glam::{Mat4, Vec3};
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Mode, Renderer, ShadingParams};
+use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Mode, Renderer};
 
 const W: u32 = 160;
 const H: u32 = 120;
@@ -219,7 +220,7 @@ impl Host {
         gpu: &Gpu,
         r: &mut Renderer,
         view: &HostView,
-        params: &ShadingParams,
+        params: &Knobs,
     ) -> Option<oslf_runtime::CacheStats> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.begin(gpu, &mut encoder);
@@ -235,7 +236,8 @@ impl Host {
             width: W,
             height: H,
         };
-        r.encode_into(&mut encoder, view, &target, params).unwrap();
+        r.encode_into(&mut encoder, view, &target, &params.params())
+            .unwrap();
         self.mesh(
             gpu,
             &mut encoder,
@@ -372,7 +374,7 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
         exposure,
         ..host_view(&r, reversed)
     };
-    let params = ShadingParams {
+    let params = Knobs {
         mode: Mode::ReconMirror,
         ..Default::default()
     };
@@ -407,7 +409,9 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
         vec![None; color.len()]
     };
     let camera = view.camera().unwrap();
-    let (cpu, _) = r.reference_image(&camera, &params, &cubes).unwrap();
+    let (cpu, _) = r
+        .reference_image(&camera, &params.params(), &cubes)
+        .unwrap();
     let behind = host.depth_of(0.9999);
     let (mut hidden, mut shown) = (0, 0);
     let mut object_gpu = Vec::new();
@@ -481,11 +485,11 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
         height: H,
     };
     let view = host_view(&r, false);
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     let mut refuse = |view: &HostView, target: &HostTarget, expect: &str| {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let e = r
-            .encode_into(&mut encoder, view, target, &params)
+            .encode_into(&mut encoder, view, target, &params.params())
             .unwrap_err()
             .to_string();
         assert!(e.contains(expect), "{e}");
@@ -535,7 +539,8 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
     );
     // Nothing was recorded for the refused frames: a good one still draws.
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    r.encode_into(&mut encoder, &view, &good, &params).unwrap();
+    r.encode_into(&mut encoder, &view, &good, &params.params())
+        .unwrap();
     gpu.queue.submit([encoder.finish()]);
     r.after_submit().unwrap();
 }
@@ -553,7 +558,7 @@ fn on_a_hosts_device_the_renderer_keeps_its_errors_and_the_host_its_handler() {
     let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
     let host = Host::new(&gpu, false, 1);
     let view = host_view(&r, false);
-    let params = ShadingParams::default();
+    let params = Knobs::default();
     host.frame(&gpu, &mut r, &view, &params);
     gpu.wait().unwrap();
     // A colour format no render pass writes: the renderer's error, and nothing recorded.
@@ -574,7 +579,7 @@ fn on_a_hosts_device_the_renderer_keeps_its_errors_and_the_host_its_handler() {
     for _ in 0..2 {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let e = r
-            .encode_into(&mut encoder, &view, &bad, &params)
+            .encode_into(&mut encoder, &view, &bad, &params.params())
             .unwrap_err();
         assert!(matches!(e, oslf_runtime::RuntimeError::Gpu(_)), "{e}");
         println!("refused: {e}");

@@ -4,13 +4,14 @@
 //! atlas page its atlas uv falls in; both objects render.
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use oslf_format::{
     encode_cube, BakeParams, CameraInfo, CubeImage, Encoding, MeshInfo, ObjectInfo, Patch,
     SampleMaps, SamplePoint, StoreMeta, StoreWriter, INVALID_INDEX,
 };
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, ShadingParams, Source};
+use oslf_runtime::{Blend, CacheConfig, Gpu, Mode, RenderOptions, Renderer, Source};
 
 const W: u32 = 96;
 const H: u32 = 72;
@@ -325,23 +326,18 @@ fn open_path(path: &std::path::Path) -> (Renderer, StoreCubes) {
     (r, cubes)
 }
 
-fn check(
-    r: &mut Renderer,
-    cubes: &StoreCubes,
-    params: ShadingParams,
-    label: &str,
-) -> Vec<[f32; 4]> {
+fn check(r: &mut Renderer, cubes: &StoreCubes, params: Knobs, label: &str) -> Vec<[f32; 4]> {
     common::check_parity(r, cubes, params, (W, H), label)
 }
 
 #[test]
 fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
     let (mut r, cubes) = open();
-    let base = ShadingParams::default();
+    let base = Knobs::default();
     check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::Recon,
             ..base
         },
@@ -350,7 +346,7 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
     for blend in Blend::ALL {
         for n in [1.0, 4.0] {
             for depth in [false, true] {
-                let p = ShadingParams {
+                let p = Knobs {
                     mode: Mode::Mirror,
                     blend,
                     blend_n: n,
@@ -369,7 +365,7 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
     check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::ReconMirror,
             ..base
         },
@@ -378,7 +374,7 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
     check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::Mirror,
             source: Source::EnvMap,
             ..base
@@ -393,7 +389,7 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
     // and with the parameters' factors for both.
     for object_material in [true, false] {
         for depth in [false, true] {
-            let p = ShadingParams {
+            let p = Knobs {
                 mode: Mode::Pbr,
                 metallic: 1.0,
                 roughness: 0.2,
@@ -417,12 +413,12 @@ fn a_mesh_object_matches_the_cpu_reference_in_every_mode_and_blend() {
 fn the_pbr_mode_takes_an_objects_material_from_the_store() {
     let (mut r, _) = open();
     let render = |r: &mut Renderer, object_material: bool| {
-        let p = ShadingParams {
+        let p = Knobs {
             mode: Mode::Pbr,
             metallic: 1.0,
             roughness: 0.2,
             object_material,
-            ..ShadingParams::default()
+            ..Knobs::default()
         };
         let options = RenderOptions {
             width: W,
@@ -430,7 +426,7 @@ fn the_pbr_mode_takes_an_objects_material_from_the_store() {
             ..Default::default()
         };
         let camera = r.default_view();
-        r.render(&camera, &p, &options).unwrap().pixels
+        r.render(&camera, &p.params(), &options).unwrap().pixels
     };
     let own = render(&mut r, true);
     let flags = render(&mut r, false);
@@ -459,11 +455,11 @@ fn recon(r: &mut Renderer) -> (Vec<[f32; 4]>, Vec<oslf_runtime::reference::GTexe
         ..Default::default()
     };
     let camera = r.default_view();
-    let params = ShadingParams {
+    let params = Knobs {
         mode: Mode::Recon,
         ..Default::default()
     };
-    let frame = r.render(&camera, &params, &options).unwrap();
+    let frame = r.render(&camera, &params.params(), &options).unwrap();
     (frame.pixels, r.read_gbuffer().unwrap())
 }
 
@@ -584,12 +580,12 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
     use oslf_runtime::reference::material::{mapped_normal, material_texel, unpack2x16unorm};
     let (mut r, cubes) = open_path(&textured_store());
     let textures = grid_textures();
-    let pbr = ShadingParams {
+    let pbr = Knobs {
         mode: Mode::Pbr,
         metallic: 1.0,
         roughness: 0.2,
         m: 8,
-        ..ShadingParams::default()
+        ..Knobs::default()
     };
     let own = check(&mut r, &cubes, pbr, "pbr, textured");
     let gbuffer = r.read_gbuffer().unwrap();
@@ -630,7 +626,10 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
         ..Default::default()
     };
     let camera = plain.default_view();
-    let before = plain.render(&camera, &pbr, &options).unwrap().pixels;
+    let before = plain
+        .render(&camera, &pbr.params(), &options)
+        .unwrap()
+        .pixels;
     // The normal texture: the textured G-buffer's normal is the CPU's mapped normal of the
     // untextured G-buffer's (the interpolated normal of the same pixel) at the pixel's
     // texture coordinates, with the tangent +x.
@@ -674,14 +673,14 @@ fn a_textured_object_reads_its_textures_per_pixel_and_matches_the_cpu_reference(
     );
     for (params, label) in [
         (
-            ShadingParams {
+            Knobs {
                 object_material: false,
                 ..pbr
             },
             "pbr, textured, the parameters' factors",
         ),
         (
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 ..pbr
             },

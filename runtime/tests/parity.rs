@@ -2,23 +2,17 @@
 //! the machine has: these tests fail, never skip, without one).
 
 use crate::common;
+use crate::common::knobs::Knobs;
 
 use common::{compare, open_store};
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{
-    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, ShadingParams, Source,
-};
+use oslf_runtime::{Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, Source};
 
 const W: u32 = 96;
 const H: u32 = 72;
 
 /// [`common::check_parity`] at this file's frame size.
-fn check(
-    renderer: &mut Renderer,
-    cubes: &StoreCubes,
-    params: ShadingParams,
-    label: &str,
-) -> Vec<[f32; 4]> {
+fn check(renderer: &mut Renderer, cubes: &StoreCubes, params: Knobs, label: &str) -> Vec<[f32; 4]> {
     common::check_parity(renderer, cubes, params, (W, H), label)
 }
 
@@ -27,11 +21,11 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
-    let base = ShadingParams::default();
+    let base = Knobs::default();
     let recon = check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::Recon,
             ..base
         },
@@ -43,7 +37,7 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
             if n != 4.0 && !matches!(blend, Blend::Reflection | Blend::Normal) {
                 continue;
             }
-            let p = ShadingParams {
+            let p = Knobs {
                 mode: Mode::Mirror,
                 blend,
                 blend_n: n,
@@ -65,7 +59,7 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
     check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::ReconMirror,
             ..base
         },
@@ -74,7 +68,7 @@ fn every_mode_and_blend_matches_the_cpu_reference() {
     let env = check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             mode: Mode::Mirror,
             source: Source::EnvMap,
             ..base
@@ -108,7 +102,7 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
     );
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
-    let base = ShadingParams {
+    let base = Knobs {
         mode: Mode::Mirror,
         ..Default::default()
     };
@@ -116,7 +110,7 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
     let plain = check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             depth: false,
             ..base
         },
@@ -135,14 +129,14 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         check(
             &mut r,
             &cubes,
-            ShadingParams { blend, ..base },
+            Knobs { blend, ..base },
             &format!("mirror {}, depth-corrected", blend.name()),
         );
     }
     let env = check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             source: Source::EnvMap,
             ..base
         },
@@ -151,7 +145,7 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
     let parallax = check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             source: Source::Parallax,
             ..base
         },
@@ -161,19 +155,19 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         compare(&env, &parallax, 1e-3).1 < 0.9,
         "parallax correction changes nothing"
     );
-    let given = r.proxy_box(&base).expect("a fitted box");
+    let given = r.proxy_box(&base.params()).expect("a fitted box");
     let shifted = [given[0], given[1].map(|v| v + 1.0)];
     check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             source: Source::Parallax,
             proxy_box: Some(shifted),
             ..base
         },
         "mirror parallax (given box)",
     );
-    let glossy = |filter, order, depth, source| ShadingParams {
+    let glossy = |filter, order, depth, source| Knobs {
         mode: Mode::Glossy,
         glossy_filter: filter,
         order,
@@ -241,7 +235,7 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         check(
             &mut r,
             &cubes,
-            ShadingParams {
+            Knobs {
                 m,
                 rd,
                 ..glossy(GlossyFilter::Mip, Order::PerPoint, true, Source::Oslf)
@@ -258,7 +252,7 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         check(
             &mut r,
             &cubes,
-            ShadingParams {
+            Knobs {
                 mode: Mode::Pbr,
                 metallic,
                 roughness: 0.6,
@@ -275,11 +269,11 @@ fn extreme_parameters_stay_finite_and_agree() {
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
-    let base = ShadingParams::default();
+    let base = Knobs::default();
     for (label, p) in [
         (
             "B^r N=1e4",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 blend: Blend::Reflection,
                 blend_n: 1e4,
@@ -288,7 +282,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "B^n N=1e4",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 blend: Blend::Normal,
                 blend_n: 1e4,
@@ -297,7 +291,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "B^r N=0",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Mirror,
                 blend: Blend::Reflection,
                 blend_n: 0.0,
@@ -306,7 +300,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "AS n=0",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 nu: 0.0,
                 nv: 0.0,
@@ -316,7 +310,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "AS n_u=1e6 n_v=1",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 nu: 1e6,
                 nv: 1.0,
@@ -326,7 +320,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "AS n=1e6 per direction",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Glossy,
                 nu: 1e6,
                 nv: 1e6,
@@ -337,7 +331,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "pbr roughness 0",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Pbr,
                 metallic: 1.0,
                 roughness: 0.0,
@@ -347,7 +341,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "pbr roughness 1 dielectric per direction",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Pbr,
                 metallic: 0.0,
                 roughness: 1.0,
@@ -358,7 +352,7 @@ fn extreme_parameters_stay_finite_and_agree() {
         ),
         (
             "phi_shader=0",
-            ShadingParams {
+            Knobs {
                 mode: Mode::Recon,
                 phi_shader_deg: 0.0,
                 ..base
@@ -380,12 +374,12 @@ fn a_pool_spread_over_four_texture_arrays_renders_the_same() {
     };
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, config).unwrap();
     assert_eq!(r.cache().slots(), count);
-    let base = ShadingParams::default();
+    let base = Knobs::default();
     for mode in [Mode::ReconMirror, Mode::Glossy] {
         check(
             &mut r,
             &cubes,
-            ShadingParams { mode, m: 4, ..base },
+            Knobs { mode, m: 4, ..base },
             &format!("{mode:?} over 4 arrays"),
         );
     }
@@ -443,7 +437,7 @@ fn the_split_sum_baseline_matches_the_cpu_reference() {
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
     let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
-    let base = ShadingParams {
+    let base = Knobs {
         mode: Mode::Pbr,
         glossy_filter: GlossyFilter::SplitSum,
         source: Source::EnvMap,
@@ -454,7 +448,7 @@ fn the_split_sum_baseline_matches_the_cpu_reference() {
     let mut images = Vec::new();
     for source in [Source::EnvMap, Source::Parallax] {
         for (metallic, roughness) in [(1.0, 0.05), (1.0, 0.4), (1.0, 1.0), (0.3, 0.4)] {
-            let p = ShadingParams {
+            let p = Knobs {
                 source,
                 metallic,
                 roughness,
@@ -480,7 +474,7 @@ fn the_split_sum_baseline_matches_the_cpu_reference() {
     let mc = check(
         &mut r,
         &cubes,
-        ShadingParams {
+        Knobs {
             glossy_filter: GlossyFilter::Mip,
             m: 64,
             roughness: 0.4,
@@ -497,22 +491,8 @@ fn the_split_sum_baseline_matches_the_cpu_reference() {
         (a / b - 1.0).abs() < 0.25,
         "split-sum mean {a}, Monte Carlo {b}"
     );
-    // Only a baseline of the pbr mode.
-    let camera = r.default_view();
-    for bad in [
-        ShadingParams {
-            source: Source::Oslf,
-            ..base
-        },
-        ShadingParams {
-            mode: Mode::Glossy,
-            ..base
-        },
-    ] {
-        let e = r
-            .render(&camera, &bad, &Default::default())
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("split-sum") && e.contains("pbr"), "{e}");
-    }
+    // Only a baseline of the pbr mode, over a probe: `PbrIntegration::SplitSum` holds a
+    // `Probe` and no other mode has it (the CLI's refusals: tests/cli_sources.rs).
+    let p = base.params();
+    assert!(p.split_sum() && p.source() == Source::EnvMap && p.monte_carlo().is_none());
 }

@@ -1,4 +1,3 @@
-// ---- oslf-shading color.wgsl ----
 // The twin of oslf-shading's color.rs: sRGB both ways, the ACES tone curve, luminance.
 
 // The sRGB transfer function, encoded [0, 1] to linear.

@@ -1,4 +1,3 @@
-// ---- oslf-shading fresnel.wgsl ----
 // The twin of oslf-shading's fresnel.rs (fresnel_ + its names): Schlick's approximation.
 
 // (1 − c)⁵, 1 − c clamped to [0, 1].

@@ -1,7 +1,8 @@
-// ---- oslf-shading ggx.wgsl ----
 // The twin of oslf-shading's ggx.rs, function for function (ggx_ + its names): GGX D, Smith
 // masking, visible-normal sampling. GGX_MIN_ALPHA and GGX_DIELECTRIC_F0 are generated from
 // the Rust constants (wgsl.rs).
+
+import package::shading::constants::{GGX_MIN_ALPHA, PI};
 
 // α = roughness², at least GGX_MIN_ALPHA.
 fn ggx_alpha(roughness: f32) -> f32 {

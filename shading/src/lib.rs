@@ -15,11 +15,13 @@
 //!
 //! Each WGSL function is the Rust function of the same module with the module's name as a
 //! prefix (`ggx::distribution` is `ggx_distribution`), the same operations in the same order,
-//! so that the two agree to the last bit where the GPU rounds as the CPU does. The WGSL modules
-//! share one namespace with the shader that includes them ([`wgsl::source`]); the prefixes keep
-//! their names apart.
+//! so that the two agree to the last bit where the GPU rounds as the CPU does. The WGSL files are
+//! modules that shaders import (`import package::shading::ggx::{ggx_distribution};`,
+//! [`wgsl::modules`]); assembled shaders keep every name as written, and the prefixes keep
+//! them apart from the shaders' own.
 //!
-//! It depends on glam alone: no I/O, no GPU, no other oslf crate. Every oslf crate that
+//! It depends on glam alone (and, with the feature `assemble` that the crates' tests use, on the
+//! `wesl` module system): no I/O, no GPU, no other oslf crate. Every oslf crate that
 //! shades may depend on it; it must never depend on any of them.
 
 pub mod color;

@@ -1,4 +1,3 @@
-// ---- oslf-shading random.wgsl ----
 // The twin of oslf-shading's random.rs: PCG32 and the stream hash, bit for bit, with 64-bit
 // integers as vec2<u32> (x = low word, y = high word), so a GPU texel draws the CPU's numbers.
 

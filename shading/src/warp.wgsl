@@ -1,6 +1,7 @@
-// ---- oslf-shading warp.wgsl ----
 // The twin of oslf-shading's warp.rs: the warps the GPU bake draws (same names, same order;
 // the inverses and the densities it does not need are Rust only) and the frame about a normal.
+
+import package::shading::constants::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 fn sample_uniform_disk_concentric(u: vec2<f32>) -> vec2<f32> {
     let o = 2.0 * u - vec2<f32>(1.0);

@@ -1,6 +1,12 @@
-//! The WGSL twins of this crate's modules, as one source text that the shader assemblers of
-//! the runtime, the GPU bake and the viewer put before their own files ([`source`]). Its
-//! constants are generated from the Rust ones, so they cannot drift.
+//! The WGSL twins of this crate's modules, as WGSL modules with imports (the WESL module
+//! system: `import package::shading::ggx::{ggx_d};`) that the shaders of the runtime, the GPU
+//! bake and the viewer import ([`modules`]). Its constants are a module generated from the Rust
+//! ones (`package::shading::constants`), so they cannot drift.
+//!
+//! Each shader is assembled from its modules by [`assemble`] (feature `assemble`, the `wesl`
+//! crate) into one WGSL file that the crate embeds (`src/generated/`); each crate's tests
+//! assemble it again and fail where the embedded file differs, so that a change to a module
+//! reaches every shader that imports it (`OSLF_BLESS=1` rewrites the files).
 
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
@@ -33,9 +39,121 @@ pub fn constants() -> String {
     .concat()
 }
 
-/// Every WGSL module of this crate, constants first, to put before a shader's own files.
-pub fn source() -> String {
-    [constants().as_str(), GGX, FRESNEL, COLOR, RANDOM, WARP].join("\n")
+/// Every WGSL module of this crate as (module path under `package::`, source).
+pub fn modules() -> Vec<(String, String)> {
+    [
+        ("shading::constants", constants()),
+        ("shading::ggx", GGX.into()),
+        ("shading::fresnel", FRESNEL.into()),
+        ("shading::color", COLOR.into()),
+        ("shading::random", RANDOM.into()),
+        ("shading::warp", WARP.into()),
+    ]
+    .into_iter()
+    .map(|(path, src)| (path.to_string(), src))
+    .collect()
+}
+
+/// Assembles the shader whose root module is `root` (a path under `package::`, such as
+/// `shade::pixel`) from `modules` ((path, source) pairs; this crate's [`modules`] among them)
+/// into one WGSL source, with the WESL module system: each module's `import`s are resolved,
+/// checked (a name used and not declared or imported is an error naming it) and every loaded
+/// module's declarations are kept under their own names (no mangling; two modules declaring
+/// one name is an error). Comments are not kept.
+#[cfg(feature = "assemble")]
+pub fn assemble(root: &str, modules: &[(String, String)]) -> Result<String, String> {
+    use wesl::syntax::{ModulePath, PathOrigin};
+    let path = |p: &str| {
+        ModulePath::new(
+            PathOrigin::Absolute,
+            p.split("::").map(str::to_string).collect(),
+        )
+    };
+    let mut resolver = wesl::resolver::VirtualResolver::new();
+    for (p, src) in modules {
+        resolver.add_module(path(p), src.as_str().into());
+    }
+    let options = wesl::CompileOptions {
+        mangler: wesl::ManglerKind::None,
+        strip: false,
+        ..Default::default()
+    };
+    let compiler = wesl::Compiler::new_with_resolver(options, resolver);
+    let mut result = compiler
+        .compile_module(&path(root))
+        .map_err(|e| format!("{root}: {e}"))?;
+    // The compiler gathers declarations in no fixed order: put them in the order of `modules`
+    // and, within a module, of its source, so that the same modules give the same text.
+    let order = |name: &str| -> Option<(usize, usize)> {
+        let patterns = [
+            format!("fn {name}("),
+            format!("struct {name} "),
+            format!("const {name}:"),
+            format!("const {name} "),
+            format!("override {name}:"),
+            format!("alias {name} "),
+            format!("> {name}:"),
+            format!("var {name}:"),
+        ];
+        modules.iter().enumerate().find_map(|(m, (_, src))| {
+            patterns
+                .iter()
+                .filter_map(|p| src.find(p.as_str()))
+                .min()
+                .map(|at| (m, at))
+        })
+    };
+    use wesl::syntax::GlobalDeclaration as G;
+    let mut keyed = Vec::new();
+    for d in std::mem::take(&mut result.syntax.global_declarations) {
+        let name = match d.node() {
+            G::Declaration(x) => x.ident.name().clone(),
+            G::TypeAlias(x) => x.ident.name().clone(),
+            G::Struct(x) => x.ident.name().clone(),
+            G::Function(x) => x.ident.name().clone(),
+            _ => return Err(format!("{root}: a declaration without a name: {d}")),
+        };
+        let key = order(&name)
+            .ok_or_else(|| format!("{root}: {name} is declared in none of the modules"))?;
+        keyed.push((key, d));
+    }
+    keyed.sort_by_key(|(key, _)| *key);
+    result.syntax.global_declarations = keyed.into_iter().map(|(_, d)| d).collect();
+    Ok(result.syntax.to_string())
+}
+
+/// The first lines of an assembled file.
+#[cfg(feature = "assemble")]
+fn banner(root: &str) -> String {
+    format!(
+        "// Assembled by oslf_shading::wgsl::assemble from WGSL modules (root `package::{root}`).\n\
+         // Do not edit: edit the modules, then run this crate's tests with OSLF_BLESS=1 to write\n\
+         // this file again.\n"
+    )
+}
+
+/// Checks that `file` (a crate's embedded shader) is what [`assemble`] makes of `root` and
+/// `modules`, with a banner; with the environment variable `OSLF_BLESS` set, writes it instead.
+/// The error says which file is stale and how to write it again.
+#[cfg(feature = "assemble")]
+pub fn check_assembled(
+    file: &std::path::Path,
+    root: &str,
+    modules: &[(String, String)],
+) -> Result<(), String> {
+    let text = banner(root) + &assemble(root, modules)?;
+    if std::env::var_os("OSLF_BLESS").is_some() {
+        return std::fs::write(file, &text).map_err(|e| format!("{}: {e}", file.display()));
+    }
+    let found = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    if found != text {
+        return Err(format!(
+            "{} is not what its modules assemble to (root {root}): run the tests with \
+             OSLF_BLESS=1 to write it again",
+            file.display()
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

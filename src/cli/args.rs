@@ -10,7 +10,9 @@ use oslf_format::Store;
 use oslf_runtime::Camera;
 
 use oslf_runtime::{
-    Background, Blend, GlossyFilter, Mode, Order, Result, RuntimeError, ShadingParams, Source,
+    AshikhminShirley, Background, Blend, Glossy, GlossyFilter, Lookup, Mirror, Mode, MonteCarlo,
+    Order, Pbr, PbrIntegration, PbrMaterial, Recon, ReconGlossy, ReconMirror, Result, RuntimeError,
+    SampleFilter, ShadingParams, Source,
 };
 
 /// The shading flags besides mode and blend (which each command takes its own way).
@@ -77,31 +79,94 @@ pub struct ShadingArgs {
 }
 
 impl ShadingArgs {
-    /// The parameters for `mode` and `blend`, validated.
+    /// The parameters of `mode` with `blend` and the flags that mode has (the others are
+    /// not read), validated. Every flag's range is checked, whichever mode reads it.
     pub fn params(&self, mode: Mode, blend: Blend) -> Result<ShadingParams> {
-        let params = ShadingParams {
-            mode,
-            blend,
-            blend_n: self.blend_n,
-            source: self.source(),
-            phi_shader_deg: self.phi_shader,
+        for all_flags in [Mode::ReconGlossy, Mode::Pbr] {
+            self.build(all_flags, blend).validate()?;
+        }
+        let source = self.source();
+        if self.glossy_filter == GlossyFilter::SplitSum
+            && (mode != Mode::Pbr || source == Source::Oslf)
+        {
+            return Err(RuntimeError::Parameter(format!(
+                "glossy filter split-sum is the engines' baseline of the pbr mode: it needs mode \
+                 pbr and source env or parallax, not mode {} and source {}",
+                mode.name(),
+                source.name()
+            )));
+        }
+        let params = self.build(mode, blend);
+        params.validate()?;
+        Ok(params)
+    }
+
+    /// The parameters of `mode` from the flags, unchecked.
+    fn build(&self, mode: Mode, blend: Blend) -> ShadingParams {
+        let lookup = Lookup::of_source(self.source(), blend, self.blend_n, self.proxy_box);
+        let filter = match self.glossy_filter {
+            GlossyFilter::Point => SampleFilter::Point,
+            GlossyFilter::Mip | GlossyFilter::SplitSum => SampleFilter::Mip,
+        };
+        let integration = MonteCarlo {
             m: self.m,
             order: self.order,
+            seed: self.seed,
+            filter,
+        };
+        let lobe = AshikhminShirley {
             rs: self.rs,
             rd: self.rd,
             nu: self.nu,
             nv: self.nv,
-            metallic: self.metallic.unwrap_or(ShadingParams::default().metallic),
-            roughness: self.roughness.unwrap_or(ShadingParams::default().roughness),
-            // The store's materials unless a flag sets the factors.
-            object_material: self.metallic.is_none() && self.roughness.is_none(),
-            seed: self.seed,
-            depth: !self.no_depth,
-            glossy_filter: self.glossy_filter,
-            proxy_box: self.proxy_box,
         };
-        params.validate()?;
-        Ok(params)
+        let (phi_shader_deg, depth) = (self.phi_shader, !self.no_depth);
+        match mode {
+            Mode::Recon => ShadingParams::Recon(Recon {
+                phi_shader_deg,
+                depth,
+            }),
+            Mode::Mirror => ShadingParams::Mirror(Mirror { lookup, depth }),
+            Mode::ReconMirror => ShadingParams::ReconMirror(ReconMirror {
+                phi_shader_deg,
+                lookup,
+                depth,
+            }),
+            Mode::Glossy => ShadingParams::Glossy(Glossy {
+                lookup,
+                depth,
+                lobe,
+                integration,
+            }),
+            Mode::ReconGlossy => ShadingParams::ReconGlossy(ReconGlossy {
+                phi_shader_deg,
+                lookup,
+                depth,
+                lobe,
+                integration,
+            }),
+            Mode::Pbr => {
+                let defaults = PbrMaterial::default();
+                ShadingParams::Pbr(Pbr {
+                    material: PbrMaterial {
+                        metallic: self.metallic.unwrap_or(defaults.metallic),
+                        roughness: self.roughness.unwrap_or(defaults.roughness),
+                        // The store's materials unless a flag sets the factors.
+                        object_material: self.metallic.is_none() && self.roughness.is_none(),
+                    },
+                    integration: match lookup {
+                        Lookup::Probe(probe) if self.glossy_filter == GlossyFilter::SplitSum => {
+                            PbrIntegration::SplitSum(probe)
+                        }
+                        _ => PbrIntegration::MonteCarlo {
+                            lookup,
+                            depth,
+                            integration,
+                        },
+                    },
+                })
+            }
+        }
     }
 
     /// `--source`, or `env` with `--envmap`.

@@ -271,9 +271,9 @@ fn check_frame_memory(args: &Args, store: &Store, gpu: &Gpu) -> anyhow::Result<(
 fn fallback_report(renderer: &Renderer, frame: &Frame, params: &ShadingParams) -> Vec<String> {
     let store = renderer.store();
     let env = store.env_cube_index();
-    let reflects = !matches!(params.mode, Mode::Recon);
+    let reflects = !matches!(params.mode(), Mode::Recon);
     let mut lines: Vec<String> = Vec::new();
-    if params.depth && !store.header().has_distance() && params.source == Source::Oslf {
+    if params.depth() && !store.header().has_distance() && params.source() == Source::Oslf {
         lines.push(format!(
             "the store has no distance channel, so {} are not depth-corrected: plain lookups as \
              the thesis did (rebake with distance_channel = true, or pass --no-depth)",
@@ -391,7 +391,7 @@ fn check_outputs(args: &Args) -> anyhow::Result<()> {
 /// The summary's `mode` line: the mode, whether it was the store's default, and whether
 /// objects take their own materials.
 fn print_mode(params: &oslf_runtime::ShadingParams, defaulted: bool) {
-    let materials = if params.mode == Mode::Pbr && params.object_material {
+    let materials = if params.material().is_some_and(|m| m.object_material) {
         ", objects with a metallic-roughness material in the store shaded with it"
     } else {
         ""
@@ -401,7 +401,10 @@ fn print_mode(params: &oslf_runtime::ShadingParams, defaulted: bool) {
     } else {
         ""
     };
-    println!("mode           {}{default}{materials}", params.mode.name());
+    println!(
+        "mode           {}{default}{materials}",
+        params.mode().name()
+    );
 }
 
 /// The mode a render without `--mode` draws: `pbr` where an object of the store carries a

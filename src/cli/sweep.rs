@@ -7,9 +7,11 @@ use anyhow::{bail, Context};
 use oslf_measure::error::MeasureError;
 use oslf_measure::judge::render_truth;
 use oslf_measure::plot::plot_tradeoff;
-use oslf_measure::sweep::{check_changes, parse_vary, run_sweep, SweepConfig, SweepRow};
+use oslf_measure::sweep::{
+    check_changes, parse_vary, run_sweep, SweepConfig, SweepRow, RUNTIME_KEYS,
+};
 use oslf_measure::sweep_report::{front_members, panels, rows_table, sensitivity_table, Fronts};
-use oslf_runtime::{Mode, Order, ShadingParams};
+use oslf_runtime::{Mode, Order, PbrMaterial, ShadingParams};
 use oslf_scene::scene::Scene;
 use oslf_trace::ground_truth::{GroundTruth, TruthSettings};
 use oslf_util::door::Door;
@@ -104,6 +106,44 @@ const OUTPUTS: [&str; 5] = [
     "tradeoff.svg",
 ];
 
+/// The runtime settings the variations start from: the mode's, with the flags it has (the
+/// others are not read).
+fn default_params(args: &Args) -> anyhow::Result<ShadingParams> {
+    let mut params = ShadingParams::of_mode(args.mode);
+    let _ = params.set_phi_shader_deg(args.phi_shader);
+    if let Ok(mc) = params.monte_carlo_mut() {
+        mc.m = args.m;
+        mc.order = match args.order.as_str() {
+            "per-point" => Order::PerPoint,
+            "per-direction" => Order::PerDirection,
+            o => bail!("--order {o:?}: per-point or per-direction"),
+        };
+    }
+    if let Ok(lobe) = params.lobe_mut() {
+        (lobe.rs, lobe.nu, lobe.nv) = (args.rs, args.nu, args.nv);
+    }
+    if let Ok(m) = params.material_mut() {
+        let defaults = PbrMaterial::default();
+        m.metallic = args.metallic.unwrap_or(defaults.metallic);
+        m.roughness = args.roughness.unwrap_or(defaults.roughness);
+        m.object_material = args.metallic.is_none() && args.roughness.is_none();
+    }
+    if params.lookup().is_some() {
+        oslf_measure::sweep::apply_runtime(
+            &mut params,
+            &oslf_measure::sweep::Change {
+                key: "blend".into(),
+                value: args.blend.clone(),
+            },
+        )
+        .map_err(|e| match e {
+            MeasureError::Vary { problem, .. } => anyhow::anyhow!("--blend: {problem}"),
+            e => e.into(),
+        })?;
+    }
+    Ok(params)
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut scene = Scene::load(&args.scene, args.preset.as_deref())?;
     if let Some(d) = args.device {
@@ -115,34 +155,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.scene.display()
         );
     };
-    let mut params = ShadingParams {
-        mode: args.mode,
-        phi_shader_deg: args.phi_shader,
-        m: args.m,
-        rs: args.rs,
-        nu: args.nu,
-        nv: args.nv,
-        metallic: args.metallic.unwrap_or(ShadingParams::default().metallic),
-        roughness: args.roughness.unwrap_or(ShadingParams::default().roughness),
-        object_material: args.metallic.is_none() && args.roughness.is_none(),
-        order: match args.order.as_str() {
-            "per-point" => Order::PerPoint,
-            "per-direction" => Order::PerDirection,
-            o => bail!("--order {o:?}: per-point or per-direction"),
-        },
-        ..ShadingParams::default()
-    };
-    oslf_measure::sweep::apply_runtime(
-        &mut params,
-        &oslf_measure::sweep::Change {
-            key: "blend".into(),
-            value: args.blend.clone(),
-        },
-    )
-    .map_err(|e| match e {
-        MeasureError::Vary { problem, .. } => anyhow::anyhow!("--blend: {problem}"),
-        e => e.into(),
-    })?;
+    let params = default_params(&args)?;
     let specs: Vec<String> = if args.vary.is_empty() {
         DEFAULT_VARY.iter().map(|s| s.to_string()).collect()
     } else {
@@ -150,10 +163,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let mut changes = Vec::new();
     for s in &specs {
-        changes.extend(parse_vary(s).map_err(vary_flag)?);
+        for c in parse_vary(s).map_err(vary_flag)? {
+            // A runtime key the mode does not have: refused when asked for, left out of the
+            // default variations.
+            let is_runtime = RUNTIME_KEYS.contains(&c.key.as_str());
+            if is_runtime {
+                if let Err(e) = oslf_measure::sweep::apply_runtime(&mut params.clone(), &c) {
+                    if args.vary.is_empty() {
+                        continue;
+                    }
+                    bail!("--vary {s}: {e}");
+                }
+            }
+            changes.push(c);
+        }
     }
     check_changes(&scene, &changes).map_err(vary_flag)?;
-    let truth_path = args.out.join(format!("truth-{}.exr", params.mode.name()));
+    let truth_path = args.out.join(format!("truth-{}.exr", params.mode().name()));
     let mut door = Door::new();
     declare_scene(&mut door, "SCENE", &scene);
     door.output_dir("--out", &args.out)
@@ -245,7 +271,7 @@ impl Outputs<'_> {
             &format!("{}\n{}", sensitivity.to_markdown(), all.to_markdown()),
         )?;
         let json = serde_json::json!({
-            "mode": params.mode.name(),
+            "mode": params.mode().name(),
             "scene": args.scene.0,
             "width": args.width,
             "height": args.height,

@@ -103,7 +103,7 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         nu: args.nu,
         nv: args.nv,
     };
-    let defaults = oslf_runtime::ShadingParams::default();
+    let defaults = oslf_runtime::PbrMaterial::default();
     let pbr_term = Term::Pbr {
         metallic: args.metallic.unwrap_or(defaults.metallic),
         roughness: args.roughness.unwrap_or(defaults.roughness),

@@ -34,8 +34,8 @@ use anyhow::{anyhow, Context};
 use glam::Vec3;
 use oslf_runtime::Camera;
 use oslf_runtime::{
-    Background, Blend, CacheConfig, Frame, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer,
-    ShadingParams, Source,
+    Background, Blend, CacheConfig, Frame, Gpu, Lookup, Mode, MonteCarlo, Order, PbrIntegration,
+    RenderOptions, Renderer, SampleFilter, ShadingParams, Source,
 };
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -105,7 +105,11 @@ struct App {
     store: PathBuf,
     access: super::args::StoreAccessArgs,
     state: Option<State>,
-    params: ShadingParams,
+    /// Each mode's parameters, in [`Mode::ALL`] order: a mode keeps its own while another is
+    /// shown.
+    params: [ShadingParams; 6],
+    /// The mode shown, an index into `params`.
+    mode: usize,
     background_flag: BackgroundArgs,
     /// The backgrounds key G cycles through; the first is the one shown at start.
     backgrounds: Vec<Background>,
@@ -140,7 +144,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         store,
         access: args.access,
         state: None,
-        params: ShadingParams::default(),
+        params: Mode::ALL.map(ShadingParams::of_mode),
+        mode: Mode::ALL
+            .iter()
+            .position(|m| *m == ShadingParams::default().mode())
+            .unwrap_or(0),
         background_flag: args.background,
         backgrounds: vec![Background::None],
         background: 0,
@@ -283,7 +291,9 @@ impl App {
             read_pixels: false,
             background: self.backgrounds[self.background],
         };
-        let frame: Frame = s.renderer.render(&orbit.camera(), &self.params, &opts)?;
+        let frame: Frame = s
+            .renderer
+            .render(&orbit.camera(), &self.params[self.mode], &opts)?;
         let texture = match s.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
@@ -347,30 +357,31 @@ impl App {
         gpu.queue.present(texture);
         gpu.take_errors()?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
-        let p = &self.params;
+        let p = &self.params[self.mode];
         let st = &frame.stats;
+        let lookup = match p.lookup() {
+            Some(Lookup::Oslf { blend, blend_n }) => format!(" {} N={blend_n}", blend.name()),
+            Some(l) => format!(" {}", l.source().name()),
+            None => String::new(),
+        };
+        let plain = if p.depth() { "" } else { " plain" };
+        let lobe = match (p.lobe(), p.material()) {
+            (Some(l), _) => format!(" n_u={} n_v={}", l.nu, l.nv),
+            (_, Some(m)) if m.object_material => format!(
+                " object materials (else metallic={} roughness={:.2})",
+                m.metallic, m.roughness
+            ),
+            (_, Some(m)) => format!(" metallic={} roughness={:.2}", m.metallic, m.roughness),
+            _ => String::new(),
+        };
+        let integration = match (p.monte_carlo(), p.split_sum()) {
+            (Some(mc), _) => format!(" M={} {:?} {:?}", mc.m, mc.order, mc.filter),
+            (None, true) => " split-sum".into(),
+            _ => String::new(),
+        };
         let title = format!(
-            "oslf — {} {}{} N={} {} M={} {:?} background {} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
-            p.mode.name(),
-            p.blend.name(),
-            match (p.source, p.depth) {
-                (Source::Oslf, true) => String::new(),
-                (Source::Oslf, false) => " plain".into(),
-                (s, _) => format!(" {}", s.name()),
-            },
-            p.blend_n,
-            if p.mode == Mode::Pbr && p.object_material {
-                format!(
-                    "object materials (else metallic={} roughness={:.2})",
-                    p.metallic, p.roughness
-                )
-            } else if p.mode == Mode::Pbr {
-                format!("metallic={} roughness={:.2}", p.metallic, p.roughness)
-            } else {
-                format!("n_u={} n_v={}", p.nu, p.nv)
-            },
-            p.m,
-            p.order,
+            "oslf — {}{lookup}{plain}{lobe}{integration} background {} — {ms:.0} ms — cache {} req, {} miss ({:.0}%), {} loaded, {} evicted, {} over budget",
+            p.mode().name(),
             background_name(opts.background),
             st.requests,
             st.misses,
@@ -389,64 +400,68 @@ impl App {
     }
 
     fn key(&mut self, key: &Key) -> bool {
-        let parallax = self
-            .state
-            .as_ref()
-            .is_some_and(|s| s.renderer.proxy_box(&self.params).is_some());
-        let p = &mut self.params;
+        let parallax = self.state.as_ref().is_some_and(|s| {
+            s.renderer
+                .proxy_box(&ShadingParams::of_mode(Mode::Recon))
+                .is_some()
+        });
+        let p = &mut self.params[self.mode];
+        // A key for what the mode does not have changes nothing (the setters refuse it).
         match key {
             Key::Named(NamedKey::Escape) => return false,
-            Key::Named(NamedKey::ArrowUp) => p.blend_n = (p.blend_n * 2.0).clamp(1.0, 1e6),
-            Key::Named(NamedKey::ArrowDown) => p.blend_n = (p.blend_n / 2.0).max(0.0),
+            Key::Named(NamedKey::ArrowUp) => set_blend(p, |b, n| (b, (n * 2.0).clamp(1.0, 1e6))),
+            Key::Named(NamedKey::ArrowDown) => set_blend(p, |b, n| (b, (n / 2.0).max(0.0))),
             Key::Character(c) => match c.as_str() {
                 "1" | "2" | "3" | "4" | "5" | "6" => {
-                    p.mode = Mode::ALL[c.parse::<usize>().unwrap_or(1) - 1];
+                    self.mode = c.parse::<usize>().unwrap_or(1) - 1;
                 }
-                "b" => {
-                    let i = Blend::ALL.iter().position(|b| *b == p.blend).unwrap_or(0);
-                    p.blend = Blend::ALL[(i + 1) % Blend::ALL.len()];
+                "b" => set_blend(p, |b, n| {
+                    let i = Blend::ALL.iter().position(|x| *x == b).unwrap_or(0);
+                    (Blend::ALL[(i + 1) % Blend::ALL.len()], n)
+                }),
+                "e" => next_source(p, parallax),
+                "d" => {
+                    let _ = p.set_depth(!p.depth());
                 }
-                "e" => {
-                    p.source = match p.source {
-                        Source::Oslf => Source::EnvMap,
-                        Source::EnvMap if parallax => Source::Parallax,
-                        Source::EnvMap | Source::Parallax => Source::Oslf,
-                    }
-                }
-                "d" => p.depth = !p.depth,
-                "f" => {
-                    let split_sum = p.mode == Mode::Pbr && p.source != Source::Oslf;
-                    p.glossy_filter = match p.glossy_filter {
-                        GlossyFilter::Mip => GlossyFilter::Point,
-                        GlossyFilter::Point if split_sum => GlossyFilter::SplitSum,
-                        GlossyFilter::Point | GlossyFilter::SplitSum => GlossyFilter::Mip,
-                    }
-                }
+                "f" => next_filter(p),
                 "g" => self.background = (self.background + 1) % self.backgrounds.len(),
                 "o" => {
-                    p.order = match p.order {
-                        Order::PerPoint => Order::PerDirection,
-                        Order::PerDirection => Order::PerPoint,
+                    if let Ok(mc) = p.monte_carlo_mut() {
+                        mc.order = match mc.order {
+                            Order::PerPoint => Order::PerDirection,
+                            Order::PerDirection => Order::PerPoint,
+                        }
                     }
                 }
-                "u" => p.nu = (p.nu * 2.0).clamp(1.0, 1e7),
-                "j" => p.nu /= 2.0,
-                "i" => p.nv = (p.nv * 2.0).clamp(1.0, 1e7),
-                "k" => p.nv /= 2.0,
-                "]" => p.m = (p.m * 2).min(65536),
-                "[" => p.m = (p.m / 2).max(1),
+                "u" | "j" | "i" | "k" => {
+                    if let Ok(l) = p.lobe_mut() {
+                        match c.as_str() {
+                            "u" => l.nu = (l.nu * 2.0).clamp(1.0, 1e7),
+                            "j" => l.nu /= 2.0,
+                            "i" => l.nv = (l.nv * 2.0).clamp(1.0, 1e7),
+                            _ => l.nv /= 2.0,
+                        }
+                    }
+                }
+                "]" | "[" => {
+                    if let Ok(mc) = p.monte_carlo_mut() {
+                        mc.m = if c == "]" {
+                            (mc.m * 2).min(65536)
+                        } else {
+                            (mc.m / 2).max(1)
+                        };
+                    }
+                }
                 // The keys set the factors for every object, as the flags do.
-                "r" => {
-                    p.roughness = (p.roughness + 0.05).min(1.0);
-                    p.object_material = false;
-                }
-                "t" => {
-                    p.roughness = (p.roughness - 0.05).max(0.0);
-                    p.object_material = false;
-                }
-                "m" => {
-                    p.metallic = if p.metallic < 1.0 { 1.0 } else { 0.0 };
-                    p.object_material = false;
+                "r" | "t" | "m" => {
+                    if let Ok(m) = p.material_mut() {
+                        match c.as_str() {
+                            "r" => m.roughness = (m.roughness + 0.05).min(1.0),
+                            "t" => m.roughness = (m.roughness - 0.05).max(0.0),
+                            _ => m.metallic = if m.metallic < 1.0 { 1.0 } else { 0.0 },
+                        }
+                        m.object_material = false;
+                    }
                 }
                 "+" | "=" => self.exposure *= 1.25,
                 "-" => self.exposure /= 1.25,
@@ -454,13 +469,74 @@ impl App {
             },
             _ => {}
         }
-        // The split sum is a baseline of the pbr mode only: another mode or source leaves it.
-        if p.glossy_filter == GlossyFilter::SplitSum
-            && (p.mode != Mode::Pbr || p.source == Source::Oslf)
-        {
-            p.glossy_filter = GlossyFilter::Mip;
-        }
         true
+    }
+}
+
+/// Changes the OSLF lookup's blend and N by `f`, where the mode looks the OSLF up.
+fn set_blend(p: &mut ShadingParams, f: impl Fn(Blend, f32) -> (Blend, f32)) {
+    if let Some((blend, n)) = p.blend() {
+        let (blend, n) = f(blend, n);
+        let _ = p.set_lookup(Lookup::oslf(blend, n));
+    }
+}
+
+/// Key E: the OSLF, then the environment cube, then (with a proxy box) that cube
+/// parallax-corrected, then the OSLF again. The pbr mode's split-sum baseline goes through the
+/// two probes and then back to Monte Carlo over the OSLF.
+fn next_source(p: &mut ShadingParams, parallax: bool) {
+    let next = match p.source() {
+        Source::Oslf => Source::EnvMap,
+        Source::EnvMap if parallax => Source::Parallax,
+        Source::EnvMap | Source::Parallax => Source::Oslf,
+    };
+    let (blend, n) = p.blend().unwrap_or((Blend::Normal, 4.0));
+    let lookup = Lookup::of_source(next, blend, n, None);
+    if let ShadingParams::Pbr(pbr) = p {
+        if let PbrIntegration::SplitSum(_) = pbr.integration {
+            pbr.integration = match lookup {
+                Lookup::Probe(probe) => PbrIntegration::SplitSum(probe),
+                Lookup::Oslf { .. } => PbrIntegration::default(),
+            };
+            return;
+        }
+    }
+    let _ = p.set_lookup(lookup);
+}
+
+/// Key F: filtered importance sampling, point sampling, and for the pbr mode over a probe the
+/// split-sum baseline.
+fn next_filter(p: &mut ShadingParams) {
+    if let ShadingParams::Pbr(pbr) = p {
+        match pbr.integration {
+            PbrIntegration::SplitSum(probe) => {
+                pbr.integration = PbrIntegration::MonteCarlo {
+                    lookup: Lookup::Probe(probe),
+                    depth: true,
+                    integration: MonteCarlo::default(),
+                };
+                return;
+            }
+            PbrIntegration::MonteCarlo {
+                lookup: Lookup::Probe(probe),
+                integration:
+                    MonteCarlo {
+                        filter: SampleFilter::Point,
+                        ..
+                    },
+                ..
+            } => {
+                pbr.integration = PbrIntegration::SplitSum(probe);
+                return;
+            }
+            _ => {}
+        }
+    }
+    if let Ok(mc) = p.monte_carlo_mut() {
+        mc.filter = match mc.filter {
+            SampleFilter::Mip => SampleFilter::Point,
+            SampleFilter::Point => SampleFilter::Mip,
+        };
     }
 }
 
@@ -544,25 +620,38 @@ impl ApplicationHandler for App {
     }
 }
 
-/// The blit shader: oslf-shading's WGSL modules (its tone curve and sRGB encoding), then
-/// view_blit.wgsl.
-fn blit_wgsl() -> String {
-    [
-        oslf_shading::wgsl::source().as_str(),
-        include_str!("view_blit.wgsl"),
-    ]
-    .join("\n")
+/// The blit shader as embedded: view_blit.wgsl with what it imports of oslf-shading's modules
+/// (its tone curve and sRGB encoding), assembled ([`blit_modules`]; the tests check it).
+fn blit_wgsl() -> &'static str {
+    include_str!("generated/view_blit.wgsl")
+}
+
+/// The modules of the blit shader, as (path under `package::`, source).
+#[cfg(test)]
+fn blit_modules() -> Vec<(String, String)> {
+    let mut modules = oslf_shading::wgsl::modules();
+    modules.push(("view_blit".into(), include_str!("view_blit.wgsl").into()));
+    modules
 }
 
 #[cfg(test)]
 mod tests {
+    /// The embedded blit shader is what its modules assemble to (`OSLF_BLESS=1` writes it).
+    #[test]
+    fn blit_shader_is_its_modules_assembled() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("src/cli/generated/view_blit.wgsl");
+        oslf_shading::wgsl::check_assembled(&file, "view_blit", &super::blit_modules())
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
+
     /// The blit shader, as assembled, parses and validates.
     #[test]
     fn blit_shader_validates() {
         use wgpu::naga;
         let src = super::blit_wgsl();
-        let module = naga::front::wgsl::parse_str(&src)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        let module = naga::front::wgsl::parse_str(src)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
         naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::default(),

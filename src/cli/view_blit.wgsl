@@ -3,6 +3,8 @@
 // format encodes it). Bindings in the order of `view.rs`'s blit layout; view.rs puts
 // oslf-shading's WGSL modules before this file.
 
+import package::shading::color::{aces, linear_to_srgb};
+
 struct Blit {
     exposure: f32,
     encode_srgb: u32,

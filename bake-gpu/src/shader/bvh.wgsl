@@ -2,6 +2,9 @@
 // and the CPU's watertight ray–triangle test (trace/src/bvh/triangle.rs: Woop, Benthin and
 // Wald 2013 with pbrt-v3's conservative bound on t, and the self-intersection guard).
 
+import package::capture::{attrs, nodes, out, tris};
+import package::layouts::{Tri};
+
 const F32_MAX: f32 = 3.40282347e+38;
 const STACK: u32 = 64u;
 // pbrt's γ(n) = nε / (1 − nε), ε = 2⁻²⁴.

@@ -1,11 +1,22 @@
-// The cube-map capture of trace/src/capture.rs: one invocation per texel of a batch of cubes,
-// its samples stratified k × k, its random stream keyed by (seed, cube, face, texel) as on the
-// CPU; and `trace`, the closest-hit queries the traversal tests compare with the CPU's BVH.
+// The shader's root module, with its three entry points: the cube-map capture of
+// trace/src/capture.rs (one invocation per texel of a batch of cubes, its samples stratified
+// k × k, its random stream keyed by (seed, cube, face, texel) as on the CPU); `trace`, the
+// closest-hit queries the traversal tests compare with the CPU's BVH; and `preview`.
 //
 // The structs the host fills (Params, Node, Tri, TriAttr, Tex, Mat, Light, Job, TexelOut,
 // TraceRay, TraceHit and the preview's PreviewCamera) are generated from their Rust
-// definitions (layouts.rs and scene.rs, whose docs say what each field holds) and
-// placed before these files (shader.rs).
+// definitions (layouts.rs and scene.rs, whose docs say what each field holds): the module
+// `layouts` (shader.rs).
+
+import package::bvh::{F32_MAX, traverse};
+import package::integrator::{Counts, closest, radiance};
+import package::layouts::{
+    Job, Light, Mat, Node, Params, TexelOut, TraceHit, TraceRay, Tri, TriAttr,
+};
+import package::preview::{camera, camera_direction, hash3, pixels, stratified_2d};
+import package::scene::{finite};
+import package::shading::color::{luminance};
+import package::shading::random::{hash4, rng_f32, rng_new};
 
 const FLAG_ENV_ACTIVE: u32 = 1u;
 const FLAG_EMITTERS: u32 = 2u;
@@ -43,7 +54,6 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     }
     return vec3<f32>(1.0, 0.0, 0.0);
 }
-
 
 const WORKGROUP: u32 = 64u;
 
@@ -112,4 +122,26 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
         o = TraceHit(h.t, attrs[h.slot].global, h.b.y, h.b.z);
     }
     trace_hits[i] = o;
+}
+
+// The bake's preview: the scene camera's image path traced with the capture's integrator, one
+// invocation per pixel (preview.wgsl).
+@compute @workgroup_size(64)
+fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
+    if id >= camera.width * camera.height {
+        return;
+    }
+    let x = id % camera.width;
+    let y = id / camera.width;
+    var rng = rng_new(params.seed, hash3(params.seed, vec2<u32>(x, 0u), vec2<u32>(y, 0u)));
+    var counts = Counts(0u, 0u);
+    let spp = max(camera.spp, 1u);
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < spp; s++) {
+        let j = stratified_2d(s, spp, &rng);
+        let dir = camera_direction(f32(x) + j.x, f32(y) + j.y);
+        sum += radiance(camera.position, dir, true, &rng, &counts).xyz;
+    }
+    pixels[id] = vec4<f32>(sum / f32(spp), 1.0);
 }

@@ -5,6 +5,24 @@
 // of scene/src/material.rs: Lambertian and glTF metallic-roughness
 // (scene/src/metallic_roughness.rs), with GGX and Fresnel from oslf-shading's WGSL.
 
+import package::bvh::{F32_MAX, Hit, traverse};
+import package::capture::{FLAG_EMITTERS, FLAG_ENV_ACTIVE, attrs, lights, materials, params};
+import package::layouts::{Mat};
+import package::scene::{
+    MODEL_METALLIC_ROUGHNESS, SurfaceHit, clamp01, disc_radiance, environment_eval, environment_pdf,
+    finite, finite_vec, material_albedo, safe_normalize, sample_environment, sample_li, surface_hit,
+    texture_eval,
+};
+import package::shading::constants::{FRAC_1_PI, GGX_DIELECTRIC_F0};
+import package::shading::fresnel::{fresnel_schlick, fresnel_schlick_weight};
+import package::shading::ggx::{
+    ggx_alpha, ggx_distribution_at, ggx_sample_visible_normal, ggx_smith_g1, ggx_visibility,
+};
+import package::shading::random::{Rng, rng_f32, rng_vec2};
+import package::shading::warp::{
+    cosine_hemisphere_pdf, frame_from_normal, sample_cosine_hemisphere, to_local, to_world,
+};
+
 // 2⁻¹⁹ (integrator::OFFSET_RELATIVE).
 const OFFSET_RELATIVE: f32 = 1.9073486e-6;
 const RUSSIAN_ROULETTE_START: u32 = 3u;

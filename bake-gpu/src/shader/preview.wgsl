@@ -1,6 +1,10 @@
-// The bake's preview (trace/src/preview.rs): the scene camera's image path traced with the
-// capture's integrator, one invocation per pixel, its samples stratified and its random
-// stream keyed by (seed, x, y) as on the CPU.
+// The bake's preview (trace/src/preview.rs): its bindings and what its entry point (`preview`
+// in capture.wgsl, the root module) needs: the scene camera's rays, their stratified samples
+// and the random stream keyed by (seed, x, y) as on the CPU.
+
+import package::layouts::{PreviewCamera};
+import package::scene::{ONE_MINUS_EPSILON, safe_normalize};
+import package::shading::random::{GOLDEN, Rng, add64, mix64, rng_vec2};
 
 @group(0) @binding(12) var<uniform> camera: PreviewCamera;
 @group(0) @binding(13) var<storage, read_write> pixels: array<vec4<f32>>;
@@ -43,24 +47,4 @@ fn camera_direction(px: f32, py: f32) -> vec3<f32> {
         return camera.forward;
     }
     return d;
-}
-
-@compute @workgroup_size(64)
-fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
-    if id >= camera.width * camera.height {
-        return;
-    }
-    let x = id % camera.width;
-    let y = id / camera.width;
-    var rng = rng_new(params.seed, hash3(params.seed, vec2<u32>(x, 0u), vec2<u32>(y, 0u)));
-    var counts = Counts(0u, 0u);
-    let spp = max(camera.spp, 1u);
-    var sum = vec3<f32>(0.0);
-    for (var s = 0u; s < spp; s++) {
-        let j = stratified_2d(s, spp, &rng);
-        let dir = camera_direction(f32(x) + j.x, f32(y) + j.y);
-        sum += radiance(camera.position, dir, true, &rng, &counts).xyz;
-    }
-    pixels[id] = vec4<f32>(sum / f32(spp), 1.0);
 }

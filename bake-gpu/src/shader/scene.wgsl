@@ -2,6 +2,13 @@
 // environment, each the CPU's function of the same name (trace/src/ray.rs,
 // scene/src/{texture,material,light,environment}.rs) on the data of scene.rs.
 
+import package::bvh::{F32_MAX, Hit, finite3};
+import package::capture::{attrs, env_tables, params, texels, tris};
+import package::integrator::{radiance};
+import package::layouts::{Light, Mat, Tex};
+import package::shading::constants::{FRAC_1_PI, PI};
+import package::shading::warp::{sample_uniform_sphere};
+
 const ONE_MINUS_EPSILON: f32 = 0.99999994;
 
 struct SurfaceHit {

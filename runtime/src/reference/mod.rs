@@ -16,7 +16,7 @@ use glam::Vec3;
 use oslf_format::SampleMapView;
 use oslf_geometry::BezierPatch;
 
-use crate::params::ShadeUniform;
+use crate::uniform::ShadeUniform;
 
 mod background;
 mod blend;

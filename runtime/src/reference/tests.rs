@@ -9,8 +9,8 @@ use oslf_shading::fresnel::schlick as fresnel;
 
 /// The constants of a store without sample points, maps or distances: environment cube
 /// `env_cube`, faces of `cube_res`².
-fn store_constants(env_cube: u32, cube_res: u32) -> crate::params::StoreConstants {
-    crate::params::StoreConstants {
+fn store_constants(env_cube: u32, cube_res: u32) -> crate::uniform::StoreConstants {
+    crate::uniform::StoreConstants {
         sample_count: 0,
         env_cube,
         map_res: 1,
@@ -59,7 +59,9 @@ impl CubeTexels for NoCubes {
 
 #[test]
 fn camera_rays_are_the_cameras_directions_through_pixel_centres() {
-    use crate::params::{Background, ShadeUniform, ShadingParams};
+    use crate::params::Background;
+    use crate::shading::ShadingParams;
+    use crate::uniform::ShadeUniform;
     use oslf_geometry::Camera;
     let k = store_constants(u32::MAX, 1);
     for (camera, (w, h)) in [
@@ -107,7 +109,9 @@ fn camera_rays_are_the_cameras_directions_through_pixel_centres() {
 
 #[test]
 fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
-    use crate::params::{Background, ShadeUniform, ShadingParams};
+    use crate::params::Background;
+    use crate::shading::ShadingParams;
+    use crate::uniform::ShadeUniform;
     let k = store_constants(0, 1);
     let camera = oslf_geometry::Camera {
         position: Vec3::new(0.0, -3.0, 0.0),
@@ -149,7 +153,8 @@ fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
 /// one off a face's edge (corners aside), on faces of 1 to 1024 texels.
 #[test]
 fn shader_seam_table_matches_the_projection() {
-    let src = crate::pipelines::shade_wgsl();
+    // The module's own text (the assembled file prints the numbers its own way).
+    let src = include_str!("../shade/seams.wgsl");
     let table = |name: &str| -> [u32; 4] {
         let head = format!("const {name} = vec4<u32>(");
         let at = src.find(&head).expect(name) + head.len();
@@ -237,8 +242,10 @@ impl CubeTexels for SmoothCube {
 
 /// The default shading (depth-corrected) of a store of `res`² cubes with distances and no
 /// environment cube.
-fn depth_uniform(res: u32) -> crate::params::ShadeUniform {
-    use crate::params::{Background, ShadeUniform, ShadingParams};
+fn depth_uniform(res: u32) -> crate::uniform::ShadeUniform {
+    use crate::params::Background;
+    use crate::shading::ShadingParams;
+    use crate::uniform::ShadeUniform;
     let mut k = store_constants(INVALID_INDEX, res);
     k.has_depth = true;
     let camera = oslf_geometry::Camera {
@@ -568,7 +575,9 @@ fn patch_normals_are_the_patchs_own_facing_as_the_vertex_normal() {
 /// filtering within each face, as `lookup` does, shows a seam 5-20 times larger.)
 #[test]
 fn the_env_background_is_continuous_across_face_edges() {
-    use crate::params::{Background, ShadeUniform, ShadingParams};
+    use crate::params::Background;
+    use crate::shading::ShadingParams;
+    use crate::uniform::ShadeUniform;
     use oslf_geometry::Camera;
     const FACTOR: f32 = 1.5;
     let (w, h) = (160u32, 120u32);
@@ -809,7 +818,9 @@ fn gltf_brdf_cos(
 /// BRDF's (midpoint quadrature of the formulas above, not the shader's sampling).
 #[test]
 fn pbr_under_a_uniform_environment_is_the_gltf_albedo() {
-    use crate::params::{Background, Mode, ShadeUniform, ShadingParams};
+    use crate::params::Background;
+    use crate::shading::ShadingParams;
+    use crate::uniform::ShadeUniform;
     let base = [0.9f64, 0.6, 0.2];
     let camera = oslf_geometry::Camera {
         position: Vec3::new(0.0, -5.0, 1.0),
@@ -823,13 +834,10 @@ fn pbr_under_a_uniform_environment_is_the_gltf_albedo() {
         count: 0,
     };
     for (metallic, roughness) in [(1.0f32, 0.3f32), (0.0, 0.5), (0.5, 0.8)] {
-        let params = ShadingParams {
-            mode: Mode::Pbr,
-            metallic,
-            roughness,
-            m: 4096,
-            ..ShadingParams::default()
-        };
+        let mut params = ShadingParams::of_mode(crate::Mode::Pbr);
+        let material = params.material_mut().unwrap();
+        (material.metallic, material.roughness) = (metallic, roughness);
+        params.monte_carlo_mut().unwrap().m = 4096;
         let u = ShadeUniform::new(
             &params,
             glam::Mat4::IDENTITY,

@@ -18,8 +18,10 @@ use wgpu::util::DeviceExt;
 use super::Renderer;
 use crate::cache::CacheStats;
 use crate::error::{Result, RuntimeError};
-use crate::params::{Background, GlossyFilter, ShadeUniform, ShadingParams};
+use crate::params::Background;
 use crate::pipelines::ShadeKey;
+use crate::shading::ShadingParams;
+use crate::uniform::ShadeUniform;
 
 /// A host's view of the world: the matrices it draws its own meshes with.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -243,7 +245,7 @@ impl Renderer {
         params: &ShadingParams,
         reversed: bool,
     ) -> Result<(ShadeUniform, wgpu::RenderPipeline)> {
-        if params.glossy_filter == GlossyFilter::SplitSum {
+        if params.split_sum() {
             self.ensure_prefiltered()?;
         }
         self.ensure_targets(target.width, target.height)?;

@@ -16,13 +16,13 @@ use crate::cache::{CacheConfig, CacheStats, CubeCache};
 use crate::error::{Param, Result, RuntimeError};
 use crate::face::FaceLayout;
 use crate::geometry::ObjectMesh;
-use crate::params::{
-    Background, GlossyFilter, ShadeUniform, ShadingParams, Source, StoreConstants,
-};
+use crate::params::{Background, Source};
 use crate::pipelines::{GBufferPipeline, ShadeBindings, ShadeKey, ShadePipelines};
 use crate::pool::{CubePool, PoolLayout};
 use crate::prefilter::PrefilteredEnv;
+use crate::shading::ShadingParams;
 use crate::textures::ObjectTextureGroups;
+use crate::uniform::{ShadeUniform, StoreConstants};
 use crate::Gpu;
 
 pub use crate::pool::DEFAULT_POOL_BYTES;
@@ -336,7 +336,7 @@ impl Renderer {
     /// The proxy box [`Source::Parallax`] uses with `params` (world space): the given one, else
     /// the one fitted to the environment cube's distances ([`crate::probe::fit_proxy_box`]).
     pub fn proxy_box(&self, params: &ShadingParams) -> Option<[[f32; 3]; 2]> {
-        params.proxy_box.or(self.constants.fitted_box)
+        params.proxy_box().or(self.constants.fitted_box)
     }
 
     /// The store constants the shader sees.
@@ -448,7 +448,7 @@ impl Renderer {
         opts: &RenderOptions,
     ) -> Result<Frame> {
         self.check_frame(params, opts.background)?;
-        if params.glossy_filter == GlossyFilter::SplitSum {
+        if params.split_sum() {
             self.ensure_prefiltered()?;
         }
         self.ensure_targets(opts.width, opts.height)?;
@@ -513,7 +513,7 @@ impl Renderer {
     /// without a proxy box, an environment background without an environment cube.
     fn check_frame(&self, params: &ShadingParams, background: Background) -> Result<()> {
         params.validate()?;
-        if params.source == Source::Parallax && self.proxy_box(params).is_none() {
+        if params.source() == Source::Parallax && self.proxy_box(params).is_none() {
             return Err(RuntimeError::InvalidParam {
                 param: Param::ProxyBox,
                 problem: "missing: source parallax needs one, and this store has no environment \

@@ -7,9 +7,9 @@ use oslf_geometry::Camera;
 use super::targets::{padded_row, SizedTargets};
 use super::Renderer;
 use crate::error::{Result, RuntimeError};
-use crate::params::ShadingParams;
 use crate::pipelines::DEPTH_CLEAR;
 use crate::reference::GTexel;
+use crate::shading::ShadingParams;
 use crate::Gpu;
 
 impl Renderer {

@@ -1,6 +1,9 @@
-// ---- shade/background.wgsl ----
 // Background: what pixels off the object show.
 // Its CPU twin: reference/background.rs.
+
+import package::shade::bindings::{BACKGROUND, INVALID, P};
+import package::shade::pixel::{finite3};
+import package::shade::seams::{seamless_read};
 
 // The unit direction of the camera ray through the centre of pixel `px`, as
 // oslf_geometry::Camera::direction computes it; the viewing direction where that degenerates.

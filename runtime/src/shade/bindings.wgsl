@@ -1,4 +1,3 @@
-// ---- shade/bindings.wgsl ----
 // The uniform, the mode's switches, the bindings, the constants.
 //
 // OSLF shading: one compute invocation per pixel, reading the G-buffer written by gbuffer.wgsl.
@@ -7,6 +6,8 @@
 // reference), in the same order and with the same operation order; the parity tests compare
 // the two. Bindings are declared in the order of `ShadePipelines::bind_group_layout`
 // (pipelines.rs).
+
+import package::layouts::{Params};
 
 // `struct Params` is generated from the Rust `ShadeUniform` (params.rs, whose docs say what
 // each field holds) and placed before this file (pipelines.rs).

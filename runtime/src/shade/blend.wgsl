@@ -1,6 +1,11 @@
-// ---- shade/blend.wgsl ----
 // Blending (chapter 4).
 // Its CPU twin: reference/blend.rs.
+
+import package::shade::bindings::{
+    BLEND, DEPTH, HIT_AGREE, INVALID, P, SOURCE, sample_maps, samples, slots,
+};
+import package::shade::cube::{Tap, fetch, lookup_lod};
+import package::shade::depth::{depth_lookup, depth_missing, depth_search, depth_toward};
 
 // Vectors, not arrays: lavapipe gives every local array that is indexed dynamically its own
 // scratch memory, initialized per invocation even where the code is never reached (a large

@@ -1,6 +1,11 @@
-// ---- shade/cube.wgsl ----
 // Cube maps: face coordinates, texel loads, bilinear and mip lookups.
 // Its CPU twin: reference/cube.rs.
+
+import package::shade::bindings::{
+    FACE_SHIFT, FILTER, P, POOLS, dpool0, dpool1, dpool2, dpool3, pool0, pool1, pool2, pool3, slots,
+};
+import package::shade::feedback::{mark_face};
+import package::shade::seams::{seamless_level};
 
 // Face and face coordinates (s, t) of a direction: the Vulkan table in oslf_format::cube.
 fn face_st(d: vec3<f32>) -> vec3<f32> {

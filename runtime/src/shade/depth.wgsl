@@ -1,6 +1,12 @@
-// ---- shade/depth.wgsl ----
 // Depth-corrected lookups (§6.3's RGBZ).
 // Its CPU twin: reference/depth.rs.
+
+import package::shade::bindings::{
+    DEPTH_ITERATIONS, DEPTH_REFINE, FAR, LOOKUP_AGREE, P, samples, slots,
+};
+import package::shade::cube::{face_st, load_depth, load_texel, lookup_lod, place, tap};
+import package::shade::feedback::{mark_face};
+import package::shading::constants::{PI};
 
 // Set by `depth_toward` when a face it reads is not resident (the search then gives up).
 var<private> depth_missing: bool;

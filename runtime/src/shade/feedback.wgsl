@@ -1,6 +1,7 @@
-// ---- shade/feedback.wgsl ----
 // Feedback marks.
 // Its CPU twin: reference/feedback.rs.
+
+import package::shade::bindings::{P, feedback};
 
 // The faces this invocation has read, gathered per cube (`mark_face`) and written to the
 // feedback buffer once at its end (`flush_marks`) instead of one atomic per read: the four

@@ -1,6 +1,20 @@
-// ---- shade/glossy.wgsl ----
 // Ashikhmin–Shirley (chapter 5) and glTF's metallic-roughness BRDF by Monte Carlo.
 // Its CPU twin: reference/glossy.rs.
+
+import package::shade::bindings::{
+    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, ORDER, P, PBR_LOD_BIAS, SOURCE, SPLIT_SUM, TERMS,
+    samples, slots,
+};
+import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
+import package::shade::cube::{lookup, lookup_levels, sample_lod};
+import package::shade::depth::{depth_iterate};
+import package::shade::random::{filter_rows, sample_xi};
+import package::shade::split_sum::{split_sum};
+import package::shading::constants::{GGX_DIELECTRIC_F0, PI};
+import package::shading::fresnel::{fresnel_schlick, fresnel_schlick_weight};
+import package::shading::ggx::{
+    ggx_distribution_denominator, ggx_sample_visible_normal, ggx_smith_g1,
+};
 
 struct AsSample {
     l: vec3<f32>,

@@ -1,6 +1,9 @@
-// ---- shade/mirror.wgsl ----
 // Mirror reflection (chapter 4).
 // Its CPU twin: reference/mirror.rs.
+
+import package::shade::bindings::{BLEND, DEPTH, INVALID, P, SOURCE};
+import package::shade::blend::{blend_fetch, blend_read, blend_weights, cand, env_read};
+import package::shade::cube::{fetch, tap};
 
 fn mirror(x: vec3<f32>, n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     // Without DEPTH every cube is looked up towards r: one tap serves the candidates and the

@@ -1,6 +1,7 @@
-// ---- shade/patch.wgsl ----
 // Patch geometry: the G-buffer normal, Bézier derivatives, the tangent frame.
 // Its CPU twin: reference/patch.rs.
+
+import package::shade::bindings::{patches};
 
 fn oct_decode(e: vec2<f32>) -> vec3<f32> {
     var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));

@@ -1,6 +1,8 @@
-// ---- shade/random.wgsl ----
 // Random numbers: PCG hash (Jarzynski & Olano 2020).
 // Its CPU twin: reference/random.rs.
+
+import package::shade::bindings::{FILTER, P, TERMS};
+import package::shading::constants::{PI};
 
 fn pcg(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;

@@ -1,6 +1,10 @@
-// ---- shade/reconstruct.wgsl ----
 // Surface reconstruction (3.11–3.12, §6.3).
 // Its CPU twin: reference/reconstruct.rs.
+
+import package::shade::bindings::{DEPTH, INVALID, P, samples, slots};
+import package::shade::blend::{cand, cand_s, is_resident};
+import package::shade::cube::{lookup};
+import package::shade::depth::{depth_lookup, depth_missing, depth_toward};
 
 fn recon_choice(n: vec3<f32>, resident_only: bool) -> u32 {
     var best = 4u;

@@ -1,6 +1,9 @@
-// ---- shade/seams.wgsl ----
 // Lookups filtered across face edges (for the background).
 // Its CPU twin: reference/seams.rs.
+
+import package::shade::bindings::{P, slots};
+import package::shade::cube::{face_st, load_texel, place};
+import package::shade::feedback::{mark_face};
 
 // The texel of the adjacent face that texel (x, y) one texel off `face`'s edge stands for, per
 // edge (left, right, top, bottom) and face 6 bits: the adjacent face (3 bits); 8: the edge's

@@ -1,7 +1,11 @@
-// ---- shade/split_sum.wgsl ----
 // The split-sum baseline of the pbr mode: the environment cube prefiltered per roughness, as
 // engines light a glossy object from one probe (prefilter.rs). No Monte Carlo.
 // Its CPU twin: reference/split_sum.rs.
+
+import package::shade::bindings::{DIFFUSE, P, prefiltered};
+import package::shade::blend::{env_dir};
+import package::shade::cube::{face_st};
+import package::shade::seams::{seam_bilinear, seam_taps};
 
 // Texel `c` (face, x, y) of mip `level` of the prefiltered environment, specular faces from
 // layer 0, irradiance from layer 6.

@@ -1,6 +1,9 @@
 //! A small store baked once per test binary, and image comparisons.
 #![allow(dead_code)] // each test binary uses its own part
 
+pub mod knobs;
+use knobs::Knobs;
+
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -144,7 +147,7 @@ pub fn all_finite(img: &[[f32; 4]]) -> bool {
 pub fn check_parity(
     renderer: &mut oslf_runtime::Renderer,
     cubes: &oslf_runtime::reference::StoreCubes,
-    params: oslf_runtime::ShadingParams,
+    params: Knobs,
     (width, height): (u32, u32),
     label: &str,
 ) -> Vec<[f32; 4]> {
@@ -154,7 +157,9 @@ pub fn check_parity(
         ..Default::default()
     };
     let camera = renderer.default_view();
-    let frame = renderer.render(&camera, &params, &options).unwrap();
+    let frame = renderer
+        .render(&camera, &params.params(), &options)
+        .unwrap();
     assert_eq!(
         frame.stats.unresolved, 0,
         "{label}: budget holds everything"
@@ -167,7 +172,9 @@ pub fn check_parity(
             "{label}: {timed:?}"
         );
     }
-    let (cpu, _) = renderer.reference_image(&camera, &params, cubes).unwrap();
+    let (cpu, _) = renderer
+        .reference_image(&camera, &params.params(), cubes)
+        .unwrap();
     assert!(all_finite(&frame.pixels), "{label}: non-finite GPU pixel");
     assert!(all_finite(&cpu), "{label}: non-finite CPU pixel");
     let (n, share, mae) = compare(&frame.pixels, &cpu, 2e-3);
@@ -192,14 +199,12 @@ pub fn check_parity(
 
 /// The glossy cases every parity test covers, as (params, label): both integration orders with
 /// an isotropic and an anisotropic lobe (M = 8), then recon + C_s glossy with a diffuse term.
-pub fn glossy_cases(
-    base: oslf_runtime::ShadingParams,
-) -> Vec<(oslf_runtime::ShadingParams, String)> {
-    use oslf_runtime::{Mode, Order, ShadingParams};
+pub fn glossy_cases(base: Knobs) -> Vec<(Knobs, String)> {
+    use oslf_runtime::{Mode, Order};
     let mut cases = Vec::new();
     for order in [Order::PerPoint, Order::PerDirection] {
         for (nu, nv) in [(10.0, 10.0), (1000.0, 10.0)] {
-            let p = ShadingParams {
+            let p = Knobs {
                 mode: Mode::Glossy,
                 order,
                 nu,
@@ -210,7 +215,7 @@ pub fn glossy_cases(
             cases.push((p, format!("glossy {order:?} n_u={nu} n_v={nv}")));
         }
     }
-    let p = ShadingParams {
+    let p = Knobs {
         mode: Mode::ReconGlossy,
         rs: 0.3,
         rd: 0.5,
@@ -225,7 +230,7 @@ pub fn glossy_cases(
         (0.0, 0.6, Order::PerDirection),
         (0.5, 0.05, Order::PerPoint),
     ] {
-        let p = ShadingParams {
+        let p = Knobs {
             mode: Mode::Pbr,
             order,
             metallic,
@@ -240,7 +245,7 @@ pub fn glossy_cases(
     }
     // Every blend, with depth-corrected and with plain lookups.
     for (i, blend) in oslf_runtime::Blend::ALL.into_iter().enumerate() {
-        let p = ShadingParams {
+        let p = Knobs {
             mode: Mode::Pbr,
             metallic: 0.5,
             roughness: 0.3,
