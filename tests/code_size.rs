@@ -1,8 +1,8 @@
 //! Every source file of every crate stays readable: at most [`FILE_LINES`] lines of code
 //! (outside `#[cfg(test)]` items, blank lines and comments not counted) and no function longer
 //! than [`FN_LINES`] lines. The sources are rustfmt'd, so a function ends at the first `}` at
-//! its own indentation; WGSL follows the same layout. Files under `generated/` (shaders
-//! assembled from WGSL modules) are not measured; their modules are.
+//! its own indentation; WGSL follows the same layout. The shaders assembled from WGSL modules
+//! live outside `src/` (each crate's `generated/`); their modules are measured.
 
 use std::path::{Path, PathBuf};
 
@@ -75,10 +75,7 @@ fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in entries {
         let path = entry.unwrap().path();
         if path.is_dir() {
-            // Assembled shaders are generated from modules, which are measured.
-            if !path.ends_with("generated") {
-                collect(&path, out);
-            }
+            collect(&path, out);
         } else if path.extension().is_some_and(|e| e == "rs" || e == "wgsl") {
             out.push(path);
         }

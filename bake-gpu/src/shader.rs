@@ -6,7 +6,7 @@
 
 /// The whole module's source, as embedded.
 pub fn source() -> &'static str {
-    include_str!("generated/capture.wgsl")
+    include_str!("../generated/capture.wgsl")
 }
 
 /// The root module's path.

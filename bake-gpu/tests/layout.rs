@@ -208,7 +208,7 @@ fn the_shader_constants_are_the_crates() {
 /// The embedded shader is what its modules assemble to (`OSLF_BLESS=1` writes it).
 #[test]
 fn the_embedded_shader_is_its_modules_assembled() {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/generated/capture.wgsl");
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("generated/capture.wgsl");
     oslf_shading::wgsl::check_assembled(
         &file,
         oslf_bake_gpu::shader::ROOT,

@@ -109,5 +109,5 @@ pub use params::{Background, Blend, GlossyFilter, Mode, Order, Source};
 pub use renderer::{Frame, FrameBytes, HostTarget, HostView, RenderOptions, Renderer};
 pub use shading::{
     AshikhminShirley, Box3, Glossy, Lookup, Mirror, MonteCarlo, Pbr, PbrIntegration, PbrMaterial,
-    Probe, Recon, ReconGlossy, ReconMirror, SampleFilter, ShadingParams,
+    Probe, Recon, ReconGlossy, ReconMirror, SampleFilter, ShadingParams, ShadingParts,
 };

@@ -26,13 +26,13 @@ pub(crate) const WORKGROUP: u32 = 8;
 /// `shade::pixel`), oslf-shading's modules and the structs generated from Rust
 /// ([`shade_modules`]); the tests check that it is what they assemble to.
 pub(crate) fn shade_wgsl() -> &'static str {
-    include_str!("generated/shade.wgsl")
+    include_str!("../generated/shade.wgsl")
 }
 
 /// gbuffer.wgsl, the G-buffer pass, as embedded: assembled from gbuffer.wgsl (root `gbuffer`),
 /// oslf-shading's modules and the structs generated from Rust ([`gbuffer_modules`]).
 pub(crate) fn gbuffer_wgsl() -> &'static str {
-    include_str!("generated/gbuffer.wgsl")
+    include_str!("../generated/gbuffer.wgsl")
 }
 
 /// The module of the structs generated from Rust: the uniform, the vertex, the texture

@@ -187,7 +187,7 @@ fn pipeline_overrides_are_the_shaders() {
 #[test]
 fn embedded_shaders_are_their_modules_assembled() {
     use crate::pipelines::{gbuffer_modules, shade_modules};
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/generated");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("generated");
     for (file, root, modules) in [
         ("shade.wgsl", "shade::pixel", shade_modules()),
         ("gbuffer.wgsl", "gbuffer", gbuffer_modules()),

@@ -213,6 +213,113 @@ pub enum PbrIntegration {
     SplitSum(Probe),
 }
 
+/// Every part a mode can have, for choosing parameters across modes (a command line's flags, a
+/// viewer that switches modes): [`ShadingParts::params`] gives a mode its parts and leaves the
+/// others.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingParts {
+    /// See [`Recon::phi_shader_deg`].
+    pub phi_shader_deg: f32,
+    /// See [`Mirror::lookup`].
+    pub lookup: Lookup,
+    /// See [`Mirror::depth`].
+    pub depth: bool,
+    /// The glossy modes' BRDF.
+    pub lobe: AshikhminShirley,
+    /// The glossy and pbr modes' integration.
+    pub integration: MonteCarlo,
+    /// The pbr mode's factors.
+    pub material: PbrMaterial,
+    /// The pbr mode's split-sum baseline instead of Monte Carlo; needs a [`Lookup::Probe`].
+    pub split_sum: bool,
+}
+
+impl Default for ShadingParts {
+    /// Each part's default.
+    fn default() -> Self {
+        Self {
+            phi_shader_deg: PHI_SHADER_DEG,
+            lookup: Lookup::default(),
+            depth: true,
+            lobe: AshikhminShirley::default(),
+            integration: MonteCarlo::default(),
+            material: PbrMaterial::default(),
+            split_sum: false,
+        }
+    }
+}
+
+impl ShadingParts {
+    /// The parameters of `mode`, validated. Every part is checked, also those the mode does
+    /// not read, so that no out-of-range choice passes unseen; `split_sum` outside the pbr mode
+    /// or over the OSLF is an error.
+    pub fn params(&self, mode: Mode) -> Result<ShadingParams> {
+        if self.split_sum && (mode != Mode::Pbr || self.lookup.source() == Source::Oslf) {
+            return Err(RuntimeError::Parameter(format!(
+                "glossy filter split-sum is the engines' baseline of the pbr mode: it needs mode \
+                 pbr and source env or parallax, not mode {} and source {}",
+                mode.name(),
+                self.lookup.source().name()
+            )));
+        }
+        for every_part in [Mode::ReconGlossy, Mode::Pbr] {
+            self.build(every_part).validate()?;
+        }
+        let params = self.build(mode);
+        params.validate()?;
+        Ok(params)
+    }
+
+    /// The parameters of `mode`, unchecked.
+    fn build(&self, mode: Mode) -> ShadingParams {
+        let Self {
+            phi_shader_deg,
+            lookup,
+            depth,
+            lobe,
+            integration,
+            material,
+            split_sum,
+        } = *self;
+        match mode {
+            Mode::Recon => ShadingParams::Recon(Recon {
+                phi_shader_deg,
+                depth,
+            }),
+            Mode::Mirror => ShadingParams::Mirror(Mirror { lookup, depth }),
+            Mode::ReconMirror => ShadingParams::ReconMirror(ReconMirror {
+                phi_shader_deg,
+                lookup,
+                depth,
+            }),
+            Mode::Glossy => ShadingParams::Glossy(Glossy {
+                lookup,
+                depth,
+                lobe,
+                integration,
+            }),
+            Mode::ReconGlossy => ShadingParams::ReconGlossy(ReconGlossy {
+                phi_shader_deg,
+                lookup,
+                depth,
+                lobe,
+                integration,
+            }),
+            Mode::Pbr => ShadingParams::Pbr(Pbr {
+                material,
+                integration: match lookup {
+                    Lookup::Probe(probe) if split_sum => PbrIntegration::SplitSum(probe),
+                    _ => PbrIntegration::MonteCarlo {
+                        lookup,
+                        depth,
+                        integration,
+                    },
+                },
+            }),
+        }
+    }
+}
+
 /// The thesis's φ_shader.
 const PHI_SHADER_DEG: f32 = 65.0;
 

@@ -4,7 +4,7 @@
 //! ones (`package::shading::constants`), so they cannot drift.
 //!
 //! Each shader is assembled from its modules by [`assemble`] (feature `assemble`, the `wesl`
-//! crate) into one WGSL file that the crate embeds (`src/generated/`); each crate's tests
+//! crate) into one WGSL file that the crate embeds (its `generated/` folder); each crate's tests
 //! assemble it again and fail where the embedded file differs, so that a change to a module
 //! reaches every shader that imports it (`OSLF_BLESS=1` rewrites the files).
 

@@ -10,9 +10,8 @@ use oslf_format::Store;
 use oslf_runtime::Camera;
 
 use oslf_runtime::{
-    AshikhminShirley, Background, Blend, Glossy, GlossyFilter, Lookup, Mirror, Mode, MonteCarlo,
-    Order, Pbr, PbrIntegration, PbrMaterial, Recon, ReconGlossy, ReconMirror, Result, RuntimeError,
-    SampleFilter, ShadingParams, Source,
+    AshikhminShirley, Background, Blend, GlossyFilter, Lookup, Mode, MonteCarlo, Order,
+    PbrMaterial, Result, RuntimeError, SampleFilter, ShadingParams, ShadingParts, Source,
 };
 
 /// The shading flags besides mode and blend (which each command takes its own way).
@@ -82,91 +81,35 @@ impl ShadingArgs {
     /// The parameters of `mode` with `blend` and the flags that mode has (the others are
     /// not read), validated. Every flag's range is checked, whichever mode reads it.
     pub fn params(&self, mode: Mode, blend: Blend) -> Result<ShadingParams> {
-        for all_flags in [Mode::ReconGlossy, Mode::Pbr] {
-            self.build(all_flags, blend).validate()?;
+        let defaults = PbrMaterial::default();
+        ShadingParts {
+            phi_shader_deg: self.phi_shader,
+            lookup: Lookup::of_source(self.source(), blend, self.blend_n, self.proxy_box),
+            depth: !self.no_depth,
+            lobe: AshikhminShirley {
+                rs: self.rs,
+                rd: self.rd,
+                nu: self.nu,
+                nv: self.nv,
+            },
+            integration: MonteCarlo {
+                m: self.m,
+                order: self.order,
+                seed: self.seed,
+                filter: match self.glossy_filter {
+                    GlossyFilter::Point => SampleFilter::Point,
+                    GlossyFilter::Mip | GlossyFilter::SplitSum => SampleFilter::Mip,
+                },
+            },
+            material: PbrMaterial {
+                metallic: self.metallic.unwrap_or(defaults.metallic),
+                roughness: self.roughness.unwrap_or(defaults.roughness),
+                // The store's materials unless a flag sets the factors.
+                object_material: self.metallic.is_none() && self.roughness.is_none(),
+            },
+            split_sum: self.glossy_filter == GlossyFilter::SplitSum,
         }
-        let source = self.source();
-        if self.glossy_filter == GlossyFilter::SplitSum
-            && (mode != Mode::Pbr || source == Source::Oslf)
-        {
-            return Err(RuntimeError::Parameter(format!(
-                "glossy filter split-sum is the engines' baseline of the pbr mode: it needs mode \
-                 pbr and source env or parallax, not mode {} and source {}",
-                mode.name(),
-                source.name()
-            )));
-        }
-        let params = self.build(mode, blend);
-        params.validate()?;
-        Ok(params)
-    }
-
-    /// The parameters of `mode` from the flags, unchecked.
-    fn build(&self, mode: Mode, blend: Blend) -> ShadingParams {
-        let lookup = Lookup::of_source(self.source(), blend, self.blend_n, self.proxy_box);
-        let filter = match self.glossy_filter {
-            GlossyFilter::Point => SampleFilter::Point,
-            GlossyFilter::Mip | GlossyFilter::SplitSum => SampleFilter::Mip,
-        };
-        let integration = MonteCarlo {
-            m: self.m,
-            order: self.order,
-            seed: self.seed,
-            filter,
-        };
-        let lobe = AshikhminShirley {
-            rs: self.rs,
-            rd: self.rd,
-            nu: self.nu,
-            nv: self.nv,
-        };
-        let (phi_shader_deg, depth) = (self.phi_shader, !self.no_depth);
-        match mode {
-            Mode::Recon => ShadingParams::Recon(Recon {
-                phi_shader_deg,
-                depth,
-            }),
-            Mode::Mirror => ShadingParams::Mirror(Mirror { lookup, depth }),
-            Mode::ReconMirror => ShadingParams::ReconMirror(ReconMirror {
-                phi_shader_deg,
-                lookup,
-                depth,
-            }),
-            Mode::Glossy => ShadingParams::Glossy(Glossy {
-                lookup,
-                depth,
-                lobe,
-                integration,
-            }),
-            Mode::ReconGlossy => ShadingParams::ReconGlossy(ReconGlossy {
-                phi_shader_deg,
-                lookup,
-                depth,
-                lobe,
-                integration,
-            }),
-            Mode::Pbr => {
-                let defaults = PbrMaterial::default();
-                ShadingParams::Pbr(Pbr {
-                    material: PbrMaterial {
-                        metallic: self.metallic.unwrap_or(defaults.metallic),
-                        roughness: self.roughness.unwrap_or(defaults.roughness),
-                        // The store's materials unless a flag sets the factors.
-                        object_material: self.metallic.is_none() && self.roughness.is_none(),
-                    },
-                    integration: match lookup {
-                        Lookup::Probe(probe) if self.glossy_filter == GlossyFilter::SplitSum => {
-                            PbrIntegration::SplitSum(probe)
-                        }
-                        _ => PbrIntegration::MonteCarlo {
-                            lookup,
-                            depth,
-                            integration,
-                        },
-                    },
-                })
-            }
-        }
+        .params(mode)
     }
 
     /// `--source`, or `env` with `--envmap`.

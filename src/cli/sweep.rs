@@ -11,7 +11,9 @@ use oslf_measure::sweep::{
     check_changes, parse_vary, run_sweep, SweepConfig, SweepRow, RUNTIME_KEYS,
 };
 use oslf_measure::sweep_report::{front_members, panels, rows_table, sensitivity_table, Fronts};
-use oslf_runtime::{Mode, Order, PbrMaterial, ShadingParams};
+use oslf_runtime::{
+    AshikhminShirley, Mode, MonteCarlo, Order, PbrMaterial, ShadingParams, ShadingParts,
+};
 use oslf_scene::scene::Scene;
 use oslf_trace::ground_truth::{GroundTruth, TruthSettings};
 use oslf_util::door::Door;
@@ -107,27 +109,34 @@ const OUTPUTS: [&str; 5] = [
 ];
 
 /// The runtime settings the variations start from: the mode's, with the flags it has (the
-/// others are not read).
+/// others are checked, not read).
 fn default_params(args: &Args) -> anyhow::Result<ShadingParams> {
-    let mut params = ShadingParams::of_mode(args.mode);
-    let _ = params.set_phi_shader_deg(args.phi_shader);
-    if let Ok(mc) = params.monte_carlo_mut() {
-        mc.m = args.m;
-        mc.order = match args.order.as_str() {
-            "per-point" => Order::PerPoint,
-            "per-direction" => Order::PerDirection,
-            o => bail!("--order {o:?}: per-point or per-direction"),
-        };
+    let defaults = ShadingParts::default();
+    let mut params = ShadingParts {
+        phi_shader_deg: args.phi_shader,
+        lobe: AshikhminShirley {
+            rs: args.rs,
+            nu: args.nu,
+            nv: args.nv,
+            ..defaults.lobe
+        },
+        integration: MonteCarlo {
+            m: args.m,
+            order: match args.order.as_str() {
+                "per-point" => Order::PerPoint,
+                "per-direction" => Order::PerDirection,
+                o => bail!("--order {o:?}: per-point or per-direction"),
+            },
+            ..defaults.integration
+        },
+        material: PbrMaterial {
+            metallic: args.metallic.unwrap_or(defaults.material.metallic),
+            roughness: args.roughness.unwrap_or(defaults.material.roughness),
+            object_material: args.metallic.is_none() && args.roughness.is_none(),
+        },
+        ..defaults
     }
-    if let Ok(lobe) = params.lobe_mut() {
-        (lobe.rs, lobe.nu, lobe.nv) = (args.rs, args.nu, args.nv);
-    }
-    if let Ok(m) = params.material_mut() {
-        let defaults = PbrMaterial::default();
-        m.metallic = args.metallic.unwrap_or(defaults.metallic);
-        m.roughness = args.roughness.unwrap_or(defaults.roughness);
-        m.object_material = args.metallic.is_none() && args.roughness.is_none();
-    }
+    .params(args.mode)?;
     if params.lookup().is_some() {
         oslf_measure::sweep::apply_runtime(
             &mut params,

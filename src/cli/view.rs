@@ -623,7 +623,7 @@ impl ApplicationHandler for App {
 /// The blit shader as embedded: view_blit.wgsl with what it imports of oslf-shading's modules
 /// (its tone curve and sRGB encoding), assembled ([`blit_modules`]; the tests check it).
 fn blit_wgsl() -> &'static str {
-    include_str!("generated/view_blit.wgsl")
+    include_str!("../../generated/view_blit.wgsl")
 }
 
 /// The modules of the blit shader, as (path under `package::`, source).
@@ -639,8 +639,8 @@ mod tests {
     /// The embedded blit shader is what its modules assemble to (`OSLF_BLESS=1` writes it).
     #[test]
     fn blit_shader_is_its_modules_assembled() {
-        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("src/cli/generated/view_blit.wgsl");
+        let file =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("generated/view_blit.wgsl");
         oslf_shading::wgsl::check_assembled(&file, "view_blit", &super::blit_modules())
             .unwrap_or_else(|e| panic!("{e}"));
     }

@@ -1,11 +1,10 @@
 //! The tests' way of writing shading parameters: every knob of every mode in one flat struct
-//! with the thesis's defaults, as the tests sweep them one at a time, turned into the mode's
-//! [`ShadingParams`] by [`Knobs::params`] (which drops the knobs the mode does not have).
+//! with the defaults, as the tests sweep them one at a time (`Knobs { m: 8, ..base }`), turned
+//! into the mode's [`ShadingParams`] by [`Knobs::params`] through [`ShadingParts`].
 
 use oslf_runtime::{
-    AshikhminShirley, Blend, Box3, Glossy, GlossyFilter, Lookup, Mirror, Mode, MonteCarlo, Order,
-    Pbr, PbrIntegration, PbrMaterial, Recon, ReconGlossy, ReconMirror, SampleFilter, ShadingParams,
-    Source,
+    AshikhminShirley, Blend, Box3, GlossyFilter, Lookup, Mode, MonteCarlo, Order, PbrMaterial,
+    SampleFilter, ShadingParams, ShadingParts, Source,
 };
 
 /// Every knob; see the fields of the parts of [`ShadingParams`].
@@ -32,21 +31,19 @@ pub struct Knobs {
 }
 
 impl Default for Knobs {
-    /// The defaults of [`ShadingParams`]' parts, in the default mode (recon + C_s mirror).
+    /// The defaults of [`ShadingParts`], in the default mode (recon + C_s mirror).
     fn default() -> Self {
-        let (blend, blend_n) = match Lookup::default() {
-            Lookup::Oslf { blend, blend_n } => (blend, blend_n),
-            Lookup::Probe(_) => unreachable!("the default lookup is the OSLF's"),
+        let parts = ShadingParts::default();
+        let Lookup::Oslf { blend, blend_n } = parts.lookup else {
+            unreachable!("the default lookup is the OSLF's")
         };
-        let mc = MonteCarlo::default();
-        let lobe = AshikhminShirley::default();
-        let material = PbrMaterial::default();
+        let (mc, lobe, material) = (parts.integration, parts.lobe, parts.material);
         Self {
             mode: ShadingParams::default().mode(),
             blend,
             blend_n,
             source: Source::Oslf,
-            phi_shader_deg: Recon::default().phi_shader_deg,
+            phi_shader_deg: parts.phi_shader_deg,
             m: mc.m,
             order: mc.order,
             rs: lobe.rs,
@@ -57,7 +54,7 @@ impl Default for Knobs {
             roughness: material.roughness,
             object_material: material.object_material,
             seed: mc.seed,
-            depth: true,
+            depth: parts.depth,
             glossy_filter: GlossyFilter::Mip,
             proxy_box: None,
         }
@@ -65,75 +62,37 @@ impl Default for Knobs {
 }
 
 impl Knobs {
-    /// The parameters of `self.mode`; panics on a combination no mode has (split-sum outside
-    /// the pbr mode's baselines), as a test wants.
+    /// The parameters of `self.mode` ([`ShadingParts::params`]); panics where the knobs are
+    /// out of range or a combination no mode has (split-sum outside the pbr mode's
+    /// baselines), as a test wants.
     pub fn params(&self) -> ShadingParams {
-        let lookup = Lookup::of_source(self.source, self.blend, self.blend_n, self.proxy_box);
-        let filter = match self.glossy_filter {
-            GlossyFilter::Mip => SampleFilter::Mip,
-            GlossyFilter::Point => SampleFilter::Point,
-            GlossyFilter::SplitSum => SampleFilter::Mip,
-        };
-        let integration = MonteCarlo {
-            m: self.m,
-            order: self.order,
-            seed: self.seed,
-            filter,
-        };
-        let lobe = AshikhminShirley {
-            rs: self.rs,
-            rd: self.rd,
-            nu: self.nu,
-            nv: self.nv,
-        };
-        let (phi_shader_deg, depth) = (self.phi_shader_deg, self.depth);
-        let split_sum = self.glossy_filter == GlossyFilter::SplitSum;
-        assert!(
-            !split_sum || self.mode == Mode::Pbr,
-            "split-sum is a baseline of the pbr mode"
-        );
-        match self.mode {
-            Mode::Recon => ShadingParams::Recon(Recon {
-                phi_shader_deg,
-                depth,
-            }),
-            Mode::Mirror => ShadingParams::Mirror(Mirror { lookup, depth }),
-            Mode::ReconMirror => ShadingParams::ReconMirror(ReconMirror {
-                phi_shader_deg,
-                lookup,
-                depth,
-            }),
-            Mode::Glossy => ShadingParams::Glossy(Glossy {
-                lookup,
-                depth,
-                lobe,
-                integration,
-            }),
-            Mode::ReconGlossy => ShadingParams::ReconGlossy(ReconGlossy {
-                phi_shader_deg,
-                lookup,
-                depth,
-                lobe,
-                integration,
-            }),
-            Mode::Pbr => ShadingParams::Pbr(Pbr {
-                material: PbrMaterial {
-                    metallic: self.metallic,
-                    roughness: self.roughness,
-                    object_material: self.object_material,
+        ShadingParts {
+            phi_shader_deg: self.phi_shader_deg,
+            lookup: Lookup::of_source(self.source, self.blend, self.blend_n, self.proxy_box),
+            depth: self.depth,
+            lobe: AshikhminShirley {
+                rs: self.rs,
+                rd: self.rd,
+                nu: self.nu,
+                nv: self.nv,
+            },
+            integration: MonteCarlo {
+                m: self.m,
+                order: self.order,
+                seed: self.seed,
+                filter: match self.glossy_filter {
+                    GlossyFilter::Point => SampleFilter::Point,
+                    GlossyFilter::Mip | GlossyFilter::SplitSum => SampleFilter::Mip,
                 },
-                integration: match lookup {
-                    Lookup::Probe(probe) if split_sum => PbrIntegration::SplitSum(probe),
-                    Lookup::Oslf { .. } if split_sum => {
-                        panic!("split-sum is a baseline: it needs source env or parallax")
-                    }
-                    _ => PbrIntegration::MonteCarlo {
-                        lookup,
-                        depth,
-                        integration,
-                    },
-                },
-            }),
+            },
+            material: PbrMaterial {
+                metallic: self.metallic,
+                roughness: self.roughness,
+                object_material: self.object_material,
+            },
+            split_sum: self.glossy_filter == GlossyFilter::SplitSum,
         }
+        .params(self.mode)
+        .unwrap_or_else(|e| panic!("{self:?}: {e}"))
     }
 }
