@@ -186,7 +186,7 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
         }
         "blend" => {
             let v = c.value.as_str();
-            let blend_n = p.blend().map_or(4.0, |(_, n)| n);
+            let blend_n = p.blend().map_or(Lookup::DEFAULT_BLEND.1, |(_, n)| n);
             let lookup = match v {
                 "distance" => Lookup::oslf(Blend::Distance, blend_n),
                 "angle" => Lookup::oslf(Blend::Angle, blend_n),

@@ -102,7 +102,7 @@ pub fn measure_tables(
 
     // The Ashikhmin–Shirley table: the finest store.
     let finest = n_stores - 1;
-    let (default_blend, default_n) = default_blend();
+    let (default_blend, default_n) = Lookup::DEFAULT_BLEND;
     for &(nu, nv) in &config.lobes {
         let name = format!("glossy-{nu}-{nv}");
         let glossy_truth = truth_of(&mut truth, Mode::Glossy, nu, nv, &name)?;
@@ -307,14 +307,6 @@ fn as_name(nu: f32, nv: f32, m: u32, label: &str) -> String {
     format!("AS {nu}:{nv} M={m} {label}")
 }
 
-/// The default lookup's blend and power N, which the tables' OSLF rows start from.
-fn default_blend() -> (Blend, f32) {
-    match Lookup::default() {
-        Lookup::Oslf { blend, blend_n } => (blend, blend_n),
-        Lookup::Probe(_) => (Blend::Normal, 4.0),
-    }
-}
-
 /// Table 6.2's rows: the two baselines (the environment map, and that map parallax-corrected),
 /// then every blend of §4 (B^r and B^n at N = 1, 4, 8, 16). Each OSLF row is measured twice:
 /// with plain lookups as the thesis did, and depth-corrected (records named "… depth").
@@ -325,7 +317,7 @@ fn mirror_methods() -> Vec<(String, ShadingParams)> {
             depth,
         })
     };
-    let (_, default_n) = default_blend();
+    let (_, default_n) = Lookup::DEFAULT_BLEND;
     let mut methods = vec![
         (
             "EnvMap".to_string(),

@@ -324,12 +324,10 @@ impl ShadingParts {
 const PHI_SHADER_DEG: f32 = 65.0;
 
 impl Default for Lookup {
-    /// The OSLF blended with B^n, N = 4 (the thesis's choice).
+    /// The OSLF blended with [`Lookup::DEFAULT_BLEND`].
     fn default() -> Self {
-        Lookup::Oslf {
-            blend: Blend::Normal,
-            blend_n: 4.0,
-        }
+        let (blend, blend_n) = Lookup::DEFAULT_BLEND;
+        Lookup::Oslf { blend, blend_n }
     }
 }
 
@@ -448,6 +446,9 @@ impl Probe {
 }
 
 impl Lookup {
+    /// The default blend and power N: B^n with N = 4 (the thesis's choice).
+    pub const DEFAULT_BLEND: (Blend, f32) = (Blend::Normal, 4.0);
+
     /// The OSLF blended with `blend` and power `blend_n`.
     pub fn oslf(blend: Blend, blend_n: f32) -> Self {
         Lookup::Oslf { blend, blend_n }
@@ -527,15 +528,15 @@ impl ShadingParams {
     /// The baseline's probe, when the frame reads one (a probe lookup or the split-sum
     /// baseline).
     pub fn probe(&self) -> Option<Probe> {
-        match (self.lookup(), self) {
-            (Some(Lookup::Probe(p)), _) => Some(p),
-            (
-                _,
-                ShadingParams::Pbr(Pbr {
-                    integration: PbrIntegration::SplitSum(p),
-                    ..
-                }),
-            ) => Some(*p),
+        if let ShadingParams::Pbr(Pbr {
+            integration: PbrIntegration::SplitSum(p),
+            ..
+        }) = self
+        {
+            return Some(*p);
+        }
+        match self.lookup() {
+            Some(Lookup::Probe(p)) => Some(p),
             _ => None,
         }
     }

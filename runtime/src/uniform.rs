@@ -2,7 +2,7 @@
 //! frame's [`ShadingParams`], camera, store constants and background packed for the GPU shader
 //! and the CPU reference alike.
 
-use crate::params::{Background, Blend, GlossyFilter, Order};
+use crate::params::{Background, GlossyFilter, Order};
 use crate::shading::{Lookup, Recon, ShadingParams};
 
 /// Most steps of the linear search of a depth-corrected lookup (`depth_search` in shade.wgsl):
@@ -147,13 +147,7 @@ impl ShadeUniform {
             Background::None | Background::Env => [0.0; 4],
         };
         // Parts the mode does not have keep their defaults: the shader does not read them.
-        let (blend, blend_n) = match p.lookup() {
-            Some(Lookup::Oslf { blend, blend_n }) => (blend, blend_n),
-            _ => match Lookup::default() {
-                Lookup::Oslf { blend, blend_n } => (blend, blend_n),
-                Lookup::Probe(_) => (Blend::Normal, 0.0),
-            },
-        };
+        let (blend, blend_n) = p.blend().unwrap_or(Lookup::DEFAULT_BLEND);
         let mc = p.monte_carlo().unwrap_or_default();
         let lobe = p.lobe().unwrap_or_default();
         let material = p.material().unwrap_or_default();

@@ -490,7 +490,7 @@ fn next_source(p: &mut ShadingParams, parallax: bool) {
         Source::EnvMap if parallax => Source::Parallax,
         Source::EnvMap | Source::Parallax => Source::Oslf,
     };
-    let (blend, n) = p.blend().unwrap_or((Blend::Normal, 4.0));
+    let (blend, n) = p.blend().unwrap_or(Lookup::DEFAULT_BLEND);
     let lookup = Lookup::of_source(next, blend, n, None);
     if let ShadingParams::Pbr(pbr) = p {
         if let PbrIntegration::SplitSum(_) = pbr.integration {

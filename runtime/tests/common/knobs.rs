@@ -34,9 +34,7 @@ impl Default for Knobs {
     /// The defaults of [`ShadingParts`], in the default mode (recon + C_s mirror).
     fn default() -> Self {
         let parts = ShadingParts::default();
-        let Lookup::Oslf { blend, blend_n } = parts.lookup else {
-            unreachable!("the default lookup is the OSLF's")
-        };
+        let (blend, blend_n) = Lookup::DEFAULT_BLEND;
         let (mc, lobe, material) = (parts.integration, parts.lobe, parts.material);
         Self {
             mode: ShadingParams::default().mode(),
