@@ -355,3 +355,55 @@ fn preflight_refuses_a_bake_too_slow_for_its_limit_before_any_work() {
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("--max-hours -1"));
 }
+
+/// examples/can.toml has no `[bake]`: the bake says what it chose and why, in the scene's
+/// units with the digits a 66 mm can needs, on stderr and in the JSON report.
+#[test]
+fn a_scene_without_bake_settings_says_what_it_chose() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/can.toml");
+    let out = oslf("bake")
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("can.oslf"))
+        .args([
+            "--max-cubes",
+            "1",
+            "--preview",
+            "none",
+            "--device",
+            "cpu",
+            "--report-json",
+        ])
+        .arg(dir.join("report.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    for key in [
+        "chosen: epsilon = 0.00",
+        "chosen: object \"Can\": sample_spacing = 0.00",
+        "chosen: cube_resolution = 64",
+        "chosen: samples_per_texel = 4",
+    ] {
+        assert!(stderr.contains(key), "no {key:?} in:\n{stderr}");
+    }
+    // ε of about a millimetre, with two significant digits.
+    let eps_line = stderr
+        .lines()
+        .find(|l| l.starts_with("chosen: epsilon"))
+        .unwrap();
+    let value: f64 = eps_line["chosen: epsilon = ".len()..]
+        .split(':')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((5e-4..5e-3).contains(&value), "{eps_line}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let chosen = report["chosen"].as_array().unwrap();
+    assert_eq!(chosen.len(), 4, "{chosen:?}");
+    assert!(chosen[0].as_str().unwrap().starts_with("epsilon = "));
+}

@@ -148,6 +148,9 @@ pub struct ObjectCoverage {
     pub places: Vec<ShortPlace>,
     /// Short texels in places not shown.
     pub other_short: u64,
+    /// Decimal places that print the object's coordinates: enough for ε and for a hundredth
+    /// of the object's size ([`decimals_for`]).
+    pub decimals: usize,
 }
 
 /// What [`diagnose`] needs besides the maps.
@@ -156,6 +159,9 @@ pub struct Probe<'a, G: Intersector> {
     pub names: &'a SurfaceNames,
     pub epsilon: f32,
     pub phi_samplemap_deg: f32,
+    /// The diagonal of each object's bounding box, in object order (for the decimals of its
+    /// coordinates).
+    pub object_sizes: &'a [f32],
 }
 
 /// Group of short texels: object, cause, instance touched (contact), facing axis (0..6).
@@ -219,7 +225,10 @@ pub fn diagnose<G: Intersector>(
             }
             a
         });
-    summarize(groups, &texels, object_names, probe.names)
+    let decimals: Vec<usize> = (0..object_names.len())
+        .map(|o| decimals_for(probe.epsilon, probe.object_sizes.get(o).copied()))
+        .collect();
+    summarize(groups, &texels, object_names, probe.names, &decimals)
 }
 
 /// The cause of one short texel of `object` at `p` (unit normal `n`, offset direction
@@ -355,6 +364,7 @@ fn summarize(
     texels: &[u64],
     object_names: &[String],
     names: &SurfaceNames,
+    decimals: &[usize],
 ) -> Vec<ObjectCoverage> {
     let mut per_object: BTreeMap<u32, Vec<ShortPlace>> = BTreeMap::new();
     for ((object, cause, instance, axis), g) in groups {
@@ -390,6 +400,7 @@ fn summarize(
                 empty,
                 places,
                 other_short,
+                decimals: decimals[o],
             }
         })
         .collect()
@@ -459,12 +470,12 @@ impl ShortPlace {
     }
 }
 
-/// Decimal places that resolve `epsilon` (at least 1, at most 6): coordinates in the summary.
-pub fn decimals_for(epsilon: f32) -> usize {
-    if !(epsilon.is_finite() && epsilon > 0.0) {
-        return 3;
-    }
-    (-epsilon.log10()).ceil().clamp(1.0, 6.0) as usize
+/// Decimal places that print coordinates near an object to two significant digits of ε and
+/// of a hundredth of the object's size `size` (the smaller), in the scene's units at any scale
+/// ([`oslf_scene::bake_defaults::length_decimals`]).
+pub fn decimals_for(epsilon: f32, size: Option<f32>) -> usize {
+    let smallest = size.map_or(epsilon, |s| epsilon.min(0.01 * s));
+    oslf_scene::bake_defaults::length_decimals(smallest)
 }
 
 #[cfg(test)]
@@ -539,6 +550,7 @@ mod tests {
             names: &names,
             epsilon: eps,
             phi_samplemap_deg: phi,
+            object_sizes: &[1.0],
         };
         let report = diagnose(&maps, &domains, &points, &["flat".into()], &probe);
         assert_eq!(report.len(), 1);

@@ -4,6 +4,8 @@
 //! with a filter: `cargo test --release --test integration -- FILE::`. `preflight.rs` is a
 //! binary of its own: its counting allocator measures the heap of one test at a time.
 
+#[path = "bake_defaults.rs"]
+mod bake_defaults;
 #[path = "coverage.rs"]
 mod coverage;
 #[path = "extremes.rs"]

@@ -371,6 +371,10 @@ fn bake_or_reuse(
 pub fn bake_variant(scene: &Scene, change: &Change) -> Result<Scene> {
     let mut variant = scene.clone();
     apply_bake(&mut variant.bake, change)?;
+    if matches!(change.key.as_str(), "sample_count" | "sample_spacing") {
+        // Spacings chosen per object where the file sets no density give way to the change.
+        variant.set_sample_density(variant.bake.sample_count);
+    }
     variant
         .check_epsilon()
         .map_err(|e| change.problem(e.to_string()))?;

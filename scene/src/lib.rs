@@ -9,7 +9,7 @@
 //!
 //! | role | modules |
 //! | --- | --- |
-//! | the model | [`scene`] (objects, shapes, lights, settings), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`normals`] (vertex normals where a file has none: flat, smooth, crease angle), [`tolerance`] (tolerances the stages share) |
+//! | the model | [`scene`] (objects, shapes, lights, settings), [`bake_defaults`] (the settings a scene file leaves unset, chosen from the objects' sizes, surroundings and materials), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`normals`] (vertex normals where a file has none: flat, smooth, crease angle), [`tolerance`] (tolerances the stages share) |
 //! | appearance | [`texture`] (constants, checkerboards, images), [`material`] (Lambertian and glTF metallic-roughness, as the path tracer evaluates them), [`metallic_roughness`] (glTF's BRDF over oslf-shading's GGX), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky, and their importance sampling), [`sampling`] (tabulated distributions) |
 //! | files | [`scene_file`] (TOML scene files: located errors, presets, includes), [`gltf`] (glTF 2.0: meshes, materials, lights, cameras), [`obj`] (Wavefront OBJ), [`input`] (every input file read with bounds: regular files only, size limits) |
 //! | errors | [`error`] ([`BakeError`], the error of the scene, the tracer and the bake) |
@@ -20,6 +20,7 @@
 //! It must never depend on the tracer (`oslf-trace`), the bake (`oslf-bake`), the runtime or
 //! any GPU crate: reading a scene needs none of them.
 
+pub mod bake_defaults;
 pub mod environment;
 pub mod error;
 pub mod gltf;

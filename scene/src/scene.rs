@@ -178,6 +178,9 @@ pub struct Scene {
     pub objects: Vec<OslfObject>,
     pub shapes: Vec<Shape>,
     pub bake: BakeSettings,
+    /// The bake settings the scene file leaves unset, as chosen from the scene, and why
+    /// ([`crate::bake_defaults`]): empty where the file sets them all.
+    pub bake_choices: Vec<crate::bake_defaults::BakeChoice>,
     /// Name of the preset applied, if any.
     pub preset: Option<String>,
     /// Names of the presets the scene file defines (`[presets.NAME]`), sorted.
@@ -327,6 +330,25 @@ pub fn epsilon_problem(epsilon: f32, object: &OslfObject) -> Option<String> {
 }
 
 impl Scene {
+    /// Sets the bake's sample density and drops the spacings chosen for objects where the
+    /// scene file left it unset ([`crate::bake_defaults`]), so that `density` holds for them
+    /// (spacings the file gives an object are kept).
+    pub fn set_sample_density(&mut self, density: SampleDensity) {
+        self.bake.sample_count = density;
+        let chosen: Vec<&str> = self
+            .bake_choices
+            .iter()
+            .filter(|c| c.key == "sample_spacing")
+            .filter_map(|c| c.object.as_deref())
+            .collect();
+        for object in &mut self.objects {
+            if chosen.contains(&object.name.as_str()) {
+                object.sample_spacing = None;
+            }
+        }
+        self.bake_choices.retain(|c| c.key != "sample_spacing");
+    }
+
     /// Checks bake settings changed after loading (tools that vary them, e.g. a sweep) against
     /// the limits the scene file's parser enforces on ε for each object.
     pub fn check_epsilon(&self) -> Result<()> {

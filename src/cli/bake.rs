@@ -166,6 +166,11 @@ fn run_in_pool(args: Args) -> anyhow::Result<()> {
         .warnings
         .iter()
         .for_each(|w| eprintln!("warning: {w}"));
+    if !args.quiet {
+        for choice in &scene.bake_choices {
+            eprintln!("chosen: {choice}");
+        }
+    }
     let device = gpu
         .clone()
         .map(|g| g as Arc<dyn oslf_bake::device::CaptureDevice>);
@@ -481,11 +486,10 @@ fn print_noise(r: &BakeReport) {
 /// Per object with short texels: a `coverage` line (how many) and a line per place (where,
 /// why, what to do).
 fn print_coverage(r: &BakeReport) {
-    let decimals = oslf_bake::coverage::decimals_for(r.epsilon);
     for c in r.coverage.iter().filter(|c| c.short > 0) {
         println!("coverage       {c}");
         for place in &c.places {
-            println!("               {}", place.describe(decimals));
+            println!("               {}", place.describe(c.decimals));
         }
     }
 }

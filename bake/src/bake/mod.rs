@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use oslf_format::ShardSpec;
 
-use crate::coverage::{decimals_for, ObjectCoverage};
+use crate::coverage::ObjectCoverage;
 use crate::preflight::Limits;
 pub use meta::{object_centre, store_meta};
 pub use noise_report::{NoiseReport, NoiseSuggestion};
@@ -59,13 +59,12 @@ pub struct BakeOptions {
 
 /// The largest place of each object's empty texels, for [`BakeError::EmptyTexels`]:
 /// `; where: object "box": 3496 texels facing down (−z) at …` (empty without any).
-fn empty_places(coverage: &[ObjectCoverage], epsilon: f32) -> String {
-    let decimals = decimals_for(epsilon);
+fn empty_places(coverage: &[ObjectCoverage]) -> String {
     let places: Vec<String> = coverage
         .iter()
         .filter_map(|c| {
             let p = c.places.iter().find(|p| p.empty > 0)?;
-            Some(format!("object {:?}: {}", c.object, p.describe(decimals)))
+            Some(format!("object {:?}: {}", c.object, p.describe(c.decimals)))
         })
         .collect();
     if places.is_empty() {
@@ -101,6 +100,7 @@ pub fn bake_shard(
     let mut report = BakeReport {
         output: options.output.clone(),
         epsilon: settings.epsilon,
+        chosen: scene.bake_choices.iter().map(ToString::to_string).collect(),
         cube_resolution: settings.cube_resolution,
         samples_per_texel: strata_per_side(settings.samples_per_texel).pow(2),
         shard: shard.map(|s| s.to_string()),
@@ -130,7 +130,7 @@ pub fn bake_shard(
             empty: stats.empty,
             texels: stats.texels,
             points: report.sample_points as u64,
-            where_: empty_places(&report.coverage, settings.epsilon),
+            where_: empty_places(&report.coverage),
         });
     }
     let meta = store_meta(scene, &surfaces);

@@ -27,6 +27,9 @@ pub struct BakeReport {
     pub points_added: usize,
     /// The bake's ε (scene units): the sample points' offset.
     pub epsilon: f32,
+    /// The settings chosen from the scene where its file leaves them unset, each with why
+    /// (`epsilon = 0.0029: 1/64 of object "can"'s size 0.1860`; [`oslf_scene::bake_defaults`]).
+    pub chosen: Vec<String>,
     pub sample_maps: SampleMapStats,
     /// Per OSLF object with sample-map texels, in object order: its short and empty texels,
     /// where they lie and why ([`crate::coverage`]).

@@ -143,11 +143,17 @@ pub(super) fn build_maps(
     }
     map_stats.rays = rays;
     let object_names: Vec<String> = surfaces.objects().iter().map(|o| o.name.clone()).collect();
+    let object_sizes: Vec<f32> = surfaces
+        .objects()
+        .iter()
+        .map(oslf_scene::bake_defaults::object_size)
+        .collect();
     let probe = coverage::Probe {
         geometry,
         names,
         epsilon: settings.epsilon,
         phi_samplemap_deg: settings.phi_samplemap_deg,
+        object_sizes: &object_sizes,
     };
     report.coverage = coverage::diagnose(&maps, &domains, &points, &object_names, &probe);
     report.sample_points = points.len();

@@ -10,6 +10,7 @@ use toml::Spanned;
 use super::context::{scene_hash, Ctx};
 use super::objects::mesh_objects;
 use super::raw::{RawDirectionalLight, RawEnvironment, RawGltf, RawPointLight, RawScene};
+use crate::bake_defaults::choose;
 use crate::environment::{Environment, LatLongMap, Sky};
 use crate::error::{BakeError, Result};
 use crate::gltf::GltfCamera;
@@ -30,7 +31,8 @@ struct Included {
 impl Ctx<'_> {
     /// The scene of the parsed file `raw` with the named preset applied.
     pub(super) fn build(&self, mut raw: RawScene, preset: Option<&str>) -> Result<Scene> {
-        let (bake, epsilon_span) = self.bake_settings(&raw, preset)?;
+        let (mut bake, epsilon_span, unset) = self.bake_settings(&raw, preset)?;
+        let given_epsilon = epsilon_span.map(|span| (bake.epsilon, span));
         let presets = raw.presets.keys().cloned().collect();
 
         let camera_spec = match raw.camera.take() {
@@ -47,13 +49,12 @@ impl Ctx<'_> {
         let mut materials = Vec::new();
         let mut objects = self.objects(
             std::mem::take(&mut raw.object),
-            bake.epsilon,
-            &epsilon_span,
+            &given_epsilon,
             &mut materials,
         )?;
         let mut shapes_out = self.shapes(&raw, &mut materials)?;
 
-        let included = self.include_gltf(&raw.gltf, bake.epsilon, &epsilon_span, &mut materials)?;
+        let included = self.include_gltf(&raw.gltf, &given_epsilon, &mut materials)?;
         objects.extend(included.objects);
         shapes_out.extend(included.shapes);
         lights.extend(included.lights);
@@ -67,6 +68,7 @@ impl Ctx<'_> {
             )));
         }
 
+        let bake_choices = choose(&mut objects, &shapes_out, &materials, &mut bake, unset);
         let hash = scene_hash(self.text.as_bytes(), &self.included.borrow())?;
         let files = std::iter::once(self.path.to_path_buf())
             .chain(self.included.borrow().iter().cloned())
@@ -82,6 +84,7 @@ impl Ctx<'_> {
             objects,
             shapes: shapes_out,
             bake,
+            bake_choices,
             preset: preset.map(str::to_string),
             presets,
             warnings,
@@ -120,14 +123,12 @@ impl Ctx<'_> {
         })
     }
 
-    /// The `[[gltf]]` includes, in order: their OSLF objects (ε checked against each, located
-    /// at the include), shapes, lights, cameras and warnings; their files are recorded as
-    /// included.
+    /// The `[[gltf]]` includes, in order: their OSLF objects (a given ε checked against each),
+    /// shapes, lights, cameras and warnings; their files are recorded as included.
     fn include_gltf(
         &self,
         includes: &[RawGltf],
-        epsilon: f32,
-        epsilon_span: &Option<Range<usize>>,
+        epsilon: &Option<(f32, Range<usize>)>,
         materials: &mut Vec<Material>,
     ) -> Result<Included> {
         let mut out = Included::default();
@@ -149,7 +150,7 @@ impl Ctx<'_> {
                 .extend(import.files.iter().cloned());
             for mut object in mesh_objects(import.objects, materials) {
                 object.sample_spacing = g.sample_spacing.map(|s| s.0);
-                self.check_epsilon(epsilon, epsilon_span.clone(), &object, g.path.span())?;
+                self.check_epsilon(epsilon, &object)?;
                 out.objects.push(object);
             }
             out.shapes.extend(import.shapes);

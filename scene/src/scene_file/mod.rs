@@ -28,10 +28,11 @@ use std::path::Path;
 use glam::{Affine3A, Vec3};
 use oslf_geometry::Camera;
 
+use crate::bake_defaults::choose;
 use crate::environment::Environment;
 use crate::error::{BakeError, Result};
 use crate::input::{read_input, InputKind};
-use crate::scene::{epsilon_problem, Scene};
+use crate::scene::Scene;
 use context::{scene_hash, Ctx};
 pub use location::line_column;
 use objects::mesh_objects;
@@ -140,19 +141,15 @@ impl Scene {
         };
         let mut materials = Vec::new();
         let mut import = crate::gltf::load(path, &options, &mut materials)?;
-        let objects = mesh_objects(std::mem::take(&mut import.objects), &materials);
+        let mut objects = mesh_objects(std::mem::take(&mut import.objects), &materials);
         let raw: RawScene = toml::from_str("").expect("an empty scene parses");
         let ctx = Ctx {
             text: "",
             path,
             included: Default::default(),
         };
-        let (bake, _) = ctx.bake_settings(&raw, None)?;
-        for object in &objects {
-            if let Some(message) = epsilon_problem(bake.epsilon, object) {
-                return Err(BakeError::Invalid(format!("{}: {message}", path.display())));
-            }
-        }
+        let (mut bake, _, unset) = ctx.bake_settings(&raw, None)?;
+        let bake_choices = choose(&mut objects, &import.shapes, &materials, &mut bake, unset);
         let camera = match import.cameras.first() {
             Some(c) => Some(c.camera),
             None => import.bounds().map(|(lo, hi)| {
@@ -182,6 +179,7 @@ impl Scene {
             objects,
             shapes: import.shapes,
             bake,
+            bake_choices,
             preset: None,
             presets: Vec::new(),
             warnings: import.warnings,

@@ -21,13 +21,12 @@ use oslf_geometry::bezier::{self, BezierPatch};
 use oslf_geometry::mesh::Mesh;
 
 impl Ctx<'_> {
-    /// The `[[object]]`s, in order, each checked against ε (located at `epsilon_span`, or at
-    /// the object when ε is the default).
+    /// The `[[object]]`s, in order, each checked against the ε the file gives (with where it
+    /// gives it; `None`: ε is chosen from the objects, within what each allows).
     pub(super) fn objects(
         &self,
         raw: Vec<Spanned<RawObject>>,
-        epsilon: f32,
-        epsilon_span: &Option<Range<usize>>,
+        epsilon: &Option<(f32, Range<usize>)>,
         materials: &mut Vec<Material>,
     ) -> Result<Vec<OslfObject>> {
         let mut objects = Vec::new();
@@ -35,7 +34,7 @@ impl Ctx<'_> {
             let span = spanned.span();
             let object =
                 self.object(spanned.into_inner(), span.clone(), objects.len(), materials)?;
-            self.check_epsilon(epsilon, epsilon_span.clone(), &object, span)?;
+            self.check_epsilon(epsilon, &object)?;
             objects.push(object);
         }
         Ok(objects)
@@ -270,18 +269,18 @@ impl Ctx<'_> {
         Ok(out)
     }
 
-    /// Refuses an ε that the bake cannot honour for `object` ([`epsilon_problem`]), located at
-    /// `epsilon_span`, or at the object when ε is the default.
+    /// Refuses a given ε (located where the file gives it) that the bake cannot honour for
+    /// `object` ([`epsilon_problem`]). A chosen one (`None`) is chosen within the limits.
     pub(super) fn check_epsilon(
         &self,
-        epsilon: f32,
-        epsilon_span: Option<Range<usize>>,
+        epsilon: &Option<(f32, Range<usize>)>,
         object: &OslfObject,
-        object_span: Range<usize>,
     ) -> Result<()> {
-        let span = epsilon_span.unwrap_or(object_span);
-        match epsilon_problem(epsilon, object) {
-            Some(message) => Err(self.error_at(span, message)),
+        let Some((epsilon, span)) = epsilon else {
+            return Ok(());
+        };
+        match epsilon_problem(*epsilon, object) {
+            Some(message) => Err(self.error_at(span.clone(), message)),
             None => Ok(()),
         }
     }

@@ -7,16 +7,19 @@ use toml::Spanned;
 
 use super::context::Ctx;
 use super::raw::RawScene;
+use crate::bake_defaults::Unset;
 use crate::error::{BakeError, Result};
 use crate::scene::{BakeSettings, SampleDensity};
 
 impl Ctx<'_> {
-    /// The bake settings and where `epsilon` was given (if it was).
+    /// The bake settings, where `epsilon` was given (if it was), and which of the settings the
+    /// scene chooses ([`crate::bake_defaults`]) the file leaves unset (those hold the former
+    /// constant defaults until [`crate::bake_defaults::choose`] sets them).
     pub(super) fn bake_settings(
         &self,
         raw: &RawScene,
         preset: Option<&str>,
-    ) -> Result<(BakeSettings, Option<Range<usize>>)> {
+    ) -> Result<(BakeSettings, Option<Range<usize>>, Unset)> {
         let merged = match preset {
             None => raw.bake.clone(),
             Some(name) => match raw.presets.get(name) {
@@ -109,6 +112,12 @@ impl Ctx<'_> {
             None => oslf_format::encoding::RGB9E5_FULL_MANTISSA_BITS,
         };
         let epsilon_span = merged.epsilon.as_ref().map(Spanned::span);
+        let unset = Unset {
+            epsilon: merged.epsilon.is_none(),
+            density: merged.sample_count.is_none() && merged.sample_spacing.is_none(),
+            cube_resolution: merged.cube_resolution.is_none(),
+            samples_per_texel: merged.samples_per_texel.is_none(),
+        };
         let settings = BakeSettings {
             epsilon: merged.epsilon.as_ref().map_or(0.1, |e| e.get_ref().0),
             sample_count,
@@ -125,6 +134,6 @@ impl Ctx<'_> {
             env_cube: merged.env_cube.unwrap_or(true),
             device: merged.device.map_or_else(Default::default, |d| d.0),
         };
-        Ok((settings, epsilon_span))
+        Ok((settings, epsilon_span, unset))
     }
 }

@@ -1,0 +1,514 @@
+//! Bake settings chosen from the scene where its file leaves them unset: ε, each object's
+//! sample spacing, the cube resolution and the samples per texel, from the objects' sizes,
+//! their distance to the surfaces around them and the lobes of their materials. Every rule is
+//! relative to the object's size, so the same scene at any scale gets the same relative
+//! placement ([`choose`]), and each choice says why ([`BakeChoice`]).
+
+use glam::Vec3;
+use oslf_geometry::mesh::Mesh;
+
+use crate::material::{Material, Model};
+use crate::scene::{epsilon_problem, BakeSettings, OslfObject, SampleDensity, Shape};
+
+/// ε as a fraction of the diagonal of the object's bounding box: the thesis's teapot (ε = 0.1
+/// for a diagonal of 7.7) and a hand-tuned 6 × 16.6 cm can (4 mm) both lie near 1/64.
+pub const EPSILON_PER_SIZE: f32 = 1.0 / 64.0;
+
+/// ε at most this fraction of the gap in front of the nearest twentieth of the object's
+/// surface (along its normals to another surface; contacts aside): sample points there stay
+/// clear of it.
+pub const EPSILON_PER_CLEARANCE: f32 = 0.5;
+
+/// The quantile of the clearances that bounds ε ([`EPSILON_PER_CLEARANCE`]).
+pub const CLEARANCE_QUANTILE: f32 = 0.05;
+
+/// A mirror's sample spacing as a fraction of the object's diagonal; a lobe of GGX width α
+/// spaces points `1 + SPACING_PER_ALPHA · α` times as far (a rough lobe blurs the parallax
+/// between points that a mirror shows).
+pub const SPACING_PER_SIZE: f32 = 1.0 / 24.0;
+
+/// See [`SPACING_PER_SIZE`].
+pub const SPACING_PER_ALPHA: f32 = 4.0;
+
+/// Spacings within the cone of Eq. 3.10's reach: a texel finds four points there (the spacing
+/// is at most ε / (this × tan(90° − φ_samplemap))).
+pub const SPACINGS_PER_CONE: f32 = 1.5;
+
+/// The cube resolutions chosen by default: a power of two between these. The largest is what a
+/// mirror gets (sharper cubes cost 4× the rays per doubling: set `cube_resolution` for them).
+pub const CUBE_RESOLUTION_RANGE: (u32, u32) = (16, 64);
+
+/// Rays per cube map chosen by default: 16 samples per texel at 32² (noise falls as the
+/// resolution falls, at the same cost per cube).
+pub const RAYS_PER_CUBE: u32 = 6 * 32 * 32 * 16;
+
+/// The samples per texel chosen by default lie within these.
+pub const SAMPLES_PER_TEXEL_RANGE: (u32, u32) = (4, 16);
+
+/// Which of the derivable settings the scene file left unset.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Unset {
+    pub epsilon: bool,
+    /// Neither `sample_count` nor `sample_spacing` (objects with a `sample_spacing` of their
+    /// own keep it).
+    pub density: bool,
+    pub cube_resolution: bool,
+    pub samples_per_texel: bool,
+}
+
+impl Unset {
+    /// Whether anything is left to choose.
+    pub fn any(&self) -> bool {
+        self.epsilon || self.density || self.cube_resolution || self.samples_per_texel
+    }
+}
+
+/// One setting chosen from the scene: its key, the object it is for (`None`: the whole
+/// bake), its value as printed and why, in the scene's units with the digits the object's
+/// size needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeChoice {
+    pub key: &'static str,
+    pub object: Option<String>,
+    pub value: String,
+    pub why: String,
+}
+
+impl std::fmt::Display for BakeChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.object {
+            Some(o) => write!(
+                f,
+                "object {o:?}: {} = {}: {}",
+                self.key, self.value, self.why
+            ),
+            None => write!(f, "{} = {}: {}", self.key, self.value, self.why),
+        }
+    }
+}
+
+/// What the rules read of one object.
+#[derive(Clone, Debug)]
+pub struct ObjectMeasure {
+    /// Diagonal of its bounding box (world space).
+    pub size: f32,
+    /// Surface area (patches tessellated).
+    pub area: f32,
+    /// The [`CLEARANCE_QUANTILE`] of the gaps in front of its surface, contacts aside;
+    /// `None` where no other surface is near.
+    pub clearance: Option<f32>,
+    /// The narrowest GGX width α of its material (0 for a Lambertian object, which the
+    /// runtime's mirror and glossy modes reflect at any lobe), and the roughness it came from.
+    pub alpha: f32,
+    pub roughness: Option<f32>,
+}
+
+/// Decimal places that print lengths down to `smallest` with two significant digits (at
+/// most 12): ε, coordinates and spacings in the scene's units at any scale.
+pub fn length_decimals(smallest: f32) -> usize {
+    if !(smallest.is_finite() && smallest > 0.0) {
+        return 3;
+    }
+    ((-smallest.log10()).ceil() + 1.0).clamp(0.0, 12.0) as usize
+}
+
+/// `x` with `decimals` places.
+fn length(x: f32, decimals: usize) -> String {
+    format!("{x:.decimals$}")
+}
+
+/// Chooses the `unset` settings of `settings` for `objects` among `shapes`, sets them (and the
+/// objects' own spacings), and returns the choices. Settings the file sets are kept.
+pub fn choose(
+    objects: &mut [OslfObject],
+    shapes: &[Shape],
+    materials: &[Material],
+    settings: &mut BakeSettings,
+    unset: Unset,
+) -> Vec<BakeChoice> {
+    if !unset.any() || objects.is_empty() {
+        return Vec::new();
+    }
+    let measures: Vec<ObjectMeasure> = objects
+        .iter()
+        .map(|o| measure(o, shapes, materials))
+        .collect();
+    let mut choices = Vec::new();
+    if unset.epsilon {
+        choices.push(choose_epsilon(objects, &measures, settings));
+    }
+    let decimals = length_decimals(settings.epsilon);
+    // A point ε above the surface at distance d is within φ of a texel's normal where
+    // ε/d ≥ tan(90° − φ): four of them need d up to about 1.5 spacings (Eq. 3.10).
+    let cone_spacing = settings.epsilon
+        / (SPACINGS_PER_CONE * (90.0 - settings.phi_samplemap_deg).to_radians().tan());
+    if unset.density {
+        for (object, m) in objects.iter_mut().zip(&measures) {
+            if object.sample_spacing.is_some() {
+                continue;
+            }
+            let by_lobe = m.size * SPACING_PER_SIZE * (1.0 + SPACING_PER_ALPHA * m.alpha);
+            let h = by_lobe.min(cone_spacing);
+            object.sample_spacing = Some(h);
+            let capped = if h < by_lobe {
+                format!(
+                    "; at most {}, so that a texel finds four points within phi_samplemap ({}°) of its normal at ε = {} (Eq. 3.10)",
+                    length(cone_spacing, decimals),
+                    settings.phi_samplemap_deg,
+                    length(settings.epsilon, decimals)
+                )
+            } else {
+                String::new()
+            };
+            let points = (m.area / (0.866_025_4 * h * h)).ceil();
+            choices.push(BakeChoice {
+                key: "sample_spacing",
+                object: Some(object.name.clone()),
+                value: length(h, decimals),
+                why: format!(
+                    "about {points} points over its area {}: 1/{} of its size {} × (1 + {SPACING_PER_ALPHA}·α) for {}{capped}",
+                    area(m.area, decimals),
+                    (1.0 / SPACING_PER_SIZE).round(),
+                    length(m.size, decimals),
+                    lobe(m)
+                ),
+            });
+        }
+        // Every object has a spacing of its own; the bake's is the finest of them.
+        let finest = objects
+            .iter()
+            .filter_map(|o| o.sample_spacing)
+            .fold(f32::INFINITY, f32::min);
+        settings.sample_count = SampleDensity::Spacing(finest);
+    }
+    if unset.cube_resolution {
+        choices.push(choose_cube_resolution(objects, &measures, settings));
+    }
+    if unset.samples_per_texel {
+        let n = settings.cube_resolution;
+        let spp = (RAYS_PER_CUBE / (6 * n * n).max(1))
+            .clamp(SAMPLES_PER_TEXEL_RANGE.0, SAMPLES_PER_TEXEL_RANGE.1);
+        settings.samples_per_texel = spp;
+        choices.push(BakeChoice {
+            key: "samples_per_texel",
+            object: None,
+            value: spp.to_string(),
+            why: format!(
+                "{} rays per cube map at {n}² (the cost of 16 per texel at 32², within {}..={})",
+                6 * n * n * spp,
+                SAMPLES_PER_TEXEL_RANGE.0,
+                SAMPLES_PER_TEXEL_RANGE.1
+            ),
+        });
+    }
+    choices
+}
+
+/// ε: the smallest over the objects of [`EPSILON_PER_SIZE`] × the size, bounded by
+/// [`EPSILON_PER_CLEARANCE`] × the clearance, and raised to twice the smallest ε the object's
+/// f32 coordinates and tessellation allow ([`epsilon_problem`]).
+fn choose_epsilon(
+    objects: &[OslfObject],
+    measures: &[ObjectMeasure],
+    settings: &mut BakeSettings,
+) -> BakeChoice {
+    let mut best: Option<(f32, usize, String)> = None;
+    for (i, (object, m)) in objects.iter().zip(measures).enumerate() {
+        let by_size = m.size * EPSILON_PER_SIZE;
+        let (mut eps, mut why) = (by_size, "size".to_string());
+        if let Some(c) = m.clearance {
+            if EPSILON_PER_CLEARANCE * c < eps {
+                eps = EPSILON_PER_CLEARANCE * c;
+                why = "clearance".to_string();
+            }
+        }
+        let floor = lowest_epsilon(object, eps);
+        if floor > eps {
+            eps = floor;
+            why = "floor".to_string();
+        }
+        if best.as_ref().is_none_or(|(b, _, _)| eps < *b) {
+            best = Some((eps, i, why));
+        }
+    }
+    let (eps, i, why) = best.expect("choose is called with objects");
+    settings.epsilon = eps;
+    let m = &measures[i];
+    let d = length_decimals(eps);
+    let object = &objects[i].name;
+    let which = if objects.len() > 1 {
+        format!(", the smallest of {} objects'", objects.len())
+    } else {
+        String::new()
+    };
+    let why = match why.as_str() {
+        "size" => format!(
+            "1/{} of object {object:?}'s size {}{which}",
+            (1.0 / EPSILON_PER_SIZE).round(),
+            length(m.size, d)
+        ),
+        "clearance" => format!(
+            "{EPSILON_PER_CLEARANCE} × the gap of {} in front of the nearest {:.0}% of object {object:?}'s surface (1/{} of its size {} would come closer to the surface there){which}",
+            length(m.clearance.unwrap_or(0.0), d),
+            100.0 * CLEARANCE_QUANTILE,
+            (1.0 / EPSILON_PER_SIZE).round(),
+            length(m.size, d)
+        ),
+        _ => format!(
+            "twice the smallest ε object {object:?}'s f32 coordinates and tessellation allow{which}"
+        ),
+    };
+    BakeChoice {
+        key: "epsilon",
+        object: None,
+        value: length(eps, d),
+        why,
+    }
+}
+
+/// Twice the smallest ε [`epsilon_problem`] accepts for `object`, found by doubling from a
+/// millionth of `guess` (0 when the guess itself is far above it).
+fn lowest_epsilon(object: &OslfObject, guess: f32) -> f32 {
+    if epsilon_problem(guess * 0.5, object).is_none() {
+        return 0.0;
+    }
+    let mut eps = guess * 0.5;
+    for _ in 0..64 {
+        if epsilon_problem(eps, object).is_none() {
+            return 2.0 * eps;
+        }
+        eps *= 2.0;
+    }
+    2.0 * eps
+}
+
+/// The cube resolution that resolves the narrowest lobe: texels of at most α radians (a
+/// GGX lobe reflects over about 2α) at the face's centre, a power of two within
+/// [`CUBE_RESOLUTION_RANGE`].
+fn choose_cube_resolution(
+    objects: &[OslfObject],
+    measures: &[ObjectMeasure],
+    settings: &mut BakeSettings,
+) -> BakeChoice {
+    let (lo, hi) = CUBE_RESOLUTION_RANGE;
+    let (i, m) = measures
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.alpha.total_cmp(&b.1.alpha))
+        .expect("choose is called with objects");
+    let wanted = if m.alpha > 0.0 {
+        (std::f32::consts::FRAC_PI_2 / m.alpha).ceil().min(1e6) as u32
+    } else {
+        u32::MAX
+    };
+    let n = wanted.clamp(lo, hi).next_power_of_two().min(hi);
+    settings.cube_resolution = n;
+    let texel_deg = 90.0 / n as f32;
+    let capped = if wanted > hi {
+        format!(" (it would take more than {hi}²: set cube_resolution for sharper cubes)")
+    } else {
+        String::new()
+    };
+    BakeChoice {
+        key: "cube_resolution",
+        object: None,
+        value: n.to_string(),
+        why: format!(
+            "texels of {texel_deg:.2}° for object {:?}, {}{capped}",
+            objects[i].name,
+            lobe(m)
+        ),
+    }
+}
+
+/// The lobe a measure describes, for messages.
+fn lobe(m: &ObjectMeasure) -> String {
+    match m.roughness {
+        Some(r) => format!("its smoothest roughness {r:.3} (GGX α {:.4})", m.alpha),
+        None => "a mirror (its material is Lambertian: the runtime's mirror and glossy modes reflect at any lobe)".to_string(),
+    }
+}
+
+/// An area in the scene's units squared, with the digits lengths of `decimals` need.
+fn area(a: f32, decimals: usize) -> String {
+    let d = (2 * decimals).min(12);
+    format!("{a:.d$}")
+}
+
+/// The bounds of the points that define `object` (world space).
+fn object_bounds(object: &OslfObject) -> (Vec3, Vec3) {
+    object
+        .points()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        })
+}
+
+/// The diagonal of `object`'s bounding box (world space): the size the rules scale with.
+pub fn object_size(object: &OslfObject) -> f32 {
+    let (lo, hi) = object_bounds(object);
+    (hi - lo).length()
+}
+
+/// What the rules read of `object` among `shapes`.
+pub fn measure(object: &OslfObject, shapes: &[Shape], materials: &[Material]) -> ObjectMeasure {
+    let surface = surface_mesh(object);
+    let (lo, hi) = object_bounds(object);
+    let size = (hi - lo).length();
+    let (alpha, roughness) = match materials.get(object.material as usize) {
+        Some(m) => material_alpha(m),
+        None => (0.0, None),
+    };
+    ObjectMeasure {
+        size,
+        area: surface.area() as f32,
+        clearance: clearance(&surface, (lo, hi), size, shapes),
+        alpha,
+        roughness,
+    }
+}
+
+/// The object's surface as triangles: a mesh as it is, patches at 8 × 8 quads.
+fn surface_mesh(object: &OslfObject) -> Mesh {
+    let mut mesh = object
+        .mesh
+        .as_ref()
+        .map_or_else(Mesh::new, |m| m.mesh.clone());
+    for p in &object.patches {
+        mesh.append(&p.tessellate(8));
+    }
+    mesh
+}
+
+/// The narrowest GGX α of a material and the roughness it comes from: roughness² of the
+/// smoothest texel of a roughness texture, or of the factor; a Lambertian material is reflected
+/// by the runtime at any lobe, a mirror's included (α = 0, no roughness).
+pub fn material_alpha(material: &Material) -> (f32, Option<f32>) {
+    let Model::MetallicRoughness { roughness, .. } = material.model else {
+        return (0.0, None);
+    };
+    let r = match &material.metallic_roughness_texture {
+        Some(t) => texture_min_green(t),
+        None => roughness,
+    }
+    .clamp(0.0, 1.0);
+    (r * r, Some(r))
+}
+
+/// The smallest green value of a texture (roughness in glTF's metallic-roughness texture).
+fn texture_min_green(t: &crate::texture::Texture) -> f32 {
+    use crate::texture::Texture;
+    match t {
+        Texture::Constant(c) => c.y,
+        Texture::Checker { a, b, .. } => a.y.min(b.y),
+        Texture::Image(img) => img.pixels.iter().fold(f32::INFINITY, |m, p| m.min(p.y)),
+    }
+}
+
+/// Surface points tested for clearance, at most.
+const CLEARANCE_POINTS: usize = 2048;
+
+/// The [`CLEARANCE_QUANTILE`] of the gaps in front of `surface`, over the whole surface: from
+/// points of it (triangle centres) along their normals to the nearest triangle of `shapes`
+/// within reach (a quarter of the size beyond the object's bounds). Gaps narrower than
+/// [`EPSILON_PER_SIZE`] × `size` are contacts (the object rests on the surface, or nearly: no
+/// ε sized to the object fits there, and the surface hides them) and count as open, as do
+/// points with no surface in reach; `None` where fewer than the quantile's share of the
+/// surface faces a gap.
+fn clearance(surface: &Mesh, bounds: (Vec3, Vec3), size: f32, shapes: &[Shape]) -> Option<f32> {
+    let reach = 0.25 * size;
+    let (lo, hi) = (bounds.0 - Vec3::splat(reach), bounds.1 + Vec3::splat(reach));
+    let near: Vec<[Vec3; 3]> = shapes
+        .iter()
+        .flat_map(|s| s.mesh.triangles.iter().filter_map(|t| s.mesh.corners(t)))
+        .filter(|[a, b, c]| {
+            let (tlo, thi) = (a.min(*b).min(*c), a.max(*b).max(*c));
+            tlo.cmple(hi).all() && thi.cmpge(lo).all()
+        })
+        .collect();
+    if near.is_empty() || surface.triangles.is_empty() {
+        return None;
+    }
+    let stride = surface.triangles.len().div_ceil(CLEARANCE_POINTS);
+    let contact = EPSILON_PER_SIZE * size;
+    let mut tested = 0usize;
+    let mut gaps: Vec<f32> = surface
+        .triangles
+        .iter()
+        .step_by(stride)
+        .filter_map(|t| {
+            let [a, b, c] = surface.corners(t)?;
+            let normals = t.map(|i| {
+                surface
+                    .normals
+                    .get(i as usize)
+                    .copied()
+                    .unwrap_or(Vec3::ZERO)
+            });
+            let n = (normals[0] + normals[1] + normals[2]).normalize_or_zero();
+            if n == Vec3::ZERO {
+                return None;
+            }
+            tested += 1;
+            let p = (a + b + c) / 3.0;
+            near.iter()
+                .filter_map(|tri| ray_triangle(p, n, tri))
+                .reduce(f32::min)
+        })
+        .filter(|d| *d > contact && *d < reach)
+        .collect();
+    // Points without a gap in reach (or in contact) count as open: the quantile is of the
+    // whole surface.
+    let k = (tested as f32 * CLEARANCE_QUANTILE) as usize;
+    gaps.sort_by(f32::total_cmp);
+    gaps.get(k).copied()
+}
+
+/// Distance along the unit direction `d` from `o` to the triangle `[a, b, c]`, if the ray
+/// meets it at t > 0 (Möller–Trumbore, either side).
+pub fn ray_triangle(o: Vec3, d: Vec3, [a, b, c]: &[Vec3; 3]) -> Option<f32> {
+    let (e1, e2) = (*b - *a, *c - *a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() <= f32::MIN_POSITIVE {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - *a;
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = e2.dot(q) * inv;
+    (t > 0.0 && t.is_finite()).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rays_meet_triangles_in_front_only() {
+        let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let o = Vec3::new(0.2, 0.2, 1.0);
+        assert_eq!(ray_triangle(o, -Vec3::Z, &t), Some(1.0));
+        assert_eq!(ray_triangle(o, Vec3::Z, &t), None);
+        assert_eq!(ray_triangle(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z, &t), None);
+        assert_eq!(ray_triangle(o, Vec3::X, &t), None);
+    }
+
+    #[test]
+    fn decimals_follow_the_smallest_length() {
+        assert_eq!(length_decimals(0.1), 2);
+        assert_eq!(length_decimals(0.0029), 4);
+        assert_eq!(length_decimals(2.9), 1);
+        assert_eq!(length_decimals(2900.0), 0);
+        assert_eq!(length_decimals(2.9e-6), 7);
+        assert_eq!(length_decimals(f32::NAN), 3);
+    }
+}
