@@ -90,8 +90,17 @@ fn exposures_fields_of_view_and_thread_counts_that_make_nonsense_are_refused() {
 #[test]
 fn an_epsilon_larger_than_the_object_is_refused_where_it_is_set() {
     let tmp = tempfile::tempdir().unwrap();
-    // LID_SCENE's [bake] table is its last: a key appended goes there.
-    let (store, out) = bake(tmp.path(), "epsilon = 1e30\n", &[]);
+    let scene = LID_SCENE.replace("epsilon = 0.1\n", "epsilon = 1e30\n");
+    assert_ne!(scene, LID_SCENE);
+    let dir = tmp.path();
+    std::fs::write(dir.join("lid.toml"), &scene).unwrap();
+    let store = dir.join("lid.oslf");
+    let out = oslf("bake")
+        .arg(dir.join("lid.toml"))
+        .args(["-q", "--preview", "none", "-o"])
+        .arg(&store)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = stderr(&out);
     assert!(

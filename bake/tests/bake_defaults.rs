@@ -285,3 +285,18 @@ fn lengths_print_with_the_digits_the_object_needs() {
     );
     assert!(printed > 0.0);
 }
+
+#[test]
+fn a_given_density_raises_epsilon_to_what_the_cone_of_eq_3_10_needs() {
+    // 20 points over the teapot: about 0.2 apart, so a texel's four points lie up to 0.3 away,
+    // within 5° of its tangent plane unless ε is at least 0.3 · tan 5°.
+    let sparse = load(&scene_text(1.0, LAMBERT, "sample_count = 20"));
+    let chosen = &sparse.bake_choices[0];
+    assert!(chosen.why.contains("Eq. 3.10"), "{chosen}");
+    let size = object_size(&sparse.objects[0]);
+    assert!(sparse.bake.epsilon > EPSILON_PER_SIZE * size, "{chosen}");
+    // Dense enough, the size rules.
+    let dense = load(&scene_text(1.0, LAMBERT, "sample_count = 2000"));
+    assert!(dense.bake_choices[0].why.starts_with("1/64"), "{}", dense.bake_choices[0]);
+}
+

@@ -8,6 +8,7 @@ use glam::Vec3;
 use oslf_geometry::mesh::Mesh;
 
 use crate::material::{Material, Model};
+pub use crate::scene::BakeChoice;
 use crate::scene::{epsilon_problem, BakeSettings, OslfObject, SampleDensity, Shape};
 
 /// ε as a fraction of the diagonal of the object's bounding box: the thesis's teapot (ε = 0.1
@@ -63,30 +64,6 @@ impl Unset {
     }
 }
 
-/// One setting chosen from the scene: its key, the object it is for (`None`: the whole
-/// bake), its value as printed and why, in the scene's units with the digits the object's
-/// size needs.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BakeChoice {
-    pub key: &'static str,
-    pub object: Option<String>,
-    pub value: String,
-    pub why: String,
-}
-
-impl std::fmt::Display for BakeChoice {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match &self.object {
-            Some(o) => write!(
-                f,
-                "object {o:?}: {} = {}: {}",
-                self.key, self.value, self.why
-            ),
-            None => write!(f, "{} = {}: {}", self.key, self.value, self.why),
-        }
-    }
-}
-
 /// What the rules read of one object.
 #[derive(Clone, Debug)]
 pub struct ObjectMeasure {
@@ -135,7 +112,7 @@ pub fn choose(
         .collect();
     let mut choices = Vec::new();
     if unset.epsilon {
-        choices.push(choose_epsilon(objects, &measures, settings));
+        choices.push(choose_epsilon(objects, &measures, settings, !unset.density));
     }
     let decimals = length_decimals(settings.epsilon);
     // A point ε above the surface at distance d is within φ of a texel's normal where
@@ -204,58 +181,88 @@ pub fn choose(
     choices
 }
 
+/// Why ε is what it is.
+enum EpsilonRule {
+    /// [`EPSILON_PER_SIZE`] × the size of object `.0`.
+    Size(usize),
+    /// [`EPSILON_PER_CLEARANCE`] × the clearance of object `.0`.
+    Clearance(usize),
+    /// The cone of Eq. 3.10 at the spacing `.1` the file gives object `.0`'s points.
+    Cone(usize, f32),
+    /// Twice the smallest ε object `.0`'s coordinates and tessellation allow.
+    Floor(usize),
+}
+
 /// ε: the smallest over the objects of [`EPSILON_PER_SIZE`] × the size, bounded by
-/// [`EPSILON_PER_CLEARANCE`] × the clearance, and raised to twice the smallest ε the object's
-/// f32 coordinates and tessellation allow ([`epsilon_problem`]).
+/// [`EPSILON_PER_CLEARANCE`] × the clearance; raised to what the cone of Eq. 3.10 needs at a
+/// spacing the file gives (`density_given`: `sample_count` or `sample_spacing`, or an object's
+/// own), and to twice the smallest ε each object's f32 coordinates and tessellation allow
+/// ([`epsilon_problem`]).
 fn choose_epsilon(
     objects: &[OslfObject],
     measures: &[ObjectMeasure],
     settings: &mut BakeSettings,
+    density_given: bool,
 ) -> BakeChoice {
-    let mut best: Option<(f32, usize, String)> = None;
-    for (i, (object, m)) in objects.iter().zip(measures).enumerate() {
+    let (mut eps, mut rule) = (f32::INFINITY, EpsilonRule::Size(0));
+    for (i, m) in measures.iter().enumerate() {
         let by_size = m.size * EPSILON_PER_SIZE;
-        let (mut eps, mut why) = (by_size, "size".to_string());
-        if let Some(c) = m.clearance {
-            if EPSILON_PER_CLEARANCE * c < eps {
-                eps = EPSILON_PER_CLEARANCE * c;
-                why = "clearance".to_string();
-            }
-        }
-        let floor = lowest_epsilon(object, eps);
-        if floor > eps {
-            eps = floor;
-            why = "floor".to_string();
-        }
-        if best.as_ref().is_none_or(|(b, _, _)| eps < *b) {
-            best = Some((eps, i, why));
+        let by_gap = m
+            .clearance
+            .map_or(f32::INFINITY, |c| EPSILON_PER_CLEARANCE * c);
+        if by_size.min(by_gap) < eps {
+            eps = by_size.min(by_gap);
+            rule = if by_gap < by_size {
+                EpsilonRule::Clearance(i)
+            } else {
+                EpsilonRule::Size(i)
+            };
         }
     }
-    let (eps, i, why) = best.expect("choose is called with objects");
+    let cone = SPACINGS_PER_CONE * (90.0 - settings.phi_samplemap_deg).to_radians().tan();
+    for (i, h) in given_spacings(objects, measures, settings, density_given) {
+        if h * cone > eps {
+            (eps, rule) = (h * cone, EpsilonRule::Cone(i, h));
+        }
+    }
+    for (i, object) in objects.iter().enumerate() {
+        let floor = lowest_epsilon(object, eps);
+        if floor > eps {
+            (eps, rule) = (floor, EpsilonRule::Floor(i));
+        }
+    }
     settings.epsilon = eps;
-    let m = &measures[i];
     let d = length_decimals(eps);
-    let object = &objects[i].name;
     let which = if objects.len() > 1 {
-        format!(", the smallest of {} objects'", objects.len())
+        format!(" (the smallest of {} objects')", objects.len())
     } else {
         String::new()
     };
-    let why = match why.as_str() {
-        "size" => format!(
-            "1/{} of object {object:?}'s size {}{which}",
+    let name = |i: usize| &objects[i].name;
+    let why = match rule {
+        EpsilonRule::Size(i) => format!(
+            "1/{} of object {:?}'s size {}{which}",
             (1.0 / EPSILON_PER_SIZE).round(),
-            length(m.size, d)
+            name(i),
+            length(measures[i].size, d)
         ),
-        "clearance" => format!(
-            "{EPSILON_PER_CLEARANCE} × the gap of {} in front of the nearest {:.0}% of object {object:?}'s surface (1/{} of its size {} would come closer to the surface there){which}",
-            length(m.clearance.unwrap_or(0.0), d),
+        EpsilonRule::Clearance(i) => format!(
+            "{EPSILON_PER_CLEARANCE} × the gap of {} in front of the nearest {:.0}% of object {:?}'s surface (1/{} of its size {} would come closer to the surface there){which}",
+            length(measures[i].clearance.unwrap_or(0.0), d),
             100.0 * CLEARANCE_QUANTILE,
+            name(i),
             (1.0 / EPSILON_PER_SIZE).round(),
-            length(m.size, d)
+            length(measures[i].size, d)
         ),
-        _ => format!(
-            "twice the smallest ε object {object:?}'s f32 coordinates and tessellation allow{which}"
+        EpsilonRule::Cone(i, h) => format!(
+            "so that a texel of object {:?} finds four points within phi_samplemap ({}°) of its normal at the spacing of {} its sample density gives (Eq. 3.10; a smaller ε needs more points)",
+            name(i),
+            settings.phi_samplemap_deg,
+            length(h, d)
+        ),
+        EpsilonRule::Floor(i) => format!(
+            "twice the smallest ε object {:?}'s f32 coordinates and tessellation allow",
+            name(i)
         ),
     };
     BakeChoice {
@@ -264,6 +271,35 @@ fn choose_epsilon(
         value: length(eps, d),
         why,
     }
+}
+
+/// The spacings the scene file gives, per object: its own `sample_spacing`, else (where
+/// `density_given`) the bake's `sample_spacing`, or the spacing `sample_count` points give over
+/// the objects without a spacing of their own (hexagonal packing, as the placement counts).
+fn given_spacings(
+    objects: &[OslfObject],
+    measures: &[ObjectMeasure],
+    settings: &BakeSettings,
+    density_given: bool,
+) -> Vec<(usize, f32)> {
+    let shared_area: f32 = objects
+        .iter()
+        .zip(measures)
+        .filter(|(o, _)| o.sample_spacing.is_none())
+        .map(|(_, m)| m.area)
+        .sum();
+    let shared = match settings.sample_count {
+        SampleDensity::Spacing(h) => h,
+        SampleDensity::Count(n) => (shared_area / (0.866_025_4 * n.max(1) as f32)).sqrt(),
+    };
+    objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| match o.sample_spacing {
+            Some(h) => Some((i, h)),
+            None => density_given.then_some((i, shared)),
+        })
+        .collect()
 }
 
 /// Twice the smallest ε [`epsilon_problem`] accepts for `object`, found by doubling from a

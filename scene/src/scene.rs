@@ -149,6 +149,30 @@ impl std::fmt::Display for DeviceChoice {
     }
 }
 
+/// One bake setting chosen from the scene ([`crate::bake_defaults`]): its key, the object it is for (`None`: the whole
+/// bake), its value as printed and why, in the scene's units with the digits the object's
+/// size needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeChoice {
+    pub key: &'static str,
+    pub object: Option<String>,
+    pub value: String,
+    pub why: String,
+}
+
+impl std::fmt::Display for BakeChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.object {
+            Some(o) => write!(
+                f,
+                "object {o:?}: {} = {}: {}",
+                self.key, self.value, self.why
+            ),
+            None => write!(f, "{} = {}: {}", self.key, self.value, self.why),
+        }
+    }
+}
+
 /// How densely sample points are placed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SampleDensity {
@@ -180,7 +204,7 @@ pub struct Scene {
     pub bake: BakeSettings,
     /// The bake settings the scene file leaves unset, as chosen from the scene, and why
     /// ([`crate::bake_defaults`]): empty where the file sets them all.
-    pub bake_choices: Vec<crate::bake_defaults::BakeChoice>,
+    pub bake_choices: Vec<BakeChoice>,
     /// Name of the preset applied, if any.
     pub preset: Option<String>,
     /// Names of the presets the scene file defines (`[presets.NAME]`), sorted.

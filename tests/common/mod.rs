@@ -39,6 +39,7 @@ pub const LID_SCENE: &str = concat!(
     include_str!("../fixtures/teapot-lid.toml"),
     r#"
 [bake]
+epsilon = 0.1
 sample_count = 12
 cube_resolution = 2
 sample_map_resolution = 4

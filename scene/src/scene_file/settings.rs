@@ -6,7 +6,7 @@ use std::ops::Range;
 use toml::Spanned;
 
 use super::context::Ctx;
-use super::raw::RawScene;
+use super::raw::{RawBake, RawScene};
 use crate::bake_defaults::Unset;
 use crate::error::{BakeError, Result};
 use crate::scene::{BakeSettings, SampleDensity};
@@ -112,12 +112,7 @@ impl Ctx<'_> {
             None => oslf_format::encoding::RGB9E5_FULL_MANTISSA_BITS,
         };
         let epsilon_span = merged.epsilon.as_ref().map(Spanned::span);
-        let unset = Unset {
-            epsilon: merged.epsilon.is_none(),
-            density: merged.sample_count.is_none() && merged.sample_spacing.is_none(),
-            cube_resolution: merged.cube_resolution.is_none(),
-            samples_per_texel: merged.samples_per_texel.is_none(),
-        };
+        let unset = unset(&merged);
         let settings = BakeSettings {
             epsilon: merged.epsilon.as_ref().map_or(0.1, |e| e.get_ref().0),
             sample_count,
@@ -135,5 +130,15 @@ impl Ctx<'_> {
             device: merged.device.map_or_else(Default::default, |d| d.0),
         };
         Ok((settings, epsilon_span, unset))
+    }
+}
+
+/// Which of the settings the scene chooses `merged` leaves unset.
+fn unset(merged: &RawBake) -> Unset {
+    Unset {
+        epsilon: merged.epsilon.is_none(),
+        density: merged.sample_count.is_none() && merged.sample_spacing.is_none(),
+        cube_resolution: merged.cube_resolution.is_none(),
+        samples_per_texel: merged.samples_per_texel.is_none(),
     }
 }
