@@ -11,9 +11,12 @@ use crate::material::{Material, Model};
 pub use crate::scene::BakeChoice;
 use crate::scene::{epsilon_problem, BakeSettings, OslfObject, SampleDensity, Shape};
 
-/// ε as a fraction of the diagonal of the object's bounding box: the thesis's teapot (ε = 0.1
-/// for a diagonal of 7.7) and a hand-tuned 6 × 16.6 cm can (4 mm) both lie near 1/64.
-pub const EPSILON_PER_SIZE: f32 = 1.0 / 64.0;
+/// ε as a fraction of the diagonal of the object's bounding box. The thesis's teapot has ε at
+/// 1/77 of it; on examples/can.toml with every other setting chosen, 1/128 gave RMSE L* 2.84 in
+/// the pbr mode against 3.09 at 1/64 (docs/measurements.md, "Settings chosen from the scene"):
+/// points nearer the surface see it with less parallax, and the cone of Eq. 3.10 still holds
+/// the spacing of [`SPACING_PER_SIZE`] (up to 7.6 ε at φ = 85°).
+pub const EPSILON_PER_SIZE: f32 = 1.0 / 128.0;
 
 /// ε at most this fraction of the gap in front of the nearest twentieth of the object's
 /// surface (along its normals to another surface; contacts aside): sample points there stay
@@ -31,9 +34,11 @@ pub const SPACING_PER_SIZE: f32 = 1.0 / 24.0;
 /// See [`SPACING_PER_SIZE`].
 pub const SPACING_PER_ALPHA: f32 = 4.0;
 
-/// Spacings within the cone of Eq. 3.10's reach: a texel finds four points there (the spacing
-/// is at most ε / (this × tan(90° − φ_samplemap))).
-pub const SPACINGS_PER_CONE: f32 = 1.5;
+/// How far, in spacings, the cone of Eq. 3.10 must reach for a texel to find four points
+/// ([`cone_epsilon`]). In a Poisson-disk set the four nearest points lie within about one
+/// spacing: examples/can.toml at ε = h/5.7 on a radius of 4.9 h, and the orb at ε = h/5.4 on a
+/// radius of 6.9 h found four for every texel away from the table they stand on.
+pub const SPACINGS_PER_CONE: f32 = 1.0;
 
 /// The cube resolutions chosen by default: a power of two between these. The largest is what a
 /// mirror gets (sharper cubes cost 4× the rays per doubling: set `cube_resolution` for them).
@@ -78,7 +83,16 @@ pub struct ObjectMeasure {
     /// runtime's mirror and glossy modes reflect at any lobe), and the roughness it came from.
     pub alpha: f32,
     pub roughness: Option<f32>,
+    /// How sharply its surface typically curves: the [`CURVATURE_QUANTILE`] of the
+    /// normal's turn per length along its smooth edges (1/radius; 0 for a flat object).
+    pub curvature: f32,
 }
+
+/// The share of an object's smooth edges that curve less than [`ObjectMeasure::curvature`]:
+/// the median, its typical curvature. Thin parts (a teapot's spout and handle, at 10× the
+/// body's) need more points, not a larger ε: what a uniform spacing cannot give them, the
+/// points added where texels find fewer than four do.
+pub const CURVATURE_QUANTILE: f32 = 0.5;
 
 /// Decimal places that print lengths down to `smallest` with two significant digits (at
 /// most 12): ε, coordinates and spacings in the scene's units at any scale.
@@ -115,21 +129,18 @@ pub fn choose(
         choices.push(choose_epsilon(objects, &measures, settings, !unset.density));
     }
     let decimals = length_decimals(settings.epsilon);
-    // A point ε above the surface at distance d is within φ of a texel's normal where
-    // ε/d ≥ tan(90° − φ): four of them need d up to about 1.5 spacings (Eq. 3.10).
-    let cone_spacing = settings.epsilon
-        / (SPACINGS_PER_CONE * (90.0 - settings.phi_samplemap_deg).to_radians().tan());
     if unset.density {
         for (object, m) in objects.iter_mut().zip(&measures) {
             if object.sample_spacing.is_some() {
                 continue;
             }
-            let by_lobe = m.size * SPACING_PER_SIZE * (1.0 + SPACING_PER_ALPHA * m.alpha);
+            let by_lobe = lobe_spacing(m);
+            let cone_spacing = cone_spacing(settings.epsilon, m.curvature, settings);
             let h = by_lobe.min(cone_spacing);
             object.sample_spacing = Some(h);
             let capped = if h < by_lobe {
                 format!(
-                    "; at most {}, so that a texel finds four points within phi_samplemap ({}°) of its normal at ε = {} (Eq. 3.10)",
+                    "; at most {}, so that a texel finds four points within phi_samplemap ({}°) of its normal at ε = {} where the surface curves as it typically does (Eq. 3.10)",
                     length(cone_spacing, decimals),
                     settings.phi_samplemap_deg,
                     length(settings.epsilon, decimals)
@@ -144,7 +155,7 @@ pub fn choose(
                 value: length(h, decimals),
                 why: format!(
                     "about {points} points over its area {}: 1/{} of its size {} × (1 + {SPACING_PER_ALPHA}·α) for {}{capped}",
-                    area(m.area, decimals),
+                    area(m.area),
                     (1.0 / SPACING_PER_SIZE).round(),
                     length(m.size, decimals),
                     lobe(m)
@@ -181,22 +192,52 @@ pub fn choose(
     choices
 }
 
+/// An object's spacing by its size and lobe: [`SPACING_PER_SIZE`] × size × (1 +
+/// [`SPACING_PER_ALPHA`] · α).
+fn lobe_spacing(m: &ObjectMeasure) -> f32 {
+    m.size * SPACING_PER_SIZE * (1.0 + SPACING_PER_ALPHA * m.alpha)
+}
+
+/// The ε at which a texel finds four points at spacing `h` within the cone of Eq. 3.10 on a
+/// surface of curvature `curvature`: a point ε above the surface at distance d lies within φ
+/// of the texel's normal where ε − κd²/2 ≥ d · tan(90° − φ) (a convex surface curves away
+/// below the tangent plane by κd²/2), with d up to [`SPACINGS_PER_CONE`] spacings.
+fn cone_epsilon(h: f32, curvature: f32, settings: &BakeSettings) -> f32 {
+    let t = (90.0 - settings.phi_samplemap_deg).to_radians().tan();
+    let d = SPACINGS_PER_CONE * h;
+    d * t + 0.5 * curvature * d * d
+}
+
+/// The largest spacing [`cone_epsilon`] allows at `epsilon`: the root of κd²/2 + t·d = ε,
+/// over [`SPACINGS_PER_CONE`].
+fn cone_spacing(epsilon: f32, curvature: f32, settings: &BakeSettings) -> f32 {
+    let t = (90.0 - settings.phi_samplemap_deg).to_radians().tan();
+    let d = if curvature > 0.0 {
+        ((t * t + 2.0 * curvature * epsilon).sqrt() - t) / curvature
+    } else {
+        epsilon / t
+    };
+    d / SPACINGS_PER_CONE
+}
+
 /// Why ε is what it is.
 enum EpsilonRule {
     /// [`EPSILON_PER_SIZE`] × the size of object `.0`.
     Size(usize),
     /// [`EPSILON_PER_CLEARANCE`] × the clearance of object `.0`.
     Clearance(usize),
-    /// The cone of Eq. 3.10 at the spacing `.1` the file gives object `.0`'s points.
+    /// The cone of Eq. 3.10 at the spacing `.1` of object `.0`'s points (the file's, or its
+    /// lobe's), at its typical curvature.
     Cone(usize, f32),
     /// Twice the smallest ε object `.0`'s coordinates and tessellation allow.
     Floor(usize),
 }
 
 /// ε: the smallest over the objects of [`EPSILON_PER_SIZE`] × the size, bounded by
-/// [`EPSILON_PER_CLEARANCE`] × the clearance; raised to what the cone of Eq. 3.10 needs at a
-/// spacing the file gives (`density_given`: `sample_count` or `sample_spacing`, or an object's
-/// own), and to twice the smallest ε each object's f32 coordinates and tessellation allow
+/// [`EPSILON_PER_CLEARANCE`] × the clearance; raised to what the cone of Eq. 3.10 needs at
+/// each object's spacing at its typical curvature ([`cone_epsilon`]; the spacing the file gives,
+/// `density_given`: `sample_count` or `sample_spacing`, or an object's own, else its lobe's),
+/// and to twice the smallest ε each object's f32 coordinates and tessellation allow
 /// ([`epsilon_problem`]).
 fn choose_epsilon(
     objects: &[OslfObject],
@@ -219,10 +260,10 @@ fn choose_epsilon(
             };
         }
     }
-    let cone = SPACINGS_PER_CONE * (90.0 - settings.phi_samplemap_deg).to_radians().tan();
-    for (i, h) in given_spacings(objects, measures, settings, density_given) {
-        if h * cone > eps {
-            (eps, rule) = (h * cone, EpsilonRule::Cone(i, h));
+    for (i, h) in spacings(objects, measures, settings, density_given) {
+        let need = cone_epsilon(h, measures[i].curvature, settings);
+        if need > eps {
+            (eps, rule) = (need, EpsilonRule::Cone(i, h));
         }
     }
     for (i, object) in objects.iter().enumerate() {
@@ -255,10 +296,11 @@ fn choose_epsilon(
             length(measures[i].size, d)
         ),
         EpsilonRule::Cone(i, h) => format!(
-            "so that a texel of object {:?} finds four points within phi_samplemap ({}°) of its normal at the spacing of {} its sample density gives (Eq. 3.10; a smaller ε needs more points)",
+            "so that a texel of object {:?} finds four points within phi_samplemap ({}°) of its normal at a spacing of {} where its surface curves as it typically does (radius {}; Eq. 3.10: a smaller ε needs more points)",
             name(i),
             settings.phi_samplemap_deg,
-            length(h, d)
+            length(h, d),
+            if measures[i].curvature > 0.0 { length(1.0 / measures[i].curvature, d) } else { "∞".to_string() }
         ),
         EpsilonRule::Floor(i) => format!(
             "twice the smallest ε object {:?}'s f32 coordinates and tessellation allow",
@@ -273,10 +315,11 @@ fn choose_epsilon(
     }
 }
 
-/// The spacings the scene file gives, per object: its own `sample_spacing`, else (where
+/// Each object's spacing: its own `sample_spacing` from the file, else (where
 /// `density_given`) the bake's `sample_spacing`, or the spacing `sample_count` points give over
-/// the objects without a spacing of their own (hexagonal packing, as the placement counts).
-fn given_spacings(
+/// the objects without a spacing of their own (hexagonal packing, as the placement counts);
+/// else the spacing its lobe will be given ([`lobe_spacing`]).
+fn spacings(
     objects: &[OslfObject],
     measures: &[ObjectMeasure],
     settings: &BakeSettings,
@@ -295,9 +338,10 @@ fn given_spacings(
     objects
         .iter()
         .enumerate()
-        .filter_map(|(i, o)| match o.sample_spacing {
-            Some(h) => Some((i, h)),
-            None => density_given.then_some((i, shared)),
+        .map(|(i, o)| match o.sample_spacing {
+            Some(h) => (i, h),
+            None if density_given => (i, shared),
+            None => (i, lobe_spacing(&measures[i])),
         })
         .collect()
 }
@@ -365,9 +409,9 @@ fn lobe(m: &ObjectMeasure) -> String {
     }
 }
 
-/// An area in the scene's units squared, with the digits lengths of `decimals` need.
-fn area(a: f32, decimals: usize) -> String {
-    let d = (2 * decimals).min(12);
+/// An area in the scene's units squared, to three significant digits.
+fn area(a: f32) -> String {
+    let d = (length_decimals(a) + 1).min(12);
     format!("{a:.d$}")
 }
 
@@ -401,6 +445,7 @@ pub fn measure(object: &OslfObject, shapes: &[Shape], materials: &[Material]) ->
         clearance: clearance(&surface, (lo, hi), size, shapes),
         alpha,
         roughness,
+        curvature: curvature(&surface),
     }
 }
 
@@ -439,6 +484,30 @@ fn texture_min_green(t: &crate::texture::Texture) -> f32 {
         Texture::Checker { a, b, .. } => a.y.min(b.y),
         Texture::Image(img) => img.pixels.iter().fold(f32::INFINITY, |m, p| m.min(p.y)),
     }
+}
+
+/// The [`CURVATURE_QUANTILE`] of |n₁ − n₂| / |p₁ − p₂| over the edges of `surface` whose ends
+/// share a vertex pair (hard edges, with vertices of their own, do not count).
+fn curvature(surface: &Mesh) -> f32 {
+    let mut k: Vec<f32> = surface
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .filter_map(|(a, b)| {
+            let (a, b) = (a as usize, b as usize);
+            let (pa, pb) = (surface.positions.get(a)?, surface.positions.get(b)?);
+            let (na, nb) = (surface.normals.get(a)?, surface.normals.get(b)?);
+            let len = (*pa - *pb).length();
+            let turn = (na.normalize_or_zero() - nb.normalize_or_zero()).length();
+            (len > 0.0 && turn.is_finite()).then_some(turn / len)
+        })
+        .filter(|k| k.is_finite())
+        .collect();
+    if k.is_empty() {
+        return 0.0;
+    }
+    k.sort_by(f32::total_cmp);
+    k[((k.len() - 1) as f32 * CURVATURE_QUANTILE) as usize]
 }
 
 /// Surface points tested for clearance, at most.
