@@ -12,7 +12,7 @@ pub use crate::scene::BakeChoice;
 use crate::scene::{epsilon_problem, BakeSettings, OslfObject, SampleDensity, Shape};
 
 /// ε as a fraction of the diagonal of the object's bounding box. The thesis's teapot has ε at
-/// 1/77 of it; on examples/can.toml with every other setting chosen, 1/128 gave RMSE L* 2.84 in
+/// 1/77 of it; on examples/can.toml with every other setting chosen, 1/128 gave RMSE L* 2.88 in
 /// the pbr mode against 3.09 at 1/64 (docs/measurements.md, "Settings chosen from the scene"):
 /// points nearer the surface see it with less parallax, and the cone of Eq. 3.10 still holds
 /// the spacing of [`SPACING_PER_SIZE`] (up to 7.6 ε at φ = 85°).
@@ -513,6 +513,9 @@ fn curvature(surface: &Mesh) -> f32 {
 /// Surface points tested for clearance, at most.
 const CLEARANCE_POINTS: usize = 2048;
 
+/// Ray–triangle tests of the clearance, at most (beyond 64 points): about a second on one core.
+const CLEARANCE_TESTS: usize = 20_000_000;
+
 /// The [`CLEARANCE_QUANTILE`] of the gaps in front of `surface`, over the whole surface: from
 /// points of it (triangle centres) along their normals to the nearest triangle of `shapes`
 /// within reach (a quarter of the size beyond the object's bounds). Gaps narrower than
@@ -534,7 +537,9 @@ fn clearance(surface: &Mesh, bounds: (Vec3, Vec3), size: f32, shapes: &[Shape]) 
     if near.is_empty() || surface.triangles.is_empty() {
         return None;
     }
-    let stride = surface.triangles.len().div_ceil(CLEARANCE_POINTS);
+    // At most CLEARANCE_TESTS ray–triangle tests: fewer points beside a dense mesh.
+    let points = (CLEARANCE_TESTS / near.len()).clamp(64, CLEARANCE_POINTS);
+    let stride = surface.triangles.len().div_ceil(points);
     let contact = EPSILON_PER_SIZE * size;
     let mut tested = 0usize;
     let mut gaps: Vec<f32> = surface
