@@ -384,8 +384,8 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
     for key in [
         "chosen: epsilon = 0.00",
         "chosen: object \"Can\": sample_spacing = 0.00",
-        "chosen: cube_resolution = 64",
-        "chosen: samples_per_texel = 4",
+        "chosen: cube_resolution = 16",
+        "chosen: samples_per_texel = 16",
     ] {
         assert!(stderr.contains(key), "no {key:?} in:\n{stderr}");
     }

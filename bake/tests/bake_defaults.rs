@@ -310,3 +310,60 @@ fn a_given_density_raises_epsilon_to_what_the_cone_of_eq_3_10_needs() {
         dense.bake_choices[0]
     );
 }
+
+#[test]
+fn a_store_budget_lowers_the_chosen_resolution_then_widens_the_spacing() {
+    let free = load(&scene_text(1.0, LAMBERT, ""));
+    let measures: Vec<_> = free
+        .objects
+        .iter()
+        .map(|o| oslf_scene::bake_defaults::measure(o, &free.shapes, &free.materials))
+        .collect();
+    let unbounded = oslf_scene::bake_defaults::store_estimate(&free.objects, &measures, &free.bake);
+    // A quarter of the free choice's store: 64² → 32², as many points.
+    let quarter = unbounded / 4e6 * 1.01;
+    let fit = load(&scene_text(
+        1.0,
+        LAMBERT,
+        &format!("store_budget_mb = {quarter}"),
+    ));
+    assert_eq!(fit.bake.cube_resolution, 32, "{:?}", fit.bake_choices);
+    assert_eq!(fit.bake.samples_per_texel, 16);
+    assert_eq!(
+        fit.objects[0].sample_spacing,
+        free.objects[0].sample_spacing
+    );
+    let line = fit.bake_choices.last().unwrap();
+    assert_eq!(line.key, "store_budget_mb");
+    assert!(line.why.starts_with("met"), "{line}");
+    // A hundredth: the smallest cube maps, and the spacing widened.
+    let tight = load(&scene_text(
+        1.0,
+        LAMBERT,
+        &format!("store_budget_mb = {}", unbounded / 1e8),
+    ));
+    assert_eq!(tight.bake.cube_resolution, 16);
+    assert!(tight.objects[0].sample_spacing > free.objects[0].sample_spacing);
+    let est = |s: &Scene| {
+        let m: Vec<_> = s
+            .objects
+            .iter()
+            .map(|o| oslf_scene::bake_defaults::measure(o, &s.shapes, &s.materials))
+            .collect();
+        oslf_scene::bake_defaults::store_estimate(&s.objects, &m, &s.bake)
+    };
+    // ε rises with the spacing, to what the cone of Eq. 3.10 needs there.
+    assert!(tight.bake.epsilon > free.bake.epsilon);
+    let line = tight.bake_choices.last().unwrap();
+    assert!(line.why.starts_with("met"), "{line}");
+    assert!(est(&tight) <= unbounded / 1e2 * 1.001, "{line}");
+    // Settings the file gives are not the budget's to change.
+    let fixed = load(&scene_text(
+        1.0,
+        LAMBERT,
+        "store_budget_mb = 0.001\ncube_resolution = 64\nsample_count = 400",
+    ));
+    assert_eq!(fixed.bake.cube_resolution, 64);
+    let line = fixed.bake_choices.last().unwrap();
+    assert!(line.why.starts_with("not met"), "{line}");
+}

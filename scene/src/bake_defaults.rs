@@ -51,8 +51,9 @@ pub const RAYS_PER_CUBE: u32 = 6 * 32 * 32 * 16;
 /// The samples per texel chosen by default lie within these.
 pub const SAMPLES_PER_TEXEL_RANGE: (u32, u32) = (4, 16);
 
-/// Which of the derivable settings the scene file left unset.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Which of the derivable settings the scene file left unset, and the store budget the
+/// choices must fit (`store_budget_mb`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Unset {
     pub epsilon: bool,
     /// Neither `sample_count` nor `sample_spacing` (objects with a `sample_spacing` of their
@@ -60,12 +61,19 @@ pub struct Unset {
     pub density: bool,
     pub cube_resolution: bool,
     pub samples_per_texel: bool,
+    /// The store's size the chosen cube resolution and spacings must fit, in bytes
+    /// ([`fit_store_budget`]).
+    pub store_budget: Option<f64>,
 }
 
 impl Unset {
-    /// Whether anything is left to choose.
+    /// Whether anything is left to choose (or a budget to report on).
     pub fn any(&self) -> bool {
-        self.epsilon || self.density || self.cube_resolution || self.samples_per_texel
+        self.epsilon
+            || self.density
+            || self.cube_resolution
+            || self.samples_per_texel
+            || self.store_budget.is_some()
     }
 }
 
@@ -83,6 +91,10 @@ pub struct ObjectMeasure {
     /// runtime's mirror and glossy modes reflect at any lobe), and the roughness it came from.
     pub alpha: f32,
     pub roughness: Option<f32>,
+    /// The area median of its roughness over its surface (the factor where it has no
+    /// roughness texture), and its GGX α: what most of its pixels reflect with.
+    pub typical_alpha: f32,
+    pub typical_roughness: Option<f32>,
     /// How sharply its surface typically curves: the [`CURVATURE_QUANTILE`] of the
     /// normal's turn per length along its smooth edges (1/radius; 0 for a flat object).
     pub curvature: f32,
@@ -174,22 +186,184 @@ pub fn choose(
     }
     if unset.samples_per_texel {
         let n = settings.cube_resolution;
-        let spp = (RAYS_PER_CUBE / (6 * n * n).max(1))
-            .clamp(SAMPLES_PER_TEXEL_RANGE.0, SAMPLES_PER_TEXEL_RANGE.1);
-        settings.samples_per_texel = spp;
-        choices.push(BakeChoice {
-            key: "samples_per_texel",
-            object: None,
-            value: spp.to_string(),
-            why: format!(
-                "{} rays per cube map at {n}² (the cost of 16 per texel at 32², within {}..={})",
-                6 * n * n * spp,
-                SAMPLES_PER_TEXEL_RANGE.0,
-                SAMPLES_PER_TEXEL_RANGE.1
-            ),
-        });
+        settings.samples_per_texel = samples_per_texel(n);
+        choices.push(samples_choice(n));
+    }
+    if let Some(budget) = unset.store_budget {
+        fit_store_budget(objects, &measures, settings, unset, budget, &mut choices);
     }
     choices
+}
+
+/// The samples per texel chosen at cube resolution `n`: [`RAYS_PER_CUBE`] per cube.
+fn samples_per_texel(n: u32) -> u32 {
+    (RAYS_PER_CUBE / (6 * n * n).max(1)).clamp(SAMPLES_PER_TEXEL_RANGE.0, SAMPLES_PER_TEXEL_RANGE.1)
+}
+
+/// The choice of [`samples_per_texel`] at `n`.
+fn samples_choice(n: u32) -> BakeChoice {
+    let spp = samples_per_texel(n);
+    BakeChoice {
+        key: "samples_per_texel",
+        object: None,
+        value: spp.to_string(),
+        why: format!(
+            "{} rays per cube map at {n}² (the choice aims at {RAYS_PER_CUBE}, 16 per texel at 32², within {}..={} per texel)",
+            6 * n * n * spp,
+            SAMPLES_PER_TEXEL_RANGE.0,
+            SAMPLES_PER_TEXEL_RANGE.1
+        ),
+    }
+}
+
+/// The store's typical size at these settings: the placed points of every object (at its
+/// spacing, or its share of `sample_count`) × six faces of `cube_resolution`² texels at the
+/// encoding's typical compressed size ([`oslf_format::encoding::compressed_texel_bytes`]).
+/// Points added where texels find fewer than four come on top.
+pub fn store_estimate(objects: &[OslfObject], measures: &[ObjectMeasure], s: &BakeSettings) -> f64 {
+    let shared_area: f64 = objects
+        .iter()
+        .zip(measures)
+        .filter(|(o, _)| o.sample_spacing.is_none())
+        .map(|(_, m)| f64::from(m.area))
+        .sum();
+    let points = |area: f64, h: f32| area / (0.866_025_4 * f64::from(h).powi(2));
+    let mut n: f64 = objects
+        .iter()
+        .zip(measures)
+        .filter_map(|(o, m)| o.sample_spacing.map(|h| points(f64::from(m.area), h)))
+        .sum();
+    if shared_area > 0.0 {
+        n += match s.sample_count {
+            SampleDensity::Count(c) => f64::from(c),
+            SampleDensity::Spacing(h) => points(shared_area, h),
+        };
+    }
+    let texel = oslf_format::encoding::compressed_texel_bytes(s.encoding, s.mantissa_bits)
+        + if s.distance_channel {
+            oslf_format::encoding::DISTANCE_COMPRESSED_BYTES
+        } else {
+            0.0
+        };
+    n.ceil() * 6.0 * f64::from(s.cube_resolution).powi(2) * texel
+}
+
+/// Fits the chosen settings into a store of `budget` bytes ([`store_estimate`]): halves a
+/// chosen cube resolution down to the smallest of [`CUBE_RESOLUTION_RANGE`] (the samples per
+/// texel follow where chosen), then widens the chosen spacings; a chosen ε rises with them to
+/// what the cone of Eq. 3.10 needs, a given ε caps them. The choices say what the budget
+/// changed; a choice line `store_budget_mb` says what is left (and that it cannot be met, when
+/// it cannot).
+fn fit_store_budget(
+    objects: &mut [OslfObject],
+    measures: &[ObjectMeasure],
+    settings: &mut BakeSettings,
+    unset: Unset,
+    budget: f64,
+    choices: &mut Vec<BakeChoice>,
+) {
+    let before = store_estimate(objects, measures, settings);
+    let mb = |bytes: f64| {
+        let d = length_decimals((bytes / 1e6) as f32);
+        format!("{:.d$} MB", bytes / 1e6)
+    };
+    let note = format!("; lowered to fit the store budget of {}", mb(budget));
+    while unset.cube_resolution
+        && settings.cube_resolution > CUBE_RESOLUTION_RANGE.0
+        && store_estimate(objects, measures, settings) > budget
+    {
+        settings.cube_resolution /= 2;
+        let n = settings.cube_resolution;
+        let texel_deg = 90.0 / n as f32;
+        if let Some(c) = choices.iter_mut().find(|c| c.key == "cube_resolution") {
+            c.value = n.to_string();
+            c.why = format!("texels of {texel_deg:.2}°{note}");
+        }
+        if unset.samples_per_texel {
+            settings.samples_per_texel = samples_per_texel(n);
+            if let Some(c) = choices.iter_mut().find(|c| c.key == "samples_per_texel") {
+                *c = samples_choice(n);
+            }
+        }
+    }
+    let estimate = store_estimate(objects, measures, settings);
+    let chosen: Vec<String> = choices
+        .iter()
+        .filter(|c| c.key == "sample_spacing")
+        .filter_map(|c| c.object.clone())
+        .collect();
+    if estimate > budget && !chosen.is_empty() {
+        // Store size goes as 1/h²: widen every chosen spacing alike. A chosen ε rises with
+        // them to what the cone of Eq. 3.10 needs; a given one caps them.
+        // 1 % over: the point counts round up.
+        let widen = 1.01 * (estimate / budget).sqrt() as f32;
+        let epsilon_before = settings.epsilon;
+        let mut epsilon = settings.epsilon;
+        for (object, m) in objects.iter_mut().zip(measures) {
+            let Some(h) = object
+                .sample_spacing
+                .filter(|_| chosen.contains(&object.name))
+            else {
+                continue;
+            };
+            let wide = if unset.epsilon {
+                epsilon = epsilon.max(cone_epsilon(h * widen, m.curvature, settings));
+                h * widen
+            } else {
+                (h * widen)
+                    .min(cone_spacing(epsilon, m.curvature, settings))
+                    .max(h)
+            };
+            object.sample_spacing = Some(wide);
+        }
+        settings.epsilon = epsilon;
+        let decimals = length_decimals(epsilon);
+        let budget_note = format!("the store budget of {}", mb(budget));
+        for c in choices.iter_mut() {
+            if c.key == "epsilon" && epsilon > epsilon_before {
+                c.value = length(epsilon, decimals);
+                c.why = format!(
+                    "{}; raised with the spacings widened for {budget_note}, to what the cone of Eq. 3.10 needs",
+                    c.why
+                );
+            }
+            let spacing = objects
+                .iter()
+                .zip(measures)
+                .find(|(o, _)| c.key == "sample_spacing" && c.object.as_ref() == Some(&o.name))
+                .and_then(|(o, m)| o.sample_spacing.map(|h| (h, m.area)));
+            if let Some((h, area)) = spacing {
+                c.value = length(h, decimals);
+                let points = (area / (0.866_025_4 * h * h)).ceil();
+                c.why = format!(
+                    "{}; × {widen:.2} for {budget_note}: about {points} points",
+                    c.why
+                );
+            }
+        }
+        settings.sample_count = SampleDensity::Spacing(
+            objects
+                .iter()
+                .filter_map(|o| o.sample_spacing)
+                .fold(f32::INFINITY, f32::min),
+        );
+    }
+    let after = store_estimate(objects, measures, settings);
+    let met = if after <= budget * 1.0001 {
+        "met".to_string()
+    } else {
+        "not met: what the file sets (or the widest spacing the cone of Eq. 3.10 allows at its epsilon) keeps the store above it; leave those keys to the bake, or lower them".to_string()
+    };
+    choices.push(BakeChoice {
+        key: "store_budget_mb",
+        object: None,
+        value: mb(budget).trim_end_matches(" MB").to_string(),
+        why: format!(
+            "{met}: the chosen settings' store is about {} (before the budget: {}; points added where texels find fewer than four come on top)",
+            mb(after),
+            mb(before)
+        ),
+    });
 }
 
 /// An object's spacing by its size and lobe: [`SPACING_PER_SIZE`] × size × (1 +
@@ -362,9 +536,12 @@ fn lowest_epsilon(object: &OslfObject, guess: f32) -> f32 {
     2.0 * eps
 }
 
-/// The cube resolution that resolves the narrowest lobe: texels of at most α radians (a
-/// GGX lobe reflects over about 2α) at the face's centre, a power of two within
-/// [`CUBE_RESOLUTION_RANGE`].
+/// The cube resolution that resolves the typical lobe (the area median of each object's
+/// roughness; the sharpest over the objects): texels of at most α radians (a GGX lobe reflects
+/// over about 2α) at the face's centre, a power of two within [`CUBE_RESOLUTION_RANGE`]. At the
+/// same rays per cube, sharper cubes are noisier: examples/can.toml (label 0.35, metal 0.12)
+/// gave RMSE L* 2.67 at 16² and 16 samples per texel, 2.55 at 32² and 16, 2.88 at 64² and 4
+/// (docs/measurements.md, "Settings chosen from the scene").
 fn choose_cube_resolution(
     objects: &[OslfObject],
     measures: &[ObjectMeasure],
@@ -374,10 +551,12 @@ fn choose_cube_resolution(
     let (i, m) = measures
         .iter()
         .enumerate()
-        .min_by(|a, b| a.1.alpha.total_cmp(&b.1.alpha))
+        .min_by(|a, b| a.1.typical_alpha.total_cmp(&b.1.typical_alpha))
         .expect("choose is called with objects");
-    let wanted = if m.alpha > 0.0 {
-        (std::f32::consts::FRAC_PI_2 / m.alpha).ceil().min(1e6) as u32
+    let wanted = if m.typical_alpha > 0.0 {
+        (std::f32::consts::FRAC_PI_2 / m.typical_alpha)
+            .ceil()
+            .min(1e6) as u32
     } else {
         u32::MAX
     };
@@ -396,7 +575,7 @@ fn choose_cube_resolution(
         why: format!(
             "texels of {texel_deg:.2}° for object {:?}, {}{capped}",
             objects[i].name,
-            lobe(m)
+            typical_lobe(m)
         ),
     }
 }
@@ -406,6 +585,17 @@ fn lobe(m: &ObjectMeasure) -> String {
     match m.roughness {
         Some(r) => format!("its smoothest roughness {r:.3} (GGX α {:.4})", m.alpha),
         None => "a mirror (its material is Lambertian: the runtime's mirror and glossy modes reflect at any lobe)".to_string(),
+    }
+}
+
+/// The typical lobe a measure describes, for messages.
+fn typical_lobe(m: &ObjectMeasure) -> String {
+    match m.typical_roughness {
+        Some(r) => format!(
+            "its typical roughness {r:.3} (GGX α {:.4}, the median over its area; sharper texels cost noise at the same rays per cube)",
+            m.typical_alpha
+        ),
+        None => lobe(m),
     }
 }
 
@@ -435,16 +625,18 @@ pub fn measure(object: &OslfObject, shapes: &[Shape], materials: &[Material]) ->
     let surface = surface_mesh(object);
     let (lo, hi) = object_bounds(object);
     let size = (hi - lo).length();
-    let (alpha, roughness) = match materials.get(object.material as usize) {
-        Some(m) => material_alpha(m),
-        None => (0.0, None),
-    };
+    let material = materials.get(object.material as usize);
+    let (alpha, roughness) = material.map_or((0.0, None), material_alpha);
+    let typical_roughness = material.and_then(|m| typical_roughness(m, &surface));
+    let typical_alpha = typical_roughness.map_or(0.0, |r| r * r);
     ObjectMeasure {
         size,
         area: surface.area() as f32,
         clearance: clearance(&surface, (lo, hi), size, shapes),
         alpha,
         roughness,
+        typical_alpha,
+        typical_roughness,
         curvature: curvature(&surface),
     }
 }
@@ -474,6 +666,46 @@ pub fn material_alpha(material: &Material) -> (f32, Option<f32>) {
     }
     .clamp(0.0, 1.0);
     (r * r, Some(r))
+}
+
+/// The area median of a metallic-roughness material's roughness over `surface` (read at each
+/// triangle's centre, in its texture coordinates); `None` for a Lambertian material.
+fn typical_roughness(material: &Material, surface: &Mesh) -> Option<f32> {
+    let Model::MetallicRoughness { roughness, .. } = material.model else {
+        return None;
+    };
+    let Some(texture) = &material.metallic_roughness_texture else {
+        return Some(roughness.clamp(0.0, 1.0));
+    };
+    let mut samples: Vec<(f32, f32)> = surface
+        .triangles
+        .iter()
+        .filter_map(|t| {
+            let [a, b, c] = surface.corners(t)?;
+            let uv = t
+                .iter()
+                .filter_map(|&i| surface.uvs.get(i as usize))
+                .sum::<glam::Vec2>()
+                / 3.0;
+            let area = 0.5 * (b - a).cross(c - a).length();
+            Some((texture.eval(uv).y.clamp(0.0, 1.0), area))
+        })
+        .filter(|(r, a)| r.is_finite() && a.is_finite())
+        .collect();
+    if samples.is_empty() {
+        return Some(texture_min_green(texture).clamp(0.0, 1.0));
+    }
+    samples.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let half = 0.5 * samples.iter().map(|s| s.1).sum::<f32>();
+    let mut acc = 0.0;
+    samples
+        .iter()
+        .find(|s| {
+            acc += s.1;
+            acc >= half
+        })
+        .or(samples.last())
+        .map(|s| s.0)
 }
 
 /// The smallest green value of a texture (roughness in glTF's metallic-roughness texture).

@@ -57,33 +57,7 @@ pub const STORE_FIXED_BYTES: u64 = 64 << 10;
 /// 32 B (`oslf_format::toc::TOC_CUBE_BYTES`), the record header (160 B) and 6 zstd frame headers.
 pub const STORE_CUBE_OVERHEAD_BYTES: u64 = 6 * 32 + 160 + 6 * 16;
 
-/// Compressed bytes per cube-map texel (colour only), by encoding and `mantissa_bits`:
-/// the mean of the 32² and 128² gazebo bakes of docs/measurements.md, "Store sizes"
-/// (lossless table: RGB9E5 3.443 and 3.121 of 4 raw bytes; RGBA16F 4.658 and 3.985 of
-/// 8; RGBA32F 9.207 of 16 — the 32² column, the only one baked from unquantised radiance;
-/// quantized RGB9E5 table for `mantissa_bits` < 9; BC6H 0.973 and 0.920 of 1 raw byte, the
-/// quick preset's 32² cubes and a 128² bake of the same scene converted from RGBA32F, filter
-/// none: `oslf_format::bc6h`). A cube map of a simpler scene compresses
-/// better; one of noisier radiance (fewer samples per texel) a little worse.
-pub fn compressed_texel_bytes(encoding: oslf_format::Encoding, mantissa_bits: u32) -> f64 {
-    use oslf_format::Encoding;
-    match encoding {
-        Encoding::Rgb9e5 => {
-            // k = 1..=9 kept mantissa bits.
-            const TABLE: [f64; 9] = [0.53, 0.93, 1.23, 1.56, 1.99, 2.32, 2.72, 3.19, 3.28];
-            TABLE[(mantissa_bits.clamp(1, 9) - 1) as usize]
-        }
-        Encoding::Rgba16f => 4.32,
-        Encoding::Rgba32f => 9.21,
-        Encoding::Bc6h => 0.95,
-    }
-}
-
-/// Compressed bytes per texel of the distance plane: the store holds each distance on
-/// the distance lattice as a 16-bit code in two predicted byte planes; measured 0.450 (gazebo)
-/// and 0.427 (meshes) at 32² (docs/measurements.md, "Compact distances"; the f32 planes of
-/// version 5 took 2.35).
-pub const DISTANCE_COMPRESSED_BYTES: f64 = 0.45;
+pub use oslf_format::encoding::{compressed_texel_bytes, DISTANCE_COMPRESSED_BYTES};
 
 /// The store's size is given as a range around its typical value: cube maps compress by a
 /// factor that depends on the scene; these bound the typical figure's error for the bakes

@@ -337,6 +337,8 @@ pub(super) struct RawBake {
     pub(super) distance_channel: Option<bool>,
     pub(super) env_cube: Option<bool>,
     pub(super) device: Option<DeviceName>,
+    /// The store size (MB) the settings the scene chooses must fit.
+    pub(super) store_budget_mb: Option<Positive>,
 }
 
 impl RawBake {
@@ -360,7 +362,8 @@ impl RawBake {
             mantissa_bits,
             distance_channel,
             env_cube,
-            device
+            device,
+            store_budget_mb
         );
         // A preset that sets one density key replaces the other.
         if over.sample_count.is_some() && over.sample_spacing.is_none() {
