@@ -9,7 +9,7 @@
 //!
 //! | role | modules |
 //! | --- | --- |
-//! | the model | [`scene`] (objects, shapes, lights, settings), [`bake_defaults`] (the settings a scene file leaves unset, chosen from the objects' sizes, surroundings and materials), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`normals`] (vertex normals where a file has none: flat, smooth, crease angle), [`tolerance`] (tolerances the stages share) |
+//! | the model | [`scene`] (objects, shapes, lights, settings), [`bake_defaults`] (the settings a scene file leaves unset, chosen from the objects' sizes, surroundings and materials), [`object_measure`] (what those choices read of an object), [`shapes`] (plane, box, cylinder, sphere, surface of revolution), [`normals`] (vertex normals where a file has none: flat, smooth, crease angle), [`tolerance`] (tolerances the stages share) |
 //! | appearance | [`texture`] (constants, checkerboards, images), [`material`] (Lambertian and glTF metallic-roughness, as the path tracer evaluates them), [`metallic_roughness`] (glTF's BRDF over oslf-shading's GGX), [`light`] (point, spot, sun), [`environment`] (constant, lat-long map, Preetham sky, and their importance sampling), [`sampling`] (tabulated distributions) |
 //! | files | [`scene_file`] (TOML scene files: located errors, presets, includes), [`gltf`] (glTF 2.0: meshes, materials, lights, cameras), [`obj`] (Wavefront OBJ), [`input`] (every input file read with bounds: regular files only, size limits) |
 //! | errors | [`error`] ([`BakeError`], the error of the scene, the tracer and the bake) |
@@ -30,6 +30,7 @@ pub mod material;
 pub mod metallic_roughness;
 pub mod normals;
 pub mod obj;
+pub mod object_measure;
 pub mod sampling;
 pub mod scene;
 pub mod scene_file;
