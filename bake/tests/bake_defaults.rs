@@ -10,8 +10,6 @@ use glam::Vec3;
 use oslf_bake::sample_points::{self, Surfaces};
 use oslf_scene::bake_defaults::{length_decimals, object_size, EPSILON_PER_SIZE, SPACING_PER_SIZE};
 use oslf_scene::scene::Scene;
-use oslf_scene::tolerance::TESSELLATION_ERROR;
-use oslf_trace::bvh::TriangleScene;
 use oslf_trace::capture::{capture_cube, CaptureSettings};
 use oslf_trace::integrator::Integrator;
 
@@ -90,12 +88,7 @@ fn the_choices_scale_with_the_scene_and_so_do_the_points_and_the_cubes() {
     );
 
     let place = |scene: &Scene| {
-        let geometry = TriangleScene::build(oslf_trace::bvh::scene_instances(
-            scene,
-            true,
-            scene.bake.epsilon * TESSELLATION_ERROR,
-        ))
-        .unwrap();
+        let geometry = crate::extremes::geometry(scene);
         let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
         let placement = sample_points::place(&surfaces, &scene.bake, &geometry).unwrap();
         (placement, geometry)

@@ -74,7 +74,8 @@ fn scene_pair(translate: DVec3, scale: f64, eps_unit: f64, count: u32) -> (Scene
     (scene, unit)
 }
 
-fn geometry(scene: &Scene) -> TriangleScene {
+/// The ray-tracing geometry of `scene` (objects included), as the bake builds it.
+pub(crate) fn geometry(scene: &Scene) -> TriangleScene {
     TriangleScene::build(oslf_trace::bvh::scene_instances(
         scene,
         true,

@@ -146,12 +146,7 @@ pub fn choose(
                 ),
             });
         }
-        // Every object has a spacing of its own; the bake's is the finest of them.
-        let finest = objects
-            .iter()
-            .filter_map(|o| o.sample_spacing)
-            .fold(f32::INFINITY, f32::min);
-        settings.sample_count = SampleDensity::Spacing(finest);
+        settings.sample_count = finest_spacing(objects);
     }
     if unset.cube_resolution {
         choices.push(choose_cube_resolution(objects, &measures, settings));
@@ -165,6 +160,16 @@ pub fn choose(
         fit_store_budget(objects, &measures, settings, unset, budget, &mut choices);
     }
     choices
+}
+
+/// The bake's density where every object has a spacing of its own: the finest of them.
+fn finest_spacing(objects: &[OslfObject]) -> SampleDensity {
+    SampleDensity::Spacing(
+        objects
+            .iter()
+            .filter_map(|o| o.sample_spacing)
+            .fold(f32::INFINITY, f32::min),
+    )
 }
 
 /// The samples per texel chosen at cube resolution `n`: [`RAYS_PER_CUBE`] per cube.
@@ -313,12 +318,7 @@ fn fit_store_budget(
                 );
             }
         }
-        settings.sample_count = SampleDensity::Spacing(
-            objects
-                .iter()
-                .filter_map(|o| o.sample_spacing)
-                .fold(f32::INFINITY, f32::min),
-        );
+        settings.sample_count = finest_spacing(objects);
     }
     let after = store_estimate(objects, measures, settings);
     let met = if after <= budget * 1.0001 {
