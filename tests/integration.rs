@@ -54,3 +54,5 @@ mod example_scene;
 mod module_graph;
 #[path = "pipeline.rs"]
 mod pipeline;
+#[path = "web.rs"]
+mod web;

@@ -48,36 +48,12 @@ impl StoreBuffers {
     /// relative to) and creates the per-frame buffers for `cube_count` cubes.
     pub fn new(device: &wgpu::Device, store: &Store, mesh: &ObjectMesh, cube_count: u32) -> Self {
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let mut positions: Vec<[f32; 4]> = store
-            .sample_points()
-            .iter()
-            .map(|s| {
-                (Vec3::from_array(s.position) - mesh.origin)
-                    .extend(1.0)
-                    .to_array()
-            })
-            .collect();
-        if positions.is_empty() {
-            positions.push([0.0; 4]);
-        }
         let samples = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("sample points"),
-            contents: bytemuck::cast_slice(&positions),
+            contents: bytemuck::cast_slice(&sample_point_data(store, mesh)),
             usage: storage,
         });
-        let mut patch_data: Vec<[f32; 4]> = Vec::with_capacity(mesh.patches.len() * PATCH_VEC4S);
-        for (((p, c), m), e) in mesh
-            .patches
-            .iter()
-            .zip(&mesh.colors)
-            .zip(&mesh.materials)
-            .zip(&mesh.emissions)
-        {
-            patch_data.extend(p.cp.iter().map(|v| v.extend(0.0).to_array()));
-            patch_data.push(c.extend(1.0).to_array());
-            patch_data.push(*m);
-            patch_data.push(*e);
-        }
+        let patch_data = patch_data(mesh);
         let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("patches"),
             contents: bytemuck::cast_slice(&patch_data),
@@ -135,6 +111,66 @@ impl StoreBuffers {
     }
 }
 
+/// shade.wgsl's `samples`: each sample point relative to the mesh's origin, w = 1 (one zero
+/// point for a store without points, as a binding cannot be empty).
+pub(crate) fn sample_point_data(store: &Store, mesh: &ObjectMesh) -> Vec<[f32; 4]> {
+    let mut positions: Vec<[f32; 4]> = store
+        .sample_points()
+        .iter()
+        .map(|s| {
+            (Vec3::from_array(s.position) - mesh.origin)
+                .extend(1.0)
+                .to_array()
+        })
+        .collect();
+    if positions.is_empty() {
+        positions.push([0.0; 4]);
+    }
+    positions
+}
+
+/// shade.wgsl's `patches`: per patch its 16 control points, colour, material and emission
+/// ([`PATCH_VEC4S`] vec4s).
+pub(crate) fn patch_data(mesh: &ObjectMesh) -> Vec<[f32; 4]> {
+    let mut patch_data: Vec<[f32; 4]> = Vec::with_capacity(mesh.patches.len() * PATCH_VEC4S);
+    for (((p, c), m), e) in mesh
+        .patches
+        .iter()
+        .zip(&mesh.colors)
+        .zip(&mesh.materials)
+        .zip(&mesh.emissions)
+    {
+        patch_data.extend(p.cp.iter().map(|v| v.extend(0.0).to_array()));
+        patch_data.push(c.extend(1.0).to_array());
+        patch_data.push(*m);
+        patch_data.push(*e);
+    }
+    patch_data
+}
+
+/// The sample maps' texture format and bytes per texel: four u16 indices, or four u32.
+pub(crate) fn sample_map_format(store: &Store) -> (wgpu::TextureFormat, u32) {
+    if store.index_width() == IndexWidth::U16 {
+        (wgpu::TextureFormat::Rgba16Uint, 8)
+    } else {
+        (wgpu::TextureFormat::Rgba32Uint, 16)
+    }
+}
+
+/// The texels of sample map `map` (a Bézier patch or an atlas page), row-major, as the
+/// texture holds them; errors name the store's damaged map.
+pub(crate) fn sample_map_bytes(store: &Store, map: u32) -> Result<Vec<u8>> {
+    let view = store.sample_map(map).map_err(|error| RuntimeError::Store {
+        path: "sample maps".into(),
+        error,
+    })?;
+    Ok(match (view.as_u16(), view.as_u32()) {
+        (Some(d), _) => bytemuck::cast_slice(d).to_vec(),
+        (_, Some(d)) => bytemuck::cast_slice(d).to_vec(),
+        _ => unreachable!("a sample map is either u16 or u32"),
+    })
+}
+
 /// Bytes of the G-buffer and shading passes' GPU timestamps (u64 ticks, start and end of each).
 pub const TIMESTAMP_BYTES: u64 = 32;
 
@@ -147,12 +183,7 @@ pub const TIMESTAMP_BYTES: u64 = 32;
 pub(crate) fn upload_sample_maps(gpu: &Gpu, store: &Store) -> Result<wgpu::TextureView> {
     let map_res = store.header().sample_map_resolution;
     let patch_count = store.meta().map_count() as u32;
-    let index16 = store.index_width() == IndexWidth::U16;
-    let map_format = if index16 {
-        wgpu::TextureFormat::Rgba16Uint
-    } else {
-        wgpu::TextureFormat::Rgba32Uint
-    };
+    let (map_format, texel) = sample_map_format(store);
     let map_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("sample maps"),
         size: wgpu::Extent3d {
@@ -167,19 +198,8 @@ pub(crate) fn upload_sample_maps(gpu: &Gpu, store: &Store) -> Result<wgpu::Textu
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let texel = if index16 { 8 } else { 16 };
     for patch in 0..patch_count {
-        let view = store
-            .sample_map(patch)
-            .map_err(|error| RuntimeError::Store {
-                path: "sample maps".into(),
-                error,
-            })?;
-        let bytes: &[u8] = match (view.as_u16(), view.as_u32()) {
-            (Some(d), _) => bytemuck::cast_slice(d),
-            (_, Some(d)) => bytemuck::cast_slice(d),
-            _ => unreachable!("a sample map is either u16 or u32"),
-        };
+        let bytes = sample_map_bytes(store, patch)?;
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: &map_texture,
@@ -191,7 +211,7 @@ pub(crate) fn upload_sample_maps(gpu: &Gpu, store: &Store) -> Result<wgpu::Textu
                 },
                 aspect: wgpu::TextureAspect::All,
             },
-            bytes,
+            &bytes,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(map_res * texel),

@@ -97,6 +97,7 @@ mod shader_layout;
 mod shading;
 mod textures;
 mod uniform;
+pub mod web;
 /// WGSL struct layouts checked against Rust: test tooling (feature `tooling`).
 #[cfg(any(test, feature = "tooling"))]
 pub mod wgsl_layout;

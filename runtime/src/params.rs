@@ -49,6 +49,20 @@ impl Mode {
         }
     }
 
+    /// The mode a store is drawn in unless one is asked for: `pbr` when any of its objects
+    /// carries a metallic-roughness material, else `recon-mirror`.
+    pub fn default_for(meta: &oslf_format::StoreMeta) -> Mode {
+        if meta
+            .objects
+            .iter()
+            .any(|o| o.material.is_metallic_roughness())
+        {
+            Mode::Pbr
+        } else {
+            Mode::ReconMirror
+        }
+    }
+
     /// The shader's term flags: 1 recon, 2 mirror, 4 glossy, 8 scale by C_s, 16 the glossy
     /// term is glTF's metallic-roughness BRDF (else Ashikhmin–Shirley).
     pub fn terms(self) -> u32 {

@@ -122,7 +122,7 @@ impl PoolLayout {
     /// The size of pool texture `t`: its slots' faces, 2^face_shift side by side per layer
     /// (multiples of 4 for BC6H, whose faces are); `None` when it holds no slot (the pool then
     /// makes a placeholder).
-    fn texture_size(&self, t: u32) -> Option<wgpu::Extent3d> {
+    pub(crate) fn texture_size(&self, t: u32) -> Option<wgpu::Extent3d> {
         let in_this = self
             .slots
             .saturating_sub(t * self.slots_per_texture)

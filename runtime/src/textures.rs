@@ -2,7 +2,7 @@
 //! textured object for gbuffer.wgsl's group 1 (`T`, `tex_base_color`, …), and one of 1×1
 //! textures with no flags for the objects without textures.
 
-use oslf_format::{StoreMeta, TextureImage, TextureKind};
+use oslf_format::{ObjectInfo, StoreMeta, TextureImage, TextureKind};
 use wgpu::util::DeviceExt;
 
 /// The kinds gbuffer.wgsl reads, in the order of its group-1 texture bindings (1, 2, …) and
@@ -52,29 +52,36 @@ impl ObjectTextureGroups {
                 .objects
                 .iter()
                 .map(|o| {
-                    let t = o.textures.as_ref();
-                    let mut params = TextureParams::default();
+                    let (params, images) = object_textures(o);
                     let views: Vec<wgpu::TextureView> = BOUND_KINDS
                         .iter()
-                        .enumerate()
-                        .map(|(bit, &kind)| {
-                            let image = t.and_then(|t| t.image(kind));
-                            if image.is_some() {
-                                params.flags |= 1 << bit;
-                            }
-                            upload(device, queue, image.unwrap_or(&blank), kind)
-                        })
+                        .zip(images)
+                        .map(|(&kind, image)| upload(device, queue, image.unwrap_or(&blank), kind))
                         .collect();
-                    if let Some(t) = t {
-                        params.normal_scale = t.normal_scale;
-                        params.occlusion_strength = t.occlusion_strength;
-                    }
                     group(device, &layout, &params, &views)
                 })
                 .collect();
             Self { layout, groups }
         })
     }
+}
+
+/// An object's [`TextureParams`] and its images in the order of [`BOUND_KINDS`] (`None`
+/// where it has no such texture: a 1×1 texture is bound there and its flag is clear).
+pub(crate) fn object_textures(o: &ObjectInfo) -> (TextureParams, [Option<&TextureImage>; 5]) {
+    let t = o.textures.as_ref();
+    let mut params = TextureParams::default();
+    let images = BOUND_KINDS.map(|kind| t.and_then(|t| t.image(kind)));
+    for (bit, image) in images.iter().enumerate() {
+        if image.is_some() {
+            params.flags |= 1 << bit;
+        }
+    }
+    if let Some(t) = t {
+        params.normal_scale = t.normal_scale;
+        params.occlusion_strength = t.occlusion_strength;
+    }
+    (params, images)
 }
 
 /// gbuffer.wgsl's group 1: the uniform, then one texture per [`BOUND_KINDS`].

@@ -6,15 +6,18 @@ mod cache_stats;
 mod compare;
 mod completions;
 mod device;
+mod export_web;
 mod flags;
 mod paths;
 mod progress;
 mod render;
+mod serve;
 mod store;
 mod sweep;
 mod tables;
 mod truth;
 mod view;
+mod web_site;
 
 use clap::{Parser, Subcommand};
 
@@ -48,6 +51,10 @@ enum Command {
     Sweep(sweep::Args),
     /// Replay a still view and an orbit and report the cube-map cache's hits, misses and loads.
     CacheStats(cache_stats::Args),
+    /// Serve stores to a browser: a WebGPU page that draws them with the runtime's shaders.
+    Serve(serve::Args),
+    /// Write a store's web viewer as static files for any web host.
+    ExportWeb(export_web::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
     Completions(completions::Args),
 }
@@ -64,6 +71,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tables(a) => tables::run(a),
         Command::Sweep(a) => sweep::run(a),
         Command::CacheStats(a) => cache_stats::run(a),
+        Command::Serve(a) => serve::run(a),
+        Command::ExportWeb(a) => export_web::run(a),
         Command::Completions(a) => completions::run(a),
     };
     result.map_err(flags::name_flags)

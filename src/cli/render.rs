@@ -101,7 +101,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.verify {
         super::store::verify_for_render(&store, &args.store, args.strict)?;
     }
-    let mode = args.mode.unwrap_or_else(|| default_mode(&store));
+    let mode = args.mode.unwrap_or_else(|| Mode::default_for(store.meta()));
     let params = args.shading.params(mode, args.blend)?;
     args.shading.check_store(&store, &args.store)?;
     let (background, note) = args.background.resolve(&store, &args.store)?;
@@ -405,19 +405,4 @@ fn print_mode(params: &oslf_runtime::ShadingParams, defaulted: bool) {
         "mode           {}{default}{materials}",
         params.mode().name()
     );
-}
-
-/// The mode a render without `--mode` draws: `pbr` where an object of the store carries a
-/// metallic-roughness material, else reconstruction plus mirror reflection (the thesis's).
-fn default_mode(store: &oslf_format::Store) -> Mode {
-    let pbr = store
-        .meta()
-        .objects
-        .iter()
-        .any(|o| o.material.is_metallic_roughness());
-    if pbr {
-        Mode::Pbr
-    } else {
-        Mode::ReconMirror
-    }
 }

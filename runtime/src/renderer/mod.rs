@@ -193,6 +193,29 @@ fn min_object_metallic(meta: &oslf_format::StoreMeta) -> Option<f32> {
         .reduce(f32::min)
 }
 
+/// What the shader sees of `store` (drawn as `mesh`) with its faces in the pool `layout`.
+pub(crate) fn store_constants(
+    store: &Store,
+    mesh: &ObjectMesh,
+    layout: &PoolLayout,
+) -> StoreConstants {
+    StoreConstants {
+        sample_count: store.sample_points().len() as u32,
+        env_cube: store.env_cube_index().unwrap_or(u32::MAX),
+        map_res: store.header().sample_map_resolution,
+        index16: store.index_width() == oslf_format::IndexWidth::U16,
+        cube_res: layout.cube_res,
+        slots_per_texture: layout.slots_per_texture,
+        mip_levels: layout.face.levels,
+        has_depth: layout.face.depth,
+        origin: mesh.origin.to_array(),
+        // A damaged environment cube leaves no fitted box; the cache reports the damage
+        // when it loads the cube, and parallax then asks for a given box.
+        fitted_box: crate::probe::fit_proxy_box(store, mesh.origin).unwrap_or(None),
+        min_object_metallic: min_object_metallic(store.meta()),
+    }
+}
+
 /// The cube cache for `store` with the pool's slots, the environment cube pinned.
 fn open_cache(store: &Store, layout: &PoolLayout, config: &CacheConfig) -> CubeCache {
     let mut cache = CubeCache::new(
@@ -244,21 +267,7 @@ impl Renderer {
             layout.face_shift,
             textures.is_some(),
         );
-        let constants = StoreConstants {
-            sample_count: store.sample_points().len() as u32,
-            env_cube: store.env_cube_index().unwrap_or(u32::MAX),
-            map_res: store.header().sample_map_resolution,
-            index16: store.index_width() == oslf_format::IndexWidth::U16,
-            cube_res: layout.cube_res,
-            slots_per_texture: layout.slots_per_texture,
-            mip_levels: face.levels,
-            has_depth: face.depth,
-            origin: mesh.origin.to_array(),
-            // A damaged environment cube leaves no fitted box; the cache reports the damage
-            // when it loads the cube (below), and parallax then asks for a given box.
-            fitted_box: crate::probe::fit_proxy_box(&store, mesh.origin).unwrap_or(None),
-            min_object_metallic: min_object_metallic(store.meta()),
-        };
+        let constants = store_constants(&store, &mesh, &layout);
         let prefiltered_view = prefiltered::upload(&gpu, &PrefilteredEnv::black());
         let composites = host::Composites::new(&gpu.device);
         let mut renderer = Self {
