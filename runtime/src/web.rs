@@ -258,6 +258,108 @@ fn encoding_name(e: Encoding) -> &'static str {
     }
 }
 
+/// What a variant's uniforms are built from.
+struct VariantView<'a> {
+    store: &'a Store,
+    mesh: &'a ObjectMesh,
+    /// The camera, relative to the mesh's origin.
+    camera: &'a oslf_geometry::Camera,
+    background: Background,
+    textured: bool,
+}
+
+impl VariantView<'_> {
+    /// The variant of the pool `layout`: its layout and every mode's uniform and constants.
+    fn variant(&self, layout: &PoolLayout) -> WebVariant {
+        let face = layout.face;
+        let constants = store_constants(self.store, self.mesh, layout);
+        let modes = Mode::ALL
+            .iter()
+            .map(|&mode| {
+                let params = ShadingParams::of_mode(mode);
+                let u = ShadeUniform::new(
+                    &params,
+                    glam::Mat4::IDENTITY,
+                    self.camera,
+                    [1, 1],
+                    &constants,
+                    self.background,
+                );
+                WebMode {
+                    name: mode.name().into(),
+                    uniform: words(&u),
+                    constants: ShadeKey::of(&u)
+                        .constants(layout.textures_in_use(), layout.face_shift, self.textured)
+                        .into_iter()
+                        .map(|(k, v)| (k.to_string(), v))
+                        .collect(),
+                }
+            })
+            .collect();
+        let (texture_format, feature) = web_format(face.encoding);
+        WebVariant {
+            encoding: encoding_name(face.encoding).to_string(),
+            texture_format: texture_format.into(),
+            feature: feature.map(Into::into),
+            slots: layout.slots,
+            slots_per_texture: layout.slots_per_texture,
+            face_shift: layout.face_shift,
+            pools: layout.textures_in_use(),
+            pool_sizes: (0..crate::cache::MAX_POOL_TEXTURES)
+                .map(|t| {
+                    layout
+                        .texture_size(t)
+                        .map(|s| [s.width, s.height, s.depth_or_array_layers])
+                })
+                .collect(),
+            cube_res: face.res,
+            levels: (0..face.levels)
+                .map(|l| {
+                    let (row_bytes, rows) = face.level_rows(l);
+                    WebLevel {
+                        side: face.side(l),
+                        offset: face.level_offset(l),
+                        row_bytes,
+                        rows,
+                    }
+                })
+                .collect(),
+            depth_offset: face.depth.then(|| face.depth_offset()),
+            face_bytes: face.payload_bytes(),
+            modes,
+            probe: if face.encoding.is_block_compressed() {
+                block_probe(self.store, face)
+            } else {
+                None
+            },
+        }
+    }
+}
+
+/// Per object of `meta`, its textures as gbuffer.wgsl's group 1 binds them.
+fn object_texture_list(meta: &oslf_format::StoreMeta) -> Vec<WebObjectTextures> {
+    meta.objects
+        .iter()
+        .map(|o| {
+            let (params, images) = object_textures(o);
+            WebObjectTextures {
+                params: words(&params),
+                images: BOUND_KINDS
+                    .iter()
+                    .zip(images)
+                    .map(|(&kind, image)| {
+                        image.map(|i| WebImage {
+                            kind: kind_name(kind),
+                            width: i.width,
+                            height: i.height,
+                        })
+                    })
+                    .collect(),
+            }
+        })
+        .collect()
+}
+
 /// The brightest of the first face's blocks of the store's first cube that decodes, and its
 /// texels; `None` when no block of it decodes.
 fn block_probe(store: &Store, face: FaceLayout) -> Option<BlockProbe> {
@@ -324,7 +426,13 @@ impl WebStore {
             Background::None
         };
         let textured = store.meta().objects.iter().any(|o| o.textures.is_some());
-        let mut variants = Vec::new();
+        let relative = oslf_geometry::Camera {
+            position: glam::Vec3::from_array(camera.position) - mesh.origin,
+            target: glam::Vec3::from_array(camera.target) - mesh.origin,
+            up: glam::Vec3::from_array(camera.up),
+            vfov_deg: camera.vfov_deg,
+        };
+        let mut variants: Vec<WebVariant> = Vec::new();
         let mut layouts = Vec::new();
         for encoding in encodings {
             let face = FaceLayout::new(&store, encoding);
@@ -332,100 +440,19 @@ impl WebStore {
                 continue;
             }
             let layout = PoolLayout::plan(&limits, face, store.cube_count(), config)?;
-            let constants = store_constants(&store, &mesh, &layout);
-            let relative = oslf_geometry::Camera {
-                position: glam::Vec3::from_array(camera.position) - mesh.origin,
-                target: glam::Vec3::from_array(camera.target) - mesh.origin,
-                up: glam::Vec3::from_array(camera.up),
-                vfov_deg: camera.vfov_deg,
+            let view = VariantView {
+                store: &store,
+                mesh: &mesh,
+                camera: &relative,
+                background,
+                textured,
             };
-            let modes = Mode::ALL
-                .iter()
-                .map(|&mode| {
-                    let params = ShadingParams::of_mode(mode);
-                    let u = ShadeUniform::new(
-                        &params,
-                        glam::Mat4::IDENTITY,
-                        &relative,
-                        [1, 1],
-                        &constants,
-                        background,
-                    );
-                    WebMode {
-                        name: mode.name().into(),
-                        uniform: words(&u),
-                        constants: ShadeKey::of(&u)
-                            .constants(layout.textures_in_use(), layout.face_shift, textured)
-                            .into_iter()
-                            .map(|(k, v)| (k.to_string(), v))
-                            .collect(),
-                    }
-                })
-                .collect();
-            let (texture_format, feature) = web_format(face.encoding);
-            let name = encoding_name(face.encoding).to_string();
-            variants.push(WebVariant {
-                encoding: name.clone(),
-                texture_format: texture_format.into(),
-                feature: feature.map(Into::into),
-                slots: layout.slots,
-                slots_per_texture: layout.slots_per_texture,
-                face_shift: layout.face_shift,
-                pools: layout.textures_in_use(),
-                pool_sizes: (0..crate::cache::MAX_POOL_TEXTURES)
-                    .map(|t| {
-                        layout
-                            .texture_size(t)
-                            .map(|s| [s.width, s.height, s.depth_or_array_layers])
-                    })
-                    .collect(),
-                cube_res: face.res,
-                levels: (0..face.levels)
-                    .map(|l| {
-                        let (row_bytes, rows) = face.level_rows(l);
-                        WebLevel {
-                            side: face.side(l),
-                            offset: face.level_offset(l),
-                            row_bytes,
-                            rows,
-                        }
-                    })
-                    .collect(),
-                depth_offset: face.depth.then(|| face.depth_offset()),
-                face_bytes: face.payload_bytes(),
-                modes,
-                probe: if face.encoding.is_block_compressed() {
-                    block_probe(&store, face)
-                } else {
-                    None
-                },
-            });
-            layouts.push((name, face));
+            variants.push(view.variant(&layout));
+            layouts.push((encoding_name(face.encoding).to_string(), face));
         }
         let (map_format, map_texel_bytes) = sample_map_format(&store);
         let textures = if textured {
-            store
-                .meta()
-                .objects
-                .iter()
-                .map(|o| {
-                    let (params, images) = object_textures(o);
-                    WebObjectTextures {
-                        params: words(&params),
-                        images: BOUND_KINDS
-                            .iter()
-                            .zip(images)
-                            .map(|(&kind, image)| {
-                                image.map(|i| WebImage {
-                                    kind: kind_name(kind),
-                                    width: i.width,
-                                    height: i.height,
-                                })
-                            })
-                            .collect(),
-                    }
-                })
-                .collect()
+            object_texture_list(store.meta())
         } else {
             Vec::new()
         };

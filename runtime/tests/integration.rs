@@ -22,3 +22,5 @@ mod mesh;
 mod parity;
 #[path = "textures.rs"]
 mod textures;
+#[path = "web.rs"]
+mod web;
