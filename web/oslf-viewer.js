@@ -248,9 +248,12 @@ export class OslfViewer extends HTMLElement {
     const shader = async (name) => {
       const text = await (await fetchOk(new URL(`shaders/${name}`, import.meta.url), `shader ${name}`)).text();
       const module = device.createShaderModule({ label: name, code: text });
-      const info = await module.getCompilationInfo();
-      const errors = info.messages.filter((m) => m.type === 'error');
-      if (errors.length) throw new ViewerError('error', `${name}: ${errors.map((m) => `${m.lineNum}:${m.linePos} ${m.message}`).join('\n')}`);
+      // Not awaited: the validation error scope below catches a module that fails, and this
+      // says where.
+      module.getCompilationInfo().then((info) => {
+        const errors = info.messages.filter((m) => m.type === 'error');
+        if (errors.length) this.fail(new ViewerError('error', `${name}: ${errors.map((m) => `${m.lineNum}:${m.linePos} ${m.message}`).join('\n')}`));
+      });
       return module;
     };
     const resource = async (name) => new Uint8Array(await (await fetchOk(new URL(name, this.base), name)).arrayBuffer());

@@ -3,6 +3,7 @@
 // reported as JSON. Used by tests/web.rs of the oslf crate and by docs/measurements.md.
 //
 //   node drive.mjs URL [--png OUT.png] [--no-webgpu] [--timeout MS] [--first-frame]
+//                      [--time-frames N]
 //
 // --no-webgpu: the page runs without navigator.gpu (a browser without WebGPU).
 // --first-frame: screenshot as soon as the first frame is drawn.
@@ -49,6 +50,23 @@ try {
       messageShown: v.shadowRoot.querySelector('.msg').classList.contains('shown') };
   });
   if (png) await page.locator('oslf-viewer canvas').screenshot({ path: png });
+  // --time-frames N: N more frames of the same view, each timed from its request to its
+  // feedback (the GPU's work done), after the cache is full.
+  const frames = Number(value('--time-frames', '0'));
+  if (frames > 0 && !state.error) {
+    state.frameMs = await page.evaluate(async (n) => {
+      const v = document.querySelector('oslf-viewer');
+      const times = [];
+      for (let i = 0; i < n; i++) {
+        const t = performance.now();
+        const done = new Promise((r) => v.addEventListener('oslf-frame', r, { once: true }));
+        v.schedule();
+        await done;
+        times.push(performance.now() - t);
+      }
+      return times;
+    }, frames);
+  }
   out = { ...state, timedOut, wallMs: Date.now() - t0, console: console_ };
 } catch (e) {
   out = { driverError: String(e) };
