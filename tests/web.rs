@@ -307,7 +307,7 @@ fn the_page_streams_within_its_cache_budget() {
 }
 
 #[test]
-fn a_missing_store_a_damaged_one_and_no_webgpu_each_say_so() {
+fn a_missing_store_a_damaged_one_a_lost_device_and_no_webgpu_each_say_so() {
     let _browser = one_browser();
     let stores = stores();
     let dir = tempfile::tempdir().unwrap();
@@ -341,6 +341,13 @@ fn a_missing_store_a_damaged_one_and_no_webgpu_each_say_so() {
         bad["message"].as_str().unwrap().contains("damaged.oslf"),
         "the message names the store: {bad}"
     );
+    let lost = drive(
+        &format!("{}?width={W}&height={H}", server.url),
+        None,
+        &["--lose-device"],
+    );
+    assert_eq!(lost["error"]["kind"], "device-lost", "{lost}");
+    assert!(lost["message"].as_str().unwrap().contains("lost"), "{lost}");
     let none = drive(&server.url, None, &["--no-webgpu"]);
     assert_eq!(none["error"]["kind"], "no-webgpu", "{none}");
     assert!(

@@ -177,8 +177,9 @@ export class OslfViewer extends HTMLElement {
     this.device?.destroy();
   }
 
+  // `src` is read once, when the element is connected; the others take effect on the next frame.
   attributeChangedCallback(name) {
-    if (!this.ready) return;
+    if (!this.ready || name === 'src') return;
     if (name === 'width' || name === 'height') this.resize();
     this.schedule();
   }
@@ -192,6 +193,12 @@ export class OslfViewer extends HTMLElement {
     this.dispatchEvent(new CustomEvent('oslf-error', { detail: this.error, bubbles: true }));
   }
 
+  // With the `debug` attribute, each start-up step is logged to the console.
+  step(what) {
+    this.steps = [...(this.steps ?? []), `${Math.round(performance.now() - this.t0)} ms ${what}`];
+    if (this.hasAttribute('debug')) console.log(`oslf-viewer: ${what}`);
+  }
+
   async start() {
     const src = this.getAttribute('src');
     if (!src) throw new ViewerError('missing', 'oslf-viewer: no src attribute (the store\'s directory, e.g. stores/0/)');
@@ -200,11 +207,13 @@ export class OslfViewer extends HTMLElement {
         'Use a browser with WebGPU enabled (Chrome or Edge 113+, Safari 26+, Firefox 141+ on Windows).');
     }
     this.base = new URL(src.endsWith('/') ? src : `${src}/`, document.baseURI);
+    this.step('manifest');
     const manifest = await (await fetchOk(new URL('manifest.json', this.base), 'the store\'s manifest')).json();
     if (manifest.format !== FORMAT_VERSION) {
       throw new ViewerError('damaged', `manifest format ${manifest.format}; this page reads ${FORMAT_VERSION}`);
     }
     this.manifest = manifest;
+    this.step('adapter');
     const adapter = await navigator.gpu.requestAdapter();
     this.adapter = adapter;
     this.software = adapter.info?.isFallbackAdapter || /swiftshader/i.test(`${adapter.info?.vendor} ${adapter.info?.architecture}`);
@@ -235,6 +244,7 @@ export class OslfViewer extends HTMLElement {
       limits.maxColorAttachmentBytesPerSample = need;
     }
     if (manifest.map_count > 256) limits.maxTextureArrayLayers = Math.min(manifest.map_count, adapter.limits.maxTextureArrayLayers);
+    this.step('device');
     const device = await adapter.requestDevice({
       requiredFeatures: variant.feature ? [variant.feature] : [],
       requiredLimits: limits,
@@ -259,11 +269,13 @@ export class OslfViewer extends HTMLElement {
     const resource = async (name) => new Uint8Array(await (await fetchOk(new URL(name, this.base), name)).arrayBuffer());
     const textureNames = [];
     manifest.textures.forEach((t, o) => t.images.forEach((i) => i && textureNames.push(`texture-${o}-${i.kind}.bin`)));
+    this.step('resources');
     const [gbufferModule, shadeModule, blitModule, vertices, indices, samples, patches, maps, ...images] =
       await Promise.all([shader('gbuffer.wgsl'), shader('shade.wgsl'), shader('blit.wgsl'),
         ...['vertices.bin', 'indices.bin', 'samples.bin', 'patches.bin', 'maps.bin', ...textureNames].map(resource)]);
     const imageBytes = new Map(textureNames.map((n, i) => [n, images[i]]));
 
+    this.step('create');
     device.pushErrorScope('validation');
     this.createResources({ vertices, indices, samples, patches, maps, imageBytes });
     this.createPipelines(gbufferModule, shadeModule, blitModule);
@@ -271,8 +283,10 @@ export class OslfViewer extends HTMLElement {
     this.setupCache();
     this.setupControls();
     this.resize();
+    this.step('error scope');
     const error = await device.popErrorScope();
     if (error) throw new ViewerError('error', `WebGPU: ${error.message}`);
+    this.step('environment cube');
     // The environment cube is pinned, loaded before the first frame as the renderer does.
     if (manifest.env_cube !== null && manifest.env_cube !== undefined) {
       const slot = this.takeSlot(0);
@@ -280,6 +294,7 @@ export class OslfViewer extends HTMLElement {
       this.inFlight.set(manifest.env_cube, slot);
       await this.loadCube(manifest.env_cube, slot);
     }
+    this.step('ready');
     this.ready = true;
     const notes = [];
     if (this.software && !this.hasAttribute('glossy-filter')) {
@@ -429,14 +444,19 @@ export class OslfViewer extends HTMLElement {
       fragment: { module: blitModule, entryPoint: 'fs', targets: [{ format: this.canvasFormat }] },
     });
     this.blitUniform = device.createBuffer({ size: 16, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-    const srgbCanvas = this.canvasFormat.endsWith('-srgb');
-    const blit = new ArrayBuffer(16);
-    new Float32Array(blit, 0, 1)[0] = Number(this.getAttribute('exposure') ?? 1);
-    new Uint32Array(blit, 4, 1)[0] = srgbCanvas ? 0 : 1;
-    device.queue.writeBuffer(this.blitUniform, 0, blit);
     this.context = this.canvas.getContext('webgpu');
     if (!this.context) throw new ViewerError('no-webgpu', 'the canvas gives no WebGPU context');
     this.context.configure({ device, format: this.canvasFormat, alphaMode: 'opaque' });
+  }
+
+  // view_blit.wgsl's uniform: the exposure, and whether to encode sRGB (not for an -srgb canvas).
+  blitParams() {
+    const exposure = Number(this.getAttribute('exposure') ?? 1);
+    if (!(exposure >= 1e-6 && exposure <= 1e6)) throw new ViewerError('error', `exposure ${this.getAttribute('exposure')}: 1e-6 to 1e6`);
+    const blit = new ArrayBuffer(16);
+    new Float32Array(blit, 0, 1)[0] = exposure;
+    new Uint32Array(blit, 4, 1)[0] = this.canvasFormat.endsWith('-srgb') ? 0 : 1;
+    return blit;
   }
 
   // The mode the attributes ask for, else the store's default (as oslf render).
@@ -571,6 +591,7 @@ export class OslfViewer extends HTMLElement {
     const mode = this.currentMode(), background = this.currentBackground();
     device.queue.writeBuffer(this.uniformBuffer, 0, this.uniform(mode, background));
     device.queue.writeBuffer(this.slotBuffer, 0, this.table);
+    device.queue.writeBuffer(this.blitUniform, 0, this.blitParams());
     const enc = device.createCommandEncoder();
     enc.clearBuffer(this.feedbackBuffer);
     const keep = { loadOp: 'load', storeOp: 'store' };

@@ -230,6 +230,13 @@ pub struct WebManifest {
     pub variants: Vec<WebVariant>,
 }
 
+impl WebManifest {
+    /// The encodings of the variants, preferred first.
+    pub fn encodings(&self) -> Vec<&str> {
+        self.variants.iter().map(|v| v.encoding.as_str()).collect()
+    }
+}
+
 /// A store opened for a web page: the manifest, and the bytes of each resource on request.
 pub struct WebStore {
     store: Arc<Store>,

@@ -33,6 +33,8 @@ const BASE: &[(&str, &str)] = &[
         "render %store=st.oslf -o @output=r.exr --stats-json @stats_json=s.json",
     ),
     ("view", "view %store=st.oslf"),
+    ("serve", "serve %stores=st.oslf --port 0"),
+    ("export-web", "export-web %store=st.oslf @dir=webdir -q"),
     ("store info", "store info %store=st.oslf"),
     ("store verify", "store verify %store=st.oslf"),
     (

@@ -88,11 +88,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         human_bytes(total),
         total as f64 / m.store_bytes.max(1) as f64,
         human_bytes(m.store_bytes),
-        m.variants
-            .iter()
-            .map(|v| v.encoding.as_str())
-            .collect::<Vec<_>>()
-            .join(" and ")
+        m.encodings().join(" and ")
     );
     println!(
         "publish        serve {} from any static web host and open index.html in a browser with WebGPU",

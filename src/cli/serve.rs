@@ -105,11 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             m.cube_count,
             m.map_count,
             human_bytes(m.store_bytes),
-            m.variants
-                .iter()
-                .map(|v| v.encoding.as_str())
-                .collect::<Vec<_>>()
-                .join(" or ")
+            m.encodings().join(" or ")
         );
     }
     println!("serving        {url} (Ctrl-C stops)");

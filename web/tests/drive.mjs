@@ -3,7 +3,7 @@
 // reported as JSON. Used by tests/web.rs of the oslf crate and by docs/measurements.md.
 //
 //   node drive.mjs URL [--png OUT.png] [--no-webgpu] [--timeout MS] [--first-frame]
-//                      [--time-frames N]
+//                      [--time-frames N] [--lose-device]
 //
 // --no-webgpu: the page runs without navigator.gpu (a browser without WebGPU).
 // --first-frame: screenshot as soon as the first frame is drawn.
@@ -42,9 +42,15 @@ try {
     null, { timeout, polling: 100 }).catch(() => { timedOut = true; });
   // Let the last frame reach the canvas.
   await page.waitForTimeout(200);
+  // --lose-device: the GPU device goes away (destroyed, as a driver reset would); the page
+  // must say so.
+  if (flag('--lose-device')) {
+    await page.evaluate(() => document.querySelector('oslf-viewer').device?.destroy());
+    await page.waitForFunction(() => document.querySelector('oslf-viewer').error !== null, null, { timeout: 10000 }).catch(() => {});
+  }
   const state = await page.evaluate(() => {
     const v = document.querySelector('oslf-viewer');
-    return { stats: v.stats, error: v.error, lastFrame: v.lastFrame ?? null,
+    return { steps: v.steps ?? [], stats: v.stats, error: v.error, lastFrame: v.lastFrame ?? null,
       variant: v.variant?.encoding ?? null, slots: v.variant?.slots ?? null,
       message: v.shadowRoot.querySelector('.msg').textContent,
       messageShown: v.shadowRoot.querySelector('.msg').classList.contains('shown') };
