@@ -248,10 +248,11 @@ fn the_page_draws_what_oslf_render_draws() {
         );
         let mad = mean_abs_diff(&page, &reference);
         report.push(format!(
-            "{} {query}: {:.4} ({})",
+            "{} {query}: {:.4} ({}, {} fetches retried)",
             stores[i].display(),
             mad,
-            v["variant"]
+            v["variant"],
+            v["stats"]["retries"]
         ));
         assert!(
             mad < 0.01,

@@ -114,19 +114,41 @@ class ViewerError extends Error {
   }
 }
 
-async function fetchOk(url, what) {
-  let response;
+// A fetch that gives up on a stalled attempt (no response in HEADERS_MS, no whole body in
+// BODY_MS) and tries again, at most ATTEMPTS times in all; counted in `retries`.
+const ATTEMPTS = 3, HEADERS_MS = 20000, BODY_MS = 120000;
+const retries = { count: 0 };
+
+async function attempt(url, what, read) {
+  const controller = new AbortController();
+  let timer = setTimeout(() => controller.abort(), HEADERS_MS);
   try {
-    response = await fetch(url);
-  } catch (e) {
-    throw new ViewerError('network', `${what}: cannot fetch ${url} (${e.message})`);
+    const response = await fetch(url, { signal: controller.signal });
+    clearTimeout(timer);
+    timer = setTimeout(() => controller.abort(), BODY_MS);
+    if (!response.ok) {
+      const body = (await response.text()).trim();
+      const kind = response.status === 404 ? 'missing' : 'damaged';
+      throw new ViewerError(kind, `${what}: HTTP ${response.status} ${body || response.statusText}`);
+    }
+    return await read(response);
+  } finally {
+    clearTimeout(timer);
   }
-  if (!response.ok) {
-    const body = (await response.text()).trim();
-    const kind = response.status === 404 ? 'missing' : 'damaged';
-    throw new ViewerError(kind, `${what}: HTTP ${response.status} ${body || response.statusText}`);
+}
+
+// Fetches `url` and reads its body with `read` (`r => r.json()`, …); HTTP errors say the status
+// and the server's text (404: kind `missing`, else `damaged`).
+async function fetchOk(url, what, read = (r) => r.arrayBuffer()) {
+  for (let i = 1; ; i++) {
+    try {
+      return await attempt(url, what, read);
+    } catch (e) {
+      if (e instanceof ViewerError) throw e;
+      if (i >= ATTEMPTS) throw new ViewerError('network', `${what}: cannot fetch ${url} (${e.message}; ${ATTEMPTS} attempts)`);
+      retries.count++;
+    }
   }
-  return response;
 }
 
 const STYLE = `
@@ -152,7 +174,7 @@ export class OslfViewer extends HTMLElement {
     this.stats = {
       frames: 0, requests: 0, hits: 0, misses: 0, loads: 0, bytes: 0, evictions: 0,
       overBudget: 0, firstFrameMisses: null, maxResident: 0, maxInFlight: 0,
-      firstFrameMs: null, completeMs: null, failed: 0,
+      firstFrameMs: null, completeMs: null, failed: 0, retries: 0,
     };
     this.error = null;
     this.root = this.attachShadow({ mode: 'open' });
@@ -195,6 +217,7 @@ export class OslfViewer extends HTMLElement {
 
   // With the `debug` attribute, each start-up step is logged to the console.
   step(what) {
+    this.stats.retries = retries.count;
     this.steps = [...(this.steps ?? []), `${Math.round(performance.now() - this.t0)} ms ${what}`];
     if (this.hasAttribute('debug')) console.log(`oslf-viewer: ${what}`);
   }
@@ -208,7 +231,7 @@ export class OslfViewer extends HTMLElement {
     }
     this.base = new URL(src.endsWith('/') ? src : `${src}/`, document.baseURI);
     this.step('manifest');
-    const manifest = await (await fetchOk(new URL('manifest.json', this.base), 'the store\'s manifest')).json();
+    const manifest = await fetchOk(new URL('manifest.json', this.base), 'the store\'s manifest', (r) => r.json());
     if (manifest.format !== FORMAT_VERSION) {
       throw new ViewerError('damaged', `manifest format ${manifest.format}; this page reads ${FORMAT_VERSION}`);
     }
@@ -256,7 +279,7 @@ export class OslfViewer extends HTMLElement {
     device.addEventListener('uncapturederror', (ev) => this.fail(new ViewerError('error', `WebGPU: ${ev.error.message}`)));
 
     const shader = async (name) => {
-      const text = await (await fetchOk(new URL(`shaders/${name}`, import.meta.url), `shader ${name}`)).text();
+      const text = await fetchOk(new URL(`shaders/${name}`, import.meta.url), `shader ${name}`, (r) => r.text());
       const module = device.createShaderModule({ label: name, code: text });
       // Not awaited: the validation error scope below catches a module that fails, and this
       // says where.
@@ -266,7 +289,7 @@ export class OslfViewer extends HTMLElement {
       });
       return module;
     };
-    const resource = async (name) => new Uint8Array(await (await fetchOk(new URL(name, this.base), name)).arrayBuffer());
+    const resource = async (name) => new Uint8Array(await fetchOk(new URL(name, this.base), name));
     const textureNames = [];
     manifest.textures.forEach((t, o) => t.images.forEach((i) => i && textureNames.push(`texture-${o}-${i.kind}.bin`)));
     this.step('resources');
@@ -752,7 +775,7 @@ export class OslfViewer extends HTMLElement {
   async loadCube(cube, slot) {
     const v = this.variant;
     const url = new URL(`cubes/${v.encoding}/${cube}.bin`, this.base);
-    const bytes = new Uint8Array(await (await fetchOk(url, `cube ${cube}`)).arrayBuffer());
+    const bytes = new Uint8Array(await fetchOk(url, `cube ${cube}`));
     if (bytes.byteLength !== 6 * v.face_bytes) {
       throw new ViewerError('damaged', `cube ${cube}: ${bytes.byteLength} bytes, not ${6 * v.face_bytes}`);
     }
@@ -776,6 +799,7 @@ export class OslfViewer extends HTMLElement {
     this.slotCube[slot] = cube;
     this.table[cube] = (slot << 6) | 63;
     this.stats.loads++;
+    this.stats.retries = retries.count;
     this.stats.bytes += bytes.byteLength;
     this.stats.maxResident = Math.max(this.stats.maxResident, this.resident.size);
   }

@@ -154,7 +154,10 @@ fn serve_requests(server: &tiny_http::Server, site: &Site, log: bool) {
         }
         let mut response =
             tiny_http::Response::from_data(if fresh { Vec::new() } else { reply.body })
-                .with_status_code(status);
+                .with_status_code(status)
+                // Content-Length, never chunked: every body is in memory, and a browser then knows
+                // each response's size (tiny_http chunks bodies over 32 KB by default).
+                .with_chunked_threshold(usize::MAX);
         let mut header = |name: &str, value: &str| {
             if let Ok(h) = tiny_http::Header::from_bytes(name.as_bytes(), value.as_bytes()) {
                 response.add_header(h);
