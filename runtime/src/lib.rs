@@ -51,6 +51,10 @@
 //!   depth-tested both ways against its meshes by a composite pass; the feedback read back
 //!   asynchronously, so a frame never waits (docs/embedding.md, "Drawing into your own
 //!   frame").
+//! * **Web** ([`web`]): a store as a browser's WebGPU page draws it (`oslf serve`,
+//!   `oslf export-web`): every mode's uniform and override constants, the pool layout, the
+//!   buffers and each cube's face payloads, computed here so that the page runs these shaders
+//!   with nothing of the shading written again in JavaScript.
 //! * **CPU reference** ([`reference`](mod@reference)): the same shading in Rust, function for function, used
 //!   by the parity tests against the GPU.
 //!
