@@ -165,8 +165,8 @@ impl Source {
     }
 }
 
-/// How the glossy term reads the cube maps: the name of a [`SampleFilter`], or the split-sum
-/// baseline ([`crate::PbrIntegration::SplitSum`]); [`ShadingParams::glossy_filter`].
+/// How the glossy term reads the cube maps: the name of a [`SampleFilter`](crate::SampleFilter), or the split-sum
+/// baseline ([`crate::PbrIntegration::SplitSum`]); [`ShadingParams::glossy_filter`](crate::ShadingParams::glossy_filter).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum GlossyFilter {
