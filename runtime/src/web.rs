@@ -37,7 +37,7 @@ use crate::geometry::ObjectMesh;
 use crate::params::{Background, Mode};
 use crate::pipelines::{ShadeKey, WORKGROUP};
 use crate::pool::PoolLayout;
-use crate::renderer::{default_camera, store_constants};
+use crate::renderer::{store_constants, store_view};
 use crate::shading::ShadingParams;
 use crate::textures::{object_textures, BOUND_KINDS};
 use crate::uniform::ShadeUniform;
@@ -410,22 +410,12 @@ impl WebStore {
             encodings.push(upload_encoding(store_encoding, false));
         }
         let mesh = ObjectMesh::from_store(&store, store.meta().bake.epsilon / 20.0);
-        let camera = match &store.meta().camera {
-            Some(c) => WebCamera {
-                position: c.position,
-                target: c.target,
-                up: c.up,
-                vfov_deg: c.vfov_deg,
-            },
-            None => {
-                let c = default_camera(&mesh);
-                WebCamera {
-                    position: c.position.to_array(),
-                    target: c.target.to_array(),
-                    up: c.up.to_array(),
-                    vfov_deg: c.vfov_deg,
-                }
-            }
+        let view = store_view(&store, &mesh);
+        let camera = WebCamera {
+            position: view.position.to_array(),
+            target: view.target.to_array(),
+            up: view.up.to_array(),
+            vfov_deg: view.vfov_deg,
         };
         let background = if store.env_cube_index().is_some() {
             Background::Env

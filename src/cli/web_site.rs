@@ -33,6 +33,8 @@ pub struct SiteStore {
 /// The site of some stores.
 pub struct Site {
     stores: Vec<SiteStore>,
+    /// [`page_stamp`], hashed once.
+    page: u64,
 }
 
 /// What a path answers.
@@ -81,7 +83,10 @@ fn page_stamp() -> u64 {
 impl Site {
     /// The site of `stores`, numbered in order.
     pub fn new(stores: Vec<SiteStore>) -> Site {
-        Site { stores }
+        Site {
+            stores,
+            page: page_stamp(),
+        }
     }
 
     /// The stores.
@@ -120,7 +125,7 @@ impl Site {
     /// The reply to a GET of `path` (its query, if any, already removed).
     pub fn get(&self, path: &str) -> Reply {
         let path = path.trim_start_matches('/');
-        let page = page_stamp();
+        let page = self.page;
         let text = |t: &'static str| t.as_bytes().to_vec();
         match path {
             "" | "index.html" => Reply::ok("text/html; charset=utf-8", text(INDEX_HTML), page),

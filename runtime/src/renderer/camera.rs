@@ -46,17 +46,22 @@ pub fn default_camera(mesh: &ObjectMesh) -> Camera {
     }
 }
 
+/// The camera of `store` (drawn as `mesh`), or [`default_camera`] when it has none.
+pub(crate) fn store_view(store: &oslf_format::Store, mesh: &ObjectMesh) -> Camera {
+    match &store.meta().camera {
+        Some(c) => Camera {
+            position: Vec3::from_array(c.position),
+            target: Vec3::from_array(c.target),
+            up: Vec3::from_array(c.up),
+            vfov_deg: c.vfov_deg,
+        },
+        None => default_camera(mesh),
+    }
+}
+
 impl Renderer {
     /// The store's camera, or [`default_camera`] when it has none.
     pub fn default_view(&self) -> Camera {
-        match &self.store.meta().camera {
-            Some(c) => Camera {
-                position: Vec3::from_array(c.position),
-                target: Vec3::from_array(c.target),
-                up: Vec3::from_array(c.up),
-                vfov_deg: c.vfov_deg,
-            },
-            None => default_camera(&self.mesh),
-        }
+        store_view(&self.store, &self.mesh)
     }
 }

@@ -35,6 +35,7 @@ mod readback;
 mod targets;
 mod timer;
 
+pub(crate) use camera::store_view;
 pub use camera::{default_camera, view_projection};
 pub use host::{HostTarget, HostView};
 pub use targets::FrameBytes;
