@@ -272,10 +272,14 @@ struct Params {
 }
 
 struct Node {
-    min: vec3<f32>,
-    count: u32,
-    max: vec3<f32>,
-    first: u32
+    p: vec3<f32>,
+    e_imask: u32,
+    child_base: u32,
+    primitive_base: u32,
+    child_meta: vec2<u32>,
+    x: vec4<u32>,
+    y: vec4<u32>,
+    z: vec4<u32>
 }
 
 struct Tri {
@@ -347,21 +351,27 @@ struct TexelOut {
     lum_sum: f32,
     lum_sq: f32,
     closest: u32,
-    shadow_hit: u32
+    shadow_hit: u32,
+    nodes: u32,
+    tris: u32,
+    _pad: vec2<u32>
 }
 
 struct TraceRay {
     origin: vec3<f32>,
     t_max: f32,
     dir: vec3<f32>,
-    objects: u32
+    flags: u32
 }
 
 struct TraceHit {
     t: f32,
     triangle: u32,
     b1: f32,
-    b2: f32
+    b2: f32,
+    nodes: u32,
+    tris: u32,
+    _pad: vec2<u32>
 }
 
 struct PreviewCamera {
@@ -377,7 +387,7 @@ struct PreviewCamera {
 
 const F32_MAX: f32 = 3.40282347e38;
 
-const STACK: u32 = 64u;
+const STACK: u32 = 32u;
 
 fn gamma(n: f32) -> f32 {
     let e = 5.9604645e-8;
@@ -535,22 +545,54 @@ fn intersect_triangle(tri: Tri, r: PreparedRay, t_max: f32) -> TriHit {
 @group(0) @binding(9)
 var<storage, read_write> out: array<TexelOut>;
 
-fn enter_box(lo: vec3<f32>, hi: vec3<f32>, r: PreparedRay, t_max: f32) -> f32 {
-    let t0 = (lo - r.origin) * r.inv_dir;
-    let t1 = (hi - r.origin) * r.inv_dir;
-    let near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), max(min(t0.z, t1.z), 0.0));
-    let far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)) * (1.0 + 2.0 * gamma(3.0));
-    if near <= far && near < t_max {
-        return near;
+const SLAB_PAD: f32 = 1e-6;
+
+fn octant_inv4(d: vec3<f32>) -> u32 {
+    return select(67372036u, 0u, d.x < 0.0) | select(33686018u, 0u, d.y < 0.0) | select(16843009u, 0u, d.z < 0.0);
+}
+
+fn intersect_node(n: Node, r: PreparedRay, t_max: f32, oct: u32) -> u32 {
+    let e = vec3<u32>(n.e_imask, n.e_imask >> 8u, n.e_imask >> 16u) & vec3<u32>(255u);
+    let a = bitcast<vec3<f32>>(e << vec3<u32>(23u)) * r.inv_dir;
+    let o = (n.p - r.origin) * r.inv_dir;
+    let pad = (abs(o) + abs(a) * 255.0) * SLAB_PAD;
+    let nx = select(n.x.xy, n.x.zw, r.dir.x < 0.0);
+    let fx = select(n.x.zw, n.x.xy, r.dir.x < 0.0);
+    let ny = select(n.y.xy, n.y.zw, r.dir.y < 0.0);
+    let fy = select(n.y.zw, n.y.xy, r.dir.y < 0.0);
+    let nz = select(n.z.xy, n.z.zw, r.dir.z < 0.0);
+    let fz = select(n.z.zw, n.z.xy, r.dir.z < 0.0);
+    let octant = oct & 255u;
+    var mask = 0u;
+    for (var c = 0u; c < 8u; c++) {
+        let w = c >> 2u;
+        let s = (c & 3u) * 8u;
+        let m = extractBits(n.child_meta[w], s, 8u);
+        if m == 0u {
+            continue;
+        }
+        let qn = vec3<f32>(vec3<u32>(extractBits(nx[w], s, 8u), extractBits(ny[w], s, 8u), extractBits(nz[w], s, 8u)));
+        let qf = vec3<f32>(vec3<u32>(extractBits(fx[w], s, 8u), extractBits(fy[w], s, 8u), extractBits(fz[w], s, 8u)));
+        let t0 = qn * a + o - pad;
+        let t1 = qf * a + o + pad;
+        let tmin = max(max(t0.x, t0.y), max(t0.z, 0.0));
+        let tmax = min(min(t1.x, t1.y), min(t1.z, t_max));
+        if tmin <= tmax {
+            let inner = (m & (m << 1u) & 16u) != 0u;
+            let bit_index = (m ^ select(0u, octant, inner)) & 31u;
+            mask |= ((m >> 5u) & 7u) << bit_index;
+        }
     }
-    return F32_MAX;
+    return mask;
 }
 
 struct Hit {
     t: f32,
     slot: u32,
     b: vec3<f32>,
-    found: bool
+    found: bool,
+    nodes: u32,
+    tris: u32
 }
 
 fn included(slot: u32, objects: bool) -> bool {
@@ -563,70 +605,63 @@ fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool
     var best: Hit;
     best.found = false;
     best.t = t_max;
+    best.nodes = 0u;
+    best.tris = 0u;
     let r = prepare_ray(o, d, t_max);
     if !r.valid {
         return best;
     }
-    var stack: array<u32, STACK>;
-    var stack_t: array<f32, STACK>;
+    let oct = octant_inv4(d);
+    var stack: array<vec2<u32>, STACK>;
     var top = 0u;
-    var node = 0u;
-    if enter_box(nodes[0].min, nodes[0].max, r, best.t) == F32_MAX {
-        return best;
-    }
+    var group = vec2<u32>(0u, 2147483648u);
+    var prims = vec2<u32>(0u, 0u);
     loop {
-        let n = nodes[node];
-        if n.count > 0u {
-            for (var i = 0u; i < n.count; i++) {
-                let slot = n.first + i;
-                if !included(slot, objects) {
-                    continue;
-                }
-                let h = intersect_triangle(tris[slot], r, best.t);
-                if h.hit {
-                    best.t = h.t;
-                    best.slot = slot;
-                    best.b = h.b;
-                    best.found = true;
-                    if any_hit {
-                        return best;
-                    }
-                }
-            }
-        }
-        else {
-            let a = n.first;
-            let ta = enter_box(nodes[a].min, nodes[a].max, r, best.t);
-            let tb = enter_box(nodes[a + 1u].min, nodes[a + 1u].max, r, best.t);
-            if ta != F32_MAX || tb != F32_MAX {
-                var near = a;
-                var far = a + 1u;
-                var far_t = tb;
-                if tb < ta {
-                    near = a + 1u;
-                    far = a;
-                    far_t = ta;
-                }
-                if far_t != F32_MAX {
-                    stack[top] = far;
-                    stack_t[top] = far_t;
-                    top = top + 1u;
-                }
-                node = near;
+        while prims.y != 0u {
+            let k = firstLeadingBit(prims.y);
+            prims.y &= ~(1u << k);
+            let slot = prims.x + k;
+            if !included(slot, objects) {
                 continue;
             }
+            best.tris += 1u;
+            let h = intersect_triangle(tris[slot], r, best.t);
+            if h.hit {
+                best.t = h.t;
+                best.slot = slot;
+                best.b = h.b;
+                best.found = true;
+                if any_hit {
+                    return best;
+                }
+            }
         }
-        loop {
-            if top == 0u || stack_t[top - 1u] < best.t {
+        if (group.y & 4278190080u) != 0u {
+            let bits = group.y;
+            let k = firstLeadingBit(bits);
+            group.y &= ~(1u << k);
+            if (group.y & 4278190080u) != 0u {
+                stack[top] = group;
+                top += 1u;
+            }
+            let slot = (k - 24u) ^ (oct & 255u);
+            let index = group.x + countOneBits(bits & ~(4294967295u << slot));
+            let n = nodes[index];
+            best.nodes += 1u;
+            let hits = intersect_node(n, r, best.t, oct);
+            group = vec2<u32>(n.child_base, (hits & 4278190080u) | (n.e_imask >> 24u));
+            prims = vec2<u32>(n.primitive_base, hits & 16777215u);
+        }
+        else {
+            group = vec2<u32>(0u);
+        }
+        if prims.y == 0u && (group.y & 4278190080u) == 0u {
+            if top == 0u {
                 break;
             }
-            top = top - 1u;
+            top -= 1u;
+            group = stack[top];
         }
-        if top == 0u {
-            break;
-        }
-        top = top - 1u;
-        node = stack[top];
     }
     return best;
 }
@@ -1149,17 +1184,28 @@ fn finite_or_zero(v: vec3<f32>) -> vec3<f32> {
 
 struct Counts {
     closest: u32,
-    shadow: u32
+    shadow: u32,
+    nodes: u32,
+    tris: u32
+}
+
+fn tally(h: Hit, counts: ptr<function, Counts>) {
+    (*counts).nodes += h.nodes;
+    (*counts).tris += h.tris;
 }
 
 fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, counts: ptr<function, Counts>) -> bool {
     (*counts).shadow += 1u;
-    return traverse(o, d, t_max, objects, true).found;
+    let h = traverse(o, d, t_max, objects, true);
+    tally(h, counts);
+    return h.found;
 }
 
 fn closest(o: vec3<f32>, d: vec3<f32>, objects: bool, counts: ptr<function, Counts>) -> Hit {
     (*counts).closest += 1u;
-    return traverse(o, d, F32_MAX, objects, false);
+    let h = traverse(o, d, F32_MAX, objects, false);
+    tally(h, counts);
+    return h;
 }
 
 fn env_active() -> bool {
@@ -1405,7 +1451,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     let objects = job.sees_objects != 0u;
     let stream = hash4(params.seed, vec2<u32>(job.index, 0u), vec2<u32>(face, 0u), vec2<u32>(texel, 0u));
     var rng = rng_new(params.seed, stream);
-    var counts = Counts(0u, 0u);
+    var counts = Counts(0u, 0u, 0u, 0u);
     let k = params.strata;
     var sum = vec3<f32>(0.0);
     var lum_sum = 0.0;
@@ -1437,6 +1483,8 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     o.lum_sq = lum_sq;
     o.closest = counts.closest;
     o.shadow_hit = (counts.shadow << 1u) | select(0u, 1u, hit_any);
+    o.nodes = counts.nodes;
+    o.tris = counts.tris;
     out[id] = o;
 }
 
@@ -1447,10 +1495,10 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let r = trace_rays[i];
-    let h = traverse(r.origin, r.dir, r.t_max, r.objects != 0u, false);
-    var o = TraceHit(F32_MAX, 4294967295u, 0.0, 0.0);
+    let h = traverse(r.origin, r.dir, r.t_max, (r.flags & 1u) != 0u, (r.flags & 2u) != 0u);
+    var o = TraceHit(F32_MAX, 4294967295u, 0.0, 0.0, h.nodes, h.tris, vec2<u32>(0u));
     if h.found {
-        o = TraceHit(h.t, attrs[h.slot].global, h.b.y, h.b.z);
+        o = TraceHit(h.t, attrs[h.slot].global, h.b.y, h.b.z, h.nodes, h.tris, vec2<u32>(0u));
     }
     trace_hits[i] = o;
 }
@@ -1464,7 +1512,7 @@ fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     let x = id % camera.width;
     let y = id / camera.width;
     var rng = rng_new(params.seed, hash3(params.seed, vec2<u32>(x, 0u), vec2<u32>(y, 0u)));
-    var counts = Counts(0u, 0u);
+    var counts = Counts(0u, 0u, 0u, 0u);
     let spp = max(camera.spp, 1u);
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < spp; s++) {

@@ -43,14 +43,26 @@ const FLAG_ENV_ACTIVE: u32 = 1;
 const FLAG_EMITTERS: u32 = 2;
 const FLAG_DISTANCE: u32 = 4;
 
-/// A ray of [`GpuCapture::trace`]: origin, unit direction, `t_max`, and whether the OSLF
-/// objects take part.
+/// A ray of [`GpuCapture::trace`]: origin, unit direction, `t_max`, whether the OSLF objects
+/// take part, and whether any hit answers it (a shadow ray's query, which stops at the first
+/// triangle hit) rather than the closest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QueryRay {
     pub origin: Vec3,
     pub dir: Vec3,
     pub t_max: f32,
     pub objects: bool,
+    pub any_hit: bool,
+}
+
+/// What [`GpuCapture::trace`] found for a ray: `(t, global triangle index)` of its hit (the
+/// closest, or for an any-hit query the first found), `None` where it escapes; and the BVH
+/// nodes and triangles its traversal tested.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QueryHit {
+    pub hit: Option<(f32, u32)>,
+    pub nodes: u32,
+    pub triangles: u32,
 }
 
 /// The scene's buffers on the GPU.
@@ -497,9 +509,8 @@ impl GpuCapture {
             })
     }
 
-    /// The closest hit of each ray on the GPU: `(t, global triangle index)`, `None` where it
-    /// escapes.
-    pub fn trace(&self, rays: &[QueryRay]) -> Result<Vec<Option<(f32, u32)>>> {
+    /// Each ray's hit on the GPU, by the bake's own traversal.
+    pub fn trace(&self, rays: &[QueryRay]) -> Result<Vec<QueryHit>> {
         if rays.is_empty() {
             return Ok(Vec::new());
         }
@@ -509,7 +520,7 @@ impl GpuCapture {
                 origin: r.origin.to_array(),
                 t_max: r.t_max,
                 dir: r.dir.to_array(),
-                objects: u32::from(r.objects),
+                flags: u32::from(r.objects) | (u32::from(r.any_hit) << 1),
             })
             .collect();
         let rays_buffer = storage(&self.gpu, "trace rays", &gpu_rays);
@@ -539,7 +550,11 @@ impl GpuCapture {
         self.check("tracing rays")?;
         Ok(bytemuck::cast_slice::<u8, TraceHit>(&out)
             .iter()
-            .map(|h| (h.triangle != u32::MAX).then_some((h.t, h.triangle)))
+            .map(|h| QueryHit {
+                hit: (h.triangle != u32::MAX).then_some((h.t, h.triangle)),
+                nodes: h.nodes,
+                triangles: h.tris,
+            })
             .collect())
     }
 }
@@ -560,6 +575,8 @@ fn unpack_cube(texels: &[TexelOut], res: u32, k: u32, distance: bool, noise: boo
         for t in chunk {
             stats.closest += u64::from(t.closest);
             stats.shadow += u64::from(t.shadow_hit >> 1);
+            stats.nodes += u64::from(t.nodes);
+            stats.triangles += u64::from(t.tris);
             if noise {
                 noise_stats.add_texel(
                     f64::from(t.lum_sum),

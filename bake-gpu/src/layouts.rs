@@ -56,7 +56,8 @@ oslf_gpu::gpu_struct! {
 oslf_gpu::gpu_struct! {
     /// The shader's `TexelOut`.
     /// One texel's result: radiance, distance, its samples' luminance sum and sum of squares,
-    /// the closest-hit rays, and (shadow rays << 1) | whether a sample hit a surface.
+    /// the closest-hit rays, (shadow rays << 1) | whether a sample hit a surface, and what
+    /// its rays' traversals tested.
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct TexelOut as "TexelOut" {
         pub radiance: [f32; 3],
@@ -65,29 +66,37 @@ oslf_gpu::gpu_struct! {
         pub lum_sq: f32,
         pub closest: u32,
         pub shadow_hit: u32,
+        /// BVH nodes and triangles its rays tested.
+        pub nodes: u32,
+        pub tris: u32,
+        pub _pad: [u32; 2],
     }
 }
 
 oslf_gpu::gpu_struct! {
-    /// The shader's `TraceRay`.
+    /// The shader's `TraceRay`; `flags`: 1 the OSLF objects take part, 2 an any-hit query.
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct TraceRay as "TraceRay" {
         pub origin: [f32; 3],
         pub t_max: f32,
         pub dir: [f32; 3],
-        pub objects: u32,
+        pub flags: u32,
     }
 }
 
 oslf_gpu::gpu_struct! {
     /// The shader's `TraceHit`.
-    /// t, the hit triangle's global index (0xffffffff: none), barycentrics b1, b2.
+    /// t, the hit triangle's global index (0xffffffff: none), barycentrics b1, b2; the BVH
+    /// nodes and triangles the query tested.
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct TraceHit as "TraceHit" {
         pub t: f32,
         pub triangle: u32,
         pub b1: f32,
         pub b2: f32,
+        pub nodes: u32,
+        pub tris: u32,
+        pub _pad: [u32; 2],
     }
 }
 

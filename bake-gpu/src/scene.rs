@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use obvhs::aabb::Aabb;
+use obvhs::cwbvh::node::CwBvhNode;
 use oslf_scene::environment::{Environment, EnvironmentModel};
 use oslf_scene::light::Light;
 use oslf_scene::material::{Material, Model};
@@ -13,18 +14,38 @@ use oslf_trace::bvh::TriangleRecord;
 
 use crate::error::{GpuBakeError, Result};
 
-/// Deepest BVH the shader's traversal stack holds (`STACK` in shader/bvh.wgsl).
-pub const MAX_DEPTH: usize = 64;
-
 oslf_gpu::gpu_struct! {
-    /// A BVH2 node: an inner node (`count` 0) has its children at `first` and `first + 1`, a leaf
-    /// the triangles `first .. first + count`.
+    /// A node of the compressed wide BVH (obvhs's `CwBvhNode`, Ylitie, Karras and Laine 2017),
+    /// byte for byte: its 8 children's boxes quantised to 8 bits in the frame of `p` and the
+    /// exponents `e`.
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct Node as "Node" {
-        pub min: [f32; 3],
-        pub count: u32,
-        pub max: [f32; 3],
-        pub first: u32,
+        /// The node box's lower corner.
+        pub p: [f32; 3],
+        /// Bytes 0–2: the exponents of the child boxes' scale per axis; byte 3: which children
+        /// are inner nodes.
+        pub e_imask: u32,
+        /// The first inner child's node index (the others follow it in slot order).
+        pub child_base: u32,
+        /// The first triangle slot of the leaf children.
+        pub primitive_base: u32,
+        /// A byte per child (children 0–3 in the first word): an inner child's 24 + slot, a
+        /// leaf's first triangle offset (low 5 bits) and its count in unary (high 3 bits).
+        pub child_meta: [u32; 2],
+        /// The children's quantised x planes: the min bytes of children 0–3 and 4–7, then the
+        /// max bytes.
+        pub x: [u32; 4],
+        pub y: [u32; 4],
+        pub z: [u32; 4],
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<Node>() == std::mem::size_of::<CwBvhNode>());
+
+impl From<&CwBvhNode> for Node {
+    fn from(n: &CwBvhNode) -> Self {
+        // Both are 80 bytes of plain data with the same field order (see the docs above).
+        bytemuck::cast(*n)
     }
 }
 
@@ -152,7 +173,7 @@ fn v4(v: Vec3, w: f32) -> [f32; 4] {
 }
 
 impl GpuScene {
-    /// Packs `triangles` (with an obvhs BVH2 built over them, the CPU's builder settings),
+    /// Packs `triangles` (with the CPU's CWBVH built over them),
     /// `materials`, `lights` and `environment`.
     pub fn new(
         triangles: &[TriangleRecord],
@@ -346,47 +367,19 @@ fn gpu_light(l: &Light) -> GpuLight {
     g
 }
 
-/// The CPU BVH's binary tree over `triangles` ([`oslf_trace::bvh::build_bvh2`], one
-/// triangle per leaf): its nodes, the triangles' order in the leaves and the deepest leaf's
-/// depth. Errors if that depth exceeds [`MAX_DEPTH`].
+/// The CPU's CWBVH over `triangles` ([`oslf_trace::bvh::build_cwbvh`]): its nodes, the
+/// triangles' order in the leaves and the deepest leaf's depth.
 fn build_bvh(triangles: &[TriangleRecord]) -> Result<(Vec<Node>, Vec<u32>, usize)> {
     let aabbs: Vec<Aabb> = triangles
         .iter()
         .map(|t| Aabb::from_points(&t.corners.map(glam::Vec3A::from)))
         .collect();
-    let bvh2 = oslf_trace::bvh::build_bvh2(&aabbs);
-    let nodes: Vec<Node> = bvh2
-        .nodes
-        .iter()
-        .map(|n| Node {
-            min: n.aabb.min.to_array(),
-            count: n.prim_count,
-            max: n.aabb.max.to_array(),
-            first: n.first_index,
-        })
-        .collect();
-    if nodes.is_empty() || bvh2.primitive_indices.len() != triangles.len() {
-        return Err(GpuBakeError::Scene(format!(
-            "BVH build produced {} primitives for {} triangles",
-            bvh2.primitive_indices.len(),
-            triangles.len()
-        )));
-    }
-    let mut depth = 0;
-    let mut stack = vec![(0usize, 1usize)];
-    while let Some((i, d)) = stack.pop() {
-        let n = &nodes[i];
-        if n.count > 0 {
-            depth = depth.max(d);
-        } else {
-            stack.push((n.first as usize, d + 1));
-            stack.push((n.first as usize + 1, d + 1));
-        }
-    }
-    if depth > MAX_DEPTH {
-        return Err(GpuBakeError::Scene(format!(
-            "degenerate geometry: BVH depth {depth} exceeds the GPU traversal's {MAX_DEPTH}"
-        )));
-    }
-    Ok((nodes, bvh2.primitive_indices.clone(), depth))
+    let bvh =
+        oslf_trace::bvh::build_cwbvh(&aabbs).map_err(|e| GpuBakeError::Scene(e.to_string()))?;
+    let depth = oslf_trace::bvh::cwbvh_depth(&bvh.nodes);
+    Ok((
+        bvh.nodes.iter().map(Node::from).collect(),
+        bvh.primitive_indices,
+        depth,
+    ))
 }

@@ -46,10 +46,14 @@ fn the_shader_structs_are_the_rust_structs() {
     check(
         "Node",
         fields!(Node {
-            min,
-            count,
-            max,
-            first
+            p,
+            e_imask,
+            child_base,
+            primitive_base,
+            child_meta,
+            x,
+            y,
+            z
         }),
         size_of::<Node>(),
     );
@@ -119,7 +123,10 @@ fn the_shader_structs_are_the_rust_structs() {
             lum_sum,
             lum_sq,
             closest,
-            shadow_hit
+            shadow_hit,
+            nodes,
+            tris,
+            _pad
         }),
         size_of::<TexelOut>(),
     );
@@ -129,7 +136,7 @@ fn the_shader_structs_are_the_rust_structs() {
             origin,
             t_max,
             dir,
-            objects
+            flags
         }),
         size_of::<TraceRay>(),
     );
@@ -153,7 +160,10 @@ fn the_shader_structs_are_the_rust_structs() {
             t,
             triangle,
             b1,
-            b2
+            b2,
+            nodes,
+            tris,
+            _pad
         }),
         size_of::<TraceHit>(),
     );
@@ -171,6 +181,41 @@ fn the_shader_structs_are_the_rust_structs() {
         }),
         size_of::<Mat>(),
     );
+}
+
+/// The GPU's node is obvhs's `CwBvhNode`, field by field.
+#[test]
+fn a_gpu_node_is_the_cpus_cwbvh_node() {
+    use obvhs::cwbvh::node::CwBvhNode;
+    let bytes = |k: u8| std::array::from_fn::<u8, 8, _>(|i| k + i as u8);
+    let cpu = CwBvhNode {
+        p: glam::Vec3::new(1.5, -2.0, 3.25),
+        e: [120, 121, 122],
+        imask: 0b1010_0101,
+        child_base_idx: 77,
+        primitive_base_idx: 99,
+        child_meta: bytes(10),
+        child_min_x: bytes(20),
+        child_max_x: bytes(30),
+        child_min_y: bytes(40),
+        child_max_y: bytes(50),
+        child_min_z: bytes(60),
+        child_max_z: bytes(70),
+    };
+    let gpu = Node::from(&cpu);
+    let word =
+        |b: [u8; 8], half: usize| u32::from_le_bytes(b[4 * half..4 * half + 4].try_into().unwrap());
+    let planes = |lo: [u8; 8], hi: [u8; 8]| [word(lo, 0), word(lo, 1), word(hi, 0), word(hi, 1)];
+    assert_eq!(gpu.p, [1.5, -2.0, 3.25]);
+    assert_eq!(gpu.e_imask, 120 | 121 << 8 | 122 << 16 | 0b1010_0101 << 24);
+    assert_eq!((gpu.child_base, gpu.primitive_base), (77, 99));
+    assert_eq!(
+        gpu.child_meta,
+        [word(cpu.child_meta, 0), word(cpu.child_meta, 1)]
+    );
+    assert_eq!(gpu.x, planes(cpu.child_min_x, cpu.child_max_x));
+    assert_eq!(gpu.y, planes(cpu.child_min_y, cpu.child_max_y));
+    assert_eq!(gpu.z, planes(cpu.child_min_z, cpu.child_max_z));
 }
 
 #[test]
@@ -192,7 +237,8 @@ fn the_shader_constants_are_the_crates() {
         value("SELF_TOLERANCE"),
         f64::from(oslf_trace::bvh::SELF_TOLERANCE)
     );
-    assert_eq!(value("STACK") as usize, oslf_bake_gpu::scene::MAX_DEPTH);
+    assert_eq!(value("STACK") as usize, oslf_trace::bvh::MAX_BVH_DEPTH);
+    assert_eq!(value("SLAB_PAD"), f64::from(oslf_trace::bvh::SLAB_PAD));
     assert_eq!(
         value("ONE_MINUS_EPSILON"),
         f64::from(oslf_shading::random::ONE_MINUS_EPSILON)

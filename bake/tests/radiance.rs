@@ -568,7 +568,8 @@ fn point_light_over_lambertian_plane() {
         stats,
         RayStats {
             closest: 1,
-            shadow: 0
+            shadow: 0,
+            ..Default::default()
         }
     );
 }
@@ -806,7 +807,8 @@ fn closed_sphere_bounce_series() {
                 stats,
                 RayStats {
                     closest: 40_000,
-                    shadow: 40_000
+                    shadow: 40_000,
+                    ..Default::default()
                 }
             );
         }

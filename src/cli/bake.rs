@@ -393,6 +393,13 @@ fn print_summary(r: &BakeReport, why: &str) {
             _ => String::new(),
         }
     );
+    if r.traversal_nodes > 0 && rays > 0.0 {
+        println!(
+            "traversal      {:.1} BVH nodes and {:.1} triangles tested per ray",
+            r.traversal_nodes as f64 / rays,
+            r.traversal_triangles as f64 / rays
+        );
+    }
     println!(
         "time           {:.1} s total{}: BVH {:.2} s ({} triangles), points {:.2} s, sample maps {:.2} s, cube maps {:.1} s",
         r.total_seconds,

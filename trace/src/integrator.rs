@@ -84,6 +84,11 @@ pub struct RayStats {
     pub closest: u64,
     /// Any-hit (shadow) queries.
     pub shadow: u64,
+    /// BVH nodes tested by those queries, where the tracer counts them (the GPU path
+    /// tracer; 0 where it does not).
+    pub nodes: u64,
+    /// Triangles tested by those queries, where the tracer counts them (as `nodes`).
+    pub triangles: u64,
 }
 
 impl RayStats {
@@ -91,6 +96,8 @@ impl RayStats {
     pub fn add(&mut self, other: &RayStats) {
         self.closest += other.closest;
         self.shadow += other.shadow;
+        self.nodes += other.nodes;
+        self.triangles += other.triangles;
     }
 
     /// All rays traced.

@@ -1,12 +1,16 @@
-// Closest-hit and any-hit queries: a stack traversal of the obvhs BVH2 (nearer child first)
-// and the CPU's watertight ray–triangle test (trace/src/bvh/triangle.rs: Woop, Benthin and
-// Wald 2013 with pbrt-v3's conservative bound on t, and the self-intersection guard).
+// Closest-hit and any-hit queries: the CPU's traversal of the compressed wide BVH
+// (trace/src/bvh: obvhs's `traverse!`, Ylitie, Karras and Laine 2017: children in the order of
+// the ray's octant, a stack of node groups, a leaf's triangles before the next node) with the
+// CPU's node test (trace/src/bvh/node.rs) and watertight ray–triangle test
+// (trace/src/bvh/triangle.rs: Woop, Benthin and Wald 2013 with pbrt-v3's conservative bound on
+// t, and the self-intersection guard). The same tree, order and tests, so the same hits.
 
 import package::capture::{attrs, nodes, out, tris};
-import package::layouts::{Tri};
+import package::layouts::{Node, Tri};
 
 const F32_MAX: f32 = 3.40282347e+38;
-const STACK: u32 = 64u;
+// oslf_trace::bvh::MAX_BVH_DEPTH: one group per level at most.
+const STACK: u32 = 32u;
 // pbrt's γ(n) = nε / (1 − nε), ε = 2⁻²⁴.
 fn gamma(n: f32) -> f32 {
     let e = 5.9604645e-8;
@@ -160,17 +164,53 @@ fn intersect_triangle(tri: Tri, r: PreparedRay, t_max: f32) -> TriHit {
     return out;
 }
 
-// The entry distance of the ray into a node's box (clipped at 0), or F32_MAX if it misses the
-// box before `t_max`; the far end is widened by its rounding error.
-fn enter_box(lo: vec3<f32>, hi: vec3<f32>, r: PreparedRay, t_max: f32) -> f32 {
-    let t0 = (lo - r.origin) * r.inv_dir;
-    let t1 = (hi - r.origin) * r.inv_dir;
-    let near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), max(min(t0.z, t1.z), 0.0));
-    let far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)) * (1.0 + 2.0 * gamma(3.0));
-    if near <= far && near < t_max {
-        return near;
+// Relative rounding error allowed for in each slab distance (node.rs SLAB_PAD).
+const SLAB_PAD: f32 = 1e-6;
+
+// obvhs's `oct_inv4`: in each byte, bit 2, 1, 0 set where d.x, d.y, d.z is not negative.
+fn octant_inv4(d: vec3<f32>) -> u32 {
+    return select(0x04040404u, 0u, d.x < 0.0) | select(0x02020202u, 0u, d.y < 0.0)
+        | select(0x01010101u, 0u, d.z < 0.0);
+}
+
+// Which children of `n` the ray enters within [0, t_max], as node.rs `intersect_node`'s hit
+// mask: bit 24 + (slot ^ octant) per entered inner child, and per entered leaf its triangles'
+// bits (the unary count shifted to its first triangle's offset).
+fn intersect_node(n: Node, r: PreparedRay, t_max: f32, oct: u32) -> u32 {
+    let e = vec3<u32>(n.e_imask, n.e_imask >> 8u, n.e_imask >> 16u) & vec3<u32>(0xffu);
+    let a = bitcast<vec3<f32>>(e << vec3<u32>(23u)) * r.inv_dir;
+    let o = (n.p - r.origin) * r.inv_dir;
+    let pad = (abs(o) + abs(a) * 255.0) * SLAB_PAD;
+    // The near and far planes per axis: (min, max), swapped where the direction is negative.
+    let nx = select(n.x.xy, n.x.zw, r.dir.x < 0.0);
+    let fx = select(n.x.zw, n.x.xy, r.dir.x < 0.0);
+    let ny = select(n.y.xy, n.y.zw, r.dir.y < 0.0);
+    let fy = select(n.y.zw, n.y.xy, r.dir.y < 0.0);
+    let nz = select(n.z.xy, n.z.zw, r.dir.z < 0.0);
+    let fz = select(n.z.zw, n.z.xy, r.dir.z < 0.0);
+    let octant = oct & 0xffu;
+    var mask = 0u;
+    for (var c = 0u; c < 8u; c++) {
+        let w = c >> 2u;
+        let s = (c & 3u) * 8u;
+        let m = extractBits(n.child_meta[w], s, 8u);
+        if m == 0u {
+            continue; // an empty slot
+        }
+        let qn = vec3<f32>(vec3<u32>(extractBits(nx[w], s, 8u), extractBits(ny[w], s, 8u), extractBits(nz[w], s, 8u)));
+        let qf = vec3<f32>(vec3<u32>(extractBits(fx[w], s, 8u), extractBits(fy[w], s, 8u), extractBits(fz[w], s, 8u)));
+        let t0 = qn * a + o - pad;
+        let t1 = qf * a + o + pad;
+        let tmin = max(max(t0.x, t0.y), max(t0.z, 0.0));
+        let tmax = min(min(t1.x, t1.y), min(t1.z, t_max));
+        if tmin <= tmax {
+            // Inner children have bits 3 and 4 of their meta byte set (24 + slot).
+            let inner = (m & (m << 1u) & 0x10u) != 0u;
+            let bit_index = (m ^ select(0u, octant, inner)) & 0x1fu;
+            mask |= ((m >> 5u) & 7u) << bit_index;
+        }
     }
-    return F32_MAX;
+    return mask;
 }
 
 struct Hit {
@@ -178,6 +218,9 @@ struct Hit {
     slot: u32,
     b: vec3<f32>,
     found: bool,
+    // Nodes and triangles tested (the traversal's counters).
+    nodes: u32,
+    tris: u32,
 }
 
 // Whether triangle `slot` takes part: not when the query leaves out the OSLF objects (the
@@ -193,70 +236,66 @@ fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool
     var best: Hit;
     best.found = false;
     best.t = t_max;
+    best.nodes = 0u;
+    best.tris = 0u;
     let r = prepare_ray(o, d, t_max);
     if !r.valid {
         return best;
     }
-    var stack: array<u32, STACK>;
-    var stack_t: array<f32, STACK>;
+    let oct = octant_inv4(d);
+    var stack: array<vec2<u32>, STACK>;
     var top = 0u;
-    var node = 0u;
-    if enter_box(nodes[0].min, nodes[0].max, r, best.t) == F32_MAX {
-        return best;
-    }
+    // The node group: its first node, and bits 24 + order of its children still to visit
+    // over the mask of its inner children (the root: the one child of a virtual parent).
+    var group = vec2<u32>(0u, 0x80000000u);
+    // The triangle group: its first slot and the bits of the triangles still to test.
+    var prims = vec2<u32>(0u, 0u);
     loop {
-        let n = nodes[node];
-        if n.count > 0u {
-            for (var i = 0u; i < n.count; i++) {
-                let slot = n.first + i;
-                if !included(slot, objects) {
-                    continue;
-                }
-                let h = intersect_triangle(tris[slot], r, best.t);
-                if h.hit {
-                    best.t = h.t;
-                    best.slot = slot;
-                    best.b = h.b;
-                    best.found = true;
-                    if any_hit {
-                        return best;
-                    }
-                }
-            }
-        } else {
-            let a = n.first;
-            let ta = enter_box(nodes[a].min, nodes[a].max, r, best.t);
-            let tb = enter_box(nodes[a + 1u].min, nodes[a + 1u].max, r, best.t);
-            if ta != F32_MAX || tb != F32_MAX {
-                var near = a;
-                var far = a + 1u;
-                var far_t = tb;
-                if tb < ta {
-                    near = a + 1u;
-                    far = a;
-                    far_t = ta;
-                }
-                if far_t != F32_MAX {
-                    stack[top] = far;
-                    stack_t[top] = far_t;
-                    top = top + 1u;
-                }
-                node = near;
+        while prims.y != 0u {
+            let k = firstLeadingBit(prims.y);
+            prims.y &= ~(1u << k);
+            let slot = prims.x + k;
+            if !included(slot, objects) {
                 continue;
             }
+            best.tris += 1u;
+            let h = intersect_triangle(tris[slot], r, best.t);
+            if h.hit {
+                best.t = h.t;
+                best.slot = slot;
+                best.b = h.b;
+                best.found = true;
+                if any_hit {
+                    return best;
+                }
+            }
         }
-        // The next stacked node the ray still enters before its closest hit so far.
-        loop {
-            if top == 0u || stack_t[top - 1u] < best.t {
+        if (group.y & 0xff000000u) != 0u {
+            let bits = group.y;
+            let k = firstLeadingBit(bits);
+            group.y &= ~(1u << k);
+            if (group.y & 0xff000000u) != 0u {
+                stack[top] = group;
+                top += 1u;
+            }
+            // The child's slot, and its index among the inner children stored in slot order.
+            let slot = (k - 24u) ^ (oct & 0xffu);
+            let index = group.x + countOneBits(bits & ~(0xffffffffu << slot));
+            let n = nodes[index];
+            best.nodes += 1u;
+            let hits = intersect_node(n, r, best.t, oct);
+            group = vec2<u32>(n.child_base, (hits & 0xff000000u) | (n.e_imask >> 24u));
+            prims = vec2<u32>(n.primitive_base, hits & 0x00ffffffu);
+        } else {
+            group = vec2<u32>(0u);
+        }
+        if prims.y == 0u && (group.y & 0xff000000u) == 0u {
+            if top == 0u {
                 break;
             }
-            top = top - 1u;
+            top -= 1u;
+            group = stack[top];
         }
-        if top == 0u {
-            break;
-        }
-        top = top - 1u;
-        node = stack[top];
     }
     return best;
 }

@@ -74,7 +74,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     let objects = job.sees_objects != 0u;
     let stream = hash4(params.seed, vec2<u32>(job.index, 0u), vec2<u32>(face, 0u), vec2<u32>(texel, 0u));
     var rng = rng_new(params.seed, stream);
-    var counts = Counts(0u, 0u);
+    var counts = Counts(0u, 0u, 0u, 0u);
     let k = params.strata;
     var sum = vec3<f32>(0.0);
     var lum_sum = 0.0;
@@ -106,6 +106,8 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     o.lum_sq = lum_sq;
     o.closest = counts.closest;
     o.shadow_hit = (counts.shadow << 1u) | select(0u, 1u, hit_any);
+    o.nodes = counts.nodes;
+    o.tris = counts.tris;
     out[id] = o;
 }
 
@@ -116,10 +118,10 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let r = trace_rays[i];
-    let h = traverse(r.origin, r.dir, r.t_max, r.objects != 0u, false);
-    var o = TraceHit(F32_MAX, 0xffffffffu, 0.0, 0.0);
+    let h = traverse(r.origin, r.dir, r.t_max, (r.flags & 1u) != 0u, (r.flags & 2u) != 0u);
+    var o = TraceHit(F32_MAX, 0xffffffffu, 0.0, 0.0, h.nodes, h.tris, vec2<u32>(0u));
     if h.found {
-        o = TraceHit(h.t, attrs[h.slot].global, h.b.y, h.b.z);
+        o = TraceHit(h.t, attrs[h.slot].global, h.b.y, h.b.z, h.nodes, h.tris, vec2<u32>(0u));
     }
     trace_hits[i] = o;
 }
@@ -135,7 +137,7 @@ fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     let x = id % camera.width;
     let y = id / camera.width;
     var rng = rng_new(params.seed, hash3(params.seed, vec2<u32>(x, 0u), vec2<u32>(y, 0u)));
-    var counts = Counts(0u, 0u);
+    var counts = Counts(0u, 0u, 0u, 0u);
     let spp = max(camera.spp, 1u);
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < spp; s++) {

@@ -193,20 +193,31 @@ fn finite_or_zero(v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
-// Rays traced for one texel, by kind (`RayStats`).
+// Rays traced for one texel, by kind, and the nodes and triangles they tested (`RayStats`).
 struct Counts {
     closest: u32,
     shadow: u32,
+    nodes: u32,
+    tris: u32,
+}
+
+fn tally(h: Hit, counts: ptr<function, Counts>) {
+    (*counts).nodes += h.nodes;
+    (*counts).tris += h.tris;
 }
 
 fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, counts: ptr<function, Counts>) -> bool {
     (*counts).shadow += 1u;
-    return traverse(o, d, t_max, objects, true).found;
+    let h = traverse(o, d, t_max, objects, true);
+    tally(h, counts);
+    return h.found;
 }
 
 fn closest(o: vec3<f32>, d: vec3<f32>, objects: bool, counts: ptr<function, Counts>) -> Hit {
     (*counts).closest += 1u;
-    return traverse(o, d, F32_MAX, objects, false);
+    let h = traverse(o, d, F32_MAX, objects, false);
+    tally(h, counts);
+    return h;
 }
 
 fn env_active() -> bool {

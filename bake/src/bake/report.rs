@@ -56,6 +56,10 @@ pub struct BakeReport {
     pub noise: Option<NoiseReport>,
     pub rays_closest: u64,
     pub rays_shadow: u64,
+    /// BVH nodes and triangles those rays tested, where the capture device counts them (the
+    /// GPU path tracer; 0 on the CPU, which does not).
+    pub traversal_nodes: u64,
+    pub traversal_triangles: u64,
     /// Capture rays per second, millions (closest + shadow, this run's cubes only).
     pub mrays_per_second: f64,
     pub placement_seconds: f64,

@@ -229,8 +229,7 @@ pub(super) fn capture(
     let mut append = |sink: &mut Sink, encoded: Vec<EncodedCube>| -> Result<()> {
         for (enc, enc_stats, stats, noise) in encoded {
             captured.noise.merge(&noise);
-            rays.closest += stats.closest;
-            rays.shadow += stats.shadow;
+            rays.add(&stats);
             report.clamped_texels += enc_stats.clamped_texels;
             captured.bytes += enc_stats.compressed_bytes;
             captured.texels += 6 * (capture.resolution as u64).pow(2);
@@ -278,6 +277,8 @@ pub(super) fn capture(
         .map(|(b, a)| b.saturating_sub(a) as f64 / 1e9);
     report.rays_closest = rays.closest;
     report.rays_shadow = rays.shadow;
+    report.traversal_nodes = rays.nodes;
+    report.traversal_triangles = rays.triangles;
     report.mrays_per_second =
         (rays.closest + rays.shadow) as f64 / report.capture_seconds.max(1e-9) / 1e6;
     Ok(captured)

@@ -48,8 +48,8 @@ mod prepared_ray;
 mod triangle;
 
 pub use instances::scene_instances;
-pub use node::PACKET;
 use node::*;
+pub use node::{PACKET, SLAB_PAD};
 pub use oslf_scene::tolerance::SELF_TOLERANCE;
 use prepared_ray::PreparedRay;
 use triangle::*;
@@ -99,10 +99,9 @@ pub struct TriangleRecord {
     pub global: u32,
 }
 
-/// The binary BVH over `aabbs` (one primitive each, in order) that [`TriangleScene`] converts
-/// to its CWBVH: obvhs's PLOC with its slow-build settings (no pre-splitting), then
-/// reinsertion. The GPU path tracer traverses it as it is.
-pub fn build_bvh2(aabbs: &[Aabb]) -> obvhs::bvh2::Bvh2 {
+/// The binary BVH over `aabbs` (one primitive each, in order) that [`build_cwbvh`] converts:
+/// obvhs's PLOC with its slow-build settings (no pre-splitting), then reinsertion.
+fn build_bvh2(aabbs: &[Aabb]) -> obvhs::bvh2::Bvh2 {
     let params = BvhBuildParams {
         pre_split: false,
         ..BvhBuildParams::slow_build()
@@ -116,6 +115,30 @@ pub fn build_bvh2(aabbs: &[Aabb]) -> obvhs::bvh2::Bvh2 {
     );
     ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
     bvh2
+}
+
+/// The compressed wide BVH over `aabbs` (one triangle each, in order) that [`TriangleScene`]
+/// and the GPU path tracer (`oslf-bake-gpu`) both traverse: [`build_bvh2`]'s tree converted to
+/// 8-wide nodes of up to 3 triangles per leaf. Deterministic, so both build the same tree.
+/// Errors where a triangle is lost or the tree is deeper than [`MAX_BVH_DEPTH`].
+pub fn build_cwbvh(aabbs: &[Aabb]) -> Result<CwBvh> {
+    let bvh2 = build_bvh2(aabbs);
+    let params = BvhBuildParams::slow_build();
+    let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+    if bvh.primitive_indices.len() != aabbs.len() || bvh.nodes.is_empty() {
+        return Err(BakeError::Invalid(format!(
+            "BVH build produced {} primitives for {} triangles",
+            bvh.primitive_indices.len(),
+            aabbs.len()
+        )));
+    }
+    let depth = cwbvh_depth(&bvh.nodes);
+    if depth > MAX_BVH_DEPTH {
+        return Err(BakeError::Invalid(format!(
+            "degenerate geometry: BVH depth {depth} exceeds {MAX_BVH_DEPTH}"
+        )));
+    }
+    Ok(bvh)
 }
 
 /// Every triangle of a scene in one CWBVH.
@@ -160,8 +183,9 @@ fn zero_area_meshes(instances: &[Instance]) -> String {
     text
 }
 
-/// Traversal stack depth of obvhs's `traverse!` (its `TRAVERSAL_STACK_SIZE`).
-const MAX_BVH_DEPTH: usize = 32;
+/// Deepest CWBVH [`build_cwbvh`] accepts: the stack depth of obvhs's `traverse!` (its
+/// `TRAVERSAL_STACK_SIZE`) and of the GPU traversal.
+pub const MAX_BVH_DEPTH: usize = 32;
 
 impl TriangleScene {
     /// Builds the BVH over all instances' triangles. Instances must be valid meshes
@@ -212,9 +236,7 @@ impl TriangleScene {
             .iter()
             .map(|v| Aabb::from_points(&v.map(Vec3A::from)))
             .collect();
-        let bvh2 = build_bvh2(&aabbs);
-        let params = BvhBuildParams::slow_build();
-        let bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+        let bvh = build_cwbvh(&aabbs)?;
         // Put the triangles in leaf order so a primitive slot indexes them directly.
         let vertices_bvh: Vec<[Vec3; 3]> = bvh
             .primitive_indices
@@ -229,19 +251,6 @@ impl TriangleScene {
         let planes = vertices_bvh.iter().map(triangle_plane).collect();
         let vertices_bvh: Vec<Corners> = vertices_bvh.iter().map(Corners::new).collect();
         let build_time = start.elapsed();
-        if vertices_bvh.len() != vertices.len() || bvh.nodes.is_empty() {
-            return Err(BakeError::Invalid(format!(
-                "BVH build produced {} primitives for {} triangles",
-                vertices_bvh.len(),
-                vertices.len()
-            )));
-        }
-        let depth = cwbvh_depth(&bvh.nodes);
-        if depth > MAX_BVH_DEPTH {
-            return Err(BakeError::Invalid(format!(
-                "degenerate geometry: BVH depth {depth} exceeds {MAX_BVH_DEPTH}"
-            )));
-        }
         let mut input_order = vec![0u32; vertices.len()];
         for (slot, &i) in bvh.primitive_indices.iter().enumerate() {
             input_order[i as usize] = slot as u32;
@@ -648,7 +657,7 @@ thread_local! {
 }
 
 /// Depth (levels of nodes) of a CWBVH.
-fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
+pub fn cwbvh_depth(nodes: &[CwBvhNode]) -> usize {
     let mut depth = 0;
     let mut stack = vec![(0usize, 1usize)];
     while let Some((i, d)) = stack.pop() {

@@ -13,7 +13,7 @@ use super::prepared_ray::{
 pub const PACKET: usize = 16;
 
 /// Relative rounding error allowed for in each slab distance (a few ulps).
-pub(super) const SLAB_PAD: f32 = 1e-6;
+pub const SLAB_PAD: f32 = 1e-6;
 
 /// The CWBVH node test: which of the node's 8 children the ray enters within `[0, t_max]`.
 /// Same as obvhs's `CwBvhNode::intersect_ray_simd` except for the clip at 0 (not 1e-4), the
