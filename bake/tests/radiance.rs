@@ -552,7 +552,8 @@ fn point_light_over_lambertian_plane() {
             stats,
             RayStats {
                 closest: 1,
-                shadow: 1
+                shadow: 1,
+                ..Default::default()
             }
         );
     }

@@ -14,7 +14,7 @@ use bevy::render::renderer::{
     RenderAdapterInfo, RenderContext, RenderDevice, RenderQueue, ViewQuery,
 };
 use bevy::render::view::{ExtractedView, Msaa, ViewDepthStencilTexture, ViewTarget};
-use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Renderer};
+use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Renderer, DEPTH_SLACK};
 
 use crate::asset::OslfStore;
 use crate::error::OslfBevyError;
@@ -26,6 +26,9 @@ use crate::stats::StatsSink;
 #[derive(Resource, Clone, Copy)]
 pub(crate) struct OslfSettings {
     pub cache: CacheConfig,
+    /// Whether objects have proxies in Bevy's depth (`proxy.rs`), which their own depth must
+    /// win over.
+    pub proxies: bool,
 }
 
 /// A store's renderer, or why it has none.
@@ -135,6 +138,7 @@ pub(crate) fn draw_oslf(
     frame: Res<ExtractedOslf>,
     mut renderers: ResMut<OslfRenderers>,
     messages: Res<OslfMessages>,
+    settings: Res<OslfSettings>,
     mut ctx: RenderContext,
 ) {
     if frame.objects.is_empty() {
@@ -175,6 +179,7 @@ pub(crate) fn draw_oslf(
         sample_count: samples,
         width: size.width,
         height: size.height,
+        depth_slack: if settings.proxies { DEPTH_SLACK } else { 0.0 },
     };
     let view_from_world = extracted.world_from_view.to_matrix().inverse();
     let mut drew = false;

@@ -29,6 +29,12 @@
 //!   it, and it writes its depth. Its radiance is scaled by the camera's exposure and goes
 //!   through Bevy's tonemapping like a mesh's (HDR cameras). MSAA cameras get the object in
 //!   every sample it covers.
+//! - **Bevy's passes.** With Bevy's `PbrPlugin`, each object has a child [`OslfProxy`]: a
+//!   mesh of the same triangles that casts shadows on Bevy's meshes under Bevy's lights
+//!   (unless the object has `NotShadowCaster`) and is in Bevy's depth and normal prepass, so
+//!   SSAO and Bevy's other screen-space effects see the object; it draws nothing in the main
+//!   pass. The object itself is lit by its baked light field only: Bevy's lights and shadows
+//!   do not fall on it.
 //! - **Streaming.** Each store has one runtime renderer with an LRU cube-map cache. Its
 //!   feedback is read back asynchronously after Bevy submits the frame: a frame never waits
 //!   for the GPU; cube maps not yet resident fall back as in `oslf view` and arrive a few
@@ -46,6 +52,7 @@ mod error;
 mod extract;
 mod messages;
 mod object;
+mod proxy;
 mod report;
 pub mod stats;
 
@@ -58,6 +65,7 @@ pub use oslf_runtime::{
     PbrIntegration, PbrMaterial, Probe, Recon, ReconGlossy, ReconMirror, SampleFilter,
     ShadingParams, Source,
 };
+pub use proxy::OslfProxy;
 pub use stats::OslfCacheStats;
 
 use bevy::app::{App, Plugin, Update};
@@ -85,11 +93,15 @@ impl Plugin for OslfPlugin {
             .insert_resource(sink.clone())
             .add_systems(Update, (stats::publish_stats, report::report_stores));
         stats::register(app);
+        let proxies = proxy::register(app);
         if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
             render_app
                 .insert_resource(messages)
                 .insert_resource(sink)
-                .insert_resource(draw::OslfSettings { cache: self.cache })
+                .insert_resource(draw::OslfSettings {
+                    cache: self.cache,
+                    proxies,
+                })
                 .init_resource::<extract::ExtractedOslf>()
                 .init_resource::<draw::OslfRenderers>();
         }

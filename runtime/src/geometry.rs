@@ -68,6 +68,13 @@ pub struct ObjectMesh {
 }
 
 impl ObjectMesh {
+    /// The tessellation every view of `store` draws (the renderer's G-buffer, the web page,
+    /// an engine's proxy of the object): [`ObjectMesh::from_store`] within a twentieth of the
+    /// bake's ε, far below the sample points' offset from the surface.
+    pub fn of_store(store: &Store) -> Self {
+        Self::from_store(store, store.meta().bake.epsilon / 20.0)
+    }
+
     /// Tessellates every Bézier patch of `store` so that the flat triangles stay within
     /// `max_error` of the surface (clamped to `1..=MAX_LEVEL` quads per side), and emits every
     /// mesh object's triangles with world positions (its transform) and world normals (the

@@ -409,7 +409,7 @@ impl WebStore {
         if store_encoding == Encoding::Bc6h {
             encodings.push(upload_encoding(store_encoding, false));
         }
-        let mesh = ObjectMesh::from_store(&store, store.meta().bake.epsilon / 20.0);
+        let mesh = ObjectMesh::of_store(&store);
         let view = store_view(&store, &mesh);
         let camera = WebCamera {
             position: view.position.to_array(),

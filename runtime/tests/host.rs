@@ -235,6 +235,7 @@ impl Host {
             sample_count: self.samples,
             width: W,
             height: H,
+            depth_slack: 0.0,
         };
         r.encode_into(&mut encoder, view, &target, &params.params())
             .unwrap();
@@ -483,6 +484,7 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
         sample_count: 1,
         width: W,
         height: H,
+        depth_slack: 0.0,
     };
     let view = host_view(&r, false);
     let params = Knobs::default();
@@ -518,6 +520,16 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
         },
         "has no depth aspect",
     );
+    for slack in [f32::NAN, -1e-6, 0.5] {
+        refuse(
+            &view,
+            &HostTarget {
+                depth_slack: slack,
+                ..good
+            },
+            "depth_slack",
+        );
+    }
     let ortho = HostView {
         projection: directx::orthographic(-1.0, 1.0, -1.0, 1.0, 0.1, 10.0),
         ..view
@@ -575,6 +587,7 @@ fn on_a_hosts_device_the_renderer_keeps_its_errors_and_the_host_its_handler() {
         sample_count: 1,
         width: W,
         height: H,
+        depth_slack: 0.0,
     };
     for _ in 0..2 {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());

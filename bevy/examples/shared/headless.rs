@@ -184,3 +184,27 @@ pub fn capture(app: &mut App, target: &Handle<Image>) -> Vec<[f32; 4]> {
         })
         .collect()
 }
+
+/// With `OSLF_BEVY_DUMP=DIR`, writes `pixels` (`width`×`height`) as `DIR/NAME.ppm` (clamped
+/// to 0..1, sRGB) to look at.
+pub fn dump(name: &str, pixels: &[[f32; 4]], (width, height): (u32, u32)) {
+    let Some(dir) = std::env::var_os("OSLF_BEVY_DUMP") else {
+        return;
+    };
+    let srgb = |v: f32| {
+        let v = v.clamp(0.0, 1.0);
+        let s = if v <= 0.0031308 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round() as u8
+    };
+    let mut bytes = format!("P6\n{width} {height}\n255\n").into_bytes();
+    bytes.extend(
+        pixels
+            .iter()
+            .flat_map(|p| [srgb(p[0]), srgb(p[1]), srgb(p[2])]),
+    );
+    std::fs::write(Path::new(&dir).join(format!("{name}.ppm")), bytes).unwrap();
+}

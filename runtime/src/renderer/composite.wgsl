@@ -7,7 +7,8 @@ override REVERSED: bool = false;
 
 @group(0) @binding(0) var shaded: texture_2d<f32>;
 @group(0) @binding(1) var object_depth: texture_depth_2d;
-// x: the scale of the radiance written (the host camera's exposure); yzw unused.
+// x: the scale of the radiance written (the host camera's exposure); y: the depth slack
+// (HostTarget::depth_slack), how much nearer the object's depth is written; zw unused.
 @group(0) @binding(2) var<uniform> exposure: vec4<f32>;
 
 @vertex
@@ -30,6 +31,6 @@ fn fs_main(@builtin(position) p: vec4<f32>) -> FsOut {
     }
     var out: FsOut;
     out.color = vec4<f32>(textureLoad(shaded, xy, 0).rgb * exposure.x, 1.0);
-    out.depth = select(d, 1.0 - d, REVERSED);
+    out.depth = select(max(d - exposure.y, 0.0), min(1.0 - d + exposure.y, 1.0), REVERSED);
     return out;
 }

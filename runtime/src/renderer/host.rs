@@ -121,7 +121,21 @@ pub struct HostTarget<'a> {
     /// Size of both targets in pixels.
     pub width: u32,
     pub height: u32,
+    /// How much nearer than its own the object's depth is written and tested, in the depth
+    /// buffer's units (0 to [`MAX_DEPTH_SLACK`]): 0, unless the host's depth already holds
+    /// the object's surface (a proxy of it drawn for the host's shadows and depth prepass,
+    /// whose depth the host computed with its own rounding), where the object must still win
+    /// over its proxy. [`DEPTH_SLACK`] suits a 32-bit float depth.
+    pub depth_slack: f32,
 }
+
+/// The largest [`HostTarget::depth_slack`].
+pub const MAX_DEPTH_SLACK: f32 = 1e-3;
+
+/// A [`HostTarget::depth_slack`] for a host whose depth holds a proxy of the object: 2⁻²⁰, a
+/// few ulps of a 32-bit float depth near 1 (where the G-buffer's depth lies before it is
+/// turned back for a reversed host).
+pub const DEPTH_SLACK: f32 = 1.0 / (1u32 << 20) as f32;
 
 impl HostTarget<'_> {
     /// Whether depth is reversed (1 near, 0 far), from the depth test; errors for a test that
@@ -151,6 +165,12 @@ impl HostTarget<'_> {
             return Err(RuntimeError::Parameter(format!(
                 "HostTarget::depth_format {:?} has no depth aspect",
                 self.depth_format
+            )));
+        }
+        if !(0.0..=MAX_DEPTH_SLACK).contains(&self.depth_slack) {
+            return Err(RuntimeError::Parameter(format!(
+                "HostTarget::depth_slack {}: must be within 0..={MAX_DEPTH_SLACK}",
+                self.depth_slack
             )));
         }
         if self.color_format.has_depth_aspect() || self.color_format.has_stencil_aspect() {
@@ -468,7 +488,7 @@ impl Renderer {
         let device = &self.gpu.device;
         let scale = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("composite exposure"),
-            contents: bytemuck::bytes_of(&[exposure, 0.0, 0.0, 0.0]),
+            contents: bytemuck::bytes_of(&[exposure, target.depth_slack, 0.0, 0.0]),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let layout = &self.composites.layout;

@@ -37,7 +37,7 @@ mod timer;
 
 pub(crate) use camera::store_view;
 pub use camera::{default_camera, view_projection};
-pub use host::{HostTarget, HostView};
+pub use host::{HostTarget, HostView, DEPTH_SLACK, MAX_DEPTH_SLACK};
 pub use targets::FrameBytes;
 
 use readback::map_read;
@@ -250,7 +250,7 @@ impl Renderer {
         // BC6H stores go up as their blocks where the device has BC texture compression.
         let face = FaceLayout::for_store(&store, gpu.has_bc());
         let layout = PoolLayout::plan(&limits, face, cube_count, &config)?;
-        let mesh = ObjectMesh::from_store(&store, store.meta().bake.epsilon / 20.0);
+        let mesh = ObjectMesh::of_store(&store);
         let cache = open_cache(&store, &layout, &config);
         let buffers = StoreBuffers::new(&gpu.device, &store, &mesh, cube_count);
         let sample_maps = upload_sample_maps(&gpu, &store)?;

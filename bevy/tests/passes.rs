@@ -1,0 +1,303 @@
+//! The object in Bevy's own passes, through its proxy (src/proxy.rs), in a real headless Bevy
+//! app: it casts a shadow on a Bevy table under a Bevy light, SSAO darkens the table where the
+//! object stands, and the object itself is still drawn as the runtime draws it, also where
+//! Bevy's depth prepass already holds its proxy.
+//!
+//! On lavapipe in CI; these tests fail, never skip, without an adapter.
+
+#[path = "../../runtime/tests/common/mod.rs"]
+mod common;
+#[path = "../examples/shared/headless.rs"]
+mod headless;
+
+use std::path::Path;
+
+use bevy::app::{App, Startup};
+use bevy::asset::{AssetServer, Assets};
+use bevy::color::Color;
+use bevy::ecs::prelude::*;
+use bevy::image::Image;
+use bevy::light::{DirectionalLight, GlobalAmbientLight, NotShadowCaster};
+use bevy::math::Vec3;
+use bevy::mesh::{Mesh, Mesh3d};
+use bevy::pbr::{MeshMaterial3d, ScreenSpaceAmbientOcclusion, StandardMaterial};
+use bevy::render::view::Msaa;
+use bevy::shape::Cuboid;
+use bevy::transform::components::Transform;
+use oslf_bevy::{Mode, OslfMessages, OslfObject, OslfProxy, ShadingParams};
+use oslf_runtime::{CacheConfig, Camera, Gpu, RenderOptions, Renderer};
+
+const W: u32 = 160;
+const H: u32 = 120;
+
+/// What a frame holds: the table always; the object, casting a shadow or not; a sun or an
+/// ambient light; SSAO or not.
+#[derive(Resource, Clone, Copy)]
+struct Setup {
+    camera: Camera,
+    /// The object's lowest point and the centre of its bounds (the store's space, z up).
+    floor: f32,
+    centre: glam::Vec3,
+    object: bool,
+    casts_shadow: bool,
+    sun: bool,
+    ssao: bool,
+}
+
+fn setup(
+    mut commands: Commands,
+    setup: Res<Setup>,
+    assets: Res<AssetServer>,
+    mut images: ResMut<Assets<Image>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    let s = *setup;
+    let v = |a: glam::Vec3| Vec3::from_array(a.to_array());
+    let mut camera =
+        headless::spawn_linear_camera(&mut commands, &mut images, &s.camera, (W, H), Msaa::Off);
+    if s.ssao {
+        camera.insert(ScreenSpaceAmbientOcclusion::default());
+    }
+    if s.object {
+        let params = ShadingParams::of_mode(Mode::ReconMirror);
+        let mut object =
+            commands.spawn(OslfObject::new(assets.load("teapot.oslf")).with_params(params));
+        if !s.casts_shadow {
+            object.insert(NotShadowCaster);
+        }
+    }
+    // A grey table whose top touches the object's lowest point.
+    commands.spawn((
+        Mesh3d(meshes.add(Cuboid::new(40.0, 40.0, 0.2))),
+        MeshMaterial3d(materials.add(StandardMaterial {
+            base_color: Color::srgb(0.5, 0.5, 0.5),
+            perceptual_roughness: 1.0,
+            reflectance: 0.0,
+            ..Default::default()
+        })),
+        Transform::from_translation(Vec3::new(s.centre.x, s.centre.y, s.floor - 0.1)),
+    ));
+    if s.sun {
+        commands.insert_resource(GlobalAmbientLight::NONE);
+        // From above and behind the object as the camera sees it: the shadow falls towards
+        // the camera, onto the table in view.
+        let away = (v(s.centre) - v(s.camera.position)).with_z(0.0).normalize();
+        let travel = (away * 0.6 + Vec3::new(0.0, 0.0, -1.0)).normalize();
+        commands.spawn((
+            DirectionalLight {
+                illuminance: 3.0,
+                shadow_maps_enabled: true,
+                ..Default::default()
+            },
+            Transform::default().looking_to(travel, Vec3::Z),
+        ));
+    } else {
+        commands.insert_resource(GlobalAmbientLight {
+            color: Color::WHITE,
+            brightness: 1.0,
+            ..GlobalAmbientLight::NONE
+        });
+    }
+}
+
+fn frame(dir: &Path, s: Setup) -> (Vec<[f32; 4]>, Vec<String>) {
+    let mut app: App = headless::headless_app(dir, CacheConfig::default());
+    app.insert_resource(s).add_systems(Startup, setup);
+    app.finish();
+    app.cleanup();
+    let pixels = headless::settle_and_capture(&mut app, 60, s.object);
+    if s.object {
+        let mut proxies = app.world_mut().query::<&OslfProxy>();
+        assert_eq!(proxies.iter(app.world()).count(), 1, "one proxy per object");
+    }
+    let messages = app.world().resource::<OslfMessages>().all();
+    (pixels, messages)
+}
+
+/// The store's camera, the object's bounds and the runtime's own render (alpha 1 on the
+/// object).
+fn reference(store: &Path) -> (Camera, glam::Vec3, glam::Vec3, Vec<[f32; 4]>) {
+    let gpu = Gpu::headless().unwrap();
+    let store = oslf_format::Store::open(store).unwrap();
+    let mut r = Renderer::new(gpu, store, CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let (lo, hi) = r.mesh().bounds();
+    let frame = r
+        .render(
+            &camera,
+            &ShadingParams::of_mode(Mode::ReconMirror),
+            &RenderOptions {
+                width: W,
+                height: H,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    (camera, lo, hi, frame.pixels)
+}
+
+fn luminance(p: &[f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// The share of object pixels of `reference` within 1 % of it in `a`.
+fn object_agreement(a: &[[f32; 4]], reference: &[[f32; 4]]) -> f64 {
+    let on: Vec<usize> = (0..a.len()).filter(|&i| reference[i][3] == 1.0).collect();
+    let ok = on
+        .iter()
+        .filter(|&&i| {
+            (0..3)
+                .all(|k| (a[i][k] - reference[i][k]).abs() <= 1e-2 * reference[i][k].abs().max(1.0))
+        })
+        .count();
+    ok as f64 / on.len().max(1) as f64
+}
+
+/// Each pixel's distance in pixels (up to `max`) to the nearest object pixel of `reference`.
+fn distance_to_object(reference: &[[f32; 4]], max: i32) -> Vec<i32> {
+    (0..reference.len())
+        .map(|i| {
+            let (x, y) = ((i as u32 % W) as i32, (i as u32 / W) as i32);
+            let mut best = max;
+            for dy in -max..=max {
+                for dx in -max..=max {
+                    let (px, py) = (x + dx, y + dy);
+                    if px < 0 || py < 0 || px >= W as i32 || py >= H as i32 {
+                        continue;
+                    }
+                    if reference[(py as u32 * W + px as u32) as usize][3] == 1.0 {
+                        best = best.min(dx.abs().max(dy.abs()));
+                    }
+                }
+            }
+            best
+        })
+        .collect()
+}
+
+#[test]
+fn the_object_casts_its_shadow_on_bevys_table() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, lo, hi, reference) = reference(&store);
+    let base = Setup {
+        camera,
+        floor: lo.z,
+        centre: (lo + hi) * 0.5,
+        object: true,
+        casts_shadow: true,
+        sun: true,
+        ssao: false,
+    };
+    let (lit, m1) = frame(dir, base);
+    let (unshadowed, m2) = frame(
+        dir,
+        Setup {
+            casts_shadow: false,
+            ..base
+        },
+    );
+    assert!(m1.is_empty() && m2.is_empty(), "{m1:?} {m2:?}");
+    headless::dump("shadow", &lit, (W, H));
+    headless::dump("shadow-not-cast", &unshadowed, (W, H));
+    let off: Vec<usize> = (0..lit.len()).filter(|&i| reference[i][3] != 1.0).collect();
+    let table: Vec<usize> = off
+        .iter()
+        .copied()
+        .filter(|&i| luminance(&unshadowed[i]) > 0.01)
+        .collect();
+    let dark = table
+        .iter()
+        .filter(|&&i| luminance(&lit[i]) <= 0.7 * luminance(&unshadowed[i]))
+        .count();
+    let brighter = table
+        .iter()
+        .filter(|&&i| luminance(&lit[i]) > 1.001 * luminance(&unshadowed[i]))
+        .count();
+    println!(
+        "{} table pixels in view, {dark} in the object's shadow, {brighter} brighter",
+        table.len()
+    );
+    assert!(
+        table.len() > 2000,
+        "the table should fill the view below the object"
+    );
+    assert!(
+        dark >= 150,
+        "only {dark} table pixels darkened by the object's shadow"
+    );
+    assert_eq!(brighter, 0);
+    // The object itself is drawn alike either way, as the runtime draws it.
+    for (name, pixels) in [("casting", &lit), ("not casting", &unshadowed)] {
+        let share = object_agreement(pixels, &reference);
+        assert!(
+            share >= 0.99,
+            "{name}: {share} of the object's pixels within 1 %"
+        );
+    }
+}
+
+#[test]
+fn ssao_sees_the_object_and_the_object_still_wins_over_its_prepass_depth() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, lo, hi, reference) = reference(&store);
+    let base = Setup {
+        camera,
+        floor: lo.z,
+        centre: (lo + hi) * 0.5,
+        object: true,
+        casts_shadow: true,
+        sun: false,
+        ssao: true,
+    };
+    let (with, m1) = frame(dir, base);
+    let (without, m2) = frame(
+        dir,
+        Setup {
+            object: false,
+            ..base
+        },
+    );
+    assert!(m1.is_empty() && m2.is_empty(), "{m1:?} {m2:?}");
+    headless::dump("ssao", &with, (W, H));
+    headless::dump("ssao-no-object", &without, (W, H));
+    // Bevy's depth prepass holds the proxy before the object's own pass: the object must
+    // still be drawn everywhere, as the runtime draws it.
+    let share = object_agreement(&with, &reference);
+    assert!(
+        share >= 0.99,
+        "{share} of the object's pixels within 1 % with a depth prepass"
+    );
+    let distance = distance_to_object(&reference, 24);
+    let ratio = |near: bool| {
+        let (mut a, mut b) = (0.0f64, 0.0f64);
+        let mut n = 0;
+        for i in 0..with.len() {
+            let d = distance[i];
+            let pick = if near { (1..=3).contains(&d) } else { d >= 24 };
+            if pick && luminance(&without[i]) > 0.01 {
+                a += f64::from(luminance(&with[i]));
+                b += f64::from(luminance(&without[i]));
+                n += 1;
+            }
+        }
+        (a / b.max(1e-9), n)
+    };
+    let (near, n_near) = ratio(true);
+    let (far, n_far) = ratio(false);
+    println!("SSAO: table next to the object {near:.3} ({n_near} pixels), far {far:.3} ({n_far})");
+    assert!(
+        n_near >= 50 && n_far >= 500,
+        "{n_near} near, {n_far} far pixels"
+    );
+    assert!(
+        near <= 0.95,
+        "the table next to the object is not darkened by SSAO: {near}"
+    );
+    assert!(
+        (far - 1.0).abs() <= 0.02,
+        "far from the object SSAO changed the table: {far}"
+    );
+}
