@@ -9,6 +9,7 @@ use std::sync::Mutex;
 use bevy::asset::AssetId;
 use bevy::ecs::prelude::*;
 use bevy::render::camera::ExtractedCamera;
+use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::RenderPassDescriptor;
 use bevy::render::renderer::{
     RenderAdapterInfo, RenderContext, RenderDevice, RenderQueue, ViewQuery,
@@ -182,6 +183,11 @@ pub(crate) fn draw_oslf(
         depth_slack: if settings.proxies { DEPTH_SLACK } else { 0.0 },
     };
     let view_from_world = extracted.world_from_view.to_matrix().inverse();
+    // The plugin's share of the frame, CPU and GPU, as Bevy's RenderDiagnosticsPlugin shows
+    // its own passes' (`render/oslf/elapsed_gpu`, where the adapter has timestamp queries).
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let span = diagnostics.time_span(ctx.command_encoder(), "oslf");
     let mut drew = false;
     for object in &frame.objects {
         let Some(slot) = renderers.slots.get_mut(&object.store) else {
@@ -229,6 +235,7 @@ pub(crate) fn draw_oslf(
                 }),
         );
     }
+    span.end(ctx.command_encoder());
 }
 
 /// After Bevy submitted the frame: each renderer that drew maps its feedback and books what

@@ -102,7 +102,22 @@ fn setup(
 }
 
 fn frame(dir: &Path, s: Setup) -> (Vec<[f32; 4]>, Vec<String>) {
+    let (pixels, messages, _) = frame_with(dir, s, false);
+    (pixels, messages)
+}
+
+/// The settled frame, the plugin's messages, and with `diagnostics` Bevy's render
+/// diagnostics (`RenderDiagnosticsPlugin`: each span's path and its average over the frames
+/// drawn, ms).
+fn frame_with(
+    dir: &Path,
+    s: Setup,
+    diagnostics: bool,
+) -> (Vec<[f32; 4]>, Vec<String>, Vec<(String, f64)>) {
     let mut app: App = headless::headless_app(dir, CacheConfig::default());
+    if diagnostics {
+        app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin);
+    }
     app.insert_resource(s).add_systems(Startup, setup);
     app.finish();
     app.cleanup();
@@ -112,7 +127,18 @@ fn frame(dir: &Path, s: Setup) -> (Vec<[f32; 4]>, Vec<String>) {
         assert_eq!(proxies.iter(app.world()).count(), 1, "one proxy per object");
     }
     let messages = app.world().resource::<OslfMessages>().all();
-    (pixels, messages)
+    let spans = app
+        .world()
+        .get_resource::<bevy::diagnostic::DiagnosticsStore>()
+        .map(|store| {
+            store
+                .iter()
+                .filter_map(|d| Some((d.path().to_string(), d.average()?)))
+                .filter(|(p, _)| p.starts_with("render/"))
+                .collect()
+        })
+        .unwrap_or_default();
+    (pixels, messages, spans)
 }
 
 /// The store's camera, the object's bounds and the runtime's own render (alpha 1 on the
@@ -299,5 +325,59 @@ fn ssao_sees_the_object_and_the_object_still_wins_over_its_prepass_depth() {
     assert!(
         (far - 1.0).abs() <= 0.02,
         "far from the object SSAO changed the table: {far}"
+    );
+}
+
+#[test]
+fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, lo, hi, _) = reference(&store);
+    let base = Setup {
+        camera,
+        floor: lo.z,
+        centre: (lo + hi) * 0.5,
+        object: true,
+        casts_shadow: true,
+        sun: true,
+        ssao: true,
+    };
+    let (_, messages, with) = frame_with(dir, base, true);
+    assert!(messages.is_empty(), "{messages:?}");
+    let (_, _, without) = frame_with(
+        dir,
+        Setup {
+            object: false,
+            ..base
+        },
+        true,
+    );
+    let show = |spans: &[(String, f64)]| {
+        spans
+            .iter()
+            .filter(|(p, _)| p.ends_with("elapsed_gpu") || p.contains("oslf"))
+            .map(|(p, v)| format!("{p} {v:.3} ms"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let triangles = {
+        let store = oslf_format::Store::open(&store).unwrap();
+        oslf_runtime::geometry::ObjectMesh::of_store(&store)
+            .indices
+            .len()
+            / 3
+    };
+    println!("the proxy: {triangles} triangles");
+    println!("with the object: {}", show(&with));
+    println!("without it: {}", show(&without));
+    let oslf: Vec<&(String, f64)> = with.iter().filter(|(p, _)| p.contains("/oslf/")).collect();
+    assert!(
+        oslf.iter()
+            .any(|(p, v)| p.ends_with("elapsed_cpu") && *v > 0.0),
+        "no render/…/oslf/elapsed_cpu span among {with:?}"
+    );
+    assert!(
+        !without.iter().any(|(p, _)| p.contains("/oslf/")),
+        "{without:?}"
     );
 }
