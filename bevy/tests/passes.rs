@@ -101,6 +101,9 @@ fn setup(
     }
 }
 
+/// A settled frame's pixels, the plugin's messages and Bevy's render diagnostics.
+type Frame = (Vec<[f32; 4]>, Vec<String>, Vec<(String, f64)>);
+
 fn frame(dir: &Path, s: Setup) -> (Vec<[f32; 4]>, Vec<String>) {
     let (pixels, messages, _) = frame_with(dir, s, false);
     (pixels, messages)
@@ -109,11 +112,7 @@ fn frame(dir: &Path, s: Setup) -> (Vec<[f32; 4]>, Vec<String>) {
 /// The settled frame, the plugin's messages, and with `diagnostics` Bevy's render
 /// diagnostics (`RenderDiagnosticsPlugin`: each span's path and its average over the frames
 /// drawn, ms).
-fn frame_with(
-    dir: &Path,
-    s: Setup,
-    diagnostics: bool,
-) -> (Vec<[f32; 4]>, Vec<String>, Vec<(String, f64)>) {
+fn frame_with(dir: &Path, s: Setup, diagnostics: bool) -> Frame {
     let mut app: App = headless::headless_app(dir, CacheConfig::default());
     if diagnostics {
         app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin);
