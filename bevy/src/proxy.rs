@@ -38,12 +38,16 @@ pub struct OslfProxy {
     store: AssetId<OslfStore>,
 }
 
-/// The proxy's material: Bevy's default prepass and shadow shaders; in the main pass a
-/// fragment shader whose colour and depth writes are switched off.
+/// The proxy's material: Bevy's default prepass and shadow shaders; in the main pass shaders
+/// that draw nothing (every vertex outside the clip volume, colour and depth writes off).
 #[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
 pub(crate) struct ProxyMaterial {}
 
 impl Material for ProxyMaterial {
+    fn vertex_shader() -> ShaderRef {
+        "embedded://oslf_bevy/proxy.wgsl".into()
+    }
+
     fn fragment_shader() -> ShaderRef {
         "embedded://oslf_bevy/proxy.wgsl".into()
     }

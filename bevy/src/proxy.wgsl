@@ -1,6 +1,12 @@
-// The proxy's main-pass fragment shader (proxy.rs): its colour and depth writes are switched
-// off, as the plugin's own pass shades the object; Bevy's shadow and prepass passes use their
-// default shaders.
+// The proxy's main-pass shaders (proxy.rs). The plugin's own pass shades the object, so in
+// Bevy's main pass the proxy is neither rasterised nor written: every vertex goes to one
+// point outside the clip volume, so each triangle is culled before rasterisation. Bevy's
+// shadow and prepass passes use their default shaders.
+
+@vertex
+fn vertex() -> @builtin(position) vec4<f32> {
+    return vec4<f32>(2.0, 2.0, 2.0, 1.0);
+}
 
 @fragment
 fn fragment() -> @location(0) vec4<f32> {
