@@ -32,11 +32,8 @@ use crate::object::OslfObject;
 
 /// Marks the child entity that stands in for its parent [`OslfObject`] in Bevy's shadow and
 /// prepass passes.
-#[derive(Component, Clone, Debug)]
-pub struct OslfProxy {
-    /// The store whose tessellation its mesh is.
-    store: AssetId<OslfStore>,
-}
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct OslfProxy;
 
 /// The proxy's material: Bevy's default prepass and shadow shaders; in the main pass shaders
 /// that draw nothing (every vertex outside the clip volume, colour and depth writes off).
@@ -139,8 +136,8 @@ fn proxy_mesh(store: &OslfStore) -> Result<(Mesh, Vec3), String> {
     Ok((bevy_mesh, origin))
 }
 
-/// What [`sync_proxies`] reads of each object: its entity, component, transform, children and
-/// whether it casts no shadow.
+/// What [`sync_proxies`] reads of each object: its entity, component, transform and whether
+/// it casts no shadow.
 type ObjectQuery<'w, 's> = Query<
     'w,
     's,
@@ -148,18 +145,34 @@ type ObjectQuery<'w, 's> = Query<
         Entity,
         &'static OslfObject,
         &'static GlobalTransform,
-        Option<&'static Children>,
         Has<NotShadowCaster>,
     ),
 >;
 
-/// Gives every object whose store is loaded its proxy (a new one when the store changes), and
-/// keeps the proxy's shadow casting and visibility in step with the object.
+/// What [`sync_proxies`] reads of each proxy: its entity, parent, mesh, shadow casting and
+/// visibility.
+type ProxyQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static ChildOf,
+        &'static Mesh3d,
+        Has<NotShadowCaster>,
+        &'static Visibility,
+    ),
+    With<OslfProxy>,
+>;
+
+/// Keeps one proxy per object in step with it: the mesh of its store (a new one when the store
+/// is reloaded), hidden while the store is not loaded or the object's scale is uneven (the
+/// plugin does not draw it then), its shadow casting as the object's; a proxy whose parent is
+/// no longer an object is despawned.
 #[allow(clippy::too_many_arguments)]
 fn sync_proxies(
     mut commands: Commands,
     objects: ObjectQuery,
-    proxies: Query<(&OslfProxy, Has<NotShadowCaster>, &Visibility)>,
+    proxies: ProxyQuery,
     stores: Res<Assets<OslfStore>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut cache: ResMut<ProxyMeshes>,
@@ -169,65 +182,80 @@ fn sync_proxies(
     cache
         .0
         .retain(|id, (s, _, _)| stores.get(*id).is_some_and(|now| now.same_bytes(s)));
-    for (entity, object, transform, children, no_shadow) in &objects {
+    // What each object's proxy should be: its mesh and translation (none while the store is
+    // not loaded), its visibility and whether it casts no shadow.
+    let mut wanted = HashMap::new();
+    for (entity, object, transform, no_shadow) in &objects {
         let id = object.store.id();
-        let Some(store) = stores.get(id) else {
-            continue;
-        };
-        if let std::collections::hash_map::Entry::Vacant(slot) = cache.0.entry(id) {
-            match proxy_mesh(store) {
-                Ok((mesh, origin)) => {
-                    slot.insert((store.clone(), meshes.add(mesh), origin));
+        let mesh = match stores.get(id) {
+            None => None,
+            Some(store) => {
+                if let std::collections::hash_map::Entry::Vacant(slot) = cache.0.entry(id) {
+                    match proxy_mesh(store) {
+                        Ok((mesh, origin)) => {
+                            slot.insert((store.clone(), meshes.add(mesh), origin));
+                        }
+                        Err(e) => {
+                            messages
+                                .say(format!("OSLF store {id}: no shadow or prepass proxy: {e}"));
+                        }
+                    }
                 }
-                Err(e) => {
-                    messages.say(format!("OSLF store {id}: no shadow or prepass proxy: {e}"));
-                    continue;
-                }
+                cache.0.get(&id).map(|(_, m, o)| (m.clone(), *o))
             }
-        }
-        let (_, mesh, origin) = &cache.0[&id];
-        let visibility = if uniform_scale(transform) {
+        };
+        let visible = mesh.is_some() && uniform_scale(transform);
+        let visibility = if visible {
             Visibility::Inherited
         } else {
             Visibility::Hidden
         };
-        let mut found = false;
-        for child in children.into_iter().flatten() {
-            let Ok((proxy, proxy_no_shadow, proxy_visibility)) = proxies.get(*child) else {
-                continue;
-            };
-            found = true;
-            let mut c = commands.entity(*child);
-            if proxy.store != id {
-                c.insert((
-                    OslfProxy { store: id },
-                    Mesh3d(mesh.clone()),
-                    Transform::from_translation(*origin),
-                ));
-            }
-            if proxy_no_shadow != no_shadow {
-                if no_shadow {
-                    c.insert(NotShadowCaster);
-                } else {
-                    c.remove::<NotShadowCaster>();
-                }
-            }
-            if *proxy_visibility != visibility {
-                c.insert(visibility);
+        wanted.insert(entity, (mesh, visibility, no_shadow));
+    }
+    let mut has_proxy = std::collections::HashSet::new();
+    for (proxy, parent, mesh, proxy_no_shadow, proxy_visibility) in &proxies {
+        let Some((want_mesh, visibility, no_shadow)) = wanted.get(&parent.parent()) else {
+            commands.entity(proxy).despawn();
+            continue;
+        };
+        if !has_proxy.insert(parent.parent()) {
+            commands.entity(proxy).despawn(); // one proxy per object
+            continue;
+        }
+        let mut c = commands.entity(proxy);
+        if let Some((m, origin)) = want_mesh {
+            if mesh.0 != *m {
+                c.insert((Mesh3d(m.clone()), Transform::from_translation(*origin)));
             }
         }
-        if !found {
-            let mut proxy = commands.spawn((
-                OslfProxy { store: id },
-                Mesh3d(mesh.clone()),
-                MeshMaterial3d(material.0.clone()),
-                Transform::from_translation(*origin),
-                visibility,
-                ChildOf(entity),
-            ));
-            if no_shadow {
-                proxy.insert(NotShadowCaster);
+        if proxy_no_shadow != *no_shadow {
+            if *no_shadow {
+                c.insert(NotShadowCaster);
+            } else {
+                c.remove::<NotShadowCaster>();
             }
+        }
+        if proxy_visibility != visibility {
+            c.insert(*visibility);
+        }
+    }
+    for (entity, (mesh, visibility, no_shadow)) in wanted {
+        let Some((mesh, origin)) = mesh else {
+            continue;
+        };
+        if has_proxy.contains(&entity) {
+            continue;
+        }
+        let mut proxy = commands.spawn((
+            OslfProxy,
+            Mesh3d(mesh),
+            MeshMaterial3d(material.0.clone()),
+            Transform::from_translation(origin),
+            visibility,
+            ChildOf(entity),
+        ));
+        if no_shadow {
+            proxy.insert(NotShadowCaster);
         }
     }
 }

@@ -380,3 +380,56 @@ fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
         "{without:?}"
     );
 }
+
+#[test]
+fn the_proxy_follows_its_object() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, lo, hi, _) = reference(&store);
+    let mut app: App = headless::headless_app(dir, CacheConfig::default());
+    app.insert_resource(Setup {
+        camera,
+        floor: lo.z,
+        centre: (lo + hi) * 0.5,
+        object: true,
+        casts_shadow: true,
+        sun: true,
+        ssao: false,
+    })
+    .add_systems(Startup, setup);
+    app.finish();
+    app.cleanup();
+    let proxies = |app: &mut App| {
+        let mut q = app.world_mut().query::<(
+            &OslfProxy,
+            &bevy::ecs::hierarchy::ChildOf,
+            Has<NotShadowCaster>,
+        )>();
+        q.iter(app.world())
+            .map(|(_, parent, no_shadow)| (parent.parent(), no_shadow))
+            .collect::<Vec<_>>()
+    };
+    let start = std::time::Instant::now();
+    while proxies(&mut app).is_empty() && start.elapsed().as_secs() < 60 {
+        app.update();
+    }
+    let object = {
+        let mut q = app.world_mut().query_filtered::<Entity, With<OslfObject>>();
+        q.single(app.world()).unwrap()
+    };
+    assert_eq!(proxies(&mut app), vec![(object, false)]);
+    // Its shadow casting follows the object's.
+    app.world_mut().entity_mut(object).insert(NotShadowCaster);
+    app.update();
+    assert_eq!(proxies(&mut app), vec![(object, true)]);
+    app.world_mut()
+        .entity_mut(object)
+        .remove::<NotShadowCaster>();
+    app.update();
+    assert_eq!(proxies(&mut app), vec![(object, false)]);
+    // An entity that is no longer an object keeps no proxy.
+    app.world_mut().entity_mut(object).remove::<OslfObject>();
+    app.update();
+    app.update();
+    assert!(proxies(&mut app).is_empty(), "{:?}", proxies(&mut app));
+}
