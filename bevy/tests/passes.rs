@@ -162,6 +162,23 @@ fn reference(store: &Path) -> (Camera, glam::Vec3, glam::Vec3, Vec<[f32; 4]>) {
     (camera, lo, hi, frame.pixels)
 }
 
+/// The fixture store's directory; a frame of its object casting its shadow on the table
+/// under the sun, without SSAO; and the runtime's own render of the object.
+fn fixture() -> (std::path::PathBuf, Setup, Vec<[f32; 4]>) {
+    let store = common::store_path();
+    let (camera, lo, hi, reference) = reference(&store);
+    let setup = Setup {
+        camera,
+        floor: lo.z,
+        centre: (lo + hi) * 0.5,
+        object: true,
+        casts_shadow: true,
+        sun: true,
+        ssao: false,
+    };
+    (store.parent().unwrap().to_path_buf(), setup, reference)
+}
+
 fn luminance(p: &[f32; 4]) -> f32 {
     0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
 }
@@ -203,21 +220,10 @@ fn distance_to_object(reference: &[[f32; 4]], max: i32) -> Vec<i32> {
 
 #[test]
 fn the_object_casts_its_shadow_on_bevys_table() {
-    let store = common::store_path();
-    let dir = store.parent().unwrap();
-    let (camera, lo, hi, reference) = reference(&store);
-    let base = Setup {
-        camera,
-        floor: lo.z,
-        centre: (lo + hi) * 0.5,
-        object: true,
-        casts_shadow: true,
-        sun: true,
-        ssao: false,
-    };
-    let (lit, m1) = frame(dir, base);
+    let (dir, base, reference) = fixture();
+    let (lit, m1) = frame(&dir, base);
     let (unshadowed, m2) = frame(
-        dir,
+        &dir,
         Setup {
             casts_shadow: false,
             ..base
@@ -265,21 +271,15 @@ fn the_object_casts_its_shadow_on_bevys_table() {
 
 #[test]
 fn ssao_sees_the_object_and_the_object_still_wins_over_its_prepass_depth() {
-    let store = common::store_path();
-    let dir = store.parent().unwrap();
-    let (camera, lo, hi, reference) = reference(&store);
+    let (dir, base, reference) = fixture();
     let base = Setup {
-        camera,
-        floor: lo.z,
-        centre: (lo + hi) * 0.5,
-        object: true,
-        casts_shadow: true,
         sun: false,
         ssao: true,
+        ..base
     };
-    let (with, m1) = frame(dir, base);
+    let (with, m1) = frame(&dir, base);
     let (without, m2) = frame(
-        dir,
+        &dir,
         Setup {
             object: false,
             ..base
@@ -329,22 +329,12 @@ fn ssao_sees_the_object_and_the_object_still_wins_over_its_prepass_depth() {
 
 #[test]
 fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
-    let store = common::store_path();
-    let dir = store.parent().unwrap();
-    let (camera, lo, hi, _) = reference(&store);
-    let base = Setup {
-        camera,
-        floor: lo.z,
-        centre: (lo + hi) * 0.5,
-        object: true,
-        casts_shadow: true,
-        sun: true,
-        ssao: true,
-    };
-    let (_, messages, with) = frame_with(dir, base, true);
+    let (dir, base, _) = fixture();
+    let base = Setup { ssao: true, ..base };
+    let (_, messages, with) = frame_with(&dir, base, true);
     assert!(messages.is_empty(), "{messages:?}");
     let (_, _, without) = frame_with(
-        dir,
+        &dir,
         Setup {
             object: false,
             ..base
@@ -360,7 +350,7 @@ fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
             .join(", ")
     };
     let triangles = {
-        let store = oslf_format::Store::open(&store).unwrap();
+        let store = oslf_format::Store::open(&common::store_path()).unwrap();
         oslf_runtime::geometry::ObjectMesh::of_store(&store)
             .indices
             .len()
@@ -383,20 +373,9 @@ fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
 
 #[test]
 fn the_proxy_follows_its_object() {
-    let store = common::store_path();
-    let dir = store.parent().unwrap();
-    let (camera, lo, hi, _) = reference(&store);
-    let mut app: App = headless::headless_app(dir, CacheConfig::default());
-    app.insert_resource(Setup {
-        camera,
-        floor: lo.z,
-        centre: (lo + hi) * 0.5,
-        object: true,
-        casts_shadow: true,
-        sun: true,
-        ssao: false,
-    })
-    .add_systems(Startup, setup);
+    let (dir, base, _) = fixture();
+    let mut app: App = headless::headless_app(&dir, CacheConfig::default());
+    app.insert_resource(base).add_systems(Startup, setup);
     app.finish();
     app.cleanup();
     let proxies = |app: &mut App| {
