@@ -5,8 +5,9 @@
 //! indoors. This crate runs that capture as a wgpu compute shader, with the estimator of the
 //! CPU path tracer (`oslf_trace::integrator`) ported line by line:
 //!
-//! - [`scene`]: the scene packed for the GPU: an obvhs BVH2 over the bake's own triangles
-//!   (the objects tessellated as for the CPU BVH), materials (Lambertian and glTF
+//! - [`scene`]: the scene packed for the GPU: the CPU's own compressed wide BVH (obvhs's
+//!   CWBVH, node for node) over the bake's own triangles (the objects tessellated as for the
+//!   CPU), materials (Lambertian and glTF
 //!   metallic-roughness, constant, checker and image textures), point, spot and sun lights,
 //!   the environment (constant, lat-long map or Preetham sky, with the CPU's sampling tables);
 //! - [`capture`]: [`GpuCapture`], which uploads it once and captures batches of cubes
