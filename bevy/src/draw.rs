@@ -253,7 +253,12 @@ pub(crate) fn after_submit_oslf(
             continue;
         };
         match renderer.after_submit() {
-            Ok(Some(stats)) => sink.add(&stats),
+            Ok(Some(stats)) => {
+                sink.add(&stats);
+                if let Some(seconds) = renderer.host_pass_seconds() {
+                    sink.passes(*id, seconds);
+                }
+            }
             Ok(None) => {}
             Err(e) => {
                 messages.say(format!(

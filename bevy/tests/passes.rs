@@ -133,7 +133,7 @@ fn frame_with(dir: &Path, s: Setup, diagnostics: bool) -> Frame {
             store
                 .iter()
                 .filter_map(|d| Some((d.path().to_string(), d.average()?)))
-                .filter(|(p, _)| p.starts_with("render/"))
+                .filter(|(p, _)| p.starts_with("render/") || p.starts_with("oslf/"))
                 .collect()
         })
         .unwrap_or_default();
@@ -345,7 +345,7 @@ fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
         spans
             .iter()
             .filter(|(p, _)| p.ends_with("elapsed_gpu") || p.contains("oslf"))
-            .map(|(p, v)| format!("{p} {v:.3} ms"))
+            .map(|(p, v)| format!("{p} {v:.3}"))
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -369,6 +369,14 @@ fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
         !without.iter().any(|(p, _)| p.contains("/oslf/")),
         "{without:?}"
     );
+    // The plugin's own passes, timed inside its frame (lavapipe has timestamp queries).
+    for pass in ["oslf/gbuffer_gpu_ms", "oslf/shade_gpu_ms"] {
+        let ms = with.iter().find(|(p, _)| p == pass).map(|(_, v)| *v);
+        assert!(
+            ms.is_some_and(|v| v > 0.0 && v.is_finite()),
+            "{pass}: {ms:?} among {with:?}"
+        );
+    }
 }
 
 #[test]

@@ -402,6 +402,15 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
     host.frame(&gpu, &mut r, &view, &params);
     gpu.wait().unwrap();
     r.after_submit().unwrap();
+    // The booked frames' passes were timed inside the host's encoder (lavapipe has
+    // timestamp queries).
+    let times = r.host_pass_seconds();
+    assert!(
+        times.is_some_and(|t| [t.gbuffer, t.shade]
+            .iter()
+            .all(|s| s.is_some_and(|s| s > 0.0 && s < 60.0))),
+        "{label}: host pass times {times:?}"
+    );
     let color = host.colors(&gpu);
     // A multisampled depth target cannot be copied out: its samples are judged by the colours.
     let depth: Vec<Option<f32>> = if samples == 1 {

@@ -15,7 +15,9 @@ use glam::{Mat4, Vec3, Vec4};
 use oslf_geometry::Camera;
 use wgpu::util::DeviceExt;
 
+use super::timer::{PassTimer, TimedPass};
 use super::Renderer;
+use crate::buffers::TIMESTAMP_BYTES;
 use crate::cache::CacheStats;
 use crate::error::{Result, RuntimeError};
 use crate::params::Background;
@@ -211,8 +213,24 @@ struct CompositeKey {
 
 /// Where a frame's feedback is copied and mapped; a slot is reused once read.
 pub(super) struct FeedbackSlot {
+    /// The feedback masks, then the frame's pass timestamps where it was timed.
     buffer: wgpu::Buffer,
     state: SlotState,
+    /// The slot's own timestamp queries (where the device has them), so that several views
+    /// recorded into one encoder never share one.
+    timer: Option<PassTimer>,
+    /// Whether the frame copied into it was timed.
+    timed: bool,
+}
+
+/// The GPU time of a host frame's passes ([`Renderer::host_pass_seconds`]), seconds; `None`
+/// for a pass whose timestamps the device did not give.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HostPassSeconds {
+    /// The object's G-buffer pass.
+    pub gbuffer: Option<f64>,
+    /// Its shading pass.
+    pub shade: Option<f64>,
 }
 
 enum SlotState {
@@ -319,25 +337,34 @@ impl Renderer {
             Some(std::mem::size_of::<ShadeUniform>() as u64),
         );
         encoder.clear_buffer(&self.buffers.feedback, 0, None);
+        let table_bytes = self.buffers.timestamps_offset;
+        // The frame's feedback slot, if one is free; its passes are timed into it.
+        let slot = self.feedback_slot(table_bytes + TIMESTAMP_BYTES);
+        let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
         let targets = self
             .targets
             .as_ref()
             .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
-        // Untimed: a host frame's timestamps would never be read back.
-        self.encode_gbuffer(encoder, targets, false);
-        self.encode_shading(encoder, targets, false)?;
+        self.encode_gbuffer(encoder, targets, timer);
+        self.encode_shading(encoder, targets, timer)?;
         self.host_frames += 1;
         let frame = self.host_frames;
-        let table_bytes = self.buffers.timestamps_offset;
-        if let Some(slot) = self.feedback_slot(table_bytes) {
+        if let Some(i) = slot {
+            let s = &self.feedback_slots[i];
             encoder.copy_buffer_to_buffer(
                 &self.buffers.feedback,
                 0,
-                &self.feedback_slots[slot].buffer,
+                &s.buffer,
                 0,
                 Some(table_bytes),
             );
-            self.feedback_slots[slot].state = SlotState::Encoded(frame);
+            if let Some(t) = &s.timer {
+                t.encode_copy(encoder, TimedPass::GBuffer, &s.buffer, table_bytes);
+                t.encode_copy(encoder, TimedPass::Shade, &s.buffer, table_bytes);
+            }
+            let s = &mut self.feedback_slots[i];
+            s.timed = s.timer.is_some();
+            s.state = SlotState::Encoded(frame);
         }
         self.encode_composite(encoder, target, composite, exposure)
     }
@@ -350,6 +377,13 @@ impl Renderer {
     pub fn after_submit(&mut self) -> Result<Option<CacheStats>> {
         let gpu = self.gpu.clone();
         gpu.scoped(|| self.book_feedback())
+    }
+
+    /// The GPU time of the G-buffer and shading passes of the latest host frame whose
+    /// feedback [`Renderer::after_submit`] booked (a frame or more after it was drawn), where
+    /// the device has timestamp queries; `None` before.
+    pub fn host_pass_seconds(&self) -> Option<HostPassSeconds> {
+        self.host_pass_seconds
     }
 
     /// [`Renderer::after_submit`]'s work, its device errors caught by the caller.
@@ -371,15 +405,25 @@ impl Renderer {
             .poll(wgpu::PollType::Poll)
             .map_err(|e| RuntimeError::gpu(format!("polling the device: {e}")))?;
         let mut booked: Option<CacheStats> = None;
+        let table_bytes = self.buffers.timestamps_offset as usize;
         while let Some(slot) = self.oldest_mapped() {
             let masks = {
-                let buffer = &self.feedback_slots[slot].buffer;
-                let bytes = buffer
+                let s = &self.feedback_slots[slot];
+                let bytes = s
+                    .buffer
                     .get_mapped_range(..)
                     .map_err(|e| RuntimeError::gpu(format!("reading the feedback: {e}")))?
                     .to_vec();
-                buffer.unmap();
-                let mut masks: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+                s.buffer.unmap();
+                if let (Some(t), true) = (&s.timer, s.timed) {
+                    let stamps = bytes.get(table_bytes..).unwrap_or_default();
+                    self.host_pass_seconds = Some(HostPassSeconds {
+                        gbuffer: t.seconds(stamps, TimedPass::GBuffer),
+                        shade: t.seconds(stamps, TimedPass::Shade),
+                    });
+                }
+                let mut masks: Vec<u32> =
+                    bytemuck::pod_collect_to_vec(&bytes[..table_bytes.min(bytes.len())]);
                 masks.truncate(self.cube_count as usize);
                 masks
             };
@@ -433,6 +477,8 @@ impl Renderer {
         self.feedback_slots.push(FeedbackSlot {
             buffer,
             state: SlotState::Free,
+            timer: PassTimer::new(&self.gpu),
+            timed: false,
         });
         Some(self.feedback_slots.len() - 1)
     }

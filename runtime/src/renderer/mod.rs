@@ -37,7 +37,7 @@ mod timer;
 
 pub(crate) use camera::store_view;
 pub use camera::{default_camera, view_projection};
-pub use host::{HostTarget, HostView, DEPTH_SLACK, MAX_DEPTH_SLACK};
+pub use host::{HostPassSeconds, HostTarget, HostView, DEPTH_SLACK, MAX_DEPTH_SLACK};
 pub use targets::FrameBytes;
 
 use readback::map_read;
@@ -139,6 +139,8 @@ pub struct Renderer {
     host_frames: u64,
     /// Where host frames' feedback is copied and mapped, asynchronously.
     feedback_slots: Vec<host::FeedbackSlot>,
+    /// The latest booked host frame's pass times ([`Renderer::host_pass_seconds`]).
+    host_pass_seconds: Option<HostPassSeconds>,
     /// The composite pipelines of the host targets seen.
     composites: host::Composites,
 }
@@ -292,6 +294,7 @@ impl Renderer {
             prefiltered_view,
             host_frames: 0,
             feedback_slots: Vec::new(),
+            host_pass_seconds: None,
             composites,
         };
         renderer.timer = PassTimer::new(&renderer.gpu);
@@ -546,9 +549,9 @@ impl Renderer {
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.buffers.feedback, 0, None);
         if geometry {
-            self.encode_gbuffer(&mut encoder, targets, true);
+            self.encode_gbuffer(&mut encoder, targets, self.timer.as_ref());
         }
-        self.encode_shading(&mut encoder, targets, true)?;
+        self.encode_shading(&mut encoder, targets, self.timer.as_ref())?;
         encoder.copy_buffer_to_buffer(
             &self.buffers.feedback,
             0,

@@ -1,7 +1,7 @@
 //! Encoding a frame's two passes: the G-buffer pass and the shading pass.
 
 use super::targets::SizedTargets;
-use super::timer::TimedPass;
+use super::timer::{PassTimer, TimedPass};
 use super::Renderer;
 use crate::error::{Result, RuntimeError};
 use crate::pipelines::{DEPTH_CLEAR, WORKGROUP};
@@ -10,13 +10,13 @@ impl Renderer {
     /// Encodes the G-buffer pass: clears depth and rasterizes the mesh into the targets. The
     /// colour targets are not cleared: the shading pass and `read_gbuffer` take a pixel as
     /// covered where its depth is below [`DEPTH_CLEAR`] and ignore the colour elsewhere, so
-    /// the pass does not spend its time clearing two Rgba32Float targets. `timed`: with the
-    /// renderer's GPU timestamps, when it has them.
+    /// the pass does not spend its time clearing two Rgba32Float targets. `timer`: where its
+    /// GPU timestamps go, if anywhere.
     pub(super) fn encode_gbuffer(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &SizedTargets,
-        timed: bool,
+        timer: Option<&PassTimer>,
     ) {
         let gp = targets.gb_position.create_view(&Default::default());
         let gn = targets.gb_normal.create_view(&Default::default());
@@ -64,7 +64,7 @@ impl Renderer {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: self.timer.as_ref().filter(|_| timed).map(|t| {
+            timestamp_writes: timer.map(|t| {
                 let (query_set, begin, end) = t.writes(TimedPass::GBuffer);
                 wgpu::RenderPassTimestampWrites {
                     query_set,
@@ -92,17 +92,17 @@ impl Renderer {
         }
     }
 
-    /// Encodes the shading pass of the current frame's pipeline over every pixel; `timed` as
+    /// Encodes the shading pass of the current frame's pipeline over every pixel; `timer` as
     /// for [`Renderer::encode_gbuffer`].
     pub(super) fn encode_shading(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &SizedTargets,
-        timed: bool,
+        timer: Option<&PassTimer>,
     ) -> Result<()> {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("shade"),
-            timestamp_writes: self.timer.as_ref().filter(|_| timed).map(|t| {
+            timestamp_writes: timer.map(|t| {
                 let (query_set, begin, end) = t.writes(TimedPass::Shade);
                 wgpu::ComputePassTimestampWrites {
                     query_set,
