@@ -1432,9 +1432,9 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     return vec3<f32>(1.0, 0.0, 0.0);
 }
 
-const WORKGROUP: u32 = 64u;
+override WORKGROUP: u32 = 64u;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
     if id >= params.texels {
@@ -1488,7 +1488,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     out[id] = o;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if i >= arrayLength(&trace_rays) {
@@ -1503,7 +1503,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
     trace_hits[i] = o;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
     if id >= camera.width * camera.height {

@@ -18,8 +18,22 @@ pub use crate::layouts::{Job, Params, TexelOut, TraceHit, TraceRay};
 use crate::scene::GpuScene;
 use crate::shader;
 
-/// Invocations per workgroup (`@workgroup_size` in shader/capture.wgsl).
+/// Invocations per workgroup on a hardware GPU (the default of the override `WORKGROUP` in
+/// shader/capture.wgsl): two warps of 32, one wavefront of 64.
 pub const WORKGROUP: u32 = 64;
+/// Invocations per workgroup on a CPU adapter (lavapipe runs a workgroup on one thread, 8
+/// invocations per 256-bit vector): smaller groups traced 1.2–1.3× the rays per second of 64
+/// (docs/measurements.md, "The compressed wide BVH on the GPU").
+pub const CPU_WORKGROUP: u32 = 16;
+
+/// The workgroup size the capture's pipelines are compiled with on `gpu`.
+pub fn workgroup_size(gpu: &Gpu) -> u32 {
+    if gpu.shares_system_memory {
+        CPU_WORKGROUP
+    } else {
+        WORKGROUP
+    }
+}
 /// Workgroups per dispatch row: a dispatch is `ROW_GROUPS × rows` workgroups.
 const ROW_GROUPS: u32 = 4096;
 /// Most paths (texels × samples) per dispatch unless that is fewer than
@@ -106,6 +120,8 @@ pub struct GpuCapture {
     triangles: usize,
     /// Capture rays per second measured on this scene ([`GpuCapture::calibrate`]).
     rate: Option<f64>,
+    /// Invocations per workgroup of its pipelines ([`workgroup_size`]).
+    workgroup: u32,
 }
 
 impl std::fmt::Debug for GpuCapture {
@@ -229,6 +245,8 @@ impl GpuCapture {
                 label: Some("capture"),
                 source: wgpu::ShaderSource::Wgsl(shader::source().into()),
             });
+        let workgroup = workgroup_size(&gpu);
+        let constants = [("WORKGROUP", f64::from(workgroup))];
         let pipeline = |entry: &str| {
             gpu.device
                 .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -236,7 +254,10 @@ impl GpuCapture {
                     layout: None,
                     module: &module,
                     entry_point: Some(entry),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
                     cache: None,
                 })
         };
@@ -278,6 +299,7 @@ impl GpuCapture {
             base,
             triangles: scene.tris.len(),
             rate: None,
+            workgroup,
         };
         capture_gpu.check("building the capture pipelines")?;
         Ok(capture_gpu)
@@ -372,7 +394,7 @@ impl GpuCapture {
             strata: k,
             seed: [seed as u32, (seed >> 32) as u32],
             texels: total as u32,
-            row_invocations: ROW_GROUPS * WORKGROUP,
+            row_invocations: ROW_GROUPS * self.workgroup,
             ..self.base
         };
         if settings.distance_channel {
@@ -464,10 +486,10 @@ impl GpuCapture {
         items: u64,
         samples: u64,
     ) {
-        params.row_invocations = ROW_GROUPS * WORKGROUP;
+        params.row_invocations = ROW_GROUPS * self.workgroup;
         let per_dispatch = (PATHS_PER_DISPATCH / samples.max(1))
             .max(MIN_INVOCATIONS_PER_DISPATCH)
-            .next_multiple_of(u64::from(WORKGROUP));
+            .next_multiple_of(u64::from(self.workgroup));
         let mut first = 0u64;
         while first < items {
             let count = per_dispatch.min(items - first);
@@ -475,7 +497,7 @@ impl GpuCapture {
             self.gpu
                 .queue
                 .write_buffer(uniform, 0, bytemuck::bytes_of(&params));
-            let groups = count.div_ceil(u64::from(WORKGROUP)) as u32;
+            let groups = count.div_ceil(u64::from(self.workgroup)) as u32;
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -542,7 +564,7 @@ impl GpuCapture {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.trace);
             pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups((rays.len() as u32).div_ceil(WORKGROUP), 1, 1);
+            pass.dispatch_workgroups((rays.len() as u32).div_ceil(self.workgroup), 1, 1);
         }
         encoder.copy_buffer_to_buffer(&hits, 0, &staging, 0, bytes);
         self.gpu.queue.submit([encoder.finish()]);

@@ -55,9 +55,10 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     return vec3<f32>(1.0, 0.0, 0.0);
 }
 
-const WORKGROUP: u32 = 64u;
+// Invocations per workgroup, chosen per adapter (capture.rs `workgroup_size`).
+override WORKGROUP: u32 = 64u;
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
     if id >= params.texels {
@@ -111,7 +112,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     out[id] = o;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if i >= arrayLength(&trace_rays) {
@@ -128,7 +129,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 // The bake's preview: the scene camera's image path traced with the capture's integrator, one
 // invocation per pixel (preview.wgsl).
-@compute @workgroup_size(64)
+@compute @workgroup_size(WORKGROUP)
 fn preview(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     let id = params.first + wg.y * params.row_invocations + wg.x * WORKGROUP + local;
     if id >= camera.width * camera.height {
