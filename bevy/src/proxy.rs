@@ -19,7 +19,7 @@ use bevy::mesh::{Indices, Mesh, Mesh3d, MeshVertexBufferLayoutRef, PrimitiveTopo
 use bevy::pbr::{Material, MaterialPipeline, MaterialPipelineKey, MaterialPlugin, MeshMaterial3d};
 use bevy::reflect::TypePath;
 use bevy::render::render_resource::{
-    AsBindGroup, ColorWrites, RenderPipelineDescriptor, SpecializedMeshPipelineError,
+    AsBindGroup, RenderPipelineDescriptor, SpecializedMeshPipelineError,
 };
 use bevy::shader::ShaderRef;
 use bevy::transform::components::{GlobalTransform, Transform};
@@ -36,7 +36,7 @@ use crate::object::OslfObject;
 pub struct OslfProxy;
 
 /// The proxy's material: Bevy's default prepass and shadow shaders; in the main pass shaders
-/// that draw nothing (every vertex outside the clip volume, colour and depth writes off).
+/// that draw nothing (every vertex outside the clip volume).
 #[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
 pub(crate) struct ProxyMaterial {}
 
@@ -55,23 +55,9 @@ impl Material for ProxyMaterial {
         _: &MeshVertexBufferLayoutRef,
         _: MaterialPipelineKey<Self>,
     ) -> Result<(), SpecializedMeshPipelineError> {
-        // The runtime's G-buffer draws both sides; so do the shadow maps and the prepass.
+        // The runtime's G-buffer draws both sides; so do the shadow maps and the prepass. (In
+        // the main pass its vertex shader culls every triangle.)
         descriptor.primitive.cull_mode = None;
-        // Bevy labels its prepass and shadow pipelines "prepass_pipeline"; the rest is the
-        // main pass, where the plugin's own pass draws the object.
-        if descriptor.label.as_deref() != Some("prepass_pipeline") {
-            for target in descriptor
-                .fragment
-                .iter_mut()
-                .flat_map(|f| f.targets.iter_mut())
-                .flatten()
-            {
-                target.write_mask = ColorWrites::empty();
-            }
-            if let Some(depth) = descriptor.depth_stencil.as_mut() {
-                depth.depth_write_enabled = Some(false);
-            }
-        }
         Ok(())
     }
 }

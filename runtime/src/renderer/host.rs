@@ -217,10 +217,8 @@ pub(super) struct FeedbackSlot {
     buffer: wgpu::Buffer,
     state: SlotState,
     /// The slot's own timestamp queries (where the device has them), so that several views
-    /// recorded into one encoder never share one.
+    /// recorded into one encoder never share one; every frame copied into it is timed.
     timer: Option<PassTimer>,
-    /// Whether the frame copied into it was timed.
-    timed: bool,
 }
 
 /// The GPU time of a host frame's passes ([`Renderer::host_pass_seconds`]), seconds; `None`
@@ -362,9 +360,7 @@ impl Renderer {
                 t.encode_copy(encoder, TimedPass::GBuffer, &s.buffer, table_bytes);
                 t.encode_copy(encoder, TimedPass::Shade, &s.buffer, table_bytes);
             }
-            let s = &mut self.feedback_slots[i];
-            s.timed = s.timer.is_some();
-            s.state = SlotState::Encoded(frame);
+            self.feedback_slots[i].state = SlotState::Encoded(frame);
         }
         self.encode_composite(encoder, target, composite, exposure)
     }
@@ -415,7 +411,7 @@ impl Renderer {
                     .map_err(|e| RuntimeError::gpu(format!("reading the feedback: {e}")))?
                     .to_vec();
                 s.buffer.unmap();
-                if let (Some(t), true) = (&s.timer, s.timed) {
+                if let Some(t) = &s.timer {
                     let stamps = bytes.get(table_bytes..).unwrap_or_default();
                     self.host_pass_seconds = Some(HostPassSeconds {
                         gbuffer: t.seconds(stamps, TimedPass::GBuffer),
@@ -478,7 +474,6 @@ impl Renderer {
             buffer,
             state: SlotState::Free,
             timer: PassTimer::new(&self.gpu),
-            timed: false,
         });
         Some(self.feedback_slots.len() - 1)
     }
