@@ -91,6 +91,18 @@ pub fn texel_direction(face: usize, x: u32, y: u32, resolution: u32) -> [f32; 3]
     face_st_to_direction(face, (x as f32 + 0.5) / n, (y as f32 + 0.5) / n)
 }
 
+/// The solid angle of texel `(x, y)` of a face of `resolution` texels a side (a resolution of
+/// 0 is treated as 1): exact, from the area element of the unit-distance face, so that the
+/// texels of a cube sum to 4π.
+pub fn texel_solid_angle(x: u32, y: u32, resolution: u32) -> f32 {
+    let n = f64::from(resolution.max(1));
+    // ∫∫ (1 + a² + b²)^(−3/2) da db from the origin to (a, b).
+    let area = |a: f64, b: f64| (a * b).atan2((a * a + b * b + 1.0).sqrt());
+    let edge = |i: u32| 2.0 * f64::from(i) / n - 1.0;
+    let (a0, a1, b0, b1) = (edge(x), edge(x + 1), edge(y), edge(y + 1));
+    (area(a1, b1) - area(a0, b1) - area(a1, b0) + area(a0, b0)) as f32
+}
+
 /// A decoded cube map: linear RGB radiance, row-major per face, faces in layer order.
 #[derive(Clone, Debug)]
 pub struct CubeImage {

@@ -190,6 +190,20 @@ pub enum Error {
     /// A cube image whose shape does not match the bake parameters.
     #[error("cube {cube}: {detail}")]
     CubeShape { cube: u32, detail: String },
+
+    /// Full verification: a cube's irradiance record is not the projection of its faces.
+    #[error("irradiance section: the record of cube {cube} (byte offset {offset}) is not the projection of the cube's stored faces")]
+    IrradianceMismatch { cube: u32, offset: u64 },
+
+    /// A coefficient of the irradiance section is not finite (byte offset of the `f32`).
+    #[error("irradiance section: cube {cube}, coefficient {coefficient}, channel {channel} (byte offset {offset}) is {value}, not finite")]
+    InvalidIrradiance {
+        cube: u64,
+        coefficient: usize,
+        channel: usize,
+        offset: u64,
+        value: f32,
+    },
     /// A caller-supplied buffer of the wrong length.
     #[error("{what}: buffer has {actual} elements, expected {expected}")]
     BufferSize {
@@ -376,7 +390,8 @@ fn unsupported_version(found: u32) -> String {
         )
     } else {
         format!(
-            "unsupported OSLF store version {found:#010x} at header bytes 8..12 (this reader understands format {} only)",
+            "unsupported OSLF store version {found:#010x} at header bytes 8..12 (this reader understands formats {} and {})",
+            crate::version_name(crate::VERSION_1_0),
             crate::version_name(crate::VERSION)
         )
     }

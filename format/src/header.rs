@@ -4,7 +4,7 @@ use crate::bytes::{align8, le_u32, le_u64};
 use crate::encoding::Encoding;
 use crate::filter::Filter;
 use crate::sample_map::IndexWidth;
-use crate::{Error, MAGIC, VERSION};
+use crate::{Error, MAGIC, VERSION, VERSION_1_0};
 use xxhash_rust::xxh3::xxh3_64;
 
 /// Bytes of the header.
@@ -16,8 +16,10 @@ pub const HEADER_CHECKSUM_OFFSET: usize = 248;
 pub const FILTER_OFFSET: usize = 176;
 /// Byte offset of the checksum of the decoded faces (`u64`).
 pub const DECODED_CHECKSUM_OFFSET: usize = 180;
+/// Byte offset of the irradiance section's offset, size and checksum (three `u64`; format 1.1).
+pub const IRRADIANCE_OFFSET: usize = 188;
 /// First reserved (zero) byte of the header.
-const RESERVED_START: usize = 188;
+const RESERVED_START: usize = 212;
 
 /// Flag bit: every face carries an `f32` distance plane.
 pub const FLAG_DISTANCE: u32 = 1;
@@ -25,12 +27,17 @@ pub const FLAG_DISTANCE: u32 = 1;
 pub const FLAG_ENV_CUBE: u32 = 2;
 /// Flag bit: `finish()` completed the file (table of contents present).
 pub const FLAG_COMPLETE: u32 = 4;
-const KNOWN_FLAGS: u32 = FLAG_DISTANCE | FLAG_ENV_CUBE | FLAG_COMPLETE;
+/// Flag bit (format 1.1): the store has an irradiance section.
+pub const FLAG_IRRADIANCE: u32 = 8;
+const KNOWN_FLAGS: u32 = FLAG_DISTANCE | FLAG_ENV_CUBE | FLAG_COMPLETE | FLAG_IRRADIANCE;
 
 /// Byte range of the fields `finish()` patches (payload size, TOC offset and size, file size).
 pub(crate) const FINISH_FIELDS: std::ops::Range<usize> = 120..152;
 /// Byte range of the metadata, points and maps checksums.
 pub(crate) const SECTION_CHECKSUMS: std::ops::Range<usize> = 152..176;
+/// Byte range of the irradiance section's fields, which `finish()` also patches.
+pub(crate) const IRRADIANCE_FIELDS: std::ops::Range<usize> =
+    IRRADIANCE_OFFSET..IRRADIANCE_OFFSET + 24;
 /// Byte range of the flags field.
 pub(crate) const FLAGS_FIELD: std::ops::Range<usize> = 12..16;
 /// Byte range of the decoded-faces checksum, which `finish()` also patches.
@@ -57,6 +64,9 @@ impl Section {
 /// The parsed header.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Header {
+    /// The format version (bytes 8..12): [`VERSION`], or [`VERSION_1_0`] for a store without
+    /// an irradiance section.
+    pub version: u32,
     pub flags: u32,
     pub encoding: Encoding,
     /// The face filter (bytes 176..180).
@@ -73,6 +83,11 @@ pub struct Header {
     pub maps: Section,
     pub payload: Section,
     pub toc: Section,
+    /// The irradiance section (bytes 188..204; format 1.1 with [`FLAG_IRRADIANCE`]), between
+    /// the cube payload and the table of contents; zero otherwise.
+    pub irradiance: Section,
+    /// Its checksum (bytes 204..212).
+    pub irradiance_checksum: u64,
     pub file_size: u64,
     pub meta_checksum: u64,
     pub points_checksum: u64,
@@ -97,13 +112,16 @@ impl Header {
     pub fn is_complete(&self) -> bool {
         self.flags & FLAG_COMPLETE != 0
     }
+    pub fn has_irradiance(&self) -> bool {
+        self.flags & FLAG_IRRADIANCE != 0
+    }
 
     /// Serialises the header, checksum included.
     pub fn to_bytes(&self) -> [u8; HEADER_BYTES] {
         let mut b = [0u8; HEADER_BYTES];
         let mut put = |off: usize, v: &[u8]| b[off..off + v.len()].copy_from_slice(v);
         put(0, &MAGIC);
-        put(8, &VERSION.to_le_bytes());
+        put(8, &self.version.to_le_bytes());
         put(12, &self.flags.to_le_bytes());
         put(16, &self.encoding.tag().to_le_bytes());
         put(20, &(self.index_width.bytes() as u32).to_le_bytes());
@@ -126,6 +144,12 @@ impl Header {
         put(
             DECODED_CHECKSUM_OFFSET,
             &self.decoded_checksum.to_le_bytes(),
+        );
+        put(IRRADIANCE_OFFSET, &self.irradiance.offset.to_le_bytes());
+        put(IRRADIANCE_OFFSET + 8, &self.irradiance.size.to_le_bytes());
+        put(
+            IRRADIANCE_OFFSET + 16,
+            &self.irradiance_checksum.to_le_bytes(),
         );
         let sum = xxh3_64(&b[..HEADER_CHECKSUM_OFFSET]);
         b[HEADER_CHECKSUM_OFFSET..].copy_from_slice(&sum.to_le_bytes());
@@ -156,7 +180,7 @@ impl Header {
             });
         }
         let version = le_u32(b, 8);
-        if version != VERSION {
+        if version != VERSION && version != VERSION_1_0 {
             return Err(Error::UnsupportedVersion { found: version });
         }
         let stored = le_u64(b, HEADER_CHECKSUM_OFFSET);
@@ -182,6 +206,19 @@ impl Header {
                 format!("unknown flag bits {:#x}", flags & !KNOWN_FLAGS),
             ));
         }
+        // Format 1.0 has no irradiance section: its flag and fields (then reserved) are zero.
+        let first_reserved = if version == VERSION_1_0 {
+            if flags & FLAG_IRRADIANCE != 0 {
+                return Err(invalid(
+                    "flags",
+                    12,
+                    "flag bit 3 (irradiance) is set in a format 1.0 store".into(),
+                ));
+            }
+            IRRADIANCE_OFFSET
+        } else {
+            RESERVED_START
+        };
         let tag = le_u32(b, 16);
         let encoding = Encoding::from_tag(tag)
             .ok_or_else(|| invalid("encoding", 16, format!("unknown encoding tag {tag}")))?;
@@ -195,13 +232,13 @@ impl Header {
             id: filter_id,
             offset: FILTER_OFFSET as u64,
         })?;
-        if let Some(i) = b[RESERVED_START..HEADER_CHECKSUM_OFFSET]
+        if let Some(i) = b[first_reserved..HEADER_CHECKSUM_OFFSET]
             .iter()
             .position(|v| *v != 0)
         {
             return Err(invalid(
                 "reserved",
-                (RESERVED_START + i) as u64,
+                (first_reserved + i) as u64,
                 "reserved bytes must be zero".into(),
             ));
         }
@@ -209,7 +246,22 @@ impl Header {
             offset: le_u64(b, 64 + 16 * i),
             size: le_u64(b, 72 + 16 * i),
         };
+        let irradiance = Section {
+            offset: le_u64(b, IRRADIANCE_OFFSET),
+            size: le_u64(b, IRRADIANCE_OFFSET + 8),
+        };
+        let irradiance_checksum = le_u64(b, IRRADIANCE_OFFSET + 16);
+        if flags & FLAG_IRRADIANCE == 0
+            && (irradiance != Section::default() || irradiance_checksum != 0)
+        {
+            return Err(invalid(
+                "irradiance",
+                IRRADIANCE_OFFSET as u64,
+                "the irradiance section's fields must be zero without flag bit 3".into(),
+            ));
+        }
         Ok(Header {
+            version,
             flags,
             encoding,
             filter,
@@ -225,6 +277,8 @@ impl Header {
             maps: section(2),
             payload: section(3),
             toc: section(4),
+            irradiance,
+            irradiance_checksum,
             file_size: le_u64(b, 144),
             meta_checksum: le_u64(b, 152),
             points_checksum: le_u64(b, 160),
@@ -234,7 +288,7 @@ impl Header {
     }
 
     /// Checks that the sections lie inside a file of `file_size` bytes, in order
-    /// (metadata, points, maps, payload, TOC), 8-byte aligned, without overlaps, with only the
+    /// (metadata, points, maps, payload, irradiance where the flag says so, TOC), 8-byte aligned, without overlaps, with only the
     /// padding the layout allows between them, and that the TOC ends the file.
     pub fn check_layout(&self, file_size: u64) -> Result<(), Error> {
         if self.file_size != file_size {
@@ -247,13 +301,16 @@ impl Header {
                 ),
             });
         }
-        let sections = [
+        let mut sections = vec![
             ("metadata", self.meta),
             ("sample points", self.points),
             ("sample maps", self.maps),
             ("cube payload", self.payload),
-            ("table of contents", self.toc),
         ];
+        if self.has_irradiance() {
+            sections.push(("irradiance", self.irradiance));
+        }
+        sections.push(("table of contents", self.toc));
         let mut prev: (&'static str, u64) = ("header", HEADER_BYTES as u64);
         for (name, s) in sections {
             let end = s.checked_end().filter(|e| *e <= file_size);

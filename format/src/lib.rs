@@ -13,10 +13,12 @@
 //! written for a person implementing a reader in another language. This crate is its reference
 //! implementation: where a module implements a part of it, its docs name the section.
 //!
-//! ## Format 1.0
+//! ## Format 1.1
 //!
-//! Header bytes 8..12 hold [`VERSION`] (`0x0001_0000`: major 1, minor 0), the only version
-//! this crate writes or reads. Stores of the development builds before it (version numbers 1
+//! Header bytes 8..12 hold [`VERSION`] (`0x0001_0001`: major 1, minor 1), the version this
+//! crate writes. Format 1.1 adds the irradiance section ([`irradiance`]: each cube's radiance
+//! in spherical harmonics, projected from its stored texels) to format 1.0, which it still
+//! reads ([`VERSION_1_0`]; [`Store::irradiance`] is `None` there). Stores of the development builds before it (version numbers 1
 //! to [`LAST_DEVELOPMENT_VERSION`]) are refused with [`Error::UnsupportedVersion`], which
 //! says to bake the scene again; [`StoreWriter::resume`] refuses their partial files alike.
 //!
@@ -28,6 +30,7 @@
 //! | Metadata: bake parameters, camera, object, mesh, material and texture records | [`meta`], [`textures`] |
 //! | Sample maps | [`sample_map`] |
 //! | Cube payload, table of contents | [`cube`], [`toc`] |
+//! | Irradiance section | [`irradiance`] |
 //! | Texel encodings, quantized RGB9E5 | [`encoding`], [`bc6h`] |
 //! | Distance plane and lattice | [`distance`] |
 //! | Face filters | [`filter`] |
@@ -58,9 +61,11 @@ pub mod distance;
 pub mod encoding;
 mod encoding_kind;
 mod error;
+mod face_decoder;
 mod file_stamp;
 pub mod filter;
 pub mod header;
+pub mod irradiance;
 pub mod meta;
 mod output_file;
 mod prefix;
@@ -95,13 +100,16 @@ pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 pub const SHARD_MAGIC: [u8; 8] = *b"OSLFSHRD";
 /// The format version, header bytes 8..12: format 1.0, major version 1 in the high 16 bits,
 /// minor 0 in the low 16. The only version this crate writes and reads.
-pub const VERSION: u32 = 0x0001_0000;
+pub const VERSION: u32 = 0x0001_0001;
+/// Format 1.0 (header bytes 8..12 `0x0001_0000`): format 1.1 without the irradiance section.
+/// Readers read it; writers write [`VERSION`].
+pub const VERSION_1_0: u32 = 0x0001_0000;
 /// Version numbers 1 to 8 in header bytes 8..12 mark stores written by development builds
 /// before format 1.0; readers refuse them with [`Error::UnsupportedVersion`], which says to
 /// bake the scene again.
 pub const LAST_DEVELOPMENT_VERSION: u32 = 8;
 
-/// `version` as "major.minor" (`VERSION` is "1.0").
+/// `version` as "major.minor" (`VERSION` is "1.1").
 pub fn version_name(version: u32) -> String {
     format!("{}.{}", version >> 16, version & 0xffff)
 }

@@ -73,6 +73,7 @@ impl Prefix {
             flags |= FLAG_ENV_CUBE;
         }
         let header = Header {
+            version: crate::VERSION,
             flags,
             encoding: meta.bake.encoding,
             filter,
@@ -88,6 +89,8 @@ impl Prefix {
             maps: s,
             payload,
             toc: Section::default(),
+            irradiance: Section::default(),
+            irradiance_checksum: 0,
             file_size: 0,
             meta_checksum: xxh3_64(&meta_bytes),
             points_checksum: xxh3_64(&point_bytes),

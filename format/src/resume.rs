@@ -7,12 +7,13 @@ use std::io::{BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use crate::bytes::{align8, zero_pad};
-use crate::cube::{face_raw_size, FACES};
+use crate::cube::FACES;
 use crate::differences::setting_differences;
 use crate::error::io_at;
+use crate::face_decoder::FaceDecoder;
 use crate::header::{
     Header, Section, DECODED_CHECKSUM_FIELD, FINISH_FIELDS, FLAGS_FIELD, FLAG_COMPLETE,
-    HEADER_BYTES, SECTION_CHECKSUMS,
+    FLAG_IRRADIANCE, HEADER_BYTES, IRRADIANCE_FIELDS, SECTION_CHECKSUMS,
 };
 use crate::meta::{decode_meta, StoreMeta, SAMPLE_POINT_BYTES};
 use crate::output_file::{open_partial, Open};
@@ -179,7 +180,8 @@ impl PartialReader<'_> {
             b[FINISH_FIELDS].fill(0);
             b[SECTION_CHECKSUMS].fill(0);
             b[DECODED_CHECKSUM_FIELD].fill(0);
-            b[FLAGS_FIELD.start] &= !(FLAG_COMPLETE as u8);
+            b[IRRADIANCE_FIELDS].fill(0);
+            b[FLAGS_FIELD.start] &= !((FLAG_COMPLETE | FLAG_IRRADIANCE) as u8);
             b[248..].fill(0);
         };
         normalise(&mut got);
@@ -319,84 +321,6 @@ impl PartialReader<'_> {
             return None;
         }
         Some((entries, raw_sums, off + pad as u64))
-    }
-}
-
-/// Checks and decodes the face frames of a partial file's cube records, reusing its buffers.
-struct FaceDecoder<'h> {
-    header: &'h Header,
-    mantissa_bits: u32,
-    /// Bytes of a raw face, as records state it and as a length.
-    raw: u64,
-    raw_len: usize,
-    /// The largest frame a raw face compresses to.
-    bound: usize,
-    /// Bytes of a filtered face, as a frame decompresses to.
-    filtered_len: usize,
-    dctx: zstd::bulk::Decompressor<'static>,
-    frame: Vec<u8>,
-    filtered: Vec<u8>,
-    raw_face: Vec<u8>,
-}
-
-impl<'h> FaceDecoder<'h> {
-    /// A decoder for the faces of a store with header `h` and `mantissa_bits`.
-    fn new(h: &'h Header, mantissa_bits: u32, partial: &Path) -> Result<Self, Error> {
-        let raw = face_raw_size(h.encoding, h.cube_resolution, h.has_distance())?;
-        let raw_len = usize::try_from(raw).unwrap_or(usize::MAX);
-        let bound = zstd::zstd_safe::compress_bound(raw_len);
-        let filtered_len = crate::filter::filtered_face_size(
-            h.filter,
-            h.encoding,
-            h.cube_resolution,
-            h.distance_plane(),
-            mantissa_bits,
-        )
-        .unwrap_or(usize::MAX);
-        let dctx = zstd::bulk::Decompressor::new()
-            .map_err(|e| Error::io(partial.display().to_string(), e))?;
-        Ok(FaceDecoder {
-            header: h,
-            mantissa_bits,
-            raw,
-            raw_len,
-            bound,
-            filtered_len,
-            dctx,
-            frame: Vec::new(),
-            filtered: Vec::new(),
-            raw_face: Vec::new(),
-        })
-    }
-
-    /// Reads a frame of `size` bytes from `rd` and checks it against `checksum` and that it
-    /// decodes; returns its raw face's checksum, `None` if it is unreadable or damaged.
-    fn read_face(&mut self, rd: &mut impl Read, size: usize, checksum: u64) -> Option<u64> {
-        let h = self.header;
-        self.frame.resize(size, 0);
-        if rd.read_exact(&mut self.frame).is_err() || xxh3_64(&self.frame) != checksum {
-            return None;
-        }
-        self.filtered.resize(self.filtered_len, 0);
-        self.raw_face.resize(self.raw_len, 0);
-        let decodes = self
-            .dctx
-            .decompress_to_buffer(&self.frame, &mut self.filtered)
-            .is_ok_and(|n| n == self.filtered_len)
-            && crate::filter::unfilter_face_quantized(
-                h.filter,
-                h.encoding,
-                h.cube_resolution,
-                h.distance_plane(),
-                self.mantissa_bits,
-                &self.filtered,
-                &mut self.raw_face,
-            )
-            .is_ok();
-        if !decodes {
-            return None;
-        }
-        Some(xxh3_64(&self.raw_face))
     }
 }
 

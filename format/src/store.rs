@@ -11,6 +11,7 @@ use crate::error::io_at;
 use crate::file_stamp::FileStamp;
 use crate::filter::{unfilter_face_quantized, Filter};
 use crate::header::{Header, Section, HEADER_BYTES};
+use crate::irradiance::{CubeSh, Projection, IRRADIANCE_CUBE_BYTES};
 use crate::meta::{decode_meta, validate_points, SamplePoint, StoreMeta, SAMPLE_POINT_BYTES};
 use crate::sample_map::{validate_section, IndexWidth, MapData, SampleMapView, ENTRIES_PER_TEXEL};
 use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES, TOC_ENTRY_BYTES};
@@ -212,6 +213,8 @@ pub struct Store {
     header: Header,
     meta: StoreMeta,
     face_raw_size: usize,
+    /// The irradiance section, parsed and checked on open (format 1.1).
+    irradiance: Option<Vec<CubeSh>>,
 }
 
 fn slice(bytes: &[u8], s: Section) -> &[u8] {
@@ -468,11 +471,31 @@ impl Store {
         )?;
         check_toc(entries, h, raw)?;
 
+        // Irradiance (format 1.1).
+        let irradiance = if h.has_irradiance() {
+            expect_size(
+                "irradiance",
+                h.irradiance.size,
+                h.cube_count.checked_mul(IRRADIANCE_CUBE_BYTES as u64),
+            )?;
+            let bytes = backing.read(h.irradiance)?;
+            check_sum(
+                "irradiance",
+                &bytes,
+                h.irradiance.offset,
+                h.irradiance_checksum,
+            )?;
+            Some(crate::irradiance::parse(&bytes, h.irradiance.offset)?)
+        } else {
+            None
+        };
+
         Ok(Store {
             header,
             meta,
             face_raw_size: face_raw,
             backing,
+            irradiance,
         })
     }
 
@@ -483,6 +506,12 @@ impl Store {
             Ok(Cow::Borrowed(b)) => b,
             _ => &[],
         }
+    }
+
+    /// Each cube's radiance in spherical harmonics (the irradiance section, cube order), or
+    /// `None` for a format 1.0 store, which has none.
+    pub fn irradiance(&self) -> Option<&[CubeSh]> {
+        self.irradiance.as_deref()
     }
 
     /// The parsed header.
@@ -761,7 +790,18 @@ impl Store {
         }
         let mut decoded = Xxh3::new();
         let mut buf = vec![0u8; self.face_raw_size];
+        let res = h.cube_resolution;
+        let color_bytes = h
+            .encoding
+            .face_bytes(res)
+            .unwrap_or(usize::MAX)
+            .min(buf.len());
+        let mut texels = vec![[0.0f32; 3]; (res as usize) * (res as usize)];
+        // The first cube whose irradiance record is not its faces' projection: reported after
+        // the decoded-faces checksum, which names the likelier cause of changed texels.
+        let mut irradiance_mismatch = None;
         for cube in 0..self.cube_count() {
+            let mut projection = Projection::new(res);
             let first = self.face_entry(cube, 0)?;
             let rec_off = first.offset.saturating_sub(RECORD_HEADER_BYTES as u64);
             let rec_bytes = self.backing.read(Section {
@@ -788,6 +828,17 @@ impl Store {
                 }
                 self.read_face_raw(cube, face, &mut buf)?;
                 decoded.update(&xxh3_64(&buf).to_le_bytes());
+                if self.irradiance.is_some() {
+                    decode_face_texels(
+                        h.encoding,
+                        res,
+                        &buf[..color_bytes],
+                        &mut texels,
+                        cube,
+                        face,
+                    )?;
+                    projection.face(face, &texels);
+                }
                 report.faces += 1;
                 report.compressed_bytes += e.compressed_size;
                 report.raw_bytes += e.raw_size;
@@ -796,7 +847,21 @@ impl Store {
             let end = last.offset.saturating_add(last.compressed_size);
             report.padding_bytes +=
                 self.check_padding(end, &format!("after the frames of cube {cube}"))?;
+            if let Some(stored) = &self.irradiance {
+                let same = projection.finish(cube).ok() == Some(stored[cube as usize]);
+                if !same && irradiance_mismatch.is_none() {
+                    irradiance_mismatch = Some(Error::IrradianceMismatch {
+                        cube,
+                        offset: h.irradiance.offset
+                            + u64::from(cube) * IRRADIANCE_CUBE_BYTES as u64,
+                    });
+                }
+            }
             report.cubes += 1;
+        }
+        if h.has_irradiance() {
+            report.padding_bytes +=
+                self.check_padding(h.irradiance.end(), "after the irradiance section")?;
         }
         let computed = decoded.digest();
         if computed != h.decoded_checksum {
@@ -804,6 +869,9 @@ impl Store {
                 stored: h.decoded_checksum,
                 computed,
             });
+        }
+        if let Some(e) = irradiance_mismatch {
+            return Err(e);
         }
         Ok(report)
     }

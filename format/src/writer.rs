@@ -14,15 +14,18 @@ use std::path::{Path, PathBuf};
 
 use crate::bytes::zero_pad;
 use crate::cube::{face_raw_size, EncodedCube, FACES};
+use crate::encoding::decode_face_texels;
 use crate::error::io_at;
-use crate::header::{Header, Section, FLAG_COMPLETE};
+use crate::face_decoder::FaceDecoder;
+use crate::header::{Header, Section, FLAG_COMPLETE, FLAG_IRRADIANCE};
+use crate::irradiance::{Projection, IRRADIANCE_CUBE_BYTES};
 use crate::meta::{SamplePoint, StoreMeta};
 pub use crate::output_file::partial_path;
 use crate::output_file::{open_partial, Open};
 use crate::prefix::Prefix;
 use crate::resume::{reopen, Reopened};
 use crate::sample_map::SampleMaps;
-use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES};
+use crate::toc::{FaceEntry, RecordHeader, RECORD_HEADER_BYTES, TOC_CUBE_BYTES, TOC_ENTRY_BYTES};
 use crate::{Error, Filter};
 use xxhash_rust::xxh3::{xxh3_64, Xxh3};
 
@@ -361,9 +364,15 @@ impl StoreWriter {
             });
         }
         let payload_size = self.pos - self.header.payload.offset;
+        let irradiance = self.project_cubes()?;
+        let irradiance_section = Section {
+            offset: self.pos,
+            size: irradiance.len() as u64,
+        };
+        let irradiance_pad = zero_pad(irradiance_section.end());
         let toc_sum = xxh3_64(&self.toc);
         let toc_size = self.toc.len() as u64 + 8;
-        let toc_offset = self.pos;
+        let toc_offset = irradiance_section.end() + irradiance_pad as u64;
         let file_size = toc_offset + toc_size;
         self.header.payload.size = payload_size;
         self.header.toc = Section {
@@ -372,12 +381,18 @@ impl StoreWriter {
         };
         self.header.file_size = file_size;
         self.header.decoded_checksum = self.decoded.digest();
-        self.header.flags |= FLAG_COMPLETE;
+        // A merge of shards written by a format 1.0 build still writes format 1.1.
+        self.header.version = crate::VERSION;
+        self.header.irradiance = irradiance_section;
+        self.header.irradiance_checksum = xxh3_64(&irradiance);
+        self.header.flags |= FLAG_COMPLETE | FLAG_IRRADIANCE;
         let partial = self.partial.clone();
         let header_bytes = self.header.to_bytes();
         let toc = std::mem::take(&mut self.toc);
         let file = &mut self.file;
         let result = (|| -> std::io::Result<()> {
+            file.write_all(&irradiance)?;
+            file.write_all(&[0u8; 8][..irradiance_pad])?;
             file.write_all(&toc)?;
             file.write_all(&toc_sum.to_le_bytes())?;
             file.flush()?;
@@ -405,6 +420,52 @@ impl StoreWriter {
             cubes: self.total,
             sample_points: self.header.sample_count,
         })
+    }
+}
+
+impl StoreWriter {
+    /// The irradiance section: every cube's faces read back from the partial file as they are
+    /// stored (frame checksums checked, decompressed, unfiltered, decoded) and projected onto
+    /// the spherical harmonics ([`crate::irradiance`]). Reading back rather than projecting
+    /// what `append` was given makes a fresh, a resumed and a merged store alike.
+    fn project_cubes(&mut self) -> Result<Vec<u8>, Error> {
+        let partial = self.partial.clone();
+        self.file.flush().map_err(io_at(&partial, "write"))?;
+        let file = File::open(&partial).map_err(io_at(&partial, "read back"))?;
+        let mut rd = std::io::BufReader::with_capacity(1 << 20, file);
+        let h = &self.header;
+        let mut faces = FaceDecoder::new(h, self.mantissa_bits, &partial)?;
+        let res = h.cube_resolution;
+        let color_bytes = h.encoding.face_bytes(res).unwrap_or(usize::MAX);
+        let mut texels = vec![[0.0f32; 3]; (res as usize) * (res as usize)];
+        let mut out = Vec::with_capacity(self.total as usize * IRRADIANCE_CUBE_BYTES);
+        for cube in 0..self.total {
+            let mut projection = Projection::new(res);
+            let first = FaceEntry::parse(&self.toc, cube as usize * TOC_CUBE_BYTES);
+            rd.seek(SeekFrom::Start(first.offset))
+                .map_err(io_at(&partial, "read back"))?;
+            for face in 0..FACES {
+                let e = FaceEntry::parse(
+                    &self.toc,
+                    cube as usize * TOC_CUBE_BYTES + face * TOC_ENTRY_BYTES,
+                );
+                let size = usize::try_from(e.compressed_size).unwrap_or(usize::MAX);
+                if faces.read_face(&mut rd, size, e.checksum).is_none() {
+                    return Err(Error::io(
+                        partial.display().to_string(),
+                        std::io::Error::other(format!(
+                            "cube {cube}, face {face} (byte offset {}) no longer reads back as it was written",
+                            e.offset
+                        )),
+                    ));
+                }
+                let color = faces.raw_face().get(..color_bytes).unwrap_or_default();
+                decode_face_texels(h.encoding, res, color, &mut texels, cube, face)?;
+                projection.face(face, &texels);
+            }
+            out.extend_from_slice(&crate::irradiance::to_bytes(&projection.finish(cube)?));
+        }
+        Ok(out)
     }
 }
 

@@ -18,6 +18,8 @@ mod damaged_mapped;
 mod damaged_positioned;
 #[path = "development_versions.rs"]
 mod development_versions;
+#[path = "irradiance.rs"]
+mod irradiance;
 #[path = "mapped.rs"]
 mod mapped;
 #[path = "mesh.rs"]

@@ -523,12 +523,12 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     b[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
     assert_eq!(
         refused(&b),
-        "it is of format version 0x00010001, and this writer continues only format 1.0 files"
+        "it is of format version 0x00010002, and this writer continues only format 1.1 files"
     );
     b[8..12].copy_from_slice(&8u32.to_le_bytes());
     assert_eq!(
         refused(&b),
-        "it is of development format version 8, from before format 1.0, and this writer continues only format 1.0 files"
+        "it is of development format version 8, from before format 1.0, and this writer continues only format 1.1 files"
     );
     let mut b = good.clone();
     b[30] ^= 1;

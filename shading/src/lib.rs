@@ -11,6 +11,7 @@
 //! | [`fresnel`] | Schlick's approximation (thesis Eq. 5.7) | `fresnel.wgsl`: `fresnel_schlick`, `fresnel_schlick_weight` |
 //! | [`random`] | PCG32, the stream hash, stratified samples | `random.wgsl`: the same streams bit for bit (`rng_new`, `rng_f32`, `hash4`) |
 //! | [`warp`] | disc, cosine-hemisphere and sphere warps with densities and inverses; the frame about a normal | `warp.wgsl`: the warps and the frame |
+//! | [`sh`] | spherical harmonics of bands 0–2: the basis, zonal convolution (the cosine and Ashikhmin–Shirley diffuse lobes), the diffuse base's Fresnel share | `sh.wgsl`: `sh_basis`, `sh_convolve`, … |
 //! | [`color`] | the sRGB transfer functions, the ACES tone curve, luminance | `color.wgsl`: `srgb_to_linear`, `linear_to_srgb`, `aces`, `luminance` |
 //!
 //! Each WGSL function is the Rust function of the same module with the module's name as a
@@ -28,5 +29,6 @@ pub mod color;
 pub mod fresnel;
 pub mod ggx;
 pub mod random;
+pub mod sh;
 pub mod warp;
 pub mod wgsl;

@@ -11,6 +11,7 @@
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 use crate::ggx::{DIELECTRIC_F0, MIN_ALPHA};
+use crate::sh;
 
 /// `ggx.wgsl`: the twin of [`crate::ggx`].
 const GGX: &str = include_str!("ggx.wgsl");
@@ -22,11 +23,19 @@ const COLOR: &str = include_str!("color.wgsl");
 const RANDOM: &str = include_str!("random.wgsl");
 /// `warp.wgsl`: the twin of [`crate::warp`].
 const WARP: &str = include_str!("warp.wgsl");
+/// `sh.wgsl`: the twin of [`crate::sh`].
+const SH: &str = include_str!("sh.wgsl");
 
 /// The constants the WGSL modules use, written from the Rust values (Rust's shortest
 /// round-trip formatting, which WGSL parses back to the same `f32`).
 pub fn constants() -> String {
     let c = |name: &str, v: f32| format!("const {name}: f32 = {v:?};\n");
+    let v3 = |name: &str, v: [f32; 3]| {
+        format!(
+            "const {name}: vec3<f32> = vec3<f32>({:?}, {:?}, {:?});\n",
+            v[0], v[1], v[2]
+        )
+    };
     [
         "// ---- oslf-shading constants (generated from the Rust values) ----\n".to_string(),
         c("PI", PI),
@@ -35,6 +44,13 @@ pub fn constants() -> String {
         c("FRAC_PI_4", FRAC_PI_4),
         c("GGX_MIN_ALPHA", MIN_ALPHA),
         c("GGX_DIELECTRIC_F0", DIELECTRIC_F0),
+        c("SH_Y0", sh::Y0),
+        c("SH_Y1", sh::Y1),
+        c("SH_Y2", sh::Y2),
+        c("SH_Y20", sh::Y20),
+        c("SH_Y22", sh::Y22),
+        v3("SH_COSINE", sh::COSINE),
+        v3("SH_AS_DIFFUSE", sh::AS_DIFFUSE),
     ]
     .concat()
 }
@@ -48,6 +64,7 @@ pub fn modules() -> Vec<(String, String)> {
         ("shading::color", COLOR.into()),
         ("shading::random", RANDOM.into()),
         ("shading::warp", WARP.into()),
+        ("shading::sh", SH.into()),
     ]
     .into_iter()
     .map(|(path, src)| (path.to_string(), src))
@@ -178,6 +195,7 @@ mod tests {
             ("ggx_", include_str!("ggx.rs"), GGX),
             ("fresnel_", include_str!("fresnel.rs"), FRESNEL),
             ("", include_str!("color.rs"), COLOR),
+            ("sh_", include_str!("sh.rs"), SH),
         ] {
             let rust: Vec<String> = functions(rust, "pub fn ")
                 .into_iter()

@@ -76,7 +76,7 @@ fn truncation_at_every_section_boundary() {
     let b = good();
     let h = header(&b);
     let mut cuts = vec![0, 1, 7, 8, 100, HEADER_BYTES - 1, HEADER_BYTES];
-    for s in [h.meta, h.points, h.maps, h.payload, h.toc] {
+    for s in [h.meta, h.points, h.maps, h.payload, h.irradiance, h.toc] {
         cuts.extend([s.offset as usize, s.end() as usize, s.end() as usize - 1]);
     }
     cuts.push(b.len() - 1);
@@ -142,7 +142,19 @@ fn wrong_magic_and_version() {
     // Unknown versions, and the versions of the development builds before format 1.0 (each
     // resealed, so that the version is the only thing wrong): each refused by number, the
     // development ones with the advice to bake again.
-    for v in [0, 9, VERSION - 1, VERSION + 1, u32::MAX, 1, 2, 3, 5, 7, 8] {
+    for v in [
+        0,
+        9,
+        VERSION_1_0 - 1,
+        VERSION + 1,
+        u32::MAX,
+        1,
+        2,
+        3,
+        5,
+        7,
+        8,
+    ] {
         let mut b = good();
         put_u32(&mut b, 8, v);
         reseal(&mut b);
@@ -391,7 +403,7 @@ fn absurd_offsets_and_lengths() {
         matches!(e, Error::InvalidHeader { field: "flags", .. }),
         "{e}"
     );
-    let e = patched(&|c| c[200] = 1);
+    let e = patched(&|c| c[220] = 1);
     assert!(
         matches!(
             e,
@@ -402,8 +414,8 @@ fn absurd_offsets_and_lengths() {
         ),
         "{e}"
     );
-    // The COMPLETE flag cleared.
-    let e = patched(&|c| put_u32(c, 12, 3));
+    // The COMPLETE flag cleared (the irradiance flag kept).
+    let e = patched(&|c| put_u32(c, 12, 3 | 8));
     assert!(matches!(e, Error::NotFinished), "{e}");
     // Points section size inconsistent with the count.
     let e = patched(&|c| put_u64(c, 32, 5));
@@ -959,4 +971,77 @@ fn a_changed_filter_id_or_mantissa_bits_fails_verify() {
         open(&c).unwrap().verify(),
         Err(Error::DecodedChecksum { .. })
     ));
+}
+
+/// The irradiance section (format 1.1): a flipped byte fails its checksum; a coefficient that
+/// is not finite, resealed, is refused naming its cube and byte offset; a finite coefficient
+/// changed and resealed opens but fails full verification against the cube's faces; a section
+/// of the wrong size is refused; the flag cleared with the fields left is refused.
+#[test]
+fn a_damaged_irradiance_section_is_refused() {
+    let b = good();
+    let h = header(&b);
+    assert!(h.has_irradiance());
+    let cubes = h.cube_count as usize;
+    assert_eq!(
+        h.irradiance.size as usize,
+        cubes * irradiance::IRRADIANCE_CUBE_BYTES
+    );
+    let at = h.irradiance.offset as usize + irradiance::IRRADIANCE_CUBE_BYTES + 4 * 5;
+    let mut c = b.clone();
+    c[at] ^= 0x10;
+    let e = open(&c).err().unwrap();
+    assert!(
+        matches!(
+            e,
+            Error::ChecksumMismatch {
+                section: "irradiance",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let reseal_irradiance = |c: &mut Vec<u8>| {
+        let s = h.irradiance;
+        let sum = xxh3_64(&c[s.offset as usize..s.end() as usize]);
+        put_u64(c, 204, sum);
+        reseal(c);
+    };
+    let mut c = b.clone();
+    c[at..at + 4].copy_from_slice(&f32::INFINITY.to_le_bytes());
+    reseal_irradiance(&mut c);
+    let e = open(&c).err().unwrap();
+    assert!(
+        matches!(e, Error::InvalidIrradiance { cube: 1, coefficient: 1, channel: 2, offset, .. } if offset == at as u64),
+        "{e}"
+    );
+    let mut c = b.clone();
+    let v = f32::from_le_bytes(c[at..at + 4].try_into().unwrap());
+    c[at..at + 4].copy_from_slice(&(v + 0.25).to_le_bytes());
+    reseal_irradiance(&mut c);
+    let store = open(&c).unwrap();
+    let e = store.verify().unwrap_err();
+    assert!(
+        matches!(e, Error::IrradianceMismatch { cube: 1, .. }),
+        "{e}"
+    );
+    let mut c = b.clone();
+    put_u64(&mut c, 196, h.irradiance.size - 8);
+    reseal(&mut c);
+    assert!(open(&c).is_err());
+    let mut c = b.clone();
+    put_u32(&mut c, 12, h.flags & !8);
+    reseal(&mut c);
+    let e = open(&c).err().unwrap();
+    assert!(
+        matches!(
+            e,
+            Error::InvalidHeader {
+                field: "irradiance",
+                offset: 188,
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
