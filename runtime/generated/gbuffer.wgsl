@@ -66,7 +66,7 @@ struct Params {
     object_material: u32,
     min_metallic: f32,
     split_sum: u32,
-    pad0: u32,
+    irradiance: u32,
     pad1: u32,
     pad2: u32
 }

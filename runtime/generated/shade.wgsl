@@ -13,6 +13,20 @@ const GGX_MIN_ALPHA: f32 = 0.001;
 
 const GGX_DIELECTRIC_F0: f32 = 0.04;
 
+const SH_Y0: f32 = 0.2820948;
+
+const SH_Y1: f32 = 0.4886025;
+
+const SH_Y2: f32 = 1.0925484;
+
+const SH_Y20: f32 = 0.31539157;
+
+const SH_Y22: f32 = 0.5462742;
+
+const SH_COSINE: vec3<f32> = vec3<f32>(1.0, 0.6666667, 0.25);
+
+const SH_AS_DIFFUSE: vec3<f32> = vec3<f32>(0.8214286, 0.58519346, 0.26822916);
+
 fn ggx_alpha(roughness: f32) -> f32 {
     return max(roughness * roughness, GGX_MIN_ALPHA);
 }
@@ -108,6 +122,35 @@ fn luminance(c: vec3<f32>) -> f32 {
     return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
 }
 
+fn sh_basis(d: vec3<f32>) -> array<f32, 9> {
+    return array<f32, 9>(SH_Y0, SH_Y1 * d.y, SH_Y1 * d.z, SH_Y1 * d.x, SH_Y2 * d.x * d.y, SH_Y2 * d.y * d.z, SH_Y20 * (3.0 * d.z * d.z - 1.0), SH_Y2 * d.x * d.z, SH_Y22 * (d.x * d.x - d.y * d.y));
+}
+
+fn sh_band(i: u32) -> u32 {
+    if (i == 0u) {
+        return 0u;
+    }
+    if (i <= 3u) {
+        return 1u;
+    }
+    return 2u;
+}
+
+fn sh_convolve(c: array<vec3<f32>, 9>, bands: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let y = sh_basis(n);
+    var e = vec3<f32>(0.0);
+    for (var i = 0u; i < 9u; i++) {
+        e += c[i] * (y[i] * bands[sh_band(i)]);
+    }
+    return max(e, vec3<f32>(0.0));
+}
+
+fn sh_fresnel_cosine_weight(nv: f32) -> f32 {
+    let s = 1.0 - clamp(nv, 0.0, 1.0);
+    let w = 8.280397e-5 + s * (0.0020117674 + s * (0.009362331 + s * (0.007705992 + s * 0.009002511)));
+    return 1.0 - w;
+}
+
 struct Params {
     view_proj: mat4x4<f32>,
     camera_pos: vec4<f32>,
@@ -146,7 +189,7 @@ struct Params {
     object_material: u32,
     min_metallic: f32,
     split_sum: u32,
-    pad0: u32,
+    irradiance: u32,
     pad1: u32,
     pad2: u32
 }
@@ -178,6 +221,8 @@ override POOLS: u32 = 4u;
 override FACE_SHIFT: u32 = 0u;
 
 override DIFFUSE: bool = false;
+
+override IRRADIANCE: bool = false;
 
 override BACKGROUND: u32 = 0u;
 
@@ -1292,7 +1337,7 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
                 spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
                 spec_lod = sample_lod(spec.l, spec.lpdf);
             }
-            if (DIFFUSE && !(FILTER && drawn)) {
+            if (DIFFUSE && !IRRADIANCE && !(FILTER && drawn)) {
                 let xd = sample_xi(pixel, i, j0 + k, 2u);
                 diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base, pbr);
                 diff_lod = sample_lod(diff.l, diff.lpdf);
@@ -1304,7 +1349,7 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
                 spec_seed[k] = seed;
                 spec_fresh[k] = false;
             }
-            if (DIFFUSE && max3(diff.weight) > 0.0) {
+            if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
                 var seed = diff_seed[k];
                 accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed);
                 diff_seed[k] = seed;
@@ -1319,6 +1364,46 @@ fn estimate(s: Sums, k: u32) -> vec3<f32> {
     return vec3<f32>(s.r[k], s.g[k], s.b[k]) / f32(max(P.m, 1u));
 }
 
+fn cube_sh(cube: u32) -> array<vec3<f32>, 9> {
+    var c: array<vec3<f32>, 9>;
+    for (var i = 0u; i < 9u; i++) {
+        c[i] = samples[P.irradiance + 9u * cube + i].xyz;
+    }
+    return c;
+}
+
+fn diffuse_irradiance(use_env: bool, n: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
+    var bands = SH_AS_DIFFUSE;
+    if ((TERMS & 16u) != 0u) {
+        bands = SH_COSINE;
+    }
+    var e = vec3<f32>(0.0);
+    var wsum = 0.0;
+    if (!use_env) {
+        let w = blend_weights(n);
+        for (var k = 0u; k < 4u; k++) {
+            if (w[k] > 0.0 && cand.idx[k] != INVALID) {
+                e += sh_convolve(cube_sh(cand.idx[k]), bands, n) * w[k];
+                wsum += w[k];
+            }
+        }
+    }
+    if (wsum > 0.0) {
+        e = e / wsum;
+    }
+    else if (P.env_cube != INVALID) {
+        e = sh_convolve(cube_sh(P.env_cube), bands, n);
+    }
+    if ((TERMS & 16u) != 0u) {
+        if (!(nv > 0.0)) {
+            return vec3<f32>(0.0);
+        }
+        return e * base * ((1.0 - pbr.x) * (1.0 - GGX_DIELECTRIC_F0) * sh_fresnel_cosine_weight(nv));
+    }
+    let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
+    return e * (28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv);
+}
+
 fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
     if (SPLIT_SUM) {
         return split_sum(x, n, v, r, base, pbr);
@@ -1326,9 +1411,13 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
     let b = cross(n, t);
     let nv = dot(n, v);
     let use_env = SOURCE != 0u || cand.count == 0u;
+    var diffuse = vec3<f32>(0.0);
+    if (DIFFUSE && IRRADIANCE) {
+        diffuse = diffuse_irradiance(use_env, n, nv, base, pbr);
+    }
     let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u);
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u) + diffuse;
     }
     var axis = r;
     if (BLEND == 4u) {
@@ -1361,9 +1450,9 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
         }
     }
     if (wsum > 0.0) {
-        return acc / wsum;
+        return acc / wsum + diffuse;
     }
-    return vec3<f32>(0.0);
+    return diffuse;
 }
 
 const SEAM_LO = vec4<u32>(568629604u, 10584325u, 716296370u, 200590563u);

@@ -111,8 +111,29 @@ impl StoreBuffers {
     }
 }
 
+/// Where [`sample_point_data`] puts the store's irradiance section: after the sample points
+/// (or the one zero point of a store without any). `None` for a store without one.
+pub(crate) fn irradiance_base(store: &Store) -> Option<u32> {
+    store
+        .irradiance()
+        .map(|_| store.sample_points().len().max(1) as u32)
+}
+
+/// The store's irradiance section as the reference reads it: per cube nine RGB coefficients
+/// (empty for a store without one).
+pub(crate) fn irradiance_coefficients(store: &Store) -> Vec<[Vec3; 9]> {
+    store
+        .irradiance()
+        .unwrap_or_default()
+        .iter()
+        .map(|c| c.map(Vec3::from_array))
+        .collect()
+}
+
 /// shade.wgsl's `samples`: each sample point relative to the mesh's origin, w = 1 (one zero
-/// point for a store without points, as a binding cannot be empty).
+/// point for a store without points, as a binding cannot be empty); then, for a store with an
+/// irradiance section, from [`irradiance_base`] on each cube's nine spherical-harmonic
+/// coefficients (RGB, w = 0), cube after cube.
 pub(crate) fn sample_point_data(store: &Store, mesh: &ObjectMesh) -> Vec<[f32; 4]> {
     let mut positions: Vec<[f32; 4]> = store
         .sample_points()
@@ -125,6 +146,9 @@ pub(crate) fn sample_point_data(store: &Store, mesh: &ObjectMesh) -> Vec<[f32; 4
         .collect();
     if positions.is_empty() {
         positions.push([0.0; 4]);
+    }
+    for cube in store.irradiance().unwrap_or_default() {
+        positions.extend(cube.iter().map(|c| [c[0], c[1], c[2], 0.0]));
     }
     positions
 }

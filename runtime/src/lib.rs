@@ -116,6 +116,6 @@ pub use renderer::{
     MAX_DEPTH_SLACK,
 };
 pub use shading::{
-    AshikhminShirley, Box3, Glossy, Lookup, Mirror, MonteCarlo, Pbr, PbrIntegration, PbrMaterial,
-    Probe, Recon, ReconGlossy, ReconMirror, SampleFilter, ShadingParams, ShadingParts,
+    AshikhminShirley, Box3, DiffuseSource, Glossy, Lookup, Mirror, MonteCarlo, Pbr, PbrIntegration,
+    PbrMaterial, Probe, Recon, ReconGlossy, ReconMirror, SampleFilter, ShadingParams, ShadingParts,
 };

@@ -266,6 +266,9 @@ pub(crate) struct ShadeKey {
     /// DIFFUSE: the glossy term has a diffuse part (R_d > 0, or a pbr material not wholly
     /// metallic).
     pub diffuse: bool,
+    /// IRRADIANCE: the diffuse part is read from the store's irradiance section (the uniform's
+    /// `irradiance` is an index).
+    pub irradiance: bool,
     /// BACKGROUND: the uniform's `background`.
     pub background: u32,
     /// DEPTH: depth-corrected lookups (the uniform's `depth_steps` > 0).
@@ -279,16 +282,18 @@ pub(crate) struct ShadeKey {
 impl ShadeKey {
     /// The key a frame with uniform `u` needs.
     pub fn of(u: &ShadeUniform) -> Self {
+        let diffuse = if u.terms & 16 != 0 {
+            u.min_metallic < 1.0
+        } else {
+            u.rd > 0.0
+        };
         Self {
             terms: u.terms,
             blend: u.blend,
             source: u.source,
             order: u.order,
-            diffuse: if u.terms & 16 != 0 {
-                u.min_metallic < 1.0
-            } else {
-                u.rd > 0.0
-            },
+            diffuse,
+            irradiance: diffuse && u.irradiance != u32::MAX,
             background: u.background,
             depth: u.depth_steps > 0,
             filter: u.mip_levels > 1,
@@ -311,6 +316,7 @@ impl ShadeKey {
             ("POOLS", f64::from(pools)),
             ("FACE_SHIFT", f64::from(face_shift)),
             ("DIFFUSE", f64::from(u32::from(self.diffuse))),
+            ("IRRADIANCE", f64::from(u32::from(self.irradiance))),
             ("BACKGROUND", f64::from(self.background)),
             ("DEPTH", f64::from(u32::from(self.depth))),
             ("FILTER", f64::from(u32::from(self.filter))),

@@ -50,7 +50,7 @@ fn shade_fields() -> Vec<Field> {
         object_material,
         min_metallic,
         split_sum,
-        pad0,
+        irradiance,
         pad1,
         pad2,
     })

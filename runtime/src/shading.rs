@@ -163,6 +163,34 @@ pub struct MonteCarlo {
     pub seed: u32,
     /// How each sample reads the cube maps.
     pub filter: SampleFilter,
+    /// Where the diffuse part (the term 5.4, glTF's diffuse base) comes from.
+    pub diffuse: DiffuseSource,
+}
+
+/// Where the glossy and pbr modes' diffuse part comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DiffuseSource {
+    /// The irradiance each sample point stores (format 1.1: its cube's spherical harmonics,
+    /// projected from every texel at bake time), convolved with the diffuse lobe at the normal
+    /// and blended between the candidates: smooth, and no Monte Carlo samples. Stores without
+    /// it (format 1.0) are sampled.
+    Irradiance,
+    /// M cosine-weighted Monte Carlo samples of the cube maps per integration, as the thesis.
+    Samples,
+}
+
+impl DiffuseSource {
+    /// Both, in CLI order.
+    pub const ALL: [DiffuseSource; 2] = [DiffuseSource::Irradiance, DiffuseSource::Samples];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            DiffuseSource::Irradiance => "irradiance",
+            DiffuseSource::Samples => "samples",
+        }
+    }
 }
 
 /// How each Monte Carlo sample reads the cube maps.
@@ -402,6 +430,7 @@ impl Default for MonteCarlo {
             order: Order::PerPoint,
             seed: 0,
             filter: SampleFilter::Mip,
+            diffuse: DiffuseSource::Irradiance,
         }
     }
 }

@@ -3,7 +3,7 @@
 //! and the CPU reference alike.
 
 use crate::params::{Background, GlossyFilter, Order};
-use crate::shading::{Lookup, Recon, ShadingParams};
+use crate::shading::{DiffuseSource, Lookup, Recon, ShadingParams};
 
 /// Most steps of the linear search of a depth-corrected lookup (`depth_search` in shade.wgsl):
 /// about one per texel of the arc the ray sweeps in the sample point's cube, at most this many.
@@ -99,8 +99,12 @@ oslf_gpu::gpu_struct! {
         pub min_metallic: f32,
         /// 1: [`GlossyFilter::SplitSum`].
         pub split_sum: u32,
+        /// Where the diffuse part is read from the store's irradiance section
+        /// ([`crate::DiffuseSource::Irradiance`] and a store that has one): the index in
+        /// `samples` of cube 0's first spherical-harmonic coefficient; else `u32::MAX` (the
+        /// diffuse part is sampled from the cube maps).
+        pub irradiance: u32,
         /// Pad the block to WGSL's 16-byte struct alignment.
-        pub pad0: u32,
         pub pad1: u32,
         pub pad2: u32,
     }
@@ -128,6 +132,8 @@ pub struct StoreConstants {
     /// The smallest metallic factor of the store's metallic-roughness objects (format version
     /// 7), `None` if it has none.
     pub min_object_metallic: Option<f32>,
+    /// Where `samples` holds the store's irradiance section (format 1.1), `None` if it has none.
+    pub irradiance_base: Option<u32>,
 }
 
 impl ShadeUniform {
@@ -208,7 +214,10 @@ impl ShadeUniform {
                 _ => material.metallic,
             },
             split_sum: u32::from(p.split_sum()),
-            pad0: 0,
+            irradiance: match (mc.diffuse, k.irradiance_base) {
+                (DiffuseSource::Irradiance, Some(base)) => base,
+                _ => u32::MAX,
+            },
             pad1: 0,
             pad2: 0,
         }

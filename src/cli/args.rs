@@ -10,8 +10,8 @@ use oslf_format::Store;
 use oslf_runtime::Camera;
 
 use oslf_runtime::{
-    AshikhminShirley, Background, Blend, GlossyFilter, Lookup, Mode, MonteCarlo, Order,
-    PbrMaterial, Result, RuntimeError, SampleFilter, ShadingParams, ShadingParts, Source,
+    AshikhminShirley, Background, Blend, DiffuseSource, GlossyFilter, Lookup, Mode, MonteCarlo,
+    Order, PbrMaterial, Result, RuntimeError, SampleFilter, ShadingParams, ShadingParts, Source,
 };
 
 /// The shading flags besides mode and blend (which each command takes its own way).
@@ -75,6 +75,11 @@ pub struct ShadingArgs {
     /// Seed of the Monte Carlo random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
+    /// Where the glossy and pbr modes' diffuse part comes from: irradiance (what each sample
+    /// point stores: its cube's spherical harmonics, smooth, no samples; a store of format 1.0
+    /// has none and is sampled) or samples (M Monte Carlo lookups of the cube maps).
+    #[arg(long, default_value = "irradiance", value_parser = parse_diffuse)]
+    pub diffuse: DiffuseSource,
 }
 
 impl ShadingArgs {
@@ -100,6 +105,7 @@ impl ShadingArgs {
                     GlossyFilter::Point => SampleFilter::Point,
                     GlossyFilter::Mip | GlossyFilter::SplitSum => SampleFilter::Mip,
                 },
+                diffuse: self.diffuse,
             },
             material: PbrMaterial {
                 metallic: self.metallic.unwrap_or(defaults.metallic),
@@ -279,6 +285,14 @@ pub fn parse_order(s: &str) -> std::result::Result<Order, String> {
         "per-direction" => Ok(Order::PerDirection),
         _ => Err(format!("unknown order {s:?} (per-point or per-direction)")),
     }
+}
+
+/// `irradiance` or `samples`.
+pub fn parse_diffuse(s: &str) -> std::result::Result<DiffuseSource, String> {
+    DiffuseSource::ALL
+        .into_iter()
+        .find(|d| d.name() == s)
+        .ok_or_else(|| format!("unknown diffuse source {s:?} (irradiance or samples)"))
 }
 
 /// `oslf`, `env` or `parallax`.

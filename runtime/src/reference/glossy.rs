@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 use oslf_format::INVALID_INDEX;
 use oslf_shading::fresnel::{schlick, schlick_weight};
 use oslf_shading::ggx;
+use oslf_shading::sh;
 
 use super::blend::Candidates;
 use super::random::filter_rows;
@@ -274,11 +275,8 @@ impl<C: CubeTexels> Shader<'_, C> {
         pbr: Vec2,
     ) -> (Vec3, bool) {
         let u = &self.uniform;
-        let diffuse = if u.terms & 16 != 0 {
-            u.min_metallic < 1.0
-        } else {
-            u.rd > 0.0
-        };
+        let (diffuse, irradiance) = self.diffuse_parts();
+        let diffuse = diffuse && !irradiance;
         let mut acc = Vec3::ZERO;
         let mut ok = true;
         let wn = self.blend_weights(c, n);
@@ -317,6 +315,70 @@ impl<C: CubeTexels> Shader<'_, C> {
         (acc / u.m.max(1) as f32, ok)
     }
 
+    /// Whether the glossy term has a diffuse part (DIFFUSE: R_d > 0, or a pbr material not
+    /// wholly metallic) and whether it is read from the stored irradiance (IRRADIANCE).
+    fn diffuse_parts(&self) -> (bool, bool) {
+        let u = &self.uniform;
+        let diffuse = if u.terms & 16 != 0 {
+            u.min_metallic < 1.0
+        } else {
+            u.rd > 0.0
+        };
+        (diffuse, diffuse && u.irradiance != INVALID_INDEX)
+    }
+
+    /// Cube `cube`'s stored spherical-harmonic coefficients.
+    fn cube_sh(&self, cube: u32) -> [Vec3; 9] {
+        self.irradiance
+            .get(cube as usize)
+            .copied()
+            .unwrap_or([Vec3::ZERO; 9])
+    }
+
+    /// The diffuse part read from the stored irradiance (shade/glossy.wgsl).
+    fn diffuse_irradiance(
+        &self,
+        c: &Candidates,
+        use_env: bool,
+        n: Vec3,
+        nv: f32,
+        base: Vec3,
+        pbr: Vec2,
+    ) -> Vec3 {
+        let u = &self.uniform;
+        let bands = if u.terms & 16 != 0 {
+            sh::COSINE
+        } else {
+            sh::AS_DIFFUSE
+        };
+        let mut e = Vec3::ZERO;
+        let mut wsum = 0.0;
+        if !use_env {
+            let w = self.blend_weights(c, n);
+            for k in 0..4 {
+                if w[k] > 0.0 && c.idx[k] != INVALID_INDEX {
+                    e += sh::convolve(&self.cube_sh(c.idx[k]), bands, n) * w[k];
+                    wsum += w[k];
+                }
+            }
+        }
+        if wsum > 0.0 {
+            e /= wsum;
+        } else if u.env_cube != INVALID_INDEX {
+            e = sh::convolve(&self.cube_sh(u.env_cube), bands, n);
+        }
+        if u.terms & 16 != 0 {
+            if !(nv > 0.0) {
+                return Vec3::ZERO;
+            }
+            return e
+                * base
+                * ((1.0 - pbr.x) * (1.0 - ggx::DIELECTRIC_F0) * sh::fresnel_cosine_weight(nv));
+        }
+        let fv = 1.0 - (1.0 - 0.5 * nv.max(0.0)).powf(5.0);
+        e * (28.0 / 23.0 * u.rd * (1.0 - u.rs) * fv) // Eq. 5.4 × π
+    }
+
     #[allow(clippy::too_many_arguments)]
     pub(super) fn glossy(
         &self,
@@ -336,18 +398,25 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
         let b = n.cross(t);
         let nv = n.dot(v);
-        if u.source != 0 || c.count == 0 {
+        let use_env = u.source != 0 || c.count == 0;
+        let diffuse = match self.diffuse_parts() {
+            (true, true) => self.diffuse_irradiance(c, use_env, n, nv, base, pbr),
+            _ => Vec3::ZERO,
+        };
+        if use_env {
             if u.env_cube == INVALID_INDEX {
-                return Vec3::ZERO;
+                return diffuse;
             }
             return self
                 .integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr)
-                .0;
+                .0
+                + diffuse;
         }
         if u.order == 1 {
             return self
                 .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv, base, pbr)
-                .0;
+                .0
+                + diffuse;
         }
         let axis = if u.blend == 4 { n } else { r };
         let w = self.blend_weights(c, axis);
@@ -364,12 +433,13 @@ impl<C: CubeTexels> Shader<'_, C> {
             }
         }
         if wsum > 0.0 {
-            return acc / wsum;
+            return acc / wsum + diffuse;
         }
         if u.env_cube == INVALID_INDEX {
-            return Vec3::ZERO;
+            return diffuse;
         }
         self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr)
             .0
+            + diffuse
     }
 }

@@ -90,6 +90,10 @@ pub struct Shader<'a, C: CubeTexels> {
     pub uniform: ShadeUniform,
     /// Sample-point positions (world space).
     pub samples: &'a [Vec3],
+    /// Per cube (sample points, then the environment cube) its stored spherical-harmonic
+    /// coefficients (the store's irradiance section), read where the uniform's `irradiance`
+    /// says so; empty otherwise.
+    pub irradiance: &'a [[Vec3; 9]],
     /// Per sample map: the world-space patch (zero control points for a mesh's atlas page,
     /// whose tangent frame then comes from the normal alone) and its object's base colour C_s.
     pub patches: &'a [BezierPatch],

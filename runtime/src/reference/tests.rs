@@ -22,6 +22,7 @@ fn store_constants(env_cube: u32, cube_res: u32) -> crate::uniform::StoreConstan
         origin: [0.0; 3],
         fitted_box: None,
         min_object_metallic: None,
+        irradiance_base: None,
     }
 }
 
@@ -135,6 +136,7 @@ fn background_pixels_have_alpha_zero_and_no_non_finite_colour() {
                 bg,
             ),
             samples: &[],
+            irradiance: &[],
             patches: &[],
             colors: &[],
             materials: &[],
@@ -275,6 +277,7 @@ fn bare_shader<'a, C: CubeTexels>(
     Shader {
         uniform,
         samples,
+        irradiance: &[],
         patches: &[],
         colors: &[],
         materials: &[],
@@ -609,6 +612,7 @@ fn the_env_background_is_continuous_across_face_edges() {
                     Background::Env,
                 ),
                 samples: &[],
+                irradiance: &[],
                 patches: &[],
                 colors: &[],
                 materials: &[],

@@ -216,6 +216,7 @@ pub(crate) fn store_constants(
         // when it loads the cube, and parallax then asks for a given box.
         fitted_box: crate::probe::fit_proxy_box(store, mesh.origin).unwrap_or(None),
         min_object_metallic: min_object_metallic(store.meta()),
+        irradiance_base: crate::buffers::irradiance_base(store),
     }
 }
 

@@ -132,9 +132,11 @@ impl Renderer {
                 error,
             })?;
         let feedback: Vec<AtomicU32> = (0..self.cube_count).map(|_| AtomicU32::new(0)).collect();
+        let irradiance = crate::buffers::irradiance_coefficients(&self.store);
         let shader = crate::reference::Shader {
             uniform: self.uniform(camera, params, w, h, self.background),
             samples: &samples,
+            irradiance: &irradiance,
             patches: &self.mesh.patches,
             colors: &self.mesh.colors,
             materials: &self.mesh.materials,

@@ -24,6 +24,9 @@ override POOLS: u32 = 4u;
 // 2^FACE_SHIFT faces lie side by side in each pool layer (pool.rs).
 override FACE_SHIFT: u32 = 0u;
 override DIFFUSE: bool = false;
+// The diffuse part is read from the sample points' stored irradiance (the uniform's
+// `irradiance` is an index into `samples`), not sampled from the cube maps.
+override IRRADIANCE: bool = false;
 // The uniform's `background`: what pixels off the object show.
 override BACKGROUND: u32 = 0u;
 // Depth-corrected lookups (the uniform's depth_steps > 0; the pool has distance planes).
@@ -49,6 +52,8 @@ struct PatchGpu {
 @group(0) @binding(1) var gb_position: texture_2d<f32>;
 @group(0) @binding(2) var gb_normal: texture_2d<f32>;
 @group(0) @binding(3) var sample_maps: texture_2d_array<u32>;
+// The sample points (object-relative, w = 1), then with IRRADIANCE from index P.irradiance
+// each cube's nine spherical-harmonic coefficients (RGB, w = 0; buffers.rs sample_point_data).
 @group(0) @binding(4) var<storage, read> samples: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> patches: array<PatchGpu>;
 @group(0) @binding(6) var<storage, read> slots: array<u32>;

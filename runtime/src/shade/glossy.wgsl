@@ -2,19 +2,20 @@
 // Its CPU twin: reference/glossy.rs.
 
 import package::shade::bindings::{
-    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, ORDER, P, PBR_LOD_BIAS, SOURCE, SPLIT_SUM, TERMS,
-    samples, slots,
+    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, IRRADIANCE, ORDER, P, PBR_LOD_BIAS, SOURCE,
+    SPLIT_SUM, TERMS, samples, slots,
 };
 import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
 import package::shade::cube::{lookup, lookup_levels, sample_lod};
 import package::shade::depth::{depth_iterate};
 import package::shade::random::{filter_rows, sample_xi};
 import package::shade::split_sum::{split_sum};
-import package::shading::constants::{GGX_DIELECTRIC_F0, PI};
+import package::shading::constants::{GGX_DIELECTRIC_F0, PI, SH_AS_DIFFUSE, SH_COSINE};
 import package::shading::fresnel::{fresnel_schlick, fresnel_schlick_weight};
 import package::shading::ggx::{
     ggx_distribution_denominator, ggx_sample_visible_normal, ggx_smith_g1,
 };
+import package::shading::sh::{sh_convolve, sh_fresnel_cosine_weight};
 
 struct AsSample {
     l: vec3<f32>,
@@ -246,7 +247,7 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
                 spec = sample_spec(xi.x, xi.y, n, t, b, v, nv, base, pbr);
                 spec_lod = sample_lod(spec.l, spec.lpdf);
             }
-            if (DIFFUSE && !(FILTER && drawn)) {
+            if (DIFFUSE && !IRRADIANCE && !(FILTER && drawn)) {
                 let xd = sample_xi(pixel, i, j0 + k, 2u);
                 diff = sample_diff(xd.x, xd.y, n, t, b, v, nv, base, pbr);
                 diff_lod = sample_lod(diff.l, diff.lpdf);
@@ -258,7 +259,7 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
                 spec_seed[k] = seed;
                 spec_fresh[k] = false;
             }
-            if (DIFFUSE && max3(diff.weight) > 0.0) {
+            if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
                 var seed = diff_seed[k];
                 accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed);
                 diff_seed[k] = seed;
@@ -274,6 +275,47 @@ fn estimate(s: Sums, k: u32) -> vec3<f32> {
     return vec3<f32>(s.r[k], s.g[k], s.b[k]) / f32(max(P.m, 1u));
 }
 
+// Cube `cube`'s stored spherical-harmonic coefficients (IRRADIANCE).
+fn cube_sh(cube: u32) -> array<vec3<f32>, 9> {
+    var c: array<vec3<f32>, 9>;
+    for (var i = 0u; i < 9u; i++) {
+        c[i] = samples[P.irradiance + 9u * cube + i].xyz;
+    }
+    return c;
+}
+
+// The diffuse part read from the stored irradiance (IRRADIANCE): each candidate's coefficients
+// convolved with the mode's diffuse lobe at n and blended with the weights B at n (always
+// resident, so every candidate takes part); the environment cube's with `use_env` or without
+// candidates. Times the lobe's constant factors: the term 5.4's 28/23 R_d (1 − R_s) f(⟨n,v⟩),
+// or glTF's (1 − metallic) C (1 − F₀) with the Fresnel share of the cosine lobe.
+fn diffuse_irradiance(use_env: bool, n: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
+    var bands = SH_AS_DIFFUSE;
+    if ((TERMS & 16u) != 0u) { bands = SH_COSINE; }
+    var e = vec3<f32>(0.0);
+    var wsum = 0.0;
+    if (!use_env) {
+        let w = blend_weights(n);
+        for (var k = 0u; k < 4u; k++) {
+            if (w[k] > 0.0 && cand.idx[k] != INVALID) {
+                e += sh_convolve(cube_sh(cand.idx[k]), bands, n) * w[k];
+                wsum += w[k];
+            }
+        }
+    }
+    if (wsum > 0.0) {
+        e = e / wsum;
+    } else if (P.env_cube != INVALID) {
+        e = sh_convolve(cube_sh(P.env_cube), bands, n);
+    }
+    if ((TERMS & 16u) != 0u) {
+        if (!(nv > 0.0)) { return vec3<f32>(0.0); }
+        return e * base * ((1.0 - pbr.x) * (1.0 - GGX_DIELECTRIC_F0) * sh_fresnel_cosine_weight(nv));
+    }
+    let fv = 1.0 - pow(1.0 - 0.5 * max(nv, 0.0), 5.0);
+    return e * (28.0 / 23.0 * P.rd * (1.0 - P.rs) * fv); // Eq. 5.4 × π
+}
+
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
 // (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
 // (order B): one integration over the blend. Both passes through one `integrate` call. With
@@ -285,9 +327,13 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
     let b = cross(n, t);
     let nv = dot(n, v);
     let use_env = SOURCE != 0u || cand.count == 0u;
+    var diffuse = vec3<f32>(0.0);
+    if (DIFFUSE && IRRADIANCE) {
+        diffuse = diffuse_irradiance(use_env, n, nv, base, pbr);
+    }
     let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u);
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u) + diffuse;
     }
     var axis = r;
     if (BLEND == 4u) { axis = n; }
@@ -314,6 +360,6 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
             }
         }
     }
-    if (wsum > 0.0) { return acc / wsum; }
-    return vec3<f32>(0.0);
+    if (wsum > 0.0) { return acc / wsum + diffuse; }
+    return diffuse;
 }

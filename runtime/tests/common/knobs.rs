@@ -3,8 +3,8 @@
 //! into the mode's [`ShadingParams`] by [`Knobs::params`] through [`ShadingParts`].
 
 use oslf_runtime::{
-    AshikhminShirley, Blend, Box3, GlossyFilter, Lookup, Mode, MonteCarlo, Order, PbrMaterial,
-    SampleFilter, ShadingParams, ShadingParts, Source,
+    AshikhminShirley, Blend, Box3, DiffuseSource, GlossyFilter, Lookup, Mode, MonteCarlo, Order,
+    PbrMaterial, SampleFilter, ShadingParams, ShadingParts, Source,
 };
 
 /// Every knob; see the fields of the parts of [`ShadingParams`].
@@ -28,6 +28,7 @@ pub struct Knobs {
     pub depth: bool,
     pub glossy_filter: GlossyFilter,
     pub proxy_box: Option<Box3>,
+    pub diffuse: DiffuseSource,
 }
 
 impl Default for Knobs {
@@ -55,6 +56,7 @@ impl Default for Knobs {
             depth: parts.depth,
             glossy_filter: GlossyFilter::Mip,
             proxy_box: None,
+            diffuse: mc.diffuse,
         }
     }
 }
@@ -82,6 +84,7 @@ impl Knobs {
                     GlossyFilter::Point => SampleFilter::Point,
                     GlossyFilter::Mip | GlossyFilter::SplitSum => SampleFilter::Mip,
                 },
+                diffuse: self.diffuse,
             },
             material: PbrMaterial {
                 metallic: self.metallic,
