@@ -28,7 +28,8 @@ fn info_verify_and_exports() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["cubes"], 6);
     assert_eq!(v["mantissa_bits"], 9);
-    assert_eq!(v["format"], "1.0");
+    assert_eq!(v["format"], "1.1");
+    assert_eq!(v["irradiance_bytes"], v["cubes"].as_u64().unwrap() * 108);
     assert_eq!(v["env_cube_index"], 5);
     let out = bin().arg("verify").arg(&path).output().unwrap();
     assert!(out.status.success());

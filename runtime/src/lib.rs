@@ -23,6 +23,10 @@
 //!   - glTF's metallic-roughness BRDF with the object's base colour (the `pbr` mode): its GGX
 //!     lobe by visible-normal sampling and its diffuse base by cosine sampling, read from the
 //!     cube maps as the Ashikhmin–Shirley samples are, so the truth's and the bake's BRDF;
+//!   - the diffuse part of both (the term 5.4, glTF's diffuse base) read, not sampled, from
+//!     the irradiance each sample point stores (format 1.1: its cube in spherical harmonics,
+//!     projected from every texel at bake time), convolved with the lobe at the normal and
+//!     blended between the candidates ([`DiffuseSource`]; sampling stays available);
 //!   - the environment-map baseline: one cube at the object's centre, by direction alone;
 //!     and the baseline engines use, that cube parallax-corrected against a proxy box fitted
 //!     to its distances ([`probe`]); for the pbr mode also as engines light from one probe,

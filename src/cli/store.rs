@@ -427,8 +427,10 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
     let b = &m.bake;
     serde_json::json!({
         "path": path.display().to_string(),
-        "format": oslf_format::version_name(oslf_format::VERSION),
+        "format": oslf_format::version_name(h.version),
         "flags": h.flags,
+        // Bytes of the irradiance section (each cube's spherical harmonics); null in format 1.0.
+        "irradiance_bytes": h.has_irradiance().then_some(h.irradiance.size),
         "encoding": b.encoding.name(),
         "mantissa_bits": b.mantissa_bits,
         "face_filter": h.filter.name(),
@@ -495,8 +497,19 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
     println!("store            {}", path.display());
     println!(
         "format           {} (flags {:#x})",
-        oslf_format::version_name(oslf_format::VERSION),
+        oslf_format::version_name(h.version),
         h.flags
+    );
+    println!(
+        "irradiance       {}",
+        if h.has_irradiance() {
+            format!(
+                "{} bytes: each cube's radiance in spherical harmonics (bands 0-2), the diffuse part's source",
+                h.irradiance.size
+            )
+        } else {
+            "none (format 1.0: the diffuse part is sampled from the cube maps)".to_string()
+        }
     );
     println!("face filter      {} (id {})", h.filter, h.filter.id());
     println!(
