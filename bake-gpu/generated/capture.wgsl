@@ -13,6 +13,20 @@ const GGX_MIN_ALPHA: f32 = 0.001;
 
 const GGX_DIELECTRIC_F0: f32 = 0.04;
 
+const SH_Y0: f32 = 0.2820948;
+
+const SH_Y1: f32 = 0.4886025;
+
+const SH_Y2: f32 = 1.0925484;
+
+const SH_Y20: f32 = 0.31539157;
+
+const SH_Y22: f32 = 0.5462742;
+
+const SH_COSINE: vec3<f32> = vec3<f32>(1.0, 0.6666667, 0.25);
+
+const SH_AS_DIFFUSE: vec3<f32> = vec3<f32>(0.8214286, 0.58519346, 0.26822916);
+
 fn ggx_alpha(roughness: f32) -> f32 {
     return max(roughness * roughness, GGX_MIN_ALPHA);
 }
@@ -268,7 +282,10 @@ struct Params {
     perez_e: vec4<f32>,
     norm: vec4<f32>,
     model_sun: vec4<f32>,
-    ground: vec4<f32>
+    ground: vec4<f32>,
+    rounds: u32,
+    target_noise: f32,
+    _pad2: vec2<u32>
 }
 
 struct Node {
@@ -354,7 +371,8 @@ struct TexelOut {
     shadow_hit: u32,
     nodes: u32,
     tris: u32,
-    _pad: vec2<u32>
+    samples: u32,
+    _pad: u32
 }
 
 struct TraceRay {
@@ -1432,6 +1450,18 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     return vec3<f32>(1.0, 0.0, 0.0);
 }
 
+fn converged(sum: f32, sum_sq: f32, n: u32, goal: f32) -> bool {
+    if n < 2u {
+        return false;
+    }
+    let nf = f32(n);
+    let mean = sum / nf;
+    let variance = max((sum_sq - nf * mean * mean) / (nf - 1.0), 0.0);
+    return variance / nf <= goal * goal * mean * mean;
+}
+
+const MIN_ROUNDS: u32 = 2u;
+
 override WORKGROUP: u32 = 64u;
 
 @compute @workgroup_size(WORKGROUP)
@@ -1457,21 +1487,28 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     var lum_sum = 0.0;
     var lum_sq = 0.0;
     var hit_any = false;
-    for (var j = 0u; j < k * k; j++) {
-        let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
-        let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
-        let s = (f32(x) + sx) / f32(res);
-        let t = (f32(y) + sy) / f32(res);
-        let dir = face_st_to_direction(face, s, t);
-        let r = radiance(job.origin, dir, objects, &rng, &counts);
-        sum += r.xyz;
-        let l = luminance(r.xyz);
-        lum_sum += l;
-        lum_sq += l * l;
-        hit_any = hit_any || r.w != F32_MAX;
+    var n = 0u;
+    for (var round = 0u; round < params.rounds; round++) {
+        for (var j = 0u; j < k * k; j++) {
+            let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
+            let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
+            let s = (f32(x) + sx) / f32(res);
+            let t = (f32(y) + sy) / f32(res);
+            let dir = face_st_to_direction(face, s, t);
+            let r = radiance(job.origin, dir, objects, &rng, &counts);
+            sum += r.xyz;
+            let l = luminance(r.xyz);
+            lum_sum += l;
+            lum_sq += l * l;
+            hit_any = hit_any || r.w != F32_MAX;
+            n += 1u;
+        }
+        if params.target_noise > 0.0 && round + 1u >= MIN_ROUNDS && converged(lum_sum, lum_sq, n, params.target_noise) {
+            break;
+        }
     }
     var o: TexelOut;
-    o.radiance = sum * (1.0 / f32(k * k));
+    o.radiance = sum * (1.0 / f32(n));
     o.distance = 0.0;
     if (params.flags & FLAG_DISTANCE) != 0u {
         let n = f32(res);
@@ -1485,6 +1522,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     o.shadow_hit = (counts.shadow << 1u) | select(0u, 1u, hit_any);
     o.nodes = counts.nodes;
     o.tris = counts.tris;
+    o.samples = n;
     out[id] = o;
 }
 

@@ -8,7 +8,7 @@ use oslf_bake::device::{CaptureDevice, CapturedCube, CubeJob};
 use oslf_format::CubeImage;
 use oslf_gpu::Gpu;
 use oslf_scene::scene::Scene;
-use oslf_trace::capture::{strata_per_side, CaptureSettings};
+use oslf_trace::capture::{sampling_plan, CaptureSettings};
 use oslf_trace::integrator::RayStats;
 use oslf_trace::noise::NoiseStats;
 use wgpu::util::DeviceExt;
@@ -176,6 +176,7 @@ impl GpuCapture {
         let settings = CaptureSettings {
             resolution: settings.resolution.min(16),
             samples_per_texel: settings.samples_per_texel.min(16),
+            target_noise: 0.0,
             distance_channel: false,
             ..*settings
         };
@@ -183,6 +184,7 @@ impl GpuCapture {
         let warm_up = CaptureSettings {
             resolution: 1,
             samples_per_texel: 1,
+            target_noise: 0.0,
             ..settings
         };
         let first = CubeJob {
@@ -361,7 +363,7 @@ impl GpuCapture {
             return Ok(Vec::new());
         }
         let res = settings.resolution;
-        let k = strata_per_side(settings.samples_per_texel);
+        let (k, rounds) = sampling_plan(settings.samples_per_texel, settings.target_noise);
         let per_cube = 6 * u64::from(res) * u64::from(res);
         let total = per_cube * jobs.len() as u64;
         let out_bytes = total * std::mem::size_of::<TexelOut>() as u64;
@@ -392,6 +394,8 @@ impl GpuCapture {
         let mut params = Params {
             resolution: res,
             strata: k,
+            rounds,
+            target_noise: settings.target_noise,
             seed: [seed as u32, (seed >> 32) as u32],
             texels: total as u32,
             row_invocations: ROW_GROUPS * self.workgroup,
@@ -406,7 +410,7 @@ impl GpuCapture {
             &uniform,
             params,
             total,
-            u64::from(k * k),
+            u64::from(k * k * rounds),
         );
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&out, 0, &staging, 0, out_bytes);
@@ -417,9 +421,7 @@ impl GpuCapture {
         Ok(jobs
             .iter()
             .zip(texels.chunks_exact(per_cube as usize))
-            .map(|(job, cube)| {
-                unpack_cube(cube, res, k, settings.distance_channel, job.sees_objects)
-            })
+            .map(|(job, cube)| unpack_cube(cube, res, settings.distance_channel, job.sees_objects))
             .collect())
     }
 
@@ -583,7 +585,7 @@ impl GpuCapture {
 
 /// One cube's texels read back: the image, its rays, and the noise of its texels (none for
 /// the environment-map baseline's cube).
-fn unpack_cube(texels: &[TexelOut], res: u32, k: u32, distance: bool, noise: bool) -> CapturedCube {
+fn unpack_cube(texels: &[TexelOut], res: u32, distance: bool, noise: bool) -> CapturedCube {
     let per_face = (res * res) as usize;
     let mut stats = RayStats::default();
     let mut noise_stats = NoiseStats::default();
@@ -603,9 +605,10 @@ fn unpack_cube(texels: &[TexelOut], res: u32, k: u32, distance: bool, noise: boo
                 noise_stats.add_texel(
                     f64::from(t.lum_sum),
                     f64::from(t.lum_sq),
-                    k * k,
+                    t.samples,
                     t.shadow_hit & 1 == 1,
                 );
+                noise_stats.count_samples(t.samples);
             }
         }
     }

@@ -39,6 +39,11 @@ oslf_gpu::gpu_struct! {
         pub norm: [f32; 4],
         pub model_sun: [f32; 4],
         pub ground: [f32; 4],
+        /// Rounds of `strata`² samples a texel takes at most, and the relative standard error
+        /// after which it stops (0: all of them; `oslf_trace::capture::sampling_plan`).
+        pub rounds: u32,
+        pub target_noise: f32,
+        pub _pad2: [u32; 2],
     }
 }
 
@@ -69,7 +74,9 @@ oslf_gpu::gpu_struct! {
         /// BVH nodes and triangles its rays tested.
         pub nodes: u32,
         pub tris: u32,
-        pub _pad: [u32; 2],
+        /// The samples it took (fewer than the most where an adaptive capture stopped it).
+        pub samples: u32,
+        pub _pad: u32,
     }
 }
 

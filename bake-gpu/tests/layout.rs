@@ -40,6 +40,9 @@ fn the_shader_structs_are_the_rust_structs() {
             norm,
             model_sun,
             ground,
+            rounds,
+            target_noise,
+            _pad2,
         }),
         size_of::<Params>(),
     );
@@ -126,6 +129,7 @@ fn the_shader_structs_are_the_rust_structs() {
             shadow_hit,
             nodes,
             tris,
+            samples,
             _pad
         }),
         size_of::<TexelOut>(),

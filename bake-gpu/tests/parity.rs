@@ -309,6 +309,7 @@ fn gpu_capture_is_the_cpu_capture_texel_by_texel() {
                     let settings = CaptureSettings {
                         resolution: 8,
                         samples_per_texel: 9,
+                        target_noise: 0.0,
                         distance_channel: i == 0,
                         seed: 11 + bounces as u64,
                     };
@@ -331,10 +332,16 @@ fn gpu_capture_is_the_cpu_capture_texel_by_texel() {
     }
 }
 
+/// Fixed samples per texel, and adaptive sampling to a target (the same stopping rule on
+/// both devices, `oslf_trace::noise::converged`): the cubes agree within their noise, and an
+/// adaptive capture spends the same rays on both within 5 %.
 #[test]
 fn gpu_and_cpu_captures_agree_within_their_noise_on_independent_seeds() {
     const SEEDS: u64 = 8;
-    for case in cases() {
+    for (case, (samples_per_texel, target_noise)) in cases().into_iter().flat_map(|c| {
+        let c = std::rc::Rc::new(c);
+        [(16, 0.0), (64, 0.15)].map(|s| (c.clone(), s))
+    }) {
         let bounces = 1;
         let d = devices(&case, bounces);
         let job = CubeJob {
@@ -344,19 +351,30 @@ fn gpu_and_cpu_captures_agree_within_their_noise_on_independent_seeds() {
         };
         // Per device, per block: the block means of each seed.
         let mut runs: [Vec<Vec<f64>>; 2] = Default::default();
+        let mut rays = [0u64; 2];
         for s in 0..SEEDS {
             let settings = |seed| CaptureSettings {
                 resolution: 8,
-                samples_per_texel: 16,
+                samples_per_texel,
+                target_noise,
                 distance_channel: false,
                 seed,
             };
             // Different seeds on the two devices: independent estimates.
-            let ((cpu, _), _) = both(&case, &d, bounces, job, &settings(100 + s));
-            let ((_, _), (gpu, _)) = both(&case, &d, bounces, job, &settings(200 + s));
+            let ((cpu, cpu_rays), _) = both(&case, &d, bounces, job, &settings(100 + s));
+            let ((_, _), (gpu, gpu_rays)) = both(&case, &d, bounces, job, &settings(200 + s));
             runs[0].push(block_means(&cpu));
             runs[1].push(block_means(&gpu));
+            rays[0] += cpu_rays;
+            rays[1] += gpu_rays;
         }
+        assert!(
+            rays[0].abs_diff(rays[1]) * 20 <= rays[0],
+            "{} at {samples_per_texel} samples, target {target_noise}: {} CPU rays, {} GPU rays",
+            case.name,
+            rays[0],
+            rays[1]
+        );
         let blocks = runs[0][0].len();
         let stats = |r: &Vec<Vec<f64>>, b: usize| {
             let n = r.len() as f64;

@@ -97,6 +97,7 @@ fn the_choices_scale_with_the_scene_and_so_do_the_points_and_the_cubes() {
     let settings = CaptureSettings {
         resolution: 8,
         samples_per_texel: 1,
+        target_noise: 0.0,
         distance_channel: true,
         seed: 3,
     };

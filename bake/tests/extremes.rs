@@ -136,6 +136,7 @@ fn compare_with_unit_scene(
     let settings = CaptureSettings {
         resolution: 8,
         samples_per_texel: 1,
+        target_noise: 0.0,
         distance_channel: true,
         seed: 5,
     };
@@ -386,6 +387,7 @@ material = { color = [0.1, 0.42, 0.12] }
     let settings = CaptureSettings {
         resolution: 1024,
         samples_per_texel: 1,
+        target_noise: 0.0,
         distance_channel: false,
         seed: 9,
     };

@@ -97,6 +97,39 @@ pub struct Header {
     pub decoded_checksum: u64,
 }
 
+/// The first reserved (zero) header byte of format `version`: format 1.0 has no irradiance
+/// section, so its flag must be clear and its fields are reserved.
+fn first_reserved(version: u32, flags: u32) -> Result<usize, Error> {
+    if version != VERSION_1_0 {
+        return Ok(RESERVED_START);
+    }
+    if flags & FLAG_IRRADIANCE != 0 {
+        return Err(Error::InvalidHeader {
+            field: "flags",
+            offset: 12,
+            detail: "flag bit 3 (irradiance) is set in a format 1.0 store".into(),
+        });
+    }
+    Ok(IRRADIANCE_OFFSET)
+}
+
+/// The irradiance section's position and checksum (bytes 188..212): zero without its flag.
+fn parse_irradiance_fields(b: &[u8], flags: u32) -> Result<(Section, u64), Error> {
+    let irradiance = Section {
+        offset: le_u64(b, IRRADIANCE_OFFSET),
+        size: le_u64(b, IRRADIANCE_OFFSET + 8),
+    };
+    let checksum = le_u64(b, IRRADIANCE_OFFSET + 16);
+    if flags & FLAG_IRRADIANCE == 0 && (irradiance != Section::default() || checksum != 0) {
+        return Err(Error::InvalidHeader {
+            field: "irradiance",
+            offset: IRRADIANCE_OFFSET as u64,
+            detail: "the irradiance section's fields must be zero without flag bit 3".into(),
+        });
+    }
+    Ok((irradiance, checksum))
+}
+
 impl Header {
     pub fn has_distance(&self) -> bool {
         self.flags & FLAG_DISTANCE != 0
@@ -206,19 +239,7 @@ impl Header {
                 format!("unknown flag bits {:#x}", flags & !KNOWN_FLAGS),
             ));
         }
-        // Format 1.0 has no irradiance section: its flag and fields (then reserved) are zero.
-        let first_reserved = if version == VERSION_1_0 {
-            if flags & FLAG_IRRADIANCE != 0 {
-                return Err(invalid(
-                    "flags",
-                    12,
-                    "flag bit 3 (irradiance) is set in a format 1.0 store".into(),
-                ));
-            }
-            IRRADIANCE_OFFSET
-        } else {
-            RESERVED_START
-        };
+        let first_reserved = first_reserved(version, flags)?;
         let tag = le_u32(b, 16);
         let encoding = Encoding::from_tag(tag)
             .ok_or_else(|| invalid("encoding", 16, format!("unknown encoding tag {tag}")))?;
@@ -246,20 +267,7 @@ impl Header {
             offset: le_u64(b, 64 + 16 * i),
             size: le_u64(b, 72 + 16 * i),
         };
-        let irradiance = Section {
-            offset: le_u64(b, IRRADIANCE_OFFSET),
-            size: le_u64(b, IRRADIANCE_OFFSET + 8),
-        };
-        let irradiance_checksum = le_u64(b, IRRADIANCE_OFFSET + 16);
-        if flags & FLAG_IRRADIANCE == 0
-            && (irradiance != Section::default() || irradiance_checksum != 0)
-        {
-            return Err(invalid(
-                "irradiance",
-                IRRADIANCE_OFFSET as u64,
-                "the irradiance section's fields must be zero without flag bit 3".into(),
-            ));
-        }
+        let (irradiance, irradiance_checksum) = parse_irradiance_fields(b, flags)?;
         Ok(Header {
             version,
             flags,

@@ -46,8 +46,8 @@ impl Projection {
             let w = f64::from(texel_solid_angle(x, y, n));
             for (k, y) in sh::basis(d).iter().enumerate() {
                 let wy = w * f64::from(*y);
-                for ch in 0..3 {
-                    self.sums[k][ch] += f64::from(c[ch]) * wy;
+                for (sum, v) in self.sums[k].iter_mut().zip(c) {
+                    *sum += f64::from(*v) * wy;
                 }
             }
         }

@@ -101,6 +101,7 @@ fn default_settings() -> BakeSettings {
         cube_resolution: 32,
         sample_map_resolution: 256,
         samples_per_texel: 4,
+        target_noise: 0.0,
         bounces: 1,
         seed: 0,
         encoding: oslf_format::Encoding::Rgb9e5,

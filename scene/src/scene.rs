@@ -89,8 +89,13 @@ pub struct BakeSettings {
     pub phi_samplemap_deg: f32,
     pub cube_resolution: u32,
     pub sample_map_resolution: u32,
-    /// Rays per cube-map texel (rounded up to a square number of strata).
+    /// Rays per cube-map texel (rounded up to a square number of strata); with a
+    /// `target_noise`, the most a texel takes.
     pub samples_per_texel: u32,
+    /// Adaptive sampling: each cube texel takes rounds of 4 stratified samples until the
+    /// relative standard error of its mean is at most this (0: off, every texel takes
+    /// `samples_per_texel`).
+    pub target_noise: f32,
     /// Diffuse bounces after the first hit (0 = direct light only).
     pub bounces: u32,
     pub seed: u64,

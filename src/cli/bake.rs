@@ -445,11 +445,19 @@ fn print_noise(r: &BakeReport) {
         );
         return;
     };
-    let level = format!(
-        "±{} relative standard error of the cube texels that see a surface ({} samples per texel)",
-        percent(error),
-        n.samples_per_texel,
-    );
+    let level = match (n.target, n.mean_samples_per_texel) {
+        (Some(target), Some(mean)) => format!(
+            "±{} relative standard error of the cube texels that see a surface, measured (adaptive: each texel sampled to ±{} or {} samples, {mean:.1} per texel on average)",
+            percent(error),
+            percent(target),
+            n.samples_per_texel,
+        ),
+        _ => format!(
+            "±{} relative standard error of the cube texels that see a surface ({} samples per texel)",
+            percent(error),
+            n.samples_per_texel,
+        ),
+    };
     let Some(s) = &n.suggestion else {
         println!(
             "noise          {level}: below the {} that shows",

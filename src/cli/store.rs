@@ -489,6 +489,18 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
     })
 }
 
+/// `store info`'s irradiance line.
+fn irradiance_info(h: &oslf_format::header::Header) -> String {
+    if h.has_irradiance() {
+        format!(
+            "{} bytes: each cube's radiance in spherical harmonics (bands 0-2), the diffuse part's source",
+            h.irradiance.size
+        )
+    } else {
+        "none (format 1.0: the diffuse part is sampled from the cube maps)".to_string()
+    }
+}
+
 /// `store info` as text.
 fn print_info(path: &Path, s: &Store, z: &Sizes) {
     let h = s.header();
@@ -500,17 +512,7 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
         oslf_format::version_name(h.version),
         h.flags
     );
-    println!(
-        "irradiance       {}",
-        if h.has_irradiance() {
-            format!(
-                "{} bytes: each cube's radiance in spherical harmonics (bands 0-2), the diffuse part's source",
-                h.irradiance.size
-            )
-        } else {
-            "none (format 1.0: the diffuse part is sampled from the cube maps)".to_string()
-        }
-    );
+    println!("irradiance       {}", irradiance_info(h));
     println!("face filter      {} (id {})", h.filter, h.filter.id());
     println!(
         "encoding         {} ({} bytes/texel raw){}",

@@ -21,11 +21,31 @@
 /// The summary then suggests more samples.
 pub const VISIBLE_RELATIVE_ERROR: f64 = 0.05;
 
+/// Whether a texel of an adaptive capture has sampled enough: the relative standard error of
+/// its mean luminance after `n` samples with luminance sum `sum` and sum of squares `sum_sq`,
+/// `√(s²/n) / mean` (`s²` unbiased, as [`NoiseStats::add_texel`]), is at most `target`; a texel
+/// whose samples are all equal (black ones too) has none. Twin: `converged` in the GPU bake's
+/// capture.wgsl (in f32).
+pub fn converged(sum: f64, sum_sq: f64, n: u32, target: f64) -> bool {
+    if n < 2 {
+        return false;
+    }
+    let nf = f64::from(n);
+    let mean = sum / nf;
+    let variance = ((sum_sq - nf * mean * mean) / (nf - 1.0)).max(0.0);
+    variance / nf <= target * target * mean * mean
+}
+
 /// The noise of a set of cube texels: sums over the texels that see a surface.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NoiseStats {
     /// Texels with at least two samples, at least one of which hit a surface.
     pub texels: u64,
+    /// Every texel counted by [`NoiseStats::count_samples`] (those that see only sky too),
+    /// and the samples they took: their ratio is the samples per texel an adaptive capture
+    /// spent.
+    pub all_texels: u64,
+    pub samples: u64,
     /// Σ s² / n over them (luminance).
     pub variance_of_means: f64,
     /// Σ mean² over them.
@@ -49,9 +69,22 @@ impl NoiseStats {
         self.squared_means += mean * mean;
     }
 
+    /// Counts one texel that took `n` samples.
+    pub fn count_samples(&mut self, n: u32) {
+        self.all_texels += 1;
+        self.samples += u64::from(n);
+    }
+
+    /// Samples per texel, on average over the texels counted; `None` without any.
+    pub fn samples_per_texel(&self) -> Option<f64> {
+        (self.all_texels > 0).then(|| self.samples as f64 / self.all_texels as f64)
+    }
+
     /// Adds `other`'s texels.
     pub fn merge(&mut self, other: &NoiseStats) {
         self.texels += other.texels;
+        self.all_texels += other.all_texels;
+        self.samples += other.samples;
         self.variance_of_means += other.variance_of_means;
         self.squared_means += other.squared_means;
     }

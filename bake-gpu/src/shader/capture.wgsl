@@ -55,6 +55,21 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     return vec3<f32>(1.0, 0.0, 0.0);
 }
 
+// Whether an adaptive capture's texel has sampled enough: the relative standard error of its
+// mean luminance after n samples is at most `goal` (oslf_trace::noise::converged, in f32).
+fn converged(sum: f32, sum_sq: f32, n: u32, goal: f32) -> bool {
+    if n < 2u {
+        return false;
+    }
+    let nf = f32(n);
+    let mean = sum / nf;
+    let variance = max((sum_sq - nf * mean * mean) / (nf - 1.0), 0.0);
+    return variance / nf <= goal * goal * mean * mean;
+}
+
+// Rounds an adaptive capture takes before it may stop a texel (capture.rs MIN_ROUNDS).
+const MIN_ROUNDS: u32 = 2u;
+
 // Invocations per workgroup, chosen per adapter (capture.rs `workgroup_size`).
 override WORKGROUP: u32 = 64u;
 
@@ -81,21 +96,30 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     var lum_sum = 0.0;
     var lum_sq = 0.0;
     var hit_any = false;
-    for (var j = 0u; j < k * k; j++) {
-        let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
-        let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
-        let s = (f32(x) + sx) / f32(res);
-        let t = (f32(y) + sy) / f32(res);
-        let dir = face_st_to_direction(face, s, t);
-        let r = radiance(job.origin, dir, objects, &rng, &counts);
-        sum += r.xyz;
-        let l = luminance(r.xyz);
-        lum_sum += l;
-        lum_sq += l * l;
-        hit_any = hit_any || r.w != F32_MAX;
+    var n = 0u;
+    // Rounds of k × k stratified samples: one without a target, else until the texel's
+    // relative standard error reaches it (capture.rs `sampling_plan`).
+    for (var round = 0u; round < params.rounds; round++) {
+        for (var j = 0u; j < k * k; j++) {
+            let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
+            let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
+            let s = (f32(x) + sx) / f32(res);
+            let t = (f32(y) + sy) / f32(res);
+            let dir = face_st_to_direction(face, s, t);
+            let r = radiance(job.origin, dir, objects, &rng, &counts);
+            sum += r.xyz;
+            let l = luminance(r.xyz);
+            lum_sum += l;
+            lum_sq += l * l;
+            hit_any = hit_any || r.w != F32_MAX;
+            n += 1u;
+        }
+        if params.target_noise > 0.0 && round + 1u >= MIN_ROUNDS && converged(lum_sum, lum_sq, n, params.target_noise) {
+            break;
+        }
     }
     var o: TexelOut;
-    o.radiance = sum * (1.0 / f32(k * k));
+    o.radiance = sum * (1.0 / f32(n));
     o.distance = 0.0;
     if (params.flags & FLAG_DISTANCE) != 0u {
         let n = f32(res);
@@ -109,6 +133,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     o.shadow_hit = (counts.shadow << 1u) | select(0u, 1u, hit_any);
     o.nodes = counts.nodes;
     o.tris = counts.tris;
+    o.samples = n;
     out[id] = o;
 }
 

@@ -164,7 +164,7 @@ pub fn bake_shard(
         };
         report.noise = Some(noise_report::noise_report(
             &written.noise,
-            settings.samples_per_texel,
+            &capture,
             &estimate,
         ));
     }

@@ -3,14 +3,19 @@
 //! preflight's model ([`crate::preflight`]).
 
 use crate::preflight::Estimate;
-use oslf_trace::capture::strata_per_side;
+use oslf_trace::capture::{sampling_plan, strata_per_side, CaptureSettings};
 use oslf_trace::noise::{samples_for, NoiseStats, VISIBLE_RELATIVE_ERROR};
 
 /// How noisy this run's cubes are.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct NoiseReport {
-    /// Samples per texel of the capture (rounded up to a square, as captured).
+    /// Samples per texel of the capture (rounded up to a square, as captured); with a target,
+    /// the most a texel took.
     pub samples_per_texel: u32,
+    /// The relative standard error each texel sampled down to (`target_noise`), if any.
+    pub target: Option<f64>,
+    /// The samples per texel the capture took, on average over every texel: measured.
+    pub mean_samples_per_texel: Option<f64>,
     /// Cube texels of this run that see a surface (the estimate is over them).
     pub texels: u64,
     /// Their relative standard error ([`NoiseStats::relative_error`]); `None`: nothing to
@@ -42,14 +47,16 @@ pub struct NoiseSuggestion {
     pub threads: usize,
 }
 
-/// The report of `noise` for a capture at `samples_per_texel` (as set), with the suggestion
-/// costed from `estimate` (the preflight's, of this bake's settings).
+/// The report of `noise` for the capture `capture`, with the suggestion costed from
+/// `estimate` (the preflight's, of this bake's settings). With a target, the suggestion is a
+/// higher cap (`samples_per_texel`) where the error achieved is still visible.
 pub(super) fn noise_report(
     noise: &NoiseStats,
-    samples_per_texel: u32,
+    capture: &CaptureSettings,
     estimate: &Estimate,
 ) -> NoiseReport {
-    let samples = strata_per_side(samples_per_texel).pow(2);
+    let (k, rounds) = sampling_plan(capture.samples_per_texel, capture.target_noise);
+    let samples = k * k * rounds;
     let error = noise.relative_error();
     let suggestion = error.filter(|&m| m > VISIBLE_RELATIVE_ERROR).map(|m| {
         let more = samples.saturating_mul(4);
@@ -75,6 +82,8 @@ pub(super) fn noise_report(
     });
     NoiseReport {
         samples_per_texel: samples,
+        target: (capture.target_noise > 0.0).then_some(f64::from(capture.target_noise)),
+        mean_samples_per_texel: noise.samples_per_texel(),
         texels: noise.texels,
         relative_error: error,
         visible_above: VISIBLE_RELATIVE_ERROR,

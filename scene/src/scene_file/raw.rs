@@ -329,6 +329,8 @@ pub(super) struct RawBake {
     pub(super) cube_resolution: Option<Resolution>,
     pub(super) sample_map_resolution: Option<Resolution>,
     pub(super) samples_per_texel: Option<Spanned<u32>>,
+    /// The relative standard error each cube texel samples down to (adaptive sampling).
+    pub(super) target_noise: Option<Spanned<f64>>,
     pub(super) bounces: Option<Spanned<u32>>,
     pub(super) seed: Option<u64>,
     pub(super) encoding: Option<EncodingName>,
@@ -355,6 +357,7 @@ impl RawBake {
             cube_resolution,
             sample_map_resolution,
             samples_per_texel,
+            target_noise,
             bounces,
             seed,
             encoding,

@@ -71,6 +71,16 @@ impl Ctx<'_> {
             Some(s) => *s.get_ref(),
             None => 4,
         };
+        let target_noise = match &merged.target_noise {
+            Some(t) if !(t.get_ref().is_finite() && *t.get_ref() > 0.0 && *t.get_ref() <= 1.0) => {
+                return Err(self.error_at(
+                    t.span(),
+                    "target_noise must be in (0, 1]: the relative standard error each cube texel samples down to (0.05 is 5 %)",
+                ))
+            }
+            Some(t) => *t.get_ref() as f32,
+            None => 0.0,
+        };
         let bounces = match &merged.bounces {
             Some(b) if *b.get_ref() > 64 => {
                 return Err(self.error_at(b.span(), "bounces must be at most 64"))
@@ -120,6 +130,7 @@ impl Ctx<'_> {
             cube_resolution: merged.cube_resolution.map_or(32, |r| r.0),
             sample_map_resolution: merged.sample_map_resolution.map_or(256, |r| r.0),
             samples_per_texel: spp,
+            target_noise,
             bounces,
             seed: merged.seed.unwrap_or(0),
             encoding,
