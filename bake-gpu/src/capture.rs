@@ -8,7 +8,7 @@ use oslf_bake::device::{CaptureDevice, CapturedCube, CubeJob};
 use oslf_format::CubeImage;
 use oslf_gpu::Gpu;
 use oslf_scene::scene::Scene;
-use oslf_trace::capture::{sampling_plan, CaptureSettings};
+use oslf_trace::capture::{pilot_samples, sampling_plan, CaptureSettings};
 use oslf_trace::integrator::RayStats;
 use oslf_trace::noise::NoiseStats;
 use wgpu::util::DeviceExt;
@@ -421,7 +421,16 @@ impl GpuCapture {
         Ok(jobs
             .iter()
             .zip(texels.chunks_exact(per_cube as usize))
-            .map(|(job, cube)| unpack_cube(cube, res, settings.distance_channel, job.sees_objects))
+            .map(|(job, cube)| {
+                let pilot = pilot_samples(settings);
+                unpack_cube(
+                    cube,
+                    res,
+                    pilot,
+                    settings.distance_channel,
+                    job.sees_objects,
+                )
+            })
             .collect())
     }
 
@@ -585,7 +594,14 @@ impl GpuCapture {
 
 /// One cube's texels read back: the image, its rays, and the noise of its texels (none for
 /// the environment-map baseline's cube).
-fn unpack_cube(texels: &[TexelOut], res: u32, distance: bool, noise: bool) -> CapturedCube {
+/// `pilot`: the samples of each texel's pilot, spent but not in its value or its `samples`.
+fn unpack_cube(
+    texels: &[TexelOut],
+    res: u32,
+    pilot: u32,
+    distance: bool,
+    noise: bool,
+) -> CapturedCube {
     let per_face = (res * res) as usize;
     let mut stats = RayStats::default();
     let mut noise_stats = NoiseStats::default();
@@ -608,7 +624,7 @@ fn unpack_cube(texels: &[TexelOut], res: u32, distance: bool, noise: bool) -> Ca
                     t.samples,
                     t.shadow_hit & 1 == 1,
                 );
-                noise_stats.count_samples(t.samples);
+                noise_stats.count_samples(t.samples + pilot);
             }
         }
     }

@@ -74,7 +74,7 @@ oslf_gpu::gpu_struct! {
         /// BVH nodes and triangles its rays tested.
         pub nodes: u32,
         pub tris: u32,
-        /// The samples it took (fewer than the most where an adaptive capture stopped it).
+        /// The samples its value is the mean of (an adaptive capture's after its pilot).
         pub samples: u32,
         pub _pad: u32,
     }

@@ -447,7 +447,7 @@ fn print_noise(r: &BakeReport) {
     };
     let level = match (n.target, n.mean_samples_per_texel) {
         (Some(target), Some(mean)) => format!(
-            "±{} relative standard error of the cube texels that see a surface, measured (adaptive: each texel sampled to ±{} or {} samples, {mean:.1} per texel on average)",
+            "±{} relative standard error of the cube texels that see a surface, measured (adaptive: each texel sampled to ±{} or {} samples, {mean:.1} per texel on average with the 8 of its pilot)",
             percent(error),
             percent(target),
             n.samples_per_texel,

@@ -7,7 +7,7 @@ use oslf_format::CubeImage;
 use rayon::prelude::*;
 
 use crate::integrator::{Integrator, RayStats};
-use crate::noise::{converged, luminance, NoiseStats};
+use crate::noise::{luminance, rounds_after_pilot, NoiseStats};
 use crate::ray::{Intersector, Ray};
 use oslf_shading::random::{hash_u64, Rng};
 
@@ -23,24 +23,34 @@ pub fn strata_per_side(samples_per_texel: u32) -> u32 {
 /// Strata per side of one round of an adaptive capture: 2 × 2 = 4 stratified samples.
 pub const ROUND_STRATA: u32 = 2;
 
-/// Rounds an adaptive capture takes before it may stop a texel: 8 samples (a variance from
-/// fewer is too unsteady to trust).
+/// Rounds of an adaptive capture's pilot, whose samples choose how many the texel takes
+/// (8 samples: a variance from fewer is too unsteady to trust).
+pub const PILOT_ROUNDS: u32 = 2;
+/// The fewest rounds an adaptive capture's texel takes after its pilot: their samples make its
+/// value.
 pub const MIN_ROUNDS: u32 = 2;
 
 /// How a capture samples each texel: `(strata per side of a round, rounds at most)`. Without a
 /// target (`target_noise` 0) one round of `k × k` strata ([`strata_per_side`]); with one,
-/// rounds of [`ROUND_STRATA`]² stratified samples, as many as reach `samples_per_texel` (at
-/// least [`MIN_ROUNDS`]), each texel stopping at the first round after which its relative
-/// standard error is at most the target ([`crate::noise::converged`]).
+/// rounds of [`ROUND_STRATA`]² stratified samples: [`PILOT_ROUNDS`], then as many as the
+/// pilot says reach the target ([`crate::noise::rounds_after_pilot`]), [`MIN_ROUNDS`] at least,
+/// `samples_per_texel` in all at most (the pilot included).
 pub fn sampling_plan(samples_per_texel: u32, target_noise: f32) -> (u32, u32) {
     if target_noise > 0.0 {
         let round = ROUND_STRATA * ROUND_STRATA;
-        (
-            ROUND_STRATA,
-            samples_per_texel.max(1).div_ceil(round).max(MIN_ROUNDS),
-        )
+        let rounds = samples_per_texel.max(1).div_ceil(round);
+        (ROUND_STRATA, rounds.max(PILOT_ROUNDS + MIN_ROUNDS))
     } else {
         (strata_per_side(samples_per_texel), 1)
+    }
+}
+
+/// Samples of each texel's pilot (0 without a target): spent, but not part of its value.
+pub fn pilot_samples(settings: &CaptureSettings) -> u32 {
+    if settings.target_noise > 0.0 {
+        PILOT_ROUNDS * ROUND_STRATA * ROUND_STRATA
+    } else {
+        0
     }
 }
 
@@ -139,6 +149,7 @@ pub fn capture_cube_with_noise<I: Intersector>(
     let res = settings.resolution;
     let (k, rounds) = sampling_plan(settings.samples_per_texel, settings.target_noise);
     let target = f64::from(settings.target_noise);
+    let pilot = pilot_samples(settings);
     let texels = (res as usize) * (res as usize);
     let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
     let mut distance: [Vec<f32>; 6] = Default::default();
@@ -190,7 +201,10 @@ pub fn capture_cube_with_noise<I: Intersector>(
             // for the noise estimate (and an adaptive capture's stopping rule).
             let mut moments = vec![(0f64, 0f64, false); texels.len()];
             let mut taken = vec![0u32; texels.len()];
-            // The tile's texels still sampling (all of them without a target).
+            // Per texel, the rounds it takes: all of them without a target; with one, set by
+            // its pilot.
+            let mut planned = vec![rounds; texels.len()];
+            // The tile's texels still sampling.
             let mut active: Vec<usize> = (0..texels.len()).collect();
             let mut rays = Vec::with_capacity(texels.len());
             let mut hits = vec![None; texels.len()];
@@ -222,16 +236,24 @@ pub fn capture_cube_with_noise<I: Intersector>(
                         taken[a] += 1;
                     }
                 }
-                if target > 0.0 && round + 1 >= MIN_ROUNDS {
-                    active.retain(|&a| !converged(moments[a].0, moments[a].1, taken[a], target));
-                    if active.is_empty() {
-                        break;
+                if target > 0.0 && round + 1 == PILOT_ROUNDS {
+                    // The pilot chooses the rounds; the texel's value is the later ones'.
+                    let plan = (MIN_ROUNDS, rounds - PILOT_ROUNDS);
+                    for a in 0..texels.len() {
+                        let (s, q, seen) = moments[a];
+                        planned[a] =
+                            PILOT_ROUNDS + rounds_after_pilot(s, q, taken[a], target, k * k, plan);
+                        (sums[a], moments[a], taken[a]) = (Vec3::ZERO, (0.0, 0.0, seen), 0);
                     }
+                }
+                active.retain(|&a| planned[a] > round + 1);
+                if active.is_empty() {
+                    break;
                 }
             }
             for (((&(x, y, i), sum), m), &n) in texels.iter().zip(&sums).zip(&moments).zip(&taken) {
                 noise.add_texel(m.0, m.1, n, m.2);
-                noise.count_samples(n);
+                noise.count_samples(n + pilot);
                 out[i] = (*sum * (1.0 / n as f32)).to_array();
                 if let Some(d_out) = dist_out.as_deref_mut() {
                     let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
@@ -307,7 +329,11 @@ mod tests {
                     let mut rng = Rng::new(settings.seed, stream);
                     let mut sum = Vec3::ZERO;
                     let (mut y_sum, mut y_sq, mut n) = (0f64, 0f64, 0u32);
+                    let mut planned = rounds;
                     for round in 0..rounds {
+                        if round >= planned {
+                            break;
+                        }
                         for j in 0..k * k {
                             let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
                             let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
@@ -322,11 +348,11 @@ mod tests {
                             let l = luminance(r.to_array());
                             (y_sum, y_sq, n) = (y_sum + l, y_sq + l * l, n + 1);
                         }
-                        if target > 0.0
-                            && round + 1 >= MIN_ROUNDS
-                            && converged(y_sum, y_sq, n, target)
-                        {
-                            break;
+                        if target > 0.0 && round + 1 == PILOT_ROUNDS {
+                            let plan = (MIN_ROUNDS, rounds - PILOT_ROUNDS);
+                            planned = PILOT_ROUNDS
+                                + rounds_after_pilot(y_sum, y_sq, n, target, k * k, plan);
+                            (sum, y_sum, y_sq, n) = (Vec3::ZERO, 0.0, 0.0, 0);
                         }
                     }
                     out.push((sum * (1.0 / n as f32)).to_array());
@@ -336,8 +362,9 @@ mod tests {
         out
     }
 
-    /// A sphere on a ground plane under a sun and a constant sky, one bounce.
-    fn sphere_scene() -> (TriangleScene, [Material; 2], [Light; 1], Environment) {
+    /// A sphere on a ground plane under a sun of angular radius `sun` and a constant sky, one
+    /// bounce.
+    fn sphere_scene(sun: f32) -> (TriangleScene, [Material; 2], [Light; 1], Environment) {
         let mut instances = vec![Instance {
             name: String::new(),
             mesh: shapes::sphere(1.0, 32).unwrap(),
@@ -362,7 +389,7 @@ mod tests {
         let lights = [Light::Sun {
             direction: Vec3::new(0.3, -0.4, 0.8).normalize(),
             irradiance: Vec3::splat(3.0),
-            angular_radius: 0.01,
+            angular_radius: sun,
         }];
         let environment = Environment::Constant(Vec3::new(0.3, 0.4, 0.6));
         (scene, materials, lights, environment)
@@ -370,7 +397,7 @@ mod tests {
 
     #[test]
     fn tiled_packet_capture_is_the_texel_by_texel_one() {
-        let (scene, materials, lights, environment) = sphere_scene();
+        let (scene, materials, lights, environment) = sphere_scene(0.01);
         // Fixed counts, and adaptive captures (whose texels leave their tile's packets as
         // they reach the target).
         for (resolution, samples_per_texel, target_noise) in [
@@ -426,15 +453,16 @@ mod tests {
         }
     }
 
-    /// Adaptive sampling reaches its target: the relative standard error of the texels that
-    /// see a surface, measured as the spread of each texel over 24 captures with different
-    /// seeds (not the capture's own estimate), is within 25 % of the target; texels stop at
-    /// different counts, fewer than the cap on average; and the capture's own estimate agrees
-    /// with the measured spread within 25 %.
+    /// Adaptive sampling reaches its target: the relative standard error of the texels,
+    /// measured as the spread of each texel over 24 captures with different seeds (not the
+    /// capture's own estimate), is within 25 % of the target; texels take fewer samples than
+    /// the cap on average; and the capture's own estimate agrees with the measured spread
+    /// within 25 %. The light is the sky's alone here (no sun in view), so that a texel's
+    /// pilot sees the light it gets: see the next test for a sun a texel's pilot misses.
     #[test]
     fn adaptive_texels_reach_their_target() {
-        let (scene, materials, lights, environment) = sphere_scene();
-        let integrator = Integrator::new(&scene, &materials, &lights, &environment, 1);
+        let (scene, materials, _, environment) = sphere_scene(0.01);
+        let integrator = Integrator::new(&scene, &materials, &[], &environment, 1);
         let origin = Vec3::new(0.3, 0.2, 0.96);
         let target = 0.02f32;
         let runs: Vec<(CubeImage, NoiseStats)> = (0..24u64)
@@ -491,5 +519,51 @@ mod tests {
         );
         // Fixed at those samples, every texel would take them: adaptive spends them unevenly.
         println!("target {target}: measured {measured:.4}, estimated {estimated:.4}, {spent:.1} samples per texel");
+    }
+
+    /// Adaptive sampling is unbiased, also where light arrives by rare bright paths: a sun of
+    /// 0.01 rad in a texel of 15° seen directly, which 8 pilot samples mostly miss. Each
+    /// texel's mean over 32 seeds agrees with fixed sampling's within 4 standard errors, and so
+    /// does the whole cube's (a rule that stops a texel by its own samples' variance would
+    /// stop those texels dark: that rule rendered the can 8–10 % darker).
+    #[test]
+    fn adaptive_sampling_is_unbiased() {
+        let (scene, materials, lights, environment) = sphere_scene(0.01);
+        let integrator = Integrator::new(&scene, &materials, &lights, &environment, 1);
+        let origin = Vec3::new(0.3, 0.2, 0.96);
+        let runs = |samples_per_texel, target_noise| -> Vec<Vec<f64>> {
+            (0..32u64)
+                .map(|seed| {
+                    let settings = CaptureSettings {
+                        resolution: 6,
+                        samples_per_texel,
+                        target_noise,
+                        distance_channel: false,
+                        seed: 1000 + seed,
+                    };
+                    let (cube, _) = capture_cube(&integrator, origin, 0, &settings);
+                    cube.faces.iter().flatten().map(|t| luminance(*t)).collect()
+                })
+                .collect()
+        };
+        let (fixed, adaptive) = (runs(16, 0.0), runs(256, 0.1));
+        let stats = |r: &[Vec<f64>], t: Option<usize>| {
+            let v: Vec<f64> = r
+                .iter()
+                .map(|c| t.map_or_else(|| c.iter().sum(), |t| c[t]))
+                .collect();
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            (mean, var / n)
+        };
+        for t in (0..6 * 36).map(Some).chain([None]) {
+            let ((a, va), (b, vb)) = (stats(&fixed, t), stats(&adaptive, t));
+            let se = (va + vb).sqrt().max(1e-6 * a.abs());
+            assert!(
+                (a - b).abs() <= 4.0 * se,
+                "texel {t:?}: fixed {a}, adaptive {b}, standard error {se}"
+            );
+        }
     }
 }

@@ -21,19 +21,37 @@
 /// The summary then suggests more samples.
 pub const VISIBLE_RELATIVE_ERROR: f64 = 0.05;
 
-/// Whether a texel of an adaptive capture has sampled enough: the relative standard error of
-/// its mean luminance after `n` samples with luminance sum `sum` and sum of squares `sum_sq`,
-/// `√(s²/n) / mean` (`s²` unbiased, as [`NoiseStats::add_texel`]), is at most `target`; a texel
-/// whose samples are all equal (black ones too) has none. Twin: `converged` in the GPU bake's
-/// capture.wgsl (in f32).
-pub fn converged(sum: f64, sum_sq: f64, n: u32, target: f64) -> bool {
-    if n < 2 {
-        return false;
-    }
-    let nf = f64::from(n);
+/// Rounds of `round` samples an adaptive capture's texel takes after its pilot: enough that
+/// the relative standard error of their mean luminance, `√(s²/n) / mean`, reaches `target` by
+/// the pilot's `n` samples (luminance sum `sum`, sum of squares `sum_sq`; `s²` unbiased, as
+/// [`NoiseStats::add_texel`]), within `min_rounds..=max_rounds`. The texel's value is the mean
+/// of these later samples alone: they are independent of the pilot that chose their number,
+/// so the value is unbiased (a texel stopped by its own samples' variance is biased low where
+/// light arrives by rare bright paths: stores of that rule rendered 8–10 % darker on the can).
+/// Twin: `rounds_after_pilot` in the GPU bake's capture.wgsl (in f32).
+pub fn rounds_after_pilot(
+    sum: f64,
+    sum_sq: f64,
+    n: u32,
+    target: f64,
+    round: u32,
+    (min_rounds, max_rounds): (u32, u32),
+) -> u32 {
+    let nf = f64::from(n.max(2));
     let mean = sum / nf;
     let variance = ((sum_sq - nf * mean * mean) / (nf - 1.0)).max(0.0);
-    variance / nf <= target * target * mean * mean
+    // n s² / (n target² mean²) samples bring the standard error of the mean to target · mean.
+    let wanted = variance / (target * target * mean * mean);
+    let rounds = if wanted.is_finite() {
+        (wanted / f64::from(round.max(1)))
+            .ceil()
+            .min(f64::from(max_rounds)) as u32
+    } else if variance > 0.0 {
+        max_rounds
+    } else {
+        min_rounds
+    };
+    rounds.clamp(min_rounds, max_rounds.max(min_rounds))
 }
 
 /// The noise of a set of cube texels: sums over the texels that see a surface.

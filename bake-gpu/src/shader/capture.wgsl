@@ -55,19 +55,24 @@ fn face_st_to_direction(face: u32, s: f32, t: f32) -> vec3<f32> {
     return vec3<f32>(1.0, 0.0, 0.0);
 }
 
-// Whether an adaptive capture's texel has sampled enough: the relative standard error of its
-// mean luminance after n samples is at most `goal` (oslf_trace::noise::converged, in f32).
-fn converged(sum: f32, sum_sq: f32, n: u32, goal: f32) -> bool {
-    if n < 2u {
-        return false;
-    }
-    let nf = f32(n);
+// Rounds of `round` samples an adaptive capture's texel takes after its pilot of n samples
+// (oslf_trace::noise::rounds_after_pilot, in f32), within min_rounds..=max_rounds.
+fn rounds_after_pilot(sum: f32, sum_sq: f32, n: u32, goal: f32, round: u32, min_rounds: u32, max_rounds: u32) -> u32 {
+    let nf = f32(max(n, 2u));
     let mean = sum / nf;
     let variance = max((sum_sq - nf * mean * mean) / (nf - 1.0), 0.0);
-    return variance / nf <= goal * goal * mean * mean;
+    let wanted = variance / (goal * goal * mean * mean);
+    var rounds = min_rounds;
+    if finite(wanted) {
+        rounds = u32(min(ceil(wanted / f32(max(round, 1u))), f32(max_rounds)));
+    } else if variance > 0.0 {
+        rounds = max_rounds;
+    }
+    return clamp(rounds, min_rounds, max(max_rounds, min_rounds));
 }
 
-// Rounds an adaptive capture takes before it may stop a texel (capture.rs MIN_ROUNDS).
+// The pilot's rounds and the fewest after it (capture.rs PILOT_ROUNDS, MIN_ROUNDS).
+const PILOT_ROUNDS: u32 = 2u;
 const MIN_ROUNDS: u32 = 2u;
 
 // Invocations per workgroup, chosen per adapter (capture.rs `workgroup_size`).
@@ -97,9 +102,11 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     var lum_sq = 0.0;
     var hit_any = false;
     var n = 0u;
-    // Rounds of k × k stratified samples: one without a target, else until the texel's
-    // relative standard error reaches it (capture.rs `sampling_plan`).
-    for (var round = 0u; round < params.rounds; round++) {
+    // Rounds of k × k stratified samples: one without a target; with one, a pilot that
+    // chooses how many follow, whose samples alone make the texel (capture.rs
+    // `sampling_plan`).
+    var planned = params.rounds;
+    for (var round = 0u; round < planned; round++) {
         for (var j = 0u; j < k * k; j++) {
             let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
             let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
@@ -114,8 +121,12 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
             hit_any = hit_any || r.w != F32_MAX;
             n += 1u;
         }
-        if params.target_noise > 0.0 && round + 1u >= MIN_ROUNDS && converged(lum_sum, lum_sq, n, params.target_noise) {
-            break;
+        if params.target_noise > 0.0 && round + 1u == PILOT_ROUNDS {
+            planned = PILOT_ROUNDS + rounds_after_pilot(lum_sum, lum_sq, n, params.target_noise, k * k, MIN_ROUNDS, params.rounds - PILOT_ROUNDS);
+            sum = vec3<f32>(0.0);
+            lum_sum = 0.0;
+            lum_sq = 0.0;
+            n = 0u;
         }
     }
     var o: TexelOut;
