@@ -20,7 +20,7 @@ use oslf_format::SamplePoint;
 pub use crate::surface::Surfaces;
 use crate::surface::{MapDomain, SurfacePoint};
 use oslf_scene::error::{BakeError, Result};
-use oslf_scene::scene::{BakeSettings, SampleDensity};
+use oslf_scene::scene::{BakeSettings, PointPlacement, SampleDensity};
 use oslf_shading::random::Rng;
 use oslf_trace::ray::{Intersector, Ray};
 /// Candidates drawn per requested point.
@@ -89,12 +89,37 @@ pub fn place(
                 surfaces.sample_object(o, rng)
             }
         };
-        let candidates: Vec<SurfacePoint> = (0..group.count * CANDIDATES_PER_POINT)
-            .map(|_| draw(&mut rng))
-            .collect();
-        let kept = eliminate(&candidates, group.count, group.area);
+        let (kept, candidates, area) = match settings.placement {
+            PointPlacement::Uniform => {
+                let candidates: Vec<SurfacePoint> = (0..group.count * CANDIDATES_PER_POINT)
+                    .map(|_| draw(&mut rng))
+                    .collect();
+                let kept = eliminate(&candidates, None, group.count, group.area);
+                (kept, candidates, group.area)
+            }
+            PointPlacement::Parallax => {
+                // Uniform draws thinned to a density ∝ 1/scale² (scale 0.5 always kept).
+                let draws: Vec<SurfacePoint> =
+                    (0..group.count * CANDIDATES_PER_POINT * PARALLAX_DRAWS)
+                        .map(|_| draw(&mut rng))
+                        .collect();
+                let scales = parallax_scales(&draws, geometry, settings.epsilon, group.area);
+                // The area the points cover at unit scale: ∫ 1/scale² dA.
+                let area = group.area * scales.iter().map(|s| 1.0 / (s * s)).sum::<f32>()
+                    / scales.len().max(1) as f32;
+                let keep_all = PARALLAX_SCALE.0 * PARALLAX_SCALE.0;
+                let (candidates, kept_scales): (Vec<SurfacePoint>, Vec<f32>) = draws
+                    .iter()
+                    .zip(&scales)
+                    .filter(|(_, s)| rng.next_f32() * s.powi(2) < keep_all)
+                    .map(|(c, s)| (*c, *s))
+                    .unzip();
+                let kept = eliminate(&candidates, Some(&kept_scales), group.count, area);
+                (kept, candidates, area)
+            }
+        };
         chosen.extend(kept.iter().map(|&i| candidates[i]));
-        radius = radius.min(poisson_radius(group.area, group.count));
+        radius = radius.min(poisson_radius(area, group.count));
     }
 
     let mut placement = Placement {
@@ -202,9 +227,64 @@ fn groups(surfaces: &Surfaces, settings: &BakeSettings) -> Result<Vec<Group>> {
 /// The placement RNG's stream id (cube-map texels use hashed streams of their own).
 const PLACEMENT_STREAM: u64 = 0x0051_a3c1_e5ee_d000;
 
+/// Uniform draws per candidate of a parallax placement, thinned by their spacing scale.
+const PARALLAX_DRAWS: usize = 4;
+/// Probe rays per draw of a parallax placement (the directions of a Fibonacci sphere of twice
+/// as many above its surface).
+const PARALLAX_RAYS: usize = 16;
+/// The limits of a parallax placement's spacing, relative to its typical spacing.
+pub const PARALLAX_SCALE: (f32, f32) = (0.5, 2.0);
+
+/// Each draw's spacing scale in a parallax placement: the harmonic mean distance to what it
+/// sees over the hemisphere of its offset (probe rays from ε above it; a ray that escapes counts
+/// as 4 × √`area`, far for these objects), over the geometric mean of all draws, within
+/// [`PARALLAX_SCALE`]. A mirror reflection's parallax between two points is their spacing over
+/// that distance: spacing ∝ distance keeps it even.
+fn parallax_scales(
+    draws: &[SurfacePoint],
+    geometry: &impl Intersector,
+    epsilon: f32,
+    area: f32,
+) -> Vec<f32> {
+    let far = 4.0 * area.sqrt();
+    let directions = fibonacci_sphere(2 * PARALLAX_RAYS);
+    let distance: Vec<f32> = draws
+        .iter()
+        .map(|c| {
+            let origin = c.position + c.offset * epsilon;
+            let (mut inverse, mut n) = (0.0f32, 0u32);
+            for &dir in directions.iter().filter(|d| d.dot(c.offset) > 0.0) {
+                let t = geometry
+                    .intersect(&Ray::new(origin, dir), far)
+                    .map_or(far, |h| h.t.max(epsilon));
+                inverse += 1.0 / t;
+                n += 1;
+            }
+            if n == 0 {
+                far
+            } else {
+                n as f32 / inverse
+            }
+        })
+        .collect();
+    let log_mean = distance.iter().map(|d| d.ln()).sum::<f32>() / distance.len().max(1) as f32;
+    let typical = log_mean.exp();
+    distance
+        .iter()
+        .map(|d| (d / typical).clamp(PARALLAX_SCALE.0, PARALLAX_SCALE.1))
+        .collect()
+}
+
 /// Weighted sample elimination down to `target` points; returns kept candidate indices in
-/// ascending order.
-fn eliminate(candidates: &[SurfacePoint], target: usize, area: f32) -> Vec<usize> {
+/// ascending order. With `scales`, each candidate's distances count in units of its spacing
+/// scale (the mean of the pair's), and `area` is the area at unit scale: a point removes its
+/// neighbours within a radius that grows with its scale.
+fn eliminate(
+    candidates: &[SurfacePoint],
+    scales: Option<&[f32]>,
+    target: usize,
+    area: f32,
+) -> Vec<usize> {
     let m = candidates.len();
     if m <= target {
         return (0..m).collect();
@@ -216,6 +296,8 @@ fn eliminate(candidates: &[SurfacePoint], target: usize, area: f32) -> Vec<usize
         let d = d.max(r_min);
         (1.0 - d / radius).max(0.0).powi(8)
     };
+    let scale = |i: usize| scales.map_or(1.0, |s| s[i]);
+    let reach = radius * scales.map_or(1.0, |_| PARALLAX_SCALE.1);
 
     let positions: Vec<[f32; 3]> = candidates.iter().map(|c| c.position.to_array()).collect();
     let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&positions);
@@ -225,10 +307,14 @@ fn eliminate(candidates: &[SurfacePoint], target: usize, area: f32) -> Vec<usize
         .enumerate()
         .map(|(i, p)| {
             let mut list: Vec<(u32, f32)> = tree
-                .nearest_n_within::<SquaredEuclidean>(p, radius * radius, max_items, false)
+                .nearest_n_within::<SquaredEuclidean>(p, reach * reach, max_items, false)
                 .into_iter()
                 .filter(|nb| nb.item as usize != i)
-                .map(|nb| (nb.item as u32, weight(nb.distance.sqrt())))
+                .map(|nb| {
+                    let s = 0.5 * (scale(i) + scale(nb.item as usize));
+                    (nb.item as u32, weight(nb.distance.sqrt() / s))
+                })
+                .filter(|&(_, w)| scales.is_none() || w > 0.0)
                 .collect();
             list.sort_unstable_by_key(|&(j, _)| j);
             list

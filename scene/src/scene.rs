@@ -85,6 +85,8 @@ pub struct BakeSettings {
     pub epsilon: f32,
     /// How many sample points to place (exact, before removal of invalid points).
     pub sample_count: SampleDensity,
+    /// How the points are spread: evenly, or denser where the surroundings are near.
+    pub placement: PointPlacement,
     /// Horizon tolerance of Eq. 3.10, degrees.
     pub phi_samplemap_deg: f32,
     pub cube_resolution: u32,
@@ -174,6 +176,32 @@ impl std::fmt::Display for BakeChoice {
                 self.key, self.value, self.why
             ),
             None => write!(f, "{} = {}: {}", self.key, self.value, self.why),
+        }
+    }
+}
+
+/// How the sample points are spread over the surfaces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PointPlacement {
+    /// Evenly by area (the thesis's; the default).
+    #[default]
+    Uniform,
+    /// Denser where the surroundings are near: a reflection's parallax between two points
+    /// grows as their spacing over the distance to what they see, so the spacing follows that
+    /// distance (the harmonic mean over a hemisphere of probe rays), within 0.5 to 2 times the
+    /// typical spacing; the count is the same.
+    Parallax,
+}
+
+impl std::str::FromStr for PointPlacement {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "uniform" => Ok(PointPlacement::Uniform),
+            "parallax" => Ok(PointPlacement::Parallax),
+            _ => Err(format!(
+                "unknown placement {s:?} (expected \"uniform\" or \"parallax\")"
+            )),
         }
     }
 }

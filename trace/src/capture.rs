@@ -147,8 +147,6 @@ pub fn capture_cube_with_noise<I: Intersector>(
     settings: &CaptureSettings,
 ) -> (CubeImage, RayStats, NoiseStats) {
     let res = settings.resolution;
-    let (k, rounds) = sampling_plan(settings.samples_per_texel, settings.target_noise);
-    let target = f64::from(settings.target_noise);
     let pilot = pilot_samples(settings);
     let texels = (res as usize) * (res as usize);
     let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
@@ -196,61 +194,13 @@ pub fn capture_cube_with_noise<I: Intersector>(
                     Rng::new(settings.seed, stream)
                 })
                 .collect();
-            let mut sums = vec![Vec3::ZERO; texels.len()];
-            // Luminance sum and sum of squares per texel, and whether a sample hit a surface,
-            // for the noise estimate (and an adaptive capture's stopping rule).
-            let mut moments = vec![(0f64, 0f64, false); texels.len()];
-            let mut taken = vec![0u32; texels.len()];
-            // Per texel, the rounds it takes: all of them without a target; with one, set by
-            // its pilot.
-            let mut planned = vec![rounds; texels.len()];
-            // The tile's texels still sampling.
-            let mut active: Vec<usize> = (0..texels.len()).collect();
-            let mut rays = Vec::with_capacity(texels.len());
-            let mut hits = vec![None; texels.len()];
-            for round in 0..rounds {
-                for j in 0..k * k {
-                    rays.clear();
-                    for &a in &active {
-                        let (x, y, _) = texels[a];
-                        let rng = &mut rngs[a];
-                        let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
-                        let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
-                        let s = (x as f32 + sx) / res as f32;
-                        let t = (y as f32 + sy) / res as f32;
-                        let dir =
-                            Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
-                        rays.push(Ray::new(origin, dir));
-                    }
-                    stats.closest += rays.len() as u64;
-                    let hits = &mut hits[..rays.len()];
-                    integrator.geometry.intersect_packet(&rays, f32::MAX, hits);
-                    for ((&a, ray), hit) in active.iter().zip(&rays).zip(hits.iter()) {
-                        let radiance = integrator
-                            .radiance_from(ray, hit.as_ref(), &mut rngs[a], &mut stats)
-                            .radiance;
-                        sums[a] += radiance;
-                        let y = luminance(radiance.to_array());
-                        let m = &mut moments[a];
-                        *m = (m.0 + y, m.1 + y * y, m.2 || hit.is_some());
-                        taken[a] += 1;
-                    }
-                }
-                if target > 0.0 && round + 1 == PILOT_ROUNDS {
-                    // The pilot chooses the rounds; the texel's value is the later ones'.
-                    let plan = (MIN_ROUNDS, rounds - PILOT_ROUNDS);
-                    for a in 0..texels.len() {
-                        let (s, q, seen) = moments[a];
-                        planned[a] =
-                            PILOT_ROUNDS + rounds_after_pilot(s, q, taken[a], target, k * k, plan);
-                        (sums[a], moments[a], taken[a]) = (Vec3::ZERO, (0.0, 0.0, seen), 0);
-                    }
-                }
-                active.retain(|&a| planned[a] > round + 1);
-                if active.is_empty() {
-                    break;
-                }
-            }
+            let TileSamples {
+                sums,
+                moments,
+                taken,
+            } = sample_tile(
+                integrator, origin, face, &texels, &mut rngs, settings, &mut stats,
+            );
             for (((&(x, y, i), sum), m), &n) in texels.iter().zip(&sums).zip(&moments).zip(&taken) {
                 noise.add_texel(m.0, m.1, n, m.2);
                 noise.count_samples(n + pilot);
@@ -285,6 +235,90 @@ pub fn capture_cube_with_noise<I: Intersector>(
         distance: settings.distance_channel.then_some(distance),
     };
     (cube, stats, noise)
+}
+
+/// One tile's samples, per texel: the sum of its radiance, its luminance's sum and sum of
+/// squares and whether a sample hit a surface (for the noise estimate), and the samples its
+/// value is the mean of (an adaptive capture's after its pilot).
+struct TileSamples {
+    sums: Vec<Vec3>,
+    moments: Vec<(f64, f64, bool)>,
+    taken: Vec<u32>,
+}
+
+/// Samples the tile `texels` ((x, y, index) on `face`, each with its random stream in `rngs`)
+/// as `settings` plans: sample j of every texel still sampling traced as one packet, then each
+/// path on alone.
+fn sample_tile<I: Intersector>(
+    integrator: &Integrator<I>,
+    origin: Vec3,
+    face: usize,
+    texels: &[(u32, u32, usize)],
+    rngs: &mut [Rng],
+    settings: &CaptureSettings,
+    stats: &mut RayStats,
+) -> TileSamples {
+    let res = settings.resolution;
+    let (k, rounds) = sampling_plan(settings.samples_per_texel, settings.target_noise);
+    let target = f64::from(settings.target_noise);
+    let mut sums = vec![Vec3::ZERO; texels.len()];
+    // Luminance sum and sum of squares per texel, and whether a sample hit a surface,
+    // for the noise estimate (and an adaptive capture's stopping rule).
+    let mut moments = vec![(0f64, 0f64, false); texels.len()];
+    let mut taken = vec![0u32; texels.len()];
+    // Per texel, the rounds it takes: all of them without a target; with one, set by
+    // its pilot.
+    let mut planned = vec![rounds; texels.len()];
+    // The tile's texels still sampling.
+    let mut active: Vec<usize> = (0..texels.len()).collect();
+    let mut rays = Vec::with_capacity(texels.len());
+    let mut hits = vec![None; texels.len()];
+    for round in 0..rounds {
+        for j in 0..k * k {
+            rays.clear();
+            for &a in &active {
+                let (x, y, _) = texels[a];
+                let rng = &mut rngs[a];
+                let sx = ((j % k) as f32 + rng.next_f32()) / k as f32;
+                let sy = ((j / k) as f32 + rng.next_f32()) / k as f32;
+                let s = (x as f32 + sx) / res as f32;
+                let t = (y as f32 + sy) / res as f32;
+                let dir = Vec3::from_array(oslf_format::cube::face_st_to_direction(face, s, t));
+                rays.push(Ray::new(origin, dir));
+            }
+            stats.closest += rays.len() as u64;
+            let hits = &mut hits[..rays.len()];
+            integrator.geometry.intersect_packet(&rays, f32::MAX, hits);
+            for ((&a, ray), hit) in active.iter().zip(&rays).zip(hits.iter()) {
+                let radiance = integrator
+                    .radiance_from(ray, hit.as_ref(), &mut rngs[a], stats)
+                    .radiance;
+                sums[a] += radiance;
+                let y = luminance(radiance.to_array());
+                let m = &mut moments[a];
+                *m = (m.0 + y, m.1 + y * y, m.2 || hit.is_some());
+                taken[a] += 1;
+            }
+        }
+        if target > 0.0 && round + 1 == PILOT_ROUNDS {
+            // The pilot chooses the rounds; the texel's value is the later ones'.
+            let plan = (MIN_ROUNDS, rounds - PILOT_ROUNDS);
+            for a in 0..texels.len() {
+                let (s, q, seen) = moments[a];
+                planned[a] = PILOT_ROUNDS + rounds_after_pilot(s, q, taken[a], target, k * k, plan);
+                (sums[a], moments[a], taken[a]) = (Vec3::ZERO, (0.0, 0.0, seen), 0);
+            }
+        }
+        active.retain(|&a| planned[a] > round + 1);
+        if active.is_empty() {
+            break;
+        }
+    }
+    TileSamples {
+        sums,
+        moments,
+        taken,
+    }
 }
 
 #[cfg(test)]

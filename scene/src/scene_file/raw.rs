@@ -325,6 +325,7 @@ pub(super) struct RawBake {
     pub(super) epsilon: Option<Spanned<Positive>>,
     pub(super) sample_count: Option<Spanned<u32>>,
     pub(super) sample_spacing: Option<Positive>,
+    pub(super) placement: Option<PlacementName>,
     pub(super) phi_samplemap: Option<Spanned<Angle>>,
     pub(super) cube_resolution: Option<Resolution>,
     pub(super) sample_map_resolution: Option<Resolution>,
@@ -353,6 +354,7 @@ impl RawBake {
             epsilon,
             sample_count,
             sample_spacing,
+            placement,
             phi_samplemap,
             cube_resolution,
             sample_map_resolution,
@@ -481,6 +483,15 @@ impl<'de> Deserialize<'de> for EncodingName {
                     "unknown encoding {s:?} (expected \"rgb9e5\", \"rgba16f\", \"rgba32f\" or \"bc6h\")"
                 ))
             })
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct PlacementName(pub(super) crate::scene::PointPlacement);
+impl<'de> Deserialize<'de> for PlacementName {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map(PlacementName).map_err(D::Error::custom)
     }
 }
 

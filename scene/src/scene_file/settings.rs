@@ -15,6 +15,20 @@ impl Ctx<'_> {
     /// The bake settings, where `epsilon` was given (if it was), and which of the settings the
     /// scene chooses ([`crate::bake_defaults`]) the file leaves unset (those hold the former
     /// constant defaults until [`crate::bake_defaults::choose`] sets them).
+    /// `target_noise`: in (0, 1], 0 where unset (no adaptive sampling).
+    fn target_noise(&self, merged: &RawBake) -> Result<f32> {
+        match &merged.target_noise {
+            Some(t) if !(t.get_ref().is_finite() && *t.get_ref() > 0.0 && *t.get_ref() <= 1.0) => {
+                Err(self.error_at(
+                    t.span(),
+                    "target_noise must be in (0, 1]: the relative standard error each cube texel samples down to (0.05 is 5 %)",
+                ))
+            }
+            Some(t) => Ok(*t.get_ref() as f32),
+            None => Ok(0.0),
+        }
+    }
+
     pub(super) fn bake_settings(
         &self,
         raw: &RawScene,
@@ -71,16 +85,7 @@ impl Ctx<'_> {
             Some(s) => *s.get_ref(),
             None => 4,
         };
-        let target_noise = match &merged.target_noise {
-            Some(t) if !(t.get_ref().is_finite() && *t.get_ref() > 0.0 && *t.get_ref() <= 1.0) => {
-                return Err(self.error_at(
-                    t.span(),
-                    "target_noise must be in (0, 1]: the relative standard error each cube texel samples down to (0.05 is 5 %)",
-                ))
-            }
-            Some(t) => *t.get_ref() as f32,
-            None => 0.0,
-        };
+        let target_noise = self.target_noise(&merged)?;
         let bounces = match &merged.bounces {
             Some(b) if *b.get_ref() > 64 => {
                 return Err(self.error_at(b.span(), "bounces must be at most 64"))
@@ -126,6 +131,7 @@ impl Ctx<'_> {
         let settings = BakeSettings {
             epsilon: merged.epsilon.as_ref().map_or(0.1, |e| e.get_ref().0),
             sample_count,
+            placement: merged.placement.map_or_else(Default::default, |p| p.0),
             phi_samplemap_deg: phi,
             cube_resolution: merged.cube_resolution.map_or(32, |r| r.0),
             sample_map_resolution: merged.sample_map_resolution.map_or(256, |r| r.0),
