@@ -309,27 +309,38 @@ fn bake_orb(dir: &Path) -> std::path::PathBuf {
 fn a_textured_object_in_a_bevy_frame_equals_the_runtimes_render() {
     let tmp = tempfile::tempdir().unwrap();
     let store = bake_orb(tmp.path());
-    assert!(oslf_format::Store::open(&store).unwrap().meta().objects[0]
-        .textures
-        .is_some());
+    let opened = oslf_format::Store::open(&store).unwrap();
+    assert!(opened.meta().objects[0].textures.is_some());
+    // A format 1.1 store: the diffuse part of a dielectric reads its stored irradiance.
+    assert!(opened.irradiance().is_some());
     let mut params = ShadingParams::of_mode(Mode::Pbr);
     params.monte_carlo_mut().unwrap().m = 8;
-    let (camera, reference) = reference(&store, &params);
-    let setup = Setup {
-        store: Some("orb.oslf".into()),
-        params,
-        ..setup_for(camera, Extra::None, true)
+    // The orb's own (gold) material, then a dielectric of the same colours, whose diffuse
+    // base is read from the stored irradiance.
+    let mut dielectric = params;
+    *dielectric.material_mut().unwrap() = oslf_runtime::PbrMaterial {
+        metallic: 0.0,
+        roughness: 0.5,
+        object_material: false,
     };
-    let mut app = app(tmp.path(), setup);
-    let pixels = run_and_capture(&mut app, 60);
-    dump("bevy-orb", &pixels);
-    let (n, share) = agreement(&pixels, &reference, 1e-2);
-    println!(
-        "textured: {n} object pixels, {:.2}% within 1% of the runtime's render",
-        share * 100.0
-    );
-    assert!(n > 500, "{n} object pixels");
-    assert!(share >= 0.99, "{share}");
-    let messages = app.world().resource::<OslfMessages>().all();
-    assert!(messages.is_empty(), "{messages:?}");
+    for (params, label) in [(params, "bevy-orb"), (dielectric, "bevy-orb-dielectric")] {
+        let (camera, reference) = reference(&store, &params);
+        let setup = Setup {
+            store: Some("orb.oslf".into()),
+            params,
+            ..setup_for(camera, Extra::None, true)
+        };
+        let mut app = app(tmp.path(), setup);
+        let pixels = run_and_capture(&mut app, 60);
+        dump(label, &pixels);
+        let (n, share) = agreement(&pixels, &reference, 1e-2);
+        println!(
+            "{label}: {n} object pixels, {:.2}% within 1% of the runtime's render",
+            share * 100.0
+        );
+        assert!(n > 500, "{label}: {n} object pixels");
+        assert!(share >= 0.99, "{label}: {share}");
+        let messages = app.world().resource::<OslfMessages>().all();
+        assert!(messages.is_empty(), "{label}: {messages:?}");
+    }
 }

@@ -16,7 +16,7 @@
 //! |---|---|
 //! | `vertices.bin` | the tessellated mesh's `GVertex` array (gbuffer.wgsl `vertices`) |
 //! | `indices.bin` | its triangle indices, u32 |
-//! | `samples.bin` | sample points, object-relative vec4 (shade.wgsl `samples`) |
+//! | `samples.bin` | sample points, object-relative vec4, then each cube's nine spherical-harmonic coefficients (shade.wgsl `samples`) |
 //! | `patches.bin` | per sample map 19 vec4 (shade.wgsl `patches`) |
 //! | `maps.bin` | every sample map's texels, layer after layer (shade.wgsl `sample_maps`) |
 //! | `texture-O-K.bin` | object O's texture of kind K (`base_color`, …), RGBA8 rows |

@@ -57,9 +57,12 @@ fn resources_have_the_sizes_the_manifest_gives() {
         get("maps.bin").len(),
         (m.map_res * m.map_res * m.map_texel_bytes * m.map_count) as usize
     );
+    // The sample points, then each cube's nine spherical-harmonic coefficients (format 1.1).
+    let cubes = web.store().irradiance().map_or(0, <[_]>::len);
+    assert_eq!(cubes as u32, web.store().cube_count());
     assert_eq!(
         get("samples.bin").len(),
-        16 * web.store().sample_points().len()
+        16 * (web.store().sample_points().len() + 9 * cubes)
     );
     assert_eq!(get("vertices.bin").len() % 64, 0);
     for name in web.resource_names() {
