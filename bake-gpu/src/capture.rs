@@ -418,11 +418,11 @@ impl GpuCapture {
         let bytes = self.read(&staging)?;
         self.check("capturing cubes")?;
         let texels: &[TexelOut] = bytemuck::cast_slice(&bytes);
+        let pilot = pilot_samples(settings);
         Ok(jobs
             .iter()
             .zip(texels.chunks_exact(per_cube as usize))
             .map(|(job, cube)| {
-                let pilot = pilot_samples(settings);
                 unpack_cube(
                     cube,
                     res,

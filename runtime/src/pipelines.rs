@@ -282,18 +282,13 @@ pub(crate) struct ShadeKey {
 impl ShadeKey {
     /// The key a frame with uniform `u` needs.
     pub fn of(u: &ShadeUniform) -> Self {
-        let diffuse = if u.terms & 16 != 0 {
-            u.min_metallic < 1.0
-        } else {
-            u.rd > 0.0
-        };
         Self {
             terms: u.terms,
             blend: u.blend,
             source: u.source,
             order: u.order,
-            diffuse,
-            irradiance: diffuse && u.irradiance != u32::MAX,
+            diffuse: u.has_diffuse(),
+            irradiance: u.reads_irradiance(),
             background: u.background,
             depth: u.depth_steps > 0,
             filter: u.mip_levels > 1,

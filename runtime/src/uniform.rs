@@ -137,6 +137,21 @@ pub struct StoreConstants {
 }
 
 impl ShadeUniform {
+    /// The glossy term has a diffuse part (override DIFFUSE): R_d > 0, or in the pbr mode a
+    /// material that is not wholly metallic.
+    pub(crate) fn has_diffuse(&self) -> bool {
+        if self.terms & 16 != 0 {
+            self.min_metallic < 1.0
+        } else {
+            self.rd > 0.0
+        }
+    }
+
+    /// The diffuse part is read from the store's irradiance section (override IRRADIANCE).
+    pub(crate) fn reads_irradiance(&self) -> bool {
+        self.has_diffuse() && self.irradiance != u32::MAX
+    }
+
     /// Packs parameters, camera (in the coordinates the shader works in), image size, store
     /// constants and background for the shader.
     pub fn new(

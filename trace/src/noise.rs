@@ -21,6 +21,14 @@
 /// The summary then suggests more samples.
 pub const VISIBLE_RELATIVE_ERROR: f64 = 0.05;
 
+/// The mean and the unbiased variance (with `n − 1`) of `n` ≥ 2 samples from their sum and sum
+/// of squares; rounding can leave a tiny negative variance for equal samples, taken as 0.
+fn mean_and_variance(sum: f64, sum_sq: f64, n: u32) -> (f64, f64) {
+    let nf = f64::from(n);
+    let mean = sum / nf;
+    (mean, ((sum_sq - nf * mean * mean) / (nf - 1.0)).max(0.0))
+}
+
 /// Rounds of `round` samples an adaptive capture's texel takes after its pilot: enough that
 /// the relative standard error of their mean luminance, `√(s²/n) / mean`, reaches `target` by
 /// the pilot's `n` samples (luminance sum `sum`, sum of squares `sum_sq`; `s²` unbiased, as
@@ -37,9 +45,7 @@ pub fn rounds_after_pilot(
     round: u32,
     (min_rounds, max_rounds): (u32, u32),
 ) -> u32 {
-    let nf = f64::from(n.max(2));
-    let mean = sum / nf;
-    let variance = ((sum_sq - nf * mean * mean) / (nf - 1.0)).max(0.0);
+    let (mean, variance) = mean_and_variance(sum, sum_sq, n.max(2));
     // n s² / (n target² mean²) samples bring the standard error of the mean to target · mean.
     let wanted = variance / (target * target * mean * mean);
     let rounds = if wanted.is_finite() {
@@ -79,9 +85,7 @@ impl NoiseStats {
             return;
         }
         let nf = f64::from(n);
-        let mean = sum / nf;
-        // Rounding can leave a tiny negative variance for equal samples.
-        let variance = ((sum_sq - nf * mean * mean) / (nf - 1.0)).max(0.0);
+        let (mean, variance) = mean_and_variance(sum, sum_sq, n);
         self.texels += 1;
         self.variance_of_means += variance / nf;
         self.squared_means += mean * mean;

@@ -275,8 +275,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         pbr: Vec2,
     ) -> (Vec3, bool) {
         let u = &self.uniform;
-        let (diffuse, irradiance) = self.diffuse_parts();
-        let diffuse = diffuse && !irradiance;
+        let diffuse = u.has_diffuse() && !u.reads_irradiance();
         let mut acc = Vec3::ZERO;
         let mut ok = true;
         let wn = self.blend_weights(c, n);
@@ -313,18 +312,6 @@ impl<C: CubeTexels> Shader<'_, C> {
             }
         }
         (acc / u.m.max(1) as f32, ok)
-    }
-
-    /// Whether the glossy term has a diffuse part (DIFFUSE: R_d > 0, or a pbr material not
-    /// wholly metallic) and whether it is read from the stored irradiance (IRRADIANCE).
-    fn diffuse_parts(&self) -> (bool, bool) {
-        let u = &self.uniform;
-        let diffuse = if u.terms & 16 != 0 {
-            u.min_metallic < 1.0
-        } else {
-            u.rd > 0.0
-        };
-        (diffuse, diffuse && u.irradiance != INVALID_INDEX)
     }
 
     /// Cube `cube`'s stored spherical-harmonic coefficients.
@@ -399,9 +386,10 @@ impl<C: CubeTexels> Shader<'_, C> {
         let b = n.cross(t);
         let nv = n.dot(v);
         let use_env = u.source != 0 || c.count == 0;
-        let diffuse = match self.diffuse_parts() {
-            (true, true) => self.diffuse_irradiance(c, use_env, n, nv, base, pbr),
-            _ => Vec3::ZERO,
+        let diffuse = if u.reads_irradiance() {
+            self.diffuse_irradiance(c, use_env, n, nv, base, pbr)
+        } else {
+            Vec3::ZERO
         };
         if use_env {
             if u.env_cube == INVALID_INDEX {
