@@ -9,8 +9,10 @@ use oslf_format::CubeImage;
 use oslf_gpu::Gpu;
 use oslf_scene::scene::Scene;
 use oslf_trace::capture::{pilot_samples, sampling_plan, CaptureSettings};
+use oslf_trace::denoise::{denoise_cube, TexelVariance};
 use oslf_trace::integrator::RayStats;
-use oslf_trace::noise::NoiseStats;
+use oslf_trace::noise::{variance_of_mean, NoiseStats};
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use crate::error::{GpuBakeError, Result};
@@ -177,6 +179,7 @@ impl GpuCapture {
             resolution: settings.resolution.min(16),
             samples_per_texel: settings.samples_per_texel.min(16),
             target_noise: 0.0,
+            denoise: false,
             distance_channel: false,
             ..*settings
         };
@@ -185,6 +188,7 @@ impl GpuCapture {
             resolution: 1,
             samples_per_texel: 1,
             target_noise: 0.0,
+            denoise: false,
             ..settings
         };
         let first = CubeJob {
@@ -420,17 +424,9 @@ impl GpuCapture {
         let texels: &[TexelOut] = bytemuck::cast_slice(&bytes);
         let pilot = pilot_samples(settings);
         Ok(jobs
-            .iter()
-            .zip(texels.chunks_exact(per_cube as usize))
-            .map(|(job, cube)| {
-                unpack_cube(
-                    cube,
-                    res,
-                    pilot,
-                    settings.distance_channel,
-                    job.sees_objects,
-                )
-            })
+            .par_iter()
+            .zip(texels.par_chunks_exact(per_cube as usize))
+            .map(|(job, cube)| unpack_cube(cube, settings, pilot, job.sees_objects))
             .collect())
     }
 
@@ -595,20 +591,26 @@ impl GpuCapture {
 /// One cube's texels read back: the image, its rays, and the noise of its texels (none for
 /// the environment-map baseline's cube).
 /// `pilot`: the samples of each texel's pilot, spent but not in its value or its `samples`.
+/// Denoised, as the CPU's capture is, where `settings` asks.
 fn unpack_cube(
     texels: &[TexelOut],
-    res: u32,
+    settings: &CaptureSettings,
     pilot: u32,
-    distance: bool,
     noise: bool,
 ) -> CapturedCube {
+    let (res, distance) = (settings.resolution, settings.distance_channel);
     let per_face = (res * res) as usize;
     let mut stats = RayStats::default();
     let mut noise_stats = NoiseStats::default();
     let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
     let mut planes: [Vec<f32>; 6] = Default::default();
+    let mut variance: TexelVariance = Default::default();
     for (face, chunk) in texels.chunks_exact(per_face).enumerate() {
         faces[face] = chunk.iter().map(|t| t.radiance).collect();
+        variance[face] = chunk
+            .iter()
+            .map(|t| variance_of_mean(f64::from(t.lum_sum), f64::from(t.lum_sq), t.samples))
+            .collect();
         if distance {
             planes[face] = chunk.iter().map(|t| t.distance).collect();
         }
@@ -628,11 +630,14 @@ fn unpack_cube(
             }
         }
     }
-    let cube = CubeImage {
+    let mut cube = CubeImage {
         resolution: res,
         faces,
         distance: distance.then_some(planes),
     };
+    if settings.denoise {
+        denoise_cube(&mut cube, &variance);
+    }
     (cube, stats, noise_stats)
 }
 

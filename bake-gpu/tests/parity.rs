@@ -310,6 +310,7 @@ fn gpu_capture_is_the_cpu_capture_texel_by_texel() {
                         resolution: 8,
                         samples_per_texel: 9,
                         target_noise: 0.0,
+                        denoise: false,
                         distance_channel: i == 0,
                         seed: 11 + bounces as u64,
                     };
@@ -357,6 +358,7 @@ fn gpu_and_cpu_captures_agree_within_their_noise_on_independent_seeds() {
                 resolution: 8,
                 samples_per_texel,
                 target_noise,
+                denoise: false,
                 distance_channel: false,
                 seed,
             };

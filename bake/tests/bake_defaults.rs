@@ -98,6 +98,7 @@ fn the_choices_scale_with_the_scene_and_so_do_the_points_and_the_cubes() {
         resolution: 8,
         samples_per_texel: 1,
         target_noise: 0.0,
+        denoise: false,
         distance_channel: true,
         seed: 3,
     };

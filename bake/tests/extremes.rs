@@ -137,6 +137,7 @@ fn compare_with_unit_scene(
         resolution: 8,
         samples_per_texel: 1,
         target_noise: 0.0,
+        denoise: false,
         distance_channel: true,
         seed: 5,
     };
@@ -388,6 +389,7 @@ material = { color = [0.1, 0.42, 0.12] }
         resolution: 1024,
         samples_per_texel: 1,
         target_noise: 0.0,
+        denoise: false,
         distance_channel: false,
         seed: 9,
     };

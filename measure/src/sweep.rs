@@ -102,6 +102,7 @@ fn default_settings() -> BakeSettings {
         sample_map_resolution: 256,
         samples_per_texel: 4,
         target_noise: 0.0,
+        denoise: false,
         placement: Default::default(),
         bounces: 1,
         seed: 0,

@@ -98,6 +98,9 @@ pub struct BakeSettings {
     /// relative standard error of its mean is at most this (0: off, every texel takes
     /// `samples_per_texel`).
     pub target_noise: f32,
+    /// Denoise each captured cube map before it is stored (`oslf_trace::denoise`): its texels
+    /// averaged with the neighbours on the same surface whose difference the noise explains.
+    pub denoise: bool,
     /// Diffuse bounces after the first hit (0 = direct light only).
     pub bounces: u32,
     pub seed: u64,

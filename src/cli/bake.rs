@@ -458,6 +458,11 @@ fn print_noise(r: &BakeReport) {
             n.samples_per_texel,
         ),
     };
+    let level = if n.denoised {
+        format!("{level}, before denoising")
+    } else {
+        level
+    };
     let Some(s) = &n.suggestion else {
         println!(
             "noise          {level}: below the {} that shows",
@@ -465,10 +470,17 @@ fn print_noise(r: &BakeReport) {
         );
         return;
     };
-    println!(
-        "noise          {level}: above {}, it shows as speckle in reflections",
-        percent(n.visible_above)
-    );
+    if n.denoised {
+        println!(
+            "noise          {level}: above {}; the filter averaged it where the contrast is below it, blurring what lies there",
+            percent(n.visible_above)
+        );
+    } else {
+        println!(
+            "noise          {level}: above {}, it shows as speckle in reflections (denoise = true averages it)",
+            percent(n.visible_above)
+        );
+    }
     let factor = f64::from(s.samples_per_texel) / f64::from(n.samples_per_texel.max(1));
     let range = |(a, b): (f64, f64)| format!("{}–{}", duration(a), duration(b));
     let further = if s.samples_per_texel_below_visible > s.samples_per_texel {

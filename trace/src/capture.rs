@@ -6,8 +6,9 @@ use glam::Vec3;
 use oslf_format::CubeImage;
 use rayon::prelude::*;
 
+use crate::denoise::{denoise_cube, TexelVariance};
 use crate::integrator::{Integrator, RayStats};
-use crate::noise::{luminance, rounds_after_pilot, NoiseStats};
+use crate::noise::{luminance, rounds_after_pilot, variance_of_mean, NoiseStats};
 use crate::ray::{Intersector, Ray};
 use oslf_shading::random::{hash_u64, Rng};
 
@@ -84,6 +85,8 @@ pub struct CaptureSettings {
     pub target_noise: f32,
     pub distance_channel: bool,
     pub seed: u64,
+    /// Whether the captured cube is denoised ([`crate::denoise`]) before it is returned.
+    pub denoise: bool,
 }
 
 impl CaptureSettings {
@@ -95,32 +98,48 @@ impl CaptureSettings {
             target_noise: settings.target_noise,
             distance_channel: settings.distance_channel,
             seed: settings.seed,
+            denoise: settings.denoise,
         }
     }
 }
 
-/// A band of [`TILE`] rows of one face: the face, its first row, its texels and (with the
-/// distance channel) their distances.
-type Band<'a> = (usize, u32, &'a mut [[f32; 3]], Option<&'a mut [f32]>);
+/// A band of [`TILE`] rows of one face: the face, its first row, its texels, (with the
+/// distance channel) their distances, and the variance of each texel's value.
+type Band<'a> = (
+    usize,
+    u32,
+    &'a mut [[f32; 3]],
+    Option<&'a mut [f32]>,
+    &'a mut [f32],
+);
 
 /// The faces (and distance planes) of a `res`² cube cut into bands of [`TILE`] rows, face by
 /// face, top to bottom.
 fn bands<'a>(
     faces: &'a mut [Vec<[f32; 3]>; 6],
     distance: &'a mut [Vec<f32>; 6],
+    variance: &'a mut TexelVariance,
     res: u32,
     distance_channel: bool,
 ) -> Vec<Band<'a>> {
     let band = TILE * res as usize;
     let mut bands: Vec<Band> = Vec::new();
-    for (face, (out, dist)) in faces.iter_mut().zip(distance.iter_mut()).enumerate() {
+    let planes = faces
+        .iter_mut()
+        .zip(distance.iter_mut())
+        .zip(variance.iter_mut());
+    for (face, ((out, dist), var)) in planes.enumerate() {
         let dist_bands: Vec<Option<&mut [f32]>> = if distance_channel {
             dist.chunks_mut(band).map(Some).collect()
         } else {
             out.chunks(band).map(|_| None).collect()
         };
-        for (b, (rows, d)) in out.chunks_mut(band).zip(dist_bands).enumerate() {
-            bands.push((face, (b * TILE) as u32, rows, d));
+        let rows = out
+            .chunks_mut(band)
+            .zip(dist_bands)
+            .zip(var.chunks_mut(band));
+        for (b, ((rows, d), v)) in rows.enumerate() {
+            bands.push((face, (b * TILE) as u32, rows, d, v));
         }
     }
     bands
@@ -151,8 +170,14 @@ pub fn capture_cube_with_noise<I: Intersector>(
     let texels = (res as usize) * (res as usize);
     let mut faces: [Vec<[f32; 3]>; 6] = Default::default();
     let mut distance: [Vec<f32>; 6] = Default::default();
-    for (f, d) in faces.iter_mut().zip(distance.iter_mut()) {
+    let mut variance: TexelVariance = Default::default();
+    for ((f, d), v) in faces
+        .iter_mut()
+        .zip(distance.iter_mut())
+        .zip(variance.iter_mut())
+    {
         *f = vec![[0.0; 3]; texels];
+        *v = vec![0.0; texels];
         if settings.distance_channel {
             *d = vec![0.0; texels];
         }
@@ -167,12 +192,18 @@ pub fn capture_cube_with_noise<I: Intersector>(
     let parallel = threads > 1
         && (rayon::current_thread_index().is_some()
             || chunk_cubes(res, settings.distance_channel) < threads);
-    let bands = bands(&mut faces, &mut distance, res, settings.distance_channel);
+    let bands = bands(
+        &mut faces,
+        &mut distance,
+        &mut variance,
+        res,
+        settings.distance_channel,
+    );
     // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
     // traced as one packet (the texels' directions differ by at most a tile), then each path
     // goes on alone. Texel by texel the random numbers are drawn in the order of a texel-by-
     // texel capture (stratum j's jitter, then path j's numbers), so the result is the same.
-    let trace_band = |(face, y0, out, mut dist_out): Band| {
+    let trace_band = |(face, y0, out, mut dist_out, var_out): Band| {
         let mut stats = RayStats::default();
         let mut noise = NoiseStats::default();
         let rows = out.len() / res as usize;
@@ -204,6 +235,7 @@ pub fn capture_cube_with_noise<I: Intersector>(
             for (((&(x, y, i), sum), m), &n) in texels.iter().zip(&sums).zip(&moments).zip(&taken) {
                 noise.add_texel(m.0, m.1, n, m.2);
                 noise.count_samples(n + pilot);
+                var_out[i] = variance_of_mean(m.0, m.1, n);
                 out[i] = (*sum * (1.0 / n as f32)).to_array();
                 if let Some(d_out) = dist_out.as_deref_mut() {
                     let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
@@ -229,11 +261,14 @@ pub fn capture_cube_with_noise<I: Intersector>(
         bands.into_iter().map(trace_band).collect()
     };
     let (stats, noise) = traced.into_iter().fold(Default::default(), sum);
-    let cube = CubeImage {
+    let mut cube = CubeImage {
         resolution: res,
         faces,
         distance: settings.distance_channel.then_some(distance),
     };
+    if settings.denoise {
+        denoise_cube(&mut cube, &variance);
+    }
     (cube, stats, noise)
 }
 
@@ -445,6 +480,7 @@ mod tests {
                 resolution,
                 samples_per_texel,
                 target_noise,
+                denoise: false,
                 distance_channel: true,
                 seed: 17,
             };
@@ -505,6 +541,7 @@ mod tests {
                     resolution: 6,
                     samples_per_texel: 1024,
                     target_noise: target,
+                    denoise: false,
                     distance_channel: false,
                     seed,
                 };
@@ -572,6 +609,7 @@ mod tests {
                         resolution: 6,
                         samples_per_texel,
                         target_noise,
+                        denoise: false,
                         distance_channel: false,
                         seed: 1000 + seed,
                     };
@@ -599,5 +637,50 @@ mod tests {
                 "texel {t:?}: fixed {a}, adaptive {b}, standard error {se}"
             );
         }
+    }
+
+    /// Denoising brings a capture of 4 samples per texel nearer to one of 1 024 where it sees
+    /// a surface (the sun's light and shadow, the sky, a bounce off the ground): its luminance
+    /// error at least a third lower than the raw capture's, its mean within 3 % of the reference's, and its
+    /// distance planes untouched.
+    #[test]
+    fn denoising_brings_few_samples_nearer_to_many() {
+        let (scene, materials, lights, environment) = sphere_scene(0.01);
+        let integrator = Integrator::new(&scene, &materials, &lights, &environment, 1);
+        let origin = Vec3::new(0.3, 0.2, 0.96);
+        let capture = |samples_per_texel, denoise| {
+            let settings = CaptureSettings {
+                resolution: 16,
+                samples_per_texel,
+                target_noise: 0.0,
+                distance_channel: true,
+                seed: 5,
+                denoise,
+            };
+            capture_cube(&integrator, origin, 0, &settings).0
+        };
+        let reference = capture(1024, false);
+        let (raw, filtered) = (capture(4, false), capture(4, true));
+        // Over the texels that see a surface: the sun seen directly is not noise.
+        let planes = reference.distance.clone().unwrap();
+        let lum = |c: &CubeImage| -> Vec<f64> {
+            let texels = c.faces.iter().flatten().zip(planes.iter().flatten());
+            texels
+                .filter(|(_, d)| **d < f32::MAX)
+                .map(|(t, _)| luminance(*t))
+                .collect()
+        };
+        let (r, a, b) = (lum(&reference), lum(&raw), lum(&filtered));
+        let rms = |x: &[f64]| {
+            let s: f64 = x.iter().zip(&r).map(|(p, q)| (p - q).powi(2)).sum();
+            (s / x.len() as f64).sqrt()
+        };
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        let (before, after) = (rms(&a), rms(&b));
+        println!("luminance RMS error against 1 024 samples: raw {before:.4}, denoised {after:.4}");
+        assert!(after < 0.67 * before, "raw {before}, denoised {after}");
+        assert!((mean(&b) / mean(&r) - 1.0).abs() < 0.03);
+        assert_eq!(raw.distance, filtered.distance);
+        assert!(b.iter().all(|v| v.is_finite()));
     }
 }

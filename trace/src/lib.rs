@@ -3,7 +3,7 @@
 //! The CPU ray tracer of oslf over the scene model of `oslf-scene`: one BVH over every triangle
 //! ([`bvh`], watertight ray–triangle test), a path tracer with next-event estimation and MIS
 //! ([`integrator`]), the capture of HDR cube maps at sample points ([`capture`], thesis §3.2)
-//! with their Monte Carlo noise ([`noise`]), path-traced previews through the scene camera
+//! with their Monte Carlo noise ([`noise`]) and its bake-time filter ([`denoise`]), path-traced previews through the scene camera
 //! ([`preview`]) and the ray-traced ground truth of what each runtime mode approximates
 //! ([`ground_truth`], the `oslf truth` command) with the Ashikhmin–Shirley lobe it needs
 //! ([`ashikhmin_shirley`]).
@@ -15,6 +15,7 @@
 //! | [`integrator`] | path tracing with next-event estimation and MIS |
 //! | [`capture`] | cube maps at sample points, deterministic per (seed, cube, face, texel) |
 //! | [`noise`] | the captured cubes' Monte Carlo noise |
+//! | [`denoise`] | the bake-time filter that averages that noise away where it shows |
 //! | [`preview`] | path-traced images through a camera |
 //! | [`ground_truth`] | reference images of the diffuse object, the mirror term, the glossy terms |
 //! | [`ashikhmin_shirley`] | the thesis's glossy BRDF (chapter 5) and its sampling triplets |
@@ -29,6 +30,7 @@
 pub mod ashikhmin_shirley;
 pub mod bvh;
 pub mod capture;
+pub mod denoise;
 pub mod ground_truth;
 pub mod integrator;
 pub mod noise;

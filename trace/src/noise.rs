@@ -29,6 +29,15 @@ fn mean_and_variance(sum: f64, sum_sq: f64, n: u32) -> (f64, f64) {
     (mean, ((sum_sq - nf * mean * mean) / (nf - 1.0)).max(0.0))
 }
 
+/// The variance of the mean of `n` samples' luminance from their sum and sum of squares, as
+/// [`crate::denoise`] weighs texels by; −1 (no estimate) for fewer than two samples.
+pub fn variance_of_mean(sum: f64, sum_sq: f64, n: u32) -> f32 {
+    if n < 2 || !(sum.is_finite() && sum_sq.is_finite()) {
+        return -1.0;
+    }
+    (mean_and_variance(sum, sum_sq, n).1 / f64::from(n)) as f32
+}
+
 /// Rounds of `round` samples an adaptive capture's texel takes after its pilot: enough that
 /// the relative standard error of their mean luminance, `√(s²/n) / mean`, reaches `target` by
 /// the pilot's `n` samples (luminance sum `sum`, sum of squares `sum_sq`; `s²` unbiased, as

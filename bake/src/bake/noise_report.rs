@@ -23,6 +23,9 @@ pub struct NoiseReport {
     pub relative_error: Option<f64>,
     /// Above this, the noise shows ([`VISIBLE_RELATIVE_ERROR`]).
     pub visible_above: f64,
+    /// Whether the cubes were denoised before they were stored (`oslf_trace::denoise`): the
+    /// error above is the capture's, before the filter.
+    pub denoised: bool,
     /// What to raise when it shows; `None` when it does not.
     pub suggestion: Option<NoiseSuggestion>,
 }
@@ -87,6 +90,7 @@ pub(super) fn noise_report(
         texels: noise.texels,
         relative_error: error,
         visible_above: VISIBLE_RELATIVE_ERROR,
+        denoised: capture.denoise,
         suggestion,
     }
 }

@@ -332,6 +332,8 @@ pub(super) struct RawBake {
     pub(super) samples_per_texel: Option<Spanned<u32>>,
     /// The relative standard error each cube texel samples down to (adaptive sampling).
     pub(super) target_noise: Option<Spanned<f64>>,
+    /// Denoise the captured cube maps.
+    pub(super) denoise: Option<bool>,
     pub(super) bounces: Option<Spanned<u32>>,
     pub(super) seed: Option<u64>,
     pub(super) encoding: Option<EncodingName>,
@@ -360,6 +362,7 @@ impl RawBake {
             sample_map_resolution,
             samples_per_texel,
             target_noise,
+            denoise,
             bounces,
             seed,
             encoding,

@@ -11,6 +11,9 @@ use crate::bake_defaults::Unset;
 use crate::error::{BakeError, Result};
 use crate::scene::{BakeSettings, SampleDensity};
 
+/// Whether a bake denoises its cube maps where `[bake] denoise` is not given.
+pub const DENOISE_DEFAULT: bool = true;
+
 impl Ctx<'_> {
     /// The bake settings, where `epsilon` was given (if it was), and which of the settings the
     /// scene chooses ([`crate::bake_defaults`]) the file leaves unset (those hold the former
@@ -137,6 +140,7 @@ impl Ctx<'_> {
             sample_map_resolution: merged.sample_map_resolution.map_or(256, |r| r.0),
             samples_per_texel: spp,
             target_noise,
+            denoise: merged.denoise.unwrap_or(DENOISE_DEFAULT),
             bounces,
             seed: merged.seed.unwrap_or(0),
             encoding,
