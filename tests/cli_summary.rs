@@ -125,10 +125,12 @@ fn the_summary_says_how_noisy_the_cubes_are_and_what_to_raise_at_what_cost() {
         .lines()
         .find(|l| l.starts_with("noise          ±"))
         .unwrap_or_else(|| panic!("no noise line:\n{stdout}"));
+    // Denoised by default: the line says the error is the capture's, before the filter.
     assert!(
-        noise.contains("(4 samples per texel): above 5.0%, it shows"),
+        noise.contains("(4 samples per texel), before denoising: above 5.0%; the filter"),
         "{stdout}"
     );
+    assert_eq!(json["noise"]["denoised"], true, "{json}");
     let hint = stdout
         .lines()
         .find(|l| l.starts_with("hint           raise samples_per_texel to "))
@@ -160,6 +162,16 @@ fn the_summary_says_how_noisy_the_cubes_are_and_what_to_raise_at_what_cost() {
     );
     assert!(!stdout.contains("hint "), "{stdout}");
     assert!(json["noise"]["suggestion"].is_null(), "{json}");
+
+    // Without the filter the cubes keep their speckle, and the line says so.
+    let raw = format!("{}\ndenoise = false", settings(4));
+    let (stdout, json) = bake(&scene(dir, &raw), dir);
+    assert!(
+        stdout.lines().any(|l| l.starts_with("noise          ±")
+            && l.contains("(4 samples per texel): above 5.0%, it shows as speckle")),
+        "{stdout}"
+    );
+    assert_eq!(json["noise"]["denoised"], false, "{json}");
 }
 
 #[test]
