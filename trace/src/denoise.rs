@@ -20,7 +20,10 @@
 //!   two would give, falling off as it exceeds it;
 //! - the texel's value becomes `Σ wⱼ cⱼ / Σ wⱼ` (RGB; its own weight is 1).
 //!
-//! A texel without noise (`V̄ᵢ` = 0: the sky seen directly, a surface every sample agrees on)
+//! `Sᵢⱼ` also holds a floor, `(f Yᵢ)² + (f Yⱼ)²` with f = [`NOISE_FLOOR`], and a texel whose
+//! `V̄ᵢ` is below its own `(f Yᵢ)²` counts as noise-free: rounding (the GPU sums luminance in
+//! f32) then decides nothing. A texel without noise (the sky seen directly, a surface every
+//! sample agrees on)
 //! or without an estimate (fewer than two samples: `V` < 0) keeps its value, and texels without
 //! an estimate are no one's neighbours. The filter trades noise for a bias where the radiance
 //! varies within a window by less than the noise: it flattens such gradients and low-contrast
@@ -35,6 +38,8 @@ use std::f32::consts::FRAC_PI_2;
 
 use oslf_format::CubeImage;
 
+use crate::noise::luminance;
+
 /// Texels on each side of a texel that its filtered value may average: a 5 × 5 window.
 pub const RADIUS: usize = 2;
 /// How far past the noise a difference may go before it stops counting as noise, in the
@@ -42,6 +47,11 @@ pub const RADIUS: usize = 2;
 /// room's teapot at 1, 2, 3 and 4 (docs/measurements.md, "Denoised cube maps"): 2 gains on
 /// both; wider blurs the gazebo's shaded checkerboard, narrower leaves the teapot's speckle.
 pub const RANGE_SCALE: f32 = 2.0;
+/// Noise below this share of a texel's luminance counts as none: such a texel keeps its value,
+/// and the two texels' share is added to every comparison's `S`. It sits above the rounding of
+/// the GPU's f32 luminance sums (whose variance of four nearly equal samples is otherwise
+/// mostly rounding), so that both devices make the same choices.
+pub const NOISE_FLOOR: f32 = 1e-3;
 /// The steepest surface the window follows as one: the distance may change by this many times
 /// a texel's angle per texel of offset (a surface seen about 76° from head-on).
 pub const DEPTH_SLOPE: f32 = 4.0;
@@ -55,7 +65,11 @@ pub fn denoise_cube(cube: &mut CubeImage, variance: &TexelVariance) {
     let res = cube.resolution as usize;
     let theta = FRAC_PI_2 / cube.resolution.max(1) as f32;
     for face in 0..6 {
-        let distance = cube.distance.as_ref().map(|d| d[face].as_slice());
+        let distance = cube
+            .distance
+            .as_ref()
+            .map(|d| d[face].as_slice())
+            .filter(|d| d.len() == res * res);
         let texels = &cube.faces[face];
         let v = &variance[face];
         if texels.len() != res * res || v.len() != res * res {
@@ -66,7 +80,7 @@ pub fn denoise_cube(cube: &mut CubeImage, variance: &TexelVariance) {
             distance,
             theta,
         };
-        let lum: Vec<f32> = texels.iter().map(|c| luminance(*c)).collect();
+        let lum: Vec<f32> = texels.iter().map(|c| luminance(*c) as f32).collect();
         let smoothed: Vec<f32> = (0..res * res)
             .map(|i| window.smoothed_variance(i, v))
             .collect();
@@ -75,11 +89,6 @@ pub fn denoise_cube(cube: &mut CubeImage, variance: &TexelVariance) {
             .collect();
         cube.faces[face] = filtered;
     }
-}
-
-/// Luminance (Rec. 709) of a linear RGB radiance.
-fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// One face's geometry: its size, its distance plane if any, and a texel's angle.
@@ -137,7 +146,8 @@ impl Window<'_> {
 
     /// Texel `i`'s filtered value.
     fn filter(&self, i: usize, texels: &[[f32; 3]], lum: &[f32], vbar: &[f32]) -> [f32; 3] {
-        if !(vbar[i] > 0.0) {
+        let floor = |j: usize| (NOISE_FLOOR * lum[j]).powi(2);
+        if !(vbar[i] > floor(i)) {
             return texels[i];
         }
         let (mut acc, mut wsum) = ([0.0f32; 3], 0.0f32);
@@ -145,7 +155,7 @@ impl Window<'_> {
             if !(vbar[j] >= 0.0) || !self.same_surface(i, j, offset) {
                 return;
             }
-            let s = vbar[i] + vbar[j];
+            let s = vbar[i] + vbar[j] + floor(i) + floor(j);
             let diff = lum[i] - lum[j];
             let excess = (diff * diff - s).max(0.0) / (RANGE_SCALE * RANGE_SCALE * s);
             // exp(−16) ≈ 10⁻⁷: nothing a sum of at most 25 weights of which one is 1 keeps.
