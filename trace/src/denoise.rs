@@ -215,6 +215,15 @@ mod tests {
             .collect()
     }
 
+    /// `clean` plus `sigma` times the normal numbers `z`.
+    fn add_noise(clean: &[[f32; 3]], z: &[f32], sigma: f32) -> Vec<[f32; 3]> {
+        clean
+            .iter()
+            .zip(z)
+            .map(|(c, n)| c.map(|v| v + sigma * n))
+            .collect()
+    }
+
     fn variance(res: u32, face0: Vec<f32>) -> TexelVariance {
         let n = (res * res) as usize;
         let mut v: TexelVariance = Default::default();
@@ -243,11 +252,7 @@ mod tests {
                 [v, v, v]
             })
             .collect();
-        let noisy: Vec<[f32; 3]> = clean
-            .iter()
-            .zip(&z)
-            .map(|(c, n)| c.map(|v| v + sigma * n))
-            .collect();
+        let noisy = add_noise(&clean, &z, sigma);
         let mut c = cube(res, noisy.clone(), Some(vec![2.0; (res * res) as usize]));
         denoise_cube(
             &mut c,
@@ -273,11 +278,7 @@ mod tests {
         let clean: Vec<[f32; 3]> = (0..n)
             .map(|i| if side(i) { [2.0; 3] } else { [0.5; 3] })
             .collect();
-        let noisy: Vec<[f32; 3]> = clean
-            .iter()
-            .zip(&z)
-            .map(|(c, n)| c.map(|v| v + sigma * n))
-            .collect();
+        let noisy = add_noise(&clean, &z, sigma);
         let mut c = cube(res, noisy.clone(), None);
         denoise_cube(&mut c, &variance(res, vec![sigma * sigma; n]));
         for (i, (f, k)) in c.faces[0].iter().zip(&clean).enumerate() {
@@ -289,13 +290,10 @@ mod tests {
         let dist: Vec<f32> = (0..n)
             .map(|i| if i / res as usize >= 8 { 10.0 } else { 1.0 })
             .collect();
-        let mut a = cube(res, flat.clone(), Some(dist));
+        let mut a = cube(res, flat.clone(), Some(dist.clone()));
         let mut b_top = flat.clone();
         b_top[(8 * res) as usize..].fill([100.0; 3]);
-        let dist2: Vec<f32> = (0..n)
-            .map(|i| if i / res as usize >= 8 { 10.0 } else { 1.0 })
-            .collect();
-        let mut b = cube(res, b_top, Some(dist2));
+        let mut b = cube(res, b_top, Some(dist));
         let v = variance(res, vec![sigma * sigma; n]);
         denoise_cube(&mut a, &v);
         denoise_cube(&mut b, &v);
