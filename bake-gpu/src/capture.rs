@@ -607,10 +607,12 @@ fn unpack_cube(
     let mut variance: TexelVariance = Default::default();
     for (face, chunk) in texels.chunks_exact(per_face).enumerate() {
         faces[face] = chunk.iter().map(|t| t.radiance).collect();
-        variance[face] = chunk
-            .iter()
-            .map(|t| variance_of_mean(f64::from(t.lum_sum), f64::from(t.lum_sq), t.samples))
-            .collect();
+        if settings.denoise {
+            variance[face] = chunk
+                .iter()
+                .map(|t| variance_of_mean(f64::from(t.lum_sum), f64::from(t.lum_sq), t.samples))
+                .collect();
+        }
         if distance {
             planes[face] = chunk.iter().map(|t| t.distance).collect();
         }

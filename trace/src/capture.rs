@@ -104,13 +104,14 @@ impl CaptureSettings {
 }
 
 /// A band of [`TILE`] rows of one face: the face, its first row, its texels, (with the
-/// distance channel) their distances, and the variance of each texel's value.
+/// distance channel) their distances, and (when the cube is denoised) the variance of each
+/// texel's value.
 type Band<'a> = (
     usize,
     u32,
     &'a mut [[f32; 3]],
     Option<&'a mut [f32]>,
-    &'a mut [f32],
+    Option<&'a mut [f32]>,
 );
 
 /// The faces (and distance planes) of a `res`² cube cut into bands of [`TILE`] rows, face by
@@ -120,7 +121,7 @@ fn bands<'a>(
     distance: &'a mut [Vec<f32>; 6],
     variance: &'a mut TexelVariance,
     res: u32,
-    distance_channel: bool,
+    settings: &CaptureSettings,
 ) -> Vec<Band<'a>> {
     let band = TILE * res as usize;
     let mut bands: Vec<Band> = Vec::new();
@@ -129,20 +130,29 @@ fn bands<'a>(
         .zip(distance.iter_mut())
         .zip(variance.iter_mut());
     for (face, ((out, dist), var)) in planes.enumerate() {
-        let dist_bands: Vec<Option<&mut [f32]>> = if distance_channel {
-            dist.chunks_mut(band).map(Some).collect()
-        } else {
-            out.chunks(band).map(|_| None).collect()
-        };
-        let rows = out
-            .chunks_mut(band)
-            .zip(dist_bands)
-            .zip(var.chunks_mut(band));
+        let count = out.len().div_ceil(band);
+        let dist_bands = optional_bands(dist, settings.distance_channel, band, count);
+        let var_bands = optional_bands(var, settings.denoise, band, count);
+        let rows = out.chunks_mut(band).zip(dist_bands).zip(var_bands);
         for (b, ((rows, d), v)) in rows.enumerate() {
             bands.push((face, (b * TILE) as u32, rows, d, v));
         }
     }
     bands
+}
+
+/// `plane` in bands of `band` values where `on`, else `count` times `None`.
+fn optional_bands(
+    plane: &mut [f32],
+    on: bool,
+    band: usize,
+    count: usize,
+) -> Vec<Option<&mut [f32]>> {
+    if on {
+        plane.chunks_mut(band).map(Some).collect()
+    } else {
+        (0..count).map(|_| None).collect()
+    }
 }
 
 /// Captures the cube map seen from `origin`. `cube_index` selects the random streams, so a
@@ -177,7 +187,9 @@ pub fn capture_cube_with_noise<I: Intersector>(
         .zip(variance.iter_mut())
     {
         *f = vec![[0.0; 3]; texels];
-        *v = vec![0.0; texels];
+        if settings.denoise {
+            *v = vec![0.0; texels];
+        }
         if settings.distance_channel {
             *d = vec![0.0; texels];
         }
@@ -192,18 +204,12 @@ pub fn capture_cube_with_noise<I: Intersector>(
     let parallel = threads > 1
         && (rayon::current_thread_index().is_some()
             || chunk_cubes(res, settings.distance_channel) < threads);
-    let bands = bands(
-        &mut faces,
-        &mut distance,
-        &mut variance,
-        res,
-        settings.distance_channel,
-    );
+    let bands = bands(&mut faces, &mut distance, &mut variance, res, settings);
     // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
     // traced as one packet (the texels' directions differ by at most a tile), then each path
     // goes on alone. Texel by texel the random numbers are drawn in the order of a texel-by-
     // texel capture (stratum j's jitter, then path j's numbers), so the result is the same.
-    let trace_band = |(face, y0, out, mut dist_out, var_out): Band| {
+    let trace_band = |(face, y0, out, mut dist_out, mut var_out): Band| {
         let mut stats = RayStats::default();
         let mut noise = NoiseStats::default();
         let rows = out.len() / res as usize;
@@ -235,7 +241,9 @@ pub fn capture_cube_with_noise<I: Intersector>(
             for (((&(x, y, i), sum), m), &n) in texels.iter().zip(&sums).zip(&moments).zip(&taken) {
                 noise.add_texel(m.0, m.1, n, m.2);
                 noise.count_samples(n + pilot);
-                var_out[i] = variance_of_mean(m.0, m.1, n);
+                if let Some(v_out) = var_out.as_deref_mut() {
+                    v_out[i] = variance_of_mean(m.0, m.1, n);
+                }
                 out[i] = (*sum * (1.0 / n as f32)).to_array();
                 if let Some(d_out) = dist_out.as_deref_mut() {
                     let dir = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, res));
