@@ -393,8 +393,21 @@ material = { color = [0.1, 0.42, 0.12] }
         distance_channel: false,
         seed: 9,
     };
-    assert_eq!(oslf_trace::capture::chunk_cubes(1024, false), 1);
-    assert_eq!(oslf_trace::capture::chunk_cubes(128, false), 32);
+    use oslf_trace::capture::chunk_cubes;
+    assert_eq!(chunk_cubes(&settings), 1);
+    let small = CaptureSettings {
+        resolution: 128,
+        ..settings
+    };
+    assert_eq!(chunk_cubes(&small), 32);
+    // The variance plane of a denoised capture counts against the chunk's bytes: at 512² a
+    // raw cube is 18 MiB (3 per chunk), a denoised one 24 MiB (2 per chunk).
+    let mid = CaptureSettings {
+        resolution: 512,
+        ..settings
+    };
+    assert_eq!(chunk_cubes(&mid), 3);
+    assert_eq!(chunk_cubes(&CaptureSettings { denoise: true, ..mid }), 2);
     let capture = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

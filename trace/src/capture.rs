@@ -63,10 +63,15 @@ const CHUNK: usize = 32;
 /// rows in parallel instead. At 2048² one cube is 288 MiB as f32; 32 of them would be 9 GiB.
 const CHUNK_BYTES: u64 = 64 << 20;
 
-/// Cubes per chunk for faces of `resolution`² (1 to `CHUNK` = 32).
-pub fn chunk_cubes(resolution: u32, distance_channel: bool) -> usize {
-    let texel_bytes = 12 + if distance_channel { 4 } else { 0 };
-    let cube_bytes = 6 * u64::from(resolution).pow(2) * texel_bytes;
+/// Bytes one texel holds while its cube is captured: f32 RGB, and an f32 each for its distance
+/// (with the distance channel) and its variance (when the cube is denoised).
+pub fn captured_texel_bytes(settings: &CaptureSettings) -> u64 {
+    12 + if settings.distance_channel { 4 } else { 0 } + if settings.denoise { 4 } else { 0 }
+}
+
+/// Cubes per chunk for the capture `settings` (1 to `CHUNK` = 32).
+pub fn chunk_cubes(settings: &CaptureSettings) -> usize {
+    let cube_bytes = 6 * u64::from(settings.resolution).pow(2) * captured_texel_bytes(settings);
     (CHUNK_BYTES / cube_bytes.max(1)).clamp(1, CHUNK as u64) as usize
 }
 
@@ -203,7 +208,7 @@ pub fn capture_cube_with_noise<I: Intersector>(
     let threads = rayon::current_num_threads();
     let parallel = threads > 1
         && (rayon::current_thread_index().is_some()
-            || chunk_cubes(res, settings.distance_channel) < threads);
+            || chunk_cubes(settings) < threads);
     let bands = bands(&mut faces, &mut distance, &mut variance, res, settings);
     // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
     // traced as one packet (the texels' directions differ by at most a tile), then each path

@@ -217,7 +217,7 @@ pub(super) fn capture(
     });
     let chunk = match &device {
         Some(d) => d.batch_cubes(&capture).max(1),
-        None => chunk_cubes(capture.resolution, capture.distance_channel),
+        None => chunk_cubes(&capture),
     };
     let encode = |i: u32, (cube, stats, noise): CapturedCube| {
         let (enc, enc_stats) = oslf_format::encode_cube(&cube, &meta.bake, i)?;

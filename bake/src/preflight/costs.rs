@@ -41,12 +41,6 @@ pub const POINT_BYTES: u64 = 72;
 /// sample_map.rs `build`).
 pub const MAP_TEXEL_BYTES: u64 = 16;
 
-/// Bytes of one captured texel as f32 RGB (capture.rs `capture_cube`), without the distance.
-pub const CUBE_TEXEL_BYTES: u64 = 12;
-
-/// Bytes the f32 distance plane adds per captured texel when `distance_channel` is on.
-pub const DISTANCE_TEXEL_BYTES: u64 = 4;
-
 // --- store -----------------------------------------------------------------------------------
 
 /// Bytes of the store besides the sample maps, points and cube maps: header (256 B), metadata

@@ -4,7 +4,7 @@
 use super::costs::*;
 use oslf_scene::scene::{BakeSettings, SampleDensity, Scene};
 use oslf_scene::tolerance::TESSELLATION_ERROR;
-use oslf_trace::capture::{chunk_cubes, strata_per_side};
+use oslf_trace::capture::{captured_texel_bytes, chunk_cubes, strata_per_side, CaptureSettings};
 
 // ---------------------------------------------------------------------------------------------
 
@@ -257,13 +257,9 @@ pub(super) fn cubes_in_flight_term(s: &BakeSettings, c: &Counts) -> Term {
     // bake/stages.rs: `chunk_cubes` cubes are captured in parallel and all of them, encoded, are
     // collected before they are appended; each holds its f32 faces until encoded
     // (capture.rs), and each encoder a raw and a filtered face (oslf-format cube.rs).
-    let chunk = chunk_cubes(s.cube_resolution, s.distance_channel) as u64;
-    let texel_bytes = CUBE_TEXEL_BYTES
-        + if s.distance_channel {
-            DISTANCE_TEXEL_BYTES
-        } else {
-            0
-        };
+    let capture = CaptureSettings::from_bake(s);
+    let chunk = chunk_cubes(&capture) as u64;
+    let texel_bytes = captured_texel_bytes(&capture);
     // BC6H's encoder also stages each face as padded RGBA binary16 (8 B per texel).
     let staging = if s.encoding.is_block_compressed() {
         8
@@ -282,8 +278,9 @@ pub(super) fn cubes_in_flight_term(s: &BakeSettings, c: &Counts) -> Term {
         name: "cubes in flight",
         bytes: in_flight,
         detail: format!(
-            "cube_resolution = {res}: {chunk} × 6 × {res}² texels × {texel_bytes} B as f32{}, encoded",
-            if s.distance_channel { " with distance" } else { "" }
+            "cube_resolution = {res}: {chunk} × 6 × {res}² texels × {texel_bytes} B as f32{}{}, encoded",
+            if s.distance_channel { " with distance" } else { "" },
+            if s.denoise { " and variance" } else { "" }
         ),
         remedy: "lower cube_resolution".into(),
     }
