@@ -215,7 +215,7 @@ fn resume_with_other_settings_names_each_setting() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let text = format!(
-        "{SCENE}\n[presets.seed9]\nseed = 9\n\n[presets.res4]\ncube_resolution = 4\nseed = 9\n"
+        "{SCENE}\n[presets.seed9]\nseed = 9\n\n[presets.res4]\ncube_resolution = 4\nseed = 9\n\n[presets.raw]\ndenoise = false\n"
     );
     let out = bake_in(dir, &text, &["--max-cubes", "2"]);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -228,6 +228,8 @@ fn resume_with_other_settings_names_each_setting() {
             "res4",
             "seed 0 (this bake: 9), cube_resolution 2 (this bake: 4)",
         ),
+        // Presets that differ only in how the cubes are filtered (the store records it).
+        ("raw", "denoise true (this bake: false)"),
     ] {
         let out = bake_in(dir, &text, &["--resume", "-p", preset]);
         assert!(!out.status.success());

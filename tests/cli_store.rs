@@ -20,7 +20,9 @@ fn info_verify_and_exports() {
     assert!(
         text.contains("rgb9e5")
             && text.contains("bytes/texel")
-            && text.contains("mantissa bits    9"),
+            && text.contains("mantissa bits    9")
+            && text
+                .contains("sampling         the same samples in every texel, cubes not denoised"),
         "{text}"
     );
     let out = bin().args(["info", "--json"]).arg(&path).output().unwrap();
@@ -28,7 +30,24 @@ fn info_verify_and_exports() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["cubes"], 6);
     assert_eq!(v["mantissa_bits"], 9);
-    assert_eq!(v["format"], "1.1");
+    assert_eq!(v["format"], "1.2");
+    assert_eq!(v["bake"]["target_noise"], 0.0);
+    assert_eq!(v["bake"]["denoised"], false);
+    // A format 1.1 store says it does not record how it was sampled.
+    let old =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("format/tests/data/v1.1-rgb9e5.oslf");
+    let out = bin().arg("info").arg(&old).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("format           1.1")
+            && text
+                .contains("sampling         not recorded (format 1.0 and 1.1 stores do not say)"),
+        "{text}"
+    );
+    let out = bin().args(["info", "--json"]).arg(&old).output().unwrap();
+    let w: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(w["bake"]["denoised"].is_null() && w["bake"]["target_noise"].is_null());
     assert_eq!(v["irradiance_bytes"], v["cubes"].as_u64().unwrap() * 108);
     assert_eq!(v["env_cube_index"], 5);
     let out = bin().arg("verify").arg(&path).output().unwrap();

@@ -407,7 +407,13 @@ material = { color = [0.1, 0.42, 0.12] }
         ..settings
     };
     assert_eq!(chunk_cubes(&mid), 3);
-    assert_eq!(chunk_cubes(&CaptureSettings { denoise: true, ..mid }), 2);
+    assert_eq!(
+        chunk_cubes(&CaptureSettings {
+            denoise: true,
+            ..mid
+        }),
+        2
+    );
     let capture = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

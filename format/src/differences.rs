@@ -10,7 +10,7 @@ type ReadSetting = fn(&Header, &StoreMeta) -> String;
 
 /// The settings [`setting_differences`] compares, in the order it names them: the name its
 /// messages use and how to read the value.
-const SETTINGS: [(&str, ReadSetting); 16] = [
+const SETTINGS: [(&str, ReadSetting); 18] = [
     ("scene hash (the scene file's text)", |_, m| {
         let s: String = m.bake.scene_hash[..8]
             .iter()
@@ -26,6 +26,14 @@ const SETTINGS: [(&str, ReadSetting); 16] = [
     }),
     ("samples_per_texel", |_, m| {
         m.bake.samples_per_texel.to_string()
+    }),
+    ("target_noise", |_, m| match &m.bake.sampling {
+        Some(s) => s.target_noise.to_string(),
+        None => "not recorded".into(),
+    }),
+    ("denoise", |_, m| match &m.bake.sampling {
+        Some(s) => s.denoised.to_string(),
+        None => "not recorded".into(),
     }),
     ("bounces", |_, m| m.bake.bounces.to_string()),
     ("epsilon", |_, m| m.bake.epsilon.to_string()),
@@ -150,7 +158,7 @@ pub(crate) fn prefix_difference(old: &[u8], new: &[u8], new_label: &str) -> Stri
         let h = Header::parse(b).ok()?;
         let start = usize::try_from(h.meta.offset).ok()?;
         let end = usize::try_from(h.meta.end()).ok()?;
-        let meta = decode_meta(b.get(start..end)?, h.meta.offset).ok()?;
+        let meta = decode_meta(b.get(start..end)?, h.meta.offset, h.version).ok()?;
         Some((h, meta))
     };
     let (Some((oh, om)), Some((nh, nm))) = (parse(old), parse(new)) else {

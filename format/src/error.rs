@@ -390,8 +390,9 @@ fn unsupported_version(found: u32) -> String {
         )
     } else {
         format!(
-            "unsupported OSLF store version {found:#010x} at header bytes 8..12 (this reader understands formats {} and {})",
+            "unsupported OSLF store version {found:#010x} at header bytes 8..12 (this reader understands formats {}, {} and {})",
             crate::version_name(crate::VERSION_1_0),
+            crate::version_name(crate::VERSION_1_1),
             crate::version_name(crate::VERSION)
         )
     }

@@ -4,7 +4,7 @@ use crate::bytes::{align8, le_u32, le_u64};
 use crate::encoding::Encoding;
 use crate::filter::Filter;
 use crate::sample_map::IndexWidth;
-use crate::{Error, MAGIC, VERSION, VERSION_1_0};
+use crate::{Error, MAGIC, VERSION, VERSION_1_0, VERSION_1_1};
 use xxhash_rust::xxh3::xxh3_64;
 
 /// Bytes of the header.
@@ -64,8 +64,8 @@ impl Section {
 /// The parsed header.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Header {
-    /// The format version (bytes 8..12): [`VERSION`], or [`VERSION_1_0`] for a store without
-    /// an irradiance section.
+    /// The format version (bytes 8..12): [`VERSION`]; [`VERSION_1_1`] for a store without
+    /// the sampling record; [`VERSION_1_0`] for one without an irradiance section either.
     pub version: u32,
     pub flags: u32,
     pub encoding: Encoding,
@@ -213,7 +213,7 @@ impl Header {
             });
         }
         let version = le_u32(b, 8);
-        if version != VERSION && version != VERSION_1_0 {
+        if ![VERSION, VERSION_1_1, VERSION_1_0].contains(&version) {
             return Err(Error::UnsupportedVersion { found: version });
         }
         let stored = le_u64(b, HEADER_CHECKSUM_OFFSET);

@@ -9,18 +9,22 @@
 //! trusts it: a damaged, truncated or hostile file is a typed [`Error`] naming the section and
 //! byte offset, never a panic or an out-of-bounds read.
 //!
-//! **The specification is `docs/format.md`** in the repository: format 1.0, byte by byte,
+//! **The specification is `docs/format.md`** in the repository: format 1.2, byte by byte,
 //! written for a person implementing a reader in another language. This crate is its reference
 //! implementation: where a module implements a part of it, its docs name the section.
 //!
-//! ## Format 1.1
+//! ## Format 1.2
 //!
-//! Header bytes 8..12 hold [`VERSION`] (`0x0001_0001`: major 1, minor 1), the version this
-//! crate writes. Format 1.1 adds the irradiance section ([`irradiance`]: each cube's radiance
-//! in spherical harmonics, projected from its stored texels) to format 1.0, which it still
-//! reads ([`VERSION_1_0`]; [`Store::irradiance`] is `None` there). Stores of the development builds before it (version numbers 1
+//! Header bytes 8..12 hold [`VERSION`] (`0x0001_0002`: major 1, minor 2), the version this
+//! crate writes. Format 1.1 added the irradiance section ([`irradiance`]: each cube's radiance
+//! in spherical harmonics, projected from its stored texels) to format 1.0; format 1.2 adds
+//! the sampling record to the bake parameters ([`Sampling`]: the adaptive sampling's target
+//! and whether the cubes were denoised). Readers read all three ([`VERSION_1_1`],
+//! [`VERSION_1_0`]; [`Store::irradiance`] is `None` in 1.0, [`BakeParams::sampling`] `None`
+//! before 1.2). Stores of the development builds before 1.0 (version numbers 1
 //! to [`LAST_DEVELOPMENT_VERSION`]) are refused with [`Error::UnsupportedVersion`], which
-//! says to bake the scene again; [`StoreWriter::resume`] refuses their partial files alike.
+//! says to bake the scene again; [`StoreWriter::resume`] and [`shard::merge`] continue only
+//! format 1.2 files.
 //!
 //! ## Map of the crate
 //!
@@ -83,7 +87,8 @@ pub use encoding_kind::Encoding;
 pub use error::Error;
 pub use filter::Filter;
 pub use meta::{
-    BakeParams, CameraInfo, MeshInfo, ObjectInfo, ObjectMaterial, Patch, SamplePoint, StoreMeta,
+    BakeParams, CameraInfo, MeshInfo, ObjectInfo, ObjectMaterial, Patch, SamplePoint, Sampling,
+    StoreMeta,
 };
 pub use output_file::{check_not_input, check_output, same_file};
 pub use sample_map::{IndexWidth, SampleMapView, SampleMaps, INVALID_INDEX};
@@ -98,9 +103,12 @@ pub const MAGIC: [u8; 8] = *b"OSLFSTOR";
 /// The first 8 bytes of every shard file ([`shard`]); a store reader that finds them says the
 /// file is a shard.
 pub const SHARD_MAGIC: [u8; 8] = *b"OSLFSHRD";
-/// The format version, header bytes 8..12: format 1.0, major version 1 in the high 16 bits,
-/// minor 0 in the low 16. The only version this crate writes and reads.
-pub const VERSION: u32 = 0x0001_0001;
+/// The format version, header bytes 8..12: format 1.2, major version 1 in the high 16 bits,
+/// minor 2 in the low 16. The version this crate writes.
+pub const VERSION: u32 = 0x0001_0002;
+/// Format 1.1 (header bytes 8..12 `0x0001_0001`): format 1.2 without the sampling record in
+/// the bake parameters. Readers read it; writers write [`VERSION`].
+pub const VERSION_1_1: u32 = 0x0001_0001;
 /// Format 1.0 (header bytes 8..12 `0x0001_0000`): format 1.1 without the irradiance section.
 /// Readers read it; writers write [`VERSION`].
 pub const VERSION_1_0: u32 = 0x0001_0000;
@@ -109,7 +117,7 @@ pub const VERSION_1_0: u32 = 0x0001_0000;
 /// bake the scene again.
 pub const LAST_DEVELOPMENT_VERSION: u32 = 8;
 
-/// `version` as "major.minor" (`VERSION` is "1.1").
+/// `version` as "major.minor" (`VERSION` is "1.2").
 pub fn version_name(version: u32) -> String {
     format!("{}.{}", version >> 16, version & 0xffff)
 }

@@ -154,6 +154,19 @@ pub struct BakeParams {
     /// RGB9E5 mantissa bits kept per channel, 1..=9 ([`crate::encoding::quantize_rgb9e5`],
     /// applied by [`crate::encode_cube`]); 9 (lossless) for the other encodings.
     pub mantissa_bits: u32,
+    /// How each cube's texels were sampled and filtered (format 1.2); `None` in a store of
+    /// format 1.0 or 1.1, which does not record it. Writers require it.
+    pub sampling: Option<Sampling>,
+}
+
+/// How a bake sampled and filtered its cubes' texels (format 1.2's sampling record).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sampling {
+    /// The relative standard error each texel sampled down to, in (0, 1]; 0 where every
+    /// texel took `samples_per_texel` samples.
+    pub target_noise: f32,
+    /// Whether each cube was denoised before it was stored.
+    pub denoised: bool,
 }
 
 impl Default for BakeParams {
@@ -171,6 +184,7 @@ impl Default for BakeParams {
             zstd_level: 3,
             scene_hash: [0; 32],
             mantissa_bits: RGB9E5_FULL_MANTISSA_BITS,
+            sampling: Some(Sampling::default()),
         }
     }
 }
@@ -259,6 +273,12 @@ pub(crate) fn encode_meta(meta: &StoreMeta) -> Vec<u8> {
     w.u32(u32::from(meta.has_env_cube));
     w.bytes(&b.scene_hash);
     w.u32(b.mantissa_bits);
+    // Format 1.2's sampling record; a meta without one is refused by the writer
+    // (`Prefix::build`) before it is encoded.
+    if let Some(s) = &b.sampling {
+        w.f32(s.target_noise);
+        w.u32(u32::from(s.denoised));
+    }
     match &meta.camera {
         Some(c) => {
             w.u32(1);
@@ -328,13 +348,13 @@ fn bad(offset: u64, detail: impl Into<String>) -> Error {
     }
 }
 
-/// Parses and validates the metadata section; `base` is its byte offset in the file (for
-/// error messages).
-pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
+/// Parses and validates the metadata section of a store of format `version` (the header's);
+/// `base` is its byte offset in the file (for error messages).
+pub(crate) fn decode_meta(bytes: &[u8], base: u64, version: u32) -> Result<StoreMeta, Error> {
     let mut r = ByteReader::new(bytes, base, "metadata");
     let object_count = r.u32()? as usize;
     let patch_count = r.u32()? as usize;
-    let (bake, has_env_cube) = decode_bake_params(&mut r)?;
+    let (bake, has_env_cube) = decode_bake_params(&mut r, version)?;
     let camera = decode_camera(&mut r)?;
     if object_count > r.remaining() / OBJECT_MIN_BYTES {
         return Err(bad(
@@ -378,8 +398,9 @@ pub(crate) fn decode_meta(bytes: &[u8], base: u64) -> Result<StoreMeta, Error> {
     })
 }
 
-/// Parses and validates the bake parameters and the environment-cube flag.
-fn decode_bake_params(r: &mut ByteReader<'_>) -> Result<(BakeParams, bool), Error> {
+/// Parses and validates the bake parameters and the environment-cube flag of a store of
+/// format `version` (the sampling record from 1.2 on).
+fn decode_bake_params(r: &mut ByteReader<'_>, version: u32) -> Result<(BakeParams, bool), Error> {
     let at = r.offset();
     let epsilon = r.finite_f32("epsilon")?;
     if epsilon <= 0.0 {
@@ -430,6 +451,11 @@ fn decode_bake_params(r: &mut ByteReader<'_>) -> Result<(BakeParams, bool), Erro
     let at = r.offset();
     let mantissa_bits = r.u32()?;
     check_mantissa_bits(encoding, mantissa_bits).map_err(|detail| bad(at, detail))?;
+    let sampling = if version >= crate::VERSION {
+        Some(decode_sampling(r)?)
+    } else {
+        None
+    };
     let bake = BakeParams {
         epsilon,
         phi_samplemap_deg,
@@ -443,8 +469,26 @@ fn decode_bake_params(r: &mut ByteReader<'_>) -> Result<(BakeParams, bool), Erro
         zstd_level,
         scene_hash,
         mantissa_bits,
+        sampling,
     };
     Ok((bake, has_env_cube))
+}
+
+/// Parses and validates format 1.2's sampling record.
+fn decode_sampling(r: &mut ByteReader<'_>) -> Result<Sampling, Error> {
+    let at = r.offset();
+    let target_noise = r.finite_f32("target_noise")?;
+    if !(target_noise == 0.0 || (target_noise > 0.0 && target_noise <= 1.0)) {
+        return Err(bad(
+            at,
+            format!("target_noise {target_noise} must be 0 or in (0, 1]"),
+        ));
+    }
+    let denoised = r.bool("denoised")?;
+    Ok(Sampling {
+        target_noise,
+        denoised,
+    })
 }
 
 /// Parses and validates the camera record (all zero when there is none).

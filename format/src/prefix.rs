@@ -30,9 +30,15 @@ impl Prefix {
     ) -> Result<Self, Error> {
         let meta_offset = HEADER_BYTES as u64;
         check_textures(meta, meta_offset)?;
+        if meta.bake.sampling.is_none() {
+            return Err(Error::InvalidMetadata {
+                offset: meta_offset,
+                detail: "the bake parameters have no sampling record (target_noise, denoised), which format 1.2 stores hold".into(),
+            });
+        }
         let meta_bytes = encode_meta(meta);
         // Validate by decoding what was encoded (same checks as the reader).
-        let decoded = decode_meta(&meta_bytes, meta_offset)?;
+        let decoded = decode_meta(&meta_bytes, meta_offset, crate::VERSION)?;
         if decoded != *meta {
             return Err(Error::InvalidMetadata {
                 offset: meta_offset,

@@ -153,7 +153,7 @@ impl PartialReader<'_> {
                 old.meta.offset, old.meta_checksum
             )));
         }
-        let old_meta = decode_meta(&old_meta_bytes, old.meta.offset)
+        let old_meta = decode_meta(&old_meta_bytes, old.meta.offset, old.version)
             .map_err(|e| self.mismatch(format!("its metadata section is damaged: {e}")))?;
         let differences = setting_differences(old, &old_meta, new_header, meta, "this bake");
         if !differences.is_empty() {
@@ -363,6 +363,10 @@ fn parse_partial_header(bytes: &[u8; HEADER_BYTES]) -> Result<Header, String> {
             match version {
                 1..=crate::LAST_DEVELOPMENT_VERSION =>
                     format!("of development format version {version}, from before format 1.0"),
+                crate::VERSION_1_0 | crate::VERSION_1_1 => format!(
+                    "of format {}, written by an earlier oslf",
+                    crate::version_name(version)
+                ),
                 _ => format!("of format version {version:#010x}"),
             },
             crate::version_name(VERSION)

@@ -101,7 +101,7 @@ fn a_version_5_store_is_refused_saying_bake_again() {
 fn each_development_version_number_is_refused_before_the_rest_is_read() {
     let good = store_bytes(Spec::default());
     assert_eq!(good[8..12], VERSION.to_le_bytes());
-    assert_eq!(version_name(VERSION), "1.1");
+    assert_eq!(version_name(VERSION), "1.2");
     for v in 1..=LAST_DEVELOPMENT_VERSION {
         let mut b = good.clone();
         b[8..12].copy_from_slice(&v.to_le_bytes());

@@ -26,5 +26,7 @@ mod mapped;
 mod mesh;
 #[path = "round_trip.rs"]
 mod round_trip;
+#[path = "sampling.rs"]
+mod sampling;
 #[path = "writer.rs"]
 mod writer;

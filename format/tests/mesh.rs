@@ -58,7 +58,8 @@ fn reseal_all(b: &mut [u8]) {
 /// Byte offset of object `index`'s kind field, walking the object records.
 fn kind_offset(b: &[u8], meta: &StoreMeta, index: usize) -> usize {
     let h = Header::parse(b).unwrap();
-    let mut off = h.meta.offset as usize + 8 + 80 + 4 + 44;
+    // Counts, bake parameters, mantissa_bits, the sampling record (format 1.2), the camera.
+    let mut off = h.meta.offset as usize + 8 + 80 + 4 + 8 + 44;
     for o in &meta.objects[..index] {
         off += 4 + o.name.len() + 64 + 12 + 8 + 4;
         if let Some(m) = &o.mesh {

@@ -173,6 +173,21 @@ fn resume_with_different_inputs_is_a_mismatch() {
             if differences[0] == "encoding rgb9e5 (this bake: rgba16f)"),
         "{e}"
     );
+    // How the cubes were sampled and filtered (format 1.2's sampling record): a bake that
+    // would denoise, or sample to a target, does not continue one that did not.
+    let mut meta = f.meta.clone();
+    meta.bake.sampling = Some(Sampling {
+        target_noise: 0.1,
+        denoised: true,
+    });
+    let e = StoreWriter::resume(&path, &meta, &f.points, &f.maps)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(&e, Error::ResumeSettings { differences, .. }
+            if differences == &["target_noise 0 (this bake: 0.1)", "denoise false (this bake: true)"]),
+        "{e}"
+    );
     // Several settings at once, each named.
     let mut meta = f.meta.clone();
     meta.bake.cube_resolution = 16;
@@ -520,15 +535,21 @@ fn a_damaged_partial_is_refused_with_a_reason() {
     b[..8].copy_from_slice(b"NOTOSLF!");
     assert!(refused(&b).starts_with("it is not an OSLF store"));
     let mut b = good.clone();
+    b[8..12].copy_from_slice(&VERSION_1_1.to_le_bytes());
+    assert_eq!(
+        refused(&b),
+        "it is of format 1.1, written by an earlier oslf, and this writer continues only format 1.2 files"
+    );
+    let mut b = good.clone();
     b[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
     assert_eq!(
         refused(&b),
-        "it is of format version 0x00010002, and this writer continues only format 1.1 files"
+        "it is of format version 0x00010003, and this writer continues only format 1.2 files"
     );
     b[8..12].copy_from_slice(&8u32.to_le_bytes());
     assert_eq!(
         refused(&b),
-        "it is of development format version 8, from before format 1.0, and this writer continues only format 1.1 files"
+        "it is of development format version 8, from before format 1.0, and this writer continues only format 1.2 files"
     );
     let mut b = good.clone();
     b[30] ^= 1;

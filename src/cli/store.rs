@@ -420,6 +420,27 @@ impl Sizes {
     }
 }
 
+/// The text `store info` prints for the sampling record.
+fn sampling_line(sampling: Option<oslf_format::Sampling>) -> String {
+    let Some(s) = sampling else {
+        return "not recorded (format 1.0 and 1.1 stores do not say)".into();
+    };
+    let samples = if s.target_noise > 0.0 {
+        format!(
+            "each texel sampled down to a relative error of {} (samples per texel the cap)",
+            s.target_noise
+        )
+    } else {
+        "the same samples in every texel".into()
+    };
+    let filter = if s.denoised {
+        "cubes denoised"
+    } else {
+        "cubes not denoised"
+    };
+    format!("{samples}, {filter}")
+}
+
 /// `store info --json`.
 fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
     let h = s.header();
@@ -475,6 +496,9 @@ fn info_json(path: &Path, s: &Store, z: &Sizes) -> serde_json::Value {
             "epsilon": b.epsilon, "phi_samplemap_deg": b.phi_samplemap_deg,
             "samples_per_texel": b.samples_per_texel, "bounces": b.bounces,
             "seed": b.seed, "zstd_level": b.zstd_level, "scene_hash": z.scene_hash,
+            // Format 1.2's sampling record; both null in a store of format 1.0 or 1.1.
+            "target_noise": b.sampling.map(|s| s.target_noise),
+            "denoised": b.sampling.map(|s| s.denoised),
         },
         "camera": m.camera.as_ref().map(|c| serde_json::json!({
             "position": c.position, "target": c.target, "up": c.up, "vfov_deg": c.vfov_deg,
@@ -603,6 +627,7 @@ fn print_info(path: &Path, s: &Store, z: &Sizes) {
         "bake             epsilon {}, phi {} deg, {} spp, {} bounces, seed {}, zstd level {}",
         b.epsilon, b.phi_samplemap_deg, b.samples_per_texel, b.bounces, b.seed, b.zstd_level
     );
+    println!("sampling         {}", sampling_line(b.sampling));
     println!("scene hash       {}", z.scene_hash);
     if let Some(c) = &m.camera {
         println!(

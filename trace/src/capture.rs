@@ -206,9 +206,8 @@ pub fn capture_cube_with_noise<I: Intersector>(
     // the cubes still running instead of waiting for them at the end of the chunk. Each texel
     // has its own random stream, so the result does not depend on the split.
     let threads = rayon::current_num_threads();
-    let parallel = threads > 1
-        && (rayon::current_thread_index().is_some()
-            || chunk_cubes(settings) < threads);
+    let parallel =
+        threads > 1 && (rayon::current_thread_index().is_some() || chunk_cubes(settings) < threads);
     let bands = bands(&mut faces, &mut distance, &mut variance, res, settings);
     // A band's texels in tiles of up to TILE × TILE: sample j of every texel of a tile is
     // traced as one packet (the texels' directions differ by at most a tile), then each path

@@ -70,6 +70,10 @@ pub fn store_meta(scene: &Scene, surfaces: &Surfaces) -> StoreMeta {
             zstd_level: s.zstd_level,
             scene_hash: scene.hash,
             mantissa_bits: s.mantissa_bits,
+            sampling: Some(oslf_format::Sampling {
+                target_noise: s.target_noise,
+                denoised: s.denoise,
+            }),
         },
         camera: scene.camera.as_ref().map(|c| CameraInfo {
             position: c.position.to_array(),

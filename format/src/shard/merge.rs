@@ -100,6 +100,13 @@ fn read_prefix(s: &mut OpenShard) -> Result<Vec<u8>, Error> {
 /// and the metadata.
 fn check_prefix(prefix: &[u8]) -> Result<(Header, StoreMeta), String> {
     let h = Header::parse(prefix).map_err(|e| format!("its store header is damaged: {e}"))?;
+    if h.version != crate::VERSION {
+        return Err(format!(
+            "its store header is of format {}, and this oslf merges only format {} shards: bake the shards again",
+            crate::version_name(h.version),
+            crate::version_name(crate::VERSION)
+        ));
+    }
     if h.is_complete() {
         return Err(format!(
             "its store header is not an unfinished store (flags {:#x})",
@@ -132,6 +139,7 @@ fn check_prefix(prefix: &[u8]) -> Result<(Header, StoreMeta), String> {
     let meta = decode_meta(
         &prefix[h.meta.offset as usize..h.meta.end() as usize],
         h.meta.offset,
+        h.version,
     )
     .map_err(|e| format!("its metadata is damaged: {e}"))?;
     Ok((h, meta))

@@ -392,7 +392,7 @@ impl Store {
         let meta_bytes = backing.read(h.meta)?;
         let meta_bytes = &meta_bytes[..];
         check_sum("metadata", meta_bytes, h.meta.offset, h.meta_checksum)?;
-        let meta = decode_meta(meta_bytes, h.meta.offset)?;
+        let meta = decode_meta(meta_bytes, h.meta.offset, h.version)?;
         check_against_meta(h, &meta)?;
         check_counts(h)?;
 

@@ -596,6 +596,45 @@ fn crafted_mantissa_bits_are_rejected() {
     }
 }
 
+/// Format 1.2's sampling record (metadata bytes 92..100, after mantissa_bits): a target out
+/// of (0, 1] or not finite, or a denoised flag other than 0 or 1, is refused at its offset.
+#[test]
+fn a_crafted_sampling_record_is_rejected() {
+    let at = HEADER_BYTES + 8 + 84;
+    let sampling = open(&good()).unwrap().meta().bake.sampling.unwrap();
+    assert_eq!(
+        f32::from_le_bytes(good()[at..at + 4].try_into().unwrap()),
+        sampling.target_noise
+    );
+    let cases: [(usize, u32, &str); 5] = [
+        (at, 1.5f32.to_bits(), "(0, 1]"),
+        (at, (-0.1f32).to_bits(), "(0, 1]"),
+        (at, f32::NAN.to_bits(), "target_noise"),
+        (at, f32::INFINITY.to_bits(), "target_noise"),
+        (at + 4, 2, "denoised"),
+    ];
+    for (off, value, says) in cases {
+        let mut b = good();
+        put_u32(&mut b, off, value);
+        reseal_all(&mut b);
+        match open(&b) {
+            Err(Error::InvalidMetadata { offset, detail }) => {
+                assert_eq!(offset, off as u64, "{detail}");
+                assert!(detail.contains(says), "{detail}");
+            }
+            other => panic!("{value:#x} at {off}: {:?}", other.err()),
+        }
+    }
+    // Both ends of the range are stores.
+    for target in [1.0f32, 1e-6] {
+        let mut b = good();
+        put_u32(&mut b, at, target.to_bits());
+        reseal_all(&mut b);
+        let s = open(&b).unwrap();
+        assert_eq!(s.meta().bake.sampling.unwrap().target_noise, target);
+    }
+}
+
 #[test]
 fn zip_bomb_frames_are_rejected() {
     // A frame that decompresses to more than the declared raw size (with checksums fixed).
