@@ -96,11 +96,7 @@ fn a_format_1_0_store_reads_without_irradiance() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v1.0-rgb9e5.oslf");
     let bytes = std::fs::read(&path).unwrap();
     assert_eq!(bytes[8..12], VERSION_1_0.to_le_bytes());
-    for store in [
-        Store::open(&path).unwrap(),
-        Store::from_bytes(&bytes).unwrap(),
-        Store::open_mapped(&path).unwrap(),
-    ] {
+    for store in each_reader(&path) {
         assert_eq!(store.header().version, VERSION_1_0);
         assert!(store.irradiance().is_none());
         assert_eq!(store.cube_count(), 25);

@@ -12,11 +12,7 @@ fn a_format_1_1_store_reads_without_a_sampling_record() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/v1.1-rgb9e5.oslf");
     let bytes = std::fs::read(&path).unwrap();
     assert_eq!(bytes[8..12], VERSION_1_1.to_le_bytes());
-    for store in [
-        Store::open(&path).unwrap(),
-        Store::from_bytes(&bytes).unwrap(),
-        Store::open_mapped(&path).unwrap(),
-    ] {
+    for store in each_reader(&path) {
         assert_eq!(store.header().version, VERSION_1_1);
         assert_eq!(store.meta().bake.sampling, None);
         assert_eq!(store.meta().bake.seed, 3);
@@ -49,11 +45,7 @@ fn the_sampling_record_round_trips() {
         write(&path, &f);
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(bytes[8..12], VERSION.to_le_bytes());
-        for store in [
-            Store::open(&path).unwrap(),
-            Store::from_bytes(&bytes).unwrap(),
-            Store::open_mapped(&path).unwrap(),
-        ] {
+        for store in each_reader(&path) {
             assert_eq!(store.meta().bake.sampling, Some(sampling));
             assert_eq!(store.meta(), &f.meta);
         }

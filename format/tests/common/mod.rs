@@ -215,6 +215,17 @@ pub fn write(path: &Path, f: &Fixture) -> StoreSummary {
     w.finish().expect("finish")
 }
 
+/// The store at `path` as each of the three readers opens it: positioned reads, in memory and
+/// memory-mapped.
+pub fn each_reader(path: &Path) -> [Store; 3] {
+    let bytes = std::fs::read(path).expect("read");
+    [
+        Store::open(path).expect("open"),
+        Store::from_bytes(&bytes).expect("from_bytes"),
+        Store::open_mapped(path).expect("open_mapped"),
+    ]
+}
+
 /// Writes the fixture and returns the store's bytes.
 pub fn store_bytes(spec: Spec) -> Vec<u8> {
     let f = fixture(spec);
