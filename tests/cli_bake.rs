@@ -386,6 +386,7 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
     for key in [
         "chosen: epsilon = 0.00",
         "chosen: object \"Can\": sample_spacing = 0.00",
+        "chosen: placement = \"parallax\": the points crowd where what they see is near",
         "chosen: cube_resolution = 16",
         "chosen: samples_per_texel = 16",
     ] {
@@ -406,6 +407,6 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let chosen = report["chosen"].as_array().unwrap();
-    assert_eq!(chosen.len(), 4, "{chosen:?}");
+    assert_eq!(chosen.len(), 5, "{chosen:?}");
     assert!(chosen[0].as_str().unwrap().starts_with("epsilon = "));
 }

@@ -9,7 +9,7 @@ use std::path::Path;
 use glam::Vec3;
 use oslf_bake::sample_points::{self, Surfaces};
 use oslf_scene::bake_defaults::{length_decimals, object_size, EPSILON_PER_SIZE, SPACING_PER_SIZE};
-use oslf_scene::scene::Scene;
+use oslf_scene::scene::{PointPlacement, Scene};
 use oslf_trace::capture::{capture_cube, CaptureSettings};
 use oslf_trace::integrator::Integrator;
 
@@ -82,10 +82,13 @@ fn the_choices_scale_with_the_scene_and_so_do_the_points_and_the_cubes() {
     let keys: Vec<&str> = unit.bake_choices.iter().map(|c| c.key).collect();
     assert_eq!(
         keys,
-        ["epsilon", "sample_spacing"],
+        ["epsilon", "sample_spacing", "placement"],
         "{:?}",
         unit.bake_choices
     );
+    // The placement is chosen with the density: parallax, at every scale (its distances
+    // count relative to their typical value, so its points scale with the scene).
+    assert_eq!(unit.bake.placement, PointPlacement::Parallax);
 
     let place = |scene: &Scene| {
         let geometry = crate::extremes::geometry(scene);
@@ -155,16 +158,17 @@ fn the_choices_scale_with_the_scene_and_so_do_the_points_and_the_cubes() {
             unit_points.points.len()
         );
 
-        // The same cubes at the first points (the same random streams).
+        // The same cubes at the first points in the same relative place (the same random
+        // streams).
         let integrator = Integrator::for_scene(&scaled, &geometry);
         let (mut texels, mut agree) = (0, 0);
-        for (i, (a, b)) in points
-            .points
-            .iter()
-            .zip(&unit_points.points)
-            .take(6)
-            .enumerate()
-        {
+        let pairs = unit_points.points.iter().filter_map(|b| {
+            let a = points.points.iter().find(|a| {
+                (Vec3::from(a.position) / s - Vec3::from(b.position)).length() <= 1e-4 * size
+            })?;
+            Some((a, b))
+        });
+        for (i, (a, b)) in pairs.take(6).enumerate() {
             let (ca, _) = capture_cube(&integrator, Vec3::from(a.position), i as u32, &settings);
             let (cb, _) = capture_cube(
                 &unit_integrator,
@@ -246,15 +250,16 @@ fn the_lobe_sets_the_spacing_the_cube_resolution_and_the_samples() {
             [
                 "epsilon",
                 "sample_spacing",
+                "placement",
                 "cube_resolution",
                 "samples_per_texel"
             ]
         );
     }
     assert!(
-        rough.bake_choices[2].why.contains("roughness 0.600"),
+        rough.bake_choices[3].why.contains("roughness 0.600"),
         "{}",
-        rough.bake_choices[2]
+        rough.bake_choices[3]
     );
     // What the file sets stays.
     let set = load(&scene_text(

@@ -186,7 +186,7 @@ impl std::fmt::Display for BakeChoice {
 /// How the sample points are spread over the surfaces.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PointPlacement {
-    /// Evenly by area (the thesis's; the default).
+    /// Evenly by area (the thesis's; the default where the file gives a density).
     #[default]
     Uniform,
     /// Denser where the surroundings are near: a reflection's parallax between two points

@@ -120,7 +120,11 @@ pub fn fixture(spec: Spec) -> Fixture {
             scene_hash: std::array::from_fn(|i| i as u8 ^ spec.seed as u8),
             mantissa_bits: spec.mantissa_bits,
             sampling: Some(Sampling {
-                target_noise: if spec.seed.is_multiple_of(3) { 0.05 } else { 0.0 },
+                target_noise: if spec.seed.is_multiple_of(3) {
+                    0.05
+                } else {
+                    0.0
+                },
                 denoised: spec.seed.is_multiple_of(2),
             }),
         },

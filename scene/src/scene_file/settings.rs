@@ -159,6 +159,7 @@ fn unset(merged: &RawBake) -> Unset {
     Unset {
         epsilon: merged.epsilon.is_none(),
         density: merged.sample_count.is_none() && merged.sample_spacing.is_none(),
+        placement: merged.placement.is_none(),
         cube_resolution: merged.cube_resolution.is_none(),
         samples_per_texel: merged.samples_per_texel.is_none(),
         store_budget: merged.store_budget_mb.map(|b| f64::from(b.0) * 1e6),
