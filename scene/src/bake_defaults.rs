@@ -172,7 +172,7 @@ pub fn choose(
 
 /// The placement chosen with the density: parallax, the points closer together where what
 /// they see is near (docs/measurements.md, "Parallax placement chosen with the density": on the
-/// can over three seeds 0.58–0.61 of the better split sum against uniform's 0.60–0.68).
+/// can over three seeds 0.58–0.62 of the better split sum against uniform's 0.60–0.68).
 fn placement_choice() -> BakeChoice {
     BakeChoice {
         key: "placement",
