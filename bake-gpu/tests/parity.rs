@@ -333,6 +333,15 @@ fn gpu_capture_is_the_cpu_capture_texel_by_texel() {
     }
 }
 
+/// Cube `index` at the first origin, which sees the objects.
+fn first_origin_job(index: u32) -> CubeJob {
+    CubeJob {
+        origin: ORIGINS[0],
+        index,
+        sees_objects: true,
+    }
+}
+
 /// The GPU's cubes are denoised as the CPU's are (the same `oslf_trace::denoise`, run on the
 /// read-back texels, with variances from the GPU's f32 luminance sums): the denoised captures
 /// agree texel by texel as the raw ones do, and the filter changed the GPU's cube. (Before the
@@ -344,11 +353,7 @@ fn gpu_capture_is_denoised_as_the_cpu_capture_is() {
     for case in cases() {
         let bounces = 1;
         let d = devices(&case, bounces);
-        let job = CubeJob {
-            origin: ORIGINS[0],
-            index: 5,
-            sees_objects: true,
-        };
+        let job = first_origin_job(5);
         let settings = |denoise| CaptureSettings {
             resolution: 16,
             samples_per_texel: 4,
@@ -378,11 +383,7 @@ fn gpu_and_cpu_captures_agree_within_their_noise_on_independent_seeds() {
     }) {
         let bounces = 1;
         let d = devices(&case, bounces);
-        let job = CubeJob {
-            origin: ORIGINS[0],
-            index: 4,
-            sees_objects: true,
-        };
+        let job = first_origin_job(4);
         // Per device, per block: the block means of each seed.
         let mut runs: [Vec<Vec<f64>>; 2] = Default::default();
         let mut rays = [0u64; 2];

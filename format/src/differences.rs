@@ -27,13 +27,11 @@ const SETTINGS: [(&str, ReadSetting); 18] = [
     ("samples_per_texel", |_, m| {
         m.bake.samples_per_texel.to_string()
     }),
-    ("target_noise", |_, m| match &m.bake.sampling {
-        Some(s) => s.target_noise.to_string(),
-        None => "not recorded".into(),
+    ("target_noise", |_, m| {
+        recorded(m.bake.sampling.map(|s| s.target_noise))
     }),
-    ("denoise", |_, m| match &m.bake.sampling {
-        Some(s) => s.denoised.to_string(),
-        None => "not recorded".into(),
+    ("denoise", |_, m| {
+        recorded(m.bake.sampling.map(|s| s.denoised))
     }),
     ("bounces", |_, m| m.bake.bounces.to_string()),
     ("epsilon", |_, m| m.bake.epsilon.to_string()),
@@ -56,6 +54,12 @@ const SETTINGS: [(&str, ReadSetting); 18] = [
         None => "none".into(),
     }),
 ];
+
+/// A setting of format 1.2's sampling record as the messages print it: "not recorded" in a
+/// store of an earlier format.
+fn recorded(value: Option<impl ToString>) -> String {
+    value.map_or_else(|| "not recorded".into(), |v| v.to_string())
+}
 
 /// How a field compared by [`setting_differences`] reads from an object.
 type ReadObjectField = fn(&ObjectInfo) -> String;
