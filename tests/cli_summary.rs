@@ -12,9 +12,22 @@ use common::oslf;
 const BOX_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
 f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
 
+/// A wide slab whose top is the box's bottom plane: the box rests on it.
+const RESTING: &str = "size = [6.0, 6.0, 0.2]\ntransform = { translate = [0.0, 0.0, -0.1] }";
+
+/// A slab of the box's footprint, its top ε/2 under the box: the box hovers over it, and views
+/// from the side reach the edges of its bottom.
+const HOVERING: &str = "size = [1.0, 1.0, 0.2]\ntransform = { translate = [0.0, 0.0, -0.125] }";
+
 /// The box resting on a slab (its bottom in the slab's top plane) under a low sun, with
 /// `bake` settings.
 fn scene(dir: &Path, bake: &str) -> std::path::PathBuf {
+    scene_over(dir, RESTING, bake)
+}
+
+/// The box over `slab` (the slab's `size` and `transform`) under a low sun, with `bake`
+/// settings.
+fn scene_over(dir: &Path, slab: &str, bake: &str) -> std::path::PathBuf {
     std::fs::write(dir.join("box.obj"), BOX_OBJ).unwrap();
     let text = format!(
         r#"
@@ -26,8 +39,7 @@ direction = [0.5, -0.3, 0.4]
 irradiance = [4.0, 4.0, 4.0]
 
 [[box]]
-size = [6.0, 6.0, 0.2]
-transform = {{ translate = [0.0, 0.0, -0.1] }}
+{slab}
 material = {{ color = [0.5, 0.5, 0.5] }}
 
 [[object]]
@@ -86,15 +98,21 @@ fn the_summary_says_where_and_why_an_objects_texels_are_short() {
         lines[at].contains("texels") && lines[at].contains("with fewer than four points"),
         "{stdout}"
     );
-    // The next line: the bottom, facing down at z = 0, in contact with the slab, harmless.
+    // Every empty texel is the bottom's, which no view reaches.
+    assert!(
+        lines[at].ends_with(", all where no view reaches"),
+        "{stdout}"
+    );
+    // The next line: the bottom, facing down at z = 0, in contact with the slab and enclosed
+    // by it.
     let place = lines[at + 1];
     assert!(place.starts_with("               "), "{stdout}");
     for part in [
         "texels facing down (−z) at x ",
         "z = 0.00",
         "all empty",
-        "within ε of [[box]] 0",
-        "harmless where unseen",
+        "within ε of [[box]] 0, enclosed",
+        "no view reaches them: nothing is lost",
     ] {
         assert!(place.contains(part), "{part:?} not in {place:?}\n{stdout}");
     }
@@ -104,11 +122,11 @@ fn the_summary_says_where_and_why_an_objects_texels_are_short() {
     assert_eq!(c["short"], json["sample_maps"]["short"], "{json}");
     assert_eq!(c["texels"], json["sample_maps"]["texels"], "{json}");
     let p = &c["places"][0];
-    assert_eq!(p["cause"], "contact", "{json}");
+    assert_eq!(p["cause"], "unseen", "{json}");
     assert_eq!(p["surface"], "[[box]] 0", "{json}");
     assert_eq!(p["facing"], "-z", "{json}");
     assert_eq!(p["min"][2], 0.0, "{json}");
-    assert!(p["remedy"].as_str().unwrap().contains("epsilon"), "{json}");
+    assert_eq!(c["unseen_empty"], c["empty"], "{json}");
 }
 
 #[test]
@@ -178,26 +196,44 @@ fn the_summary_says_how_noisy_the_cubes_are_and_what_to_raise_at_what_cost() {
 fn strict_refusal_says_where_the_empty_texels_are_and_why() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let path = scene(
-        dir,
-        "sample_count = 400\nsample_map_resolution = 32\ncube_resolution = 2\nsamples_per_texel = 1",
-    );
-    let out = oslf("bake")
-        .arg(&path)
-        .arg("-o")
-        .arg(dir.join("strict.oslf"))
-        .args(["--preview", "none", "-q", "--strict"])
-        .output()
-        .unwrap();
+    let settings =
+        "sample_count = 400\nsample_map_resolution = 32\ncube_resolution = 2\nsamples_per_texel = 1";
+    let run = |path: &Path, strict: bool| {
+        let mut c = oslf("bake");
+        c.arg(path)
+            .arg("-o")
+            .arg(dir.join("strict.oslf"))
+            .args(["--preview", "none", "-q"]);
+        if strict {
+            c.arg("--strict");
+        }
+        c.output().unwrap()
+    };
+    // Hovering: the edges of the bottom are empty and seen from the side.
+    let out = run(&scene_over(dir, HOVERING, settings), true);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     for part in [
         "have no visible sample point",
         "; where: object \"box\": ",
         "texels facing down (−z) at x ",
-        "within ε of [[box]] 0",
+        "within ε of [[box]] 0; harmless where unseen",
         "(--strict)",
     ] {
         assert!(err.contains(part), "{part:?} not in {err}");
     }
+    // Without --strict the bake warns, counting the bottom's middle apart.
+    let out = run(&scene_over(dir, HOVERING, settings), false);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: ") && err.contains("more where no view reaches)"),
+        "{err}"
+    );
+    // Resting: every empty texel is under the box, where no view reaches; --strict bakes it
+    // without a warning.
+    let out = run(&scene(dir, settings), true);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("warning"), "{err}");
 }

@@ -8,6 +8,10 @@
 //!   ([`FREE_SPACE_TOLERANCE`]) or encloses it. The object rests on or touches that surface
 //!   (a box on a table: its bottom), or folds onto itself. Harmless where the side cannot be
 //!   seen; the surface is named as the scene names it.
+//! - **unseen**: contact, and no view reaches the texel: every probe direction within
+//!   [`UNSEEN_CONE_DEG`] of its normal meets a surface within the object's size (a can's base
+//!   on a table). Its empty texels lose nothing, so they are neither warned about nor refused
+//!   under `--strict` ([`ObjectCoverage::unseen_empty`]).
 //! - **hidden**: four or more of the texel's nearest points lie within φ_samplemap of its
 //!   normal, but geometry hides enough of them (a crevice, a nearby surface).
 //! - **sparse**: fewer than four of its nearest points
@@ -15,9 +19,10 @@
 //!   normal: the points are too far apart there.
 //!
 //! Texels of one cause are grouped by the surface they touch and the axis they face, and each
-//! group located by the box its texels span. Only short texels are examined (64 probe rays and
-//! at most [`MAX_CANDIDATES`](crate::sample_map::MAX_CANDIDATES) visibility rays each: about
-//! twice what the map build cast for them; examples/meshes.toml: 0.06 s beside the maps'
+//! group located by the box its texels span. Only short texels are examined (64 probe rays, at
+//! most 64 more for the unseen test of contact texels, and at most
+//! [`MAX_CANDIDATES`](crate::sample_map::MAX_CANDIDATES) visibility rays each: about twice what
+//! the map build cast for them; examples/meshes.toml: 0.06 s beside the maps'
 //! 1.4 s), and the maps are only read: the store does not change.
 
 use std::collections::BTreeMap;
@@ -40,12 +45,19 @@ pub const PLACES_SHOWN: usize = 3;
 /// placement's free-space test probes).
 const PROBE_DIRECTIONS: usize = 64;
 
+/// The unseen test probes the directions within this angle of a texel's normal: a view more
+/// grazing than this sees its surface foreshortened below a sixth of its area, through a gap
+/// narrower than ε.
+pub const UNSEEN_CONE_DEG: f32 = 80.0;
+
 /// Why a texel found fewer than four sample points.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Cause {
     /// Its sample point would lie closer than ε to a surface, or inside one.
     Contact,
+    /// In contact, and enclosed: no view reaches its surface ([`UNSEEN_CONE_DEG`]).
+    Unseen,
     /// Enough points in its cone, but hidden behind geometry.
     Hidden,
     /// Too few points within φ_samplemap of its normal.
@@ -60,6 +72,7 @@ impl Cause {
                 "harmless where unseen (the object rests on or touches it), otherwise move them \
                  more than epsilon apart or lower epsilon"
             }
+            Cause::Unseen => "no view reaches them: nothing is lost",
             Cause::Hidden => {
                 "lower epsilon, or raise sample_count (or lower sample_spacing) so points land \
                  in the gap"
@@ -144,6 +157,8 @@ pub struct ObjectCoverage {
     /// Of them, with fewer than four points, and with none.
     pub short: u64,
     pub empty: u64,
+    /// Of the empty texels, those no view reaches ([`Cause::Unseen`]).
+    pub unseen_empty: u64,
     /// The largest places ([`PLACES_SHOWN`] at most), most short texels first.
     pub places: Vec<ShortPlace>,
     /// Short texels in places not shown.
@@ -241,11 +256,18 @@ fn classify<G: Intersector>(
     (p, n, offset): (Vec3, Vec3, Vec3),
 ) -> (Cause, Option<u32>) {
     let point = p + offset * probe.epsilon;
+    let lift = probe.epsilon * VISIBILITY_LIFT;
     if let Some(triangle) = contact(probe.geometry, point, probe.epsilon, object, directions) {
-        return (Cause::Contact, probe.names.instance(triangle));
+        let reach = probe.object_sizes.get(object as usize).copied();
+        let cause = match reach {
+            Some(reach) if enclosed(probe.geometry, p + n * lift, n, reach, directions) => {
+                Cause::Unseen
+            }
+            _ => Cause::Contact,
+        };
+        return (cause, probe.names.instance(triangle));
     }
     let cos_phi = probe.phi_samplemap_deg.to_radians().cos();
-    let lift = probe.epsilon * VISIBILITY_LIFT;
     let (in_cone, _) = sample_map::texel_candidates(index, probe.geometry, p, n, cos_phi, lift);
     if in_cone >= 4 {
         (Cause::Hidden, None)
@@ -299,6 +321,31 @@ fn contact(
         .then_some(nearest_back)
         .flatten()
         .map(|(_, _, t)| t)
+}
+
+/// Whether no view reaches the surface at `origin` (lifted off it along its unit normal `n`):
+/// each of `directions`, turned into `n`'s hemisphere, that lies within [`UNSEEN_CONE_DEG`] of
+/// `n` meets a surface within `reach`.
+fn enclosed(
+    geometry: &impl Intersector,
+    origin: Vec3,
+    n: Vec3,
+    reach: f32,
+    directions: &[Vec3],
+) -> bool {
+    let cos_cone = UNSEEN_CONE_DEG.to_radians().cos();
+    let mut probed = 0;
+    for &d in directions {
+        let d = if d.dot(n) < 0.0 { -d } else { d };
+        if d.dot(n) < cos_cone {
+            continue;
+        }
+        probed += 1;
+        if !geometry.occluded(&Ray::new(origin, d), reach) {
+            return false;
+        }
+    }
+    probed > 0
 }
 
 /// The axis `n` is closest to: 0 `+x`, 1 `-x`, 2 `+y`, 3 `-y`, 4 `+z`, 5 `-z`.
@@ -391,6 +438,11 @@ fn summarize(
             places.sort_by_key(|p| std::cmp::Reverse(p.short));
             let short: u64 = places.iter().map(|p| p.short).sum();
             let empty: u64 = places.iter().map(|p| p.empty).sum();
+            let unseen_empty = places
+                .iter()
+                .filter(|p| p.cause == Cause::Unseen)
+                .map(|p| p.empty)
+                .sum();
             let other_short = places.iter().skip(PLACES_SHOWN).map(|p| p.short).sum();
             places.truncate(PLACES_SHOWN);
             ObjectCoverage {
@@ -398,6 +450,7 @@ fn summarize(
                 texels: texels[o],
                 short,
                 empty,
+                unseen_empty,
                 places,
                 other_short,
                 decimals: decimals[o],
@@ -418,6 +471,11 @@ impl std::fmt::Display for ObjectCoverage {
             100.0 * self.short as f64 / self.texels.max(1) as f64,
             self.empty
         )?;
+        match self.unseen_empty {
+            0 => {}
+            u if u == self.empty => write!(f, ", all where no view reaches")?,
+            u => write!(f, " ({u} of them where no view reaches)")?,
+        }
         if self.other_short > 0 {
             write!(f, " ({} in smaller places not listed)", self.other_short)?;
         }
@@ -433,6 +491,8 @@ impl ShortPlace {
         let why = match (self.cause, &self.surface) {
             (Cause::Contact, Some(s)) => format!("within ε of {s}"),
             (Cause::Contact, None) => "within ε of another surface".to_string(),
+            (Cause::Unseen, Some(s)) => format!("within ε of {s}, enclosed"),
+            (Cause::Unseen, None) => "within ε of another surface, enclosed".to_string(),
             (Cause::Hidden, _) => "their nearest points are hidden behind geometry".to_string(),
             (Cause::Sparse, _) => "too few points within phi_samplemap of their normal".to_string(),
         };

@@ -50,7 +50,7 @@ fn the_box(report: &BakeReport) -> &ObjectCoverage {
 }
 
 #[test]
-fn a_box_resting_on_a_slab_has_its_bottom_short_for_contact_with_the_slab_named_and_located() {
+fn a_box_resting_on_a_slab_has_its_bottom_unseen_with_the_slab_named_and_located() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     // A solid slab whose top is the box's bottom plane, z = 0.
@@ -61,7 +61,8 @@ fn a_box_resting_on_a_slab_has_its_bottom_short_for_contact_with_the_slab_named_
     assert!(c.empty > 0, "{c:?}");
     // The largest place: the bottom, facing down, at z = 0, over the box's footprint.
     let bottom = &c.places[0];
-    assert_eq!(bottom.cause, Cause::Contact, "{c:?}");
+    // In contact with the slab, and enclosed by it: no view reaches the bottom.
+    assert_eq!(bottom.cause, Cause::Unseen, "{c:?}");
     assert_eq!(bottom.facing, "-z", "{c:?}");
     assert_eq!(bottom.surface.as_deref(), Some("[[box]] 0"), "{c:?}");
     assert!(
@@ -78,14 +79,50 @@ fn a_box_resting_on_a_slab_has_its_bottom_short_for_contact_with_the_slab_named_
         bottom.empty,
         c.texels
     );
-    assert!(bottom.remedy.contains("harmless"), "{bottom:?}");
+    assert!(bottom.remedy.contains("nothing is lost"), "{bottom:?}");
+    // Every empty texel is the bottom's: none a view may reach.
+    assert_eq!(c.unseen_empty, c.empty, "{c:?}");
+    assert_eq!(report.visible_empty(), 0, "{c:?}");
     // Nothing facing up is in contact with anything.
     assert!(
         c.places
             .iter()
-            .all(|p| p.cause != Cause::Contact || p.facing != "+z"),
+            .all(|p| !matches!(p.cause, Cause::Contact | Cause::Unseen) || p.facing != "+z"),
         "{c:?}"
     );
+}
+
+#[test]
+fn a_box_hovering_closer_than_epsilon_has_its_bottom_unseen_within_and_seen_at_the_edges() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // A slab of the box's footprint, its top half ε (0.025) under the box's bottom: no point
+    // fits in the gap. From the middle of the bottom every direction within 80° of straight
+    // down meets the slab within 0.025 · tan 80° = 0.14 of the point; from within 0.14 of an
+    // edge, views from the side pass the slab's edge and reach it.
+    let slab = "[[box]]\nsize = [1.0, 1.0, 0.2]\ntransform = { translate = [1.5, 0.0, -0.125] }\n\
+                material = { color = [0.5, 0.5, 0.5] }\n";
+    let report = bake_box(d, [1.0, -0.5, 0.0], 400, slab);
+    let c = the_box(&report);
+    let down = |cause| {
+        c.places
+            .iter()
+            .find(|p| p.cause == cause && p.facing == "-z")
+            .unwrap_or_else(|| panic!("no {cause:?} facing down: {c:#?}"))
+    };
+    let (unseen, seen) = (down(Cause::Unseen), down(Cause::Contact));
+    assert_eq!(unseen.surface.as_deref(), Some("[[box]] 0"), "{c:#?}");
+    assert_eq!(seen.surface.as_deref(), Some("[[box]] 0"), "{c:#?}");
+    // The unseen texels lie inside, more than a texel (1/8 of a face here) from the edges.
+    for axis in 0..2 {
+        assert!(
+            unseen.min[axis] > seen.min[axis] + 0.05 && unseen.max[axis] < seen.max[axis] - 0.05,
+            "{c:#?}"
+        );
+    }
+    assert!(unseen.empty > 0 && seen.empty > 0, "{c:#?}");
+    assert_eq!(c.unseen_empty, unseen.empty, "{c:#?}");
+    assert_eq!(report.visible_empty(), c.empty - unseen.empty, "{c:#?}");
 }
 
 #[test]
@@ -113,7 +150,7 @@ fn a_well_covered_floating_box_reports_no_short_place() {
 }
 
 #[test]
-fn a_surface_through_the_would_be_points_is_contact() {
+fn a_surface_through_the_would_be_points_is_found_and_named() {
     // A plane exactly ε above the box's top: every point of the top would lie on it. A probe
     // ray from the point skips such a surface as a self-hit; the contact test, like
     // placement's, probes segments through the point.
@@ -128,7 +165,9 @@ fn a_surface_through_the_would_be_points_is_contact() {
         .iter()
         .find(|p| p.facing == "+z")
         .unwrap_or_else(|| panic!("no place facing +z: {c:?}"));
-    assert_eq!(top.cause, Cause::Contact, "{c:?}");
+    // Named; and, the plane reaching past the top by more than ε · tan 80°, no view reaches
+    // the top's surface.
+    assert_eq!(top.cause, Cause::Unseen, "{c:?}");
     assert_eq!(top.surface.as_deref(), Some("[[plane]] 0"), "{c:?}");
     assert!((top.min[2] - 2.0).abs() < 1e-4, "{top:?}");
 }

@@ -70,8 +70,8 @@ pub struct Args {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
-    /// Fail, before the cube maps are captured, if a sample-map texel has no visible sample
-    /// point (without it: a warning, and the store is written).
+    /// Fail, before the cube maps are captured, if a sample-map texel that a view may reach
+    /// has no visible sample point (without it: a warning, and the store is written).
     #[arg(long)]
     strict: bool,
 }
@@ -298,16 +298,22 @@ fn write_preview(
 /// error say it alike).
 const EMPTY_TEXELS_REMEDY: &str = "raise sample_count (or lower sample_spacing), or lower epsilon";
 
-/// The warning for sample-map texels without any visible sample point (`--strict` refuses
-/// them before the capture).
+/// The warning for sample-map texels without any visible sample point where a view may
+/// reach them (`--strict` refuses those before the capture); empty texels no view reaches are
+/// counted beside them, not warned about.
 fn warn_empty_texels(report: &BakeReport) {
     let m = &report.sample_maps;
-    if m.empty > 0 {
+    let visible = report.visible_empty();
+    if visible > 0 {
+        let unseen = match report.unseen_empty() {
+            0 => String::new(),
+            u => format!(" (and {u} more where no view reaches)"),
+        };
         eprintln!(
-            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake; the coverage lines say where and why)",
-            m.empty,
+            "warning: {} of {} sample-map texels ({:.3}%) have no visible sample point{unseen}, so the store cannot reconstruct them; {EMPTY_TEXELS_REMEDY} (--strict refuses such a bake; the coverage lines say where and why)",
+            visible,
             m.texels,
-            100.0 * m.empty as f64 / m.texels.max(1) as f64
+            100.0 * visible as f64 / m.texels.max(1) as f64
         );
     }
 }

@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use oslf_format::ShardSpec;
 
-use crate::coverage::ObjectCoverage;
+use crate::coverage::{Cause, ObjectCoverage};
 use crate::preflight::Limits;
 pub use meta::{object_centre, store_meta};
 pub use noise_report::{NoiseReport, NoiseSuggestion};
@@ -48,8 +48,9 @@ pub struct BakeOptions {
     /// for a later `resume` (a bake in slices). `None`: run to the end.
     pub cube_limit: Option<u32>,
     /// Fail with [`BakeError::EmptyTexels`] before the cube maps are captured if a sample-map
-    /// texel has no visible sample point at all (the runtime has nothing to reconstruct it
-    /// from). `false`: bake anyway; the report counts them.
+    /// texel that a view may reach has no visible sample point at all (the runtime has nothing
+    /// to reconstruct it from; [`BakeReport::visible_empty`]). `false`: bake anyway; the
+    /// report counts them.
     pub refuse_empty_texels: bool,
     /// What captures the cube maps: `None`, this crate's CPU path tracer
     /// ([`oslf_trace::capture`]); else another device for this scene (the GPU,
@@ -63,7 +64,10 @@ fn empty_places(coverage: &[ObjectCoverage]) -> String {
     let places: Vec<String> = coverage
         .iter()
         .filter_map(|c| {
-            let p = c.places.iter().find(|p| p.empty > 0)?;
+            let p = c
+                .places
+                .iter()
+                .find(|p| p.empty > 0 && p.cause != Cause::Unseen)?;
             Some(format!("object {:?}: {}", c.object, p.describe(c.decimals)))
         })
         .collect();
@@ -125,9 +129,9 @@ pub fn bake_shard(
         &mut report,
     );
     let stats = report.sample_maps;
-    if options.refuse_empty_texels && stats.empty > 0 {
+    if options.refuse_empty_texels && report.visible_empty() > 0 {
         return Err(BakeError::EmptyTexels {
-            empty: stats.empty,
+            empty: report.visible_empty(),
             texels: stats.texels,
             points: report.sample_points as u64,
             where_: empty_places(&report.coverage),

@@ -82,6 +82,19 @@ pub struct BakeReport {
     pub clamped_texels: u64,
 }
 
+impl BakeReport {
+    /// Empty sample-map texels that no view reaches ([`crate::coverage::Cause::Unseen`]).
+    pub fn unseen_empty(&self) -> u64 {
+        self.coverage.iter().map(|c| c.unseen_empty).sum()
+    }
+
+    /// Empty sample-map texels a view may reach: those the store cannot reconstruct where
+    /// it matters (warned about, and refused under `--strict`).
+    pub fn visible_empty(&self) -> u64 {
+        self.sample_maps.empty.saturating_sub(self.unseen_empty())
+    }
+}
+
 /// How a mesh object's sample maps were laid out.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct AtlasReport {
