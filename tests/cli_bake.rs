@@ -409,4 +409,10 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
     let chosen = report["chosen"].as_array().unwrap();
     assert_eq!(chosen.len(), 5, "{chosen:?}");
     assert!(chosen[0].as_str().unwrap().starts_with("epsilon = "));
+    // The texels without a point lie under the can's base on the table, where no view
+    // reaches: counted, not warned about.
+    let empty = report["sample_maps"]["empty"].as_u64().unwrap();
+    assert!(empty > 0, "{report}");
+    assert_eq!(report["coverage"][0]["unseen_empty"], empty, "{report}");
+    assert!(!stderr.contains("have no visible sample point"), "{stderr}");
 }
