@@ -1282,100 +1282,144 @@ fn russian_roulette(throughput: ptr<function, vec3<f32>>, rng: ptr<function, Rng
     return true;
 }
 
-fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec3<f32> {
+struct Path {
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    hit: SurfaceHit,
+    incoming: vec3<f32>,
+    bounce: u32,
+    origin: vec3<f32>,
+    wi: vec3<f32>,
+    pdf: f32
+}
+
+fn path_start(first: SurfaceHit, incoming: vec3<f32>) -> Path {
+    var p: Path;
+    p.radiance = vec3<f32>(0.0);
+    p.throughput = vec3<f32>(1.0);
+    p.hit = first;
+    p.incoming = incoming;
+    p.bounce = 0u;
+    return p;
+}
+
+fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> bool {
     let env_on = env_active();
     let emitters = (params.flags & FLAG_EMITTERS) != 0u;
-    var radiance = vec3<f32>(0.0);
-    var throughput = vec3<f32>(1.0);
-    var hit = first;
-    var incoming = incoming_in;
-    var bounce = 0u;
-    loop {
-        let normals = oriented_normals(hit, incoming);
-        let ng = normals[0];
-        let ns = normals[1];
-        let wo = -incoming;
-        if hit.material >= arrayLength(&materials) {
-            break;
-        }
-        let m = materials[hit.material];
-        radiance += throughput * m.emission;
-        var valid = false;
-        let lobe = lobe_at(m, hit.uv, &valid);
-        if !valid {
-            break;
-        }
-        let p = hit.position;
-        let origin = offset_origin(p, ng, hit.extent);
-        for (var i = 0u; i < params.light_count; i++) {
-            let ls = sample_li(lights[i], p);
-            if !ls.valid {
-                continue;
-            }
-            let c = dot(ns, ls.dir);
-            if c <= 0.0 || dot(ng, ls.dir) <= 0.0 {
-                continue;
-            }
-            var t_max = F32_MAX;
-            if ls.distance != F32_MAX {
-                t_max = ls.distance * (1.0 - 0.0001);
-            }
-            if !occluded(origin, ls.dir, t_max, objects, counts) {
-                radiance += throughput * lobe_f(lobe, ns, wo, ls.dir) * ls.irradiance * c;
-            }
-        }
-        if env_on {
-            let es = sample_environment(rng_vec2(rng));
-            let c = dot(ns, es.dir);
-            if es.pdf > 0.0 && c > 0.0 && dot(ng, es.dir) > 0.0 {
-                if !occluded(origin, es.dir, F32_MAX, objects, counts) {
-                    let le = environment_eval(es.dir);
-                    let w = power_heuristic(es.pdf, lobe_pdf(lobe, ns, wo, es.dir, c));
-                    radiance += throughput * lobe_f(lobe, ns, wo, es.dir) * le * (c * w / es.pdf);
-                }
-            }
-        }
-        let gather_next = bounce < params.max_bounces;
-        if !env_on && !gather_next && !emitters {
-            break;
-        }
-        let bs = lobe_sample(lobe, ns, wo, rng);
-        if !bs.valid {
-            break;
-        }
-        if bs.pdf <= 0.0 || dot(ng, bs.wi) <= 0.0 {
-            break;
-        }
-        throughput *= bs.weight;
-        if !gather_next {
-            radiance += last_sample(origin, bs.wi, bs.pdf, throughput, emitters, objects, counts);
-            break;
-        }
-        let next = closest(origin, bs.wi, objects, counts);
-        if !next.found {
-            if env_on {
-                radiance += escaped(bs.wi, bs.pdf, throughput);
-            }
-            break;
-        }
-        bounce += 1u;
-        if bounce >= RUSSIAN_ROULETTE_START && !russian_roulette(&throughput, rng) {
-            break;
-        }
-        hit = surface_hit(next);
-        incoming = bs.wi;
+    let hit = (*path).hit;
+    let normals = oriented_normals(hit, (*path).incoming);
+    let ng = normals[0];
+    let ns = normals[1];
+    let wo = -(*path).incoming;
+    if hit.material >= arrayLength(&materials) {
+        return false;
     }
-    return finite_or_zero(radiance);
+    let m = materials[hit.material];
+    let throughput = (*path).throughput;
+    (*path).radiance += throughput * m.emission;
+    var valid = false;
+    let lobe = lobe_at(m, hit.uv, &valid);
+    if !valid {
+        return false;
+    }
+    let p = hit.position;
+    let origin = offset_origin(p, ng, hit.extent);
+    for (var i = 0u; i < params.light_count; i++) {
+        let ls = sample_li(lights[i], p);
+        if !ls.valid {
+            continue;
+        }
+        let c = dot(ns, ls.dir);
+        if c <= 0.0 || dot(ng, ls.dir) <= 0.0 {
+            continue;
+        }
+        var t_max = F32_MAX;
+        if ls.distance != F32_MAX {
+            t_max = ls.distance * (1.0 - 0.0001);
+        }
+        if !occluded(origin, ls.dir, t_max, objects, counts) {
+            (*path).radiance += throughput * lobe_f(lobe, ns, wo, ls.dir) * ls.irradiance * c;
+        }
+    }
+    if env_on {
+        let es = sample_environment(rng_vec2(rng));
+        let c = dot(ns, es.dir);
+        if es.pdf > 0.0 && c > 0.0 && dot(ng, es.dir) > 0.0 {
+            if !occluded(origin, es.dir, F32_MAX, objects, counts) {
+                let le = environment_eval(es.dir);
+                let w = power_heuristic(es.pdf, lobe_pdf(lobe, ns, wo, es.dir, c));
+                (*path).radiance += throughput * lobe_f(lobe, ns, wo, es.dir) * le * (c * w / es.pdf);
+            }
+        }
+    }
+    let gather_next = (*path).bounce < params.max_bounces;
+    if !env_on && !gather_next && !emitters {
+        return false;
+    }
+    let bs = lobe_sample(lobe, ns, wo, rng);
+    if !bs.valid {
+        return false;
+    }
+    if bs.pdf <= 0.0 || dot(ng, bs.wi) <= 0.0 {
+        return false;
+    }
+    (*path).throughput = throughput * bs.weight;
+    if !gather_next {
+        (*path).radiance += last_sample(origin, bs.wi, bs.pdf, (*path).throughput, emitters, objects, counts);
+        return false;
+    }
+    (*path).origin = origin;
+    (*path).wi = bs.wi;
+    (*path).pdf = bs.pdf;
+    return true;
+}
+
+fn path_next(path: ptr<function, Path>, next: Hit, rng: ptr<function, Rng>) -> bool {
+    if !next.found {
+        if env_active() {
+            (*path).radiance += escaped((*path).wi, (*path).pdf, (*path).throughput);
+        }
+        return false;
+    }
+    (*path).bounce += 1u;
+    if (*path).bounce >= RUSSIAN_ROULETTE_START {
+        var throughput = (*path).throughput;
+        if !russian_roulette(&throughput, rng) {
+            return false;
+        }
+        (*path).throughput = throughput;
+    }
+    (*path).hit = surface_hit(next);
+    (*path).incoming = (*path).wi;
+    return true;
+}
+
+fn radiance_leaving(first: SurfaceHit, incoming: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec3<f32> {
+    var path = path_start(first, incoming);
+    loop {
+        if !path_vertex(&path, objects, rng, counts) {
+            break;
+        }
+        let next = closest(path.origin, path.wi, objects, counts);
+        if !path_next(&path, next, rng) {
+            break;
+        }
+    }
+    return finite_or_zero(path.radiance);
+}
+
+fn escaped_primary(dir: vec3<f32>) -> vec3<f32> {
+    var l = environment_eval(dir);
+    for (var i = 0u; i < params.light_count; i++) {
+        l += disc_radiance(lights[i], dir);
+    }
+    return finite_or_zero(l);
 }
 
 fn radiance(o: vec3<f32>, dir: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec4<f32> {
     let first = closest(o, dir, objects, counts);
     if !first.found {
-        var l = environment_eval(dir);
-        for (var i = 0u; i < params.light_count; i++) {
-            l += disc_radiance(lights[i], dir);
-        }
-        return vec4<f32>(finite_or_zero(l), F32_MAX);
+        return vec4<f32>(escaped_primary(dir), F32_MAX);
     }
     return vec4<f32>(radiance_leaving(surface_hit(first), dir, objects, rng, counts), first.t);
 }
@@ -1496,21 +1540,62 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     var hit_any = false;
     var n = 0u;
     var planned = params.rounds;
-    for (var round = 0u; round < planned; round++) {
-        for (var j = 0u; j < k * k; j++) {
+    var round = 0u;
+    var j = 0u;
+    var fresh = true;
+    var ray_o = job.origin;
+    var ray_d = vec3<f32>(0.0);
+    var path: Path;
+    var first_t = F32_MAX;
+    loop {
+        if round >= planned {
+            break;
+        }
+        if fresh {
             let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
             let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
             let s = (f32(x) + sx) / f32(res);
             let t = (f32(y) + sy) / f32(res);
-            let dir = face_st_to_direction(face, s, t);
-            let r = radiance(job.origin, dir, objects, &rng, &counts);
-            sum += r.xyz;
-            let l = luminance(r.xyz);
-            lum_sum += l;
-            lum_sq += l * l;
-            hit_any = hit_any || r.w != F32_MAX;
-            n += 1u;
+            ray_o = job.origin;
+            ray_d = face_st_to_direction(face, s, t);
         }
+        let h = closest(ray_o, ray_d, objects, &counts);
+        var going = false;
+        if fresh {
+            first_t = F32_MAX;
+            if h.found {
+                first_t = h.t;
+                path = path_start(surface_hit(h), ray_d);
+                going = true;
+            }
+            else {
+                path.radiance = escaped_primary(ray_d);
+            }
+        }
+        else {
+            going = path_next(&path, h, &rng);
+        }
+        if going {
+            going = path_vertex(&path, objects, &rng, &counts);
+        }
+        fresh = !going;
+        if going {
+            ray_o = path.origin;
+            ray_d = path.wi;
+            continue;
+        }
+        let r = finite_or_zero(path.radiance);
+        sum += r;
+        let l = luminance(r);
+        lum_sum += l;
+        lum_sq += l * l;
+        hit_any = hit_any || first_t != F32_MAX;
+        n += 1u;
+        j += 1u;
+        if j < k * k {
+            continue;
+        }
+        j = 0u;
         if params.target_noise > 0.0 && round + 1u == PILOT_ROUNDS {
             planned = PILOT_ROUNDS + rounds_after_pilot(lum_sum, lum_sq, n, params.target_noise, k * k, MIN_ROUNDS, params.rounds - PILOT_ROUNDS);
             sum = vec3<f32>(0.0);
@@ -1518,6 +1603,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
             lum_sq = 0.0;
             n = 0u;
         }
+        round += 1u;
     }
     var o: TexelOut;
     o.radiance = sum * (1.0 / f32(n));

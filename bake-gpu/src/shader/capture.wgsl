@@ -9,12 +9,15 @@
 // `layouts` (shader.rs).
 
 import package::bvh::{F32_MAX, traverse};
-import package::integrator::{Counts, closest, radiance};
+import package::integrator::{
+    Counts, Path, closest, escaped_primary, finite_or_zero, path_next, path_start, path_vertex,
+    radiance,
+};
 import package::layouts::{
     Job, Light, Mat, Node, Params, TexelOut, TraceHit, TraceRay, Tri, TriAttr,
 };
 import package::preview::{camera, camera_direction, hash3, pixels, stratified_2d};
-import package::scene::{finite};
+import package::scene::{finite, surface_hit};
 import package::shading::color::{luminance};
 import package::shading::random::{hash4, rng_f32, rng_new};
 
@@ -104,23 +107,67 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
     var n = 0u;
     // Rounds of k × k stratified samples: one without a target; with one, a pilot that
     // chooses how many follow, whose samples alone make the texel (capture.rs
-    // `sampling_plan`).
+    // `sampling_plan`). The samples' paths are interleaved, one traced ray per turn of the
+    // loop: an invocation whose path ended starts its next sample at once instead of idling
+    // while its neighbours' paths go on. Each sample draws its random numbers in the order
+    // `radiance` would, so the texel's value is the same.
     var planned = params.rounds;
-    for (var round = 0u; round < planned; round++) {
-        for (var j = 0u; j < k * k; j++) {
+    var round = 0u;
+    var j = 0u;
+    // The next ray to trace: a sample's first (`fresh`), or its path's continuation.
+    var fresh = true;
+    var ray_o = job.origin;
+    var ray_d = vec3<f32>(0.0);
+    var path: Path;
+    var first_t = F32_MAX;
+    loop {
+        if round >= planned {
+            break;
+        }
+        if fresh {
             let sx = (f32(j % k) + rng_f32(&rng)) / f32(k);
             let sy = (f32(j / k) + rng_f32(&rng)) / f32(k);
             let s = (f32(x) + sx) / f32(res);
             let t = (f32(y) + sy) / f32(res);
-            let dir = face_st_to_direction(face, s, t);
-            let r = radiance(job.origin, dir, objects, &rng, &counts);
-            sum += r.xyz;
-            let l = luminance(r.xyz);
-            lum_sum += l;
-            lum_sq += l * l;
-            hit_any = hit_any || r.w != F32_MAX;
-            n += 1u;
+            ray_o = job.origin;
+            ray_d = face_st_to_direction(face, s, t);
         }
+        let h = closest(ray_o, ray_d, objects, &counts);
+        var going = false;
+        if fresh {
+            first_t = F32_MAX;
+            if h.found {
+                first_t = h.t;
+                path = path_start(surface_hit(h), ray_d);
+                going = true;
+            } else {
+                path.radiance = escaped_primary(ray_d);
+            }
+        } else {
+            going = path_next(&path, h, &rng);
+        }
+        if going {
+            going = path_vertex(&path, objects, &rng, &counts);
+        }
+        fresh = !going;
+        if going {
+            ray_o = path.origin;
+            ray_d = path.wi;
+            continue;
+        }
+        // The sample is done.
+        let r = finite_or_zero(path.radiance);
+        sum += r;
+        let l = luminance(r);
+        lum_sum += l;
+        lum_sq += l * l;
+        hit_any = hit_any || first_t != F32_MAX;
+        n += 1u;
+        j += 1u;
+        if j < k * k {
+            continue;
+        }
+        j = 0u;
         if params.target_noise > 0.0 && round + 1u == PILOT_ROUNDS {
             planned = PILOT_ROUNDS + rounds_after_pilot(lum_sum, lum_sq, n, params.target_noise, k * k, MIN_ROUNDS, params.rounds - PILOT_ROUNDS);
             sum = vec3<f32>(0.0);
@@ -128,6 +175,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
             lum_sq = 0.0;
             n = 0u;
         }
+        round += 1u;
     }
     var o: TexelOut;
     o.radiance = sum * (1.0 / f32(n));

@@ -282,97 +282,157 @@ fn russian_roulette(throughput: ptr<function, vec3<f32>>, rng: ptr<function, Rng
     return true;
 }
 
-// `Integrator::radiance_leaving` from the first hit `first` of a ray along `incoming_in`.
-fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec3<f32> {
+// A path in flight: `Integrator::radiance_leaving`'s loop state, so that a caller may trace
+// each vertex's continuation itself (the capture interleaves its samples' paths, capture.wgsl).
+struct Path {
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    hit: SurfaceHit,
+    incoming: vec3<f32>,
+    bounce: u32,
+    // The continuation after `path_vertex` returned true: its origin, direction and density.
+    origin: vec3<f32>,
+    wi: vec3<f32>,
+    pdf: f32,
+}
+
+// A path at its first hit `first`, reached along `incoming`.
+fn path_start(first: SurfaceHit, incoming: vec3<f32>) -> Path {
+    var p: Path;
+    p.radiance = vec3<f32>(0.0);
+    p.throughput = vec3<f32>(1.0);
+    p.hit = first;
+    p.incoming = incoming;
+    p.bounce = 0u;
+    return p;
+}
+
+// One vertex of `radiance_leaving`'s loop at `(*path).hit`: its emission, one shadow ray per
+// delta light, the environment sample and the BSDF sample. True when the path goes on along
+// `(*path).origin`, `(*path).wi`: trace that ray's closest hit and give it to `path_next`.
+fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> bool {
     let env_on = env_active();
     let emitters = (params.flags & FLAG_EMITTERS) != 0u;
-    var radiance = vec3<f32>(0.0);
-    var throughput = vec3<f32>(1.0);
-    var hit = first;
-    var incoming = incoming_in;
-    var bounce = 0u;
-    loop {
-        let normals = oriented_normals(hit, incoming);
-        let ng = normals[0];
-        let ns = normals[1];
-        let wo = -incoming;
-        if hit.material >= arrayLength(&materials) {
-            break;
-        }
-        let m = materials[hit.material];
-        radiance += throughput * m.emission;
-        var valid = false;
-        let lobe = lobe_at(m, hit.uv, &valid);
-        if !valid {
-            break;
-        }
-        let p = hit.position;
-        let origin = offset_origin(p, ng, hit.extent);
-
-        // Delta lights.
-        for (var i = 0u; i < params.light_count; i++) {
-            let ls = sample_li(lights[i], p);
-            if !ls.valid {
-                continue;
-            }
-            let c = dot(ns, ls.dir);
-            if c <= 0.0 || dot(ng, ls.dir) <= 0.0 {
-                continue;
-            }
-            var t_max = F32_MAX;
-            if ls.distance != F32_MAX {
-                t_max = ls.distance * (1.0 - 1e-4);
-            }
-            if !occluded(origin, ls.dir, t_max, objects, counts) {
-                radiance += throughput * lobe_f(lobe, ns, wo, ls.dir) * ls.irradiance * c;
-            }
-        }
-
-        // Environment light sample (MIS with the BSDF sample below).
-        if env_on {
-            let es = sample_environment(rng_vec2(rng));
-            let c = dot(ns, es.dir);
-            if es.pdf > 0.0 && c > 0.0 && dot(ng, es.dir) > 0.0 {
-                if !occluded(origin, es.dir, F32_MAX, objects, counts) {
-                    let le = environment_eval(es.dir);
-                    let w = power_heuristic(es.pdf, lobe_pdf(lobe, ns, wo, es.dir, c));
-                    radiance += throughput * lobe_f(lobe, ns, wo, es.dir) * le * (c * w / es.pdf);
-                }
-            }
-        }
-
-        // BSDF sample: environment MIS partner and path continuation.
-        let gather_next = bounce < params.max_bounces;
-        if !env_on && !gather_next && !emitters {
-            break;
-        }
-        let bs = lobe_sample(lobe, ns, wo, rng);
-        if !bs.valid {
-            break;
-        }
-        if bs.pdf <= 0.0 || dot(ng, bs.wi) <= 0.0 {
-            break;
-        }
-        throughput *= bs.weight;
-        if !gather_next {
-            radiance += last_sample(origin, bs.wi, bs.pdf, throughput, emitters, objects, counts);
-            break;
-        }
-        let next = closest(origin, bs.wi, objects, counts);
-        if !next.found {
-            if env_on {
-                radiance += escaped(bs.wi, bs.pdf, throughput);
-            }
-            break;
-        }
-        bounce += 1u;
-        if bounce >= RUSSIAN_ROULETTE_START && !russian_roulette(&throughput, rng) {
-            break;
-        }
-        hit = surface_hit(next);
-        incoming = bs.wi;
+    let hit = (*path).hit;
+    let normals = oriented_normals(hit, (*path).incoming);
+    let ng = normals[0];
+    let ns = normals[1];
+    let wo = -(*path).incoming;
+    if hit.material >= arrayLength(&materials) {
+        return false;
     }
-    return finite_or_zero(radiance);
+    let m = materials[hit.material];
+    let throughput = (*path).throughput;
+    (*path).radiance += throughput * m.emission;
+    var valid = false;
+    let lobe = lobe_at(m, hit.uv, &valid);
+    if !valid {
+        return false;
+    }
+    let p = hit.position;
+    let origin = offset_origin(p, ng, hit.extent);
+
+    // Delta lights.
+    for (var i = 0u; i < params.light_count; i++) {
+        let ls = sample_li(lights[i], p);
+        if !ls.valid {
+            continue;
+        }
+        let c = dot(ns, ls.dir);
+        if c <= 0.0 || dot(ng, ls.dir) <= 0.0 {
+            continue;
+        }
+        var t_max = F32_MAX;
+        if ls.distance != F32_MAX {
+            t_max = ls.distance * (1.0 - 1e-4);
+        }
+        if !occluded(origin, ls.dir, t_max, objects, counts) {
+            (*path).radiance += throughput * lobe_f(lobe, ns, wo, ls.dir) * ls.irradiance * c;
+        }
+    }
+
+    // Environment light sample (MIS with the BSDF sample below).
+    if env_on {
+        let es = sample_environment(rng_vec2(rng));
+        let c = dot(ns, es.dir);
+        if es.pdf > 0.0 && c > 0.0 && dot(ng, es.dir) > 0.0 {
+            if !occluded(origin, es.dir, F32_MAX, objects, counts) {
+                let le = environment_eval(es.dir);
+                let w = power_heuristic(es.pdf, lobe_pdf(lobe, ns, wo, es.dir, c));
+                (*path).radiance += throughput * lobe_f(lobe, ns, wo, es.dir) * le * (c * w / es.pdf);
+            }
+        }
+    }
+
+    // BSDF sample: environment MIS partner and path continuation.
+    let gather_next = (*path).bounce < params.max_bounces;
+    if !env_on && !gather_next && !emitters {
+        return false;
+    }
+    let bs = lobe_sample(lobe, ns, wo, rng);
+    if !bs.valid {
+        return false;
+    }
+    if bs.pdf <= 0.0 || dot(ng, bs.wi) <= 0.0 {
+        return false;
+    }
+    (*path).throughput = throughput * bs.weight;
+    if !gather_next {
+        (*path).radiance += last_sample(origin, bs.wi, bs.pdf, (*path).throughput, emitters, objects, counts);
+        return false;
+    }
+    (*path).origin = origin;
+    (*path).wi = bs.wi;
+    (*path).pdf = bs.pdf;
+    return true;
+}
+
+// The closest hit `next` of the continuation `path_vertex` asked for: the environment where it
+// escapes, else Russian roulette from the 4th vertex. True when the path goes on at `next`
+// (`path_vertex` again).
+fn path_next(path: ptr<function, Path>, next: Hit, rng: ptr<function, Rng>) -> bool {
+    if !next.found {
+        if env_active() {
+            (*path).radiance += escaped((*path).wi, (*path).pdf, (*path).throughput);
+        }
+        return false;
+    }
+    (*path).bounce += 1u;
+    if (*path).bounce >= RUSSIAN_ROULETTE_START {
+        var throughput = (*path).throughput;
+        if !russian_roulette(&throughput, rng) {
+            return false;
+        }
+        (*path).throughput = throughput;
+    }
+    (*path).hit = surface_hit(next);
+    (*path).incoming = (*path).wi;
+    return true;
+}
+
+// `Integrator::radiance_leaving` from the first hit `first` of a ray along `incoming`.
+fn radiance_leaving(first: SurfaceHit, incoming: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec3<f32> {
+    var path = path_start(first, incoming);
+    loop {
+        if !path_vertex(&path, objects, rng, counts) {
+            break;
+        }
+        let next = closest(path.origin, path.wi, objects, counts);
+        if !path_next(&path, next, rng) {
+            break;
+        }
+    }
+    return finite_or_zero(path.radiance);
+}
+
+// What a ray along `dir` that escapes the scene brings: the environment and the discs of the
+// distant lights.
+fn escaped_primary(dir: vec3<f32>) -> vec3<f32> {
+    var l = environment_eval(dir);
+    for (var i = 0u; i < params.light_count; i++) {
+        l += disc_radiance(lights[i], dir);
+    }
+    return finite_or_zero(l);
 }
 
 // `Integrator::radiance_from`: radiance arriving at `o` from `-dir`, and the first hit's
@@ -380,11 +440,7 @@ fn radiance_leaving(first: SurfaceHit, incoming_in: vec3<f32>, objects: bool, rn
 fn radiance(o: vec3<f32>, dir: vec3<f32>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> vec4<f32> {
     let first = closest(o, dir, objects, counts);
     if !first.found {
-        var l = environment_eval(dir);
-        for (var i = 0u; i < params.light_count; i++) {
-            l += disc_radiance(lights[i], dir);
-        }
-        return vec4<f32>(finite_or_zero(l), F32_MAX);
+        return vec4<f32>(escaped_primary(dir), F32_MAX);
     }
     return vec4<f32>(radiance_leaving(surface_hit(first), dir, objects, rng, counts), first.t);
 }
