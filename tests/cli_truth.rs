@@ -143,3 +143,102 @@ fn the_pbr_truth_renders_and_checks_its_material() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("metallic 2"), "{err}");
 }
+
+/// `oslf compare --second-reference`: three truths of one scene at other seeds; the third
+/// judged against the first two's mean. Its error is then only noise, of the same size as
+/// each truth's: raw √(σ² + σ²/2), the mean's noise σ/√2, and the corrected error σ, √(2/3)
+/// of the raw. The JSON and CSV carry it; a CSV of another header and a second reference of
+/// another size are refused.
+#[test]
+fn a_second_reference_takes_the_references_noise_out_of_the_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, scene_text()).unwrap();
+    let truth = |seed: &str, width: &str| {
+        let prefix = dir.join(format!("t{seed}-{width}"));
+        let out = oslf("truth")
+            .arg(&scene)
+            .args([
+                "-m", "mirror", "--spp", "4", "--width", width, "--height", "60",
+            ])
+            .args(["--seed", seed, "-q", "-o"])
+            .arg(&prefix)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        prefix.with_file_name(format!("t{seed}-{width}-mirror.exr"))
+    };
+    let (a, b, test) = (truth("1", "80"), truth("2", "80"), truth("3", "80"));
+    let (json, csv) = (dir.join("c.json"), dir.join("c.csv"));
+    let compare = |second: &std::path::Path, csv: &std::path::Path| {
+        oslf("compare")
+            .arg(&a)
+            .arg(&test)
+            .arg("--second-reference")
+            .arg(second)
+            .arg("--json")
+            .arg(&json)
+            .arg("--csv")
+            .arg(csv)
+            .output()
+            .unwrap()
+    };
+    let out = compare(&b, &csv);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("reference   the mean of "), "{stdout}");
+    assert!(stdout.contains("corrected   RMSE L*a*b* "), "{stdout}");
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let c = &j["corrected"];
+    for ch in 0..3 {
+        let raw = j["rmse_rgb"][ch].as_f64().unwrap();
+        let corrected = c["rmse_rgb"][ch].as_f64().unwrap();
+        let noise = c["reference_noise_rgb"][ch].as_f64().unwrap();
+        assert!(raw > 0.0 && noise > 0.0, "{j}");
+        let ratio = corrected / raw;
+        assert!(
+            (0.72..0.93).contains(&ratio),
+            "channel {ch}: {ratio} of the raw: {j}"
+        );
+    }
+    let l = c["rmse_lab"][0].as_f64().unwrap() / j["rmse_lab"][0].as_f64().unwrap();
+    assert!((0.6..0.95).contains(&l), "L*: {l} of the raw: {j}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 2, "{text}");
+    assert!(
+        lines[0].ends_with(",second_reference,rmse_l_corrected,rmse_a_corrected,rmse_b_corrected")
+    );
+    assert_eq!(
+        lines[0].split(',').count(),
+        lines[1].split(',').count(),
+        "{text}"
+    );
+    // Refused: a CSV whose header is another's, and a second reference of another size.
+    let old = dir.join("old.csv");
+    std::fs::write(&old, "reference,test,pixels\n").unwrap();
+    let out = compare(&b, &old);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("old.csv: line 1 is not the header"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&old).unwrap(),
+        "reference,test,pixels\n"
+    );
+    let out = compare(&truth("2", "60"), &csv);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("is 80x60 but") && err.contains("is 60x60"),
+        "{err}"
+    );
+}

@@ -9,6 +9,7 @@
 //! | module | what |
 //! | --- | --- |
 //! | [`metrics`] | image error: RMSE in CIELAB and linear RGB, PSNR, over a mask (thesis §6.1) |
+//! | [`reference_noise`] | a path-traced reference's own noise, from two renders, and errors corrected for it |
 //! | [`judge`] | render one runtime configuration, compare it with the truth, time it |
 //! | [`table`] | result tables as aligned text, Markdown and CSV |
 //! | [`pareto`] | the Pareto front of (time, error) |
@@ -30,6 +31,7 @@ pub mod judge;
 pub mod metrics;
 pub mod pareto;
 pub mod plot;
+pub mod reference_noise;
 pub mod replay;
 pub mod series_plot;
 pub mod sweep;

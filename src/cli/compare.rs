@@ -6,6 +6,7 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use glam::Vec3;
 use oslf_measure::metrics::{compare, Metrics};
+use oslf_measure::reference_noise::{self, Corrected};
 use oslf_util::image_file;
 use oslf_util::input_file::{byte_size, Limit};
 
@@ -22,6 +23,11 @@ pub struct Args {
     reference: InputPath,
     /// The image to judge (OpenEXR, same size).
     test: InputPath,
+    /// A second render of the reference, independent of the first (`oslf truth --seed` with
+    /// another seed): the test is judged against the two's mean, and the mean's own noise
+    /// (half the two's RMSE) is taken out of its error in quadrature (the `corrected` line).
+    #[arg(long, value_name = "REFERENCE2")]
+    second_reference: Option<InputPath>,
     /// Which pixels count: `reference` (its alpha > 0.5), `both` (both alphas), `all`.
     #[arg(long, default_value = "reference")]
     mask: String,
@@ -94,10 +100,23 @@ fn read_exr(path: &Path) -> anyhow::Result<(usize, usize, Vec<[f32; 4]>)> {
     Ok((size.width(), size.height(), pixels))
 }
 
+/// The comparison `oslf compare` reports: the metrics and, with a second reference, the error
+/// corrected for the references' noise.
+#[derive(serde::Serialize)]
+struct Report {
+    #[serde(flatten)]
+    metrics: Metrics,
+    /// `null` without `--second-reference`.
+    corrected: Option<Corrected>,
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut door = oslf_util::door::Door::new();
     door.input("REFERENCE", &args.reference)
         .input("TEST", &args.test);
+    if let Some(path) = &args.second_reference {
+        door.input("--second-reference", path);
+    }
     for (role, path) in [
         ("--json", &args.json),
         ("--csv", &args.csv),
@@ -108,35 +127,98 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     door.check()?;
-    let (w, h, a) = read_exr(&args.reference)?;
+    let (w, h, mut a) = read_exr(&args.reference)?;
     let (w2, h2, b) = read_exr(&args.test)?;
-    if (w, h) != (w2, h2) {
-        bail!(
-            "{} is {w}x{h} but {} is {w2}x{h2}",
-            args.reference.display(),
-            args.test.display()
-        );
+    let same_size = |path: &Path, (w2, h2): (usize, usize)| {
+        if (w, h) == (w2, h2) {
+            Ok(())
+        } else {
+            Err(anyhow::anyhow!(
+                "{} is {w}x{h} but {} is {w2}x{h2}",
+                args.reference.display(),
+                path.display()
+            ))
+        }
+    };
+    same_size(&args.test, (w2, h2))?;
+    let second = match &args.second_reference {
+        Some(path) => {
+            let (w3, h3, c) = read_exr(path)?;
+            same_size(path, (w3, h3))?;
+            Some((path, c))
+        }
+        None => None,
+    };
+    let measure = |reference: &[[f32; 4]], test: &[[f32; 4]], what: &Path| {
+        let (r, t) = (reference, test);
+        match args.mask.as_str() {
+            "reference" => compare(r, t, w, |i| r[i][3] > 0.5, args.white),
+            "both" => compare(r, t, w, |i| r[i][3] > 0.5 && t[i][3] > 0.5, args.white),
+            "all" => compare(r, t, w, |_| true, args.white),
+            other => bail!("unknown --mask {other:?} (reference, both or all)"),
+        }
+        .with_context(|| {
+            format!(
+                "comparing {} with {}",
+                what.display(),
+                args.reference.display()
+            )
+        })
+    };
+    let mut between = None;
+    if let Some((path, c)) = &second {
+        between = Some(measure(&a, c, path)?);
+        a = reference_noise::mean_image(&a, c)?;
     }
-    let m: Metrics = match args.mask.as_str() {
-        "reference" => compare(&a, &b, w, |i| a[i][3] > 0.5, args.white),
-        "both" => compare(&a, &b, w, |i| a[i][3] > 0.5 && b[i][3] > 0.5, args.white),
-        "all" => compare(&a, &b, w, |_| true, args.white),
-        other => bail!("unknown --mask {other:?} (reference, both or all)"),
-    }
-    .with_context(|| {
-        format!(
-            "comparing {} with {}",
-            args.test.display(),
-            args.reference.display()
-        )
-    })?;
+    let m = measure(&a, &b, &args.test)?;
     if m.pixels == 0 {
         bail!(
             "the mask selects no pixel (is the reference's alpha an object mask? try --mask all)"
         );
     }
+    let corrected = between.map(|between| reference_noise::corrected(&m, &between));
+    print_report(&args, &m, corrected.as_ref());
+    if let Some(path) = &args.side_by_side {
+        let pixels = side_by_side(&b, &a, w, h);
+        image_file::write_png(path, (2 * w + GAP) as u32, h as u32, &pixels, args.exposure)?;
+        println!(
+            "side by side {} (left {}, right {})",
+            path.display(),
+            args.test.display(),
+            args.reference.display()
+        );
+    }
+    let report = Report {
+        metrics: m,
+        corrected,
+    };
+    if let Some(path) = &args.json {
+        oslf_util::output_file::write_bytes(
+            path,
+            serde_json::to_string_pretty(&report)?.as_bytes(),
+        )?;
+    }
+    if let Some(path) = &args.csv {
+        append_csv_row(path, &args, &report)?;
+    }
+    Ok(())
+}
+
+/// The lines on stdout.
+fn print_report(args: &Args, m: &Metrics, corrected: Option<&Corrected>) {
     let psnr = m.psnr_db.map_or("inf".to_string(), |p| format!("{p:.2}"));
     println!("pixels      {}", m.pixels);
+    if let (Some(c), Some(second)) = (corrected, &args.second_reference) {
+        let n = c.reference_noise_lab;
+        println!(
+            "reference   the mean of {} and {}; its own noise RMSE L*a*b* {:.4} {:.4} {:.4} (half the two's difference)",
+            args.reference.display(),
+            second.display(),
+            n[0],
+            n[1],
+            n[2]
+        );
+    }
     println!(
         "RMSE L*a*b* {:.4} {:.4} {:.4}   (/100: {:.6} {:.6} {:.6})",
         m.rmse_lab[0],
@@ -150,50 +232,58 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "RMSE RGB    {:.6} {:.6} {:.6}",
         m.rmse_rgb[0], m.rmse_rgb[1], m.rmse_rgb[2]
     );
-    println!("PSNR        {psnr} dB (white {})", m.white);
-    if let Some(path) = &args.side_by_side {
-        let pixels = side_by_side(&b, &a, w, h);
-        image_file::write_png(path, (2 * w + GAP) as u32, h as u32, &pixels, args.exposure)?;
+    if let Some(c) = corrected {
+        let e = c.rmse_lab;
         println!(
-            "side by side {} (left {}, right {})",
-            path.display(),
-            args.test.display(),
-            args.reference.display()
+            "corrected   RMSE L*a*b* {:.4} {:.4} {:.4}   (the reference's noise taken out in quadrature)",
+            e[0], e[1], e[2]
         );
     }
-    if let Some(path) = &args.json {
-        oslf_util::output_file::write_bytes(path, serde_json::to_string_pretty(&m)?.as_bytes())?;
-    }
-    if let Some(path) = &args.csv {
-        append_csv_row(path, &args, &m)?;
-    }
-    Ok(())
+    println!("PSNR        {psnr} dB (white {})", m.white);
 }
 
 /// The header of `--csv`, written when the file is new.
-const CSV_HEADER: &str = "reference,test,pixels,rmse_l,rmse_a,rmse_b,rmse_l_norm,rmse_a_norm,rmse_b_norm,rmse_r,rmse_g,rmse_b_rgb,psnr_db,white";
+/// The corrected columns are empty without `--second-reference`.
+const CSV_HEADER: &str = "reference,test,pixels,rmse_l,rmse_a,rmse_b,rmse_l_norm,rmse_a_norm,rmse_b_norm,rmse_r,rmse_g,rmse_b_rgb,psnr_db,white,second_reference,rmse_l_corrected,rmse_a_corrected,rmse_b_corrected";
 
 /// The most bytes of a `--csv` file that a row is appended to: 256 MiB.
 const MAX_CSV_BYTES: u64 = 256 << 20;
 
 /// Appends one row for `m` to the CSV file at `path` (with the header if the file is new):
 /// the whole file is written anew through a temporary file and renamed into place, so an
-/// interrupted append leaves the old rows as they were.
-fn append_csv_row(path: &Path, args: &Args, m: &Metrics) -> anyhow::Result<()> {
+/// interrupted append leaves the old rows as they were. A file whose header is not this
+/// version's is refused (its columns would not line up).
+fn append_csv_row(path: &Path, args: &Args, report: &Report) -> anyhow::Result<()> {
+    let m = &report.metrics;
     let mut text = if path.exists() {
         let limit = Limit::new(
             MAX_CSV_BYTES,
             format!("the {} allowed for a --csv file", byte_size(MAX_CSV_BYTES)),
         );
-        oslf_util::input_file::read(path, &limit)?
+        let text = oslf_util::input_file::read(path, &limit)?;
+        let header = text.split(|&c| c == b'\n').next().unwrap_or_default();
+        if header.strip_suffix(b"\r").unwrap_or(header) != CSV_HEADER.as_bytes() {
+            bail!(
+                "{}: line 1 is not the header of this oslf's --csv rows ({CSV_HEADER}), so a row would not line up with its columns; append to a new file",
+                path.display()
+            );
+        }
+        text
     } else {
         format!("{CSV_HEADER}\n").into_bytes()
     };
     if text.last().is_some_and(|&b| b != b'\n') {
         text.push(b'\n');
     }
+    let corrected = report.corrected.as_ref().map_or(",,".to_string(), |c| {
+        format!("{},{},{}", c.rmse_lab[0], c.rmse_lab[1], c.rmse_lab[2])
+    });
+    let second = args
+        .second_reference
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
     let row = format!(
-        "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{second},{corrected}\n",
         args.reference.display(),
         args.test.display(),
         m.pixels,
