@@ -59,7 +59,7 @@ const BASE: &[(&str, &str)] = &[
     ),
     (
         "compare",
-        "compare %reference=a.exr %test=b.exr --json @json=c.json --csv @csv=c.csv --side-by-side @side_by_side=sbs.png",
+        "compare %reference=a.exr %test=b.exr --second-reference %second_reference=a2.exr --json @json=c.json --csv @csv=c.csv --side-by-side @side_by_side=sbs.png",
     ),
     (
         "tables",
@@ -210,6 +210,7 @@ fn fixtures(dir: &Path) {
     let px = vec![[0.5f32, 0.25, 0.125, 1.0]; 4];
     oslf_util::image_file::write_exr_rgba(&dir.join("a.exr"), 2, 2, &px).unwrap();
     oslf_util::image_file::write_exr_rgba(&dir.join("b.exr"), 2, 2, &px).unwrap();
+    oslf_util::image_file::write_exr_rgba(&dir.join("a2.exr"), 2, 2, &px).unwrap();
 }
 
 /// The names and contents of the regular files in `dir`, and the names of everything else.
