@@ -1,6 +1,8 @@
 //! `oslf truth --background scene` and `oslf compare --side-by-side`: the scene behind the
 //! object changes no object pixel and no metric, and the pair is written as one PNG.
 
+use std::path::{Path, PathBuf};
+
 use crate::common;
 
 use common::{oslf, read_exr};
@@ -14,6 +16,26 @@ fn scene_text() -> String {
     )
 }
 
+/// `oslf truth SCENE -m mirror ARGS -q -o PREFIX`, which must succeed; the mirror image's path.
+fn mirror_truth(scene: &Path, args: &[&str], prefix: &Path) -> PathBuf {
+    let out = oslf("truth")
+        .arg(scene)
+        .args(["-m", "mirror"])
+        .args(args)
+        .args(["-q", "-o"])
+        .arg(prefix)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut name = prefix.file_name().unwrap().to_os_string();
+    name.push("-mirror.exr");
+    prefix.with_file_name(name)
+}
+
 #[test]
 fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() {
     let tmp = tempfile::tempdir().unwrap();
@@ -21,21 +43,9 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, scene_text()).unwrap();
     let truth = |background: &str, prefix: &str| {
-        let out = oslf("truth")
-            .arg(&scene)
-            .args([
-                "-m", "mirror", "--spp", "2", "--width", "40", "--height", "30", "-q",
-            ])
-            .args(["--background", background, "-o"])
-            .arg(dir.join(prefix))
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        read_exr(&dir.join(format!("{prefix}-mirror.exr"))).1
+        let args = ["--spp", "2", "--width", "40", "--height", "30"];
+        let args = [&args[..], &["--background", background]].concat();
+        read_exr(&mirror_truth(&scene, &args, &dir.join(prefix))).1
     };
     let plain = truth("none", "plain");
     let behind = truth("scene", "behind");
@@ -156,22 +166,10 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
     let scene = dir.join("lid.toml");
     std::fs::write(&scene, scene_text()).unwrap();
     let truth = |seed: &str, width: &str| {
-        let prefix = dir.join(format!("t{seed}-{width}"));
-        let out = oslf("truth")
-            .arg(&scene)
-            .args([
-                "-m", "mirror", "--spp", "4", "--width", width, "--height", "60",
-            ])
-            .args(["--seed", seed, "-q", "-o"])
-            .arg(&prefix)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        prefix.with_file_name(format!("t{seed}-{width}-mirror.exr"))
+        let args = [
+            "--spp", "4", "--width", width, "--height", "60", "--seed", seed,
+        ];
+        mirror_truth(&scene, &args, &dir.join(format!("t{seed}-{width}")))
     };
     let (a, b, test) = (truth("1", "80"), truth("2", "80"), truth("3", "80"));
     let (json, csv) = (dir.join("c.json"), dir.join("c.csv"));
