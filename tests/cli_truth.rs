@@ -157,8 +157,8 @@ fn the_pbr_truth_renders_and_checks_its_material() {
 /// `oslf compare --second-reference`: three truths of one scene at other seeds; the third
 /// judged against the first two's mean. Its error is then only noise, of the same size as
 /// each truth's: raw √(σ² + σ²/2), the mean's noise σ/√2, and the corrected error σ, √(2/3)
-/// of the raw. The JSON and CSV carry it; a CSV of another header and a second reference of
-/// another size are refused.
+/// of the raw. The JSON and CSV carry it, and the side-by-side pair names the mean; a CSV of
+/// another header and a second reference of another size are refused.
 #[test]
 fn a_second_reference_takes_the_references_noise_out_of_the_error() {
     let tmp = tempfile::tempdir().unwrap();
@@ -183,6 +183,8 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
             .arg(&json)
             .arg("--csv")
             .arg(csv)
+            .arg("--side-by-side")
+            .arg(dir.join("pair.png"))
             .output()
             .unwrap()
     };
@@ -195,6 +197,8 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
     );
     assert!(stdout.contains("reference   the mean of "), "{stdout}");
     assert!(stdout.contains("corrected   RMSE L*a*b* "), "{stdout}");
+    // The pair's right half is what the test was judged against, and says so.
+    assert!(stdout.contains(", right the mean of "), "{stdout}");
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     let c = &j["corrected"];
     for ch in 0..3 {

@@ -1,6 +1,6 @@
 //! The cache's statistics in the main world: a resource summed over every OSLF object's
 //! renderer, and Bevy diagnostics (misses and loads per frame, miss rate, the GPU time of the
-//! plugin's G-buffer and shading passes) for the usual diagnostic tools.
+//! plugin's G-buffer, shading and composite passes) for the usual diagnostic tools.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -25,6 +25,9 @@ pub const CACHE_MISS_RATE: DiagnosticPath = DiagnosticPath::const_new("oslf/cach
 pub const GBUFFER_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/gbuffer_gpu_ms");
 /// GPU milliseconds of the objects' shading passes, as [`GBUFFER_GPU_MS`].
 pub const SHADE_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/shade_gpu_ms");
+/// GPU milliseconds of the objects' composite passes (into the camera's colour and depth), as
+/// [`GBUFFER_GPU_MS`].
+pub const COMPOSITE_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/composite_gpu_ms");
 
 /// The cache counters of every OSLF object, as the render world booked them (feedback arrives
 /// a few frames after it was drawn: the GPU is never waited for).
@@ -75,7 +78,8 @@ pub(crate) fn register(app: &mut App) {
         .register_diagnostic(Diagnostic::new(CACHE_LOADS))
         .register_diagnostic(Diagnostic::new(CACHE_MISS_RATE))
         .register_diagnostic(Diagnostic::new(GBUFFER_GPU_MS).with_suffix("ms"))
-        .register_diagnostic(Diagnostic::new(SHADE_GPU_MS).with_suffix("ms"));
+        .register_diagnostic(Diagnostic::new(SHADE_GPU_MS).with_suffix("ms"))
+        .register_diagnostic(Diagnostic::new(COMPOSITE_GPU_MS).with_suffix("ms"));
 }
 
 /// Moves what the render world booked into [`OslfCacheStats`] and the diagnostics.
@@ -94,6 +98,9 @@ pub(crate) fn publish_stats(
     }
     if let Some(ms) = sum(|p| p.shade) {
         diagnostics.add_measurement(&SHADE_GPU_MS, || ms);
+    }
+    if let Some(ms) = sum(|p| p.composite) {
+        diagnostics.add_measurement(&COMPOSITE_GPU_MS, || ms);
     }
     let latest = booked.cache;
     if latest.frames > 0 {

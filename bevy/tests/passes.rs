@@ -370,7 +370,11 @@ fn the_plugins_share_of_the_frame_is_a_bevy_render_diagnostic() {
         "{without:?}"
     );
     // The plugin's own passes, timed inside its frame (lavapipe has timestamp queries).
-    for pass in ["oslf/gbuffer_gpu_ms", "oslf/shade_gpu_ms"] {
+    for pass in [
+        "oslf/gbuffer_gpu_ms",
+        "oslf/shade_gpu_ms",
+        "oslf/composite_gpu_ms",
+    ] {
         let ms = with.iter().find(|(p, _)| p == pass).map(|(_, v)| *v);
         assert!(
             ms.is_some_and(|v| v > 0.0 && v.is_finite()),

@@ -90,8 +90,12 @@ pub struct CacheStats {
     pub ram_evictions: u64,
     /// Bytes of encoded texels decoded (zstd + filter) from the store.
     pub bytes_decoded: u64,
-    /// Bytes uploaded to the GPU.
+    /// Bytes of cube-map texels uploaded to the GPU.
     pub bytes_uploaded: u64,
+    /// Writes of the indirection table (which slot holds which cube's faces) to the GPU: one in
+    /// a frame whose resident set changed, none in a frame where it did not.
+    #[serde(default)]
+    pub table_writes: u64,
     /// Wall time spent decoding.
     pub decode_seconds: f64,
     /// Wall time spent handing uploads to the GPU queue.
@@ -127,6 +131,7 @@ impl CacheStats {
         self.ram_evictions += o.ram_evictions;
         self.bytes_decoded += o.bytes_decoded;
         self.bytes_uploaded += o.bytes_uploaded;
+        self.table_writes += o.table_writes;
         self.decode_seconds += o.decode_seconds;
         self.upload_seconds += o.upload_seconds;
         self.decode_errors += o.decode_errors;

@@ -398,15 +398,31 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
         booked.last().is_some_and(|s| s.misses == 0),
         "{label}: the frames never stopped missing: {booked:?}"
     );
-    // One more frame, everything resident: the image to check.
-    host.frame(&gpu, &mut r, &view, &params);
+    // The indirection table goes to the GPU in the frames that loaded faces.
+    assert!(
+        booked.iter().all(|s| s.loads == 0 || s.table_writes > 0),
+        "{label}: a frame loaded faces without writing the table: {booked:?}"
+    );
+    // One more frame, everything resident: the image to check. It uploads nothing: no faces,
+    // and not the unchanged table.
+    let mut steady: Vec<_> = host
+        .frame(&gpu, &mut r, &view, &params)
+        .into_iter()
+        .collect();
     gpu.wait().unwrap();
-    r.after_submit().unwrap();
+    steady.extend(r.after_submit().unwrap());
+    assert!(!steady.is_empty(), "{label}: the last frame booked nothing");
+    assert!(
+        steady
+            .iter()
+            .all(|s| s.loads == 0 && s.bytes_uploaded == 0 && s.table_writes == 0),
+        "{label}: the steady frame uploaded: {steady:?}"
+    );
     // The booked frames' passes were timed inside the host's encoder (lavapipe has
     // timestamp queries).
     let times = r.host_pass_seconds();
     assert!(
-        times.is_some_and(|t| [t.gbuffer, t.shade]
+        times.is_some_and(|t| [t.gbuffer, t.shade, t.composite]
             .iter()
             .all(|s| s.is_some_and(|s| s > 0.0 && s < 60.0))),
         "{label}: host pass times {times:?}"

@@ -40,8 +40,9 @@ pub struct Args {
     /// Also append the result as one CSV row (header written when the file is new).
     #[arg(long)]
     csv: Option<OutputPath>,
-    /// Also write a PNG with the test image on the left and the reference on the right,
-    /// tone mapped alike (whole images: background pixels too).
+    /// Also write a PNG with the test image on the left and the reference on the right (with
+    /// --second-reference, the two references' mean: what the test is judged against), tone
+    /// mapped alike (whole images: background pixels too).
     #[arg(long, value_name = "PNG")]
     side_by_side: Option<OutputPath>,
     /// Exposure of --side-by-side, 1e-6 to 1e6.
@@ -181,11 +182,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.side_by_side {
         let pixels = side_by_side(&b, &a, w, h);
         image_file::write_png(path, (2 * w + GAP) as u32, h as u32, &pixels, args.exposure)?;
+        let right = match &second {
+            Some((path2, _)) => format!(
+                "the mean of {} and {}",
+                args.reference.display(),
+                path2.display()
+            ),
+            None => args.reference.display().to_string(),
+        };
         println!(
-            "side by side {} (left {}, right {})",
+            "side by side {} (left {}, right {right})",
             path.display(),
             args.test.display(),
-            args.reference.display()
         );
     }
     let report = Report {

@@ -185,17 +185,29 @@ impl HostTarget<'_> {
     }
 }
 
-/// The composite pipelines, one per host target kind, and their bind-group layout.
+/// The composite pipelines, one per host target kind, their bind-group layout and the
+/// uniform they read (composite.wgsl's `exposure`).
 pub(super) struct Composites {
     pipelines: std::collections::HashMap<CompositeKey, wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
+    /// The exposure and depth slack, copied from each view's staging buffer in the encoder.
+    uniform: wgpu::Buffer,
 }
+
+/// Bytes of the composite's uniform: exposure, depth slack, two unused.
+const COMPOSITE_UNIFORM_BYTES: u64 = 16;
 
 impl Composites {
     pub(super) fn new(device: &wgpu::Device) -> Self {
         Self {
             pipelines: Default::default(),
             layout: composite_layout(device),
+            uniform: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("composite exposure"),
+                size: COMPOSITE_UNIFORM_BYTES,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
         }
     }
 }
@@ -229,6 +241,8 @@ pub struct HostPassSeconds {
     pub gbuffer: Option<f64>,
     /// Its shading pass.
     pub shade: Option<f64>,
+    /// The composite pass into the host's targets.
+    pub composite: Option<f64>,
 }
 
 enum SlotState {
@@ -308,8 +322,8 @@ impl Renderer {
         Ok((u, pipeline))
     }
 
-    /// Records the host frame's passes into `encoder`: its uniform, the G-buffer, the shading,
-    /// the feedback copy (when a slot is free) and the composite.
+    /// Records the host frame's passes into `encoder`: its uniforms, the G-buffer, the shading,
+    /// the feedback copy (when a slot is free), the composite and its timestamps.
     fn record_host_frame(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -318,51 +332,102 @@ impl Renderer {
         composite: &wgpu::RenderPipeline,
         exposure: f32,
     ) -> Result<()> {
-        // The uniform travels in the encoder, so that each view recorded into it has its own.
+        // The uniforms travel in the encoder, so that each view recorded into it has its own:
+        // one staging buffer per view (the shading's uniform, then the composite's), copied
+        // into the buffers the passes' bind groups hold.
+        let shade_bytes = std::mem::size_of::<ShadeUniform>() as u64;
+        let mut contents = bytemuck::bytes_of(u).to_vec();
+        contents.extend_from_slice(bytemuck::bytes_of(&[
+            exposure,
+            target.depth_slack,
+            0.0,
+            0.0,
+        ]));
         let staging = self
             .gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("host uniform"),
-                contents: bytemuck::bytes_of(u),
+                label: Some("host uniforms"),
+                contents: &contents,
                 usage: wgpu::BufferUsages::COPY_SRC,
             });
+        encoder.copy_buffer_to_buffer(&staging, 0, &self.buffers.uniform, 0, Some(shade_bytes));
         encoder.copy_buffer_to_buffer(
             &staging,
+            shade_bytes,
+            &self.composites.uniform,
             0,
-            &self.buffers.uniform,
-            0,
-            Some(std::mem::size_of::<ShadeUniform>() as u64),
+            Some(COMPOSITE_UNIFORM_BYTES),
         );
         encoder.clear_buffer(&self.buffers.feedback, 0, None);
         let table_bytes = self.buffers.timestamps_offset;
         // The frame's feedback slot, if one is free; its passes are timed into it.
         let slot = self.feedback_slot(table_bytes + TIMESTAMP_BYTES);
-        let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
+        self.ensure_composite_group()?;
         let targets = self
             .targets
             .as_ref()
             .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
+        let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
         self.encode_gbuffer(encoder, targets, timer);
         self.encode_shading(encoder, targets, timer)?;
-        self.host_frames += 1;
-        let frame = self.host_frames;
         if let Some(i) = slot {
-            let s = &self.feedback_slots[i];
             encoder.copy_buffer_to_buffer(
                 &self.buffers.feedback,
                 0,
-                &s.buffer,
+                &self.feedback_slots[i].buffer,
                 0,
                 Some(table_bytes),
             );
-            if let Some(t) = &s.timer {
-                t.encode_copy(encoder, TimedPass::GBuffer, &s.buffer, table_bytes);
-                t.encode_copy(encoder, TimedPass::Shade, &s.buffer, table_bytes);
-            }
-            self.feedback_slots[i].state = SlotState::Encoded(frame);
         }
-        self.encode_composite(encoder, target, composite, exposure)
+        encode_composite(encoder, target, composite, targets, timer);
+        self.host_frames += 1;
+        if let Some(i) = slot {
+            let s = &self.feedback_slots[i];
+            if let Some(t) = &s.timer {
+                for pass in [TimedPass::GBuffer, TimedPass::Shade, TimedPass::Composite] {
+                    t.encode_copy(encoder, pass, &s.buffer, table_bytes);
+                }
+            }
+            self.feedback_slots[i].state = SlotState::Encoded(self.host_frames);
+        }
+        Ok(())
+    }
+
+    /// Makes the composite's bind group for the current targets, unless they have one.
+    fn ensure_composite_group(&mut self) -> Result<()> {
+        let targets = self
+            .targets
+            .as_mut()
+            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
+        if targets.composite_group.is_some() {
+            return Ok(());
+        }
+        let shaded = targets.output.create_view(&Default::default());
+        let depth = targets.depth.create_view(&Default::default());
+        let group = self
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("composite"),
+                layout: &self.composites.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&shaded),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&depth),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: self.composites.uniform.as_entire_binding(),
+                    },
+                ],
+            });
+        targets.composite_group = Some(group);
+        Ok(())
     }
 
     /// Call once the encoder of [`Renderer::encode_into`] is submitted: maps the feedback it
@@ -416,6 +481,7 @@ impl Renderer {
                     self.host_pass_seconds = Some(HostPassSeconds {
                         gbuffer: t.seconds(stamps, TimedPass::GBuffer),
                         shade: t.seconds(stamps, TimedPass::Shade),
+                        composite: t.seconds(stamps, TimedPass::Composite),
                     });
                 }
                 let mut masks: Vec<u32> =
@@ -426,7 +492,7 @@ impl Renderer {
             self.feedback_slots[slot].state = SlotState::Free;
             let (uploads, mut stats) = self.cache.plan(&masks, &self.store, false);
             stats.upload_seconds = self.pool.upload(&self.gpu.queue, &uploads);
-            self.write_slots();
+            stats.table_writes = self.write_slots();
             self.cache.cumulative.add(&stats);
             match &mut booked {
                 None => booked = Some(stats),
@@ -515,76 +581,52 @@ impl Renderer {
             Background::None,
         )
     }
+}
 
-    /// Records the composite pass: the shaded object, scaled by `exposure`, into the host's
-    /// colour target, its depth
-    /// (turned back if reversed) tested against and written into the host's depth.
-    fn encode_composite(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &HostTarget<'_>,
-        pipeline: &wgpu::RenderPipeline,
-        exposure: f32,
-    ) -> Result<()> {
-        let device = &self.gpu.device;
-        let scale = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("composite exposure"),
-            contents: bytemuck::bytes_of(&[exposure, target.depth_slack, 0.0, 0.0]),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let layout = &self.composites.layout;
-        let targets = self
-            .targets
-            .as_ref()
-            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
-        let shaded = targets.output.create_view(&Default::default());
-        let depth = targets.depth.create_view(&Default::default());
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("composite"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&shaded),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&depth),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: scale.as_entire_binding(),
-                },
-            ],
-        });
-        fn keep<V>() -> wgpu::Operations<V> {
-            wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            }
+/// Records the composite pass: the shaded object, scaled by the exposure, into the host's
+/// colour target where its depth passes the host's depth test, its depth written; timed where
+/// `timer`.
+fn encode_composite(
+    encoder: &mut wgpu::CommandEncoder,
+    target: &HostTarget<'_>,
+    pipeline: &wgpu::RenderPipeline,
+    targets: &super::targets::SizedTargets,
+    timer: Option<&PassTimer>,
+) {
+    fn keep<V>() -> wgpu::Operations<V> {
+        wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("composite"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target.color,
-                depth_slice: None,
-                resolve_target: None,
-                ops: keep(),
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target.depth,
-                depth_ops: Some(keep()),
-                stencil_ops: target.depth_format.has_stencil_aspect().then(keep),
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.draw(0..3, 0..1);
-        Ok(())
     }
+    let timestamp_writes = timer.map(|t| {
+        let (query_set, begin, end) = t.writes(TimedPass::Composite);
+        wgpu::RenderPassTimestampWrites {
+            query_set,
+            beginning_of_pass_write_index: begin,
+            end_of_pass_write_index: end,
+        }
+    });
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("composite"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target.color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: keep(),
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: target.depth,
+            depth_ops: Some(keep()),
+            stencil_ops: target.depth_format.has_stencil_aspect().then(keep),
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, targets.composite_group.as_ref(), &[]);
+    pass.draw(0..3, 0..1);
 }
 
 /// composite.wgsl's bindings: the shaded image, the G-buffer's depth and the exposure.

@@ -141,6 +141,8 @@ pub struct Renderer {
     feedback_slots: Vec<host::FeedbackSlot>,
     /// The latest booked host frame's pass times ([`Renderer::host_pass_seconds`]).
     host_pass_seconds: Option<HostPassSeconds>,
+    /// The indirection table as last written to the GPU (`write_slots`).
+    slots_written: Vec<u32>,
     /// The composite pipelines of the host targets seen.
     composites: host::Composites,
 }
@@ -297,6 +299,7 @@ impl Renderer {
             feedback_slots: Vec::new(),
             host_pass_seconds: None,
             composites,
+            slots_written: Vec::new(),
         };
         renderer.timer = PassTimer::new(&renderer.gpu);
         renderer.load_env_cube();
@@ -390,15 +393,21 @@ impl Renderer {
         )
     }
 
-    /// Writes the cache's indirection table to the GPU.
-    fn write_slots(&self) {
+    /// Writes the cache's indirection table to the GPU unless the GPU has it already.
+    /// Returns 1 when it wrote it, 0 when not (a [`CacheStats::table_writes`] count).
+    fn write_slots(&mut self) -> u64 {
         let mut table = self.cache.indirection();
         if table.is_empty() {
             table.push(0);
         }
+        if table == self.slots_written {
+            return 0;
+        }
         self.gpu
             .queue
             .write_buffer(&self.buffers.slots, 0, bytemuck::cast_slice(&table));
+        self.slots_written = table;
+        1
     }
 
     /// Creates the G-buffer, depth and output textures and the shading bind group for images
@@ -489,7 +498,7 @@ impl Renderer {
             let (uploads, mut frame_stats) =
                 self.cache.plan(&needed, &self.store, opts.resolve_misses);
             frame_stats.upload_seconds = self.pool.upload(&self.gpu.queue, &uploads);
-            self.write_slots();
+            frame_stats.table_writes = self.write_slots();
             frame_stats.cache_seconds = readback + start.elapsed().as_secs_f64();
             let missed = frame_stats.misses > 0 && !uploads.is_empty();
             // This pass shaded without what it missed; the last pass's count is the image's.

@@ -14,6 +14,9 @@ pub(super) struct SizedTargets {
     pub(super) depth: wgpu::Texture,
     pub(super) output: wgpu::Texture,
     pub(super) shade_group: wgpu::BindGroup,
+    /// The host frame's composite bind group over `output` and `depth`, made at the first
+    /// host frame of this size (`host.rs`).
+    pub(super) composite_group: Option<wgpu::BindGroup>,
 }
 
 impl SizedTargets {
@@ -98,6 +101,7 @@ impl SizedTargets {
             depth,
             output,
             shade_group,
+            composite_group: None,
         }
     }
 }

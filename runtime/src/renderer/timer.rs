@@ -3,9 +3,10 @@
 use crate::buffers::TIMESTAMP_BYTES;
 use crate::Gpu;
 
-/// Timestamps at the start and end of the G-buffer pass (queries 0, 1) and of the shading pass
-/// (2, 3), resolved into `resolve` (one pair per 256-byte resolve offset) and copied behind
-/// the feedback masks (`StoreBuffers::feedback_readback`), so one map per pass reads them.
+/// Timestamps at the start and end of the G-buffer pass (queries 0, 1), of the shading pass
+/// (2, 3) and of a host frame's composite pass (4, 5), resolved into `resolve` (one pair per
+/// 256-byte resolve offset) and copied behind the feedback masks
+/// (`StoreBuffers::feedback_readback`), so one map per frame reads them.
 pub(super) struct PassTimer {
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,
@@ -13,12 +14,18 @@ pub(super) struct PassTimer {
     period_ns: f64,
 }
 
-/// A pass's pair of timestamps: G-buffer or shading.
+/// A pass's pair of timestamps: G-buffer, shading or (host frames) composite.
 #[derive(Clone, Copy)]
 pub(super) enum TimedPass {
     GBuffer = 0,
     Shade = 1,
+    Composite = 2,
 }
+
+/// The timed passes.
+const PASSES: u32 = 3;
+// Each pass's pair is two u64 ticks behind the feedback masks.
+const _: () = assert!(TIMESTAMP_BYTES == 16 * PASSES as u64);
 
 impl TimedPass {
     /// Its two queries' indices.
@@ -33,7 +40,7 @@ impl TimedPass {
 
     /// Where its pair lies behind the feedback masks.
     pub(super) fn readback_offset(self) -> u64 {
-        TIMESTAMP_BYTES / 2 * self as u64
+        TIMESTAMP_BYTES / u64::from(PASSES) * self as u64
     }
 }
 
@@ -46,11 +53,11 @@ impl PassTimer {
             queries: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 4,
+                count: 2 * PASSES,
             }),
             resolve: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("pass timestamps"),
-                size: 2 * wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT,
+                size: u64::from(PASSES) * wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
@@ -83,7 +90,7 @@ impl PassTimer {
             pass.resolve_offset(),
             readback,
             stamps + pass.readback_offset(),
-            Some(TIMESTAMP_BYTES / 2),
+            Some(TIMESTAMP_BYTES / u64::from(PASSES)),
         );
     }
 
