@@ -1,8 +1,13 @@
-//! What the render world needs of the main world each frame: every OSLF object (its store,
-//! transform, visibility and shading) and the stores they use.
+//! What the render world needs of the main world: every OSLF object (its store, transform,
+//! visibility and shading) and the stores they use. Extracted again only in a frame where
+//! something of it changed (an object's component, transform or visibility; an object
+//! removed; a store loaded, reloaded or dropped): the render world keeps the last extraction
+//! otherwise, as Bevy's own extraction of visibility ranges does.
 
-use bevy::asset::{AssetId, Assets};
+use bevy::asset::{AssetEvent, AssetId, Assets};
 use bevy::camera::visibility::InheritedVisibility;
+use bevy::ecs::lifecycle::RemovedComponents;
+use bevy::ecs::message::MessageReader;
 use bevy::ecs::prelude::*;
 use bevy::math::Mat4;
 use bevy::render::Extract;
@@ -11,6 +16,7 @@ use oslf_runtime::ShadingParams;
 
 use crate::asset::OslfStore;
 use crate::object::OslfObject;
+use crate::stats::StatsSink;
 
 /// One object as extracted for this frame.
 #[derive(Clone, Debug)]
@@ -43,11 +49,31 @@ pub(crate) fn uniform_scale(t: &GlobalTransform) -> bool {
     lo > 0.0 && hi.is_finite() && (hi - lo) <= 1e-4 * hi
 }
 
+/// The objects whose component, transform or visibility changed since the last extraction.
+type ChangedObjects = (
+    With<OslfObject>,
+    Or<(
+        Changed<OslfObject>,
+        Changed<GlobalTransform>,
+        Changed<InheritedVisibility>,
+    )>,
+);
+
 pub(crate) fn extract_oslf(
     mut out: ResMut<ExtractedOslf>,
     objects: Extract<Query<(Entity, &OslfObject, &GlobalTransform, &InheritedVisibility)>>,
+    changed: Extract<Query<(), ChangedObjects>>,
+    mut removed: Extract<RemovedComponents<OslfObject>>,
+    mut store_events: Extract<MessageReader<AssetEvent<OslfStore>>>,
     stores: Extract<Res<Assets<OslfStore>>>,
+    sink: Res<StatsSink>,
 ) {
+    // Both readers are drained every frame, so that what they held is not seen again.
+    let removed_any = removed.read().count() > 0;
+    let stores_changed = store_events.read().count() > 0;
+    if changed.is_empty() && !removed_any && !stores_changed {
+        return;
+    }
     out.objects.clear();
     out.stores.clear();
     out.sheared.clear();
@@ -74,4 +100,5 @@ pub(crate) fn extract_oslf(
             radiance_scale: object.radiance_scale,
         });
     }
+    sink.extracted(objects.iter().count() as u64);
 }

@@ -1,6 +1,7 @@
 //! The cache's statistics in the main world: a resource summed over every OSLF object's
 //! renderer, and Bevy diagnostics (misses and loads per frame, miss rate, the GPU time of the
-//! plugin's G-buffer, shading and composite passes) for the usual diagnostic tools.
+//! plugin's G-buffer, shading and composite passes, the objects extracted) for the usual
+//! diagnostic tools.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -29,6 +30,11 @@ pub const SHADE_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/shade_g
 /// [`GBUFFER_GPU_MS`].
 pub const COMPOSITE_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/composite_gpu_ms");
 
+/// OSLF objects extracted to the render world since the previous main-world update: every
+/// object in a frame where one of them (its component, transform or visibility) or a store
+/// changed, none in a frame where nothing did.
+pub const EXTRACTED_OBJECTS: DiagnosticPath = DiagnosticPath::const_new("oslf/extracted_objects");
+
 /// The cache counters of every OSLF object, as the render world booked them (feedback arrives
 /// a few frames after it was drawn: the GPU is never waited for).
 #[derive(Resource, Clone, Debug, Default)]
@@ -45,6 +51,7 @@ pub struct OslfCacheStats {
 pub(crate) struct Booked {
     cache: CacheStats,
     passes: HashMap<AssetId<OslfStore>, HostPassSeconds>,
+    extracted: u64,
 }
 
 /// The render world's side of [`OslfCacheStats`] and the diagnostics.
@@ -64,6 +71,12 @@ impl StatsSink {
         }
     }
 
+    pub fn extracted(&self, objects: u64) {
+        if let Ok(mut s) = self.0.lock() {
+            s.extracted += objects;
+        }
+    }
+
     fn take(&self) -> Booked {
         self.0
             .lock()
@@ -79,7 +92,8 @@ pub(crate) fn register(app: &mut App) {
         .register_diagnostic(Diagnostic::new(CACHE_MISS_RATE))
         .register_diagnostic(Diagnostic::new(GBUFFER_GPU_MS).with_suffix("ms"))
         .register_diagnostic(Diagnostic::new(SHADE_GPU_MS).with_suffix("ms"))
-        .register_diagnostic(Diagnostic::new(COMPOSITE_GPU_MS).with_suffix("ms"));
+        .register_diagnostic(Diagnostic::new(COMPOSITE_GPU_MS).with_suffix("ms"))
+        .register_diagnostic(Diagnostic::new(EXTRACTED_OBJECTS));
 }
 
 /// Moves what the render world booked into [`OslfCacheStats`] and the diagnostics.
@@ -102,6 +116,7 @@ pub(crate) fn publish_stats(
     if let Some(ms) = sum(|p| p.composite) {
         diagnostics.add_measurement(&COMPOSITE_GPU_MS, || ms);
     }
+    diagnostics.add_measurement(&EXTRACTED_OBJECTS, || booked.extracted as f64);
     let latest = booked.cache;
     if latest.frames > 0 {
         stats.total.add(&latest);

@@ -240,6 +240,72 @@ fn bevy_meshes_in_front_hide_the_object_and_it_hides_those_behind() {
     }
 }
 
+/// The objects extracted to the render world in each of `frames` updates
+/// (`oslf/extracted_objects`).
+fn extracted_per_update(app: &mut App, frames: usize) -> Vec<f64> {
+    (0..frames)
+        .map(|_| {
+            app.update();
+            app.world()
+                .resource::<bevy::diagnostic::DiagnosticsStore>()
+                .get(&oslf_bevy::stats::EXTRACTED_OBJECTS)
+                .and_then(|d| d.value())
+                .unwrap_or(f64::NAN)
+        })
+        .collect()
+}
+
+/// The render world keeps the last extraction while nothing changes, and follows every
+/// change: the object hidden, shown and moved, moved back, its component removed.
+#[test]
+fn the_object_follows_its_entity_and_still_frames_extract_nothing() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, reference) = reference(&store, &params());
+    let mut app = app(dir, setup_for(camera, Extra::None, true));
+    let settled = run_and_capture(&mut app, 60);
+    let (n, share) = agreement(&settled, &reference, 1e-2);
+    assert!(n > 1000 && share >= 0.99, "{n} object pixels, {share}");
+    // Nothing changes: nothing is extracted, and the object is still drawn.
+    let still = extracted_per_update(&mut app, 5);
+    assert!(
+        still.iter().all(|&e| e == 0.0),
+        "still frames extracted {still:?}"
+    );
+    assert!(agreement(&run_and_capture(&mut app, 1), &reference, 1e-2).1 >= 0.99);
+    let object = {
+        let mut q = app.world_mut().query_filtered::<Entity, With<OslfObject>>();
+        q.single(app.world()).unwrap()
+    };
+    let change = |app: &mut App, what: &dyn Fn(&mut bevy::ecs::world::EntityWorldMut)| {
+        what(&mut app.world_mut().entity_mut(object));
+        let extracted = extracted_per_update(app, 3);
+        assert!(
+            extracted.iter().any(|&e| e == 1.0),
+            "the change was not extracted: {extracted:?}"
+        );
+        agreement(&run_and_capture(app, 1), &reference, 1e-2).1
+    };
+    let hidden = change(&mut app, &|e| {
+        e.insert(bevy::camera::visibility::Visibility::Hidden);
+    });
+    assert!(hidden < 0.05, "hidden, still drawn: {hidden}");
+    let moved = change(&mut app, &|e| {
+        e.insert((
+            bevy::camera::visibility::Visibility::Inherited,
+            Transform::from_xyz(0.4, 0.0, 0.0),
+        ));
+    });
+    assert!(moved < 0.9, "moved, drawn where it was: {moved}");
+    let back = change(&mut app, &|e| {
+        e.insert(Transform::IDENTITY);
+    });
+    assert!(back >= 0.99, "moved back, not drawn where it was: {back}");
+    app.world_mut().entity_mut(object).remove::<OslfObject>();
+    let gone = agreement(&run_and_capture(&mut app, 1), &reference, 1e-2).1;
+    assert!(gone < 0.05, "removed, still drawn: {gone}");
+}
+
 #[test]
 fn damaged_and_missing_stores_are_said_once_and_draw_nothing() {
     let store = common::store_path();
