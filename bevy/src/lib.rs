@@ -29,11 +29,11 @@
 //!   it, and it writes its depth. Its radiance is scaled by the camera's exposure and goes
 //!   through Bevy's tonemapping like a mesh's (HDR cameras). MSAA cameras get the object in
 //!   every sample it covers.
-//! - **Bevy's passes.** With Bevy's `PbrPlugin`, each object has a child [`OslfProxy`]: a
-//!   mesh of the same triangles that casts shadows on Bevy's meshes under Bevy's lights
-//!   (unless the object has `NotShadowCaster`) and is in Bevy's depth and normal prepass, so
-//!   SSAO and Bevy's other screen-space effects see the object; it draws nothing in the main
-//!   pass. The object itself is lit by its baked light field only: Bevy's lights and shadows
+//! - **Bevy's passes.** With Bevy's `PbrPlugin`, each object has two children
+//!   ([`OslfProxy`]), meshes that draw nothing in the main pass: the same triangles in Bevy's
+//!   depth and normal prepass, so SSAO and Bevy's other screen-space effects see the object,
+//!   and a coarser tessellation (within the bake's ε) that casts shadows on Bevy's meshes
+//!   under Bevy's lights (unless the object has `NotShadowCaster`). The object itself is lit by its baked light field only: Bevy's lights and shadows
 //!   do not fall on it.
 //! - **Streaming.** Each store has one runtime renderer with an LRU cube-map cache. Its
 //!   feedback is read back asynchronously after Bevy submits the frame: a frame never waits

@@ -1,11 +1,14 @@
-//! The object as Bevy sees it: a proxy mesh (a child entity of each [`OslfObject`]) of the
-//! very triangles the runtime rasterises, with a material that takes part in Bevy's shadow
-//! passes (the object casts shadows on Bevy's meshes under Bevy's lights) and its depth and
-//! normal prepass (what SSAO and Bevy's other screen-space effects read), but draws nothing in
-//! the main pass: the plugin's own pass shades the object.
+//! The object as Bevy sees it: two proxy meshes, child entities of each [`OslfObject`], whose
+//! materials draw nothing in the main pass (the plugin's own pass shades the object):
+//! - in Bevy's depth and normal prepass (what SSAO and Bevy's other screen-space effects
+//!   read), the very triangles the runtime rasterises, so that the object's depth wins over
+//!   its proxy's by the composite's small slack;
+//! - in Bevy's shadow passes (the object casts shadows on Bevy's meshes under Bevy's lights),
+//!   a coarser tessellation, within the bake's ε of the surface: every shadow map of every
+//!   light draws it, and a shadow map cannot tell ε (docs/measurements.md, "The Bevy plugin").
 //!
 //! Only with Bevy's `PbrPlugin` (shadows and the prepass are its); without it there is no
-//! proxy. An object with `NotShadowCaster` gives its proxy the same.
+//! proxy. An object with `NotShadowCaster` gives its shadow proxy the same.
 
 use std::collections::HashMap;
 
@@ -30,15 +33,37 @@ use crate::extract::uniform_scale;
 use crate::messages::OslfMessages;
 use crate::object::OslfObject;
 
-/// Marks the child entity that stands in for its parent [`OslfObject`] in Bevy's shadow and
-/// prepass passes.
-#[derive(Component, Clone, Copy, Debug, Default)]
-pub struct OslfProxy;
+/// Marks a child entity that stands in for its parent [`OslfObject`] in Bevy's passes, and
+/// which.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum OslfProxy {
+    /// In Bevy's depth and normal prepass: the runtime's own tessellation
+    /// (`ObjectMesh::of_store`).
+    Prepass,
+    /// In Bevy's shadow passes: the object's Bézier patches tessellated within the bake's ε
+    /// (mesh objects as they are); it has `NotShadowCaster` where the object has.
+    Shadow,
+}
 
-/// The proxy's material: Bevy's default prepass and shadow shaders; in the main pass shaders
-/// that draw nothing (every vertex outside the clip volume).
+impl OslfProxy {
+    const ALL: [OslfProxy; 2] = [OslfProxy::Prepass, OslfProxy::Shadow];
+}
+
+/// The prepass proxy's material: Bevy's default prepass shaders, no shadows; in the main pass
+/// shaders that draw nothing (every vertex outside the clip volume).
 #[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
 pub(crate) struct ProxyMaterial {}
+
+/// The shadow proxy's material: Bevy's default shadow shaders, no prepass; in the main pass
+/// the same shaders as [`ProxyMaterial`].
+#[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
+pub(crate) struct ShadowProxyMaterial {}
+
+/// The runtime's G-buffer draws both sides; so do the shadow maps and the prepass. (In the main
+/// pass the proxies' vertex shader culls every triangle.)
+fn both_sides(descriptor: &mut RenderPipelineDescriptor) {
+    descriptor.primitive.cull_mode = None;
+}
 
 impl Material for ProxyMaterial {
     fn vertex_shader() -> ShaderRef {
@@ -49,22 +74,51 @@ impl Material for ProxyMaterial {
         "embedded://oslf_bevy/proxy.wgsl".into()
     }
 
+    fn enable_shadows() -> bool {
+        false
+    }
+
     fn specialize(
         _: &MaterialPipeline,
         descriptor: &mut RenderPipelineDescriptor,
         _: &MeshVertexBufferLayoutRef,
         _: MaterialPipelineKey<Self>,
     ) -> Result<(), SpecializedMeshPipelineError> {
-        // The runtime's G-buffer draws both sides; so do the shadow maps and the prepass. (In
-        // the main pass its vertex shader culls every triangle.)
-        descriptor.primitive.cull_mode = None;
+        both_sides(descriptor);
         Ok(())
     }
 }
 
-/// The one proxy material every proxy shares.
+impl Material for ShadowProxyMaterial {
+    fn vertex_shader() -> ShaderRef {
+        "embedded://oslf_bevy/proxy.wgsl".into()
+    }
+
+    fn fragment_shader() -> ShaderRef {
+        "embedded://oslf_bevy/proxy.wgsl".into()
+    }
+
+    fn enable_prepass() -> bool {
+        false
+    }
+
+    fn specialize(
+        _: &MaterialPipeline,
+        descriptor: &mut RenderPipelineDescriptor,
+        _: &MeshVertexBufferLayoutRef,
+        _: MaterialPipelineKey<Self>,
+    ) -> Result<(), SpecializedMeshPipelineError> {
+        both_sides(descriptor);
+        Ok(())
+    }
+}
+
+/// The one material of each kind every proxy of that kind shares.
 #[derive(Resource)]
-pub(crate) struct ProxyMaterialHandle(Handle<ProxyMaterial>);
+pub(crate) struct ProxyMaterialHandles {
+    prepass: Handle<ProxyMaterial>,
+    shadow: Handle<ShadowProxyMaterial>,
+}
 
 /// Adds the proxy's material and systems where Bevy's PBR is there to use it.
 pub(crate) fn register(app: &mut bevy::app::App) -> bool {
@@ -72,26 +126,38 @@ pub(crate) fn register(app: &mut bevy::app::App) -> bool {
         return false;
     }
     embedded_asset!(app, "proxy.wgsl");
-    app.add_plugins(MaterialPlugin::<ProxyMaterial>::default());
-    let handle = app
-        .world_mut()
+    app.add_plugins((
+        MaterialPlugin::<ProxyMaterial>::default(),
+        MaterialPlugin::<ShadowProxyMaterial>::default(),
+    ));
+    let world = app.world_mut();
+    let prepass = world
         .resource_mut::<Assets<ProxyMaterial>>()
         .add(ProxyMaterial::default());
-    app.insert_resource(ProxyMaterialHandle(handle))
+    let shadow = world
+        .resource_mut::<Assets<ShadowProxyMaterial>>()
+        .add(ShadowProxyMaterial::default());
+    app.insert_resource(ProxyMaterialHandles { prepass, shadow })
         .init_resource::<ProxyMeshes>()
         .add_systems(bevy::app::PostUpdate, sync_proxies);
     true
 }
 
-/// Each store's proxy mesh and the translation (the tessellation's origin) it is drawn at.
-#[derive(Resource, Default)]
-struct ProxyMeshes(HashMap<AssetId<OslfStore>, (OslfStore, Handle<Mesh>, Vec3)>);
+/// A proxy's mesh and the translation (its tessellation's origin) it is drawn at.
+type ProxyMesh = (Handle<Mesh>, Vec3);
 
-/// The runtime's triangles of `store` as a Bevy mesh (positions relative to the returned
-/// origin, vertex normals), or why there is none.
-fn proxy_mesh(store: &OslfStore) -> Result<(Mesh, Vec3), String> {
+/// Each store's proxy meshes: the prepass's and the shadow passes'.
+#[derive(Resource, Default)]
+struct ProxyMeshes(HashMap<AssetId<OslfStore>, (OslfStore, [ProxyMesh; 2])>);
+
+/// `store`'s triangles for the proxy of `kind` as a Bevy mesh (positions relative to the
+/// returned origin, vertex normals), or why there is none.
+fn proxy_mesh(store: &OslfStore, kind: OslfProxy) -> Result<(Mesh, Vec3), String> {
     let store = store.open().map_err(|e| e.to_string())?;
-    let mesh = ObjectMesh::of_store(&store);
+    let mesh = match kind {
+        OslfProxy::Prepass => ObjectMesh::of_store(&store),
+        OslfProxy::Shadow => ObjectMesh::from_store(&store, store.meta().bake.epsilon),
+    };
     let positions: Vec<[f32; 3]> = mesh
         .vertices
         .iter()
@@ -135,25 +201,25 @@ type ObjectQuery<'w, 's> = Query<
     ),
 >;
 
-/// What [`sync_proxies`] reads of each proxy: its entity, parent, mesh, shadow casting and
-/// visibility.
+/// What [`sync_proxies`] reads of each proxy: its entity, kind, parent, mesh, shadow casting
+/// and visibility.
 type ProxyQuery<'w, 's> = Query<
     'w,
     's,
     (
         Entity,
+        &'static OslfProxy,
         &'static ChildOf,
         &'static Mesh3d,
         Has<NotShadowCaster>,
         &'static Visibility,
     ),
-    With<OslfProxy>,
 >;
 
-/// Keeps one proxy per object in step with it: the mesh of its store (a new one when the store
-/// is reloaded), hidden while the store is not loaded or the object's scale is uneven (the
-/// plugin does not draw it then), its shadow casting as the object's; a proxy whose parent is
-/// no longer an object is despawned.
+/// Keeps the two proxies of each object in step with it: the meshes of its store (new ones when
+/// the store is reloaded), hidden while the store is not loaded or the object's scale is uneven
+/// (the plugin does not draw it then), the shadow proxy's shadow casting as the object's; a
+/// proxy whose parent is no longer an object is despawned.
 #[allow(clippy::too_many_arguments)]
 fn sync_proxies(
     mut commands: Commands,
@@ -162,50 +228,60 @@ fn sync_proxies(
     stores: Res<Assets<OslfStore>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut cache: ResMut<ProxyMeshes>,
-    material: Res<ProxyMaterialHandle>,
+    materials: Res<ProxyMaterialHandles>,
     messages: Res<OslfMessages>,
 ) {
     cache
         .0
-        .retain(|id, (s, _, _)| stores.get(*id).is_some_and(|now| now.same_bytes(s)));
-    // What each object's proxy should be: its mesh and translation (none while the store is
-    // not loaded), its visibility and whether it casts no shadow.
+        .retain(|id, (s, _)| stores.get(*id).is_some_and(|now| now.same_bytes(s)));
+    // What each object's proxies should be: their meshes and translations (none while the
+    // store is not loaded), their visibility and whether the shadow proxy casts no shadow.
     let mut wanted = HashMap::new();
     for (entity, object, transform, no_shadow) in &objects {
         let id = object.store.id();
-        let mesh = match stores.get(id) {
+        let proxy_meshes = match stores.get(id) {
             None => None,
             Some(store) => {
                 if let std::collections::hash_map::Entry::Vacant(slot) = cache.0.entry(id) {
-                    match proxy_mesh(store) {
-                        Ok((mesh, origin)) => {
-                            slot.insert((store.clone(), meshes.add(mesh), origin));
+                    let made = OslfProxy::ALL.map(|kind| proxy_mesh(store, kind));
+                    match made {
+                        [Ok((prepass, a)), Ok((shadow, b))] => {
+                            slot.insert((
+                                store.clone(),
+                                [(meshes.add(prepass), a), (meshes.add(shadow), b)],
+                            ));
                         }
-                        Err(e) => {
+                        [Err(e), _] | [_, Err(e)] => {
                             messages
                                 .say(format!("OSLF store {id}: no shadow or prepass proxy: {e}"));
                         }
                     }
                 }
-                cache.0.get(&id).map(|(_, m, o)| (m.clone(), *o))
+                cache.0.get(&id).map(|(_, m)| m.clone())
             }
         };
-        let visible = mesh.is_some() && uniform_scale(transform);
+        let visible = proxy_meshes.is_some() && uniform_scale(transform);
         let visibility = if visible {
             Visibility::Inherited
         } else {
             Visibility::Hidden
         };
-        wanted.insert(entity, (mesh, visibility, no_shadow));
+        for (i, kind) in OslfProxy::ALL.into_iter().enumerate() {
+            let mesh = proxy_meshes.as_ref().map(|m| m[i].clone());
+            // The prepass proxy's material casts no shadow whatever the component says.
+            let no_shadow = no_shadow && kind == OslfProxy::Shadow;
+            wanted.insert((entity, kind), (mesh, visibility, no_shadow));
+        }
     }
     let mut has_proxy = std::collections::HashSet::new();
-    for (proxy, parent, mesh, proxy_no_shadow, proxy_visibility) in &proxies {
-        let Some((want_mesh, visibility, no_shadow)) = wanted.get(&parent.parent()) else {
+    for (proxy, kind, parent, mesh, proxy_no_shadow, proxy_visibility) in &proxies {
+        let key = (parent.parent(), *kind);
+        let Some((want_mesh, visibility, no_shadow)) = wanted.get(&key) else {
             commands.entity(proxy).despawn();
             continue;
         };
-        if !has_proxy.insert(parent.parent()) {
-            commands.entity(proxy).despawn(); // one proxy per object
+        if !has_proxy.insert(key) {
+            commands.entity(proxy).despawn(); // one proxy of each kind per object
             continue;
         }
         let mut c = commands.entity(proxy);
@@ -225,21 +301,24 @@ fn sync_proxies(
             c.insert(*visibility);
         }
     }
-    for (entity, (mesh, visibility, no_shadow)) in wanted {
+    for ((entity, kind), (mesh, visibility, no_shadow)) in wanted {
         let Some((mesh, origin)) = mesh else {
             continue;
         };
-        if has_proxy.contains(&entity) {
+        if has_proxy.contains(&(entity, kind)) {
             continue;
         }
         let mut proxy = commands.spawn((
-            OslfProxy,
+            kind,
             Mesh3d(mesh),
-            MeshMaterial3d(material.0.clone()),
             Transform::from_translation(origin),
             visibility,
             ChildOf(entity),
         ));
+        match kind {
+            OslfProxy::Prepass => proxy.insert(MeshMaterial3d(materials.prepass.clone())),
+            OslfProxy::Shadow => proxy.insert(MeshMaterial3d(materials.shadow.clone())),
+        };
         if no_shadow {
             proxy.insert(NotShadowCaster);
         }

@@ -123,7 +123,13 @@ fn frame_with(dir: &Path, s: Setup, diagnostics: bool) -> Frame {
     let pixels = headless::settle_and_capture(&mut app, 60, s.object);
     if s.object {
         let mut proxies = app.world_mut().query::<&OslfProxy>();
-        assert_eq!(proxies.iter(app.world()).count(), 1, "one proxy per object");
+        let mut kinds: Vec<OslfProxy> = proxies.iter(app.world()).copied().collect();
+        kinds.sort_by_key(|k| *k as u8);
+        assert_eq!(
+            kinds,
+            [OslfProxy::Prepass, OslfProxy::Shadow],
+            "one proxy of each kind per object"
+        );
     }
     let messages = app.world().resource::<OslfMessages>().all();
     let spans = app
@@ -396,9 +402,12 @@ fn the_proxy_follows_its_object() {
             &bevy::ecs::hierarchy::ChildOf,
             Has<NotShadowCaster>,
         )>();
-        q.iter(app.world())
-            .map(|(_, parent, no_shadow)| (parent.parent(), no_shadow))
-            .collect::<Vec<_>>()
+        let mut found = q
+            .iter(app.world())
+            .map(|(kind, parent, no_shadow)| (*kind, parent.parent(), no_shadow))
+            .collect::<Vec<_>>();
+        found.sort_by_key(|(kind, _, _)| *kind as u8);
+        found
     };
     let start = std::time::Instant::now();
     while proxies(&mut app).is_empty() && start.elapsed().as_secs() < 60 {
@@ -408,16 +417,22 @@ fn the_proxy_follows_its_object() {
         let mut q = app.world_mut().query_filtered::<Entity, With<OslfObject>>();
         q.single(app.world()).unwrap()
     };
-    assert_eq!(proxies(&mut app), vec![(object, false)]);
-    // Its shadow casting follows the object's.
+    let both = |shadowless: bool| {
+        vec![
+            (OslfProxy::Prepass, object, false),
+            (OslfProxy::Shadow, object, shadowless),
+        ]
+    };
+    assert_eq!(proxies(&mut app), both(false));
+    // The shadow proxy's shadow casting follows the object's.
     app.world_mut().entity_mut(object).insert(NotShadowCaster);
     app.update();
-    assert_eq!(proxies(&mut app), vec![(object, true)]);
+    assert_eq!(proxies(&mut app), both(true));
     app.world_mut()
         .entity_mut(object)
         .remove::<NotShadowCaster>();
     app.update();
-    assert_eq!(proxies(&mut app), vec![(object, false)]);
+    assert_eq!(proxies(&mut app), both(false));
     // An entity that is no longer an object keeps no proxy.
     app.world_mut().entity_mut(object).remove::<OslfObject>();
     app.update();
