@@ -59,59 +59,43 @@ pub(crate) struct ProxyMaterial {}
 #[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
 pub(crate) struct ShadowProxyMaterial {}
 
-/// The runtime's G-buffer draws both sides; so do the shadow maps and the prepass. (In the main
-/// pass the proxies' vertex shader culls every triangle.)
-fn both_sides(descriptor: &mut RenderPipelineDescriptor) {
-    descriptor.primitive.cull_mode = None;
+/// `Material` for a proxy material drawing nothing in the main pass (proxy.wgsl), in Bevy's
+/// prepass or not, in its shadow passes or not; both sides drawn, as the runtime's G-buffer
+/// draws them. (In the main pass the vertex shader culls every triangle.)
+macro_rules! proxy_material {
+    ($material:ty, prepass: $prepass:expr, shadows: $shadows:expr) => {
+        impl Material for $material {
+            fn vertex_shader() -> ShaderRef {
+                "embedded://oslf_bevy/proxy.wgsl".into()
+            }
+
+            fn fragment_shader() -> ShaderRef {
+                "embedded://oslf_bevy/proxy.wgsl".into()
+            }
+
+            fn enable_prepass() -> bool {
+                $prepass
+            }
+
+            fn enable_shadows() -> bool {
+                $shadows
+            }
+
+            fn specialize(
+                _: &MaterialPipeline,
+                descriptor: &mut RenderPipelineDescriptor,
+                _: &MeshVertexBufferLayoutRef,
+                _: MaterialPipelineKey<Self>,
+            ) -> Result<(), SpecializedMeshPipelineError> {
+                descriptor.primitive.cull_mode = None;
+                Ok(())
+            }
+        }
+    };
 }
 
-impl Material for ProxyMaterial {
-    fn vertex_shader() -> ShaderRef {
-        "embedded://oslf_bevy/proxy.wgsl".into()
-    }
-
-    fn fragment_shader() -> ShaderRef {
-        "embedded://oslf_bevy/proxy.wgsl".into()
-    }
-
-    fn enable_shadows() -> bool {
-        false
-    }
-
-    fn specialize(
-        _: &MaterialPipeline,
-        descriptor: &mut RenderPipelineDescriptor,
-        _: &MeshVertexBufferLayoutRef,
-        _: MaterialPipelineKey<Self>,
-    ) -> Result<(), SpecializedMeshPipelineError> {
-        both_sides(descriptor);
-        Ok(())
-    }
-}
-
-impl Material for ShadowProxyMaterial {
-    fn vertex_shader() -> ShaderRef {
-        "embedded://oslf_bevy/proxy.wgsl".into()
-    }
-
-    fn fragment_shader() -> ShaderRef {
-        "embedded://oslf_bevy/proxy.wgsl".into()
-    }
-
-    fn enable_prepass() -> bool {
-        false
-    }
-
-    fn specialize(
-        _: &MaterialPipeline,
-        descriptor: &mut RenderPipelineDescriptor,
-        _: &MeshVertexBufferLayoutRef,
-        _: MaterialPipelineKey<Self>,
-    ) -> Result<(), SpecializedMeshPipelineError> {
-        both_sides(descriptor);
-        Ok(())
-    }
-}
+proxy_material!(ProxyMaterial, prepass: true, shadows: false);
+proxy_material!(ShadowProxyMaterial, prepass: false, shadows: true);
 
 /// The one material of each kind every proxy of that kind shares.
 #[derive(Resource)]
