@@ -33,8 +33,8 @@
 //!   ([`OslfProxy`]), meshes that draw nothing in the main pass: the same triangles in Bevy's
 //!   depth and normal prepass, so SSAO and Bevy's other screen-space effects see the object,
 //!   and a coarser tessellation (within the bake's ε) that casts shadows on Bevy's meshes
-//!   under Bevy's lights (unless the object has `NotShadowCaster`). The object itself is lit by its baked light field only: Bevy's lights and shadows
-//!   do not fall on it.
+//!   under Bevy's lights (unless the object has `NotShadowCaster`). The object itself is lit
+//!   by its baked light field only: Bevy's lights and shadows do not fall on it.
 //! - **Streaming.** Each store has one runtime renderer with an LRU cube-map cache. Its
 //!   feedback is read back asynchronously after Bevy submits the frame: a frame never waits
 //!   for the GPU; cube maps not yet resident fall back as in `oslf view` and arrive a few

@@ -299,6 +299,7 @@ impl Renderer {
             self.ensure_prefiltered()?;
         }
         self.ensure_targets(target.width, target.height)?;
+        self.ensure_composite_group()?;
         let u = self.host_uniform(view, camera, params, target, reversed);
         self.current = ShadeKey::of(&u);
         self.background = Background::None;
@@ -363,7 +364,6 @@ impl Renderer {
         let table_bytes = self.buffers.timestamps_offset;
         // The frame's feedback slot, if one is free; its passes are timed into it.
         let slot = self.feedback_slot(table_bytes + TIMESTAMP_BYTES);
-        self.ensure_composite_group()?;
         let targets = self
             .targets
             .as_ref()
