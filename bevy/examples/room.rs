@@ -14,7 +14,8 @@ mod shared;
 
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
-use oslf_bevy::{Blend, Mode, OslfCacheStats, OslfObject, OslfPlugin, Source};
+use oslf_bevy::{Mode, OslfCacheStats, OslfObject, OslfPlugin};
+use shared::keys::{apply, describe, ShadingKey};
 use shared::{keep_only_the_orbit_camera, spawn_room, Orbit, ASSETS};
 
 fn main() {
@@ -75,31 +76,26 @@ fn keys(
         KeyCode::Digit5,
         KeyCode::Digit6,
     ];
+    let mut pressed: Vec<ShadingKey> = modes
+        .iter()
+        .zip(Mode::ALL)
+        .filter(|(key, _)| keys.just_pressed(**key))
+        .map(|(_, mode)| ShadingKey::Mode(mode))
+        .collect();
+    for (key, shading) in [
+        (KeyCode::KeyE, ShadingKey::Source),
+        (KeyCode::KeyD, ShadingKey::Depth),
+        (KeyCode::KeyB, ShadingKey::Blend),
+        (KeyCode::BracketRight, ShadingKey::MoreSamples),
+        (KeyCode::BracketLeft, ShadingKey::FewerSamples),
+    ] {
+        if keys.just_pressed(key) {
+            pressed.push(shading);
+        }
+    }
     for mut object in &mut objects {
-        let p = &mut object.params;
-        for (i, key) in modes.iter().enumerate() {
-            if keys.just_pressed(*key) {
-                p.mode = Mode::ALL[i.min(Mode::ALL.len() - 1)];
-            }
-        }
-        if keys.just_pressed(KeyCode::KeyE) {
-            p.source = match p.source {
-                Source::Oslf => Source::EnvMap,
-                Source::EnvMap | Source::Parallax => Source::Oslf,
-            };
-        }
-        if keys.just_pressed(KeyCode::KeyD) {
-            p.depth = !p.depth;
-        }
-        if keys.just_pressed(KeyCode::KeyB) {
-            let i = Blend::ALL.iter().position(|b| *b == p.blend).unwrap_or(0);
-            p.blend = Blend::ALL[(i + 1) % Blend::ALL.len()];
-        }
-        if keys.just_pressed(KeyCode::BracketRight) {
-            p.m = (p.m * 2).min(65536);
-        }
-        if keys.just_pressed(KeyCode::BracketLeft) {
-            p.m = (p.m / 2).max(1);
+        for key in &pressed {
+            apply(&mut object.params, *key);
         }
     }
 }
@@ -118,8 +114,11 @@ fn report(
     for o in &objects {
         let p = &o.params;
         info!(
-            "{:?} {:?} depth {} blend {:?} M {}; cache: {} frames booked, miss rate {:.3}, {} loads",
-            p.mode, p.source, p.depth, p.blend, p.m, stats.total.frames, stats.total.miss_rate, stats.total.loads
+            "{}; cache: {} frames booked, miss rate {:.3}, {} loads",
+            describe(p),
+            stats.total.frames,
+            stats.total.miss_rate,
+            stats.total.loads
         );
     }
 }

@@ -9,6 +9,8 @@
 mod common;
 #[path = "../examples/shared/headless.rs"]
 mod headless;
+#[path = "../examples/shared/keys.rs"]
+mod keys;
 
 use std::path::Path;
 
@@ -237,6 +239,51 @@ fn bevy_meshes_in_front_hide_the_object_and_it_hides_those_behind() {
         if extra == Extra::Front {
             assert!(hidden > 100, "{hidden}");
         }
+    }
+}
+
+/// The room example's keys (examples/shared/keys.rs) change what they say, where the mode has
+/// it, and nothing where it does not.
+#[test]
+fn the_examples_keys_change_the_shading_they_name() {
+    use keys::{apply, describe, ShadingKey};
+    use oslf_bevy::{Blend, Lookup, Source};
+    let mut p = ShadingParams::of_mode(Mode::ReconGlossy);
+    let m = p.monte_carlo().unwrap().m;
+    apply(&mut p, ShadingKey::MoreSamples);
+    assert_eq!(p.monte_carlo().unwrap().m, 2 * m);
+    apply(&mut p, ShadingKey::FewerSamples);
+    apply(&mut p, ShadingKey::FewerSamples);
+    assert_eq!(p.monte_carlo().unwrap().m, m / 2);
+    let depth = p.depth();
+    apply(&mut p, ShadingKey::Depth);
+    assert_eq!(p.depth(), !depth);
+    let (blend, n) = p.blend().unwrap();
+    apply(&mut p, ShadingKey::Blend);
+    let i = Blend::ALL.iter().position(|b| *b == blend).unwrap();
+    assert_eq!(p.blend(), Some((Blend::ALL[(i + 1) % Blend::ALL.len()], n)));
+    apply(&mut p, ShadingKey::Source);
+    assert_eq!(p.source(), Source::EnvMap);
+    assert_eq!(p.blend(), None);
+    apply(&mut p, ShadingKey::Source);
+    assert_eq!(p.source(), Source::Oslf);
+    assert_eq!(p.blend(), Some(Lookup::DEFAULT_BLEND));
+    assert!(
+        describe(&p).starts_with("ReconGlossy Oslf depth"),
+        "{}",
+        describe(&p)
+    );
+    // The mode key gives the mode's defaults; keys for what it lacks change nothing.
+    apply(&mut p, ShadingKey::Mode(Mode::Recon));
+    let recon = ShadingParams::of_mode(Mode::Recon);
+    assert_eq!(p, recon);
+    for key in [
+        ShadingKey::Source,
+        ShadingKey::Blend,
+        ShadingKey::MoreSamples,
+    ] {
+        apply(&mut p, key);
+        assert_eq!(p, recon, "{key:?} changed the recon mode");
     }
 }
 

@@ -2,6 +2,9 @@
 //! `examples/room.toml` by the OSLF plugin.
 
 pub mod headless;
+// The room example uses it; the frame-cost example, which shares this module, does not.
+#[allow(dead_code)]
+pub mod keys;
 
 use std::f32::consts::FRAC_PI_2;
 
