@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common;
 
-use common::{oslf, read_exr};
+use common::{oslf, read_exr, run_ok};
 
 /// The lid scene of tests/common on a box, so the background behind it holds geometry too.
 fn scene_text() -> String {
@@ -16,20 +16,22 @@ fn scene_text() -> String {
     )
 }
 
+/// [`scene_text`] written into `dir`; its path.
+fn lid_scene(dir: &Path) -> PathBuf {
+    let scene = dir.join("lid.toml");
+    std::fs::write(&scene, scene_text()).unwrap();
+    scene
+}
+
 /// `oslf truth SCENE -m mirror ARGS -q -o PREFIX`, which must succeed; the mirror image's path.
 fn mirror_truth(scene: &Path, args: &[&str], prefix: &Path) -> PathBuf {
-    let out = oslf("truth")
-        .arg(scene)
-        .args(["-m", "mirror"])
-        .args(args)
-        .args(["-q", "-o"])
-        .arg(prefix)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    run_ok(
+        oslf("truth")
+            .arg(scene)
+            .args(["-m", "mirror"])
+            .args(args)
+            .args(["-q", "-o"])
+            .arg(prefix),
     );
     let mut name = prefix.file_name().unwrap().to_os_string();
     name.push("-mirror.exr");
@@ -40,8 +42,7 @@ fn mirror_truth(scene: &Path, args: &[&str], prefix: &Path) -> PathBuf {
 fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = dir.join("lid.toml");
-    std::fs::write(&scene, scene_text()).unwrap();
+    let scene = lid_scene(dir);
     let truth = |background: &str, prefix: &str| {
         let args = ["--spp", "2", "--width", "40", "--height", "30"];
         let args = [&args[..], &["--background", background]].concat();
@@ -115,8 +116,7 @@ fn the_scene_behind_the_object_changes_no_object_pixel_and_pairs_side_by_side() 
 fn the_pbr_truth_renders_and_checks_its_material() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = dir.join("lid.toml");
-    std::fs::write(&scene, scene_text()).unwrap();
+    let scene = lid_scene(dir);
     let truth = |metallic: &str, roughness: &str, prefix: &str| {
         oslf("truth")
             .arg(&scene)
@@ -163,8 +163,7 @@ fn the_pbr_truth_renders_and_checks_its_material() {
 fn a_second_reference_takes_the_references_noise_out_of_the_error() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let scene = dir.join("lid.toml");
-    std::fs::write(&scene, scene_text()).unwrap();
+    let scene = lid_scene(dir);
     let truth = |seed: &str, width: &str| {
         let args = [
             "--spp", "4", "--width", width, "--height", "60", "--seed", seed,
@@ -174,7 +173,8 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
     let (a, b, test) = (truth("1", "80"), truth("2", "80"), truth("3", "80"));
     let (json, csv) = (dir.join("c.json"), dir.join("c.csv"));
     let compare = |second: &std::path::Path, csv: &std::path::Path| {
-        oslf("compare")
+        let mut command = oslf("compare");
+        command
             .arg(&a)
             .arg(&test)
             .arg("--second-reference")
@@ -184,17 +184,10 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
             .arg("--csv")
             .arg(csv)
             .arg("--side-by-side")
-            .arg(dir.join("pair.png"))
-            .output()
-            .unwrap()
+            .arg(dir.join("pair.png"));
+        command
     };
-    let out = compare(&b, &csv);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = run_ok(&mut compare(&b, &csv));
     assert!(stdout.contains("reference   the mean of "), "{stdout}");
     assert!(stdout.contains("corrected   RMSE L*a*b* "), "{stdout}");
     // The pair's right half is what the test was judged against, and says so.
@@ -228,7 +221,7 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
     // Refused: a CSV whose header is another's, and a second reference of another size.
     let old = dir.join("old.csv");
     std::fs::write(&old, "reference,test,pixels\n").unwrap();
-    let out = compare(&b, &old);
+    let out = compare(&b, &old).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("old.csv: line 1 is not the header"), "{err}");
@@ -236,7 +229,7 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
         std::fs::read_to_string(&old).unwrap(),
         "reference,test,pixels\n"
     );
-    let out = compare(&truth("2", "60"), &csv);
+    let out = compare(&truth("2", "60"), &csv).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(

@@ -77,7 +77,9 @@ pub(crate) fn extract_oslf(
     out.objects.clear();
     out.stores.clear();
     out.sheared.clear();
+    let mut extracted = 0;
     for (entity, object, transform, visibility) in &objects {
+        extracted += 1;
         let id = object.store.id();
         let Some(store) = stores.get(id) else {
             continue;
@@ -100,5 +102,5 @@ pub(crate) fn extract_oslf(
             radiance_scale: object.radiance_scale,
         });
     }
-    sink.extracted(objects.iter().count() as u64);
+    sink.extracted(extracted);
 }

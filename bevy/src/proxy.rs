@@ -134,14 +134,20 @@ type ProxyMesh = (Handle<Mesh>, Vec3);
 #[derive(Resource, Default)]
 struct ProxyMeshes(HashMap<AssetId<OslfStore>, (OslfStore, [ProxyMesh; 2])>);
 
-/// `store`'s triangles for the proxy of `kind` as a Bevy mesh (positions relative to the
-/// returned origin, vertex normals), or why there is none.
-fn proxy_mesh(store: &OslfStore, kind: OslfProxy) -> Result<(Mesh, Vec3), String> {
+/// `store`'s triangles for each proxy kind ([`OslfProxy::ALL`]) as Bevy meshes, or why there
+/// are none.
+fn proxy_meshes(store: &OslfStore) -> Result<[(Mesh, Vec3); 2], String> {
     let store = store.open().map_err(|e| e.to_string())?;
-    let mesh = match kind {
-        OslfProxy::Prepass => ObjectMesh::of_store(&store),
-        OslfProxy::Shadow => ObjectMesh::from_store(&store, store.meta().bake.epsilon),
-    };
+    Ok(OslfProxy::ALL.map(|kind| {
+        bevy_mesh(match kind {
+            OslfProxy::Prepass => ObjectMesh::of_store(&store),
+            OslfProxy::Shadow => ObjectMesh::from_store(&store, store.meta().bake.epsilon),
+        })
+    }))
+}
+
+/// `mesh` as a Bevy mesh (positions relative to the returned origin, vertex normals).
+fn bevy_mesh(mesh: ObjectMesh) -> (Mesh, Vec3) {
     let positions: Vec<[f32; 3]> = mesh
         .vertices
         .iter()
@@ -169,7 +175,7 @@ fn proxy_mesh(store: &OslfStore, kind: OslfProxy) -> Result<(Mesh, Vec3), String
     .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, positions)
     .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, normals)
     .with_inserted_indices(Indices::U32(mesh.indices));
-    Ok((bevy_mesh, origin))
+    (bevy_mesh, origin)
 }
 
 /// What [`sync_proxies`] reads of each object: its entity, component, transform and whether
@@ -227,15 +233,12 @@ fn sync_proxies(
             None => None,
             Some(store) => {
                 if let std::collections::hash_map::Entry::Vacant(slot) = cache.0.entry(id) {
-                    let made = OslfProxy::ALL.map(|kind| proxy_mesh(store, kind));
-                    match made {
-                        [Ok((prepass, a)), Ok((shadow, b))] => {
-                            slot.insert((
-                                store.clone(),
-                                [(meshes.add(prepass), a), (meshes.add(shadow), b)],
-                            ));
+                    match proxy_meshes(store) {
+                        Ok(made) => {
+                            let handles = made.map(|(mesh, origin)| (meshes.add(mesh), origin));
+                            slot.insert((store.clone(), handles));
                         }
-                        [Err(e), _] | [_, Err(e)] => {
+                        Err(e) => {
                             messages
                                 .say(format!("OSLF store {id}: no shadow or prepass proxy: {e}"));
                         }
