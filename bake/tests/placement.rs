@@ -16,11 +16,16 @@ f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
 
 /// A scene whose OSLF object is the box at `translate` with `extra` keys, plus `more`.
 fn box_scene(d: &Path, translate: [f32; 3], extra: &str, more: &str) -> Scene {
+    box_scene_baked(d, translate, extra, more, "")
+}
+
+/// [`box_scene`] with `bake` added to its `[bake]` table.
+fn box_scene_baked(d: &Path, translate: [f32; 3], extra: &str, more: &str, bake: &str) -> Scene {
     std::fs::write(d.join("box.obj"), BOX_OBJ).unwrap();
     let text = format!(
         "[environment]\nuniform = [0.5, 0.5, 0.5]\n\n[[object]]\nname = \"box\"\nmesh = \"box.obj\"\n\
          transform = {{ translate = {translate:?} }}\n{extra}\nmaterial = {{ color = [0.5, 0.5, 0.5] }}\n\
-         {more}\n[bake]\nepsilon = 0.05\nsample_count = 400\nsample_map_resolution = 32\n"
+         {more}\n[bake]\nepsilon = 0.05\nsample_count = 400\nsample_map_resolution = 32\n{bake}\n"
     );
     let path = d.join("scene.toml");
     std::fs::write(&path, text).unwrap();
@@ -102,6 +107,101 @@ fn a_box_on_a_slab_loses_only_its_bottom_and_the_rim_within_epsilon_of_the_slab(
         "lost {lost} of {}, expected about {expected_lost}",
         p.placed
     );
+}
+
+/// The slab `a_box_on_a_slab_…` rests its box on: top face at z = 0.
+const SLAB: &str =
+    "[[box]]\nsize = [6.0, 6.0, 0.2]\ntransform = { translate = [0.0, 0.0, -0.1] }\n\
+                    material = { color = [0.5, 0.5, 0.5] }\n";
+
+#[test]
+fn near_the_slab_lowered_points_keep_the_rim_and_their_height_leaves_the_gap_three_times_over() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let lower = box_scene_baked(d, [0.0; 3], "", SLAB, "near_surface = \"lower\"");
+    let remove = box_scene(d, [0.0; 3], "", SLAB);
+    let (pl, pr) = (placement(&lower), placement(&remove));
+    let eps = lower.bake.epsilon;
+    assert_eq!(pl.placed, pr.placed);
+    assert_eq!(pr.lowered, 0, "the thesis's rule lowers nothing");
+    // The rim within ε of the slab stays; only the bottom (in the slab) goes.
+    let bottom = pl.placed as f32 / 6.0;
+    let lost = (pl.removed_close + pl.removed_inside) as f32;
+    assert!(
+        (lost - bottom).abs() < 0.25 * bottom,
+        "lost {lost} of {}, the bottom is about {bottom}",
+        pl.placed
+    );
+    assert!(lost < (pr.removed_close + pr.removed_inside) as f32);
+    // Points that the slab does not come near are where the thesis puts them.
+    let far: Vec<_> = pr
+        .points
+        .iter()
+        .filter(|p| p.position[2] > 4.0 * eps)
+        .collect();
+    let far_lowered: Vec<_> = pl
+        .points
+        .iter()
+        .filter(|p| p.position[2] > 4.0 * eps)
+        .collect();
+    assert_eq!(far, far_lowered);
+    let mut heights = Vec::new();
+    for (i, point) in pl.points.iter().enumerate() {
+        let at = Vec3::from_array(point.position);
+        let h = distance_to_box(at, Vec3::ZERO);
+        let z = at.z;
+        if (h - eps).abs() < 1e-4 {
+            // At ε: the slab, in the half-space the side faces, lies at least 3ε away (up to
+            // the 64 probe directions' spacing), or the point is above the rim's reach.
+            assert!(z > 2.5 * eps || (z - eps).abs() < 1e-4, "point {i} at {at}");
+            continue;
+        }
+        // Lowered: by halves, at most to ε/8, and still clear of the slab.
+        let k = (eps / h).log2();
+        assert!(
+            (k - k.round()).abs() < 1e-3 && (1.0..=3.0).contains(&k.round()),
+            "point {i} at {at}: height {h} is not ε/2, ε/4 or ε/8"
+        );
+        assert!(
+            z >= 0.9 * h,
+            "point {i} at {at}: height {h}, {z} above the slab"
+        );
+        assert!(
+            z < 3.0 * 2.0 * h + 1e-4,
+            "point {i} at {at} was lowered needlessly"
+        );
+        heights.push(k.round() as u32);
+    }
+    assert!(
+        (1..=3).all(|k| heights.contains(&k)),
+        "the rim's points take every height: {heights:?}"
+    );
+    assert_eq!(pl.lowered, heights.len());
+}
+
+#[test]
+fn a_surface_of_the_points_own_object_lowers_nothing() {
+    // The box and a slab under it in one mesh: the rim's points face their own object, so
+    // "lower" removes them as the thesis does (a fold or a concave rim is no contact).
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let slab = "v -3 -3 -0.2\nv 3 -3 -0.2\nv -3 3 -0.2\nv 3 3 -0.2\nv -3 -3 0\nv 3 -3 0\nv -3 3 0\nv 3 3 0\n\
+                f 9 11 12 10\nf 13 14 16 15\nf 9 10 14 13\nf 11 15 16 12\nf 9 13 15 11\nf 10 12 16 14\n";
+    let text = format!("{BOX_OBJ}{slab}");
+    let place_with = |rule: &str| {
+        // Written with the box alone, then loaded again with the slab in its mesh.
+        box_scene_baked(d, [0.0; 3], "", "", rule);
+        std::fs::write(d.join("box.obj"), &text).unwrap();
+        let scene = Scene::load(&d.join("scene.toml"), None).unwrap_or_else(|e| panic!("{e}"));
+        placement(&scene)
+    };
+    let (pl, pr) = (
+        place_with("near_surface = \"lower\""),
+        place_with("near_surface = \"remove\""),
+    );
+    assert_eq!(pl.lowered, 0);
+    assert_eq!(pl.points, pr.points);
+    assert!(pr.removed_close > 0);
 }
 
 #[test]

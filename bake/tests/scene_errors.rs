@@ -289,3 +289,35 @@ fn metallic_roughness_materials_parse_and_are_checked() {
     );
     assert_located(&text, 7, 12, "both `metallic` and `roughness`");
 }
+
+#[test]
+fn near_surface_names_its_two_rules() {
+    let text = GOOD.replace(
+        "sample_count = 10",
+        "sample_count = 10\nnear_surface = \"lift\"",
+    );
+    assert_located(
+        &text,
+        11,
+        16,
+        "unknown near_surface \"lift\" (expected \"remove\" or \"lower\")",
+    );
+    let text = GOOD.replace(
+        "sample_count = 10",
+        "sample_count = 10\nnear_surface = \"lower\"",
+    );
+    assert_eq!(
+        parse(&text).unwrap().bake.near_surface,
+        oslf_scene::scene::NearSurface::Lower
+    );
+    // Chosen with ε; a file that sets ε keeps the thesis's rule unless it asks.
+    assert_eq!(
+        parse(GOOD).unwrap().bake.near_surface,
+        oslf_scene::scene::NearSurface::Lower
+    );
+    let text = GOOD.replace("sample_count = 10", "sample_count = 10\nepsilon = 0.1");
+    assert_eq!(
+        parse(&text).unwrap().bake.near_surface,
+        oslf_scene::scene::NearSurface::Remove
+    );
+}

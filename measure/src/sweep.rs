@@ -104,6 +104,7 @@ fn default_settings() -> BakeSettings {
         target_noise: 0.0,
         denoise: false,
         placement: Default::default(),
+        near_surface: Default::default(),
         bounces: 1,
         seed: 0,
         encoding: oslf_format::Encoding::Rgb9e5,

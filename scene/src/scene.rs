@@ -87,6 +87,9 @@ pub struct BakeSettings {
     pub sample_count: SampleDensity,
     /// How the points are spread: evenly, or denser where the surroundings are near.
     pub placement: PointPlacement,
+    /// What becomes of a point that ε brings near another surface: removed (the thesis's
+    /// §3.3), or lowered towards its own.
+    pub near_surface: NearSurface,
     /// Horizon tolerance of Eq. 3.10, degrees.
     pub phi_samplemap_deg: f32,
     pub cube_resolution: u32,
@@ -204,6 +207,34 @@ impl std::str::FromStr for PointPlacement {
             "parallax" => Ok(PointPlacement::Parallax),
             _ => Err(format!(
                 "unknown placement {s:?} (expected \"uniform\" or \"parallax\")"
+            )),
+        }
+    }
+}
+
+/// What becomes of a sample point near a surface other than its object's own (`[bake]
+/// near_surface`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NearSurface {
+    /// Removed where a surface lies within ε (the thesis's free-space test, §3.3; the default
+    /// where the file sets `epsilon`).
+    #[default]
+    Remove,
+    /// Lowered towards its own surface, by halves down to ε/8, until every other surface it
+    /// faces lies at least three times its height away (removed only where even ε/8 fails):
+    /// near a contact, such as a can on a table, the points that ε would remove or leave too
+    /// high stay, at a height the gap allows.
+    Lower,
+}
+
+impl std::str::FromStr for NearSurface {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "remove" => Ok(NearSurface::Remove),
+            "lower" => Ok(NearSurface::Lower),
+            _ => Err(format!(
+                "unknown near_surface {s:?} (expected \"remove\" or \"lower\")"
             )),
         }
     }

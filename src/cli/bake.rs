@@ -330,8 +330,16 @@ fn print_summary(r: &BakeReport, why: &str) {
         ),
         None => println!("store          {}", r.output.display()),
     }
+    let lowered = if r.points_lowered > 0 {
+        format!(
+            "; {} of them lowered nearer their surface than ε, near another",
+            r.points_lowered
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "sample points  {}: {} placed, {} closer than ε to a surface, {} inside geometry, {} added where texels had fewer than four",
+        "sample points  {}: {} placed, {} closer than ε to a surface, {} inside geometry, {} added where texels had fewer than four{lowered}",
         r.sample_points,
         r.points_placed,
         r.points_removed_close,

@@ -25,6 +25,9 @@ pub struct BakeReport {
     pub points_removed_inside: usize,
     /// Points added where sample-map texels found fewer than four (§6.3).
     pub points_added: usize,
+    /// Points, placed or added, kept nearer their surface than ε because another surface
+    /// lay near (`near_surface = "lower"`).
+    pub points_lowered: usize,
     /// The bake's ε (scene units): the sample points' offset.
     pub epsilon: f32,
     /// The settings chosen from the scene where its file leaves them unset, each with why

@@ -77,6 +77,7 @@ pub(super) fn place<'s>(
     report.points_placed = placement.placed;
     report.points_removed_close = placement.removed_close;
     report.points_removed_inside = placement.removed_inside;
+    report.points_lowered = placement.lowered;
     Ok((surfaces, placement))
 }
 
@@ -121,12 +122,13 @@ pub(super) fn build_maps(
             break;
         }
         let budget = report.points_placed.saturating_sub(report.points_added);
-        let added = sample_points::refine(
+        let (added, lowered) = sample_points::refine(
             &mut points,
             &short,
             &domains,
             settings.sample_map_resolution,
             settings.epsilon,
+            settings.near_surface,
             min_distance,
             budget,
             geometry,
@@ -135,6 +137,7 @@ pub(super) fn build_maps(
             break;
         }
         report.points_added += added;
+        report.points_lowered += lowered;
         // Free the old maps first: at 4096² one patch's map is 256 MiB.
         maps.indices = Vec::new();
         (maps, map_stats) = build(&points);

@@ -326,6 +326,7 @@ pub(super) struct RawBake {
     pub(super) sample_count: Option<Spanned<u32>>,
     pub(super) sample_spacing: Option<Positive>,
     pub(super) placement: Option<PlacementName>,
+    pub(super) near_surface: Option<NearSurfaceName>,
     pub(super) phi_samplemap: Option<Spanned<Angle>>,
     pub(super) cube_resolution: Option<Resolution>,
     pub(super) sample_map_resolution: Option<Resolution>,
@@ -357,6 +358,7 @@ impl RawBake {
             sample_count,
             sample_spacing,
             placement,
+            near_surface,
             phi_samplemap,
             cube_resolution,
             sample_map_resolution,
@@ -495,6 +497,15 @@ impl<'de> Deserialize<'de> for PlacementName {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         let s = String::deserialize(d)?;
         s.parse().map(PlacementName).map_err(D::Error::custom)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct NearSurfaceName(pub(super) crate::scene::NearSurface);
+impl<'de> Deserialize<'de> for NearSurfaceName {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map(NearSurfaceName).map_err(D::Error::custom)
     }
 }
 
