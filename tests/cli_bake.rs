@@ -387,6 +387,7 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
         "chosen: epsilon = 0.00",
         "chosen: object \"Can\": sample_spacing = 0.00",
         "chosen: placement = \"parallax\": the points crowd where what they see is near",
+        "chosen: near_surface = \"lower\": a point that ε brings near another surface",
         "chosen: cube_resolution = 16",
         "chosen: samples_per_texel = 16",
     ] {
@@ -407,8 +408,15 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let chosen = report["chosen"].as_array().unwrap();
-    assert_eq!(chosen.len(), 5, "{chosen:?}");
+    assert_eq!(chosen.len(), 6, "{chosen:?}");
     assert!(chosen[0].as_str().unwrap().starts_with("epsilon = "));
+    // The can stands on the table: the points by its base are lowered, not removed.
+    assert!(report["points_lowered"].as_u64().unwrap() > 0, "{report}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains(" of them lowered nearer their surface than ε, near another"),
+        "{stdout}"
+    );
     // The texels without a point lie under the can's base on the table, where no view
     // reaches: counted, not warned about.
     let empty = report["sample_maps"]["empty"].as_u64().unwrap();

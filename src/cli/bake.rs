@@ -318,18 +318,8 @@ fn warn_empty_texels(report: &BakeReport) {
     }
 }
 
-fn print_summary(r: &BakeReport, why: &str) {
-    let m = &r.sample_maps;
-    match &r.shard {
-        Some(s) => println!(
-            "shard          {} ({}: {} of the store's {} cube maps; join the shards with `oslf store merge`)",
-            s,
-            r.output.display(),
-            r.cubes,
-            r.store_cubes
-        ),
-        None => println!("store          {}", r.output.display()),
-    }
+/// The summary's `sample points` line: placed, removed, added and lowered.
+fn print_points(r: &BakeReport) {
     let lowered = if r.points_lowered > 0 {
         format!(
             "; {} of them lowered nearer their surface than ε, near another",
@@ -346,6 +336,21 @@ fn print_summary(r: &BakeReport, why: &str) {
         r.points_removed_inside,
         r.points_added
     );
+}
+
+fn print_summary(r: &BakeReport, why: &str) {
+    let m = &r.sample_maps;
+    match &r.shard {
+        Some(s) => println!(
+            "shard          {} ({}: {} of the store's {} cube maps; join the shards with `oslf store merge`)",
+            s,
+            r.output.display(),
+            r.cubes,
+            r.store_cubes
+        ),
+        None => println!("store          {}", r.output.display()),
+    }
+    print_points(r);
     println!(
         "sample maps    {} texels; {} with fewer than four points ({:.3}%), {} with none",
         m.texels,

@@ -32,12 +32,9 @@ impl Ctx<'_> {
         }
     }
 
-    pub(super) fn bake_settings(
-        &self,
-        raw: &RawScene,
-        preset: Option<&str>,
-    ) -> Result<(BakeSettings, Option<Range<usize>>, Unset)> {
-        let merged = match preset {
+    /// `[bake]` with preset `preset`'s keys over it.
+    fn merged_bake(&self, raw: &RawScene, preset: Option<&str>) -> Result<RawBake> {
+        Ok(match preset {
             None => raw.bake.clone(),
             Some(name) => match raw.presets.get(name) {
                 Some(p) => raw.bake.overridden_by(p),
@@ -54,7 +51,15 @@ impl Ctx<'_> {
                     )));
                 }
             },
-        };
+        })
+    }
+
+    pub(super) fn bake_settings(
+        &self,
+        raw: &RawScene,
+        preset: Option<&str>,
+    ) -> Result<(BakeSettings, Option<Range<usize>>, Unset)> {
+        let merged = self.merged_bake(raw, preset)?;
         let sample_count = match (&merged.sample_count, &merged.sample_spacing) {
             (Some(c), Some(_)) => {
                 return Err(self.error_at(
