@@ -31,7 +31,8 @@ use glam::Vec3;
 use oslf_format::{SampleMaps, SamplePoint, INVALID_INDEX};
 use rayon::prelude::*;
 
-use crate::sample_map::{self, PointIndex, VISIBILITY_LIFT};
+pub use crate::sample_map::UNSEEN_CONE_DEG;
+use crate::sample_map::{self, enclosed, PointIndex, VISIBILITY_LIFT};
 use crate::sample_points::{fibonacci_sphere, through_point, FREE_SPACE_TOLERANCE};
 use crate::surface::MapDomain;
 use oslf_trace::bvh::Instance;
@@ -44,11 +45,6 @@ pub const PLACES_SHOWN: usize = 3;
 /// Directions probed around a texel's would-be sample point by the contact test (as many as
 /// placement's free-space test probes).
 const PROBE_DIRECTIONS: usize = 64;
-
-/// The unseen test probes the directions within this angle of a texel's normal: a view more
-/// grazing than this sees its surface foreshortened below a sixth of its area, through a gap
-/// narrower than ε.
-pub const UNSEEN_CONE_DEG: f32 = 80.0;
 
 /// Why a texel found fewer than four sample points.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
@@ -321,31 +317,6 @@ fn contact(
         .then_some(nearest_back)
         .flatten()
         .map(|(_, _, t)| t)
-}
-
-/// Whether no view reaches the surface at `origin` (lifted off it along its unit normal `n`):
-/// each of `directions`, turned into `n`'s hemisphere, that lies within [`UNSEEN_CONE_DEG`] of
-/// `n` meets a surface within `reach`.
-fn enclosed(
-    geometry: &impl Intersector,
-    origin: Vec3,
-    n: Vec3,
-    reach: f32,
-    directions: &[Vec3],
-) -> bool {
-    let cos_cone = UNSEEN_CONE_DEG.to_radians().cos();
-    let mut probed = 0;
-    for &d in directions {
-        let d = if d.dot(n) < 0.0 { -d } else { d };
-        if d.dot(n) < cos_cone {
-            continue;
-        }
-        probed += 1;
-        if !geometry.occluded(&Ray::new(origin, d), reach) {
-            return false;
-        }
-    }
-    probed > 0
 }
 
 /// The axis `n` is closest to: 0 `+x`, 1 `-x`, 2 `+y`, 3 `-y`, 4 `+z`, 5 `-z`.

@@ -162,13 +162,52 @@ pub fn texel_candidates(
     (in_cone, visible)
 }
 
-/// Used texels with fewer than four indices, as (map, x, y), in storage order.
+/// The unseen test probes the directions within this angle of a texel's normal: a view more
+/// grazing than this sees its surface foreshortened below a sixth of its area, through a gap
+/// narrower than ε.
+pub const UNSEEN_CONE_DEG: f32 = 80.0;
+
+/// Whether no view reaches the surface at `origin` (lifted off it along its unit normal `n`):
+/// each of `directions`, turned into `n`'s hemisphere, that lies within [`UNSEEN_CONE_DEG`] of
+/// `n` meets a surface within `reach`.
+pub fn enclosed(
+    geometry: &impl Intersector,
+    origin: Vec3,
+    n: Vec3,
+    reach: f32,
+    directions: &[Vec3],
+) -> bool {
+    let cos_cone = UNSEEN_CONE_DEG.to_radians().cos();
+    let mut probed = 0;
+    for &d in directions {
+        let d = if d.dot(n) < 0.0 { -d } else { d };
+        if d.dot(n) < cos_cone {
+            continue;
+        }
+        probed += 1;
+        if !geometry.occluded(&Ray::new(origin, d), reach) {
+            return false;
+        }
+    }
+    probed > 0
+}
+
+/// Used texels with fewer than four indices, as (map, x, y): those with none first (no point
+/// reconstructs them at all), then the others, each in storage order.
 pub fn short_texels(maps: &SampleMaps, domains: &[MapDomain]) -> Vec<(u32, u32, u32)> {
     let res = maps.resolution as usize;
-    maps.indices
+    let empty = maps
+        .indices
         .iter()
         .enumerate()
-        .filter(|(_, t)| t[3] == INVALID_INDEX)
+        .filter(|(_, t)| t[0] == INVALID_INDEX);
+    let short = maps
+        .indices
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t[0] != INVALID_INDEX && t[3] == INVALID_INDEX);
+    empty
+        .chain(short)
         .map(|(i, _)| {
             let map = i / (res * res);
             let texel = i % (res * res);

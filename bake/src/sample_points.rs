@@ -2,7 +2,8 @@
 //! [`crate::surface`]) with controlled coverage, offset by ε along the geometric normal of the
 //! face each lies on (thesis §3.1; a mesh's smooth shading normal would tilt points near a hard
 //! edge towards the neighbouring face and closer than ε to it),
-//! and culled where the free-space condition fails (§3.3).
+//! and culled where the free-space condition fails (§3.3), or, with `near_surface = "lower"`,
+//! lowered towards their own surface where another surface is near ([`NEAR_CLEARANCE`]).
 //!
 //! Placement is *weighted sample elimination* (Yuksel 2015, "Sample Elimination for Generating
 //! Poisson Disk Sample Sets"): many candidates are drawn uniformly by area over all surfaces, then
@@ -17,6 +18,7 @@ use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::SamplePoint;
 
+use crate::sample_map::{enclosed, VISIBILITY_LIFT};
 pub use crate::surface::Surfaces;
 use crate::surface::{MapDomain, SurfacePoint};
 use oslf_scene::error::{BakeError, Result};
@@ -388,7 +390,9 @@ fn poisson_radius(area: f32, n: usize) -> f32 {
 /// texel's surface point (lower near another surface, as [`place`] puts it with
 /// `near_surface`); texels are visited in order and a candidate is kept when it passes the
 /// free-space tests and lies at least `min_distance` from every existing and newly kept
-/// point. At most `max_new` points are added. Returns how many were added.
+/// point; a lowered candidate, where no view reaches its texel (`sample_map::enclosed` within
+/// its object's `reach`, the size), is not. At most `max_new` points are added. Returns how
+/// many were added, and how many of them were lowered.
 #[allow(clippy::too_many_arguments)]
 pub fn refine(
     points: &mut Vec<SamplePoint>,
@@ -399,6 +403,7 @@ pub fn refine(
     near_surface: NearSurface,
     min_distance: f32,
     max_new: usize,
+    reach: &[f32],
     geometry: &impl Intersector,
 ) -> (usize, usize) {
     let existing: Vec<[f32; 3]> = points.iter().map(|p| p.position).collect();
@@ -414,7 +419,7 @@ pub fn refine(
         let Some(map) = maps.get(patch_index as usize) else {
             continue;
         };
-        let Some((base, _, offset)) = map.texel_offset(x, y, resolution) else {
+        let Some((base, n, offset)) = map.texel_offset(x, y, resolution) else {
             continue;
         };
         let u = (x as f32 + 0.5) / resolution as f32;
@@ -430,6 +435,20 @@ pub fn refine(
         ) else {
             continue;
         };
+        // A texel in contact that no view reaches (under a base) is not worth a point of the
+        // budget: it is only seen empty.
+        let reach = reach.get(map.object() as usize).copied().unwrap_or(0.0);
+        if was_lowered
+            && enclosed(
+                geometry,
+                base + n * epsilon * VISIBILITY_LIFT,
+                n,
+                reach,
+                &directions,
+            )
+        {
+            continue;
+        }
         let q = position.to_array();
         let near_existing =
             !existing.is_empty() && tree.nearest_one::<SquaredEuclidean>(&q).distance < min_sq;

@@ -82,7 +82,7 @@ fn the_choices_scale_with_the_scene_and_so_do_the_points_and_the_cubes() {
     let keys: Vec<&str> = unit.bake_choices.iter().map(|c| c.key).collect();
     assert_eq!(
         keys,
-        ["epsilon", "sample_spacing", "placement"],
+        ["epsilon", "near_surface", "sample_spacing", "placement"],
         "{:?}",
         unit.bake_choices
     );
@@ -249,6 +249,7 @@ fn the_lobe_sets_the_spacing_the_cube_resolution_and_the_samples() {
             keys,
             [
                 "epsilon",
+                "near_surface",
                 "sample_spacing",
                 "placement",
                 "cube_resolution",

@@ -112,6 +112,11 @@ pub(super) fn build_maps(
         progress.finish();
         built
     };
+    let object_sizes: Vec<f32> = surfaces
+        .objects()
+        .iter()
+        .map(oslf_scene::bake_defaults::object_size)
+        .collect();
     let mut points = placement.points;
     let (mut maps, mut map_stats) = build(&points);
     let mut min_distance = placement.radius;
@@ -131,6 +136,7 @@ pub(super) fn build_maps(
             settings.near_surface,
             min_distance,
             budget,
+            &object_sizes,
             geometry,
         );
         if added == 0 {
@@ -146,11 +152,6 @@ pub(super) fn build_maps(
     }
     map_stats.rays = rays;
     let object_names: Vec<String> = surfaces.objects().iter().map(|o| o.name.clone()).collect();
-    let object_sizes: Vec<f32> = surfaces
-        .objects()
-        .iter()
-        .map(oslf_scene::bake_defaults::object_size)
-        .collect();
     let probe = coverage::Probe {
         geometry,
         names,
