@@ -390,8 +390,8 @@ fn poisson_radius(area: f32, n: usize) -> f32 {
 /// texel's surface point (lower near another surface, as [`place`] puts it with
 /// `near_surface`); texels are visited in order and a candidate is kept when it passes the
 /// free-space tests and lies at least `min_distance` from every existing and newly kept
-/// point; a lowered candidate, where no view reaches its texel (`sample_map::enclosed` within
-/// its object's `reach`, the size), is not. At most `max_new` points are added. Returns how
+/// point; a candidate in contact, where no view reaches its texel (`sample_map::enclosed`
+/// within its object's `reach`, its size), is not. At most `max_new` points are added. Returns how
 /// many were added, and how many of them were lowered.
 #[allow(clippy::too_many_arguments)]
 pub fn refine(
@@ -435,16 +435,15 @@ pub fn refine(
         ) else {
             continue;
         };
-        // A texel in contact that no view reaches (under a base) is not worth a point of the
-        // budget: it is only seen empty.
+        // A texel in contact (no point fits at ε) that no view reaches, under a base, is not
+        // worth a point of the budget: the coverage report counts it as unseen.
         let reach = reach.get(map.object() as usize).copied().unwrap_or(0.0);
+        let lift = base + n * epsilon * VISIBILITY_LIFT;
         if was_lowered
-            && enclosed(
-                geometry,
-                base + n * epsilon * VISIBILITY_LIFT,
-                n,
-                reach,
-                &directions,
+            && enclosed(geometry, lift, n, reach, &directions)
+            && !matches!(
+                free_space(geometry, base + offset * epsilon, epsilon, &directions),
+                FreeSpace::Ok
             )
         {
             continue;
