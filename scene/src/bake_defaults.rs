@@ -193,7 +193,7 @@ fn placement_choice() -> BakeChoice {
 
 /// The rule chosen with ε: points near another surface lowered, not removed
 /// (docs/measurements.md, "Points lowered near a contact": on the can over three seeds
-/// 0.55–0.57 of the better split sum against 0.58–0.62 with the points removed).
+/// 0.56–0.57 of the better split sum against 0.58–0.62 with the points removed).
 fn near_surface_choice() -> BakeChoice {
     BakeChoice {
         key: "near_surface",
