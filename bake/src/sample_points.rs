@@ -153,10 +153,10 @@ pub fn place(
             &directions,
         );
         match (outcome, kept) {
-            (_, Some((position, lowered))) => {
-                placement.lowered += usize::from(lowered);
+            (_, Some(kept)) => {
+                placement.lowered += usize::from(kept.lowered);
                 placement.points.push(SamplePoint {
-                    position: position.to_array(),
+                    position: kept.position.to_array(),
                     normal: c.offset.to_array(),
                     uv: c.uv.to_array(),
                     patch: c.map,
@@ -410,6 +410,16 @@ pub fn refine(
     let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&existing);
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
     let min_sq = min_distance * min_distance;
+    // A point at any height lies within ε of the one at ε.
+    let sure = min_distance - epsilon;
+    // Whether an existing or newly `added` point lies within √`r_sq` of `p`.
+    let crowded = |added: &[SamplePoint], p: Vec3, r_sq: f32| {
+        (!existing.is_empty()
+            && tree.nearest_one::<SquaredEuclidean>(&p.to_array()).distance < r_sq)
+            || added
+                .iter()
+                .any(|a| Vec3::from_array(a.position).distance_squared(p) < r_sq)
+    };
     let mut added: Vec<SamplePoint> = Vec::new();
     let mut lowered = 0;
     for &(patch_index, x, y) in short_texels {
@@ -424,7 +434,11 @@ pub fn refine(
         };
         let u = (x as f32 + 0.5) / resolution as f32;
         let v = (y as f32 + 0.5) / resolution as f32;
-        let (_, Some((position, was_lowered))) = offset_point(
+        // Cheap first: a point within `sure` of the one at ε rules out every height below it.
+        if sure > 0.0 && crowded(&added, base + offset * epsilon, sure * sure) {
+            continue;
+        }
+        let (_, Some(kept)) = offset_point(
             geometry,
             base,
             offset,
@@ -439,25 +453,14 @@ pub fn refine(
         // worth a point of the budget: the coverage report counts it as unseen.
         let reach = reach.get(map.object() as usize).copied().unwrap_or(0.0);
         let lift = base + n * epsilon * VISIBILITY_LIFT;
-        if was_lowered
-            && enclosed(geometry, lift, n, reach, &directions)
-            && !matches!(
-                free_space(geometry, base + offset * epsilon, epsilon, &directions),
-                FreeSpace::Ok
-            )
-        {
+        if kept.contact && enclosed(geometry, lift, n, reach, &directions) {
             continue;
         }
-        let q = position.to_array();
-        let near_existing =
-            !existing.is_empty() && tree.nearest_one::<SquaredEuclidean>(&q).distance < min_sq;
-        let near_new = added
-            .iter()
-            .any(|p| Vec3::from_array(p.position).distance_squared(position) < min_sq);
-        if near_existing || near_new {
+        if crowded(&added, kept.position, min_sq) {
             continue;
         }
-        lowered += usize::from(was_lowered);
+        let q = kept.position.to_array();
+        lowered += usize::from(kept.lowered);
         added.push(SamplePoint {
             position: q,
             normal: offset.to_array(),
@@ -497,12 +500,21 @@ enum FreeSpace {
     Inside,
 }
 
+/// Where [`offset_point`] put a point.
+struct Offset {
+    position: Vec3,
+    /// Nearer its surface than ε.
+    lowered: bool,
+    /// At ε it failed the free-space test (another surface within ε): a contact.
+    contact: bool,
+}
+
 /// Where the point over `base` (on object `own`, its face's normal `offset`) goes: ε along
 /// `offset` where the free-space tests pass there, and with [`NearSurface::Lower`], nearer its
 /// own surface where another lies within ε or within [`NEAR_CLEARANCE`] times the point's
 /// height in the half-space it faces (halving the height at most [`NEAR_LOWERINGS`] times,
-/// the lowest that passes the free-space tests kept). Returns the test's outcome, the position
-/// where it passed and whether it was lowered.
+/// the lowest that passes the free-space tests kept). Returns the test's outcome and, where it
+/// passed, the point.
 fn offset_point(
     geometry: &impl Intersector,
     base: Vec3,
@@ -511,7 +523,7 @@ fn offset_point(
     epsilon: f32,
     rule: NearSurface,
     directions: &[Vec3],
-) -> (FreeSpace, Option<(Vec3, bool)>) {
+) -> (FreeSpace, Option<Offset>) {
     let lowerings = match rule {
         NearSurface::Remove => 0,
         NearSurface::Lower => NEAR_LOWERINGS,
@@ -528,14 +540,20 @@ fn offset_point(
             })
     };
     let mut h = epsilon;
-    let mut kept = None;
+    let mut kept: Option<Offset> = None;
     let mut outcome = FreeSpace::TooClose;
+    let mut contact = false;
     for k in 0..=lowerings {
         let position = base + offset * h;
         outcome = free_space(geometry, position, h, directions);
+        contact |= k == 0 && matches!(outcome, FreeSpace::TooClose);
         match outcome {
             FreeSpace::Ok => {
-                kept = Some((position, k > 0));
+                kept = Some(Offset {
+                    position,
+                    lowered: k > 0,
+                    contact,
+                });
                 if k == lowerings || !other_within(position, h * NEAR_CLEARANCE, true) {
                     break;
                 }

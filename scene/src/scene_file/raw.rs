@@ -325,8 +325,8 @@ pub(super) struct RawBake {
     pub(super) epsilon: Option<Spanned<Positive>>,
     pub(super) sample_count: Option<Spanned<u32>>,
     pub(super) sample_spacing: Option<Positive>,
-    pub(super) placement: Option<PlacementName>,
-    pub(super) near_surface: Option<NearSurfaceName>,
+    pub(super) placement: Option<Named<crate::scene::PointPlacement>>,
+    pub(super) near_surface: Option<Named<crate::scene::NearSurface>>,
     pub(super) phi_samplemap: Option<Spanned<Angle>>,
     pub(super) cube_resolution: Option<Resolution>,
     pub(super) sample_map_resolution: Option<Resolution>,
@@ -342,7 +342,7 @@ pub(super) struct RawBake {
     pub(super) mantissa_bits: Option<Spanned<i64>>,
     pub(super) distance_channel: Option<bool>,
     pub(super) env_cube: Option<bool>,
-    pub(super) device: Option<DeviceName>,
+    pub(super) device: Option<Named<crate::scene::DeviceChoice>>,
     /// The store size (MB) the settings the scene chooses must fit.
     pub(super) store_budget_mb: Option<Positive>,
 }
@@ -491,30 +491,14 @@ impl<'de> Deserialize<'de> for EncodingName {
     }
 }
 
+/// A setting named by a string in the file (`placement = "parallax"`): whatever `T` parses,
+/// its error the message.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct PlacementName(pub(super) crate::scene::PointPlacement);
-impl<'de> Deserialize<'de> for PlacementName {
+pub(super) struct Named<T>(pub(super) T);
+impl<'de, T: std::str::FromStr<Err = String>> Deserialize<'de> for Named<T> {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         let s = String::deserialize(d)?;
-        s.parse().map(PlacementName).map_err(D::Error::custom)
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct NearSurfaceName(pub(super) crate::scene::NearSurface);
-impl<'de> Deserialize<'de> for NearSurfaceName {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        s.parse().map(NearSurfaceName).map_err(D::Error::custom)
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct DeviceName(pub(super) crate::scene::DeviceChoice);
-impl<'de> Deserialize<'de> for DeviceName {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        s.parse().map(DeviceName).map_err(D::Error::custom)
+        s.parse().map(Named).map_err(D::Error::custom)
     }
 }
 
