@@ -167,6 +167,42 @@ fn stderr(out: &std::process::Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
+/// `placement = "adaptive"` from the CLI: the bake captures its pilot cubes (half the 12
+/// points asked, at least 16), counts them on the summary's `time` line and in the JSON
+/// report, and places the points asked; the same scene and seed give the same store bytes
+/// again. A placement it does not know is a located error naming the three.
+#[test]
+fn adaptive_placement_captures_pilot_cubes_and_says_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let text = format!("{SCENE}placement = \"adaptive\"\n");
+    let mut stores = Vec::new();
+    for run in 0..2 {
+        let report = dir.join(format!("report{run}.json"));
+        let out = bake_in(dir, &text, &["--report-json", report.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        assert_eq!(report["pilot_cubes"], 16, "{report}");
+        assert_eq!(report["points_placed"], 12, "{report}");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains(" (16 pilot cubes)"), "{stdout}");
+        stores.push(std::fs::read(dir.join("lid.oslf")).unwrap());
+    }
+    assert!(
+        stores[0] == stores[1],
+        "the same scene and seed gave other bytes"
+    );
+
+    let out = bake_in(dir, &format!("{SCENE}placement = \"error\"\n"), &[]);
+    assert!(!out.status.success());
+    let e = stderr(&out);
+    assert!(
+        e.contains("lid.toml:") && e.contains("\"uniform\", \"parallax\" or \"adaptive\""),
+        "{e}"
+    );
+}
+
 /// A partial file whose fixed sections were never completely written (the bake was killed
 /// while creating it) holds no cube maps: `--resume` says so in one line and starts over.
 #[test]

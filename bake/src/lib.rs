@@ -14,6 +14,7 @@
 //! | --- | --- |
 //! | [`surface`] | the sample-map domains of patches and meshes |
 //! | [`sample_points`] | placing points ε above the surfaces |
+//! | [`pilot`] | pilot cubes and their leave-one-out error, for adaptive placement |
 //! | [`sample_map`] | the four nearest visible points per texel |
 //! | [`coverage`] | why sample-map texels are short, per object |
 //! | [`device`] | the `CaptureDevice` trait through which another capture takes the CPU's place |
@@ -26,6 +27,7 @@
 pub mod bake;
 pub mod coverage;
 pub mod device;
+pub mod pilot;
 pub mod preflight;
 pub mod sample_map;
 pub mod sample_points;

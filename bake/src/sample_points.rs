@@ -17,13 +17,18 @@ use std::num::NonZero;
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::SamplePoint;
+use rayon::prelude::*;
 
+use crate::pilot::{prediction_errors, Pilot, PilotCapture, MIN_PILOTS, PILOT_FRACTION};
 use crate::sample_map::{enclosed, VISIBILITY_LIFT};
 pub use crate::surface::Surfaces;
 use crate::surface::{MapDomain, SurfacePoint};
 use oslf_scene::error::{BakeError, Result};
-use oslf_scene::scene::{BakeSettings, NearSurface, PointPlacement, SampleDensity};
+use oslf_scene::scene::{BakeSettings, NearSurface, PointPlacement, SampleDensity, Scene};
 use oslf_shading::random::Rng;
+use oslf_trace::bvh::TriangleScene;
+use oslf_trace::capture::{capture_cube_with_noise, CaptureSettings};
+use oslf_trace::integrator::Integrator;
 use oslf_trace::ray::{Intersector, Ray};
 /// Candidates drawn per requested point.
 const CANDIDATES_PER_POINT: usize = 6;
@@ -63,16 +68,30 @@ pub struct Placement {
     pub radius: f32,
     /// Points added by [`refine`] where sample-map texels found fewer than four.
     pub added: usize,
-    /// Rays cast by the free-space tests.
+    /// Pilot cubes captured by [`PointPlacement::Adaptive`] ([`crate::pilot`]).
+    pub pilot_cubes: usize,
+    /// Rays cast by the free-space tests and the pilot cubes.
     pub rays: u64,
 }
 
 /// Places sample points over every map domain of `surfaces` (patches and mesh triangles),
-/// offsets them and removes invalid ones.
+/// offsets them and removes invalid ones. [`PointPlacement::Adaptive`] needs the scene's
+/// light, [`place_lit`]'s: here it is an error.
 pub fn place(
     surfaces: &Surfaces,
     settings: &BakeSettings,
     geometry: &impl Intersector,
+) -> Result<Placement> {
+    place_lit(surfaces, settings, geometry, None)
+}
+
+/// [`place`], with `pilot` capturing the pilot cubes of [`PointPlacement::Adaptive`]
+/// ([`crate::pilot`]; the bake's own CPU path tracer over the same scene).
+pub fn place_lit(
+    surfaces: &Surfaces,
+    settings: &BakeSettings,
+    geometry: &impl Intersector,
+    pilot: Option<&PilotCapture>,
 ) -> Result<Placement> {
     let area = surfaces.area();
     if area.is_nan() || area <= 0.0 {
@@ -83,6 +102,7 @@ pub fn place(
     let mut rng = Rng::new(settings.seed, PLACEMENT_STREAM);
     let mut radius = f32::INFINITY;
     let mut chosen: Vec<SurfacePoint> = Vec::new();
+    let (mut pilot_cubes, mut pilot_rays) = (0usize, 0u64);
     for group in groups(surfaces, settings)? {
         let draw = |rng: &mut Rng| match group.objects.as_slice() {
             [] => surfaces.sample(rng),
@@ -109,13 +129,28 @@ pub fn place(
                 let kept = eliminate(&candidates, None, group.count, group.area);
                 (kept, candidates, group.area)
             }
-            PointPlacement::Parallax => {
+            PointPlacement::Parallax | PointPlacement::Adaptive => {
                 // Uniform draws thinned to a density ∝ 1/scale² (scale 0.5 always kept).
                 let draws: Vec<SurfacePoint> =
                     (0..group.count * CANDIDATES_PER_POINT * PARALLAX_DRAWS)
                         .map(|_| draw(&mut rng))
                         .collect();
-                let scales = parallax_scales(&draws, geometry, settings.epsilon, group.area);
+                let scales = if settings.placement == PointPlacement::Parallax {
+                    parallax_scales(&draws, geometry, settings.epsilon, group.area)
+                } else {
+                    let Some(pilot) = pilot else {
+                        return Err(BakeError::Invalid(
+                            "placement \"adaptive\" captures pilot cubes: it needs the scene's \
+                             light (sample_points::place_lit)"
+                                .into(),
+                        ));
+                    };
+                    let (scales, pilots, rays) =
+                        adaptive_scales(&draws, group.count, group.area, settings, geometry, pilot);
+                    pilot_cubes += pilots;
+                    pilot_rays += rays;
+                    scales
+                };
                 // The area the points cover at unit scale: ∫ 1/scale² dA.
                 let area = group.area * scales.iter().map(|s| 1.0 / (s * s)).sum::<f32>()
                     / scales.len().max(1) as f32;
@@ -138,6 +173,7 @@ pub fn place(
         placed: chosen.len(),
         area,
         radius,
+        pilot_cubes,
         ..Default::default()
     };
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
@@ -167,7 +203,7 @@ pub fn place(
             _ => placement.removed_close += 1,
         }
     }
-    placement.rays = (chosen.len() * PROBE_DIRECTIONS * 2) as u64;
+    placement.rays = (chosen.len() * PROBE_DIRECTIONS * 2) as u64 + pilot_rays;
     if placement.points.is_empty() {
         return Err(BakeError::Invalid(format!(
             "all {} sample points were removed ({} closer than ε = {} to a surface, {} inside geometry)",
@@ -178,6 +214,20 @@ pub fn place(
         )));
     }
     Ok(placement)
+}
+
+/// [`place_lit`] for `scene` (whose objects `surfaces` are, traced in `geometry`), the pilot
+/// cubes of an adaptive placement captured by the bake's CPU path tracer whatever the bake's
+/// capture device, so that the points are the same on every device.
+pub fn place_in(scene: &Scene, surfaces: &Surfaces, geometry: &TriangleScene) -> Result<Placement> {
+    let integrator = Integrator::for_scene(scene, geometry);
+    let settings = crate::pilot::capture_settings(&CaptureSettings::from_bake(&scene.bake));
+    let pilot = |position: Vec3, index: u32| {
+        let (cube, rays, noise) = capture_cube_with_noise(&integrator, position, index, &settings);
+        let noise = noise.relative_error().unwrap_or(0.0) as f32;
+        (cube, noise, rays.closest + rays.shadow)
+    };
+    place_lit(surfaces, &scene.bake, geometry, Some(&pilot))
 }
 
 /// Points placed together by one weighted sample elimination, drawn over `objects` (all of
@@ -297,6 +347,103 @@ fn parallax_scales(
         .map(|d| (d / typical).clamp(PARALLAX_SCALE.0, PARALLAX_SCALE.1))
         .collect()
 }
+
+/// Each draw's spacing scale in an adaptive placement ([`crate::pilot`]): pilot cubes at a
+/// coarse Poisson-disk subset of the draws ([`PILOT_FRACTION`] of the `count` points, ε above
+/// them as [`place`] puts points), each pilot's leave-one-out prediction error, and each draw
+/// taking its nearest pilot's (of its object). The scale is the error's inverse square root
+/// over the draws' geometric mean of it, within [`PARALLAX_SCALE`]: where interpolating between
+/// points errs as the square of their spacing, that evens the error out. Returns the scales,
+/// the pilot cubes captured and their rays.
+fn adaptive_scales(
+    draws: &[SurfacePoint],
+    count: usize,
+    area: f32,
+    settings: &BakeSettings,
+    geometry: &impl Intersector,
+    capture: &PilotCapture,
+) -> (Vec<f32>, usize, u64) {
+    let wanted = ((count as f32 * PILOT_FRACTION).ceil() as usize).max(MIN_PILOTS);
+    let directions = fibonacci_sphere(PROBE_DIRECTIONS);
+    // A uniform placement's elimination over as many draws per pilot as one of points: more
+    // would break more near-ties of its weights differently at another scale.
+    let pool = &draws[..(wanted * CANDIDATES_PER_POINT).min(draws.len())];
+    let sites: Vec<(usize, Vec3)> = eliminate(pool, None, wanted, area)
+        .into_par_iter()
+        .filter_map(|i| {
+            let c = &draws[i];
+            let (_, kept) = offset_point(
+                geometry,
+                c.position,
+                c.offset,
+                c.object,
+                settings.epsilon,
+                settings.near_surface,
+                &directions,
+            );
+            kept.map(|k| (i, k.position))
+        })
+        .collect();
+    let captured: Vec<(Pilot, u64)> = sites
+        .par_iter()
+        .map(|&(i, position)| {
+            // The draw's index picks the random streams: a pilot removed by the free-space
+            // tests at one scale and not another leaves the others' cubes the same.
+            let (cube, noise, rays) = capture(position, i as u32);
+            let c = &draws[i];
+            let pilot = Pilot {
+                position,
+                normal: c.offset,
+                object: c.object,
+                cube,
+                noise,
+            };
+            (pilot, rays)
+        })
+        .collect();
+    let rays =
+        captured.iter().map(|(_, r)| r).sum::<u64>() + (sites.len() * PROBE_DIRECTIONS * 2) as u64;
+    let (pilots, _): (Vec<Pilot>, Vec<u64>) = captured.into_iter().unzip();
+    if pilots.is_empty() {
+        return (vec![1.0; draws.len()], 0, rays);
+    }
+    let errors = prediction_errors(&pilots);
+    // Each draw's nearest pilot of its own object (else the nearest).
+    let bases: Vec<[f32; 3]> = sites
+        .iter()
+        .map(|&(i, _)| draws[i].position.to_array())
+        .collect();
+    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&bases);
+    let nearest = NonZero::new(8.min(pilots.len())).expect("at least one pilot");
+    let floor = 1e-4f32;
+    let error: Vec<f32> = draws
+        .par_iter()
+        .map(|d| {
+            let found = tree.nearest_n::<SquaredEuclidean>(&d.position.to_array(), nearest);
+            let own = found
+                .iter()
+                .find(|nb| pilots[nb.item as usize].object == d.object)
+                .unwrap_or(&found[0]);
+            errors[own.item as usize].max(floor)
+        })
+        .collect();
+    let log_mean = error.iter().map(|e| e.ln()).sum::<f32>() / error.len().max(1) as f32;
+    let typical = log_mean.exp();
+    // In steps of an eighth of an octave: the pilots' errors carry Monte Carlo noise, and the
+    // same scene at another scale rounds its paths differently; steps keep the scales, and
+    // so the points, the same unless an error crosses a step.
+    let scales = error
+        .iter()
+        .map(|e| {
+            let octaves = (0.5 * (typical / e).log2() * SCALE_STEPS).round() / SCALE_STEPS;
+            octaves.exp2().clamp(PARALLAX_SCALE.0, PARALLAX_SCALE.1)
+        })
+        .collect();
+    (scales, pilots.len(), rays)
+}
+
+/// Steps per octave of an adaptive placement's spacing scales.
+const SCALE_STEPS: f32 = 8.0;
 
 /// Weighted sample elimination down to `target` points; returns kept candidate indices in
 /// ascending order. With `scales`, each candidate's distances count in units of its spacing

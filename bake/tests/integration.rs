@@ -30,6 +30,8 @@ mod noise;
 mod normals;
 #[path = "object_spacing.rs"]
 mod object_spacing;
+#[path = "pilot.rs"]
+mod pilot;
 #[path = "placement.rs"]
 mod placement;
 #[path = "quantize.rs"]

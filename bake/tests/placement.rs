@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use oslf_bake::sample_points::{place, Placement, Surfaces};
+use oslf_bake::sample_points::{place, place_in, Placement, Surfaces};
 use oslf_scene::scene::Scene;
 use oslf_scene::tolerance::TESSELLATION_ERROR;
 use oslf_trace::bvh::TriangleScene;
@@ -40,7 +40,7 @@ fn placement(scene: &Scene) -> Placement {
     ))
     .unwrap();
     let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
-    place(&surfaces, &scene.bake, &geometry).unwrap()
+    place_in(scene, &surfaces, &geometry).unwrap()
 }
 
 /// Distance from `p` to the surface of the axis-aligned box `[lo, lo + 1]³`, from outside.
@@ -239,12 +239,14 @@ fn a_point_lying_on_another_surface_is_too_close() {
     );
 }
 
-/// `placement = "parallax"`: a plate (2 × 1, facing up) with a wall standing 0.1 beyond one
-/// short edge and only the sky beyond the other. Parallax puts more of the same count of
-/// points on the half by the wall (where a reflection changes fastest from point to point),
-/// at least 1.8 times the far half's; uniform placement splits them evenly (within 15 %).
+/// `placement = "parallax"` and `"adaptive"`: a plate (2 × 1, facing up) with a wall standing
+/// 0.1 beyond one short edge and only the sky beyond the other. Parallax puts more of the
+/// same count of points on the half by the wall (where a reflection changes fastest from point
+/// to point), at least 1.8 times the far half's; adaptive placement at least 1.5 times, its
+/// pilot cubes finding the near wall's edge against the sky moving most between points there.
+/// Uniform placement splits them evenly (within 15 %).
 #[test]
-fn parallax_placement_is_denser_where_the_surroundings_are_near() {
+fn parallax_and_adaptive_placements_are_denser_where_the_surroundings_are_near() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     std::fs::write(
@@ -273,9 +275,40 @@ fn parallax_placement_is_denser_where_the_surroundings_are_near() {
         (near as f32 / far as f32 - 1.0).abs() < 0.15,
         "uniform: {near} near the wall, {far} far"
     );
-    let (near, far) = halves("parallax");
-    assert!(
-        near as f32 >= 1.8 * far as f32,
-        "parallax: {near} near the wall, {far} far"
+    // Adaptive's far half still sees the wall, 1 to 2 away across the plate: its pilots'
+    // views move less from point to point there, not nothing (253 against 147 points).
+    for (rule, ratio) in [("parallax", 1.8), ("adaptive", 1.5)] {
+        let (near, far) = halves(rule);
+        assert!(
+            near as f32 >= ratio * far as f32,
+            "{rule}: {near} near the wall, {far} far"
+        );
+    }
+}
+
+/// Adaptive placement captures pilot cubes, so it needs the scene's light: [`place`], which
+/// has only the geometry, says so instead of placing points some other way.
+#[test]
+fn adaptive_placement_without_the_scene_light_is_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = box_scene_baked(
+        tmp.path(),
+        [0.0, 0.0, 1.0],
+        "",
+        "",
+        "placement = \"adaptive\"",
     );
+    let geometry =
+        TriangleScene::build(oslf_trace::bvh::scene_instances(&scene, true, 0.001)).unwrap();
+    let surfaces = Surfaces::new(&scene.objects, &scene.bake).unwrap();
+    let e = place(&surfaces, &scene.bake, &geometry)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("placement \"adaptive\"") && e.contains("place_lit"),
+        "{e}"
+    );
+    let lit = placement(&scene);
+    assert!(lit.pilot_cubes >= 16, "{} pilot cubes", lit.pilot_cubes);
+    assert_eq!(lit.points.len(), 400);
 }

@@ -289,6 +289,15 @@ fn estimates_grow_with_every_setting() {
         "{off} vs {base}"
     );
     grows("encoding = \"rgba32f\"", true, true, false);
+    // Adaptive placement's pilot cubes take time of their own, named with its remedy.
+    grows("placement = \"adaptive\"", false, false, true);
+    let adaptive = estimate(&gazebo_with("placement = \"adaptive\""), THREADS);
+    let pilots = adaptive.time.iter().find(|t| t.name == "pilot cubes");
+    assert!(
+        pilots.is_some_and(|t| t.detail.contains("150 pilot cubes") && t.seconds.1 > 0.0),
+        "{adaptive}"
+    );
+    assert!(!base.time.iter().any(|t| t.name == "pilot cubes"), "{base}");
     grows("epsilon = 0.01", true, false, true);
 
     // Step by step along each setting.

@@ -197,6 +197,11 @@ pub enum PointPlacement {
     /// distance (the harmonic mean over a hemisphere of probe rays), within 0.5 to 2 times the
     /// typical spacing; the count is the same.
     Parallax,
+    /// Denser where neighbouring points predict each other's view worst: pilot cube maps
+    /// captured at a coarse set of points, each predicted from its nearest neighbours' cubes
+    /// through their distances (leave one out), and the spacing following that error (its
+    /// inverse square root), within 0.5 to 2 times the typical spacing; the count is the same.
+    Adaptive,
 }
 
 impl std::str::FromStr for PointPlacement {
@@ -205,8 +210,9 @@ impl std::str::FromStr for PointPlacement {
         match s {
             "uniform" => Ok(PointPlacement::Uniform),
             "parallax" => Ok(PointPlacement::Parallax),
+            "adaptive" => Ok(PointPlacement::Adaptive),
             _ => Err(format!(
-                "unknown placement {s:?} (expected \"uniform\" or \"parallax\")"
+                "unknown placement {s:?} (expected \"uniform\", \"parallax\" or \"adaptive\")"
             )),
         }
     }

@@ -419,8 +419,12 @@ fn print_summary(r: &BakeReport, why: &str) {
             r.traversal_triangles as f64 / rays
         );
     }
+    let pilots = match r.pilot_cubes {
+        0 => String::new(),
+        n => format!(" ({n} pilot cubes)"),
+    };
     println!(
-        "time           {:.1} s total{}: BVH {:.2} s ({} triangles), points {:.2} s, sample maps {:.2} s, cube maps {:.1} s",
+        "time           {:.1} s total{}: BVH {:.2} s ({} triangles), points {:.2} s{pilots}, sample maps {:.2} s, cube maps {:.1} s",
         r.total_seconds,
         r.cpu_seconds
             .map_or(String::new(), |c| format!(" ({c:.1} CPU-s)")),

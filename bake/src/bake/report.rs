@@ -66,6 +66,8 @@ pub struct BakeReport {
     /// Capture rays per second, millions (closest + shadow, this run's cubes only).
     pub mrays_per_second: f64,
     pub placement_seconds: f64,
+    /// Pilot cubes captured to place the points (`placement = "adaptive"`; 0 otherwise).
+    pub pilot_cubes: usize,
     pub sample_map_seconds: f64,
     pub capture_seconds: f64,
     /// What captured the cube maps: `CPU (N threads)`, or the capture device's description

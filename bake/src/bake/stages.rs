@@ -72,8 +72,9 @@ pub(super) fn place<'s>(
     let surfaces = Surfaces::new(&scene.objects, settings)?;
     report.atlases = atlas_reports(scene, &surfaces);
     report.normals = normals_reports(scene);
-    let placement = sample_points::place(&surfaces, settings, geometry)?;
+    let placement = sample_points::place_in(scene, &surfaces, geometry)?;
     report.placement_seconds = t.elapsed().as_secs_f64();
+    report.pilot_cubes = placement.pilot_cubes;
     report.points_placed = placement.placed;
     report.points_removed_close = placement.removed_close;
     report.points_removed_inside = placement.removed_inside;

@@ -2,7 +2,8 @@
 //! texels, cubes), and from them each memory, store and time term.
 
 use super::costs::*;
-use oslf_scene::scene::{BakeSettings, SampleDensity, Scene};
+use crate::pilot::{MIN_PILOTS, PILOT_FRACTION, PILOT_RESOLUTION, PILOT_SAMPLES};
+use oslf_scene::scene::{BakeSettings, PointPlacement, SampleDensity, Scene};
 use oslf_scene::tolerance::TESSELLATION_ERROR;
 use oslf_trace::capture::{captured_texel_bytes, chunk_cubes, strata_per_side, CaptureSettings};
 
@@ -474,6 +475,25 @@ pub(super) fn time_terms(scene: &Scene, c: &Counts) -> (Vec<TimeTerm>, (f64, f64
         ),
         remedy: "lower sample_count".into(),
     };
+    // Adaptive placement's pilot cubes (crate::pilot), on the CPU whatever the device.
+    let pilot_time = (scene.bake.placement == PointPlacement::Adaptive).then(|| {
+        let pilots = ((requested as f32 * PILOT_FRACTION).ceil() as u64).max(MIN_PILOTS as u64);
+        let rays = (pilots * 6 * u64::from(PILOT_RESOLUTION).pow(2) * u64::from(PILOT_SAMPLES))
+            as f64
+            * c.vertices_per_path as f64
+            * c.rays_per_vertex as f64;
+        TimeTerm {
+            name: "pilot cubes",
+            seconds: (
+                rays * 0.5 / (RAYS_PER_CORE_SECOND.1 * th),
+                rays / (RAYS_PER_CORE_SECOND.0 * th),
+            ),
+            detail: format!(
+                "placement = \"adaptive\": {pilots} pilot cubes × 6 × {PILOT_RESOLUTION}² texels × {PILOT_SAMPLES} samples = {rays:.3e} rays"
+            ),
+            remedy: "use placement = \"parallax\"".into(),
+        }
+    });
     let bvh_triangles = c.triangles + c.env_triangles;
     let bvh_time = TimeTerm {
         name: "BVH",
@@ -485,6 +505,7 @@ pub(super) fn time_terms(scene: &Scene, c: &Counts) -> (Vec<TimeTerm>, (f64, f64
         remedy: "raise epsilon or simplify the environment meshes".into(),
     };
     let mut time = vec![capture, sample_maps_time, placement_time, bvh_time];
+    time.extend(pilot_time);
     time.sort_by(|a, b| b.seconds.1.total_cmp(&a.seconds.1));
     let seconds = time
         .iter()
