@@ -178,16 +178,7 @@ pub fn place_lit(
     };
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
     for c in &chosen {
-        // Along the face's own normal, so the point lies ε from its face (§3.1).
-        let (outcome, kept) = offset_point(
-            geometry,
-            c.position,
-            c.offset,
-            c.object,
-            settings.epsilon,
-            settings.near_surface,
-            &directions,
-        );
+        let (outcome, kept) = offset_draw(geometry, c, settings, &directions);
         match (outcome, kept) {
             (_, Some(kept)) => {
                 placement.lowered += usize::from(kept.lowered);
@@ -371,16 +362,7 @@ fn adaptive_scales(
     let sites: Vec<(usize, Vec3)> = eliminate(pool, None, wanted, area)
         .into_par_iter()
         .filter_map(|i| {
-            let c = &draws[i];
-            let (_, kept) = offset_point(
-                geometry,
-                c.position,
-                c.offset,
-                c.object,
-                settings.epsilon,
-                settings.near_surface,
-                &directions,
-            );
+            let (_, kept) = offset_draw(geometry, &draws[i], settings, &directions);
             kept.map(|k| (i, k.position))
         })
         .collect();
@@ -654,6 +636,25 @@ struct Offset {
     lowered: bool,
     /// At ε it failed the free-space test (another surface within ε): a contact.
     contact: bool,
+}
+
+/// [`offset_point`] for a drawn surface point with the bake's ε and `near_surface`: along the
+/// face's own normal, so the point lies ε from its face (§3.1).
+fn offset_draw(
+    geometry: &impl Intersector,
+    c: &SurfacePoint,
+    settings: &BakeSettings,
+    directions: &[Vec3],
+) -> (FreeSpace, Option<Offset>) {
+    offset_point(
+        geometry,
+        c.position,
+        c.offset,
+        c.object,
+        settings.epsilon,
+        settings.near_surface,
+        directions,
+    )
 }
 
 /// Where the point over `base` (on object `own`, its face's normal `offset`) goes: ε along
