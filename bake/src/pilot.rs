@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use oslf_format::cube::{direction_to_face_st, texel_direction, texel_solid_angle, FACES};
+use oslf_format::cube::{texel_direction, texel_solid_angle, FACES};
 use oslf_format::CubeImage;
 use oslf_trace::capture::CaptureSettings;
 use oslf_trace::noise::luminance;
@@ -23,6 +23,11 @@ pub const PILOT_SAMPLES: u32 = 32;
 pub const PILOT_FRACTION: f32 = 0.5;
 /// Fewest pilot points of a placement group.
 pub const MIN_PILOTS: usize = 16;
+
+/// The pilot points of a placement group of `count` points, before the free-space tests.
+pub fn pilot_count(count: usize) -> usize {
+    ((count as f32 * PILOT_FRACTION).ceil() as usize).max(MIN_PILOTS)
+}
 /// Neighbours a pilot's view is predicted from (the runtime blends four points).
 pub const PILOT_NEIGHBOURS: usize = 4;
 /// The pilot cubes' random streams, apart from the store's cubes'.
@@ -99,6 +104,12 @@ pub fn prediction_errors(pilots: &[Pilot]) -> Vec<f32> {
 
 /// [`prediction_errors`] of one pilot from `neighbours` (each with its distance).
 fn leave_one_out(pilot: &Pilot, neighbours: &[(&Pilot, f32)]) -> f32 {
+    // Inverse-distance weights, normalized.
+    let inverse: f64 = neighbours.iter().map(|&(_, d)| 1.0 / f64::from(d)).sum();
+    let weights: Vec<f64> = neighbours
+        .iter()
+        .map(|&(_, d)| 1.0 / f64::from(d) / inverse)
+        .collect();
     let res = pilot.cube.resolution;
     let (mut difference, mut total) = (0.0f64, 0.0f64);
     for face in 0..FACES {
@@ -117,15 +128,16 @@ fn leave_one_out(pilot: &Pilot, neighbours: &[(&Pilot, f32)]) -> f32 {
                     .map_or(f32::MAX, |d| d[face][k]);
                 // What the view ray meets; an escaped ray's is at infinity (direction only).
                 let seen = (t.is_finite() && t < f32::MAX).then(|| pilot.position + dir * t);
-                let (mut sum, mut weights) = (0.0f64, 0.0f64);
-                for &(n, d) in neighbours {
-                    let towards = seen.map_or(dir, |p| p - n.position);
-                    let w = 1.0 / f64::from(d);
-                    sum += w * luminance(bilinear(&n.cube, towards));
-                    weights += w;
-                }
+                let predicted: f64 = neighbours
+                    .iter()
+                    .zip(&weights)
+                    .map(|(&(n, _), w)| {
+                        let towards = seen.map_or(dir, |p| p - n.position);
+                        w * luminance(n.cube.bilinear(towards.to_array()))
+                    })
+                    .sum();
                 let omega = f64::from(texel_solid_angle(x, y, res));
-                difference += omega * (own - sum / weights).powi(2);
+                difference += omega * (own - predicted).powi(2);
                 total += omega * own * own;
             }
         }
@@ -133,30 +145,12 @@ fn leave_one_out(pilot: &Pilot, neighbours: &[(&Pilot, f32)]) -> f32 {
     if !(total > 0.0 && difference.is_finite()) {
         return 0.0;
     }
-    let weights: f64 = neighbours.iter().map(|&(_, d)| 1.0 / f64::from(d)).sum();
     let predicted_noise: f64 = neighbours
         .iter()
-        .map(|&(n, d)| (f64::from(n.noise) / f64::from(d) / weights).powi(2))
+        .zip(&weights)
+        .map(|(&(n, _), w)| (f64::from(n.noise) * w).powi(2))
         .sum();
     let error = difference / total;
     let signal = error - f64::from(pilot.noise).powi(2) - predicted_noise;
     signal.max(0.01 * error).sqrt() as f32
-}
-
-/// `cube` looked up towards `dir`, bilinear within the face it points at (clamped at the
-/// face's edges).
-fn bilinear(cube: &CubeImage, dir: Vec3) -> [f32; 3] {
-    let (face, s, t) = direction_to_face_st(dir.to_array());
-    let res = cube.resolution.max(1) as usize;
-    let last = (res - 1) as f32;
-    let fx = (s * res as f32 - 0.5).clamp(0.0, last);
-    let fy = (t * res as f32 - 0.5).clamp(0.0, last);
-    let (x0, y0) = (fx as usize, fy as usize);
-    let (x1, y1) = ((x0 + 1).min(res - 1), (y0 + 1).min(res - 1));
-    let (ax, ay) = (fx - x0 as f32, fy - y0 as f32);
-    let texels = &cube.faces[face];
-    let at = |x: usize, y: usize| Vec3::from_array(texels[y * res + x]);
-    let top = at(x0, y0).lerp(at(x1, y0), ax);
-    let bottom = at(x0, y1).lerp(at(x1, y1), ax);
-    top.lerp(bottom, ay).to_array()
 }

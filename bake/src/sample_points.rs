@@ -19,7 +19,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use oslf_format::SamplePoint;
 use rayon::prelude::*;
 
-use crate::pilot::{prediction_errors, Pilot, PilotCapture, MIN_PILOTS, PILOT_FRACTION};
+use crate::pilot::{pilot_count, prediction_errors, Pilot, PilotCapture};
 use crate::sample_map::{enclosed, VISIBILITY_LIFT};
 pub use crate::surface::Surfaces;
 use crate::surface::{MapDomain, SurfacePoint};
@@ -211,6 +211,9 @@ pub fn place_lit(
 /// cubes of an adaptive placement captured by the bake's CPU path tracer whatever the bake's
 /// capture device, so that the points are the same on every device.
 pub fn place_in(scene: &Scene, surfaces: &Surfaces, geometry: &TriangleScene) -> Result<Placement> {
+    if scene.bake.placement != PointPlacement::Adaptive {
+        return place(surfaces, &scene.bake, geometry);
+    }
     let integrator = Integrator::for_scene(scene, geometry);
     let settings = crate::pilot::capture_settings(&CaptureSettings::from_bake(&scene.bake));
     let pilot = |position: Vec3, index: u32| {
@@ -340,7 +343,7 @@ fn parallax_scales(
 }
 
 /// Each draw's spacing scale in an adaptive placement ([`crate::pilot`]): pilot cubes at a
-/// coarse Poisson-disk subset of the draws ([`PILOT_FRACTION`] of the `count` points, ε above
+/// coarse Poisson-disk subset of the draws ([`pilot_count`] of the `count` points, ε above
 /// them as [`place`] puts points), each pilot's leave-one-out prediction error, and each draw
 /// taking its nearest pilot's (of its object). The scale is the error's inverse square root
 /// over the draws' geometric mean of it, within [`PARALLAX_SCALE`]: where interpolating between
@@ -354,7 +357,7 @@ fn adaptive_scales(
     geometry: &impl Intersector,
     capture: &PilotCapture,
 ) -> (Vec<f32>, usize, u64) {
-    let wanted = ((count as f32 * PILOT_FRACTION).ceil() as usize).max(MIN_PILOTS);
+    let wanted = pilot_count(count);
     let directions = fibonacci_sphere(PROBE_DIRECTIONS);
     // A uniform placement's elimination over as many draws per pilot as one of points: more
     // would break more near-ties of its weights differently at another scale.

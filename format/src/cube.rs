@@ -103,6 +103,35 @@ pub fn texel_solid_angle(x: u32, y: u32, resolution: u32) -> f32 {
     (area(a1, b1) - area(a0, b1) - area(a1, b0) + area(a0, b0)) as f32
 }
 
+/// Where face coordinates `(s, t)` land on a face of side `n`: the four texels around them,
+/// clamped at the face's edges, and the bilinear weights (as `Tap` in the runtime's
+/// shade.wgsl).
+pub struct Tap {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+    pub wx: f32,
+    pub wy: f32,
+}
+
+impl Tap {
+    pub fn new(n: u32, s: f32, t: f32) -> Self {
+        let nf = n as f32;
+        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
+        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
+        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
+        Tap {
+            x0,
+            y0,
+            x1: (x0 + 1).min(n - 1),
+            y1: (y0 + 1).min(n - 1),
+            wx: fx - fx.floor(),
+            wy: fy - fy.floor(),
+        }
+    }
+}
+
 /// A decoded cube map: linear RGB radiance, row-major per face, faces in layer order.
 #[derive(Clone, Debug)]
 pub struct CubeImage {
@@ -115,6 +144,27 @@ pub struct CubeImage {
 }
 
 impl CubeImage {
+    /// The radiance towards `dir`, bilinear within the face it points at ([`Tap`]).
+    pub fn bilinear(&self, dir: [f32; 3]) -> [f32; 3] {
+        let (face, s, t) = direction_to_face_st(dir);
+        let n = self.resolution.max(1);
+        let Tap {
+            x0,
+            y0,
+            x1,
+            y1,
+            wx,
+            wy,
+        } = Tap::new(n, s, t);
+        let texels = &self.faces[face];
+        let at = |x: u32, y: u32| texels[(y * n + x) as usize];
+        let lerp =
+            |a: [f32; 3], b: [f32; 3], w: f32| std::array::from_fn(|i| a[i] + (b[i] - a[i]) * w);
+        let top = lerp(at(x0, y0), at(x1, y0), wx);
+        let bottom = lerp(at(x0, y1), at(x1, y1), wx);
+        lerp(top, bottom, wy)
+    }
+
     /// A black cube (with a zero distance plane if `distance`).
     pub fn black(resolution: u32, distance: bool) -> Self {
         let n = (resolution as usize).saturating_mul(resolution as usize);

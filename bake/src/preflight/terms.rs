@@ -2,7 +2,7 @@
 //! texels, cubes), and from them each memory, store and time term.
 
 use super::costs::*;
-use crate::pilot::{MIN_PILOTS, PILOT_FRACTION, PILOT_RESOLUTION, PILOT_SAMPLES};
+use crate::pilot::{pilot_count, PILOT_RESOLUTION, PILOT_SAMPLES};
 use oslf_scene::scene::{BakeSettings, PointPlacement, SampleDensity, Scene};
 use oslf_scene::tolerance::TESSELLATION_ERROR;
 use oslf_trace::capture::{captured_texel_bytes, chunk_cubes, strata_per_side, CaptureSettings};
@@ -477,7 +477,7 @@ pub(super) fn time_terms(scene: &Scene, c: &Counts) -> (Vec<TimeTerm>, (f64, f64
     };
     // Adaptive placement's pilot cubes (crate::pilot), on the CPU whatever the device.
     let pilot_time = (scene.bake.placement == PointPlacement::Adaptive).then(|| {
-        let pilots = ((requested as f32 * PILOT_FRACTION).ceil() as u64).max(MIN_PILOTS as u64);
+        let pilots = pilot_count(requested as usize) as u64;
         let rays = (pilots * 6 * u64::from(PILOT_RESOLUTION).pow(2) * u64::from(PILOT_SAMPLES))
             as f64
             * c.vertices_per_path as f64

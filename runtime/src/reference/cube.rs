@@ -25,33 +25,8 @@ pub fn face_point(face: usize, s: f32, t: f32) -> Vec3 {
     }
 }
 
-/// Where face coordinates `(s, t)` land on a face of side `n`: the four texels around them,
-/// clamped at the face's edges, and the bilinear weights (as `Tap` in shade.wgsl).
-pub(super) struct Tap {
-    pub(super) x0: u32,
-    pub(super) y0: u32,
-    pub(super) x1: u32,
-    pub(super) y1: u32,
-    pub(super) wx: f32,
-    pub(super) wy: f32,
-}
-
-impl Tap {
-    pub(super) fn new(n: u32, s: f32, t: f32) -> Self {
-        let nf = n as f32;
-        let fx = (s * nf - 0.5).clamp(0.0, nf - 1.0);
-        let fy = (t * nf - 0.5).clamp(0.0, nf - 1.0);
-        let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
-        Tap {
-            x0,
-            y0,
-            x1: (x0 + 1).min(n - 1),
-            y1: (y0 + 1).min(n - 1),
-            wx: fx - fx.floor(),
-            wy: fy - fy.floor(),
-        }
-    }
-}
+/// The four texels and bilinear weights of face coordinates (as `Tap` in shade.wgsl).
+pub(super) use oslf_format::cube::Tap;
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 impl<C: CubeTexels> Shader<'_, C> {
