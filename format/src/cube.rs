@@ -148,16 +148,10 @@ impl CubeImage {
     pub fn bilinear(&self, dir: [f32; 3]) -> [f32; 3] {
         let (face, s, t) = direction_to_face_st(dir);
         let n = self.resolution.max(1);
-        let Tap {
-            x0,
-            y0,
-            x1,
-            y1,
-            wx,
-            wy,
-        } = Tap::new(n, s, t);
+        let tap = Tap::new(n, s, t);
         let texels = &self.faces[face];
         let at = |x: u32, y: u32| texels[(y * n + x) as usize];
+        let (x0, y0, x1, y1, wx, wy) = (tap.x0, tap.y0, tap.x1, tap.y1, tap.wx, tap.wy);
         let lerp =
             |a: [f32; 3], b: [f32; 3], w: f32| std::array::from_fn(|i| a[i] + (b[i] - a[i]) * w);
         let top = lerp(at(x0, y0), at(x1, y0), wx);
