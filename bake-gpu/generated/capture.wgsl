@@ -264,14 +264,13 @@ struct Params {
     resolution: u32,
     strata: u32,
     max_bounces: u32,
-    light_count: u32,
-    seed: vec2<u32>,
-    env_kind: u32,
     flags: u32,
+    seed: vec2<u32>,
     texels: u32,
     row_invocations: u32,
     first: u32,
     _pad1: u32,
+    _pad0: vec2<u32>,
     env_size: vec4<u32>,
     env_tables: vec4<u32>,
     env_rotation: vec4<f32>,
@@ -613,11 +612,9 @@ struct Hit {
     tris: u32
 }
 
-fn included(slot: u32, objects: bool) -> bool {
-    return objects || attrs[slot].object == ENVIRONMENT_OBJECT;
+fn included(tri: Tri, objects: bool) -> bool {
+    return objects || tri.v1.w != 0.0;
 }
-
-const ENVIRONMENT_OBJECT: u32 = 4294967295u;
 
 fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool) -> Hit {
     var best: Hit;
@@ -639,11 +636,12 @@ fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool
             let k = firstLeadingBit(prims.y);
             prims.y &= ~(1u << k);
             let slot = prims.x + k;
-            if !included(slot, objects) {
+            let tri = tris[slot];
+            if !included(tri, objects) {
                 continue;
             }
             best.tris += 1u;
-            let h = intersect_triangle(tris[slot], r, best.t);
+            let h = intersect_triangle(tri, r, best.t);
             if h.hit {
                 best.t = h.t;
                 best.slot = slot;
@@ -739,7 +737,7 @@ fn texel_rgb(i: u32) -> vec3<f32> {
 
 fn wrap(i: i32, n: u32) -> u32 {
     let m = i32(n);
-    return u32(((i % m) + m) % m);
+    return u32(select(select(i, i - m, i >= m), i + m, i < 0));
 }
 
 fn texture_eval(t: Tex, uv_in: vec2<f32>) -> vec3<f32> {
@@ -747,16 +745,19 @@ fn texture_eval(t: Tex, uv_in: vec2<f32>) -> vec3<f32> {
     if !(finite(uv.x) && finite(uv.y)) {
         uv = vec2<f32>(0.0);
     }
-    if t.kind == TEX_CONSTANT {
+    if t.kind == TEX_CONSTANT || TEXTURE_KINDS == (1u << TEX_CONSTANT) {
         return t.a;
     }
-    if t.kind == TEX_CHECKER {
+    if present(TEXTURE_KINDS, TEX_CHECKER) && t.kind == TEX_CHECKER {
         let s = select(1.0, t.scale, finite(t.scale));
         let sum = floor(uv.x * s) + floor(uv.y * s);
         if sum - 2.0 * floor(0.5 * sum) == 0.0 {
             return t.a;
         }
         return t.b;
+    }
+    if !present(TEXTURE_KINDS, TEX_IMAGE) {
+        return t.a;
     }
     let u = uv.x - floor(uv.x);
     let v = uv.y - floor(uv.y);
@@ -775,6 +776,10 @@ fn texture_eval(t: Tex, uv_in: vec2<f32>) -> vec3<f32> {
     let top = mix(texel_rgb(r0 + c0), texel_rgb(r0 + c1), fx);
     let bottom = mix(texel_rgb(r1 + c0), texel_rgb(r1 + c1), fx);
     return mix(top, bottom, fy);
+}
+
+fn present(kinds: u32, kind: u32) -> bool {
+    return (kinds & (1u << kind)) != 0u;
 }
 
 const TEX_CONSTANT: u32 = 0u;
@@ -831,7 +836,7 @@ fn safe_normalize(v: vec3<f32>) -> vec3<f32> {
 fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
     var s: LightSample;
     s.valid = false;
-    if l.kind == LIGHT_SUN {
+    if present(LIGHT_KINDS, LIGHT_SUN) && l.kind == LIGHT_SUN {
         let dir = safe_normalize(l.direction);
         if all(dir == vec3<f32>(0.0)) || all(l.power == vec3<f32>(0.0)) || !finite_vec(l.power) {
             return s;
@@ -842,6 +847,9 @@ fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
         s.valid = true;
         return s;
     }
+    if !present(LIGHT_KINDS, LIGHT_POINT) && !present(LIGHT_KINDS, LIGHT_SPOT) {
+        return s;
+    }
     let d = l.position - p;
     let r2 = dot(d, d);
     if !(r2 > 0.0 && finite(r2)) {
@@ -850,7 +858,7 @@ fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
     let r = sqrt(r2);
     let dir = d / r;
     var e = l.power / r2;
-    if l.kind == LIGHT_SPOT {
+    if present(LIGHT_KINDS, LIGHT_SPOT) && l.kind == LIGHT_SPOT {
         let axis = safe_normalize(l.direction);
         if all(axis == vec3<f32>(0.0)) {
             return s;
@@ -869,7 +877,7 @@ fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
 }
 
 fn disc_radiance(l: Light, dir: vec3<f32>) -> vec3<f32> {
-    if l.kind != LIGHT_SUN {
+    if !present(LIGHT_KINDS, LIGHT_SUN) || l.kind != LIGHT_SUN {
         return vec3<f32>(0.0);
     }
     let s = safe_normalize(l.direction);
@@ -934,10 +942,10 @@ fn lat_long_uv(dir: vec3<f32>) -> vec3<f32> {
 }
 
 fn environment_eval(dir: vec3<f32>) -> vec3<f32> {
-    if params.env_kind == ENV_CONSTANT {
+    if ENV_KIND == ENV_CONSTANT {
         return params.env_constant.xyz;
     }
-    if params.env_kind == ENV_LAT_LONG {
+    if ENV_KIND == ENV_LAT_LONG {
         let uv = lat_long_uv(dir).xy;
         let w = params.env_size.x;
         let h = params.env_size.y;
@@ -988,7 +996,7 @@ struct EnvSample {
 }
 
 fn sample_environment(u: vec2<f32>) -> EnvSample {
-    if params.env_kind == ENV_CONSTANT {
+    if ENV_KIND == ENV_CONSTANT {
         return EnvSample(sample_uniform_sphere(u), 0.25 * FRAC_1_PI);
     }
     let w = params.env_tables.x;
@@ -1015,7 +1023,7 @@ fn sample_environment(u: vec2<f32>) -> EnvSample {
 }
 
 fn environment_pdf(dir: vec3<f32>) -> f32 {
-    if params.env_kind == ENV_CONSTANT {
+    if ENV_KIND == ENV_CONSTANT {
         return 0.25 * FRAC_1_PI;
     }
     let uvs = lat_long_uv(dir);
@@ -1102,14 +1110,21 @@ fn mr_pdf(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     return p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl);
 }
 
+fn is_metallic_roughness(model: u32) -> bool {
+    if !present(MATERIAL_MODELS, MODEL_LAMBERTIAN) {
+        return true;
+    }
+    return present(MATERIAL_MODELS, MODEL_METALLIC_ROUGHNESS) && model == MODEL_METALLIC_ROUGHNESS;
+}
+
 fn lobe_at(m: Mat, uv: vec2<f32>, valid: ptr<function, bool>) -> Lobe {
     var l: Lobe;
     l.model = m.model;
     l.albedo = material_albedo(m, uv);
     l.metallic = m.metallic;
     l.roughness = m.roughness;
-    if m.model == MODEL_METALLIC_ROUGHNESS {
-        if m.has_mr_texture != 0u {
+    if is_metallic_roughness(m.model) {
+        if MR_TEXTURES && m.has_mr_texture != 0u {
             let c = texture_eval(m.mr_texture, uv);
             l.metallic = clamp01(c.z);
             l.roughness = clamp01(c.y);
@@ -1123,14 +1138,14 @@ fn lobe_at(m: Mat, uv: vec2<f32>, valid: ptr<function, bool>) -> Lobe {
 }
 
 fn lobe_f(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    if l.model == MODEL_METALLIC_ROUGHNESS {
+    if is_metallic_roughness(l.model) {
         return mr_eval(l, ns, wo, wi);
     }
     return l.albedo * FRAC_1_PI;
 }
 
 fn lobe_pdf(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, cos_theta: f32) -> f32 {
-    if l.model == MODEL_METALLIC_ROUGHNESS {
+    if is_metallic_roughness(l.model) {
         return mr_pdf(l, ns, wo, wi);
     }
     return cosine_hemisphere_pdf(cos_theta);
@@ -1146,7 +1161,7 @@ struct BsdfSample {
 fn lobe_sample(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, rng: ptr<function, Rng>) -> BsdfSample {
     var s: BsdfSample;
     s.valid = false;
-    if l.model != MODEL_METALLIC_ROUGHNESS {
+    if !is_metallic_roughness(l.model) {
         let wi = to_world(frame_from_normal(ns), sample_cosine_hemisphere(rng_vec2(rng)));
         s.wi = wi;
         s.weight = l.albedo;
@@ -1227,7 +1242,7 @@ fn closest(o: vec3<f32>, d: vec3<f32>, objects: bool, counts: ptr<function, Coun
 }
 
 fn env_active() -> bool {
-    return (params.flags & FLAG_ENV_ACTIVE) != 0u;
+    return ENV_ACTIVE;
 }
 
 fn escaped(wi: vec3<f32>, pdf: f32, throughput: vec3<f32>) -> vec3<f32> {
@@ -1305,7 +1320,7 @@ fn path_start(first: SurfaceHit, incoming: vec3<f32>) -> Path {
 
 fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> bool {
     let env_on = env_active();
-    let emitters = (params.flags & FLAG_EMITTERS) != 0u;
+    let emitters = EMITTERS;
     let hit = (*path).hit;
     let normals = oriented_normals(hit, (*path).incoming);
     let ng = normals[0];
@@ -1324,7 +1339,7 @@ fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>
     }
     let p = hit.position;
     let origin = offset_origin(p, ng, hit.extent);
-    for (var i = 0u; i < params.light_count; i++) {
+    for (var i = 0u; i < LIGHT_COUNT; i++) {
         let ls = sample_li(lights[i], p);
         if !ls.valid {
             continue;
@@ -1374,8 +1389,8 @@ fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>
     return true;
 }
 
-fn path_next(path: ptr<function, Path>, next: Hit, rng: ptr<function, Rng>) -> bool {
-    if !next.found {
+fn path_next(path: ptr<function, Path>, found: bool, next: SurfaceHit, rng: ptr<function, Rng>) -> bool {
+    if !found {
         if env_active() {
             (*path).radiance += escaped((*path).wi, (*path).pdf, (*path).throughput);
         }
@@ -1389,7 +1404,7 @@ fn path_next(path: ptr<function, Path>, next: Hit, rng: ptr<function, Rng>) -> b
         }
         (*path).throughput = throughput;
     }
-    (*path).hit = surface_hit(next);
+    (*path).hit = next;
     (*path).incoming = (*path).wi;
     return true;
 }
@@ -1401,7 +1416,7 @@ fn radiance_leaving(first: SurfaceHit, incoming: vec3<f32>, objects: bool, rng: 
             break;
         }
         let next = closest(path.origin, path.wi, objects, counts);
-        if !path_next(&path, next, rng) {
+        if !path_next(&path, next.found, surface_hit(next), rng) {
             break;
         }
     }
@@ -1410,7 +1425,7 @@ fn radiance_leaving(first: SurfaceHit, incoming: vec3<f32>, objects: bool, rng: 
 
 fn escaped_primary(dir: vec3<f32>) -> vec3<f32> {
     var l = environment_eval(dir);
-    for (var i = 0u; i < params.light_count; i++) {
+    for (var i = 0u; i < LIGHT_COUNT; i++) {
         l += disc_radiance(lights[i], dir);
     }
     return finite_or_zero(l);
@@ -1424,11 +1439,23 @@ fn radiance(o: vec3<f32>, dir: vec3<f32>, objects: bool, rng: ptr<function, Rng>
     return vec4<f32>(radiance_leaving(surface_hit(first), dir, objects, rng, counts), first.t);
 }
 
-const FLAG_ENV_ACTIVE: u32 = 1u;
+const FLAG_DISTANCE: u32 = 1u;
 
-const FLAG_EMITTERS: u32 = 2u;
+override ENV_KIND: u32;
 
-const FLAG_DISTANCE: u32 = 4u;
+override ENV_ACTIVE: bool;
+
+override EMITTERS: bool;
+
+override LIGHT_COUNT: u32;
+
+override LIGHT_KINDS: u32;
+
+override MATERIAL_MODELS: u32;
+
+override TEXTURE_KINDS: u32;
+
+override MR_TEXTURES: bool;
 
 @group(0) @binding(0)
 var<uniform> params: Params;
@@ -1560,12 +1587,13 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
             ray_d = face_st_to_direction(face, s, t);
         }
         let h = closest(ray_o, ray_d, objects, &counts);
+        let surface = surface_hit(h);
         var going = false;
         if fresh {
             first_t = F32_MAX;
             if h.found {
                 first_t = h.t;
-                path = path_start(surface_hit(h), ray_d);
+                path = path_start(surface, ray_d);
                 going = true;
             }
             else {
@@ -1573,7 +1601,7 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
             }
         }
         else {
-            going = path_next(&path, h, &rng);
+            going = path_next(&path, h.found, surface, &rng);
         }
         if going {
             going = path_vertex(&path, objects, &rng, &counts);

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use crate::error::{GpuBakeError, Result};
+use crate::features::SceneFeatures;
 pub use crate::layouts::{Job, Params, TexelOut, TraceHit, TraceRay};
 use crate::scene::GpuScene;
 use crate::shader;
@@ -54,10 +55,8 @@ const BATCH_BYTES: u64 = 64 << 20;
 /// Most cubes per batch.
 const MAX_BATCH_CUBES: u64 = 256;
 
-/// `FLAG_*` of shader/capture.wgsl.
-const FLAG_ENV_ACTIVE: u32 = 1;
-const FLAG_EMITTERS: u32 = 2;
-const FLAG_DISTANCE: u32 = 4;
+/// `FLAG_DISTANCE` of shader/capture.wgsl.
+pub const FLAG_DISTANCE: u32 = 1;
 
 /// A ray of [`GpuCapture::trace`]: origin, unit direction, `t_max`, whether the OSLF objects
 /// take part, and whether any hit answers it (a shadow ray's query, which stops at the first
@@ -252,7 +251,8 @@ impl GpuCapture {
                 source: wgpu::ShaderSource::Wgsl(shader::source().into()),
             });
         let workgroup = workgroup_size(&gpu);
-        let constants = [("WORKGROUP", f64::from(workgroup))];
+        let mut constants = vec![("WORKGROUP", f64::from(workgroup))];
+        constants.extend(SceneFeatures::of(scene)?.constants());
         let pipeline = |entry: &str| {
             gpu.device
                 .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -271,18 +271,8 @@ impl GpuCapture {
         let trace = pipeline("trace");
         let preview = pipeline("preview");
         let e = &scene.environment;
-        let mut flags = 0;
-        if e.active {
-            flags |= FLAG_ENV_ACTIVE;
-        }
-        if scene.emitters {
-            flags |= FLAG_EMITTERS;
-        }
         let base = Params {
             max_bounces,
-            light_count: scene.lights.len() as u32,
-            env_kind: e.kind,
-            flags,
             env_size: e.size,
             env_tables: e.tables,
             env_rotation: e.rotation,

@@ -12,10 +12,9 @@ oslf_gpu::gpu_struct! {
         pub resolution: u32,
         pub strata: u32,
         pub max_bounces: u32,
-        pub light_count: u32,
-        pub seed: [u32; 2],
-        pub env_kind: u32,
+        /// `FLAG_*` of shader/capture.wgsl.
         pub flags: u32,
+        pub seed: [u32; 2],
         /// Texels of the batch (cubes × 6 × resolution²).
         pub texels: u32,
         /// Invocations per dispatch row.
@@ -23,6 +22,7 @@ oslf_gpu::gpu_struct! {
         /// The dispatch's first texel.
         pub first: u32,
         pub _pad1: u32,
+        pub _pad0: [u32; 2],
         /// Lat-long map: width, height, first texel in `texels`.
         pub env_size: [u32; 4],
         /// Sampling tables: width, height.

@@ -10,6 +10,9 @@
 //!   CPU), materials (Lambertian and glTF
 //!   metallic-roughness, constant, checker and image textures), point, spot and sun lights,
 //!   the environment (constant, lat-long map or Preetham sky, with the CPU's sampling tables);
+//! - [`features`]: what that scene holds (environment, light kinds, material models, texture
+//!   kinds), the pipeline constants the shader is specialized on, so that it compiles without
+//!   the code no path of the scene reaches;
 //! - [`capture`]: [`GpuCapture`], which uploads it once and captures batches of cubes
 //!   (bounded memory per batch, short dispatches), implementing the bake's
 //!   `CaptureDevice`, so `oslf bake --device gpu` resumes, shards and merges as the CPU bake;
@@ -33,6 +36,7 @@
 pub mod capture;
 pub mod choice;
 pub mod error;
+pub mod features;
 pub mod layouts;
 pub mod preview;
 pub mod scene;

@@ -11,8 +11,25 @@ use oslf_scene::light::Light;
 use oslf_scene::material::{Material, Model};
 use oslf_scene::texture::Texture;
 use oslf_trace::bvh::TriangleRecord;
+use oslf_trace::ray::ENVIRONMENT_OBJECT;
 
 use crate::error::{GpuBakeError, Result};
+
+/// `Tex::kind`: shader/scene.wgsl's `TEX_*`.
+pub const TEX_CONSTANT: u32 = 0;
+pub const TEX_CHECKER: u32 = 1;
+pub const TEX_IMAGE: u32 = 2;
+/// `Mat::model`: shader/scene.wgsl's `MODEL_*`.
+pub const MODEL_LAMBERTIAN: u32 = 0;
+pub const MODEL_METALLIC_ROUGHNESS: u32 = 1;
+/// `GpuLight::kind`: shader/scene.wgsl's `LIGHT_*`.
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_SUN: u32 = 2;
+/// `EnvironmentParams::kind`: shader/scene.wgsl's `ENV_*`.
+pub const ENV_CONSTANT: u32 = 0;
+pub const ENV_LAT_LONG: u32 = 1;
+pub const ENV_SKY: u32 = 2;
 
 oslf_gpu::gpu_struct! {
     /// A node of the compressed wide BVH (obvhs's `CwBvhNode`, Ylitie, Karras and Laine 2017),
@@ -51,7 +68,9 @@ impl From<&CwBvhNode> for Node {
 
 oslf_gpu::gpu_struct! {
     /// A triangle's corners (`v0[3]`: the largest coordinate magnitude of the corners, the hit's
-    /// `extent`) and its unnormalised plane normal with that normal's length.
+    /// `extent`; `v1[3]`: 1 where it belongs to no OSLF object, which the environment-map
+    /// baseline's view keeps, else 0; read with the corners, so that the traversal needs no
+    /// second load per triangle) and its unnormalised plane normal with that normal's length.
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct Tri as "Tri" {
         pub v0: [f32; 4],
@@ -96,7 +115,7 @@ oslf_gpu::gpu_struct! {
 }
 
 oslf_gpu::gpu_struct! {
-    /// A material: model 0 Lambertian, 1 glTF metallic-roughness.
+    /// A material: model [`MODEL_LAMBERTIAN`] or [`MODEL_METALLIC_ROUGHNESS`] (glTF's).
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct Mat as "Mat" {
         pub albedo: Tex,
@@ -111,7 +130,7 @@ oslf_gpu::gpu_struct! {
 }
 
 oslf_gpu::gpu_struct! {
-    /// A delta light: kind 0 point, 1 spot, 2 sun; `power` is the intensity (point, spot) or the
+    /// A delta light: kind [`LIGHT_POINT`], [`LIGHT_SPOT`] or [`LIGHT_SUN`]; `power` is the intensity (point, spot) or the
     /// irradiance (sun).
     #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
     pub struct GpuLight as "Light" {
@@ -195,7 +214,7 @@ impl GpuScene {
             let extent = a.abs().max(b.abs()).max(c.abs()).max_element();
             scene.tris.push(Tri {
                 v0: v4(a, extent),
-                v1: v4(b, 0.0),
+                v1: v4(b, f32::from(u8::from(t.object == ENVIRONMENT_OBJECT))),
                 v2: v4(c, 0.0),
                 plane: v4(n, n.length()),
             });
@@ -221,11 +240,11 @@ impl GpuScene {
                 None => (Tex::zeroed(), 0),
             };
             let (model, metallic, roughness) = match m.model {
-                Model::Lambertian => (0, 0.0, 0.0),
+                Model::Lambertian => (MODEL_LAMBERTIAN, 0.0, 0.0),
                 Model::MetallicRoughness {
                     metallic,
                     roughness,
-                } => (1, metallic, roughness),
+                } => (MODEL_METALLIC_ROUGHNESS, metallic, roughness),
             };
             scene.materials.push(Mat {
                 albedo,
@@ -248,15 +267,18 @@ impl GpuScene {
     fn texture(&mut self, t: &Texture) -> Result<Tex> {
         let mut tex = Tex::zeroed();
         match t {
-            Texture::Constant(c) => tex.a = v3(*c),
+            Texture::Constant(c) => {
+                tex.kind = TEX_CONSTANT;
+                tex.a = v3(*c);
+            }
             Texture::Checker { a, b, scale } => {
-                tex.kind = 1;
+                tex.kind = TEX_CHECKER;
                 tex.a = v3(*a);
                 tex.b = v3(*b);
                 tex.scale = *scale;
             }
             Texture::Image(img) => {
-                tex.kind = 2;
+                tex.kind = TEX_IMAGE;
                 tex.width = img.width;
                 tex.height = img.height;
                 tex.offset = self.append_texels(&img.pixels)?;
@@ -286,18 +308,18 @@ impl GpuScene {
         };
         let sampling = match environment.model() {
             EnvironmentModel::Constant(c) => {
-                e.kind = 0;
+                e.kind = ENV_CONSTANT;
                 e.constant = v4(c, 0.0);
                 None
             }
             EnvironmentModel::LatLong { map, sampling } => {
-                e.kind = 1;
+                e.kind = ENV_LAT_LONG;
                 let first = self.append_texels(&map.pixels)?;
                 e.size = [map.width, map.height, first, 0];
                 Some(sampling)
             }
             EnvironmentModel::Sky { model, sampling } => {
-                e.kind = 2;
+                e.kind = ENV_SKY;
                 let [y, x, yc] = model.perez;
                 e.perez = [
                     [y[0], y[1], y[2], y[3]],
@@ -335,7 +357,7 @@ fn gpu_light(l: &Light) -> GpuLight {
             position,
             intensity,
         } => {
-            g.kind = 0;
+            g.kind = LIGHT_POINT;
             g.position = v3(position);
             g.power = v3(intensity);
         }
@@ -346,7 +368,7 @@ fn gpu_light(l: &Light) -> GpuLight {
             inner_angle,
             outer_angle,
         } => {
-            g.kind = 1;
+            g.kind = LIGHT_SPOT;
             g.position = v3(position);
             g.direction = v3(direction);
             g.power = v3(intensity);
@@ -358,7 +380,7 @@ fn gpu_light(l: &Light) -> GpuLight {
             irradiance,
             angular_radius,
         } => {
-            g.kind = 2;
+            g.kind = LIGHT_SUN;
             g.direction = v3(direction);
             g.power = v3(irradiance);
             g.angular_radius = angular_radius;

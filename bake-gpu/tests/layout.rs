@@ -21,14 +21,13 @@ fn the_shader_structs_are_the_rust_structs() {
             resolution,
             strata,
             max_bounces,
-            light_count,
-            seed,
-            env_kind,
             flags,
+            seed,
             texels,
             row_invocations,
             first,
             _pad1,
+            _pad0,
             env_size,
             env_tables,
             env_rotation,
@@ -262,11 +261,41 @@ fn the_shader_constants_are_the_crates() {
         ),
         "{workgroup:?}"
     );
-    assert_eq!(
-        value("ENVIRONMENT_OBJECT") as u32,
-        oslf_trace::ray::ENVIRONMENT_OBJECT
-    );
     assert_eq!(value("F32_MAX"), f64::from(f32::MAX));
+    use oslf_bake_gpu::scene as packed;
+    for (name, v) in [
+        ("TEX_CONSTANT", packed::TEX_CONSTANT),
+        ("TEX_CHECKER", packed::TEX_CHECKER),
+        ("TEX_IMAGE", packed::TEX_IMAGE),
+        ("MODEL_LAMBERTIAN", packed::MODEL_LAMBERTIAN),
+        ("MODEL_METALLIC_ROUGHNESS", packed::MODEL_METALLIC_ROUGHNESS),
+        ("LIGHT_POINT", packed::LIGHT_POINT),
+        ("LIGHT_SPOT", packed::LIGHT_SPOT),
+        ("LIGHT_SUN", packed::LIGHT_SUN),
+        ("ENV_CONSTANT", packed::ENV_CONSTANT),
+        ("ENV_LAT_LONG", packed::ENV_LAT_LONG),
+        ("ENV_SKY", packed::ENV_SKY),
+        ("FLAG_DISTANCE", oslf_bake_gpu::capture::FLAG_DISTANCE),
+    ] {
+        assert_eq!(value(name) as u32, v, "{name}");
+    }
+}
+
+/// The overrides the shader is specialized on are those the host sets, no more and no fewer.
+#[test]
+fn the_shader_overrides_are_the_scene_features() {
+    let module = parse("capture shader", oslf_bake_gpu::shader::source());
+    let mut declared: Vec<&str> = module
+        .overrides
+        .iter()
+        .filter_map(|(_, o)| o.name.as_deref())
+        .filter(|n| *n != "WORKGROUP")
+        .collect();
+    let features = oslf_bake_gpu::features::SceneFeatures::of(&Default::default()).unwrap();
+    let mut set: Vec<&str> = features.constants().iter().map(|c| c.0).collect();
+    declared.sort_unstable();
+    set.sort_unstable();
+    assert_eq!(declared, set);
 }
 
 /// The embedded shader is what its modules assemble to (`OSLF_BLESS=1` writes it).

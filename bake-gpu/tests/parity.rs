@@ -83,11 +83,13 @@ fn cases() -> Vec<Case> {
     let sky = Sky::new(Vec3::new(0.4, 0.3, 0.6), 3.0, 1.0).unwrap();
     vec![
         Case {
-            name: "sun and constant sky, Lambertian",
+            // Constant and checker textures without an image: the shader compiles without
+            // the image lookup (capture.wgsl's TEXTURE_KINDS).
+            name: "sun and constant sky, Lambertian, a checker ground",
             instances: sphere_on_ground(24, vec![]),
             materials: vec![
                 Material::lambertian(Vec3::new(0.2, 0.6, 0.3)),
-                Material::lambertian(Vec3::splat(0.5)),
+                checker.clone(),
             ],
             lights: vec![sun.clone()],
             environment: Environment::Constant(Vec3::new(0.3, 0.4, 0.6)),

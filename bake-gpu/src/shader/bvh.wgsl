@@ -5,7 +5,7 @@
 // (trace/src/bvh/triangle.rs: Woop, Benthin and Wald 2013 with pbrt-v3's conservative bound on
 // t, and the self-intersection guard). The same tree, order and tests, so the same hits.
 
-import package::capture::{attrs, nodes, out, tris};
+import package::capture::{nodes, out, tris};
 import package::layouts::{Node, Tri};
 
 const F32_MAX: f32 = 3.40282347e+38;
@@ -223,13 +223,11 @@ struct Hit {
     tris: u32,
 }
 
-// Whether triangle `slot` takes part: not when the query leaves out the OSLF objects (the
-// environment-map baseline's view) and it belongs to one.
-fn included(slot: u32, objects: bool) -> bool {
-    return objects || attrs[slot].object == ENVIRONMENT_OBJECT;
+// Whether triangle `tri` takes part: not when the query leaves out the OSLF objects (the
+// environment-map baseline's view) and it belongs to one (its `v1.w` is 0).
+fn included(tri: Tri, objects: bool) -> bool {
+    return objects || tri.v1.w != 0.0;
 }
-
-const ENVIRONMENT_OBJECT: u32 = 0xffffffffu;
 
 // The closest hit with t in (0, t_max), or none; `any_hit`: stop at the first.
 fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool) -> Hit {
@@ -255,11 +253,12 @@ fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool
             let k = firstLeadingBit(prims.y);
             prims.y &= ~(1u << k);
             let slot = prims.x + k;
-            if !included(slot, objects) {
+            let tri = tris[slot];
+            if !included(tri, objects) {
                 continue;
             }
             best.tris += 1u;
-            let h = intersect_triangle(tris[slot], r, best.t);
+            let h = intersect_triangle(tri, r, best.t);
             if h.hit {
                 best.t = h.t;
                 best.slot = slot;

@@ -21,9 +21,23 @@ import package::scene::{finite, surface_hit};
 import package::shading::color::{luminance};
 import package::shading::random::{hash4, rng_f32, rng_new};
 
-const FLAG_ENV_ACTIVE: u32 = 1u;
-const FLAG_EMITTERS: u32 = 2u;
-const FLAG_DISTANCE: u32 = 4u;
+// `Params::flags`: each texel's distance is traced too.
+const FLAG_DISTANCE: u32 = 1u;
+
+// What the scene holds, fixed when the pipelines are built (scene.rs `SceneFeatures`): the
+// environment's kind (ENV_*) and whether it shines, whether any material emits, the delta
+// lights' count, and bits 1 << kind of the light kinds (LIGHT_*), material models (MODEL_*)
+// and texture kinds (TEX_*) present, and whether any material has a metallic-roughness
+// texture. The compiler drops every branch no path of this scene can take: a CPU adapter,
+// which runs both sides of a branch its SIMD lanes disagree on, gains the most.
+override ENV_KIND: u32;
+override ENV_ACTIVE: bool;
+override EMITTERS: bool;
+override LIGHT_COUNT: u32;
+override LIGHT_KINDS: u32;
+override MATERIAL_MODELS: u32;
+override TEXTURE_KINDS: u32;
+override MR_TEXTURES: bool;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> nodes: array<Node>;
@@ -133,18 +147,20 @@ fn capture(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index
             ray_d = face_st_to_direction(face, s, t);
         }
         let h = closest(ray_o, ray_d, objects, &counts);
+        // The hit's surface, read once for either use (a CPU adapter would read it twice).
+        let surface = surface_hit(h);
         var going = false;
         if fresh {
             first_t = F32_MAX;
             if h.found {
                 first_t = h.t;
-                path = path_start(surface_hit(h), ray_d);
+                path = path_start(surface, ray_d);
                 going = true;
             } else {
                 path.radiance = escaped_primary(ray_d);
             }
         } else {
-            going = path_next(&path, h, &rng);
+            going = path_next(&path, h.found, surface, &rng);
         }
         if going {
             going = path_vertex(&path, objects, &rng, &counts);

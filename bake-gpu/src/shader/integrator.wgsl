@@ -6,12 +6,14 @@
 // (scene/src/metallic_roughness.rs), with GGX and Fresnel from oslf-shading's WGSL.
 
 import package::bvh::{F32_MAX, Hit, traverse};
-import package::capture::{FLAG_EMITTERS, FLAG_ENV_ACTIVE, attrs, lights, materials, params};
+import package::capture::{
+    EMITTERS, ENV_ACTIVE, LIGHT_COUNT, MATERIAL_MODELS, MR_TEXTURES, attrs, lights, materials, params,
+};
 import package::layouts::{Mat};
 import package::scene::{
-    MODEL_METALLIC_ROUGHNESS, SurfaceHit, clamp01, disc_radiance, environment_eval, environment_pdf,
-    finite, finite_vec, material_albedo, safe_normalize, sample_environment, sample_li, surface_hit,
-    texture_eval,
+    MODEL_LAMBERTIAN, MODEL_METALLIC_ROUGHNESS, SurfaceHit, clamp01, disc_radiance, environment_eval,
+    environment_pdf, finite, finite_vec, material_albedo, present, safe_normalize,
+    sample_environment, sample_li, surface_hit, texture_eval,
 };
 import package::shading::constants::{FRAC_1_PI, GGX_DIELECTRIC_F0};
 import package::shading::fresnel::{fresnel_schlick, fresnel_schlick_weight};
@@ -95,6 +97,15 @@ fn mr_pdf(l: Lobe, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     return p * specular + (1.0 - p) * cosine_hemisphere_pdf(nl);
 }
 
+// Whether a lobe of `model` is metallic-roughness: decided by the scene's models alone where
+// it holds one model.
+fn is_metallic_roughness(model: u32) -> bool {
+    if !present(MATERIAL_MODELS, MODEL_LAMBERTIAN) {
+        return true;
+    }
+    return present(MATERIAL_MODELS, MODEL_METALLIC_ROUGHNESS) && model == MODEL_METALLIC_ROUGHNESS;
+}
+
 // The lobe of material `m` at `uv` (`Lobe::at`); `valid` false for a black Lambertian one.
 fn lobe_at(m: Mat, uv: vec2<f32>, valid: ptr<function, bool>) -> Lobe {
     var l: Lobe;
@@ -102,8 +113,8 @@ fn lobe_at(m: Mat, uv: vec2<f32>, valid: ptr<function, bool>) -> Lobe {
     l.albedo = material_albedo(m, uv);
     l.metallic = m.metallic;
     l.roughness = m.roughness;
-    if m.model == MODEL_METALLIC_ROUGHNESS {
-        if m.has_mr_texture != 0u {
+    if is_metallic_roughness(m.model) {
+        if MR_TEXTURES && m.has_mr_texture != 0u {
             let c = texture_eval(m.mr_texture, uv);
             l.metallic = clamp01(c.z);
             l.roughness = clamp01(c.y);
@@ -116,14 +127,14 @@ fn lobe_at(m: Mat, uv: vec2<f32>, valid: ptr<function, bool>) -> Lobe {
 }
 
 fn lobe_f(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    if l.model == MODEL_METALLIC_ROUGHNESS {
+    if is_metallic_roughness(l.model) {
         return mr_eval(l, ns, wo, wi);
     }
     return l.albedo * FRAC_1_PI;
 }
 
 fn lobe_pdf(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, cos_theta: f32) -> f32 {
-    if l.model == MODEL_METALLIC_ROUGHNESS {
+    if is_metallic_roughness(l.model) {
         return mr_pdf(l, ns, wo, wi);
     }
     return cosine_hemisphere_pdf(cos_theta);
@@ -140,7 +151,7 @@ struct BsdfSample {
 fn lobe_sample(l: Lobe, ns: vec3<f32>, wo: vec3<f32>, rng: ptr<function, Rng>) -> BsdfSample {
     var s: BsdfSample;
     s.valid = false;
-    if l.model != MODEL_METALLIC_ROUGHNESS {
+    if !is_metallic_roughness(l.model) {
         let wi = to_world(frame_from_normal(ns), sample_cosine_hemisphere(rng_vec2(rng)));
         s.wi = wi;
         s.weight = l.albedo;
@@ -221,7 +232,7 @@ fn closest(o: vec3<f32>, d: vec3<f32>, objects: bool, counts: ptr<function, Coun
 }
 
 fn env_active() -> bool {
-    return (params.flags & FLAG_ENV_ACTIVE) != 0u;
+    return ENV_ACTIVE;
 }
 
 // `Integrator::escaped`.
@@ -312,7 +323,7 @@ fn path_start(first: SurfaceHit, incoming: vec3<f32>) -> Path {
 // `(*path).origin`, `(*path).wi`: trace that ray's closest hit and give it to `path_next`.
 fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>, counts: ptr<function, Counts>) -> bool {
     let env_on = env_active();
-    let emitters = (params.flags & FLAG_EMITTERS) != 0u;
+    let emitters = EMITTERS;
     let hit = (*path).hit;
     let normals = oriented_normals(hit, (*path).incoming);
     let ng = normals[0];
@@ -333,7 +344,7 @@ fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>
     let origin = offset_origin(p, ng, hit.extent);
 
     // Delta lights.
-    for (var i = 0u; i < params.light_count; i++) {
+    for (var i = 0u; i < LIGHT_COUNT; i++) {
         let ls = sample_li(lights[i], p);
         if !ls.valid {
             continue;
@@ -387,11 +398,11 @@ fn path_vertex(path: ptr<function, Path>, objects: bool, rng: ptr<function, Rng>
     return true;
 }
 
-// The closest hit `next` of the continuation `path_vertex` asked for: the environment where it
-// escapes, else Russian roulette from the 4th vertex. True when the path goes on at `next`
-// (`path_vertex` again).
-fn path_next(path: ptr<function, Path>, next: Hit, rng: ptr<function, Rng>) -> bool {
-    if !next.found {
+// The closest hit of the continuation `path_vertex` asked for (`found`, and its surface
+// `next`): the environment where it escapes, else Russian roulette from the 4th vertex. True
+// when the path goes on at `next` (`path_vertex` again).
+fn path_next(path: ptr<function, Path>, found: bool, next: SurfaceHit, rng: ptr<function, Rng>) -> bool {
+    if !found {
         if env_active() {
             (*path).radiance += escaped((*path).wi, (*path).pdf, (*path).throughput);
         }
@@ -405,7 +416,7 @@ fn path_next(path: ptr<function, Path>, next: Hit, rng: ptr<function, Rng>) -> b
         }
         (*path).throughput = throughput;
     }
-    (*path).hit = surface_hit(next);
+    (*path).hit = next;
     (*path).incoming = (*path).wi;
     return true;
 }
@@ -418,7 +429,7 @@ fn radiance_leaving(first: SurfaceHit, incoming: vec3<f32>, objects: bool, rng: 
             break;
         }
         let next = closest(path.origin, path.wi, objects, counts);
-        if !path_next(&path, next, rng) {
+        if !path_next(&path, next.found, surface_hit(next), rng) {
             break;
         }
     }
@@ -429,7 +440,7 @@ fn radiance_leaving(first: SurfaceHit, incoming: vec3<f32>, objects: bool, rng: 
 // distant lights.
 fn escaped_primary(dir: vec3<f32>) -> vec3<f32> {
     var l = environment_eval(dir);
-    for (var i = 0u; i < params.light_count; i++) {
+    for (var i = 0u; i < LIGHT_COUNT; i++) {
         l += disc_radiance(lights[i], dir);
     }
     return finite_or_zero(l);

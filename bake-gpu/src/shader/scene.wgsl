@@ -3,7 +3,9 @@
 // scene/src/{texture,material,light,environment}.rs) on the data of scene.rs.
 
 import package::bvh::{F32_MAX, Hit, finite3};
-import package::capture::{attrs, env_tables, params, texels, tris};
+import package::capture::{
+    ENV_KIND, LIGHT_KINDS, TEXTURE_KINDS, attrs, env_tables, params, texels, tris,
+};
 import package::integrator::{radiance};
 import package::layouts::{Light, Mat, Tex};
 import package::shading::constants::{FRAC_1_PI, PI};
@@ -62,9 +64,12 @@ fn texel_rgb(i: u32) -> vec3<f32> {
     return vec3<f32>(texels[3u * i], texels[3u * i + 1u], texels[3u * i + 2u]);
 }
 
+// `i.rem_euclid(n)` for i in [−n, 2n), where a bilinear tap's column or row lies (from −1
+// to n): without an integer division, which SIMD units lack (a CPU adapter divides lane by
+// lane).
 fn wrap(i: i32, n: u32) -> u32 {
     let m = i32(n);
-    return u32(((i % m) + m) % m);
+    return u32(select(select(i, i - m, i >= m), i + m, i < 0));
 }
 
 // `Texture::eval`.
@@ -73,16 +78,19 @@ fn texture_eval(t: Tex, uv_in: vec2<f32>) -> vec3<f32> {
     if !(finite(uv.x) && finite(uv.y)) {
         uv = vec2<f32>(0.0);
     }
-    if t.kind == TEX_CONSTANT {
+    if t.kind == TEX_CONSTANT || TEXTURE_KINDS == (1u << TEX_CONSTANT) {
         return t.a;
     }
-    if t.kind == TEX_CHECKER {
+    if present(TEXTURE_KINDS, TEX_CHECKER) && t.kind == TEX_CHECKER {
         let s = select(1.0, t.scale, finite(t.scale));
         let sum = floor(uv.x * s) + floor(uv.y * s);
         if sum - 2.0 * floor(0.5 * sum) == 0.0 {
             return t.a;
         }
         return t.b;
+    }
+    if !present(TEXTURE_KINDS, TEX_IMAGE) {
+        return t.a; // no path reaches this
     }
     // A linear RGB image, bilinear, wrapping (`ImageTexture::eval`).
     let u = uv.x - floor(uv.x);
@@ -102,6 +110,12 @@ fn texture_eval(t: Tex, uv_in: vec2<f32>) -> vec3<f32> {
     let top = mix(texel_rgb(r0 + c0), texel_rgb(r0 + c1), fx);
     let bottom = mix(texel_rgb(r1 + c0), texel_rgb(r1 + c1), fx);
     return mix(top, bottom, fy);
+}
+
+// Whether bit 1 << `kind` is set in `kinds` (the overrides LIGHT_KINDS, MATERIAL_MODELS and
+// TEXTURE_KINDS).
+fn present(kinds: u32, kind: u32) -> bool {
+    return (kinds & (1u << kind)) != 0u;
 }
 
 const TEX_CONSTANT: u32 = 0u;
@@ -155,7 +169,7 @@ fn safe_normalize(v: vec3<f32>) -> vec3<f32> {
 fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
     var s: LightSample;
     s.valid = false;
-    if l.kind == LIGHT_SUN {
+    if present(LIGHT_KINDS, LIGHT_SUN) && l.kind == LIGHT_SUN {
         let dir = safe_normalize(l.direction);
         if all(dir == vec3<f32>(0.0)) || all(l.power == vec3<f32>(0.0)) || !finite_vec(l.power) {
             return s;
@@ -166,6 +180,9 @@ fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
         s.valid = true;
         return s;
     }
+    if !present(LIGHT_KINDS, LIGHT_POINT) && !present(LIGHT_KINDS, LIGHT_SPOT) {
+        return s; // no path reaches this
+    }
     let d = l.position - p;
     let r2 = dot(d, d);
     if !(r2 > 0.0 && finite(r2)) {
@@ -174,7 +191,7 @@ fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
     let r = sqrt(r2);
     let dir = d / r;
     var e = l.power / r2;
-    if l.kind == LIGHT_SPOT {
+    if present(LIGHT_KINDS, LIGHT_SPOT) && l.kind == LIGHT_SPOT {
         let axis = safe_normalize(l.direction);
         if all(axis == vec3<f32>(0.0)) {
             return s;
@@ -194,7 +211,7 @@ fn sample_li(l: Light, p: vec3<f32>) -> LightSample {
 
 // `Light::disc_radiance`.
 fn disc_radiance(l: Light, dir: vec3<f32>) -> vec3<f32> {
-    if l.kind != LIGHT_SUN {
+    if !present(LIGHT_KINDS, LIGHT_SUN) || l.kind != LIGHT_SUN {
         return vec3<f32>(0.0);
     }
     let s = safe_normalize(l.direction);
@@ -261,10 +278,10 @@ fn lat_long_uv(dir: vec3<f32>) -> vec3<f32> {
 
 // `Environment::eval`.
 fn environment_eval(dir: vec3<f32>) -> vec3<f32> {
-    if params.env_kind == ENV_CONSTANT {
+    if ENV_KIND == ENV_CONSTANT {
         return params.env_constant.xyz;
     }
-    if params.env_kind == ENV_LAT_LONG {
+    if ENV_KIND == ENV_LAT_LONG {
         let uv = lat_long_uv(dir).xy;
         let w = params.env_size.x;
         let h = params.env_size.y;
@@ -317,7 +334,7 @@ struct EnvSample {
 
 // `Environment::sample_environment`.
 fn sample_environment(u: vec2<f32>) -> EnvSample {
-    if params.env_kind == ENV_CONSTANT {
+    if ENV_KIND == ENV_CONSTANT {
         return EnvSample(sample_uniform_sphere(u), 0.25 * FRAC_1_PI);
     }
     let w = params.env_tables.x;
@@ -345,7 +362,7 @@ fn sample_environment(u: vec2<f32>) -> EnvSample {
 
 // `Environment::environment_pdf`.
 fn environment_pdf(dir: vec3<f32>) -> f32 {
-    if params.env_kind == ENV_CONSTANT {
+    if ENV_KIND == ENV_CONSTANT {
         return 0.25 * FRAC_1_PI;
     }
     let uvs = lat_long_uv(dir);
