@@ -616,6 +616,8 @@ fn included(tri: Tri, objects: bool) -> bool {
     return objects || tri.v1.w != 0.0;
 }
 
+var<private> stack: array<vec2<u32>, STACK>;
+
 fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool) -> Hit {
     var best: Hit;
     best.found = false;
@@ -627,7 +629,6 @@ fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool
         return best;
     }
     let oct = octant_inv4(d);
-    var stack: array<vec2<u32>, STACK>;
     var top = 0u;
     var group = vec2<u32>(0u, 2147483648u);
     var prims = vec2<u32>(0u, 0u);

@@ -229,6 +229,10 @@ fn included(tri: Tri, objects: bool) -> bool {
     return objects || tri.v1.w != 0.0;
 }
 
+// The traversal's stack of node groups: one per invocation, not per query, because a
+// function's variables are zeroed at every call (a CPU adapter stores all of it each time).
+var<private> stack: array<vec2<u32>, STACK>;
+
 // The closest hit with t in (0, t_max), or none; `any_hit`: stop at the first.
 fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool) -> Hit {
     var best: Hit;
@@ -241,7 +245,6 @@ fn traverse(o: vec3<f32>, d: vec3<f32>, t_max: f32, objects: bool, any_hit: bool
         return best;
     }
     let oct = octant_inv4(d);
-    var stack: array<vec2<u32>, STACK>;
     var top = 0u;
     // The node group: its first node, and bits 24 + order of its children still to visit
     // over the mask of its inner children (the root: the one child of a virtual parent).
