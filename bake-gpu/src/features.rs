@@ -3,8 +3,8 @@
 //! capture's pipelines are built. With them the shader compiler drops the environment models,
 //! light kinds, material models and texture kinds the scene lacks, and the loops over its
 //! delta lights have a known count: less code per path vertex, which a CPU adapter (lavapipe
-//! runs both sides of every branch its SIMD lanes disagree on) pays for in full and a GPU in
-//! registers.
+//! runs both sides of every branch under a mask of its SIMD lanes) pays for in full and a GPU
+//! in registers.
 
 use crate::error::{GpuBakeError, Result};
 use crate::scene::GpuScene;

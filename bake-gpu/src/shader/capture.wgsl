@@ -24,12 +24,12 @@ import package::shading::random::{hash4, rng_f32, rng_new};
 // `Params::flags`: each texel's distance is traced too.
 const FLAG_DISTANCE: u32 = 1u;
 
-// What the scene holds, fixed when the pipelines are built (scene.rs `SceneFeatures`): the
+// What the scene holds, fixed when the pipelines are built (features.rs `SceneFeatures`): the
 // environment's kind (ENV_*) and whether it shines, whether any material emits, the delta
 // lights' count, and bits 1 << kind of the light kinds (LIGHT_*), material models (MODEL_*)
 // and texture kinds (TEX_*) present, and whether any material has a metallic-roughness
 // texture. The compiler drops every branch no path of this scene can take: a CPU adapter,
-// which runs both sides of a branch its SIMD lanes disagree on, gains the most.
+// which runs both sides of every branch under a mask of its SIMD lanes, gains the most.
 override ENV_KIND: u32;
 override ENV_ACTIVE: bool;
 override EMITTERS: bool;
