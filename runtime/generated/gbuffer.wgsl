@@ -85,6 +85,32 @@ struct TextureParams {
     pad: u32
 }
 
+struct Prepass {
+    clip_from_patch: mat4x4<f32>,
+    previous_clip_from_patch: mat4x4<f32>,
+    world_from_local: mat4x4<f32>
+}
+
+fn oct_encode(n: vec3<f32>) -> vec2<f32> {
+    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) {
+        let sx = select(-1.0, 1.0, p.x >= 0.0);
+        let sy = select(-1.0, 1.0, p.y >= 0.0);
+        return vec2<f32>((1.0 - abs(p.y)) * sx, (1.0 - abs(p.x)) * sy);
+    }
+    return p;
+}
+
+fn oct_decode(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        let sx = select(-1.0, 1.0, n.x >= 0.0);
+        let sy = select(-1.0, 1.0, n.y >= 0.0);
+        n = vec3<f32>((1.0 - abs(n.y)) * sx, (1.0 - abs(n.x)) * sy, n.z);
+    }
+    return normalize(n);
+}
+
 @group(0) @binding(0)
 var<uniform> P: Params;
 
@@ -123,16 +149,6 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VsOut {
     out.texcoord = vert.v.zw;
     out.tangent = vert.tangent;
     return out;
-}
-
-fn oct_encode(n: vec3<f32>) -> vec2<f32> {
-    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if (n.z < 0.0) {
-        let sx = select(-1.0, 1.0, p.x >= 0.0);
-        let sy = select(-1.0, 1.0, p.y >= 0.0);
-        return vec2<f32>((1.0 - abs(p.y)) * sx, (1.0 - abs(p.x)) * sy);
-    }
-    return p;
 }
 
 struct FsOut {

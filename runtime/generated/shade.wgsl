@@ -208,6 +208,32 @@ struct TextureParams {
     pad: u32
 }
 
+struct Prepass {
+    clip_from_patch: mat4x4<f32>,
+    previous_clip_from_patch: mat4x4<f32>,
+    world_from_local: mat4x4<f32>
+}
+
+fn oct_encode(n: vec3<f32>) -> vec2<f32> {
+    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) {
+        let sx = select(-1.0, 1.0, p.x >= 0.0);
+        let sy = select(-1.0, 1.0, p.y >= 0.0);
+        return vec2<f32>((1.0 - abs(p.y)) * sx, (1.0 - abs(p.x)) * sy);
+    }
+    return p;
+}
+
+fn oct_decode(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        let sx = select(-1.0, 1.0, n.x >= 0.0);
+        let sy = select(-1.0, 1.0, n.y >= 0.0);
+        n = vec3<f32>((1.0 - abs(n.y)) * sx, (1.0 - abs(n.x)) * sy, n.z);
+    }
+    return normalize(n);
+}
+
 override TERMS: u32 = 1u;
 
 override BLEND: u32 = 4u;
@@ -730,16 +756,6 @@ fn depth_lookup(cube: u32, h: vec4<f32>, lod: f32) -> vec4<f32> {
     }
     let c = load_texel(at.x, layer, c00, 0u) * w.x + load_texel(at.x, layer, c10, 0u) * w.y + load_texel(at.x, layer, c01, 0u) * w.z + load_texel(at.x, layer, c11, 0u) * w.w;
     return vec4<f32>(c, 1.0);
-}
-
-fn oct_decode(e: vec2<f32>) -> vec3<f32> {
-    var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
-    if (n.z < 0.0) {
-        let sx = select(-1.0, 1.0, n.x >= 0.0);
-        let sy = select(-1.0, 1.0, n.y >= 0.0);
-        n = vec3<f32>((1.0 - abs(n.y)) * sx, (1.0 - abs(n.x)) * sy, n.z);
-    }
-    return normalize(n);
 }
 
 fn bern3(t: f32) -> vec4<f32> {

@@ -195,9 +195,9 @@ pub(crate) fn sample_map_bytes(store: &Store, map: u32) -> Result<Vec<u8>> {
     })
 }
 
-/// Bytes of the G-buffer, shading and composite passes' GPU timestamps (u64 ticks, start and
-/// end of each).
-pub const TIMESTAMP_BYTES: u64 = 48;
+/// Bytes of the G-buffer, shading, composite and prepass passes' GPU timestamps (u64 ticks,
+/// start and end of each).
+pub const TIMESTAMP_BYTES: u64 = 64;
 
 /// Uploads `store`'s sample maps as stored (zero-copy): one integer array layer per sample map
 /// (Bézier patch or atlas page),

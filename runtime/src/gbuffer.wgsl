@@ -8,6 +8,7 @@
 // (pipelines.rs, textures.rs).
 
 import package::layouts::{GVertex, Params, TextureParams};
+import package::octahedral::{oct_encode};
 import package::shading::color::{linear_to_srgb, srgb_to_linear};
 
 // `struct Params` (the shading pass's uniform; this pass reads view_proj and camera_pos),
@@ -43,16 +44,6 @@ fn vs_main(@builtin(vertex_index) index: u32) -> VsOut {
     out.texcoord = vert.v.zw;
     out.tangent = vert.tangent;
     return out;
-}
-
-fn oct_encode(n: vec3<f32>) -> vec2<f32> {
-    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if (n.z < 0.0) {
-        let sx = select(-1.0, 1.0, p.x >= 0.0);
-        let sy = select(-1.0, 1.0, p.y >= 0.0);
-        return vec2<f32>((1.0 - abs(p.y)) * sx, (1.0 - abs(p.x)) * sy);
-    }
-    return p;
 }
 
 struct FsOut {

@@ -167,7 +167,7 @@ impl ObjectMesh {
     }
 }
 
-/// Octahedral encoding of a unit vector (as `oct_encode` in gbuffer.wgsl).
+/// Octahedral encoding of a unit vector (as `oct_encode` in octahedral.wgsl).
 pub fn oct_encode(n: Vec3) -> [f32; 2] {
     let s = n.x.abs() + n.y.abs() + n.z.abs();
     let (px, py) = (n.x / s, n.y / s);
@@ -180,7 +180,7 @@ pub fn oct_encode(n: Vec3) -> [f32; 2] {
     }
 }
 
-/// Octahedral decoding (as `oct_decode` in shade.wgsl).
+/// Octahedral decoding (as `oct_decode` in octahedral.wgsl).
 pub fn oct_decode(e: [f32; 2]) -> Vec3 {
     let mut n = Vec3::new(e[0], e[1], 1.0 - e[0].abs() - e[1].abs());
     if n.z < 0.0 {

@@ -116,8 +116,8 @@ pub use oslf_geometry::Camera;
 pub use oslf_gpu::{Gpu, GpuError};
 pub use params::{Background, Blend, GlossyFilter, Mode, Order, Source};
 pub use renderer::{
-    Frame, FrameBytes, HostPassSeconds, HostTarget, HostView, RenderOptions, Renderer, DEPTH_SLACK,
-    MAX_DEPTH_SLACK,
+    Frame, FrameBytes, HostPassSeconds, HostPrepass, HostTarget, HostView, PrepassTarget,
+    RenderOptions, Renderer, DEPTH_SLACK, MAX_DEPTH_SLACK,
 };
 pub use shading::{
     AshikhminShirley, Box3, DiffuseSource, Glossy, Lookup, Mirror, MonteCarlo, Pbr, PbrIntegration,

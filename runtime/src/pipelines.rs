@@ -29,6 +29,13 @@ pub(crate) fn shade_wgsl() -> &'static str {
     include_str!("../generated/shade.wgsl")
 }
 
+/// composite.wgsl, a host frame's composite and prepass passes, as embedded: assembled from
+/// renderer/composite.wgsl (root `composite`) and the modules it imports
+/// ([`composite_modules`]).
+pub(crate) fn composite_wgsl() -> &'static str {
+    include_str!("../generated/composite.wgsl")
+}
+
 /// gbuffer.wgsl, the G-buffer pass, as embedded: assembled from gbuffer.wgsl (root `gbuffer`),
 /// oslf-shading's modules and the structs generated from Rust ([`gbuffer_modules`]).
 pub(crate) fn gbuffer_wgsl() -> &'static str {
@@ -36,13 +43,14 @@ pub(crate) fn gbuffer_wgsl() -> &'static str {
 }
 
 /// The module of the structs generated from Rust: the uniform, the vertex, the texture
-/// parameters.
+/// parameters, the host prepass's uniform.
 #[cfg(test)]
 fn layouts_module() -> (String, String) {
     let src = [
         crate::uniform::ShadeUniform::wgsl(),
         crate::geometry::GVertex::wgsl(),
         crate::textures::TextureParams::wgsl(),
+        crate::renderer::PrepassUniform::wgsl(),
     ]
     .concat();
     ("layouts".into(), src)
@@ -70,6 +78,7 @@ pub(crate) fn shade_modules() -> Vec<(String, String)> {
     ];
     let mut modules = oslf_shading::wgsl::modules();
     modules.push(layouts_module());
+    modules.push(octahedral_module());
     modules.extend(
         files
             .into_iter()
@@ -83,8 +92,29 @@ pub(crate) fn shade_modules() -> Vec<(String, String)> {
 pub(crate) fn gbuffer_modules() -> Vec<(String, String)> {
     let mut modules = oslf_shading::wgsl::modules();
     modules.push(layouts_module());
+    modules.push(octahedral_module());
     modules.push(("gbuffer".into(), include_str!("gbuffer.wgsl").into()));
     modules
+}
+
+/// The modules of composite.wgsl (the host frame's composite and prepass passes), as
+/// [`shade_modules`].
+#[cfg(test)]
+pub(crate) fn composite_modules() -> Vec<(String, String)> {
+    let mut modules = oslf_shading::wgsl::modules();
+    modules.push(layouts_module());
+    modules.push(octahedral_module());
+    modules.push((
+        "composite".into(),
+        include_str!("renderer/composite.wgsl").into(),
+    ));
+    modules
+}
+
+/// The octahedral normal encoding the G-buffer writes and the passes after it read.
+#[cfg(test)]
+fn octahedral_module() -> (String, String) {
+    ("octahedral".into(), include_str!("octahedral.wgsl").into())
 }
 
 /// A read-only or read-write storage buffer at `binding`.

@@ -186,11 +186,12 @@ fn pipeline_overrides_are_the_shaders() {
 /// The embedded shaders are what their modules assemble to (`OSLF_BLESS=1` writes them).
 #[test]
 fn embedded_shaders_are_their_modules_assembled() {
-    use crate::pipelines::{gbuffer_modules, shade_modules};
+    use crate::pipelines::{composite_modules, gbuffer_modules, shade_modules};
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("generated");
     for (file, root, modules) in [
         ("shade.wgsl", "shade::pixel", shade_modules()),
         ("gbuffer.wgsl", "gbuffer", gbuffer_modules()),
+        ("composite.wgsl", "composite", composite_modules()),
     ] {
         oslf_shading::wgsl::check_assembled(&dir.join(file), root, &modules)
             .unwrap_or_else(|e| panic!("{e}"));

@@ -3,7 +3,9 @@
 //! with depth growing away from the camera and reversed (as Bevy draws), single-sampled and
 //! 4× multisampled; the cache's feedback read back asynchronously until nothing falls back.
 //! The object's pixels equal the CPU reference of the same G-buffer, as for
-//! `Renderer::render`.
+//! `Renderer::render`. With a host prepass (`Renderer::encode_prepass_into`), the object's depth,
+//! normals and motion vectors are in the host's prepass targets before its main pass, and the
+//! frame shades them alike.
 
 use crate::common;
 use crate::common::knobs::Knobs;
@@ -15,13 +17,21 @@ use glam::camera::rh::proj::directx;
 use glam::camera::rh::view::look_at_mat4;
 use glam::{Mat4, Vec3};
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Mode, Renderer};
+use oslf_runtime::{
+    CacheConfig, Gpu, HostPrepass, HostTarget, HostView, Mode, PrepassTarget, Renderer,
+};
 
 const W: u32 = 160;
 const H: u32 = 120;
 const COLOR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const COLOR_MSAA: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Bevy's prepass formats: normals, motion vectors.
+const NORMAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgb10a2Unorm;
+const MOTION: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
+/// The clip-space shift of the host's previous frame in the prepass test: the object moved
+/// 0.1 in normalised x since (a tenth of the half-width).
+const PREVIOUS_SHIFT: f32 = 0.1;
 /// The host's clear colour, its mesh in front of the object (left half) and its mesh behind
 /// the object (everywhere, drawn after it).
 const CLEAR: [f32; 4] = [0.1, 0.2, 0.3, 1.0];
@@ -36,12 +46,14 @@ struct Host {
     depth: wgpu::Texture,
     reversed: bool,
     samples: u32,
+    /// The prepass's normal and motion targets, where the host has a prepass.
+    prepass: Option<(wgpu::Texture, wgpu::Texture)>,
 }
 
 impl Host {
     /// Single-sampled targets (`Rgba32Float`), or `samples` per pixel (`Rgba16Float`, which
     /// every adapter multisamples).
-    fn new(gpu: &Gpu, reversed: bool, samples: u32) -> Self {
+    fn new(gpu: &Gpu, reversed: bool, samples: u32, prepass: bool) -> Self {
         let make = |format, samples| {
             gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: None,
@@ -66,6 +78,7 @@ impl Host {
             depth: make(DEPTH, samples),
             reversed,
             samples,
+            prepass: prepass.then(|| (make(NORMAL, samples), make(MOTION, samples))),
         }
     }
 
@@ -123,6 +136,25 @@ impl Host {
             (0, W / 2),
             wgpu::CompareFunction::Always,
         );
+        for t in self.prepass.iter().flat_map(|(n, m)| [n, m]) {
+            let v = t.create_view(&Default::default());
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("host prepass clear"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+        }
     }
 
     /// A full-height quad over columns `x0..x1` at depth `z`, colour `c`, tested by `compare`.
@@ -226,6 +258,39 @@ impl Host {
         self.begin(gpu, &mut encoder);
         let cv = self.color.create_view(&Default::default());
         let dv = self.depth.create_view(&Default::default());
+        if let Some((normal, motion)) = &self.prepass {
+            let (nv, mv) = (
+                normal.create_view(&Default::default()),
+                motion.create_view(&Default::default()),
+            );
+            // The previous frame saw the object PREVIOUS_SHIFT further right in clip space.
+            let shift = Mat4::from_cols(
+                glam::Vec4::X,
+                glam::Vec4::Y,
+                glam::Vec4::Z,
+                glam::Vec4::new(PREVIOUS_SHIFT, 0.0, 0.0, 1.0),
+            );
+            let prepass = HostPrepass {
+                depth: &dv,
+                depth_format: DEPTH,
+                depth_compare: self.compare(),
+                sample_count: self.samples,
+                width: W,
+                height: H,
+                normal: Some(PrepassTarget {
+                    view: &nv,
+                    format: NORMAL,
+                }),
+                motion: Some(PrepassTarget {
+                    view: &mv,
+                    format: MOTION,
+                }),
+                world_from_local: Mat4::IDENTITY,
+                previous_clip_from_local: shift * view.projection * view.view,
+            };
+            r.encode_prepass_into(&mut encoder, view, &prepass, &params.params())
+                .unwrap();
+        }
         let target = HostTarget {
             color: &cv,
             color_format: self.format,
@@ -283,6 +348,21 @@ impl Host {
     }
 
     fn read<T: bytemuck::Pod>(&self, gpu: &Gpu, depth: bool) -> Vec<T> {
+        let texture = match (depth, &self.resolved) {
+            (true, _) => &self.depth,
+            (false, Some(resolved)) => resolved,
+            (false, None) => &self.color,
+        };
+        self.read_texture(gpu, texture, depth)
+    }
+
+    /// A single-sampled `texture`'s texels as `T`, row-major (its depth aspect with `depth`).
+    fn read_texture<T: bytemuck::Pod>(
+        &self,
+        gpu: &Gpu,
+        texture: &wgpu::Texture,
+        depth: bool,
+    ) -> Vec<T> {
         let texel = std::mem::size_of::<T>() as u32;
         let row = (W * texel).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -294,11 +374,7 @@ impl Host {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
-                texture: match (depth, &self.resolved) {
-                    (true, _) => &self.depth,
-                    (false, Some(resolved)) => resolved,
-                    (false, None) => &self.color,
-                },
+                texture,
                 mip_level: 0,
                 origin: wgpu::Origin3d::ZERO,
                 aspect: if depth {
@@ -362,10 +438,11 @@ fn host_view(r: &Renderer, reversed: bool) -> HostView {
     }
 }
 
-fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
+fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32, prepass: bool) {
     let label = format!(
-        "{}, {samples} sample(s) per pixel, exposure {exposure}",
-        if reversed { "reversed depth" } else { "depth" }
+        "{}, {samples} sample(s) per pixel, exposure {exposure}{}",
+        if reversed { "reversed depth" } else { "depth" },
+        if prepass { ", a prepass" } else { "" }
     );
     let store = open_store();
     let cubes = StoreCubes::decode(&store).unwrap();
@@ -379,7 +456,7 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
         mode: Mode::ReconMirror,
         ..Default::default()
     };
-    let host = Host::new(&gpu, reversed, samples);
+    let host = Host::new(&gpu, reversed, samples, prepass);
     // Streaming: the first frame finds the cube maps missing and falls back; their loads
     // arrive over the next frames, read back without waiting.
     let mut booked = Vec::new();
@@ -424,8 +501,13 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
     assert!(
         times.is_some_and(|t| [t.gbuffer, t.shade, t.composite]
             .iter()
+            .chain(prepass.then_some(&t.prepass))
             .all(|s| s.is_some_and(|s| s > 0.0 && s < 60.0))),
         "{label}: host pass times {times:?}"
+    );
+    assert!(
+        times.is_some_and(|t| prepass || t.prepass.is_none()),
+        "{label}: a prepass timed without one: {times:?}"
     );
     let color = host.colors(&gpu);
     // A multisampled depth target cannot be copied out: its samples are judged by the colours.
@@ -471,31 +553,88 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32) {
         hidden > 100 && shown > 100,
         "{label}: {hidden} hidden, {shown} shown"
     );
+    if let (Some((normal, motion)), 1) = (&host.prepass, samples) {
+        check_prepass(&gpu, &host, normal, motion, &cpu, &camera, &label);
+    }
     let (n, share, mae) = compare(&object_gpu, &object_cpu, 2e-3);
     println!("{label}: {n} object pixels, {:.3}% within 2e-3 of the CPU reference, mean |gpu-cpu| {mae:.2e}", share * 100.0);
     assert!(share >= 0.995 && mae < 2e-3, "{label}: {share} {mae}");
 }
 
+/// The prepass's targets after the frame: on the object's visible pixels a unit normal, most
+/// of them facing the camera, and the motion of the shifted previous frame; elsewhere
+/// (hidden by the host's front mesh, or off the object) as the host cleared them.
+fn check_prepass(
+    gpu: &Gpu,
+    host: &Host,
+    normal: &wgpu::Texture,
+    motion: &wgpu::Texture,
+    reference: &[[f32; 4]],
+    camera: &oslf_runtime::Camera,
+    label: &str,
+) {
+    let normals: Vec<u32> = host.read_texture(gpu, normal, false);
+    let motions: Vec<[u16; 2]> = host.read_texture(gpu, motion, false);
+    let to_camera = (camera.position - camera.target).normalize();
+    let (mut shown, mut facing) = (0, 0);
+    for (i, ((n, m), c)) in normals.iter().zip(&motions).zip(reference).enumerate() {
+        let left = (i as u32 % W) < W / 2;
+        if left || c[3] != 1.0 {
+            assert_eq!((*n, *m), (0, [0, 0]), "{label}: pixel {i} written");
+            continue;
+        }
+        shown += 1;
+        let unorm = |shift: u32| f32::from((*n >> shift & 1023) as u16) / 1023.0 * 2.0 - 1.0;
+        let n = Vec3::new(unorm(0), unorm(10), unorm(20));
+        assert!(
+            (n.length() - 1.0).abs() < 0.01,
+            "{label}: pixel {i}: normal {n}"
+        );
+        facing += usize::from(n.dot(to_camera) > 0.0);
+        let m = m.map(f16_to_f32);
+        let want = [-0.5 * PREVIOUS_SHIFT, 0.0];
+        assert!(
+            (m[0] - want[0]).abs() < 1e-3 && m[1].abs() < 1e-3,
+            "{label}: pixel {i}: motion {m:?}, not {want:?}"
+        );
+    }
+    assert!(
+        facing * 10 >= shown * 9,
+        "{label}: {facing} of {shown} normals face the camera"
+    );
+}
+
 #[test]
 fn the_object_is_drawn_into_a_host_frame_depth_tested_both_ways() {
-    draws_into_a_host_frame(false, 1, 1.0);
+    draws_into_a_host_frame(false, 1, 1.0, false);
 }
 
 #[test]
 fn the_object_is_drawn_into_a_host_frame_with_reversed_depth() {
-    draws_into_a_host_frame(true, 1, 1.0);
+    draws_into_a_host_frame(true, 1, 1.0, false);
 }
 
 #[test]
 fn the_object_is_drawn_into_a_multisampled_host_frame_at_the_hosts_exposure() {
-    draws_into_a_host_frame(true, 4, 0.5);
+    draws_into_a_host_frame(true, 4, 0.5, false);
+}
+
+#[test]
+fn the_object_is_written_into_a_host_prepass_and_shaded_from_it_depth_tested_both_ways() {
+    draws_into_a_host_frame(false, 1, 1.0, true);
+    draws_into_a_host_frame(true, 1, 1.0, true);
+}
+
+#[test]
+fn the_object_is_written_into_a_multisampled_host_prepass_and_shaded_from_it() {
+    draws_into_a_host_frame(true, 4, 0.5, true);
 }
 
 #[test]
 fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
     let gpu = Gpu::headless().unwrap();
     let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
-    let host = Host::new(&gpu, false, 1);
+    let host = Host::new(&gpu, false, 1, false);
     let (cv, dv) = (
         host.color.create_view(&Default::default()),
         host.depth.create_view(&Default::default()),
@@ -593,7 +732,7 @@ fn on_a_hosts_device_the_renderer_keeps_its_errors_and_the_host_its_handler() {
         }));
     let gpu = Gpu::from_host_device(own.device.clone(), own.queue.clone(), "host".into());
     let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
-    let host = Host::new(&gpu, false, 1);
+    let host = Host::new(&gpu, false, 1, false);
     let view = host_view(&r, false);
     let params = Knobs::default();
     host.frame(&gpu, &mut r, &view, &params);

@@ -139,49 +139,78 @@ pub const MAX_DEPTH_SLACK: f32 = 1e-3;
 /// turned back for a reversed host).
 pub const DEPTH_SLACK: f32 = 1.0 / (1u32 << 20) as f32;
 
-impl HostTarget<'_> {
-    /// Whether depth is reversed (1 near, 0 far), from the depth test; errors for a test that
-    /// is neither kind.
-    fn reversed(&self) -> Result<bool> {
-        use wgpu::CompareFunction as C;
-        match self.depth_compare {
-            C::Less | C::LessEqual => Ok(false),
-            C::Greater | C::GreaterEqual => Ok(true),
-            other => Err(RuntimeError::Parameter(format!(
-                "HostTarget::depth_compare {other:?}: must be Less, LessEqual, Greater or \
-                 GreaterEqual (the test the host draws its meshes with)"
-            ))),
-        }
+/// Checks a host's depth target as `host` (the struct named in errors) describes it: its
+/// samples per pixel, its format and its depth test; returns whether its depth is reversed
+/// (1 near, 0 far), from the test.
+pub(super) fn check_host_depth(
+    host: &str,
+    sample_count: u32,
+    depth_format: wgpu::TextureFormat,
+    depth_compare: wgpu::CompareFunction,
+) -> Result<bool> {
+    use wgpu::CompareFunction as C;
+    if !matches!(sample_count, 1 | 2 | 4 | 8) {
+        return Err(RuntimeError::Parameter(format!(
+            "{host}::sample_count {sample_count}: must be 1, 2, 4 or 8 (the samples per pixel \
+             of the host's targets)"
+        )));
     }
+    if !depth_format.has_depth_aspect() {
+        return Err(RuntimeError::Parameter(format!(
+            "{host}::depth_format {depth_format:?} has no depth aspect"
+        )));
+    }
+    match depth_compare {
+        C::Less | C::LessEqual => Ok(false),
+        C::Greater | C::GreaterEqual => Ok(true),
+        other => Err(RuntimeError::Parameter(format!(
+            "{host}::depth_compare {other:?}: must be Less, LessEqual, Greater or \
+             GreaterEqual (the test the host draws its meshes with)"
+        ))),
+    }
+}
 
-    /// Checks the target; returns whether its depth is reversed ([`HostTarget::reversed`]).
+/// `compare` passing equal depths too (`Less` ↦ `LessEqual`, `Greater` ↦ `GreaterEqual`).
+fn inclusive(compare: wgpu::CompareFunction) -> wgpu::CompareFunction {
+    use wgpu::CompareFunction as C;
+    match compare {
+        C::Less => C::LessEqual,
+        C::Greater => C::GreaterEqual,
+        other => other,
+    }
+}
+
+/// Errors unless `format` (of `host`'s `field`) is a colour format.
+pub(super) fn check_color_format(
+    host: &str,
+    field: &str,
+    format: wgpu::TextureFormat,
+) -> Result<()> {
+    if format.has_depth_aspect() || format.has_stencil_aspect() {
+        return Err(RuntimeError::Parameter(format!(
+            "{host}::{field} {format:?} is not a colour format"
+        )));
+    }
+    Ok(())
+}
+
+impl HostTarget<'_> {
+    /// Checks the target; returns whether its depth is reversed ([`check_host_depth`]).
     fn validate(&self) -> Result<bool> {
-        if !matches!(self.sample_count, 1 | 2 | 4 | 8) {
-            return Err(RuntimeError::Parameter(format!(
-                "HostTarget::sample_count {}: must be 1, 2, 4 or 8 (the samples per pixel of \
-                 both targets)",
-                self.sample_count
-            )));
-        }
-        if !self.depth_format.has_depth_aspect() {
-            return Err(RuntimeError::Parameter(format!(
-                "HostTarget::depth_format {:?} has no depth aspect",
-                self.depth_format
-            )));
-        }
+        let reversed = check_host_depth(
+            "HostTarget",
+            self.sample_count,
+            self.depth_format,
+            self.depth_compare,
+        )?;
         if !(0.0..=MAX_DEPTH_SLACK).contains(&self.depth_slack) {
             return Err(RuntimeError::Parameter(format!(
                 "HostTarget::depth_slack {}: must be within 0..={MAX_DEPTH_SLACK}",
                 self.depth_slack
             )));
         }
-        if self.color_format.has_depth_aspect() || self.color_format.has_stencil_aspect() {
-            return Err(RuntimeError::Parameter(format!(
-                "HostTarget::color_format {:?} is not a colour format",
-                self.color_format
-            )));
-        }
-        self.reversed()
+        check_color_format("HostTarget", "color_format", self.color_format)?;
+        Ok(reversed)
     }
 }
 
@@ -230,7 +259,9 @@ pub(super) struct FeedbackSlot {
     state: SlotState,
     /// The slot's own timestamp queries (where the device has them), so that several views
     /// recorded into one encoder never share one; every frame copied into it is timed.
-    timer: Option<PassTimer>,
+    pub(super) timer: Option<PassTimer>,
+    /// Whether the frame copied into it had a prepass (whose pass it then timed too).
+    prepassed: bool,
 }
 
 /// The GPU time of a host frame's passes ([`Renderer::host_pass_seconds`]), seconds; `None`
@@ -243,6 +274,9 @@ pub struct HostPassSeconds {
     pub shade: Option<f64>,
     /// The composite pass into the host's targets.
     pub composite: Option<f64>,
+    /// The prepass into the host's depth prepass ([`Renderer::encode_prepass_into`]); `None`
+    /// also for a frame without one.
+    pub prepass: Option<f64>,
 }
 
 enum SlotState {
@@ -268,6 +302,9 @@ impl Renderer {
     /// Several calls may go into one encoder (several views): each records its own uniform.
     /// Errors for an invalid view or target ([`HostView::camera`], sample counts, formats) or
     /// parameters, before anything is recorded.
+    ///
+    /// After [`Renderer::encode_prepass_into`] for the same view, parameters and size, the
+    /// frame shades the G-buffer that pass rasterised instead of rasterising the object again.
     pub fn encode_into(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -285,6 +322,27 @@ impl Renderer {
         gpu.scoped(|| self.record_host_frame(encoder, target, &u, &composite, view.exposure))
     }
 
+    /// The uniform of a host view of `size` pixels, with the targets of that size and the
+    /// shading pipeline it needs made ready.
+    pub(super) fn prepare_host_view(
+        &mut self,
+        view: &HostView,
+        camera: &Camera,
+        params: &ShadingParams,
+        size: [u32; 2],
+        reversed: bool,
+    ) -> Result<ShadeUniform> {
+        if params.split_sum() {
+            self.ensure_prefiltered()?;
+        }
+        self.ensure_targets(size[0], size[1])?;
+        let u = self.host_uniform(view, camera, params, size, reversed);
+        self.current = ShadeKey::of(&u);
+        self.background = Background::None;
+        self.shade.prepare(&self.gpu.device, self.current);
+        Ok(u)
+    }
+
     /// The host frame's uniform and composite pipeline, with the targets and the shading
     /// pipeline it needs made ready.
     fn prepare_host_frame(
@@ -295,20 +353,21 @@ impl Renderer {
         params: &ShadingParams,
         reversed: bool,
     ) -> Result<(ShadeUniform, wgpu::RenderPipeline)> {
-        if params.split_sum() {
-            self.ensure_prefiltered()?;
-        }
-        self.ensure_targets(target.width, target.height)?;
+        let size = [target.width, target.height];
+        let u = self.prepare_host_view(view, camera, params, size, reversed)?;
         self.ensure_composite_group()?;
-        let u = self.host_uniform(view, camera, params, target, reversed);
-        self.current = ShadeKey::of(&u);
-        self.background = Background::None;
-        self.shade.prepare(&self.gpu.device, self.current);
+        // After this view's prepass the host's depth holds the object's own depth, which the
+        // composite writes again bit for bit: its test then passes equal depths too.
+        let compare = if self.prepassed.as_ref().is_some_and(|p| p.shades(&u)) {
+            inclusive(target.depth_compare)
+        } else {
+            target.depth_compare
+        };
         let key = CompositeKey {
             samples: target.sample_count,
             color: target.color_format,
             depth: target.depth_format,
-            compare: target.depth_compare,
+            compare,
             reversed,
         };
         if let Some(pipeline) = self.composites.pipelines.get(&key) {
@@ -323,27 +382,19 @@ impl Renderer {
         Ok((u, pipeline))
     }
 
-    /// Records the host frame's passes into `encoder`: its uniforms, the G-buffer, the shading,
-    /// the feedback copy (when a slot is free), the composite and its timestamps.
-    fn record_host_frame(
-        &mut self,
+    /// Records copying `u` and then `pass` (the uniform of the pass that follows) from a
+    /// staging buffer of their own into the shading uniform and `to`. The uniforms travel in
+    /// the encoder, so that each view recorded into it has its own.
+    pub(super) fn record_host_uniforms(
+        &self,
         encoder: &mut wgpu::CommandEncoder,
-        target: &HostTarget<'_>,
         u: &ShadeUniform,
-        composite: &wgpu::RenderPipeline,
-        exposure: f32,
-    ) -> Result<()> {
-        // The uniforms travel in the encoder, so that each view recorded into it has its own:
-        // one staging buffer per view (the shading's uniform, then the composite's), copied
-        // into the buffers the passes' bind groups hold.
+        pass: &[u8],
+        to: &wgpu::Buffer,
+    ) {
         let shade_bytes = std::mem::size_of::<ShadeUniform>() as u64;
         let mut contents = bytemuck::bytes_of(u).to_vec();
-        contents.extend_from_slice(bytemuck::bytes_of(&[
-            exposure,
-            target.depth_slack,
-            0.0,
-            0.0,
-        ]));
+        contents.extend_from_slice(pass);
         let staging = self
             .gpu
             .device
@@ -353,16 +404,18 @@ impl Renderer {
                 usage: wgpu::BufferUsages::COPY_SRC,
             });
         encoder.copy_buffer_to_buffer(&staging, 0, &self.buffers.uniform, 0, Some(shade_bytes));
-        encoder.copy_buffer_to_buffer(
-            &staging,
-            shade_bytes,
-            &self.composites.uniform,
-            0,
-            Some(COMPOSITE_UNIFORM_BYTES),
-        );
+        encoder.copy_buffer_to_buffer(&staging, shade_bytes, to, 0, Some(pass.len() as u64));
+    }
+
+    /// Records the start of a host frame whose uniforms are recorded: clearing the feedback
+    /// and the G-buffer pass, timed into the frame's feedback slot (if one is free), which it
+    /// returns.
+    pub(super) fn record_host_gbuffer(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<Option<usize>> {
         encoder.clear_buffer(&self.buffers.feedback, 0, None);
         let table_bytes = self.buffers.timestamps_offset;
-        // The frame's feedback slot, if one is free; its passes are timed into it.
         let slot = self.feedback_slot(table_bytes + TIMESTAMP_BYTES);
         let targets = self
             .targets
@@ -370,6 +423,35 @@ impl Renderer {
             .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
         let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
         self.encode_gbuffer(encoder, targets, timer);
+        Ok(slot)
+    }
+
+    /// Records the host frame's passes into `encoder`: its uniforms, the G-buffer (unless the
+    /// view's prepass recorded it), the shading, the feedback copy (when a slot is free), the
+    /// composite and its timestamps.
+    fn record_host_frame(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &HostTarget<'_>,
+        u: &ShadeUniform,
+        composite: &wgpu::RenderPipeline,
+        exposure: f32,
+    ) -> Result<()> {
+        let composite_uniform = [exposure, target.depth_slack, 0.0, 0.0];
+        let pass = bytemuck::bytes_of(&composite_uniform);
+        self.record_host_uniforms(encoder, u, pass, &self.composites.uniform);
+        // The prepass of this very view (same uniform: matrices, size, parameters) left its
+        // G-buffer; any other frame rasterises its own.
+        let (slot, prepassed) = match self.prepassed.take() {
+            Some(p) if p.shades(u) => (p.slot, true),
+            _ => (self.record_host_gbuffer(encoder)?, false),
+        };
+        let table_bytes = self.buffers.timestamps_offset;
+        let targets = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
+        let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
         self.encode_shading(encoder, targets, timer)?;
         if let Some(i) = slot {
             encoder.copy_buffer_to_buffer(
@@ -385,11 +467,14 @@ impl Renderer {
         if let Some(i) = slot {
             let s = &self.feedback_slots[i];
             if let Some(t) = &s.timer {
-                for pass in [TimedPass::GBuffer, TimedPass::Shade, TimedPass::Composite] {
+                let passes = [TimedPass::GBuffer, TimedPass::Shade, TimedPass::Composite];
+                let prepass = prepassed.then_some(TimedPass::Prepass);
+                for pass in passes.into_iter().chain(prepass) {
                     t.encode_copy(encoder, pass, &s.buffer, table_bytes);
                 }
             }
             self.feedback_slots[i].state = SlotState::Encoded(self.host_frames);
+            self.feedback_slots[i].prepassed = prepassed;
         }
         Ok(())
     }
@@ -482,6 +567,10 @@ impl Renderer {
                         gbuffer: t.seconds(stamps, TimedPass::GBuffer),
                         shade: t.seconds(stamps, TimedPass::Shade),
                         composite: t.seconds(stamps, TimedPass::Composite),
+                        prepass: s
+                            .prepassed
+                            .then(|| t.seconds(stamps, TimedPass::Prepass))
+                            .flatten(),
                     });
                 }
                 let mut masks: Vec<u32> =
@@ -540,6 +629,7 @@ impl Renderer {
             buffer,
             state: SlotState::Free,
             timer: PassTimer::new(&self.gpu),
+            prepassed: false,
         });
         Some(self.feedback_slots.len() - 1)
     }
@@ -552,7 +642,7 @@ impl Renderer {
         view: &HostView,
         camera: &Camera,
         params: &ShadingParams,
-        target: &HostTarget<'_>,
+        size: [u32; 2],
         reversed: bool,
     ) -> ShadeUniform {
         let origin = self.mesh.origin;
@@ -576,7 +666,7 @@ impl Renderer {
             params,
             view_proj,
             &relative,
-            [target.width, target.height],
+            size,
             &self.constants,
             Background::None,
         )
@@ -668,7 +758,7 @@ fn composite_pipeline(
 ) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("composite.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("composite.wgsl").into()),
+        source: wgpu::ShaderSource::Wgsl(crate::pipelines::composite_wgsl().into()),
     });
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("composite"),

@@ -31,6 +31,7 @@ mod camera;
 mod host;
 mod passes;
 mod prefiltered;
+mod prepass;
 mod readback;
 mod targets;
 mod timer;
@@ -38,6 +39,7 @@ mod timer;
 pub(crate) use camera::store_view;
 pub use camera::{default_camera, view_projection};
 pub use host::{HostPassSeconds, HostTarget, HostView, DEPTH_SLACK, MAX_DEPTH_SLACK};
+pub use prepass::{HostPrepass, PrepassTarget, PrepassUniform};
 pub use targets::FrameBytes;
 
 use readback::map_read;
@@ -145,6 +147,10 @@ pub struct Renderer {
     slots_written: Vec<u32>,
     /// The composite pipelines of the host targets seen.
     composites: host::Composites,
+    /// The prepass pipelines of the host prepasses seen.
+    prepasses: prepass::Prepasses,
+    /// The prepass recorded for the view whose frame comes next, if any.
+    prepassed: Option<prepass::Prepassed>,
 }
 
 /// Errors with [`RuntimeError::Limits`] when the device's 2D textures cannot hold `store`'s
@@ -276,6 +282,7 @@ impl Renderer {
         let constants = store_constants(&store, &mesh, &layout);
         let prefiltered_view = prefiltered::upload(&gpu, &PrefilteredEnv::black());
         let composites = host::Composites::new(&gpu.device);
+        let prepasses = prepass::Prepasses::new(&gpu.device);
         let mut renderer = Self {
             gpu,
             store: Arc::new(store),
@@ -299,6 +306,8 @@ impl Renderer {
             feedback_slots: Vec::new(),
             host_pass_seconds: None,
             composites,
+            prepasses,
+            prepassed: None,
             slots_written: Vec::new(),
         };
         renderer.timer = PassTimer::new(&renderer.gpu);

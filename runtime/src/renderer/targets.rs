@@ -17,6 +17,9 @@ pub(super) struct SizedTargets {
     /// The host frame's composite bind group over `output` and `depth`, made at the first
     /// host frame of this size (`host.rs`).
     pub(super) composite_group: Option<wgpu::BindGroup>,
+    /// The host prepass's bind group over `depth`, `gb_position` and `gb_normal`, likewise
+    /// (`prepass.rs`).
+    pub(super) prepass_group: Option<wgpu::BindGroup>,
 }
 
 impl SizedTargets {
@@ -102,6 +105,7 @@ impl SizedTargets {
             output,
             shade_group,
             composite_group: None,
+            prepass_group: None,
         }
     }
 }

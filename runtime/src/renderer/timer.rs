@@ -4,7 +4,7 @@ use crate::buffers::TIMESTAMP_BYTES;
 use crate::Gpu;
 
 /// Timestamps at the start and end of the G-buffer pass (queries 0, 1), of the shading pass
-/// (2, 3) and of a host frame's composite pass (4, 5), resolved into `resolve` (one pair per
+/// (2, 3), of a host frame's composite pass (4, 5) and of its prepass (6, 7), resolved into `resolve` (one pair per
 /// 256-byte resolve offset) and copied behind the feedback masks
 /// (`StoreBuffers::feedback_readback`), so one map per frame reads them.
 pub(super) struct PassTimer {
@@ -14,16 +14,17 @@ pub(super) struct PassTimer {
     period_ns: f64,
 }
 
-/// A pass's pair of timestamps: G-buffer, shading or (host frames) composite.
+/// A pass's pair of timestamps: G-buffer, shading or (host frames) composite and prepass.
 #[derive(Clone, Copy)]
 pub(super) enum TimedPass {
     GBuffer = 0,
     Shade = 1,
     Composite = 2,
+    Prepass = 3,
 }
 
 /// The timed passes.
-const PASSES: u32 = 3;
+const PASSES: u32 = 4;
 // Each pass's pair is two u64 ticks behind the feedback masks.
 const _: () = assert!(TIMESTAMP_BYTES == 16 * PASSES as u64);
 

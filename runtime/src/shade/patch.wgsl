@@ -1,17 +1,7 @@
-// Patch geometry: the G-buffer normal, Bézier derivatives, the tangent frame.
+// Patch geometry: Bézier derivatives, the G-buffer normal of a patch, the tangent frame.
 // Its CPU twin: reference/patch.rs.
 
 import package::shade::bindings::{patches};
-
-fn oct_decode(e: vec2<f32>) -> vec3<f32> {
-    var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
-    if (n.z < 0.0) {
-        let sx = select(-1.0, 1.0, n.x >= 0.0);
-        let sy = select(-1.0, 1.0, n.y >= 0.0);
-        n = vec3<f32>((1.0 - abs(n.y)) * sx, (1.0 - abs(n.x)) * sy, n.z);
-    }
-    return normalize(n);
-}
 
 fn bern3(t: f32) -> vec4<f32> {
     let s = 1.0 - t;

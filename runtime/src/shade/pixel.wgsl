@@ -1,6 +1,7 @@
 // The entry point: one invocation per pixel.
 // Its CPU twin: reference/pixel.rs.
 
+import package::octahedral::{oct_decode};
 import package::shade::background::{background};
 import package::shade::bindings::{
     P, TERMS, TEXTURED, gb_depth, gb_material, gb_normal, gb_position, out_image, patches,
@@ -9,7 +10,7 @@ import package::shade::blend::{cand, candidates};
 import package::shade::feedback::{flush_marks, mark_bits, mark_cube, mark_env};
 import package::shade::glossy::{glossy};
 import package::shade::mirror::{mirror};
-import package::shade::patch::{oct_decode, patch_du, patch_normal, tangent_frame};
+import package::shade::patch::{patch_du, patch_normal, tangent_frame};
 import package::shade::random::{pcg};
 import package::shade::reconstruct::{recon};
 import package::shading::color::{srgb_to_linear};
