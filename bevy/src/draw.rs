@@ -1,12 +1,16 @@
 //! The render world's side: one runtime [`Renderer`] per store (its cube-map cache shared by
-//! every object of that store), made on Bevy's own device; each 3D camera draws every visible
-//! object into its colour and depth targets between Bevy's opaque and transparent passes; the
-//! cache's feedback is booked after Bevy submits the frame, without waiting for the GPU.
+//! every object of that store), made on Bevy's own device; each 3D camera with a prepass
+//! writes every visible object into it after Bevy's prepass (the object's G-buffer, rasterised
+//! once: depth, normals, motion vectors), and each 3D camera draws every visible object into
+//! its colour and depth targets between Bevy's opaque and transparent passes, from that
+//! G-buffer where the prepass made one; the cache's feedback is booked after Bevy submits the
+//! frame, without waiting for the GPU.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
 
 use bevy::asset::AssetId;
+use bevy::core_pipeline::prepass::{PreviousViewData, ViewPrepassTextures};
 use bevy::ecs::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::diagnostic::RecordDiagnostics;
@@ -15,7 +19,7 @@ use bevy::render::renderer::{
     RenderAdapterInfo, RenderContext, RenderDevice, RenderQueue, ViewQuery,
 };
 use bevy::render::view::{ExtractedView, Msaa, ViewDepthStencilTexture, ViewTarget};
-use oslf_runtime::{CacheConfig, Gpu, HostTarget, HostView, Renderer, DEPTH_SLACK};
+use oslf_runtime::{CacheConfig, Gpu, HostPrepass, HostTarget, HostView, PrepassTarget, Renderer};
 
 use crate::asset::OslfStore;
 use crate::error::OslfBevyError;
@@ -27,9 +31,6 @@ use crate::stats::StatsSink;
 #[derive(Resource, Clone, Copy)]
 pub(crate) struct OslfSettings {
     pub cache: CacheConfig,
-    /// Whether objects have proxies in Bevy's depth (`proxy.rs`), which their own depth must
-    /// win over.
-    pub proxies: bool,
 }
 
 /// A store's renderer, or why it has none.
@@ -125,6 +126,129 @@ pub(crate) fn prepare_oslf(
     }
 }
 
+/// The runtime's view of `object` through Bevy's `view`, at the camera's exposure.
+fn host_view(
+    camera: &ExtractedCamera,
+    view: &ExtractedView,
+    object: &crate::extract::ExtractedObject,
+) -> HostView {
+    let view_from_world = view.world_from_view.to_matrix().inverse();
+    HostView {
+        view: to_runtime(view_from_world * object.world_from_local),
+        projection: to_runtime(view.clip_from_view),
+        exposure: camera.exposure * object.radiance_scale,
+    }
+}
+
+/// What [`prepass_oslf`] reads of a view: its camera, matrices, depth target, samples per
+/// pixel, prepass targets and previous matrices (where it has motion vectors).
+type PrepassView = (
+    &'static ExtractedCamera,
+    &'static ExtractedView,
+    &'static ViewDepthStencilTexture,
+    &'static Msaa,
+    &'static ViewPrepassTextures,
+    Option<&'static PreviousViewData>,
+);
+
+/// Writes every visible object into this camera's prepass, after Bevy's: its depth into the
+/// view's depth (which Bevy's main pass then tests its meshes against, and which is copied
+/// again into the prepass depth texture SSAO and other effects read), its world normals and
+/// motion vectors into the prepass's targets where the camera has them. Each object is
+/// rasterised into its renderer's G-buffer here, which [`draw_oslf`] shades. A camera without
+/// a prepass draws in [`draw_oslf`] alone.
+pub(crate) fn prepass_oslf(
+    view: ViewQuery<PrepassView>,
+    frame: Res<ExtractedOslf>,
+    mut renderers: ResMut<OslfRenderers>,
+    messages: Res<OslfMessages>,
+    mut ctx: RenderContext,
+) {
+    if frame.objects.is_empty() {
+        return;
+    }
+    let view_entity = view.entity();
+    let (camera, extracted, depth, msaa, textures, previous) = view.into_inner();
+    let has_prepass = textures.depth.is_some()
+        || textures.normal.is_some()
+        || textures.motion_vectors.is_some()
+        || textures.deferred.is_some();
+    // A viewport is refused by `draw_oslf`, which says so.
+    if !has_prepass || camera.viewport.is_some() {
+        return;
+    }
+    let target = |a: &bevy::render::texture::ColorAttachment| {
+        let texture = &a.texture;
+        (texture.default_view.clone(), texture.texture.format())
+    };
+    let (normal, motion) = (
+        textures.normal.as_ref().map(target),
+        textures.motion_vectors.as_ref().map(target),
+    );
+    let size = depth.texture().size();
+    let clip_from_world =
+        extracted.clip_from_view * extracted.world_from_view.to_matrix().inverse();
+    let previous_clip_from_world =
+        previous.map_or(clip_from_world, |p| p.unjittered_clip_from_world);
+    let diagnostics = ctx.diagnostic_recorder();
+    let diagnostics = diagnostics.as_deref();
+    let span = diagnostics.time_span(ctx.command_encoder(), "oslf_prepass");
+    let mut wrote = false;
+    for object in &frame.objects {
+        let Some(slot) = renderers.slots.get_mut(&object.store) else {
+            continue;
+        };
+        let Some(Ok(renderer)) = slot.renderer.as_mut().map(Mutex::get_mut) else {
+            continue;
+        };
+        let prepass = HostPrepass {
+            depth: depth.attachment.depth_stencil_views().attachment_view(),
+            depth_format: depth.texture().format(),
+            // Bevy's depth is reversed (1 near, 0 far); its meshes pass GreaterEqual.
+            depth_compare: wgpu::CompareFunction::GreaterEqual,
+            sample_count: msaa.samples(),
+            width: size.width,
+            height: size.height,
+            normal: normal.as_ref().map(|(view, format)| PrepassTarget {
+                view,
+                format: *format,
+            }),
+            motion: motion.as_ref().map(|(view, format)| PrepassTarget {
+                view,
+                format: *format,
+            }),
+            world_from_local: to_runtime(object.world_from_local),
+            previous_clip_from_local: to_runtime(
+                previous_clip_from_world * object.previous_world_from_local,
+            ),
+        };
+        match renderer.encode_prepass_into(
+            ctx.command_encoder(),
+            &host_view(camera, extracted, object),
+            &prepass,
+            &object.params,
+        ) {
+            Ok(()) => wrote = true,
+            Err(e) => {
+                messages.say(format!(
+                    "OSLF object {}: not in the prepass of camera {view_entity}: {e}",
+                    object.entity
+                ));
+            }
+        }
+    }
+    // Bevy copied the view's depth into the prepass depth texture at the end of its
+    // prepass, before the objects were in it.
+    if let (true, Some(prepass_depth)) = (wrote, &textures.depth) {
+        ctx.command_encoder().copy_texture_to_texture(
+            depth.texture().as_image_copy(),
+            prepass_depth.texture.texture.as_image_copy(),
+            textures.size,
+        );
+    }
+    span.end(ctx.command_encoder());
+}
+
 /// Draws every visible object into this camera's targets, after Bevy's opaque pass: depth-
 /// tested against Bevy's meshes (reversed depth), its own depth written, its radiance scaled
 /// by the camera's exposure (Bevy's tonemapping follows, as for its meshes).
@@ -139,7 +263,6 @@ pub(crate) fn draw_oslf(
     frame: Res<ExtractedOslf>,
     mut renderers: ResMut<OslfRenderers>,
     messages: Res<OslfMessages>,
-    settings: Res<OslfSettings>,
     mut ctx: RenderContext,
 ) {
     if frame.objects.is_empty() {
@@ -180,9 +303,10 @@ pub(crate) fn draw_oslf(
         sample_count: samples,
         width: size.width,
         height: size.height,
-        depth_slack: if settings.proxies { DEPTH_SLACK } else { 0.0 },
+        // Bevy's depth holds no proxy of the object (only its prepass's own depth, which the
+        // runtime matches exactly).
+        depth_slack: 0.0,
     };
-    let view_from_world = extracted.world_from_view.to_matrix().inverse();
     // The plugin's share of the frame, CPU and GPU, as Bevy's RenderDiagnosticsPlugin shows
     // its own passes' (`render/oslf/elapsed_gpu`, where the adapter has timestamp queries).
     let diagnostics = ctx.diagnostic_recorder();
@@ -196,14 +320,9 @@ pub(crate) fn draw_oslf(
         let Some(Ok(renderer)) = slot.renderer.as_mut().map(Mutex::get_mut) else {
             continue;
         };
-        let host_view = HostView {
-            view: to_runtime(view_from_world * object.world_from_local),
-            projection: to_runtime(extracted.clip_from_view),
-            exposure: camera.exposure * object.radiance_scale,
-        };
         match renderer.encode_into(
             ctx.command_encoder(),
-            &host_view,
+            &host_view(camera, extracted, object),
             &host_target,
             &object.params,
         ) {

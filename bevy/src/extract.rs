@@ -26,6 +26,8 @@ pub(crate) struct ExtractedObject {
     pub store: AssetId<OslfStore>,
     /// Bevy's world from the object's (the bake's) space.
     pub world_from_local: Mat4,
+    /// The same at the previous frame (where its motion vectors start).
+    pub previous_world_from_local: Mat4,
     pub params: ShadingParams,
     pub radiance_scale: f32,
 }
@@ -72,8 +74,18 @@ pub(crate) fn extract_oslf(
     let removed_any = removed.read().count() > 0;
     let stores_changed = store_events.read().count() > 0;
     if changed.is_empty() && !removed_any && !stores_changed {
+        // Nothing moved since the last frame.
+        for o in &mut out.objects {
+            o.previous_world_from_local = o.world_from_local;
+        }
         return;
     }
+    // Where each object was at the last extraction, which no change followed until now.
+    let before: std::collections::HashMap<Entity, Mat4> = out
+        .objects
+        .iter()
+        .map(|o| (o.entity, o.world_from_local))
+        .collect();
     out.objects.clear();
     out.stores.clear();
     out.sheared.clear();
@@ -94,10 +106,12 @@ pub(crate) fn extract_oslf(
             out.sheared.push(entity);
             continue;
         }
+        let world_from_local = transform.to_matrix();
         out.objects.push(ExtractedObject {
             entity,
             store: id,
-            world_from_local: transform.to_matrix(),
+            world_from_local,
+            previous_world_from_local: before.get(&entity).copied().unwrap_or(world_from_local),
             params: object.params,
             radiance_scale: object.radiance_scale,
         });

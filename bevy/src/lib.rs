@@ -29,12 +29,19 @@
 //!   it, and it writes its depth. Its radiance is scaled by the camera's exposure and goes
 //!   through Bevy's tonemapping like a mesh's (HDR cameras). MSAA cameras get the object in
 //!   every sample it covers.
-//! - **Bevy's passes.** With Bevy's `PbrPlugin`, each object has two children
-//!   ([`OslfProxy`]), meshes that draw nothing in the main pass: the same triangles in Bevy's
-//!   depth and normal prepass, so SSAO and Bevy's other screen-space effects see the object,
-//!   and a coarser tessellation (within the bake's ε) that casts shadows on Bevy's meshes
-//!   under Bevy's lights (unless the object has `NotShadowCaster`). The object itself is lit
-//!   by its baked light field only: Bevy's lights and shadows do not fall on it.
+//! - **Bevy's prepass.** A camera with a prepass (`DepthPrepass`, `NormalPrepass`,
+//!   `MotionVectorPrepass`; SSAO and TAA add them) gets each object written into it right
+//!   after Bevy's own: its depth (so Bevy's main pass tests its meshes against the object),
+//!   its world normals and its motion vectors, so SSAO, TAA and Bevy's other screen-space
+//!   effects see the object. That pass rasterises the object into the runtime's G-buffer,
+//!   and the drawing above shades that G-buffer: the object is rasterised once per camera.
+//!   Bevy's deferred G-buffer (`DeferredPrepass`) does not get the object's material; the
+//!   object is drawn over Bevy's deferred lighting like a forward mesh.
+//! - **Shadows.** With Bevy's `PbrPlugin`, each object has a child ([`OslfProxy`]), a mesh
+//!   drawn only in Bevy's shadow passes: a coarser tessellation (within the bake's ε) that
+//!   casts shadows on Bevy's meshes under Bevy's lights (unless the object has
+//!   `NotShadowCaster`). The object itself is lit by its baked light field only: Bevy's
+//!   lights and shadows do not fall on it.
 //! - **Streaming.** Each store has one runtime renderer with an LRU cube-map cache. Its
 //!   feedback is read back asynchronously after Bevy submits the frame: a frame never waits
 //!   for the GPU; cube maps not yet resident fall back as in `oslf view` and arrive a few
@@ -71,6 +78,8 @@ pub use stats::OslfCacheStats;
 use bevy::app::{App, Plugin, Update};
 use bevy::asset::AssetApp;
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
+use bevy::core_pipeline::deferred::node::late_deferred_prepass;
+use bevy::core_pipeline::prepass::node::late_prepass;
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::ecs::prelude::*;
 use bevy::render::renderer::{RenderGraph, RenderGraphSystems};
@@ -93,15 +102,12 @@ impl Plugin for OslfPlugin {
             .insert_resource(sink.clone())
             .add_systems(Update, (stats::publish_stats, report::report_stores));
         stats::register(app);
-        let proxies = proxy::register(app);
+        proxy::register(app);
         if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
             render_app
                 .insert_resource(messages)
                 .insert_resource(sink)
-                .insert_resource(draw::OslfSettings {
-                    cache: self.cache,
-                    proxies,
-                })
+                .insert_resource(draw::OslfSettings { cache: self.cache })
                 .init_resource::<extract::ExtractedOslf>()
                 .init_resource::<draw::OslfRenderers>();
         }
@@ -116,6 +122,15 @@ impl Plugin for OslfPlugin {
         render_app
             .add_systems(ExtractSchedule, extract::extract_oslf)
             .add_systems(Render, draw::prepare_oslf.in_set(RenderSystems::Prepare))
+            .add_systems(
+                Core3d,
+                // Inside Bevy's prepass set, after its passes: what reads the prepass (SSAO,
+                // the deferred lighting-id copy) runs after the set, the object in it.
+                draw::prepass_oslf
+                    .after(late_prepass)
+                    .after(late_deferred_prepass)
+                    .in_set(Core3dSystems::Prepass),
+            )
             .add_systems(
                 Core3d,
                 draw::draw_oslf

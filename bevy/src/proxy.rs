@@ -1,14 +1,12 @@
-//! The object as Bevy sees it: two proxy meshes, child entities of each [`OslfObject`], whose
-//! materials draw nothing in the main pass (the plugin's own pass shades the object):
-//! - in Bevy's depth and normal prepass (what SSAO and Bevy's other screen-space effects
-//!   read), the very triangles the runtime rasterises, so that the object's depth wins over
-//!   its proxy's by the composite's small slack;
-//! - in Bevy's shadow passes (the object casts shadows on Bevy's meshes under Bevy's lights),
-//!   a coarser tessellation, within the bake's ε of the surface: every shadow map of every
-//!   light draws it, and a shadow map cannot tell ε (docs/measurements.md, "The Bevy plugin").
+//! The object in Bevy's shadow passes: a proxy mesh, a child entity of each [`OslfObject`],
+//! whose material draws nothing in the main pass or the prepass (the plugin's own passes
+//! write the object there, `draw.rs`). In Bevy's shadow passes (the object casts shadows on
+//! Bevy's meshes under Bevy's lights) it is a coarser tessellation than the runtime's, within
+//! the bake's ε of the surface: every shadow map of every light draws it, and a shadow map
+//! cannot tell ε (docs/measurements.md, "The Bevy plugin").
 //!
-//! Only with Bevy's `PbrPlugin` (shadows and the prepass are its); without it there is no
-//! proxy. An object with `NotShadowCaster` gives its shadow proxy the same.
+//! Only with Bevy's `PbrPlugin` (shadows are its); without it there is no proxy. An object
+//! with `NotShadowCaster` gives its proxy the same.
 
 use std::collections::HashMap;
 
@@ -34,73 +32,55 @@ use crate::messages::OslfMessages;
 use crate::object::OslfObject;
 
 /// Marks a child entity that stands in for its parent [`OslfObject`] in Bevy's passes, and
-/// which.
+/// in which.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum OslfProxy {
-    /// In Bevy's depth and normal prepass: the runtime's own tessellation
-    /// (`ObjectMesh::of_store`).
-    Prepass,
     /// In Bevy's shadow passes: the object's Bézier patches tessellated within the bake's ε
     /// (mesh objects as they are); it has `NotShadowCaster` where the object has.
     Shadow,
 }
 
 impl OslfProxy {
-    const ALL: [OslfProxy; 2] = [OslfProxy::Prepass, OslfProxy::Shadow];
+    const ALL: [OslfProxy; 1] = [OslfProxy::Shadow];
 }
 
-/// The prepass proxy's material: Bevy's default prepass shaders, no shadows; in the main pass
-/// shaders that draw nothing (every vertex outside the clip volume).
-#[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
-pub(crate) struct ProxyMaterial {}
-
 /// The shadow proxy's material: Bevy's default shadow shaders, no prepass; in the main pass
-/// the same shaders as [`ProxyMaterial`].
+/// shaders that draw nothing (proxy.wgsl: every vertex outside the clip volume); both sides
+/// drawn, as the runtime's G-buffer draws them.
 #[derive(Asset, TypePath, AsBindGroup, Clone, Debug, Default)]
 pub(crate) struct ShadowProxyMaterial {}
 
-/// `Material` for a proxy material drawing nothing in the main pass (proxy.wgsl), in Bevy's
-/// prepass or not, in its shadow passes or not; both sides drawn, as the runtime's G-buffer
-/// draws them. (In the main pass the vertex shader culls every triangle.)
-macro_rules! proxy_material {
-    ($material:ty, prepass: $prepass:expr, shadows: $shadows:expr) => {
-        impl Material for $material {
-            fn vertex_shader() -> ShaderRef {
-                "embedded://oslf_bevy/proxy.wgsl".into()
-            }
+impl Material for ShadowProxyMaterial {
+    fn vertex_shader() -> ShaderRef {
+        "embedded://oslf_bevy/proxy.wgsl".into()
+    }
 
-            fn fragment_shader() -> ShaderRef {
-                "embedded://oslf_bevy/proxy.wgsl".into()
-            }
+    fn fragment_shader() -> ShaderRef {
+        "embedded://oslf_bevy/proxy.wgsl".into()
+    }
 
-            fn enable_prepass() -> bool {
-                $prepass
-            }
+    fn enable_prepass() -> bool {
+        false
+    }
 
-            fn enable_shadows() -> bool {
-                $shadows
-            }
+    fn enable_shadows() -> bool {
+        true
+    }
 
-            fn specialize(
-                _: &MaterialPipeline,
-                descriptor: &mut RenderPipelineDescriptor,
-                _: &MeshVertexBufferLayoutRef,
-                _: MaterialPipelineKey<Self>,
-            ) -> Result<(), SpecializedMeshPipelineError> {
-                descriptor.primitive.cull_mode = None;
-                Ok(())
-            }
-        }
-    };
+    fn specialize(
+        _: &MaterialPipeline,
+        descriptor: &mut RenderPipelineDescriptor,
+        _: &MeshVertexBufferLayoutRef,
+        _: MaterialPipelineKey<Self>,
+    ) -> Result<(), SpecializedMeshPipelineError> {
+        descriptor.primitive.cull_mode = None;
+        Ok(())
+    }
 }
 
-proxy_material!(ProxyMaterial, prepass: true, shadows: false);
-proxy_material!(ShadowProxyMaterial, prepass: false, shadows: true);
-
-/// The one material of each kind every proxy of that kind shares.
+/// The one material every shadow proxy shares.
 #[derive(Resource)]
 pub(crate) struct ProxyMaterialHandles {
-    prepass: Handle<ProxyMaterial>,
     shadow: Handle<ShadowProxyMaterial>,
 }
 
@@ -110,18 +90,12 @@ pub(crate) fn register(app: &mut bevy::app::App) -> bool {
         return false;
     }
     embedded_asset!(app, "proxy.wgsl");
-    app.add_plugins((
-        MaterialPlugin::<ProxyMaterial>::default(),
-        MaterialPlugin::<ShadowProxyMaterial>::default(),
-    ));
-    let world = app.world_mut();
-    let prepass = world
-        .resource_mut::<Assets<ProxyMaterial>>()
-        .add(ProxyMaterial::default());
-    let shadow = world
+    app.add_plugins(MaterialPlugin::<ShadowProxyMaterial>::default());
+    let shadow = app
+        .world_mut()
         .resource_mut::<Assets<ShadowProxyMaterial>>()
         .add(ShadowProxyMaterial::default());
-    app.insert_resource(ProxyMaterialHandles { prepass, shadow })
+    app.insert_resource(ProxyMaterialHandles { shadow })
         .init_resource::<ProxyMeshes>()
         .add_systems(bevy::app::PostUpdate, sync_proxies);
     true
@@ -130,17 +104,16 @@ pub(crate) fn register(app: &mut bevy::app::App) -> bool {
 /// A proxy's mesh and the translation (its tessellation's origin) it is drawn at.
 type ProxyMesh = (Handle<Mesh>, Vec3);
 
-/// Each store's proxy meshes: the prepass's and the shadow passes'.
+/// Each store's proxy meshes, one per kind ([`OslfProxy::ALL`]).
 #[derive(Resource, Default)]
-struct ProxyMeshes(HashMap<AssetId<OslfStore>, (OslfStore, [ProxyMesh; 2])>);
+struct ProxyMeshes(HashMap<AssetId<OslfStore>, (OslfStore, [ProxyMesh; 1])>);
 
 /// `store`'s triangles for each proxy kind ([`OslfProxy::ALL`]) as Bevy meshes, or why there
 /// are none.
-fn proxy_meshes(store: &OslfStore) -> Result<[(Mesh, Vec3); 2], String> {
+fn proxy_meshes(store: &OslfStore) -> Result<[(Mesh, Vec3); 1], String> {
     let store = store.open().map_err(|e| e.to_string())?;
     Ok(OslfProxy::ALL.map(|kind| {
         bevy_mesh(match kind {
-            OslfProxy::Prepass => ObjectMesh::of_store(&store),
             OslfProxy::Shadow => ObjectMesh::from_store(&store, store.meta().bake.epsilon),
         })
     }))
@@ -239,8 +212,7 @@ fn sync_proxies(
                             slot.insert((store.clone(), handles));
                         }
                         Err(e) => {
-                            messages
-                                .say(format!("OSLF store {id}: no shadow or prepass proxy: {e}"));
+                            messages.say(format!("OSLF store {id}: no shadow proxy: {e}"));
                         }
                     }
                 }
@@ -255,8 +227,6 @@ fn sync_proxies(
         };
         for (i, kind) in OslfProxy::ALL.into_iter().enumerate() {
             let mesh = proxy_meshes.as_ref().map(|m| m[i].clone());
-            // The prepass proxy's material casts no shadow whatever the component says.
-            let no_shadow = no_shadow && kind == OslfProxy::Shadow;
             wanted.insert((entity, kind), (mesh, visibility, no_shadow));
         }
     }
@@ -303,7 +273,6 @@ fn sync_proxies(
             ChildOf(entity),
         ));
         match kind {
-            OslfProxy::Prepass => proxy.insert(MeshMaterial3d(materials.prepass.clone())),
             OslfProxy::Shadow => proxy.insert(MeshMaterial3d(materials.shadow.clone())),
         };
         if no_shadow {

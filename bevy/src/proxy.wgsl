@@ -1,7 +1,7 @@
 // The proxy's main-pass shaders (proxy.rs). The plugin's own pass shades the object, so in
 // Bevy's main pass the proxy is neither rasterised nor written: every vertex goes to one
 // point outside the clip volume, so each triangle is culled before rasterisation. Bevy's
-// shadow and prepass passes use their default shaders.
+// shadow passes use their default shaders.
 
 @vertex
 fn vertex() -> @builtin(position) vec4<f32> {

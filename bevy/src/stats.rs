@@ -1,6 +1,6 @@
 //! The cache's statistics in the main world: a resource summed over every OSLF object's
 //! renderer, and Bevy diagnostics (misses and loads per frame, miss rate, the GPU time of the
-//! plugin's G-buffer, shading and composite passes, the objects extracted) for the usual
+//! plugin's G-buffer, prepass, shading and composite passes, the objects extracted) for the usual
 //! diagnostic tools.
 
 use std::collections::HashMap;
@@ -29,6 +29,9 @@ pub const SHADE_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/shade_g
 /// GPU milliseconds of the objects' composite passes (into the camera's colour and depth), as
 /// [`GBUFFER_GPU_MS`].
 pub const COMPOSITE_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/composite_gpu_ms");
+/// GPU milliseconds of the objects' prepass passes (their depth, normals and motion vectors
+/// into the prepass of a camera that has one), as [`GBUFFER_GPU_MS`].
+pub const PREPASS_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("oslf/prepass_gpu_ms");
 
 /// OSLF objects extracted to the render world since the previous main-world update: every
 /// object in a frame where one of them (its component, transform or visibility) or a store
@@ -93,6 +96,7 @@ pub(crate) fn register(app: &mut App) {
         .register_diagnostic(Diagnostic::new(GBUFFER_GPU_MS).with_suffix("ms"))
         .register_diagnostic(Diagnostic::new(SHADE_GPU_MS).with_suffix("ms"))
         .register_diagnostic(Diagnostic::new(COMPOSITE_GPU_MS).with_suffix("ms"))
+        .register_diagnostic(Diagnostic::new(PREPASS_GPU_MS).with_suffix("ms"))
         .register_diagnostic(Diagnostic::new(EXTRACTED_OBJECTS));
 }
 
@@ -115,6 +119,9 @@ pub(crate) fn publish_stats(
     }
     if let Some(ms) = sum(|p| p.composite) {
         diagnostics.add_measurement(&COMPOSITE_GPU_MS, || ms);
+    }
+    if let Some(ms) = sum(|p| p.prepass) {
+        diagnostics.add_measurement(&PREPASS_GPU_MS, || ms);
     }
     diagnostics.add_measurement(&EXTRACTED_OBJECTS, || booked.extracted as f64);
     let latest = booked.cache;
