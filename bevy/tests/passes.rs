@@ -1,7 +1,7 @@
-//! The object in Bevy's own passes, through its proxy (src/proxy.rs), in a real headless Bevy
-//! app: it casts a shadow on a Bevy table under a Bevy light, SSAO darkens the table where the
-//! object stands, and the object itself is still drawn as the runtime draws it, also where
-//! Bevy's depth prepass already holds its proxy.
+//! The object in Bevy's own passes, in a real headless Bevy app: through its shadow proxy
+//! (src/proxy.rs) it casts a shadow on a Bevy table under a Bevy light; through the plugin's
+//! prepass (src/draw.rs) SSAO darkens the table where the object stands, and the object itself
+//! is still drawn as the runtime draws it, shaded from the G-buffer that prepass rasterised.
 //!
 //! On lavapipe in CI; these tests fail, never skip, without an adapter.
 
