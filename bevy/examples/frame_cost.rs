@@ -5,10 +5,12 @@
 //! ```text
 //! oslf bake examples/room.toml -o examples/room.oslf
 //! cargo run --release -p oslf-bevy --features viewer --example frame_cost --ignore-rust-version -- \
-//!     [WIDTH HEIGHT FRAMES [GPU_SLOTS]]
+//!     [--ssao] [WIDTH HEIGHT FRAMES [GPU_SLOTS]]
 //! ```
 //!
-//! Defaults: 640×360, 120 frames, a cache holding every cube. Prints a summary and writes
+//! Defaults: 640×360, 120 frames, a cache holding every cube, a camera without a prepass;
+//! `--ssao` gives the camera Bevy's SSAO and with it a depth and normal prepass, which the
+//! plugin writes the object into. Prints a summary and writes
 //! `frame_cost.csv` (frame, ms without, ms with, misses, loads) and the last frame with the
 //! object, `frame_cost.png`.
 
@@ -27,8 +29,9 @@ use oslf_bevy::{CacheConfig, OslfCacheStats};
 use shared::headless::headless_app;
 use shared::{keep_only_the_orbit_camera, spawn_room, Orbit, ASSETS};
 
+/// The target's size, whether the teapot is in the room, whether the camera has SSAO.
 #[derive(Resource, Clone, Copy)]
-struct Size(u32, u32, bool);
+struct Size(u32, u32, bool, bool);
 
 #[derive(Resource)]
 struct Waiting(Vec<UntypedAssetId>);
@@ -56,7 +59,7 @@ fn setup(
         pitch: 0.35,
         distance: 1.6,
     };
-    commands.spawn((
+    let mut camera = commands.spawn((
         Camera3d::default(),
         bevy::camera::Hdr,
         Msaa::Off,
@@ -64,11 +67,14 @@ fn setup(
         orbit,
         orbit.transform(),
     ));
+    if size.3 {
+        camera.insert(bevy::pbr::ScreenSpaceAmbientOcclusion::default());
+    }
 }
 
-fn app(width: u32, height: u32, teapot: bool, cache: CacheConfig) -> App {
+fn app(size: Size, cache: CacheConfig) -> App {
     let mut app = headless_app(Path::new(ASSETS), cache);
-    app.insert_resource(Size(width, height, teapot))
+    app.insert_resource(size)
         .add_systems(Startup, setup)
         .add_systems(Update, keep_only_the_orbit_camera);
     app.finish();
@@ -141,11 +147,14 @@ fn median(v: &[f64]) -> f64 {
 }
 
 fn main() {
-    let args: Vec<u32> = std::env::args()
-        .skip(1)
+    let raw: Vec<String> = std::env::args().skip(1).collect();
+    let ssao = raw.iter().any(|a| a == "--ssao");
+    let args: Vec<u32> = raw
+        .iter()
+        .filter(|a| *a != "--ssao")
         .map(|a| {
             a.parse()
-                .expect("arguments: WIDTH HEIGHT FRAMES [GPU_SLOTS]")
+                .expect("arguments: [--ssao] WIDTH HEIGHT FRAMES [GPU_SLOTS]")
         })
         .collect();
     let width = args.first().copied().unwrap_or(640);
@@ -155,9 +164,13 @@ fn main() {
         gpu_slots: args.get(3).copied(),
         ..Default::default()
     };
-    let without = orbit(&mut app(width, height, false, cache), frames, None);
+    let without = orbit(
+        &mut app(Size(width, height, false, ssao), cache),
+        frames,
+        None,
+    );
     let with = orbit(
-        &mut app(width, height, true, cache),
+        &mut app(Size(width, height, true, ssao), cache),
         frames,
         Some("frame_cost.png"),
     );
@@ -166,7 +179,14 @@ fn main() {
     let loading: Vec<f64> = with.iter().filter(|f| f.2 > 0).map(|f| f.0).collect();
     let missing = with.iter().filter(|f| f.1 > 0).count();
     let last_miss = with.iter().rposition(|f| f.1 > 0);
-    println!("{width}×{height}, {frames} frames on one orbit, each waited for on the GPU");
+    println!(
+        "{width}×{height}, {frames} frames on one orbit, each waited for on the GPU{}",
+        if ssao {
+            ", SSAO (a depth and normal prepass)"
+        } else {
+            ""
+        }
+    );
     println!(
         "median frame: {a:.1} ms without the object, {b:.1} ms with it: ×{:.2}",
         b / a
