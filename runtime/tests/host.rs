@@ -713,6 +713,65 @@ fn a_host_target_or_view_the_renderer_cannot_draw_into_is_refused() {
         &good,
         "HostView::exposure -1: must be finite and ≥ 0",
     );
+    // A prepass is refused alike, and for its own matrices and formats.
+    let prepass = HostPrepass {
+        depth: &dv,
+        depth_format: DEPTH,
+        depth_compare: wgpu::CompareFunction::Less,
+        sample_count: 1,
+        width: W,
+        height: H,
+        normal: None,
+        motion: None,
+        world_from_local: Mat4::IDENTITY,
+        previous_clip_from_local: view.projection * view.view,
+    };
+    let mut refuse_prepass = |prepass: &HostPrepass, expect: &str| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let e = r
+            .encode_prepass_into(&mut encoder, &view, prepass, &params.params())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(expect), "{e}");
+    };
+    refuse_prepass(
+        &HostPrepass {
+            sample_count: 0,
+            ..prepass
+        },
+        "HostPrepass::sample_count 0",
+    );
+    refuse_prepass(
+        &HostPrepass {
+            depth_compare: wgpu::CompareFunction::Equal,
+            ..prepass
+        },
+        "HostPrepass::depth_compare Equal",
+    );
+    refuse_prepass(
+        &HostPrepass {
+            normal: Some(PrepassTarget {
+                view: &dv,
+                format: DEPTH,
+            }),
+            ..prepass
+        },
+        "HostPrepass::normal.format Depth32Float is not a colour format",
+    );
+    refuse_prepass(
+        &HostPrepass {
+            world_from_local: Mat4::ZERO,
+            ..prepass
+        },
+        "HostPrepass::world_from_local: must be finite and invertible",
+    );
+    refuse_prepass(
+        &HostPrepass {
+            previous_clip_from_local: Mat4::from_translation(Vec3::INFINITY),
+            ..prepass
+        },
+        "HostPrepass::previous_clip_from_local: must be finite",
+    );
     // Nothing was recorded for the refused frames: a good one still draws.
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     r.encode_into(&mut encoder, &view, &good, &params.params())
