@@ -51,6 +51,15 @@ pub(crate) struct OslfRenderers {
     slots: HashMap<AssetId<OslfStore>, StoreSlot>,
 }
 
+impl OslfRenderers {
+    /// The renderer of `store`, if it has one, and its slot's flag saying a view drew it.
+    fn renderer(&mut self, store: AssetId<OslfStore>) -> Option<(&mut Renderer, &mut bool)> {
+        let slot = self.slots.get_mut(&store)?;
+        let renderer = slot.renderer.as_mut()?.get_mut().ok()?;
+        Some((renderer, &mut slot.drew))
+    }
+}
+
 /// Bevy's math (glam 0.33) to the runtime's (glam 0.34), column by column.
 fn to_runtime(m: bevy::math::Mat4) -> glam::Mat4 {
     glam::Mat4::from_cols_array(&m.to_cols_array())
@@ -195,10 +204,7 @@ pub(crate) fn prepass_oslf(
     let span = diagnostics.time_span(ctx.command_encoder(), "oslf_prepass");
     let mut wrote = false;
     for object in &frame.objects {
-        let Some(slot) = renderers.slots.get_mut(&object.store) else {
-            continue;
-        };
-        let Some(Ok(renderer)) = slot.renderer.as_mut().map(Mutex::get_mut) else {
+        let Some((renderer, _)) = renderers.renderer(object.store) else {
             continue;
         };
         let prepass = HostPrepass {
@@ -314,10 +320,7 @@ pub(crate) fn draw_oslf(
     let span = diagnostics.time_span(ctx.command_encoder(), "oslf");
     let mut drew = false;
     for object in &frame.objects {
-        let Some(slot) = renderers.slots.get_mut(&object.store) else {
-            continue;
-        };
-        let Some(Ok(renderer)) = slot.renderer.as_mut().map(Mutex::get_mut) else {
+        let Some((renderer, slot_drew)) = renderers.renderer(object.store) else {
             continue;
         };
         match renderer.encode_into(
@@ -327,7 +330,7 @@ pub(crate) fn draw_oslf(
             &object.params,
         ) {
             Ok(()) => {
-                slot.drew = true;
+                *slot_drew = true;
                 drew = true;
             }
             Err(e) => {

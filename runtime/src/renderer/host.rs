@@ -721,7 +721,22 @@ fn encode_composite(
 
 /// composite.wgsl's bindings: the shaded image, the G-buffer's depth and the exposure.
 fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("composite"),
+        entries: &[
+            fragment_texture(0, wgpu::TextureSampleType::Float { filterable: false }),
+            fragment_texture(1, wgpu::TextureSampleType::Depth),
+            fragment_uniform(2),
+        ],
+    })
+}
+
+/// A 2D texture composite.wgsl's fragment stage loads from, at `binding`.
+pub(super) fn fragment_texture(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
         ty: wgpu::BindingType::Texture {
@@ -730,24 +745,21 @@ fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             multisampled: false,
         },
         count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("composite"),
-        entries: &[
-            texture(0, wgpu::TextureSampleType::Float { filterable: false }),
-            texture(1, wgpu::TextureSampleType::Depth),
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-        ],
-    })
+    }
+}
+
+/// A uniform buffer composite.wgsl's fragment stage reads, at `binding`.
+pub(super) fn fragment_uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
 }
 
 /// A full-screen triangle writing the host's colour format and testing its depth as it does.
@@ -756,51 +768,83 @@ fn composite_pipeline(
     layout: &wgpu::BindGroupLayout,
     key: CompositeKey,
 ) -> wgpu::RenderPipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("composite.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(crate::pipelines::composite_wgsl().into()),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("composite"),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    let constants = [("REVERSED", if key.reversed { 1.0 } else { 0.0 })];
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("composite"),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: key.depth,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(key.compare),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: wgpu::MultisampleState {
-            count: key.samples,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
+    let target = wgpu::ColorTargetState {
+        format: key.color,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    };
+    let pass = FullScreenPass {
+        label: "composite",
+        entry_point: "fs_main",
+        depth: key.depth,
+        compare: key.compare,
+        samples: key.samples,
+        reversed: key.reversed,
+    };
+    pass.pipeline(device, layout, &[Some(target)])
+}
+
+/// A full-screen pass of composite.wgsl into a host's targets: its fragment entry point, and
+/// the host's depth format, depth test, samples per pixel and depth direction.
+pub(super) struct FullScreenPass {
+    pub(super) label: &'static str,
+    pub(super) entry_point: &'static str,
+    pub(super) depth: wgpu::TextureFormat,
+    pub(super) compare: wgpu::CompareFunction,
+    pub(super) samples: u32,
+    pub(super) reversed: bool,
+}
+
+impl FullScreenPass {
+    /// Its pipeline over `layout`, writing the colour `targets` and the depth it tests.
+    pub(super) fn pipeline(
+        &self,
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        targets: &[Option<wgpu::ColorTargetState>],
+    ) -> wgpu::RenderPipeline {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("composite.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(crate::pipelines::composite_wgsl().into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(self.label),
+            bind_group_layouts: &[Some(layout)],
+            immediate_size: 0,
+        });
+        let constants = [("REVERSED", if self.reversed { 1.0 } else { 0.0 })];
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(self.label),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: self.depth,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(self.compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: self.samples,
                 ..Default::default()
             },
-            targets: &[Some(wgpu::ColorTargetState {
-                format: key.color,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(self.entry_point),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                },
+                targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
 }

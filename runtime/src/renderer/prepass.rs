@@ -8,7 +8,9 @@
 
 use glam::Mat4;
 
-use super::host::{check_color_format, check_host_depth};
+use super::host::{
+    check_color_format, check_host_depth, fragment_texture, fragment_uniform, FullScreenPass,
+};
 use super::targets::SizedTargets;
 use super::timer::{PassTimer, TimedPass};
 use super::Renderer;
@@ -328,33 +330,14 @@ fn color_slots<T>(normal: Option<T>, motion: impl FnOnce() -> Option<T>) -> Vec<
 /// composite.wgsl's `fs_prepass` bindings: the G-buffer's depth, position and normal, and the
 /// prepass's uniform.
 fn prepass_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    };
     let float = wgpu::TextureSampleType::Float { filterable: false };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("prepass"),
         entries: &[
-            texture(1, wgpu::TextureSampleType::Depth),
-            texture(3, float),
-            texture(4, float),
-            wgpu::BindGroupLayoutEntry {
-                binding: 5,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
+            fragment_texture(1, wgpu::TextureSampleType::Depth),
+            fragment_texture(3, float),
+            fragment_texture(4, float),
+            fragment_uniform(5),
         ],
     })
 }
@@ -366,53 +349,22 @@ fn prepass_pipeline(
     layout: &wgpu::BindGroupLayout,
     key: PrepassKey,
 ) -> wgpu::RenderPipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("composite.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(crate::pipelines::composite_wgsl().into()),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("prepass"),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    let constants = [("REVERSED", if key.reversed { 1.0 } else { 0.0 })];
     let target = |format| wgpu::ColorTargetState {
         format,
         blend: None,
         write_mask: wgpu::ColorWrites::ALL,
     };
-    let targets = color_slots(key.normal.map(target), || key.motion.map(target));
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("prepass"),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: key.depth,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(key.compare),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: wgpu::MultisampleState {
-            count: key.samples,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_prepass"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                ..Default::default()
-            },
-            targets: &targets,
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+    let pass = FullScreenPass {
+        label: "prepass",
+        entry_point: "fs_prepass",
+        depth: key.depth,
+        compare: key.compare,
+        samples: key.samples,
+        reversed: key.reversed,
+    };
+    pass.pipeline(
+        device,
+        layout,
+        &color_slots(key.normal.map(target), || key.motion.map(target)),
+    )
 }
