@@ -85,9 +85,9 @@ pub(crate) struct ProxyMaterialHandles {
 }
 
 /// Adds the proxy's material and systems where Bevy's PBR is there to use it.
-pub(crate) fn register(app: &mut bevy::app::App) -> bool {
+pub(crate) fn register(app: &mut bevy::app::App) {
     if !app.is_plugin_added::<bevy::pbr::PbrPlugin>() {
-        return false;
+        return;
     }
     embedded_asset!(app, "proxy.wgsl");
     app.add_plugins(MaterialPlugin::<ShadowProxyMaterial>::default());
@@ -98,7 +98,6 @@ pub(crate) fn register(app: &mut bevy::app::App) -> bool {
     app.insert_resource(ProxyMaterialHandles { shadow })
         .init_resource::<ProxyMeshes>()
         .add_systems(bevy::app::PostUpdate, sync_proxies);
-    true
 }
 
 /// A proxy's mesh and the translation (its tessellation's origin) it is drawn at.
