@@ -17,9 +17,10 @@ use std::path::Path;
 use bevy::app::{App, Startup};
 use bevy::asset::{AssetServer, Assets};
 use bevy::color::Color;
-use bevy::core_pipeline::prepass::{DepthPrepass, NormalPrepass};
+use bevy::core_pipeline::prepass::{DeferredPrepass, DepthPrepass, NormalPrepass};
 use bevy::ecs::prelude::*;
 use bevy::image::Image;
+use bevy::material::OpaqueRendererMethod;
 use bevy::math::Vec3;
 use bevy::mesh::{Mesh, Mesh3d};
 use bevy::pbr::{MeshMaterial3d, StandardMaterial};
@@ -49,9 +50,19 @@ struct Setup {
     extra: Extra,
     params: ShadingParams,
     msaa: Msaa,
-    /// A depth and normal prepass on the camera, which the plugin writes the object into and
-    /// shades it from.
-    prepass: bool,
+    /// A prepass on the camera, which the plugin writes the object into and shades it from.
+    prepass: Prepass,
+}
+
+/// The prepass of the test's camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Prepass {
+    None,
+    /// Depth and normals (what SSAO asks for).
+    DepthNormal,
+    /// Bevy's deferred G-buffer with depth: Bevy's meshes are lit in its deferred lighting
+    /// pass, the object drawn over it as a forward mesh.
+    Deferred,
 }
 
 fn setup(
@@ -66,15 +77,29 @@ fn setup(
     let v = |a: glam::Vec3| Vec3::from_array(a.to_array());
     let mut camera =
         headless::spawn_linear_camera(&mut commands, &mut images, c, (W, H), setup.msaa);
-    if setup.prepass {
-        camera.insert((DepthPrepass, NormalPrepass));
+    match setup.prepass {
+        Prepass::None => {}
+        Prepass::DepthNormal => {
+            camera.insert((DepthPrepass, NormalPrepass));
+        }
+        Prepass::Deferred => {
+            camera.insert((DepthPrepass, DeferredPrepass));
+        }
     }
     if let Some(store) = &setup.store {
         commands.spawn(OslfObject::new(assets.load(store.clone())).with_params(setup.params));
     }
+    // With Bevy's deferred G-buffer, Bevy's meshes are drawn into it and lit in its deferred
+    // lighting pass.
+    let method = if setup.prepass == Prepass::Deferred {
+        OpaqueRendererMethod::Deferred
+    } else {
+        OpaqueRendererMethod::Auto
+    };
     let unlit = |color: Color| StandardMaterial {
         base_color: color,
         unlit: true,
+        opaque_render_method: method,
         ..Default::default()
     };
     // The teapot of the fixture sits near the origin, about 3 units across; the camera looks
@@ -149,7 +174,7 @@ fn setup_for(camera: Camera, extra: Extra, with_object: bool) -> Setup {
         extra,
         params: params(),
         msaa: Msaa::Off,
-        prepass: false,
+        prepass: Prepass::None,
     }
 }
 
@@ -176,17 +201,18 @@ fn the_object_in_a_bevy_frame_equals_the_runtimes_render() {
     // Multisampled: shaded once per pixel, written to each sample, resolved by the plugin.
     // With a prepass: written into it, then shaded from the G-buffer that pass rasterised.
     for (msaa, prepass) in [
-        (Msaa::Off, false),
-        (Msaa::Sample4, false),
-        (Msaa::Off, true),
-        (Msaa::Sample4, true),
+        (Msaa::Off, Prepass::None),
+        (Msaa::Sample4, Prepass::None),
+        (Msaa::Off, Prepass::DepthNormal),
+        (Msaa::Sample4, Prepass::DepthNormal),
+        (Msaa::Off, Prepass::Deferred),
     ] {
         let setup = Setup {
             msaa,
             prepass,
             ..setup_for(camera, Extra::None, true)
         };
-        let msaa = format!("{msaa:?}{}", if prepass { ", prepass" } else { "" });
+        let msaa = format!("{msaa:?}, prepass {prepass:?}");
         let mut app = app(dir, setup);
         let pixels = run_and_capture(&mut app, 60);
         dump(&format!("bevy-{msaa}"), &pixels);
@@ -223,10 +249,12 @@ fn bevy_meshes_in_front_hide_the_object_and_it_hides_those_behind() {
     // With a prepass, Bevy's main pass tests its meshes against the object's depth the plugin
     // wrote there, and the plugin shades the G-buffer it rasterised then.
     for (extra, prepass) in [
-        (Extra::Front, false),
-        (Extra::Behind, false),
-        (Extra::Front, true),
-        (Extra::Behind, true),
+        (Extra::Front, Prepass::None),
+        (Extra::Behind, Prepass::None),
+        (Extra::Front, Prepass::DepthNormal),
+        (Extra::Behind, Prepass::DepthNormal),
+        (Extra::Front, Prepass::Deferred),
+        (Extra::Behind, Prepass::Deferred),
     ] {
         let setup = |with_object| Setup {
             prepass,
@@ -234,12 +262,12 @@ fn bevy_meshes_in_front_hide_the_object_and_it_hides_those_behind() {
         };
         let without = run_and_capture(&mut app(dir, setup(false)), 4);
         let with = run_and_capture(&mut app(dir, setup(true)), 60);
-        let name = match (extra == Extra::Front, prepass) {
-            (true, false) => "front",
-            (false, false) => "behind",
-            (true, true) => "front-prepass",
-            (false, true) => "behind-prepass",
+        let side = if extra == Extra::Front {
+            "front"
+        } else {
+            "behind"
         };
+        let name = format!("{side}-{prepass:?}");
         dump(&format!("bevy-{name}"), &with);
         let (mut hidden, mut shown) = (0, 0);
         let mut object = (Vec::new(), Vec::new());
