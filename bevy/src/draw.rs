@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use bevy::asset::AssetId;
 use bevy::core_pipeline::prepass::{PreviousViewData, ViewPrepassTextures};
 use bevy::ecs::prelude::*;
-use bevy::render::camera::ExtractedCamera;
+use bevy::render::camera::{ExtractedCamera, TemporalJitter};
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::render_resource::RenderPassDescriptor;
 use bevy::render::renderer::{
@@ -135,22 +135,42 @@ pub(crate) fn prepare_oslf(
     }
 }
 
-/// The runtime's view of `object` through Bevy's `view`, at the camera's exposure.
+/// The runtime's view of `object` through Bevy's `view`, at the camera's exposure, jittered
+/// as Bevy jitters its meshes this frame (TAA) for a target of `size` pixels.
 fn host_view(
     camera: &ExtractedCamera,
     view: &ExtractedView,
+    jitter: Option<&TemporalJitter>,
+    size: bevy::math::Vec2,
     object: &crate::extract::ExtractedObject,
 ) -> HostView {
     let view_from_world = view.world_from_view.to_matrix().inverse();
+    let jitter = jitter.map_or([0.0; 2], |j| ndc_jitter(view.clip_from_view, j, size));
     HostView {
         view: to_runtime(view_from_world * object.world_from_local),
         projection: to_runtime(view.clip_from_view),
         exposure: camera.exposure * object.radiance_scale,
+        jitter,
     }
 }
 
+/// How far `jitter` moves what the perspective `clip_from_view` projects this frame, in
+/// normalised device coordinates, for a target of `size` pixels: Bevy jitters the projection's
+/// third column, which with clip w = −z_view moves normalised x, y by minus what it added.
+fn ndc_jitter(
+    clip_from_view: bevy::math::Mat4,
+    jitter: &TemporalJitter,
+    size: bevy::math::Vec2,
+) -> [f32; 2] {
+    let mut jittered = clip_from_view;
+    jitter.jitter_projection(&mut jittered, size);
+    let moved = jittered.z_axis - clip_from_view.z_axis;
+    [-moved.x, -moved.y]
+}
+
 /// What [`prepass_oslf`] reads of a view: its camera, matrices, depth target, samples per
-/// pixel, prepass targets and previous matrices (where it has motion vectors).
+/// pixel, prepass targets, previous matrices (where it has motion vectors) and jitter (with
+/// TAA).
 type PrepassView = (
     &'static ExtractedCamera,
     &'static ExtractedView,
@@ -158,6 +178,7 @@ type PrepassView = (
     &'static Msaa,
     &'static ViewPrepassTextures,
     Option<&'static PreviousViewData>,
+    Option<&'static TemporalJitter>,
 );
 
 /// Writes every visible object into this camera's prepass, after Bevy's: its depth into the
@@ -177,7 +198,7 @@ pub(crate) fn prepass_oslf(
         return;
     }
     let view_entity = view.entity();
-    let (camera, extracted, depth, msaa, textures, previous) = view.into_inner();
+    let (camera, extracted, depth, msaa, textures, previous, jitter) = view.into_inner();
     let has_prepass = textures.depth.is_some()
         || textures.normal.is_some()
         || textures.motion_vectors.is_some()
@@ -195,6 +216,7 @@ pub(crate) fn prepass_oslf(
         textures.motion_vectors.as_ref().map(target),
     );
     let size = depth.texture().size();
+    let view_size = bevy::math::Vec2::new(size.width as f32, size.height as f32);
     let clip_from_world =
         extracted.clip_from_view * extracted.world_from_view.to_matrix().inverse();
     let previous_clip_from_world =
@@ -230,7 +252,7 @@ pub(crate) fn prepass_oslf(
         };
         match renderer.encode_prepass_into(
             ctx.command_encoder(),
-            &host_view(camera, extracted, object),
+            &host_view(camera, extracted, jitter, view_size, object),
             &prepass,
             &object.params,
         ) {
@@ -255,17 +277,22 @@ pub(crate) fn prepass_oslf(
     span.end(ctx.command_encoder());
 }
 
+/// What [`draw_oslf`] reads of a view: its camera, matrices, colour and depth targets,
+/// samples per pixel and jitter (with TAA).
+type DrawView = (
+    &'static ExtractedCamera,
+    &'static ExtractedView,
+    &'static ViewTarget,
+    &'static ViewDepthStencilTexture,
+    &'static Msaa,
+    Option<&'static TemporalJitter>,
+);
+
 /// Draws every visible object into this camera's targets, after Bevy's opaque pass: depth-
 /// tested against Bevy's meshes (reversed depth), its own depth written, its radiance scaled
 /// by the camera's exposure (Bevy's tonemapping follows, as for its meshes).
 pub(crate) fn draw_oslf(
-    view: ViewQuery<(
-        &ExtractedCamera,
-        &ExtractedView,
-        &ViewTarget,
-        &ViewDepthStencilTexture,
-        &Msaa,
-    )>,
+    view: ViewQuery<DrawView>,
     frame: Res<ExtractedOslf>,
     mut renderers: ResMut<OslfRenderers>,
     messages: Res<OslfMessages>,
@@ -275,7 +302,7 @@ pub(crate) fn draw_oslf(
         return;
     }
     let view_entity = view.entity();
-    let (camera, extracted, target, depth, msaa) = view.into_inner();
+    let (camera, extracted, target, depth, msaa, jitter) = view.into_inner();
     if camera.viewport.is_some() {
         messages.say(format!(
             "OSLF: camera {view_entity} draws into a viewport, which OSLF objects do not \
@@ -299,6 +326,7 @@ pub(crate) fn draw_oslf(
         return;
     };
     let size = target.main_texture().size();
+    let view_size = bevy::math::Vec2::new(size.width as f32, size.height as f32);
     let host_target = HostTarget {
         color,
         color_format: target.main_texture_format(),
@@ -325,7 +353,7 @@ pub(crate) fn draw_oslf(
         };
         match renderer.encode_into(
             ctx.command_encoder(),
-            &host_view(camera, extracted, object),
+            &host_view(camera, extracted, jitter, view_size, object),
             &host_target,
             &object.params,
         ) {
@@ -387,6 +415,47 @@ pub(crate) fn after_submit_oslf(
                     "OSLF store {id}: booking the cache's feedback: {e}"
                 ));
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bevy::camera::CameraProjection;
+    use bevy::math::{Mat4, Vec2, Vec3, Vec4Swizzles};
+
+    /// The runtime's jitter moves a point's normalised coordinates as Bevy's jittered
+    /// projection does, for Bevy's infinite reversed perspective.
+    #[test]
+    fn the_jitter_moves_points_as_bevys_jittered_projection() {
+        // Bevy's own perspective projection (infinite, reversed depth).
+        let projection = bevy::camera::PerspectiveProjection {
+            fov: 0.8,
+            aspect_ratio: 16.0 / 9.0,
+            near: 0.1,
+            ..Default::default()
+        }
+        .get_clip_from_view();
+        let size = Vec2::new(1920.0, 1080.0);
+        let jitter = TemporalJitter {
+            offset: Vec2::new(0.3, -0.45),
+        };
+        let [jx, jy] = ndc_jitter(projection, &jitter, size);
+        let mut jittered = projection;
+        jitter.jitter_projection(&mut jittered, size);
+        for p in [Vec3::new(0.5, -0.2, -3.0), Vec3::new(-4.0, 1.0, -40.0)] {
+            let ndc = |m: Mat4| {
+                let c = m * p.extend(1.0);
+                c.xy() / c.w
+            };
+            let moved = ndc(jittered) - ndc(projection);
+            assert!(
+                (moved - Vec2::new(jx, jy)).length() < 1e-6,
+                "{moved} {jx} {jy}"
+            );
+            // A sub-pixel offset: 0.3 and 0.45 of a pixel (2 / size in normalised units).
+            assert!((moved.abs() * size / 2.0 - Vec2::new(0.3, 0.45)).length() < 1e-3);
         }
     }
 }

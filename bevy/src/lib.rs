@@ -35,6 +35,7 @@
 //!   its world normals and its motion vectors, so SSAO, TAA and Bevy's other screen-space
 //!   effects see the object. That pass rasterises the object into the runtime's G-buffer,
 //!   and the drawing above shades that G-buffer: the object is rasterised once per camera.
+//!   Under TAA it is rasterised with the frame's jitter, as Bevy's meshes are.
 //!   Bevy's deferred G-buffer (`DeferredPrepass`) does not get the object's material; the
 //!   object is drawn over Bevy's deferred lighting like a forward mesh.
 //! - **Shadows.** With Bevy's `PbrPlugin`, each object has a child ([`OslfProxy`]), a mesh

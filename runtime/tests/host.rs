@@ -435,6 +435,7 @@ fn host_view(r: &Renderer, reversed: bool) -> HostView {
         view: look_at_mat4(cam.position, cam.target, cam.up),
         projection,
         exposure: 1.0,
+        jitter: [0.0; 2],
     }
 }
 
@@ -628,6 +629,84 @@ fn the_object_is_written_into_a_host_prepass_and_shaded_from_it_depth_tested_bot
 #[test]
 fn the_object_is_written_into_a_multisampled_host_prepass_and_shaded_from_it() {
     draws_into_a_host_frame(true, 4, 0.5, true);
+}
+
+#[test]
+fn a_jittered_host_view_moves_the_object_by_its_jitter() {
+    let gpu = Gpu::headless().unwrap();
+    let mut r = Renderer::new(gpu.clone(), open_store(), CacheConfig::default()).unwrap();
+    let view = host_view(&r, true);
+    let params = Knobs {
+        mode: Mode::ReconMirror,
+        ..Default::default()
+    };
+    let host = Host::new(&gpu, true, 1, false);
+    // Streams until nothing falls back, then one frame more: the image.
+    let mut settled = |view: &HostView| {
+        for _ in 0..40 {
+            let booked = host.frame(&gpu, &mut r, view, &params);
+            gpu.wait().unwrap();
+            if booked.is_some_and(|s| s.misses == 0) {
+                break;
+            }
+        }
+        host.frame(&gpu, &mut r, view, &params);
+        gpu.wait().unwrap();
+        host.colors(&gpu)
+    };
+    let plain = settled(&view);
+    // One pixel to the right: 2 / W in normalised x.
+    let jittered = settled(&HostView {
+        jitter: [2.0 / W as f32, 0.0],
+        ..view
+    });
+    // Right of the host's front mesh, each object pixel is its left neighbour's unjittered
+    // one (the same surface point, seen along the same ray from the eye).
+    let (mut object, mut same) = (0, 0);
+    for y in 0..H {
+        for x in W / 2 + 1..W - 1 {
+            let (before, after) = (
+                plain[(y * W + x) as usize],
+                jittered[(y * W + x + 1) as usize],
+            );
+            if before == BEHIND {
+                continue;
+            }
+            object += 1;
+            let close = (0..3).all(|k| (before[k] - after[k]).abs() <= 1e-3 * before[k].max(1.0));
+            same += usize::from(close);
+        }
+    }
+    println!("{same} of {object} object pixels equal their neighbours unjittered");
+    assert!(object > 100, "{object} object pixels");
+    assert!(same * 100 >= object * 98, "{same} of {object}");
+    // Jitter is sub-pixel: more than the whole screen is refused.
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let cv = host.color.create_view(&Default::default());
+    let dv = host.depth.create_view(&Default::default());
+    let target = HostTarget {
+        color: &cv,
+        color_format: host.format,
+        depth: &dv,
+        depth_format: DEPTH,
+        depth_compare: host.compare(),
+        sample_count: 1,
+        width: W,
+        height: H,
+        depth_slack: 0.0,
+    };
+    for jitter in [[1.5, 0.0], [0.0, f32::NAN]] {
+        let e = r
+            .encode_into(
+                &mut encoder,
+                &HostView { jitter, ..view },
+                &target,
+                &params.params(),
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("HostView::jitter"), "{e}");
+    }
 }
 
 #[test]

@@ -39,6 +39,12 @@ pub struct HostView {
     /// The scale of the radiance written: an engine's camera exposure (Bevy multiplies its
     /// meshes' lighting by the view's exposure, `ExtractedCamera::exposure`), 1 for none.
     pub exposure: f32,
+    /// This frame's sub-pixel offset of the host's projection, in normalised device
+    /// coordinates (clip x, y += jitter · w): the jitter of temporal anti-aliasing (Bevy's
+    /// `TemporalJitter`), [0, 0] for none. The object is rasterised with it, as the host's
+    /// meshes are; `projection` stays unjittered, and so do the shading and the motion
+    /// vectors. Finite and within ±1.
+    pub jitter: [f32; 2],
 }
 
 impl HostView {
@@ -53,6 +59,13 @@ impl HostView {
             return Err(RuntimeError::Parameter(format!(
                 "HostView::exposure {}: must be finite and ≥ 0",
                 self.exposure
+            )));
+        }
+        if !self.jitter.iter().all(|j| j.abs() <= 1.0) {
+            return Err(RuntimeError::Parameter(format!(
+                "HostView::jitter {:?}: must be finite and within ±1 (normalised device \
+                 coordinates; a sub-pixel offset is 2 / width at most)",
+                self.jitter
             )));
         }
         let finite = |m: &Mat4| m.to_cols_array().iter().all(|v| v.is_finite());
@@ -656,7 +669,11 @@ impl Renderer {
         } else {
             Mat4::IDENTITY
         };
-        let view_proj = flip * view.projection * view.view * Mat4::from_translation(origin);
+        // TAA's jitter: clip x, y moved by jitter · w.
+        let [jx, jy] = view.jitter;
+        let jitter = Mat4::from_cols(Vec4::X, Vec4::Y, Vec4::Z, Vec4::new(jx, jy, 0.0, 1.0));
+        let view_proj =
+            flip * jitter * view.projection * view.view * Mat4::from_translation(origin);
         let relative = Camera {
             position: camera.position - origin,
             target: camera.target - origin,
