@@ -430,13 +430,23 @@ impl Renderer {
         encoder.clear_buffer(&self.buffers.feedback, 0, None);
         let table_bytes = self.buffers.timestamps_offset;
         let slot = self.feedback_slot(table_bytes + TIMESTAMP_BYTES);
+        let (targets, timer) = self.host_passes(slot)?;
+        self.encode_gbuffer(encoder, targets, timer);
+        Ok(slot)
+    }
+
+    /// The targets a host frame's passes draw into, and the timer of its feedback `slot` (if
+    /// it has one and the device has timestamps).
+    pub(super) fn host_passes(
+        &self,
+        slot: Option<usize>,
+    ) -> Result<(&super::targets::SizedTargets, Option<&PassTimer>)> {
         let targets = self
             .targets
             .as_ref()
             .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
         let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
-        self.encode_gbuffer(encoder, targets, timer);
-        Ok(slot)
+        Ok((targets, timer))
     }
 
     /// Records the host frame's passes into `encoder`: its uniforms, the G-buffer (unless the
@@ -460,11 +470,7 @@ impl Renderer {
             _ => (self.record_host_gbuffer(encoder)?, false),
         };
         let table_bytes = self.buffers.timestamps_offset;
-        let targets = self
-            .targets
-            .as_ref()
-            .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
-        let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
+        let (targets, timer) = self.host_passes(slot)?;
         self.encode_shading(encoder, targets, timer)?;
         if let Some(i) = slot {
             encoder.copy_buffer_to_buffer(
@@ -785,11 +791,6 @@ fn composite_pipeline(
     layout: &wgpu::BindGroupLayout,
     key: CompositeKey,
 ) -> wgpu::RenderPipeline {
-    let target = wgpu::ColorTargetState {
-        format: key.color,
-        blend: None,
-        write_mask: wgpu::ColorWrites::ALL,
-    };
     let pass = FullScreenPass {
         label: "composite",
         entry_point: "fs_main",
@@ -798,7 +799,7 @@ fn composite_pipeline(
         samples: key.samples,
         reversed: key.reversed,
     };
-    pass.pipeline(device, layout, &[Some(target)])
+    pass.pipeline(device, layout, &[Some(key.color.into())])
 }
 
 /// A full-screen pass of composite.wgsl into a host's targets: its fragment entry point, and

@@ -189,11 +189,7 @@ impl Renderer {
             let pass = bytemuck::bytes_of(&uniform);
             self.record_host_uniforms(encoder, &u, pass, &self.prepasses.uniform);
             let slot = self.record_host_gbuffer(encoder)?;
-            let targets = self
-                .targets
-                .as_ref()
-                .ok_or_else(|| RuntimeError::gpu("render targets missing"))?;
-            let timer = slot.and_then(|i| self.feedback_slots[i].timer.as_ref());
+            let (targets, timer) = self.host_passes(slot)?;
             encode_prepass(encoder, prepass, &pipeline, targets, timer)?;
             self.prepassed = Some(Prepassed { uniform: u, slot });
             Ok(())
@@ -349,11 +345,8 @@ fn prepass_pipeline(
     layout: &wgpu::BindGroupLayout,
     key: PrepassKey,
 ) -> wgpu::RenderPipeline {
-    let target = |format| wgpu::ColorTargetState {
-        format,
-        blend: None,
-        write_mask: wgpu::ColorWrites::ALL,
-    };
+    // Written whole, unblended.
+    let target = wgpu::ColorTargetState::from;
     let pass = FullScreenPass {
         label: "prepass",
         entry_point: "fs_prepass",
