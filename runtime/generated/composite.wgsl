@@ -61,7 +61,7 @@ struct TextureParams {
 struct Prepass {
     clip_from_patch: mat4x4<f32>,
     previous_clip_from_patch: mat4x4<f32>,
-    world_from_local: mat4x4<f32>
+    normal_from_local: mat4x4<f32>
 }
 
 fn oct_encode(n: vec3<f32>) -> vec2<f32> {
@@ -143,6 +143,21 @@ struct PrepassOut {
     depth: f32
 }
 
+fn prepass_normal(e: vec2<f32>, normal_from_local: mat4x4<f32>) -> vec4<f32> {
+    let world = (normal_from_local * vec4<f32>(oct_decode(e), 0.0)).xyz;
+    let l2 = dot(world, world);
+    let n = select(vec3<f32>(0.0, 0.0, 1.0), world * inverseSqrt(l2), l2 > 1e-30);
+    return vec4<f32>(n * 0.5 + vec3<f32>(0.5), 1.0);
+}
+
+fn prepass_motion(x: vec4<f32>, clip_from_patch: mat4x4<f32>, previous_clip_from_patch: mat4x4<f32>) -> vec2<f32> {
+    let now = clip_from_patch * x;
+    let before = previous_clip_from_patch * x;
+    let seen = now.w > 1e-20 && before.w > 1e-20;
+    let motion = (now.xy / now.w - before.xy / before.w) * vec2<f32>(0.5, -0.5);
+    return select(vec2<f32>(0.0), motion, seen);
+}
+
 @fragment
 fn fs_prepass(@builtin(position) p: vec4<f32>) -> PrepassOut {
     let xy = vec2<i32>(p.xy);
@@ -151,17 +166,9 @@ fn fs_prepass(@builtin(position) p: vec4<f32>) -> PrepassOut {
         discard;
     }
     var out: PrepassOut;
-    let local = oct_decode(textureLoad(gb_normal, xy, 0).xy);
-    let world = (prepass.world_from_local * vec4<f32>(local, 0.0)).xyz;
-    let l2 = dot(world, world);
-    let n = select(vec3<f32>(0.0, 0.0, 1.0), world * inverseSqrt(l2), l2 > 1e-30);
-    out.normal = vec4<f32>(n * 0.5 + vec3<f32>(0.5), 1.0);
+    out.normal = prepass_normal(textureLoad(gb_normal, xy, 0).xy, prepass.normal_from_local);
     let x = vec4<f32>(textureLoad(gb_position, xy, 0).xyz, 1.0);
-    let now = prepass.clip_from_patch * x;
-    let before = prepass.previous_clip_from_patch * x;
-    let seen = now.w > 1e-20 && before.w > 1e-20;
-    let motion = (now.xy / now.w - before.xy / before.w) * vec2<f32>(0.5, -0.5);
-    out.motion = select(vec2<f32>(0.0), motion, seen);
+    out.motion = prepass_motion(x, prepass.clip_from_patch, prepass.previous_clip_from_patch);
     out.depth = host_depth(d, 0.0);
     return out;
 }

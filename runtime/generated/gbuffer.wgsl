@@ -88,7 +88,7 @@ struct TextureParams {
 struct Prepass {
     clip_from_patch: mat4x4<f32>,
     previous_clip_from_patch: mat4x4<f32>,
-    world_from_local: mat4x4<f32>
+    normal_from_local: mat4x4<f32>
 }
 
 fn oct_encode(n: vec3<f32>) -> vec2<f32> {

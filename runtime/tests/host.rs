@@ -16,7 +16,8 @@ use common::{compare, open_store};
 use glam::camera::rh::proj::directx;
 use glam::camera::rh::view::look_at_mat4;
 use glam::{Mat4, Vec3};
-use oslf_runtime::reference::StoreCubes;
+use oslf_runtime::reference::{prepass_motion, prepass_normal, GTexel, StoreCubes};
+use oslf_runtime::renderer::normal_from_local;
 use oslf_runtime::{
     CacheConfig, Gpu, HostPrepass, HostTarget, HostView, Mode, PrepassTarget, Renderer,
 };
@@ -32,6 +33,21 @@ const MOTION: wgpu::TextureFormat = wgpu::TextureFormat::Rg16Float;
 /// The clip-space shift of the host's previous frame in the prepass test: the object moved
 /// 0.1 in normalised x since (a tenth of the half-width).
 const PREVIOUS_SHIFT: f32 = 0.1;
+
+/// The object's world transform in the prepass test: scaled unevenly, so that its world
+/// normals need the inverse transpose (the shading itself does not use it).
+fn world_from_local() -> Mat4 {
+    Mat4::from_scale_rotation_translation(
+        Vec3::new(2.0, 1.0, 0.25),
+        glam::Quat::from_rotation_z(0.5),
+        Vec3::new(1.0, -2.0, 3.0),
+    )
+}
+
+/// The host's previous clip space in the prepass test: PREVIOUS_SHIFT further right.
+fn previous_clip_from_clip() -> Mat4 {
+    Mat4::from_translation(Vec3::new(PREVIOUS_SHIFT, 0.0, 0.0))
+}
 /// The host's clear colour, its mesh in front of the object (left half) and its mesh behind
 /// the object (everywhere, drawn after it).
 const CLEAR: [f32; 4] = [0.1, 0.2, 0.3, 1.0];
@@ -263,13 +279,6 @@ impl Host {
                 normal.create_view(&Default::default()),
                 motion.create_view(&Default::default()),
             );
-            // The previous frame saw the object PREVIOUS_SHIFT further right in clip space.
-            let shift = Mat4::from_cols(
-                glam::Vec4::X,
-                glam::Vec4::Y,
-                glam::Vec4::Z,
-                glam::Vec4::new(PREVIOUS_SHIFT, 0.0, 0.0, 1.0),
-            );
             let prepass = HostPrepass {
                 depth: &dv,
                 depth_format: DEPTH,
@@ -285,8 +294,9 @@ impl Host {
                     view: &mv,
                     format: MOTION,
                 }),
-                world_from_local: Mat4::IDENTITY,
-                previous_clip_from_local: shift * view.projection * view.view,
+                world_from_local: world_from_local(),
+                // The previous frame saw the object PREVIOUS_SHIFT further right in clip space.
+                previous_clip_from_local: previous_clip_from_clip() * view.projection * view.view,
             };
             r.encode_prepass_into(&mut encoder, view, &prepass, &params.params())
                 .unwrap();
@@ -555,7 +565,20 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32, prepass:
         "{label}: {hidden} hidden, {shown} shown"
     );
     if let (Some((normal, motion)), 1) = (&host.prepass, samples) {
-        check_prepass(&gpu, &host, normal, motion, &cpu, &camera, &label);
+        let gbuffer = r.read_gbuffer().unwrap();
+        let clip_from_patch = view.projection * view.view * Mat4::from_translation(r.mesh().origin);
+        let twin = |g: &GTexel| {
+            let [x, y, z, _] = g.position_patch;
+            let [e0, e1, _, _] = g.normal_uv;
+            let normal = prepass_normal([e0, e1], normal_from_local(world_from_local()));
+            let before = previous_clip_from_clip() * clip_from_patch;
+            let motion = prepass_motion(Vec3::new(x, y, z), clip_from_patch, before);
+            (normal.truncate() * 2.0 - Vec3::ONE, motion)
+        };
+        let expected: Vec<_> = gbuffer.iter().map(twin).collect();
+        check_prepass(
+            &gpu, &host, normal, motion, &cpu, &expected, &camera, &label,
+        );
     }
     let (n, share, mae) = compare(&object_gpu, &object_cpu, 2e-3);
     println!("{label}: {n} object pixels, {:.3}% within 2e-3 of the CPU reference, mean |gpu-cpu| {mae:.2e}", share * 100.0);
@@ -563,22 +586,33 @@ fn draws_into_a_host_frame(reversed: bool, samples: u32, exposure: f32, prepass:
 }
 
 /// The prepass's targets after the frame: on the object's visible pixels a unit normal, most
-/// of them facing the camera, and the motion of the shifted previous frame; elsewhere
+/// of them facing the camera, and the motion of the shifted previous frame, both as the CPU
+/// twin gives them from the frame's G-buffer (`expected`: world normal, motion); elsewhere
 /// (hidden by the host's front mesh, or off the object) as the host cleared them.
+#[allow(clippy::too_many_arguments)]
 fn check_prepass(
     gpu: &Gpu,
     host: &Host,
     normal: &wgpu::Texture,
     motion: &wgpu::Texture,
     reference: &[[f32; 4]],
+    expected: &[(Vec3, glam::Vec2)],
     camera: &oslf_runtime::Camera,
     label: &str,
 ) {
     let normals: Vec<u32> = host.read_texture(gpu, normal, false);
     let motions: Vec<[u16; 2]> = host.read_texture(gpu, motion, false);
+    // The camera looks at the object's space; its normals are judged in it.
     let to_camera = (camera.position - camera.target).normalize();
+    let local_from_normal = normal_from_local(world_from_local()).inverse();
     let (mut shown, mut facing) = (0, 0);
-    for (i, ((n, m), c)) in normals.iter().zip(&motions).zip(reference).enumerate() {
+    for (i, (((n, m), c), (want_n, want_m))) in normals
+        .iter()
+        .zip(&motions)
+        .zip(reference)
+        .zip(expected)
+        .enumerate()
+    {
         let left = (i as u32 % W) < W / 2;
         if left || c[3] != 1.0 {
             assert_eq!((*n, *m), (0, [0, 0]), "{label}: pixel {i} written");
@@ -587,16 +621,28 @@ fn check_prepass(
         shown += 1;
         let unorm = |shift: u32| f32::from((*n >> shift & 1023) as u16) / 1023.0 * 2.0 - 1.0;
         let n = Vec3::new(unorm(0), unorm(10), unorm(20));
+        // The CPU twin's normal, within the 10-bit target's rounding: Vulkan converts to either
+        // of the two nearest codes, a code's width (1/1023 of n·½ + ½) apart at most.
+        assert!(
+            (n - *want_n).abs().max_element() <= 2.01 / 1023.0,
+            "{label}: pixel {i}: normal {n}, the CPU twin's {want_n}"
+        );
         assert!(
             (n.length() - 1.0).abs() < 0.01,
             "{label}: pixel {i}: normal {n}"
         );
-        facing += usize::from(n.dot(to_camera) > 0.0);
+        let local = local_from_normal.transform_vector3(n);
+        facing += usize::from(local.dot(to_camera) > 0.0);
         let m = m.map(f16_to_f32);
         let want = [-0.5 * PREVIOUS_SHIFT, 0.0];
         assert!(
             (m[0] - want[0]).abs() < 1e-3 && m[1].abs() < 1e-3,
             "{label}: pixel {i}: motion {m:?}, not {want:?}"
+        );
+        // The CPU twin's motion, within the half-float target's rounding.
+        assert!(
+            (glam::Vec2::from(m) - *want_m).abs().max_element() <= 1e-4,
+            "{label}: pixel {i}: motion {m:?}, the CPU twin's {want_m}"
         );
     }
     assert!(

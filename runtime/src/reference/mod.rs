@@ -1,7 +1,8 @@
 //! The CPU reference of shade.wgsl: the same shading in Rust `f32`, function for function and
 //! in the same operation order, so that GPU images can be checked against it (the parity
 //! tests) and so that users without a GPU can still evaluate a G-buffer. Each file here is the
-//! twin of the file of the same name under shade/, its functions in the same order.
+//! twin of the file of the same name under shade/ (composite.rs: the prepass of
+//! renderer/composite.wgsl), its functions in the same order.
 //!
 //! Residency and feedback work as on the GPU: a [`CubeTexels`] says which faces are available,
 //! and every face a lookup *would* read with everything resident is marked in the feedback
@@ -20,6 +21,7 @@ use crate::uniform::ShadeUniform;
 
 mod background;
 mod blend;
+mod composite;
 mod cube;
 mod depth;
 mod feedback;
@@ -36,6 +38,7 @@ mod store;
 #[cfg(test)]
 mod tests;
 
+pub use composite::{prepass_motion, prepass_normal};
 pub use cube::{face_point, face_st};
 pub use patch::{patch_du, patch_dv, patch_normal, tangent_frame};
 pub use random::{filter_rows, filter_xi, pcg};

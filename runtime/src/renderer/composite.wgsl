@@ -5,6 +5,7 @@
 // - fs_prepass, the prepass: the object's depth, world normal and motion vector into the
 //   host's depth prepass (Bevy's: depth, then normals and motion vectors as its prepass
 //   writes them), before the host shades anything.
+// Its CPU twin: reference/composite.rs, function for function.
 
 import package::layouts::{Prepass};
 import package::octahedral::{oct_decode};
@@ -57,6 +58,26 @@ struct PrepassOut {
     @builtin(frag_depth) depth: f32,
 };
 
+// The host's normal target of the object's normal `e` (octahedral, its own space): the world
+// normal through `normal_from_local` (world_from_local's inverse transpose, so that uneven
+// scales keep it perpendicular to the surface) as n·½ + ½; +z where it vanishes.
+fn prepass_normal(e: vec2<f32>, normal_from_local: mat4x4<f32>) -> vec4<f32> {
+    let world = (normal_from_local * vec4<f32>(oct_decode(e), 0.0)).xyz;
+    let l2 = dot(world, world);
+    let n = select(vec3<f32>(0.0, 0.0, 1.0), world * inverseSqrt(l2), l2 > 1e-30);
+    return vec4<f32>(n * 0.5 + vec3<f32>(0.5), 1.0);
+}
+
+// The screen motion of the G-buffer point `x` since the previous frame, in UV units (y down),
+// as Bevy's prepass writes it; 0 where either frame sees it behind the eye.
+fn prepass_motion(x: vec4<f32>, clip_from_patch: mat4x4<f32>, previous_clip_from_patch: mat4x4<f32>) -> vec2<f32> {
+    let now = clip_from_patch * x;
+    let before = previous_clip_from_patch * x;
+    let seen = now.w > 1e-20 && before.w > 1e-20;
+    let motion = (now.xy / now.w - before.xy / before.w) * vec2<f32>(0.5, -0.5);
+    return select(vec2<f32>(0.0), motion, seen);
+}
+
 @fragment
 fn fs_prepass(@builtin(position) p: vec4<f32>) -> PrepassOut {
     let xy = vec2<i32>(p.xy);
@@ -65,18 +86,9 @@ fn fs_prepass(@builtin(position) p: vec4<f32>) -> PrepassOut {
         discard;
     }
     var out: PrepassOut;
-    let local = oct_decode(textureLoad(gb_normal, xy, 0).xy);
-    let world = (prepass.world_from_local * vec4<f32>(local, 0.0)).xyz;
-    let l2 = dot(world, world);
-    let n = select(vec3<f32>(0.0, 0.0, 1.0), world * inverseSqrt(l2), l2 > 1e-30);
-    out.normal = vec4<f32>(n * 0.5 + vec3<f32>(0.5), 1.0);
-    // The screen motion since the previous frame, in UV units, as Bevy's prepass writes it.
+    out.normal = prepass_normal(textureLoad(gb_normal, xy, 0).xy, prepass.normal_from_local);
     let x = vec4<f32>(textureLoad(gb_position, xy, 0).xyz, 1.0);
-    let now = prepass.clip_from_patch * x;
-    let before = prepass.previous_clip_from_patch * x;
-    let seen = now.w > 1e-20 && before.w > 1e-20;
-    let motion = (now.xy / now.w - before.xy / before.w) * vec2<f32>(0.5, -0.5);
-    out.motion = select(vec2<f32>(0.0), motion, seen);
+    out.motion = prepass_motion(x, prepass.clip_from_patch, prepass.previous_clip_from_patch);
     out.depth = host_depth(d, 0.0);
     return out;
 }

@@ -39,7 +39,7 @@ mod timer;
 pub(crate) use camera::store_view;
 pub use camera::{default_camera, view_projection};
 pub use host::{HostPassSeconds, HostTarget, HostView, DEPTH_SLACK, MAX_DEPTH_SLACK};
-pub use prepass::{HostPrepass, PrepassTarget, PrepassUniform};
+pub use prepass::{normal_from_local, HostPrepass, PrepassTarget, PrepassUniform};
 pub use targets::FrameBytes;
 
 use readback::map_read;

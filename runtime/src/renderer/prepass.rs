@@ -51,7 +51,8 @@ pub struct HostPrepass<'a> {
     /// vector prepass stores it, if the host keeps it.
     pub motion: Option<PrepassTarget<'a>>,
     /// World from the object's space (the store's, as [`HostView::view`] is view from it):
-    /// turns its normals into world space. Finite and invertible.
+    /// its inverse transpose turns the object's normals into world space. Finite and
+    /// invertible.
     pub world_from_local: Mat4,
     /// Clip from the object's space at the previous frame, without jitter (the host's
     /// previous unjittered `clip_from_world` times the object's previous `world_from_local`;
@@ -76,7 +77,10 @@ impl HostPrepass<'_> {
             check_color_format(HOST, "motion.format", t.format)?;
         }
         let finite = |m: &Mat4| m.to_cols_array().iter().all(|v| v.is_finite());
-        if !finite(&self.world_from_local) || self.world_from_local.determinant().abs() <= 1e-30 {
+        if !finite(&self.world_from_local)
+            || self.world_from_local.determinant().abs() <= 1e-30
+            || !finite(&normal_from_local(self.world_from_local))
+        {
             return Err(RuntimeError::Parameter(
                 "HostPrepass::world_from_local: must be finite and invertible".into(),
             ));
@@ -90,15 +94,22 @@ impl HostPrepass<'_> {
     }
 }
 
+/// What turns the object's normals into world space: `world_from_local`'s inverse transpose,
+/// which keeps them perpendicular to the surface under uneven scales and shears.
+pub fn normal_from_local(world_from_local: Mat4) -> Mat4 {
+    world_from_local.inverse().transpose()
+}
+
 oslf_gpu::gpu_struct! {
     /// The prepass's uniform, `Prepass` in composite.wgsl: the object's clip space now and at
-    /// the previous frame, and its world orientation, from its G-buffer's coordinates (the
-    /// object's space relative to its mesh's origin).
+    /// the previous frame, from its G-buffer's coordinates (the object's space relative to its
+    /// mesh's origin), and what turns its normals into world space (`world_from_local`'s
+    /// inverse transpose).
     #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
     pub struct PrepassUniform as "Prepass" {
         pub clip_from_patch: [[f32; 4]; 4],
         pub previous_clip_from_patch: [[f32; 4]; 4],
-        pub world_from_local: [[f32; 4]; 4],
+        pub normal_from_local: [[f32; 4]; 4],
     }
 }
 
@@ -183,7 +194,7 @@ impl Renderer {
             clip_from_patch: (view.projection * view.view * origin).to_cols_array_2d(),
             previous_clip_from_patch: (prepass.previous_clip_from_local * origin)
                 .to_cols_array_2d(),
-            world_from_local: prepass.world_from_local.to_cols_array_2d(),
+            normal_from_local: normal_from_local(prepass.world_from_local).to_cols_array_2d(),
         };
         gpu.scoped(|| {
             let pass = bytemuck::bytes_of(&uniform);
