@@ -102,7 +102,8 @@ pub fn measure_tables(
 
     // The Ashikhmin–Shirley table: the finest store.
     let finest = n_stores - 1;
-    let (default_blend, default_n) = Lookup::DEFAULT_BLEND;
+    // The thesis's blend (B^n, N = 4), which its table used, whatever the runtime's default.
+    let (default_blend, default_n) = (Blend::Normal, 4.0);
     for &(nu, nv) in &config.lobes {
         let name = format!("glossy-{nu}-{nv}");
         let glossy_truth = truth_of(&mut truth, Mode::Glossy, nu, nv, &name)?;

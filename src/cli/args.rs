@@ -18,7 +18,7 @@ use oslf_runtime::{
 #[derive(Args, Clone, Debug)]
 pub struct ShadingArgs {
     /// Lobe power N of the r and n blends (0 = avg).
-    #[arg(short = 'N', long = "blend-n", default_value_t = 4.0)]
+    #[arg(short = 'N', long = "blend-n", default_value_t = Lookup::DEFAULT_BLEND.1)]
     pub blend_n: f32,
     /// Where reflections come from: the OSLF's sample points, the environment-map baseline
     /// (one cube at the object's centre, by direction alone), or that cube parallax-corrected
