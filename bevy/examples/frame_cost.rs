@@ -27,7 +27,7 @@ use bevy::render::renderer::RenderDevice;
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use oslf_bevy::{CacheConfig, OslfCacheStats};
 use shared::headless::headless_app;
-use shared::{keep_only_the_orbit_camera, spawn_room, Orbit, ASSETS};
+use shared::{assets, keep_only_the_orbit_camera, spawn_room, Orbit};
 
 /// The target's size, whether the teapot is in the room, whether the camera has SSAO.
 #[derive(Resource, Clone, Copy)]
@@ -73,7 +73,7 @@ fn setup(
 }
 
 fn app(size: Size, cache: CacheConfig) -> App {
-    let mut app = headless_app(Path::new(ASSETS), cache);
+    let mut app = headless_app(Path::new(&assets()), cache);
     app.insert_resource(size)
         .add_systems(Startup, setup)
         .add_systems(Update, keep_only_the_orbit_camera);

@@ -16,12 +16,12 @@ use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
 use bevy::prelude::*;
 use oslf_bevy::{Mode, OslfCacheStats, OslfObject, OslfPlugin};
 use shared::keys::{apply, describe, ShadingKey};
-use shared::{keep_only_the_orbit_camera, spawn_room, Orbit, ASSETS};
+use shared::{assets, keep_only_the_orbit_camera, spawn_room, Orbit};
 
 fn main() {
     App::new()
         .add_plugins(DefaultPlugins.set(AssetPlugin {
-            file_path: ASSETS.into(),
+            file_path: assets(),
             ..default()
         }))
         .add_plugins(OslfPlugin::default())

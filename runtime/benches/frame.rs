@@ -20,7 +20,7 @@
 //! cache), and the G-buffer pass's (`OSLF_BENCH_FILTER="glossy ratio"` runs only this part,
 //! `OSLF_BENCH_ROUNDS` sets its rounds, `OSLF_BENCH_SIZE=1920x1080` its image size, 655×460
 //! unless given). Writes Markdown tables to stdout and CSV to
-//! `target/frame-times.csv`.
+//! `target/frame-times.csv` (`OSLF_BENCH_CSV` to write it elsewhere).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -419,7 +419,11 @@ fn main() {
             ));
         }
     }
-    let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/frame-times.csv");
+    // OSLF_BENCH_CSV: elsewhere (a binary run from another checkout, scripts/device-kit.sh).
+    let out = std::env::var_os("OSLF_BENCH_CSV").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/frame-times.csv"),
+        PathBuf::from,
+    );
     std::fs::write(&out, csv).unwrap();
     println!("wrote {}", out.display());
 }

@@ -15,8 +15,13 @@ use oslf_bevy::OslfObject;
 /// metres), in Bevy's Y-up world: its middle.
 pub const TEAPOT: Vec3 = Vec3::new(0.0, 0.95, 0.0);
 
-/// The asset folder: the repository's `examples/` (room.glb, room.oslf).
-pub const ASSETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples");
+/// The asset folder: `OSLF_ASSETS` where set (a binary run from another checkout, as
+/// scripts/device-kit.sh does on a lent GPU), else the repository's `examples/` (room.glb,
+/// room.oslf).
+pub fn assets() -> String {
+    std::env::var("OSLF_ASSETS")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../examples").to_string())
+}
 
 /// The camera orbiting the teapot.
 #[derive(Component, Clone, Copy)]
