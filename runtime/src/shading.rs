@@ -457,8 +457,9 @@ impl Default for PbrIntegration {
 }
 
 impl Default for ShadingParams {
-    /// The thesis's settings: reconstruction plus mirror reflection blended with B^n, N = 4;
-    /// φ_shader = 65°. Beyond the thesis: depth-corrected lookups on.
+    /// The thesis's settings: reconstruction plus mirror reflection blended with B^n;
+    /// φ_shader = 65°. Beyond the thesis: depth-corrected lookups on, and with them the blend's
+    /// power N = 2 instead of 4 ([`Lookup::DEFAULT_BLEND`]).
     fn default() -> Self {
         ShadingParams::ReconMirror(ReconMirror::default())
     }
