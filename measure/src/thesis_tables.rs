@@ -103,7 +103,7 @@ pub fn measure_tables(
     // The Ashikhmin–Shirley table: the finest store.
     let finest = n_stores - 1;
     // The thesis's blend (B^n, N = 4), which its table used, whatever the runtime's default.
-    let (default_blend, default_n) = (Blend::Normal, 4.0);
+    let (default_blend, default_n) = (Blend::Normal, Lookup::THESIS_BLEND_N);
     for &(nu, nv) in &config.lobes {
         let name = format!("glossy-{nu}-{nv}");
         let glossy_truth = truth_of(&mut truth, Mode::Glossy, nu, nv, &name)?;

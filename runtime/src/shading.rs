@@ -484,6 +484,19 @@ impl Lookup {
     /// (docs/measurements.md, "The blend's power with depth-corrected lookups").
     pub const DEFAULT_BLEND: (Blend, f32) = (Blend::Normal, 2.0);
 
+    /// The thesis's power N of B^n (§4, chosen there for plain lookups), which plain lookups
+    /// still measure best with (Table 6.2: 0.1411 against N = 1's 0.1484 at 64²).
+    pub const THESIS_BLEND_N: f32 = 4.0;
+
+    /// The default power N for lookups with (`depth`) or without depth correction.
+    pub fn default_blend_n(depth: bool) -> f32 {
+        if depth {
+            Lookup::DEFAULT_BLEND.1
+        } else {
+            Lookup::THESIS_BLEND_N
+        }
+    }
+
     /// The OSLF blended with `blend` and power `blend_n`.
     pub fn oslf(blend: Blend, blend_n: f32) -> Self {
         Lookup::Oslf { blend, blend_n }

@@ -17,9 +17,10 @@ use oslf_runtime::{
 /// The shading flags besides mode and blend (which each command takes its own way).
 #[derive(Args, Clone, Debug)]
 pub struct ShadingArgs {
-    /// Lobe power N of the r and n blends (0 = avg).
-    #[arg(short = 'N', long = "blend-n", default_value_t = Lookup::DEFAULT_BLEND.1)]
-    pub blend_n: f32,
+    /// Lobe power N of the r and n blends (0 = avg) [default: 2 with depth-corrected lookups,
+    /// the thesis's 4 with --no-depth].
+    #[arg(short = 'N', long = "blend-n")]
+    pub blend_n: Option<f32>,
     /// Where reflections come from: the OSLF's sample points, the environment-map baseline
     /// (one cube at the object's centre, by direction alone), or that cube parallax-corrected
     /// against a proxy box.
@@ -83,13 +84,19 @@ pub struct ShadingArgs {
 }
 
 impl ShadingArgs {
+    /// The blend's power N: the flag's, else the default for the lookups chosen.
+    pub fn blend_n(&self) -> f32 {
+        self.blend_n
+            .unwrap_or_else(|| Lookup::default_blend_n(!self.no_depth))
+    }
+
     /// The parameters of `mode` with `blend` and the flags that mode has (the others are
     /// not read), validated. Every flag's range is checked, whichever mode reads it.
     pub fn params(&self, mode: Mode, blend: Blend) -> Result<ShadingParams> {
         let defaults = PbrMaterial::default();
         ShadingParts {
             phi_shader_deg: self.phi_shader,
-            lookup: Lookup::of_source(self.source(), blend, self.blend_n, self.proxy_box),
+            lookup: Lookup::of_source(self.source(), blend, self.blend_n(), self.proxy_box),
             depth: !self.no_depth,
             lobe: AshikhminShirley {
                 rs: self.rs,
@@ -402,6 +409,33 @@ mod tests {
                 e.contains("none, env, or a linear colour") && e.contains(says),
                 "{bad}: {e}"
             );
+        }
+    }
+
+    #[derive(clap::Parser)]
+    struct Shading {
+        #[command(flatten)]
+        shading: ShadingArgs,
+    }
+
+    /// The blend's power: 2 with depth-corrected lookups, the thesis's 4 with plain ones, and
+    /// `-N` over either; it reaches the parameters a frame is shaded with.
+    #[test]
+    fn the_blend_power_follows_the_lookups_unless_given() {
+        use clap::Parser;
+        for (flags, want) in [
+            (&[][..], 2.0),
+            (&["--no-depth"][..], 4.0),
+            (&["--no-depth", "-N", "3"][..], 3.0),
+            (&["-N", "0"][..], 0.0),
+        ] {
+            let args =
+                Shading::try_parse_from(std::iter::once("oslf").chain(flags.iter().copied()))
+                    .unwrap()
+                    .shading;
+            assert_eq!(args.blend_n(), want, "{flags:?}");
+            let p = args.params(Mode::Mirror, Blend::Normal).unwrap();
+            assert_eq!(p.blend(), Some((Blend::Normal, want)), "{flags:?}");
         }
     }
 }

@@ -379,7 +379,7 @@ impl Report<'_> {
             "streaming": args.streaming,
             "ram_bytes": self.ram_bytes,
             "shading": {
-                "blend_n": args.shading.blend_n,
+                "blend_n": args.shading.blend_n(),
                 "source": args.shading.source().name(),
                 "depth": !args.shading.no_depth,
                 "glossy_filter": args.shading.glossy_filter.name(),
