@@ -43,7 +43,8 @@ pack() {
         "target/release/examples/frame_cost:frame_cost" \
         "$bench:frame-bench"; do
         strip -o "$KIT/bin/${pair#*:}" "${pair%%:*}"
-        xz -T2 -6 "$KIT/bin/${pair#*:}"
+        # gzip, not xz: a bare machine may lack xz.
+        gzip -9 "$KIT/bin/${pair#*:}"
     done
     (cd "$KIT/gl" && apt-get download $LOADER_PACKAGES) ||
         echo "device-kit: the loader packages were not downloaded; the machine must have them" >&2
@@ -80,9 +81,9 @@ run() {
     local work=/tmp/oslf-device-kit
     rm -rf "$work"
     mkdir -p "$work/bin" "$work/examples"
-    for f in "$KIT"/bin/*.xz; do
-        xz -dc "$f" >"$work/bin/$(basename "$f" .xz)"
-        chmod +x "$work/bin/$(basename "$f" .xz)"
+    for f in "$KIT"/bin/*.gz; do
+        gzip -dc "$f" >"$work/bin/$(basename "$f" .gz)"
+        chmod +x "$work/bin/$(basename "$f" .gz)"
     done
     # The loader, unless the machine has one; the NVIDIA driver's manifests where it keeps them.
     if ! ldconfig -p | grep -q libvulkan.so.1 && ls "$KIT"/gl/*.deb >/dev/null 2>&1; then
