@@ -136,16 +136,17 @@ pub(crate) fn prepare_oslf(
 }
 
 /// The runtime's view of `object` through Bevy's `view`, at the camera's exposure, jittered
-/// as Bevy jitters its meshes this frame (TAA) for a target of `size` pixels.
+/// as Bevy jitters its meshes this frame (TAA) for a target of `size`.
 fn host_view(
     camera: &ExtractedCamera,
     view: &ExtractedView,
     jitter: Option<&TemporalJitter>,
-    size: bevy::math::Vec2,
+    size: wgpu::Extent3d,
     object: &crate::extract::ExtractedObject,
 ) -> HostView {
     let view_from_world = view.world_from_view.to_matrix().inverse();
-    let jitter = jitter.map_or([0.0; 2], |j| ndc_jitter(view.clip_from_view, j, size));
+    let pixels = bevy::math::Vec2::new(size.width as f32, size.height as f32);
+    let jitter = jitter.map_or([0.0; 2], |j| ndc_jitter(view.clip_from_view, j, pixels));
     HostView {
         view: to_runtime(view_from_world * object.world_from_local),
         projection: to_runtime(view.clip_from_view),
@@ -216,7 +217,6 @@ pub(crate) fn prepass_oslf(
         textures.motion_vectors.as_ref().map(target),
     );
     let size = depth.texture().size();
-    let view_size = bevy::math::Vec2::new(size.width as f32, size.height as f32);
     let clip_from_world =
         extracted.clip_from_view * extracted.world_from_view.to_matrix().inverse();
     let previous_clip_from_world =
@@ -252,7 +252,7 @@ pub(crate) fn prepass_oslf(
         };
         match renderer.encode_prepass_into(
             ctx.command_encoder(),
-            &host_view(camera, extracted, jitter, view_size, object),
+            &host_view(camera, extracted, jitter, size, object),
             &prepass,
             &object.params,
         ) {
@@ -326,7 +326,6 @@ pub(crate) fn draw_oslf(
         return;
     };
     let size = target.main_texture().size();
-    let view_size = bevy::math::Vec2::new(size.width as f32, size.height as f32);
     let host_target = HostTarget {
         color,
         color_format: target.main_texture_format(),
@@ -353,7 +352,7 @@ pub(crate) fn draw_oslf(
         };
         match renderer.encode_into(
             ctx.command_encoder(),
-            &host_view(camera, extracted, jitter, view_size, object),
+            &host_view(camera, extracted, jitter, size, object),
             &host_target,
             &object.params,
         ) {

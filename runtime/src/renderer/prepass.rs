@@ -61,8 +61,9 @@ pub struct HostPrepass<'a> {
 }
 
 impl HostPrepass<'_> {
-    /// Checks the prepass; returns whether its depth is reversed.
-    fn validate(&self) -> Result<bool> {
+    /// Checks the prepass; returns whether its depth is reversed, and what turns the object's
+    /// normals into world space ([`normal_from_local`]).
+    fn validate(&self) -> Result<(bool, Mat4)> {
         const HOST: &str = "HostPrepass";
         let reversed = check_host_depth(
             HOST,
@@ -77,9 +78,10 @@ impl HostPrepass<'_> {
             check_color_format(HOST, "motion.format", t.format)?;
         }
         let finite = |m: &Mat4| m.to_cols_array().iter().all(|v| v.is_finite());
+        let normals = normal_from_local(self.world_from_local);
         if !finite(&self.world_from_local)
             || self.world_from_local.determinant().abs() <= 1e-30
-            || !finite(&normal_from_local(self.world_from_local))
+            || !finite(&normals)
         {
             return Err(RuntimeError::Parameter(
                 "HostPrepass::world_from_local: must be finite and invertible".into(),
@@ -90,7 +92,7 @@ impl HostPrepass<'_> {
                 "HostPrepass::previous_clip_from_local: must be finite".into(),
             ));
         }
-        Ok(reversed)
+        Ok((reversed, normals))
     }
 }
 
@@ -178,7 +180,7 @@ impl Renderer {
         prepass: &HostPrepass<'_>,
         params: &ShadingParams,
     ) -> Result<()> {
-        let reversed = prepass.validate()?;
+        let (reversed, normals) = prepass.validate()?;
         let camera = view.camera()?;
         self.check_frame(params, Background::None)?;
         let gpu = self.gpu.clone();
@@ -194,7 +196,7 @@ impl Renderer {
             clip_from_patch: (view.projection * view.view * origin).to_cols_array_2d(),
             previous_clip_from_patch: (prepass.previous_clip_from_local * origin)
                 .to_cols_array_2d(),
-            normal_from_local: normal_from_local(prepass.world_from_local).to_cols_array_2d(),
+            normal_from_local: normals.to_cols_array_2d(),
         };
         gpu.scoped(|| {
             let pass = bytemuck::bytes_of(&uniform);
