@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Error against sample points on the room's teapot, uniform against parallax placement: the
-mirror mode, and pbr at roughness 0.3 shaded per point and per direction. Means over seeds,
-each seed's figure a faint dot (docs/measurements.md, "Points on the room's teapot").
+"""Error against sample points on the room's teapot, uniform placement against parallax (and
+adaptive, where given): the mirror mode, and pbr at roughness 0.3 shaded per point and per
+direction. Means over seeds, each seed's figure a faint dot (docs/measurements.md, "Points
+on the room's teapot").
 
     python3 scripts/teapot-points-plot.py TABLE.txt OUT.png
 
@@ -18,6 +19,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import NullFormatter, ScalarFormatter  # noqa: E402
 
 
+PLACEMENTS = ["uniform", "parallax", "adaptive"]
+
+
 def read(path):
     runs = defaultdict(list)  # (placement, N) -> [(points, mirror, per point, per direction)]
     for number, line in enumerate(open(path), 1):
@@ -26,14 +30,17 @@ def read(path):
             continue
         try:
             placement, n, _seed = f[0].split("-")
+            if placement not in PLACEMENTS:
+                raise ValueError(placement)
             runs[(placement, int(n))].append((int(f[1]), float(f[4]), float(f[5]), float(f[6])))
         except (ValueError, IndexError):
-            sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD")
+            sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD"
+                     f" (PLACEMENT one of {', '.join(PLACEMENTS)})")
     return runs
 
 
 def curve(ax, runs, placement, column, dash, label):
-    colour = {"uniform": "tab:blue", "parallax": "tab:red"}[placement]
+    colour = {"uniform": "tab:blue", "parallax": "tab:red", "adaptive": "tab:green"}[placement]
     xs, ys = [], []
     for key in sorted(k for k in runs if k[0] == placement):
         px = [r[0] for r in runs[key]]
@@ -49,7 +56,7 @@ def main():
         sys.exit(__doc__)
     runs = read(sys.argv[1])
     fig, (mirror, pbr) = plt.subplots(1, 2, figsize=(11, 4.6), dpi=110)
-    for placement in ("uniform", "parallax"):
+    for placement in sorted({k[0] for k in runs}, key=PLACEMENTS.index):
         curve(mirror, runs, placement, 1, "-", placement)
         curve(pbr, runs, placement, 2, "--", f"{placement}, per point (default)")
         curve(pbr, runs, placement, 3, "-", f"{placement}, per direction")
