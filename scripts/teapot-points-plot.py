@@ -19,28 +19,32 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import NullFormatter, ScalarFormatter  # noqa: E402
 
 
-PLACEMENTS = ["uniform", "parallax", "adaptive"]
+# The placements, in legend order, and their colours.
+PLACEMENTS = {"uniform": "tab:blue", "parallax": "tab:red", "adaptive": "tab:green"}
 
 
 def read(path):
-    runs = defaultdict(list)  # (placement, N) -> [(points, mirror, per point, per direction)]
+    """(placement, N) -> [(points, mirror, per point, per direction)], and the seeds read."""
+    runs = defaultdict(list)
+    seeds = set()
     for number, line in enumerate(open(path), 1):
         f = line.split()
         if not f:
             continue
         try:
-            placement, n, _seed = f[0].split("-")
+            placement, n, seed = f[0].split("-")
             if placement not in PLACEMENTS:
                 raise ValueError(placement)
             runs[(placement, int(n))].append((int(f[1]), float(f[4]), float(f[5]), float(f[6])))
+            seeds.add(int(seed))
         except (ValueError, IndexError):
             sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD"
                      f" (PLACEMENT one of {', '.join(PLACEMENTS)})")
-    return runs
+    return runs, seeds
 
 
 def curve(ax, runs, placement, column, dash, label):
-    colour = {"uniform": "tab:blue", "parallax": "tab:red", "adaptive": "tab:green"}[placement]
+    colour = PLACEMENTS[placement]
     xs, ys = [], []
     for key in sorted(k for k in runs if k[0] == placement):
         px = [r[0] for r in runs[key]]
@@ -54,9 +58,9 @@ def curve(ax, runs, placement, column, dash, label):
 def main():
     if len(sys.argv) != 3:
         sys.exit(__doc__)
-    runs = read(sys.argv[1])
+    runs, seeds = read(sys.argv[1])
     fig, (mirror, pbr) = plt.subplots(1, 2, figsize=(11, 4.6), dpi=110)
-    for placement in sorted({k[0] for k in runs}, key=PLACEMENTS.index):
+    for placement in sorted({k[0] for k in runs}, key=list(PLACEMENTS).index):
         curve(mirror, runs, placement, 1, "-", placement)
         curve(pbr, runs, placement, 2, "--", f"{placement}, per point (default)")
         curve(pbr, runs, placement, 3, "-", f"{placement}, per direction")
@@ -71,7 +75,8 @@ def main():
         ax.set_ylabel("RMSE L* against the truth")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle("The room's teapot at 16 samples per texel, denoised: means of seeds 0, 7, 13")
+    seed_list = ", ".join(str(s) for s in sorted(seeds))
+    fig.suptitle(f"The room's teapot at 16 samples per texel, denoised: means of seeds {seed_list}")
     fig.tight_layout()
     fig.savefig(sys.argv[2])
 
