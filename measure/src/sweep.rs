@@ -182,10 +182,9 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
         "phi_shader" => p.set_phi_shader_deg(parse(c)?)?,
         "m" => p.monte_carlo_mut()?.m = parse(c)?,
         "order" => {
-            p.monte_carlo_mut()?.order = match c.value.as_str() {
-                "per-point" => Order::PerPoint,
-                "per-direction" => Order::PerDirection,
-                _ => return check(c, false, "{per-point, per-direction}"),
+            p.monte_carlo_mut()?.order = match c.value.parse::<Order>() {
+                Ok(order) => order,
+                Err(_) => return check(c, false, "{per-point, per-direction, per-point-visible}"),
             }
         }
         "blend" => {

@@ -492,11 +492,7 @@ pub fn records_csv(records: &[Record]) -> String {
             lobe.map_or(String::new(), |l| l.nu.to_string()),
             lobe.map_or(String::new(), |l| l.nv.to_string()),
             mc.map_or(String::new(), |mc| mc.m.to_string()),
-            match mc.map(|mc| mc.order) {
-                Some(Order::PerPoint) => "per-point",
-                Some(Order::PerDirection) => "per-direction",
-                None => "",
-            },
+            mc.map_or("", |mc| mc.order.name()),
             m.pixels,
             m.rmse_lab[0],
             m.rmse_lab[1],

@@ -701,6 +701,12 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(b.xyz, 1.0);
 }
 
+fn depth_hidden(cube: u32, entry: u32, o: vec3<f32>, l: vec3<f32>) -> bool {
+    let d = o + l * length(o);
+    let seen = depth_toward(cube, entry, d, false);
+    return seen < FAR && length(d) >= seen;
+}
+
 fn depth_iterate(cube: u32, entry: u32, o: vec3<f32>, l: vec3<f32>, fresh: bool, seed: ptr<function, f32>) -> vec3<f32> {
     let ol = dot(o, l);
     let oo = dot(o, o);
@@ -1268,6 +1274,10 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
     else if (DEPTH) {
         d = depth_iterate(cube, entry, o, l, fresh, seed);
     }
+    return cube_radiance(cube, entry, d, lod);
+}
+
+fn cube_radiance(cube: u32, entry: u32, d: vec3<f32>, lod: f32) -> vec4<f32> {
     if (FILTER) {
         return lookup_levels(cube, entry, d, lod);
     }
@@ -1299,17 +1309,40 @@ struct Sums {
     ok: vec4<f32>
 }
 
-fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
-    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
-    if (l.w == 0.0) {
+fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>, other: vec4<f32>) {
+    let own = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
+    if (own.w == 0.0) {
         (*sums).ok[k] = 0.0;
     }
+    let l = select(own.xyz, other.xyz / max(other.w, 1e-30), other.w > 0.0);
     (*sums).r[k] += l.r * s.weight.r;
     (*sums).g[k] += l.g * s.weight.g;
     (*sums).b[k] += l.b * s.weight.b;
 }
 
-fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> Sums {
+fn seen_elsewhere(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample, lod: f32) -> vec4<f32> {
+    var out = vec4<f32>(0.0);
+    let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
+    for (var j = select(4u, 0u, hidden); j < 4u; j++) {
+        if (j == k || !used[j] || !(w[j] > 0.0)) {
+            continue;
+        }
+        let o = vec3<f32>(ox[j], oy[j], oz[j]);
+        if (depth_hidden(cubes[j], entries[j], o, s.l)) {
+            continue;
+        }
+        var seed = 0.0;
+        let d = depth_iterate(cubes[j], entries[j], o, s.l, true, &seed);
+        let l = cube_radiance(cubes[j], entries[j], d, lod);
+        if (l.w == 0.0) {
+            continue;
+        }
+        out += vec4<f32>(l.xyz * w[j], w[j]);
+    }
+    return out;
+}
+
+fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) {
@@ -1360,14 +1393,22 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
+                var other = vec4<f32>(0.0);
+                if (ORDER == 2u && DEPTH) {
+                    other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, spec, spec_lod);
+                }
                 var seed = spec_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed);
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed, other);
                 spec_seed[k] = seed;
                 spec_fresh[k] = false;
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
+                var other = vec4<f32>(0.0);
+                if (ORDER == 2u && DEPTH) {
+                    other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, diff, diff_lod);
+                }
                 var seed = diff_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed);
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed, other);
                 diff_seed[k] = seed;
                 diff_fresh[k] = false;
             }
@@ -1433,7 +1474,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
     }
     let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u) + diffuse;
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr, vec4<f32>(0.0)), 0u) + diffuse;
     }
     var axis = r;
     if (BLEND == 4u) {
@@ -1457,7 +1498,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
             used = one;
             wp = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         }
-        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base, pbr);
+        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base, pbr, wp);
         for (var k = 0u; k < 4u; k++) {
             if (used[k] && (sums.ok[k] > 0.0 || phase == 1u)) {
                 acc += estimate(sums, k) * wp[k];

@@ -198,7 +198,8 @@ impl GlossyFilter {
     }
 }
 
-/// The two Monte Carlo integration orders of §5.2.
+/// The Monte Carlo integration orders: the two of §5.2, and per point with hidden samples
+/// read elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Order {
@@ -207,6 +208,34 @@ pub enum Order {
     PerPoint,
     /// For each of M random vectors blend the four sample points, then integrate.
     PerDirection,
+    /// Per point, but a sample whose ray its sample point cannot see (depth-corrected lookups
+    /// only: the point at x's own distance along the ray lies behind the surface the point
+    /// sees) takes the radiance of the other sample points that can, blended. The cost of per
+    /// point plus one distance read per sample, and more where a sample is hidden.
+    PerPointVisible,
+}
+
+impl Order {
+    /// Every order, in CLI order.
+    pub const ALL: [Order; 3] = [Order::PerPoint, Order::PerDirection, Order::PerPointVisible];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Order::PerPoint => "per-point",
+            Order::PerDirection => "per-direction",
+            Order::PerPointVisible => "per-point-visible",
+        }
+    }
+
+    /// The shader's tag (`ORDER`): 0 per point, 1 per direction, 2 per point visible.
+    pub fn tag(self) -> u32 {
+        match self {
+            Order::PerPoint => 0,
+            Order::PerDirection => 1,
+            Order::PerPointVisible => 2,
+        }
+    }
 }
 
 macro_rules! from_str_by_name {
@@ -233,6 +262,7 @@ from_str_by_name!(Mode, "mode");
 from_str_by_name!(Blend, "blend");
 from_str_by_name!(Source, "source");
 from_str_by_name!(GlossyFilter, "glossy filter");
+from_str_by_name!(Order, "order");
 
 /// What the pixels the object does not cover show. Their alpha stays 0 whatever is chosen:
 /// alpha is the object mask, which the metrics use.

@@ -2,7 +2,7 @@
 //! frame's [`ShadingParams`], camera, store constants and background packed for the GPU shader
 //! and the CPU reference alike.
 
-use crate::params::{Background, GlossyFilter, Order};
+use crate::params::{Background, GlossyFilter};
 use crate::shading::{DiffuseSource, Lookup, Recon, ShadingParams};
 
 /// Most steps of the linear search of a depth-corrected lookup (`depth_search` in shade.wgsl):
@@ -182,10 +182,7 @@ impl ShadeUniform {
             blend_n,
             source: p.source().tag(),
             m: mc.m,
-            order: match mc.order {
-                Order::PerPoint => 0,
-                Order::PerDirection => 1,
-            },
+            order: mc.order.tag(),
             rs: lobe.rs,
             rd: lobe.rd,
             nu: lobe.nu,

@@ -243,6 +243,31 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
             label,
         );
     }
+    // Per point visible: samples a candidate cannot see read from the others (specular and,
+    // with R_d > 0, diffuse samples). It must change pixels of this scene against per point,
+    // so that the exchange itself is what matches the reference.
+    let knobs = |order| Knobs {
+        m: 9,
+        rd: 0.5,
+        ..glossy(GlossyFilter::Mip, order, true, Source::Oslf)
+    };
+    let visible = check(
+        &mut r,
+        &cubes,
+        knobs(Order::PerPointVisible),
+        "glossy mip depth per point visible with diffuse, M = 9",
+    );
+    let point = check(
+        &mut r,
+        &cubes,
+        knobs(Order::PerPoint),
+        "glossy mip depth per point with diffuse, M = 9",
+    );
+    let (_, same, _) = compare(&visible, &point, 1e-4);
+    assert!(
+        same < 0.999,
+        "per point visible changes {same} of the pixels"
+    );
     // The pbr mode's filtered GGX samples: each candidate its own turn of the spiral
     // (`filter_xi`), with, below metallic 1, the diffuse samples' grid shared by all.
     for (metallic, label) in [

@@ -48,7 +48,8 @@ pub struct ShadingArgs {
     /// Monte Carlo samples M per integration (glossy modes).
     #[arg(short = 'M', long, default_value_t = 16)]
     pub m: u32,
-    /// Integration order of §5.2: per-point (integrate, then blend) or per-direction.
+    /// Integration order: per-point (§5.2: integrate, then blend), per-direction (blend, then
+    /// integrate) or per-point-visible (per point, hidden samples read from the other points).
     #[arg(long, default_value = "per-point", value_parser = parse_order)]
     pub order: Order,
     /// Ashikhmin–Shirley specular reflectance R_s.
@@ -285,13 +286,9 @@ pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
     }
 }
 
-/// `per-point` or `per-direction`.
+/// `per-point`, `per-direction` or `per-point-visible`.
 pub fn parse_order(s: &str) -> std::result::Result<Order, String> {
-    match s {
-        "per-point" => Ok(Order::PerPoint),
-        "per-direction" => Ok(Order::PerDirection),
-        _ => Err(format!("unknown order {s:?} (per-point or per-direction)")),
-    }
+    s.parse::<Order>().map_err(|e| e.to_string())
 }
 
 /// `irradiance` or `samples`.

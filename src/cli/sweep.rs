@@ -40,7 +40,7 @@ pub struct Args {
     device: Option<oslf_scene::scene::DeviceChoice>,
     /// KEY=V1,V2,...: bake keys epsilon, sample_count, cube_resolution, phi_samplemap,
     /// samples_per_texel, sample_map_resolution, mantissa_bits, device; runtime keys phi_shader, blend (distance,
-    /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction). Repeatable.
+    /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction, per-point-visible). Repeatable.
     /// [default: cube_resolution=16,64 sample_count=150,600 epsilon=0.05,0.2 phi_samplemap=60
     /// phi_shader=45,85 blend=distance,angle,avg,r4,envmap]
     #[arg(long)]
@@ -122,11 +122,10 @@ fn default_params(args: &Args) -> anyhow::Result<ShadingParams> {
         },
         integration: MonteCarlo {
             m: args.m,
-            order: match args.order.as_str() {
-                "per-point" => Order::PerPoint,
-                "per-direction" => Order::PerDirection,
-                o => bail!("--order {o:?}: per-point or per-direction"),
-            },
+            order: args
+                .order
+                .parse::<Order>()
+                .map_err(|e| anyhow::anyhow!("--order: {e}"))?,
             ..defaults.integration
         },
         material: PbrMaterial {

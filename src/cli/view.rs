@@ -10,7 +10,7 @@
 //! | D | depth-corrected lookups on ↔ off |
 //! | F | glossy filter: mip ↔ point |
 //! | G | next background: env, none (and the `--background` colour, if one was given) |
-//! | O | integration order: per point ↔ per direction |
+//! | O | integration order: per point → per direction → per point visible |
 //! | Up / Down | blend power N × 2 / ÷ 2 |
 //! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
 //! | ] / [ | M × 2 / ÷ 2 |
@@ -427,10 +427,8 @@ impl App {
                 "g" => self.background = (self.background + 1) % self.backgrounds.len(),
                 "o" => {
                     if let Ok(mc) = p.monte_carlo_mut() {
-                        mc.order = match mc.order {
-                            Order::PerPoint => Order::PerDirection,
-                            Order::PerDirection => Order::PerPoint,
-                        }
+                        let i = Order::ALL.iter().position(|&o| o == mc.order).unwrap_or(0);
+                        mc.order = Order::ALL[(i + 1) % Order::ALL.len()];
                     }
                 }
                 "u" | "j" | "i" | "k" => {

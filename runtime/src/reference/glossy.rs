@@ -211,7 +211,12 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             s.l
         };
-        if u.mip_levels > 1 {
+        self.cube_radiance(cube, d, lod)
+    }
+
+    /// Radiance of `cube` towards `d` at mip level `lod` (as `cube_radiance`).
+    fn cube_radiance(&self, cube: u32, d: Vec3, lod: f32) -> Option<Vec3> {
+        if self.uniform.mip_levels > 1 {
             self.lookup_levels(cube, d, lod)
         } else {
             self.lookup(cube, d)
@@ -258,6 +263,44 @@ impl<C: CubeTexels> Shader<'_, C> {
         self.sample_diffuse(xi1, xi2, n, t, b, nv)
     }
 
+    /// Per point visible, for sample `s` of candidate `k` (its cube `cube`): where `cube`
+    /// cannot see the sample's ray, the other candidates' radiance that can, times their
+    /// weights `w`, and the weights' sum (as `seen_elsewhere`).
+    #[allow(clippy::too_many_arguments)]
+    fn seen_elsewhere(
+        &self,
+        c: &Candidates,
+        k: u32,
+        cube: u32,
+        w: [f32; 4],
+        x: Vec3,
+        s: &AsSample,
+    ) -> (Vec3, f32) {
+        let mut out = (Vec3::ZERO, 0.0f32);
+        let u = &self.uniform;
+        let o = |cube: u32| x - self.samples[cube as usize];
+        if cube == u.env_cube || !self.depth_hidden(cube, o(cube), s.l) {
+            return out;
+        }
+        let lod = self.sample_lod(s.l, s.lpdf);
+        for j in 0..4 {
+            let other = c.idx[j];
+            if j as u32 == k || other == INVALID_INDEX || !(w[j] > 0.0) {
+                continue;
+            }
+            if self.depth_hidden(other, o(other), s.l) {
+                continue;
+            }
+            let mut seed = 0.0;
+            let d = self.depth_iterate(other, x, s.l, true, &mut seed);
+            if let Some(l) = self.cube_radiance(other, d, lod) {
+                out.0 += l * w[j];
+                out.1 += w[j];
+            }
+        }
+        out
+    }
+
     #[allow(clippy::too_many_arguments)]
     pub(super) fn integrate(
         &self,
@@ -273,6 +316,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         nv: f32,
         base: Vec3,
         pbr: Vec2,
+        w: [f32; 4],
     ) -> (Vec3, bool) {
         let u = &self.uniform;
         let diffuse = u.has_diffuse() && !u.reads_irradiance();
@@ -301,13 +345,23 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if !(s.weight.max_element() > 0.0) {
                     continue;
                 }
-                let li = self
+                let other = if u.order == 2 && u.depth_steps > 0 {
+                    self.seen_elsewhere(c, j, cube, w, x, &s)
+                } else {
+                    (Vec3::ZERO, 0.0)
+                };
+                let own = self
                     .sample_radiance(c, cube, wn, x, &s, fresh[k as usize], &mut seed[k as usize])
                     .unwrap_or_else(|| {
                         ok = false;
                         Vec3::ZERO
                     });
                 fresh[k as usize] = false;
+                let li = if other.1 > 0.0 {
+                    other.0 / other.1.max(1e-30)
+                } else {
+                    own
+                };
                 acc += li * s.weight;
             }
         }
@@ -396,13 +450,29 @@ impl<C: CubeTexels> Shader<'_, C> {
                 return diffuse;
             }
             return self
-                .integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr)
+                .integrate(
+                    c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr, [0.0; 4],
+                )
                 .0
                 + diffuse;
         }
         if u.order == 1 {
             return self
-                .integrate(c, INVALID_INDEX, 4, pixel, x, n, t, b, v, nv, base, pbr)
+                .integrate(
+                    c,
+                    INVALID_INDEX,
+                    4,
+                    pixel,
+                    x,
+                    n,
+                    t,
+                    b,
+                    v,
+                    nv,
+                    base,
+                    pbr,
+                    [0.0; 4],
+                )
                 .0
                 + diffuse;
         }
@@ -412,8 +482,9 @@ impl<C: CubeTexels> Shader<'_, C> {
         let mut wsum = 0.0;
         for j in 0..4 {
             if w[j] > 0.0 {
-                let (est, ok) =
-                    self.integrate(c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv, base, pbr);
+                let (est, ok) = self.integrate(
+                    c, c.idx[j], j as u32, pixel, x, n, t, b, v, nv, base, pbr, w,
+                );
                 if ok {
                     acc += est * w[j];
                     wsum += w[j];
@@ -426,8 +497,9 @@ impl<C: CubeTexels> Shader<'_, C> {
         if u.env_cube == INVALID_INDEX {
             return diffuse;
         }
-        self.integrate(c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr)
-            .0
-            + diffuse
+        self.integrate(
+            c, u.env_cube, 4, pixel, x, n, t, b, v, nv, base, pbr, [0.0; 4],
+        )
+        .0 + diffuse
     }
 }

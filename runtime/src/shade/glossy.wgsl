@@ -7,7 +7,7 @@ import package::shade::bindings::{
 };
 import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
 import package::shade::cube::{lookup, lookup_levels, sample_lod};
-import package::shade::depth::{depth_iterate};
+import package::shade::depth::{depth_hidden, depth_iterate};
 import package::shade::random::{filter_rows, sample_xi};
 import package::shade::split_sum::{split_sum};
 import package::shading::constants::{GGX_DIELECTRIC_F0, PI, SH_AS_DIFFUSE, SH_COSINE};
@@ -148,9 +148,14 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
     } else if (DEPTH) {
         d = depth_iterate(cube, entry, o, l, fresh, seed);
     }
-    // With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
-    // `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
-    // (docs/measurements.md).
+    return cube_radiance(cube, entry, d, lod);
+}
+
+// Radiance of cube `cube` towards d at mip level `lod` (`sample_lod`) with FILTER, else at full
+// resolution. With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
+// `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
+// (docs/measurements.md).
+fn cube_radiance(cube: u32, entry: u32, d: vec3<f32>, lod: f32) -> vec4<f32> {
     if (FILTER) {
         return lookup_levels(cube, entry, d, lod);
     }
@@ -184,15 +189,39 @@ struct Sums {
 };
 
 // Adds sample `s`'s radiance × weight to entry k of `sums` (`sample_radiance` of cube `cube`;
-// `fresh` and `seed` as `depth_iterate`).
+// `fresh` and `seed` as `depth_iterate`), or, where `other.w` > 0 (`seen_elsewhere`), the
+// other candidates' blend `other.xyz` ÷ `other.w` instead.
 // A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
 // slower with even a one-pass loop around the read (docs/measurements.md).
-fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
-    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
-    if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
+fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>, other: vec4<f32>) {
+    let own = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
+    if (own.w == 0.0) { (*sums).ok[k] = 0.0; }
+    let l = select(own.xyz, other.xyz / max(other.w, 1e-30), other.w > 0.0);
     (*sums).r[k] += l.r * s.weight.r;
     (*sums).g[k] += l.g * s.weight.g;
     (*sums).b[k] += l.b * s.weight.b;
+}
+
+// Per point visible (ORDER 2), for sample `s` of entry k: where k's sample point cannot see the
+// sample's ray (`depth_hidden`), the radiance of the other used entries' points that can, each
+// depth-corrected as a fresh sample, times their blend weights `w` (xyz), and those weights'
+// sum (w); zero where k sees it (or is the environment cube) or no other point does.
+fn seen_elsewhere(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample, lod: f32) -> vec4<f32> {
+    var out = vec4<f32>(0.0);
+    let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
+    // A loop no invocation enters where k sees the sample: lavapipe runs an if's body whatever
+    // its condition, but skips a loop that no invocation enters.
+    for (var j = select(4u, 0u, hidden); j < 4u; j++) {
+        if (j == k || !used[j] || !(w[j] > 0.0)) { continue; }
+        let o = vec3<f32>(ox[j], oy[j], oz[j]);
+        if (depth_hidden(cubes[j], entries[j], o, s.l)) { continue; }
+        var seed = 0.0;
+        let d = depth_iterate(cubes[j], entries[j], o, s.l, true, &seed);
+        let l = cube_radiance(cubes[j], entries[j], d, lod);
+        if (l.w == 0.0) { continue; }
+        out += vec4<f32>(l.xyz * w[j], w[j]);
+    }
+    return out;
 }
 
 // The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
@@ -201,8 +230,9 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<
 // the diffuse and Ashikhmin–Shirley samples are one fixed set for every source, drawn once for
 // all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term
 // 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one call site:
-// lavapipe pays for every inlined copy whether it runs or not.
-fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>) -> Sums {
+// lavapipe pays for every inlined copy whether it runs or not. `w`: the entries' blend
+// weights, which ORDER 2 blends hidden samples with (`seen_elsewhere`).
+fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
     if (ORDER == 1u && BLEND == 4u) { wn = blend_weights(n); }
@@ -254,14 +284,18 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
+                var other = vec4<f32>(0.0);
+                if (ORDER == 2u && DEPTH) { other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, spec, spec_lod); }
                 var seed = spec_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed);
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed, other);
                 spec_seed[k] = seed;
                 spec_fresh[k] = false;
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
+                var other = vec4<f32>(0.0);
+                if (ORDER == 2u && DEPTH) { other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, diff, diff_lod); }
                 var seed = diff_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed);
+                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed, other);
                 diff_seed[k] = seed;
                 diff_fresh[k] = false;
             }
@@ -317,7 +351,8 @@ fn diffuse_irradiance(use_env: bool, n: vec3<f32>, nv: f32, base: vec3<f32>, pbr
 }
 
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
-// (4.7); the environment cube (integration 4) when no candidate is usable. Per direction
+// (4.7); the environment cube (integration 4) when no candidate is usable; per point visible
+// (ORDER 2) alike, with hidden samples read from the other candidates. Per direction
 // (order B): one integration over the blend. Both passes through one `integrate` call. With
 // SPLIT_SUM (the pbr mode's engine baseline) no Monte Carlo: `split_sum`.
 fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
@@ -333,7 +368,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
     }
     let one = vec4<bool>(true, false, false, false);
     if (ORDER == 1u && !use_env) {
-        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr), 0u) + diffuse;
+        return estimate(integrate(vec4<u32>(INVALID), one, 4u, pixel, x, n, t, b, v, nv, base, pbr, vec4<f32>(0.0)), 0u) + diffuse;
     }
     var axis = r;
     if (BLEND == 4u) { axis = n; }
@@ -352,7 +387,7 @@ fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r:
             used = one;
             wp = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         }
-        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base, pbr);
+        let sums = integrate(cubes, used, select(0u, 4u, phase == 1u), pixel, x, n, t, b, v, nv, base, pbr, wp);
         for (var k = 0u; k < 4u; k++) {
             if (used[k] && (sums.ok[k] > 0.0 || phase == 1u)) {
                 acc += estimate(sums, k) * wp[k];

@@ -197,12 +197,12 @@ pub fn check_parity(
     frame.pixels
 }
 
-/// The glossy cases every parity test covers, as (params, label): both integration orders with
+/// The glossy cases every parity test covers, as (params, label): every integration order with
 /// an isotropic and an anisotropic lobe (M = 8), then recon + C_s glossy with a diffuse term.
 pub fn glossy_cases(base: Knobs) -> Vec<(Knobs, String)> {
     use oslf_runtime::{Mode, Order};
     let mut cases = Vec::new();
-    for order in [Order::PerPoint, Order::PerDirection] {
+    for order in Order::ALL {
         for (nu, nv) in [(10.0, 10.0), (1000.0, 10.0)] {
             let p = Knobs {
                 mode: Mode::Glossy,
@@ -229,6 +229,7 @@ pub fn glossy_cases(base: Knobs) -> Vec<(Knobs, String)> {
         (1.0, 0.3, Order::PerPoint),
         (0.0, 0.6, Order::PerDirection),
         (0.5, 0.05, Order::PerPoint),
+        (1.0, 0.3, Order::PerPointVisible),
     ] {
         let p = Knobs {
             mode: Mode::Pbr,
