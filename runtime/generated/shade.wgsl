@@ -1274,10 +1274,6 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
     else if (DEPTH) {
         d = depth_iterate(cube, entry, o, l, fresh, seed);
     }
-    return cube_radiance(cube, entry, d, lod);
-}
-
-fn cube_radiance(cube: u32, entry: u32, d: vec3<f32>, lod: f32) -> vec4<f32> {
     if (FILTER) {
         return lookup_levels(cube, entry, d, lod);
     }
@@ -1309,37 +1305,31 @@ struct Sums {
     ok: vec4<f32>
 }
 
-fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>, other: vec4<f32>) {
-    let own = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
-    if (own.w == 0.0) {
+fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
+    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
+    if (l.w == 0.0) {
         (*sums).ok[k] = 0.0;
     }
-    let l = select(own.xyz, other.xyz / max(other.w, 1e-30), other.w > 0.0);
     (*sums).r[k] += l.r * s.weight.r;
     (*sums).g[k] += l.g * s.weight.g;
     (*sums).b[k] += l.b * s.weight.b;
 }
 
-fn seen_elsewhere(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample, lod: f32) -> vec4<f32> {
-    var out = vec4<f32>(0.0);
+fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample) -> u32 {
+    var best = k;
+    var best_w = 0.0;
     let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
     for (var j = select(4u, 0u, hidden); j < 4u; j++) {
-        if (j == k || !used[j] || !(w[j] > 0.0)) {
+        if (j == k || !used[j] || !(w[j] > best_w)) {
             continue;
         }
-        let o = vec3<f32>(ox[j], oy[j], oz[j]);
-        if (depth_hidden(cubes[j], entries[j], o, s.l)) {
+        if (depth_hidden(cubes[j], entries[j], vec3<f32>(ox[j], oy[j], oz[j]), s.l)) {
             continue;
         }
-        var seed = 0.0;
-        let d = depth_iterate(cubes[j], entries[j], o, s.l, true, &seed);
-        let l = cube_radiance(cubes[j], entries[j], d, lod);
-        if (l.w == 0.0) {
-            continue;
-        }
-        out += vec4<f32>(l.xyz * w[j], w[j]);
+        best = j;
+        best_w = w[j];
     }
-    return out;
+    return best;
 }
 
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
@@ -1393,24 +1383,26 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
-                var other = vec4<f32>(0.0);
+                var e = k;
                 if (ORDER == 2u && DEPTH) {
-                    other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, spec, spec_lod);
+                    e = stand_in(k, cubes, entries, used, ox, oy, oz, w, spec);
                 }
-                var seed = spec_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed, other);
-                spec_seed[k] = seed;
-                spec_fresh[k] = false;
+                let own = e == k;
+                var seed = select(0.0, spec_seed[k], own);
+                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, spec, spec_lod, spec_fresh[k] || !own, &seed);
+                spec_seed[k] = select(spec_seed[k], seed, own);
+                spec_fresh[k] = spec_fresh[k] && !own;
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
-                var other = vec4<f32>(0.0);
+                var e = k;
                 if (ORDER == 2u && DEPTH) {
-                    other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, diff, diff_lod);
+                    e = stand_in(k, cubes, entries, used, ox, oy, oz, w, diff);
                 }
-                var seed = diff_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed, other);
-                diff_seed[k] = seed;
-                diff_fresh[k] = false;
+                let own = e == k;
+                var seed = select(0.0, diff_seed[k], own);
+                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, diff, diff_lod, diff_fresh[k] || !own, &seed);
+                diff_seed[k] = select(diff_seed[k], seed, own);
+                diff_fresh[k] = diff_fresh[k] && !own;
             }
         }
     }

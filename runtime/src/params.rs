@@ -210,8 +210,8 @@ pub enum Order {
     PerDirection,
     /// Per point, but a sample whose ray its sample point cannot see (depth-corrected lookups
     /// only: the point at x's own distance along the ray lies behind the surface the point
-    /// sees) takes the radiance of the other sample points that can, blended. The cost of per
-    /// point plus one distance read per sample, and more where a sample is hidden.
+    /// sees) reads the cube of the candidate of largest blend weight that can. The cost of per
+    /// point plus one distance read per sample, and a few more where a sample is hidden.
     PerPointVisible,
 }
 

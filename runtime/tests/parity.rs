@@ -243,9 +243,9 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
             label,
         );
     }
-    // Per point visible: samples a candidate cannot see read from the others (specular and,
-    // with R_d > 0, diffuse samples). It must change pixels of this scene against per point,
-    // so that the exchange itself is what matches the reference.
+    // Per point visible: a sample a candidate cannot see read from a stand-in's cube (specular
+    // and, with R_d > 0, diffuse samples). It must change pixels of this scene against per
+    // point, so that the stand-ins themselves are what matches the reference.
     let knobs = |order| Knobs {
         m: 9,
         rd: 0.5,

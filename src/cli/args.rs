@@ -49,7 +49,7 @@ pub struct ShadingArgs {
     #[arg(short = 'M', long, default_value_t = 16)]
     pub m: u32,
     /// Integration order: per-point (§5.2: integrate, then blend), per-direction (blend, then
-    /// integrate) or per-point-visible (per point, hidden samples read from the other points).
+    /// integrate) or per-point-visible (per point, a hidden sample read from a point that sees it).
     #[arg(long, default_value = "per-point", value_parser = parse_order)]
     pub order: Order,
     /// Ashikhmin–Shirley specular reflectance R_s.

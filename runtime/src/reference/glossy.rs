@@ -211,12 +211,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             s.l
         };
-        self.cube_radiance(cube, d, lod)
-    }
-
-    /// Radiance of `cube` towards `d` at mip level `lod` (as `cube_radiance`).
-    fn cube_radiance(&self, cube: u32, d: Vec3, lod: f32) -> Option<Vec3> {
-        if self.uniform.mip_levels > 1 {
+        if u.mip_levels > 1 {
             self.lookup_levels(cube, d, lod)
         } else {
             self.lookup(cube, d)
@@ -263,11 +258,9 @@ impl<C: CubeTexels> Shader<'_, C> {
         self.sample_diffuse(xi1, xi2, n, t, b, nv)
     }
 
-    /// Per point visible, for sample `s` of candidate `k` (its cube `cube`): where `cube`
-    /// cannot see the sample's ray, the other candidates' radiance that can, times their
-    /// weights `w`, and the weights' sum (as `seen_elsewhere`).
-    #[allow(clippy::too_many_arguments)]
-    fn seen_elsewhere(
+    /// Per point visible, the candidate whose cube sample `s` of candidate `k` (cube `cube`)
+    /// reads (as `stand_in`).
+    pub(super) fn stand_in(
         &self,
         c: &Candidates,
         k: u32,
@@ -275,30 +268,24 @@ impl<C: CubeTexels> Shader<'_, C> {
         w: [f32; 4],
         x: Vec3,
         s: &AsSample,
-    ) -> (Vec3, f32) {
-        let mut out = (Vec3::ZERO, 0.0f32);
-        let u = &self.uniform;
+    ) -> u32 {
         let o = |cube: u32| x - self.samples[cube as usize];
-        if cube == u.env_cube || !self.depth_hidden(cube, o(cube), s.l) {
-            return out;
+        let (mut best, mut best_w) = (k, 0.0f32);
+        if cube == self.uniform.env_cube || !self.depth_hidden(cube, o(cube), s.l) {
+            return best;
         }
-        let lod = self.sample_lod(s.l, s.lpdf);
         for j in 0..4 {
             let other = c.idx[j];
-            if j as u32 == k || other == INVALID_INDEX || !(w[j] > 0.0) {
+            if j as u32 == k || other == INVALID_INDEX || !(w[j] > best_w) {
                 continue;
             }
             if self.depth_hidden(other, o(other), s.l) {
                 continue;
             }
-            let mut seed = 0.0;
-            let d = self.depth_iterate(other, x, s.l, true, &mut seed);
-            if let Some(l) = self.cube_radiance(other, d, lod) {
-                out.0 += l * w[j];
-                out.1 += w[j];
-            }
+            best = j as u32;
+            best_w = w[j];
         }
-        out
+        best
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -345,23 +332,29 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if !(s.weight.max_element() > 0.0) {
                     continue;
                 }
-                let other = if u.order == 2 && u.depth_steps > 0 {
-                    self.seen_elsewhere(c, j, cube, w, x, &s)
+                // A hidden sample reads its stand-in as a fresh one, leaving this row's seed.
+                let e = if u.order == 2 && u.depth_steps > 0 {
+                    self.stand_in(c, j, cube, w, x, &s)
                 } else {
-                    (Vec3::ZERO, 0.0)
+                    j
                 };
-                let own = self
-                    .sample_radiance(c, cube, wn, x, &s, fresh[k as usize], &mut seed[k as usize])
+                let own = e == j;
+                let (read, fresh_e) = if own {
+                    (cube, fresh[k as usize])
+                } else {
+                    (c.idx[e as usize], true)
+                };
+                let mut seed_e = if own { seed[k as usize] } else { 0.0 };
+                let li = self
+                    .sample_radiance(c, read, wn, x, &s, fresh_e, &mut seed_e)
                     .unwrap_or_else(|| {
                         ok = false;
                         Vec3::ZERO
                     });
-                fresh[k as usize] = false;
-                let li = if other.1 > 0.0 {
-                    other.0 / other.1.max(1e-30)
-                } else {
-                    own
-                };
+                if own {
+                    seed[k as usize] = seed_e;
+                    fresh[k as usize] = false;
+                }
                 acc += li * s.weight;
             }
         }

@@ -503,6 +503,112 @@ fn depth_corrected_blends_agree_on_the_nearest_hit() {
     assert!((both - Vec3::Z).length() < 1e-5, "{both}");
 }
 
+/// Two sample points: the first enclosed by a surface 0.05 away in every direction (red), the
+/// second under a ceiling 10 away (blue, nothing below the horizon).
+struct Enclosed {
+    res: u32,
+    points: [Vec3; 2],
+}
+
+impl Enclosed {
+    fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3) {
+        if cube == 0 {
+            return (0.05, Vec3::X);
+        }
+        let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
+        if d.z <= 0.0 {
+            return (FAR_DISTANCE, Vec3::Y);
+        }
+        ((10.0 - self.points[1].z) / d.z * d.length(), Vec3::Z)
+    }
+}
+
+impl CubeTexels for Enclosed {
+    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+        Some(self.trace(cube, face, x, y).0)
+    }
+    fn texel(&self, cube: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
+        Some(self.trace(cube, face, x, y).1)
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
+/// Per point visible: a sample whose ray its candidate cannot see (the enclosed point, whose
+/// surface lies nearer than the ray's point at x's distance) reads the cube of the candidate
+/// of largest weight that sees it; one that sees it reads its own; with no other candidate
+/// that sees it, its own. Integrated, the enclosed candidate's estimate then shows the
+/// ceiling (blue) where per point shows its enclosure (red).
+#[test]
+fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
+    let res = 16;
+    let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
+    let cubes = Enclosed { res, points };
+    let mut uniform = depth_uniform(res);
+    (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
+    let x = Vec3::ZERO;
+    let o = |cube: usize| x - points[cube];
+    let c = Candidates {
+        idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
+        s: [
+            points[0].normalize(),
+            points[1].normalize(),
+            Vec3::Z,
+            Vec3::Z,
+        ],
+        count: 2,
+    };
+    let w = [0.5, 0.5, 0.0, 0.0];
+    let up = super::glossy::AsSample {
+        l: Vec3::Z,
+        weight: Vec3::ONE,
+        lpdf: 0.0,
+    };
+    let shader = bare_shader(uniform, &points, &cubes);
+    assert!(shader.depth_hidden(0, o(0), Vec3::Z));
+    assert!(!shader.depth_hidden(1, o(1), Vec3::Z));
+    assert_eq!(shader.stand_in(&c, 0, 0, w, x, &up), 1);
+    assert_eq!(shader.stand_in(&c, 1, 1, w, x, &up), 1);
+    assert_eq!(shader.stand_in(&c, 0, 0, [0.5, 0.0, 0.0, 0.0], x, &up), 0);
+    let both_enclosed = Candidates {
+        idx: [0, 0, INVALID_INDEX, INVALID_INDEX],
+        ..c
+    };
+    assert_eq!(
+        shader.stand_in(&both_enclosed, 0, 0, w, x, &up),
+        0,
+        "no other sees it"
+    );
+
+    let (n, t, b, v) = (Vec3::Z, Vec3::X, Vec3::Y, Vec3::Z);
+    let estimate = |order: u32| {
+        let mut u = uniform;
+        u.order = order;
+        let shader = bare_shader(u, &points, &cubes);
+        let (e, ok) = shader.integrate(
+            &c,
+            0,
+            0,
+            0,
+            x,
+            n,
+            t,
+            b,
+            v,
+            1.0,
+            Vec3::ONE,
+            glam::Vec2::ZERO,
+            w,
+        );
+        assert!(ok);
+        e
+    };
+    let (point, visible) = (estimate(0), estimate(2));
+    assert!(point.x > 0.5 && point.z == 0.0, "{point}");
+    assert!(visible.z > 0.5 && visible.x == 0.0, "{visible}");
+}
+
 /// Filtered samples for M = n² are the grid's stratum centres through the concentric map:
 /// mapped back to the square (the map's inverse), sample i lands at the centre of cell i;
 /// every (ξ1, ξ2) lies in [0, 1)², and other M take the Hammersley set.

@@ -148,14 +148,9 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
     } else if (DEPTH) {
         d = depth_iterate(cube, entry, o, l, fresh, seed);
     }
-    return cube_radiance(cube, entry, d, lod);
-}
-
-// Radiance of cube `cube` towards d at mip level `lod` (`sample_lod`) with FILTER, else at full
-// resolution. With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
-// `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
-// (docs/measurements.md).
-fn cube_radiance(cube: u32, entry: u32, d: vec3<f32>, lod: f32) -> vec4<f32> {
+    // With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
+    // `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
+    // (docs/measurements.md).
     if (FILTER) {
         return lookup_levels(cube, entry, d, lod);
     }
@@ -189,39 +184,33 @@ struct Sums {
 };
 
 // Adds sample `s`'s radiance × weight to entry k of `sums` (`sample_radiance` of cube `cube`;
-// `fresh` and `seed` as `depth_iterate`), or, where `other.w` > 0 (`seen_elsewhere`), the
-// other candidates' blend `other.xyz` ÷ `other.w` instead.
+// `fresh` and `seed` as `depth_iterate`).
 // A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
 // slower with even a one-pass loop around the read (docs/measurements.md).
-fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>, other: vec4<f32>) {
-    let own = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
-    if (own.w == 0.0) { (*sums).ok[k] = 0.0; }
-    let l = select(own.xyz, other.xyz / max(other.w, 1e-30), other.w > 0.0);
+fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
+    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
+    if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
     (*sums).r[k] += l.r * s.weight.r;
     (*sums).g[k] += l.g * s.weight.g;
     (*sums).b[k] += l.b * s.weight.b;
 }
 
-// Per point visible (ORDER 2), for sample `s` of entry k: where k's sample point cannot see the
-// sample's ray (`depth_hidden`), the radiance of the other used entries' points that can, each
-// depth-corrected as a fresh sample, times their blend weights `w` (xyz), and those weights'
-// sum (w); zero where k sees it (or is the environment cube) or no other point does.
-fn seen_elsewhere(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample, lod: f32) -> vec4<f32> {
-    var out = vec4<f32>(0.0);
+// Per point visible (ORDER 2), the entry whose cube sample `s` of entry k reads: k itself where
+// its sample point sees the sample's ray (`depth_hidden`) or it is the environment cube, else
+// the used entry of largest blend weight `w` whose point sees it (k where none does).
+fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample) -> u32 {
+    var best = k;
+    var best_w = 0.0;
     let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
     // A loop no invocation enters where k sees the sample: lavapipe runs an if's body whatever
     // its condition, but skips a loop that no invocation enters.
     for (var j = select(4u, 0u, hidden); j < 4u; j++) {
-        if (j == k || !used[j] || !(w[j] > 0.0)) { continue; }
-        let o = vec3<f32>(ox[j], oy[j], oz[j]);
-        if (depth_hidden(cubes[j], entries[j], o, s.l)) { continue; }
-        var seed = 0.0;
-        let d = depth_iterate(cubes[j], entries[j], o, s.l, true, &seed);
-        let l = cube_radiance(cubes[j], entries[j], d, lod);
-        if (l.w == 0.0) { continue; }
-        out += vec4<f32>(l.xyz * w[j], w[j]);
+        if (j == k || !used[j] || !(w[j] > best_w)) { continue; }
+        if (depth_hidden(cubes[j], entries[j], vec3<f32>(ox[j], oy[j], oz[j]), s.l)) { continue; }
+        best = j;
+        best_w = w[j];
     }
-    return out;
+    return best;
 }
 
 // The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
@@ -230,8 +219,9 @@ fn seen_elsewhere(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>
 // the diffuse and Ashikhmin–Shirley samples are one fixed set for every source, drawn once for
 // all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term
 // 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one call site:
-// lavapipe pays for every inlined copy whether it runs or not. `w`: the entries' blend
-// weights, which ORDER 2 blends hidden samples with (`seen_elsewhere`).
+// lavapipe pays for every inlined copy whether it runs or not. With ORDER 2 a sample entry k's
+// point cannot see reads its `stand_in`'s cube instead, as a fresh sample (its own seed and
+// row untouched); `w`: the entries' blend weights, which choose the stand-in.
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
@@ -284,20 +274,22 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
-                var other = vec4<f32>(0.0);
-                if (ORDER == 2u && DEPTH) { other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, spec, spec_lod); }
-                var seed = spec_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, spec, spec_lod, spec_fresh[k], &seed, other);
-                spec_seed[k] = seed;
-                spec_fresh[k] = false;
+                var e = k;
+                if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, spec); }
+                let own = e == k;
+                var seed = select(0.0, spec_seed[k], own);
+                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, spec, spec_lod, spec_fresh[k] || !own, &seed);
+                spec_seed[k] = select(spec_seed[k], seed, own);
+                spec_fresh[k] = spec_fresh[k] && !own;
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
-                var other = vec4<f32>(0.0);
-                if (ORDER == 2u && DEPTH) { other = seen_elsewhere(k, cubes, entries, used, ox, oy, oz, w, diff, diff_lod); }
-                var seed = diff_seed[k];
-                accumulate(&out, k, cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, diff, diff_lod, diff_fresh[k], &seed, other);
-                diff_seed[k] = seed;
-                diff_fresh[k] = false;
+                var e = k;
+                if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, diff); }
+                let own = e == k;
+                var seed = select(0.0, diff_seed[k], own);
+                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, diff, diff_lod, diff_fresh[k] || !own, &seed);
+                diff_seed[k] = select(diff_seed[k], seed, own);
+                diff_fresh[k] = diff_fresh[k] && !own;
             }
         }
     }
@@ -352,8 +344,8 @@ fn diffuse_irradiance(use_env: bool, n: vec3<f32>, nv: f32, base: vec3<f32>, pbr
 
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
 // (4.7); the environment cube (integration 4) when no candidate is usable; per point visible
-// (ORDER 2) alike, with hidden samples read from the other candidates. Per direction
-// (order B): one integration over the blend. Both passes through one `integrate` call. With
+// (ORDER 2) alike, a hidden sample read from a `stand_in`. Per direction (order B): one
+// integration over the blend. Both passes through one `integrate` call. With
 // SPLIT_SUM (the pbr mode's engine baseline) no Monte Carlo: `split_sum`.
 fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {
     if (SPLIT_SUM) {
