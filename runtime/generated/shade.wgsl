@@ -1305,16 +1305,6 @@ struct Sums {
     ok: vec4<f32>
 }
 
-fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
-    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
-    if (l.w == 0.0) {
-        (*sums).ok[k] = 0.0;
-    }
-    (*sums).r[k] += l.r * s.weight.r;
-    (*sums).g[k] += l.g * s.weight.g;
-    (*sums).b[k] += l.b * s.weight.b;
-}
-
 fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample) -> u32 {
     var best = k;
     var best_w = 0.0;
@@ -1330,6 +1320,24 @@ fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: 
         best_w = w[j];
     }
     return best;
+}
+
+fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
+    var e = k;
+    if (ORDER == 2u && DEPTH) {
+        e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s);
+    }
+    let own = e == k;
+    var seed = select(0.0, (*seeds)[k], own);
+    let l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
+    (*seeds)[k] = select((*seeds)[k], seed, own);
+    (*fresh)[k] = (*fresh)[k] && !own;
+    if (l.w == 0.0) {
+        (*sums).ok[k] = 0.0;
+    }
+    (*sums).r[k] += l.r * s.weight.r;
+    (*sums).g[k] += l.g * s.weight.g;
+    (*sums).b[k] += l.b * s.weight.b;
 }
 
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
@@ -1383,26 +1391,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
-                var e = k;
-                if (ORDER == 2u && DEPTH) {
-                    e = stand_in(k, cubes, entries, used, ox, oy, oz, w, spec);
-                }
-                let own = e == k;
-                var seed = select(0.0, spec_seed[k], own);
-                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, spec, spec_lod, spec_fresh[k] || !own, &seed);
-                spec_seed[k] = select(spec_seed[k], seed, own);
-                spec_fresh[k] = spec_fresh[k] && !own;
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, spec, spec_lod, &spec_fresh, &spec_seed);
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
-                var e = k;
-                if (ORDER == 2u && DEPTH) {
-                    e = stand_in(k, cubes, entries, used, ox, oy, oz, w, diff);
-                }
-                let own = e == k;
-                var seed = select(0.0, diff_seed[k], own);
-                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, diff, diff_lod, diff_fresh[k] || !own, &seed);
-                diff_seed[k] = select(diff_seed[k], seed, own);
-                diff_fresh[k] = diff_fresh[k] && !own;
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, diff, diff_lod, &diff_fresh, &diff_seed);
             }
         }
     }

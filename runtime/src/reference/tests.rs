@@ -425,6 +425,26 @@ fn glossy_depth_correction_finds_where_the_ray_meets_the_stored_distances() {
     assert_eq!(shader.depth_iterate(0, x, down, true, &mut 0.0), down);
 }
 
+/// Cubes drawn by tracing: each texel's distance and radiance.
+trait Trace: Sync {
+    fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3);
+}
+
+/// A [`Trace`]'s cubes, every face resident.
+struct Traced<T>(T);
+
+impl<T: Trace> CubeTexels for Traced<T> {
+    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
+        Some(self.0.trace(cube, face, x, y).0)
+    }
+    fn texel(&self, cube: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
+        Some(self.0.trace(cube, face, x, y).1)
+    }
+    fn resident(&self, _: u32) -> bool {
+        true
+    }
+}
+
 /// Two sample points over a ceiling 10 away (blue), with a small plate halfway (red) that
 /// only the first one's cube holds (too thin for the second's texels, say).
 struct TwoViews {
@@ -432,7 +452,7 @@ struct TwoViews {
     points: [Vec3; 2],
 }
 
-impl TwoViews {
+impl Trace for TwoViews {
     fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3) {
         let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
         let p = self.points[cube as usize];
@@ -448,18 +468,6 @@ impl TwoViews {
     }
 }
 
-impl CubeTexels for TwoViews {
-    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
-        Some(self.trace(cube, face, x, y).0)
-    }
-    fn texel(&self, cube: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
-        Some(self.trace(cube, face, x, y).1)
-    }
-    fn resident(&self, _: u32) -> bool {
-        true
-    }
-}
-
 /// The candidates agree on the nearest hit their searches find: the plate that one
 /// candidate's cube resolves is what the blend shows, the other candidate (whose distances
 /// do not see the plate's point) left out, not a mix of plate and ceiling.
@@ -468,7 +476,7 @@ fn depth_corrected_blends_agree_on_the_nearest_hit() {
     let res = 64;
     let uniform = depth_uniform(res);
     let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
-    let cubes = TwoViews { res, points };
+    let cubes = Traced(TwoViews { res, points });
     let shader = bare_shader(uniform, &points, &cubes);
     let x = Vec3::ZERO;
     let c = Candidates {
@@ -510,7 +518,7 @@ struct Enclosed {
     points: [Vec3; 2],
 }
 
-impl Enclosed {
+impl Trace for Enclosed {
     fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3) {
         if cube == 0 {
             return (0.05, Vec3::X);
@@ -523,18 +531,6 @@ impl Enclosed {
     }
 }
 
-impl CubeTexels for Enclosed {
-    fn depth(&self, cube: u32, face: usize, x: u32, y: u32) -> Option<f32> {
-        Some(self.trace(cube, face, x, y).0)
-    }
-    fn texel(&self, cube: u32, face: usize, _: u32, x: u32, y: u32) -> Option<Vec3> {
-        Some(self.trace(cube, face, x, y).1)
-    }
-    fn resident(&self, _: u32) -> bool {
-        true
-    }
-}
-
 /// Per point visible: a sample whose ray its candidate cannot see (the enclosed point, whose
 /// surface lies nearer than the ray's point at x's distance) reads the cube of the candidate
 /// of largest weight that sees it; one that sees it reads its own; with no other candidate
@@ -544,7 +540,7 @@ impl CubeTexels for Enclosed {
 fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
     let res = 16;
     let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
-    let cubes = Enclosed { res, points };
+    let cubes = Traced(Enclosed { res, points });
     let mut uniform = depth_uniform(res);
     (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
     let x = Vec3::ZERO;

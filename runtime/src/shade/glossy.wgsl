@@ -183,18 +183,6 @@ struct Sums {
     ok: vec4<f32>,
 };
 
-// Adds sample `s`'s radiance × weight to entry k of `sums` (`sample_radiance` of cube `cube`;
-// `fresh` and `seed` as `depth_iterate`).
-// A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
-// slower with even a one-pass loop around the read (docs/measurements.md).
-fn accumulate(sums: ptr<function, Sums>, k: u32, cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) {
-    let l = sample_radiance(cube, entry, o, wn, x, s, lod, fresh, seed);
-    if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
-    (*sums).r[k] += l.r * s.weight.r;
-    (*sums).g[k] += l.g * s.weight.g;
-    (*sums).b[k] += l.b * s.weight.b;
-}
-
 // Per point visible (ORDER 2), the entry whose cube sample `s` of entry k reads: k itself where
 // its sample point sees the sample's ray (`depth_hidden`) or it is the environment cube, else
 // the used entry of largest blend weight `w` whose point sees it (k where none does).
@@ -213,15 +201,34 @@ fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: 
     return best;
 }
 
+// Adds sample `s`'s radiance × weight to entry k of `sums`: `sample_radiance` of entry k's cube,
+// or with ORDER 2, where k's point cannot see the sample, of its `stand_in`'s, read as a fresh
+// sample that leaves k's row as it was. `fresh` and `seeds`: per entry, this kind of sample's
+// row state of `depth_iterate`; `w`: the entries' blend weights, which choose the stand-in.
+// A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
+// slower with even a one-pass loop around the read (docs/measurements.md).
+fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
+    var e = k;
+    if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s); }
+    let own = e == k;
+    var seed = select(0.0, (*seeds)[k], own);
+    let l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
+    (*seeds)[k] = select((*seeds)[k], seed, own);
+    (*fresh)[k] = (*fresh)[k] && !own;
+    if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
+    (*sums).r[k] += l.r * s.weight.r;
+    (*sums).g[k] += l.g * s.weight.g;
+    (*sums).b[k] += l.b * s.weight.b;
+}
+
 // The M samples' sums of radiance × weight (Eq. 5.12, before ÷ M) from up to four sources at
 // once: entry k integrates over `cubes[k]` where `used[k]`, with the random numbers of
 // integration j0 + k; cube INVALID is the blend of the candidates per direction. With FILTER
 // the diffuse and Ashikhmin–Shirley samples are one fixed set for every source, drawn once for
 // all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term
 // 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one call site:
-// lavapipe pays for every inlined copy whether it runs or not. With ORDER 2 a sample entry k's
-// point cannot see reads its `stand_in`'s cube instead, as a fresh sample (its own seed and
-// row untouched); `w`: the entries' blend weights, which choose the stand-in.
+// lavapipe pays for every inlined copy whether it runs or not. `w`: the entries' blend weights
+// (ORDER 2's `stand_in`s).
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
@@ -274,22 +281,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
-                var e = k;
-                if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, spec); }
-                let own = e == k;
-                var seed = select(0.0, spec_seed[k], own);
-                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, spec, spec_lod, spec_fresh[k] || !own, &seed);
-                spec_seed[k] = select(spec_seed[k], seed, own);
-                spec_fresh[k] = spec_fresh[k] && !own;
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, spec, spec_lod, &spec_fresh, &spec_seed);
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
-                var e = k;
-                if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, diff); }
-                let own = e == k;
-                var seed = select(0.0, diff_seed[k], own);
-                accumulate(&out, k, cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, diff, diff_lod, diff_fresh[k] || !own, &seed);
-                diff_seed[k] = select(diff_seed[k], seed, own);
-                diff_fresh[k] = diff_fresh[k] && !own;
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, diff, diff_lod, &diff_fresh, &diff_seed);
             }
         }
     }
