@@ -445,6 +445,20 @@ impl<T: Trace> CubeTexels for Traced<T> {
     }
 }
 
+/// The candidates of a texel at `x`: sample points 0 and 1 at `points`.
+fn two_candidates(points: &[Vec3; 2], x: Vec3) -> Candidates {
+    Candidates {
+        idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
+        s: [
+            (points[0] - x).normalize(),
+            (points[1] - x).normalize(),
+            Vec3::Z,
+            Vec3::Z,
+        ],
+        count: 2,
+    }
+}
+
 /// Two sample points over a ceiling 10 away (blue), with a small plate halfway (red) that
 /// only the first one's cube holds (too thin for the second's texels, say).
 struct TwoViews {
@@ -479,16 +493,7 @@ fn depth_corrected_blends_agree_on_the_nearest_hit() {
     let cubes = Traced(TwoViews { res, points });
     let shader = bare_shader(uniform, &points, &cubes);
     let x = Vec3::ZERO;
-    let c = Candidates {
-        idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
-        s: [
-            points[0].normalize(),
-            points[1].normalize(),
-            Vec3::Z,
-            Vec3::Z,
-        ],
-        count: 2,
-    };
+    let c = two_candidates(&points, x);
     // Each candidate alone: the plate (the first), the ceiling (the second).
     let first = shader
         .blend_read(&c, [1.0, 0.0, 0.0, 0.0], x, Vec3::Z, 0.0)
@@ -545,16 +550,7 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
     (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
     let x = Vec3::ZERO;
     let o = |cube: usize| x - points[cube];
-    let c = Candidates {
-        idx: [0, 1, INVALID_INDEX, INVALID_INDEX],
-        s: [
-            points[0].normalize(),
-            points[1].normalize(),
-            Vec3::Z,
-            Vec3::Z,
-        ],
-        count: 2,
-    };
+    let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
     let up = super::glossy::AsSample {
         l: Vec3::Z,
