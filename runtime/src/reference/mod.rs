@@ -24,6 +24,8 @@ mod blend;
 mod composite;
 mod cube;
 mod depth;
+#[cfg(test)]
+mod depth_tests;
 mod feedback;
 mod glossy;
 pub mod material;
