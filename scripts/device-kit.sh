@@ -17,7 +17,9 @@
 #   - the Bevy plugin's cost in the room example at 1920 × 1080, without and with a prepass
 #     (issue 45: ≤ 0.5 ms added);
 #   - the runtime's frame at 3840 × 2160 and 1920 × 1080, FIS + depth, M = 16 (issue 45: ≤ 2 ms
-#     at 4K).
+#     at 4K);
+#   - the glossy orders' frames (per point, per direction, per point visible) at 655 × 460 and
+#     1280 × 720.
 set -uo pipefail
 
 KIT=.device-kit
@@ -141,6 +143,10 @@ run() {
             OSLF_BENCH_FILTER="glossy ratio" OSLF_BENCH_CSV=$OUT/frame-$size.csv \
             step "frame-$size" 300 "$work/bin/frame-bench"
     done
+    # The glossy orders' frames (per point, per direction, per point visible) at the bench's
+    # own sizes: what per point visible and per direction cost on this device.
+    OSLF_STORE=$work/$bench_store.oslf OSLF_BENCH_FILTER="glossy M=16, per" \
+        OSLF_BENCH_CSV=$OUT/frame-orders.csv step frame-orders 300 "$work/bin/frame-bench"
     if ! $quick; then
         # Every other example preset.
         bake gazebo-quick gazebo

@@ -200,6 +200,15 @@ fn main() {
             },
         ),
         (
+            "glossy M=16, per point visible",
+            Knobs {
+                mode: Mode::Glossy,
+                m: 16,
+                order: oslf_runtime::Order::PerPointVisible,
+                ..base
+            },
+        ),
+        (
             "recon + glossy M=16",
             Knobs {
                 mode: Mode::ReconGlossy,
