@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Error against sample points on the room's teapot, uniform placement against parallax (and
-adaptive, where given): the mirror mode, and pbr at roughness 0.3 shaded per point and per
-direction. Means over seeds, each seed's figure a faint dot (docs/measurements.md, "Points
-on the room's teapot").
+adaptive, where given): the mirror mode, and pbr at roughness 0.3 shaded per point, per
+direction and, where given, per point visible. Means over seeds, each seed's figure a faint dot
+(docs/measurements.md, "Points on the room's teapot").
 
     python3 scripts/teapot-points-plot.py TABLE.txt OUT.png
 
 TABLE.txt: one line per store, `PLACEMENT-N-SEED POINTS BAKE_S STORE_MB MIRROR PBR_PER_POINT
-PBR_PER_DIRECTION` (RMSE L*, whitespace separated). Needs matplotlib.
+PBR_PER_DIRECTION [PBR_PER_POINT_VISIBLE]` (RMSE L*, whitespace separated); a placement's
+per-point-visible curve is drawn where every one of its lines has the column. Needs matplotlib.
 """
 import sys
 from collections import defaultdict
@@ -24,7 +25,8 @@ PLACEMENTS = {"uniform": "tab:blue", "parallax": "tab:red", "adaptive": "tab:gre
 
 
 def read(path):
-    """(placement, N) -> [(points, mirror, per point, per direction)], and the seeds read."""
+    """(placement, N) -> [(points, mirror, per point, per direction, per point visible or
+    None)], and the seeds read."""
     runs = defaultdict(list)
     seeds = set()
     for number, line in enumerate(open(path), 1):
@@ -35,10 +37,15 @@ def read(path):
             placement, n, seed = f[0].split("-")
             if placement not in PLACEMENTS:
                 raise ValueError(placement)
-            runs[(placement, int(n))].append((int(f[1]), float(f[4]), float(f[5]), float(f[6])))
+            if len(f) > 8:
+                raise ValueError(f[8])
+            visible = float(f[7]) if len(f) == 8 else None
+            runs[(placement, int(n))].append(
+                (int(f[1]), float(f[4]), float(f[5]), float(f[6]), visible)
+            )
             seeds.add(int(seed))
         except (ValueError, IndexError):
-            sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD"
+            sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD [PPV]"
                      f" (PLACEMENT one of {', '.join(PLACEMENTS)})")
     return runs, seeds
 
@@ -64,6 +71,8 @@ def main():
         curve(mirror, runs, placement, 1, "-", placement)
         curve(pbr, runs, placement, 2, "--", f"{placement}, per point (default)")
         curve(pbr, runs, placement, 3, "-", f"{placement}, per direction")
+        if all(r[4] is not None for k in runs if k[0] == placement for r in runs[k]):
+            curve(pbr, runs, placement, 4, ":", f"{placement}, per point visible")
     mirror.set_title("mirror")
     pbr.set_title("pbr, metallic 1, roughness 0.3, M = 16")
     for ax in (mirror, pbr):
@@ -74,7 +83,7 @@ def main():
         ax.set_xlabel("sample points (after refinement)")
         ax.set_ylabel("RMSE L* against the truth")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
     seed_list = ", ".join(str(s) for s in sorted(seeds))
     fig.suptitle(f"The room's teapot at 16 samples per texel, denoised: means of seeds {seed_list}")
     fig.tight_layout()
