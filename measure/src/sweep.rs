@@ -184,7 +184,10 @@ pub fn apply_runtime(p: &mut ShadingParams, c: &Change) -> Result<()> {
         "order" => {
             p.monte_carlo_mut()?.order = match c.value.parse::<Order>() {
                 Ok(order) => order,
-                Err(_) => return check(c, false, "{per-point, per-direction, per-point-visible}"),
+                Err(_) => {
+                    let names: Vec<_> = Order::ALL.iter().map(|o| o.name()).collect();
+                    return check(c, false, &format!("{{{}}}", names.join(", ")));
+                }
             }
         }
         "blend" => {
