@@ -211,7 +211,12 @@ impl<C: CubeTexels> Shader<'_, C> {
         } else {
             s.l
         };
-        if u.mip_levels > 1 {
+        self.read_dir(cube, d, lod)
+    }
+
+    /// Cube `cube` towards `d` at mip level `lod` (with mips; else level 0), as `read_dir`.
+    fn read_dir(&self, cube: u32, d: Vec3, lod: f32) -> Option<Vec3> {
+        if self.uniform.mip_levels > 1 {
             self.lookup_levels(cube, d, lod)
         } else {
             self.lookup(cube, d)
@@ -258,8 +263,8 @@ impl<C: CubeTexels> Shader<'_, C> {
         self.sample_diffuse(xi1, xi2, n, t, b, nv)
     }
 
-    /// Per point visible, the candidate whose cube sample `s` of candidate `k` (cube `cube`)
-    /// reads (as `stand_in`).
+    /// Per point visible, where sample `s` of candidate `k` (cube `cube`) is read, as
+    /// `stand_in`: the candidate whose cube is read and the direction from its point.
     pub(super) fn stand_in(
         &self,
         c: &Candidates,
@@ -268,10 +273,11 @@ impl<C: CubeTexels> Shader<'_, C> {
         w: [f32; 4],
         x: Vec3,
         s: &AsSample,
-    ) -> u32 {
-        let o = |cube: u32| x - self.samples[cube as usize];
-        let (mut best, mut best_w) = (k, 0.0f32);
-        if cube == self.uniform.env_cube || !self.depth_hidden(cube, o(cube), s.l) {
+    ) -> (u32, Vec3) {
+        let (d, seen) = self.depth_search(cube, x, s.l);
+        let mut best = (k, d);
+        let mut best_w = 0.0f32;
+        if seen >= 0.0 {
             return best;
         }
         for j in 0..4 {
@@ -279,10 +285,11 @@ impl<C: CubeTexels> Shader<'_, C> {
             if j as u32 == k || other == INVALID_INDEX || !(w[j] > best_w) {
                 continue;
             }
-            if self.depth_hidden(other, o(other), s.l) {
+            let (d, seen) = self.depth_search(other, x, s.l);
+            if seen < 0.0 {
                 continue;
             }
-            best = j as u32;
+            best = (j as u32, d);
             best_w = w[j];
         }
         best
@@ -332,30 +339,27 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if !(s.weight.max_element() > 0.0) {
                     continue;
                 }
-                // A hidden sample reads its stand-in as a fresh one, leaving this row's seed.
-                let e = if u.order == 2 && u.depth_steps > 0 {
-                    self.stand_in(c, j, cube, w, x, &s)
+                let li = if u.order == 2 && u.depth_steps > 0 && cube != u.env_cube {
+                    let (e, d) = self.stand_in(c, j, cube, w, x, &s);
+                    let read = if e == j { cube } else { c.idx[e as usize] };
+                    self.read_dir(read, d, self.sample_lod(s.l, s.lpdf))
                 } else {
-                    j
-                };
-                let own = e == j;
-                let (read, fresh_e) = if own {
-                    (cube, fresh[k as usize])
-                } else {
-                    (c.idx[e as usize], true)
-                };
-                let mut seed_e = if own { seed[k as usize] } else { 0.0 };
-                let li = self
-                    .sample_radiance(c, read, wn, x, &s, fresh_e, &mut seed_e)
-                    .unwrap_or_else(|| {
-                        ok = false;
-                        Vec3::ZERO
-                    });
-                if own {
-                    seed[k as usize] = seed_e;
+                    let li = self.sample_radiance(
+                        c,
+                        cube,
+                        wn,
+                        x,
+                        &s,
+                        fresh[k as usize],
+                        &mut seed[k as usize],
+                    );
                     fresh[k as usize] = false;
-                }
-                acc += li * s.weight;
+                    li
+                };
+                acc += li.unwrap_or_else(|| {
+                    ok = false;
+                    Vec3::ZERO
+                }) * s.weight;
             }
         }
         (acc / u.m.max(1) as f32, ok)

@@ -7,7 +7,7 @@ import package::shade::bindings::{
 };
 import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
 import package::shade::cube::{lookup, lookup_levels, sample_lod};
-import package::shade::depth::{depth_hidden, depth_iterate};
+import package::shade::depth::{depth_iterate, depth_search};
 import package::shade::random::{filter_rows, sample_xi};
 import package::shade::split_sum::{split_sum};
 import package::shading::constants::{GGX_DIELECTRIC_F0, PI, SH_AS_DIFFUSE, SH_COSINE};
@@ -148,9 +148,13 @@ fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f
     } else if (DEPTH) {
         d = depth_iterate(cube, entry, o, l, fresh, seed);
     }
-    // With FILTER every level through `lookup_levels`, level 0 too: lavapipe would run
-    // `lookup_lod`'s branch to `lookup` for every sample, lengthening FIS + depth frames
-    // (docs/measurements.md).
+    return read_dir(cube, entry, d, lod);
+}
+
+// Cube `cube` towards `d` at mip level `lod` (with FILTER; else level 0). With FILTER every
+// level through `lookup_levels`, level 0 too: lavapipe would run `lookup_lod`'s branch to
+// `lookup` for every sample, lengthening FIS + depth frames (docs/measurements.md).
+fn read_dir(cube: u32, entry: u32, d: vec3<f32>, lod: f32) -> vec4<f32> {
     if (FILTER) {
         return lookup_levels(cube, entry, d, lod);
     }
@@ -183,38 +187,48 @@ struct Sums {
     ok: vec4<f32>,
 };
 
-// Per point visible (ORDER 2), the entry whose cube sample `s` of entry k reads: k itself where
-// its sample point sees the sample's ray (`depth_hidden`) or it is the environment cube, else
-// the used entry of largest blend weight `w` whose point sees it (k where none does).
-fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample) -> u32 {
-    var best = k;
+// Per point visible (ORDER 2), where sample `s` of entry k is read: where k's sample point
+// sees the sample's ray meet the scene (`depth_search`), or where k's cannot (the search's
+// w < 0), where the used entry of largest blend weight `w` whose point sees it does (k's own
+// search where none does). `e`: the entry whose cube is read; `d`: the direction from its point.
+struct Seen {
+    e: u32,
+    d: vec3<f32>,
+};
+
+fn stand_in(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+    let h = depth_search(cubes[k], x, s.l);
+    var best = Seen(k, h.xyz);
     var best_w = 0.0;
-    let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
     // A loop no invocation enters where k sees the sample: lavapipe runs an if's body whatever
     // its condition, but skips a loop that no invocation enters.
-    for (var j = select(4u, 0u, hidden); j < 4u; j++) {
+    for (var j = select(4u, 0u, h.w < 0.0); j < 4u; j++) {
         if (j == k || !used[j] || !(w[j] > best_w)) { continue; }
-        if (depth_hidden(cubes[j], entries[j], vec3<f32>(ox[j], oy[j], oz[j]), s.l)) { continue; }
-        best = j;
+        let q = depth_search(cubes[j], x, s.l);
+        if (q.w < 0.0) { continue; }
+        best = Seen(j, q.xyz);
         best_w = w[j];
     }
     return best;
 }
 
 // Adds sample `s`'s radiance × weight to entry k of `sums`: `sample_radiance` of entry k's cube,
-// or with ORDER 2, where k's point cannot see the sample, of its `stand_in`'s, read as a fresh
-// sample that leaves k's row as it was. `fresh` and `seeds`: per entry, this kind of sample's
-// row state of `depth_iterate`; `w`: the entries' blend weights, which choose the stand-in.
+// or with ORDER 2 where `stand_in` sees it. `fresh` and `seeds`: per entry, this kind of
+// sample's row state of `depth_iterate`; `w`: the entries' blend weights, which choose the
+// stand-in.
 // A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
 // slower with even a one-pass loop around the read (docs/measurements.md).
 fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
-    var e = k;
-    if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s); }
-    let own = e == k;
-    var seed = select(0.0, (*seeds)[k], own);
-    let l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
-    (*seeds)[k] = select((*seeds)[k], seed, own);
-    (*fresh)[k] = (*fresh)[k] && !own;
+    var l: vec4<f32>;
+    if (ORDER == 2u && DEPTH && cubes[k] != P.env_cube) {
+        let seen = stand_in(k, cubes, used, x, w, s);
+        l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
+    } else {
+        var seed = (*seeds)[k];
+        l = sample_radiance(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, s, lod, (*fresh)[k], &seed);
+        (*seeds)[k] = seed;
+        (*fresh)[k] = false;
+    }
     if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
     (*sums).r[k] += l.r * s.weight.r;
     (*sums).g[k] += l.g * s.weight.g;
