@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Error against sample points on the room's teapot, uniform placement against parallax (and
 adaptive, where given): the mirror mode, and pbr at roughness 0.3 shaded per point, per
-direction and, where given, per point visible. Means over seeds, each seed's figure a faint dot
+direction and, where given, per point visible and per point searched. Means over seeds, each seed's figure a faint dot
 (docs/measurements.md, "Points on the room's teapot").
 
     python3 scripts/teapot-points-plot.py TABLE.txt OUT.png
 
 TABLE.txt: one line per store, `PLACEMENT-N-SEED POINTS BAKE_S STORE_MB MIRROR PBR_PER_POINT
-PBR_PER_DIRECTION [PBR_PER_POINT_VISIBLE]` (RMSE L*, whitespace separated); a placement's
-per-point-visible curve is drawn where every one of its lines has the column. Needs matplotlib.
+PBR_PER_DIRECTION [PBR_PER_POINT_VISIBLE [PBR_PER_POINT_SEARCHED]]` (RMSE L*, whitespace
+separated); a placement's curve of an optional column is drawn where every one of its lines has
+the column. Needs matplotlib.
 """
 import sys
 from collections import defaultdict
@@ -26,7 +27,7 @@ PLACEMENTS = {"uniform": "tab:blue", "parallax": "tab:red", "adaptive": "tab:gre
 
 def read(path):
     """(placement, N) -> [(points, mirror, per point, per direction, per point visible or
-    None)], and the seeds read."""
+    None, per point searched or None)], and the seeds read."""
     runs = defaultdict(list)
     seeds = set()
     for number, line in enumerate(open(path), 1):
@@ -37,15 +38,15 @@ def read(path):
             placement, n, seed = f[0].split("-")
             if placement not in PLACEMENTS:
                 raise ValueError(placement)
-            if len(f) > 8:
-                raise ValueError(f[8])
-            visible = float(f[7]) if len(f) == 8 else None
+            if len(f) > 9:
+                raise ValueError(f[9])
+            optional = [float(v) for v in f[7:]] + [None] * (9 - max(len(f), 7))
             runs[(placement, int(n))].append(
-                (int(f[1]), float(f[4]), float(f[5]), float(f[6]), visible)
+                (int(f[1]), float(f[4]), float(f[5]), float(f[6]), *optional)
             )
             seeds.add(int(seed))
         except (ValueError, IndexError):
-            sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD [PPV]"
+            sys.exit(f"{path}:{number}: expected PLACEMENT-N-SEED POINTS BAKE MB MIRROR PP PD [PPV [PPS]]"
                      f" (PLACEMENT one of {', '.join(PLACEMENTS)})")
     return runs, seeds
 
@@ -71,8 +72,9 @@ def main():
         curve(mirror, runs, placement, 1, "-", placement)
         curve(pbr, runs, placement, 2, "--", f"{placement}, per point (default)")
         curve(pbr, runs, placement, 3, "-", f"{placement}, per direction")
-        if all(r[4] is not None for k in runs if k[0] == placement for r in runs[k]):
-            curve(pbr, runs, placement, 4, ":", f"{placement}, per point visible")
+        for column, dash, name in [(4, ":", "per point visible"), (5, "-.", "per point searched")]:
+            if all(r[column] is not None for k in runs if k[0] == placement for r in runs[k]):
+                curve(pbr, runs, placement, column, dash, f"{placement}, {name}")
     mirror.set_title("mirror")
     pbr.set_title("pbr, metallic 1, roughness 0.3, M = 16")
     for ax in (mirror, pbr):

@@ -209,6 +209,15 @@ fn main() {
             },
         ),
         (
+            "glossy M=16, per point searched",
+            Knobs {
+                mode: Mode::Glossy,
+                m: 16,
+                order: oslf_runtime::Order::PerPointSearched,
+                ..base
+            },
+        ),
+        (
             "recon + glossy M=16",
             Knobs {
                 mode: Mode::ReconGlossy,

@@ -701,6 +701,12 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(b.xyz, 1.0);
 }
 
+fn depth_hidden(cube: u32, entry: u32, o: vec3<f32>, l: vec3<f32>) -> bool {
+    let d = o + l * length(o);
+    let seen = depth_toward(cube, entry, d, false);
+    return seen < FAR && length(d) >= seen;
+}
+
 fn depth_iterate(cube: u32, entry: u32, o: vec3<f32>, l: vec3<f32>, fresh: bool, seed: ptr<function, f32>) -> vec3<f32> {
     let ol = dot(o, l);
     let oo = dot(o, o);
@@ -1303,12 +1309,29 @@ struct Sums {
     ok: vec4<f32>
 }
 
+fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample) -> u32 {
+    var best = k;
+    var best_w = 0.0;
+    let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
+    for (var j = select(4u, 0u, hidden); j < 4u; j++) {
+        if (j == k || !used[j] || !(w[j] > best_w)) {
+            continue;
+        }
+        if (depth_hidden(cubes[j], entries[j], vec3<f32>(ox[j], oy[j], oz[j]), s.l)) {
+            continue;
+        }
+        best = j;
+        best_w = w[j];
+    }
+    return best;
+}
+
 struct Seen {
     e: u32,
     d: vec3<f32>
 }
 
-fn stand_in(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
     let h = depth_search(cubes[k], x, s.l);
     var best = Seen(k, h.xyz);
     var best_w = 0.0;
@@ -1328,15 +1351,20 @@ fn stand_in(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f3
 
 fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
     var l: vec4<f32>;
-    if (ORDER == 2u && DEPTH && cubes[k] != P.env_cube) {
-        let seen = stand_in(k, cubes, used, x, w, s);
+    if (ORDER == 3u && DEPTH && cubes[k] != P.env_cube) {
+        let seen = searched(k, cubes, used, x, w, s);
         l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
     }
     else {
-        var seed = (*seeds)[k];
-        l = sample_radiance(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, s, lod, (*fresh)[k], &seed);
-        (*seeds)[k] = seed;
-        (*fresh)[k] = false;
+        var e = k;
+        if (ORDER == 2u && DEPTH) {
+            e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s);
+        }
+        let own = e == k;
+        var seed = select(0.0, (*seeds)[k], own);
+        l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
+        (*seeds)[k] = select((*seeds)[k], seed, own);
+        (*fresh)[k] = (*fresh)[k] && !own;
     }
     if (l.w == 0.0) {
         (*sums).ok[k] = 0.0;

@@ -199,7 +199,7 @@ impl GlossyFilter {
 }
 
 /// The Monte Carlo integration orders: the two of §5.2, and per point with hidden samples
-/// read elsewhere.
+/// read elsewhere (two ways).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Order {
@@ -213,11 +213,21 @@ pub enum Order {
     /// sees) reads the cube of the candidate of largest blend weight that can. The cost of per
     /// point plus one distance read per sample, and a few more where a sample is hidden.
     PerPointVisible,
+    /// Per point, but each sample read where its sample point sees the ray meet the scene by
+    /// the mirror's search (depth-corrected lookups only), and a sample whose ray that point
+    /// cannot see where the candidate of largest blend weight that can sees it. About per
+    /// direction's cost: a full search per sample and candidate.
+    PerPointSearched,
 }
 
 impl Order {
     /// Every order, in CLI order.
-    pub const ALL: [Order; 3] = [Order::PerPoint, Order::PerDirection, Order::PerPointVisible];
+    pub const ALL: [Order; 4] = [
+        Order::PerPoint,
+        Order::PerDirection,
+        Order::PerPointVisible,
+        Order::PerPointSearched,
+    ];
 
     /// The CLI name.
     pub fn name(self) -> &'static str {
@@ -225,15 +235,18 @@ impl Order {
             Order::PerPoint => "per-point",
             Order::PerDirection => "per-direction",
             Order::PerPointVisible => "per-point-visible",
+            Order::PerPointSearched => "per-point-searched",
         }
     }
 
-    /// The shader's tag (`ORDER`): 0 per point, 1 per direction, 2 per point visible.
+    /// The shader's tag (`ORDER`): 0 per point, 1 per direction, 2 per point visible, 3 per
+    /// point searched.
     pub fn tag(self) -> u32 {
         match self {
             Order::PerPoint => 0,
             Order::PerDirection => 1,
             Order::PerPointVisible => 2,
+            Order::PerPointSearched => 3,
         }
     }
 }

@@ -268,6 +268,21 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
         same < 0.999,
         "per point visible changes {same} of the pixels"
     );
+    // Per point searched: every sample read where its candidate's search meets the ray, a
+    // hidden one where another's does; it must differ from per point visible too.
+    let searched = check(
+        &mut r,
+        &cubes,
+        knobs(Order::PerPointSearched),
+        "glossy mip depth per point searched with diffuse, M = 9",
+    );
+    for (other, name) in [(&point, "per point"), (&visible, "per point visible")] {
+        let (_, same, _) = compare(&searched, other, 1e-4);
+        assert!(
+            same < 0.999,
+            "per point searched changes {same} of the pixels against {name}"
+        );
+    }
     // The pbr mode's filtered GGX samples: each candidate its own turn of the spiral
     // (`filter_xi`), with, below metallic 1, the diffuse samples' grid shared by all.
     for (metallic, label) in [

@@ -49,7 +49,8 @@ pub struct ShadingArgs {
     #[arg(short = 'M', long, default_value_t = 16)]
     pub m: u32,
     /// Integration order: per-point (§5.2: integrate, then blend), per-direction (blend, then
-    /// integrate) or per-point-visible (per point, a hidden sample read from a point that sees it).
+    /// integrate), per-point-visible (per point, a hidden sample read from a point that sees it)
+    /// or per-point-searched (per point, each sample read where the mirror's search meets it).
     #[arg(long, default_value = "per-point", value_parser = parse_order)]
     pub order: Order,
     /// Ashikhmin–Shirley specular reflectance R_s.
@@ -286,7 +287,7 @@ pub fn parse_background(s: &str) -> std::result::Result<Background, String> {
     }
 }
 
-/// `per-point`, `per-direction` or `per-point-visible`.
+/// `per-point`, `per-direction`, `per-point-visible` or `per-point-searched`.
 pub fn parse_order(s: &str) -> std::result::Result<Order, String> {
     s.parse::<Order>().map_err(|e| e.to_string())
 }

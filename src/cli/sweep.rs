@@ -40,7 +40,8 @@ pub struct Args {
     device: Option<oslf_scene::scene::DeviceChoice>,
     /// KEY=V1,V2,...: bake keys epsilon, sample_count, cube_resolution, phi_samplemap,
     /// samples_per_texel, sample_map_resolution, mantissa_bits, device; runtime keys phi_shader, blend (distance,
-    /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction, per-point-visible). Repeatable.
+    /// angle, avg, rN, nN, envmap), m, order (per-point, per-direction, per-point-visible,
+    /// per-point-searched). Repeatable.
     /// [default: cube_resolution=16,64 sample_count=150,600 epsilon=0.05,0.2 phi_samplemap=60
     /// phi_shader=45,85 blend=distance,angle,avg,r4,envmap]
     #[arg(long)]

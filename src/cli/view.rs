@@ -10,7 +10,7 @@
 //! | D | depth-corrected lookups on ↔ off |
 //! | F | glossy filter: mip ↔ point |
 //! | G | next background: env, none (and the `--background` colour, if one was given) |
-//! | O | integration order: per point → per direction → per point visible |
+//! | O | integration order: per point → per direction → per point visible → per point searched |
 //! | Up / Down | blend power N × 2 / ÷ 2 |
 //! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
 //! | ] / [ | M × 2 / ÷ 2 |

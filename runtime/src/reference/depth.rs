@@ -106,6 +106,15 @@ impl<C: CubeTexels> Shader<'_, C> {
         (b.0, 1.0)
     }
 
+    /// Whether sample point `cube` cannot see the ray from x along `l`, o = x − p (as
+    /// `depth_hidden`).
+    pub(super) fn depth_hidden(&self, cube: u32, o: Vec3, l: Vec3) -> bool {
+        let d = o + l * o.length();
+        let mut missing = false;
+        let seen = self.depth_toward(cube, d, false, &mut missing);
+        seen < FAR_DISTANCE && d.length() >= seen
+    }
+
     /// The depth-corrected lookup direction of sample point `cube` for a glossy sample from
     /// `x` along `l` (as `depth_iterate`): for a `fresh` sample DEPTH_ITERATIONS fixed-point
     /// steps on the spheres of the stored distances from `l`, `l` where a step finds nothing

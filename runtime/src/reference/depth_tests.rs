@@ -284,9 +284,9 @@ impl Trace for Enclosed {
 }
 
 /// Per point visible: a sample whose ray its candidate cannot see (the enclosed point, whose
-/// surface lies nearer than the ray's point at x's distance: its search's w < 0) reads the cube
-/// of the candidate of largest weight that sees it, towards where that one's search meets the
-/// ray; one that sees it reads its own; with no other candidate that sees it, its own. Integrated, the enclosed candidate's estimate then shows the
+/// surface lies nearer than the ray's point at x's distance) reads the cube of the candidate
+/// of largest weight that sees it; one that sees it reads its own; with no other candidate
+/// that sees it, its own. Integrated, the enclosed candidate's estimate then shows the
 /// ceiling (blue) where per point shows its enclosure (red).
 #[test]
 fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
@@ -296,6 +296,7 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
     let mut uniform = depth_uniform(res);
     (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
     let x = Vec3::ZERO;
+    let o = |cube: usize| x - points[cube];
     let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
     let up = super::glossy::AsSample {
@@ -304,26 +305,17 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
         lpdf: 0.0,
     };
     let shader = bare_shader(uniform, &points, &cubes);
-    assert!(shader.depth_search(0, x, Vec3::Z).1 < 0.0, "enclosed");
-    assert_eq!(
-        shader.depth_search(1, x, Vec3::Z).1,
-        1.0,
-        "under the ceiling"
-    );
-    // The hidden sample is read from the other point, towards where it sees the ray meet the
-    // ceiling: x + 10 z, seen from (−0.1, 0, 0.1).
-    let (e, d) = shader.stand_in(&c, 0, 0, w, x, &up);
-    assert_eq!(e, 1);
-    let want = Vec3::new(0.1, 0.0, 9.9);
-    assert!((d - want).length() < 0.05 * want.length(), "{d}");
-    assert_eq!(shader.stand_in(&c, 1, 1, w, x, &up).0, 1);
-    assert_eq!(shader.stand_in(&c, 0, 0, [0.5, 0.0, 0.0, 0.0], x, &up).0, 0);
+    assert!(shader.depth_hidden(0, o(0), Vec3::Z));
+    assert!(!shader.depth_hidden(1, o(1), Vec3::Z));
+    assert_eq!(shader.stand_in(&c, 0, 0, w, x, &up), 1);
+    assert_eq!(shader.stand_in(&c, 1, 1, w, x, &up), 1);
+    assert_eq!(shader.stand_in(&c, 0, 0, [0.5, 0.0, 0.0, 0.0], x, &up), 0);
     let both_enclosed = Candidates {
         idx: [0, 0, INVALID_INDEX, INVALID_INDEX],
         ..c
     };
     assert_eq!(
-        shader.stand_in(&both_enclosed, 0, 0, w, x, &up).0,
+        shader.stand_in(&both_enclosed, 0, 0, w, x, &up),
         0,
         "no other sees it"
     );
@@ -354,4 +346,79 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
     let (point, visible) = (estimate(0), estimate(2));
     assert!(point.x > 0.5 && point.z == 0.0, "{point}");
     assert!(visible.z > 0.5 && visible.x == 0.0, "{visible}");
+}
+
+/// Per point searched: each sample is read where its candidate's search meets the ray (the
+/// ceiling above x, seen from the second point at a slant: not the plain direction); a sample
+/// whose ray its candidate cannot see (the enclosed point: its search's w < 0) where the
+/// candidate of largest weight that sees it meets the ray; with no other candidate that sees
+/// it, its own search's direction. Integrated, the enclosed candidate's estimate shows the
+/// ceiling (blue) where per point shows its enclosure (red).
+#[test]
+fn per_point_searched_reads_where_a_point_that_sees_the_ray_meets_it() {
+    let res = 16;
+    let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
+    let cubes = Traced(Enclosed { res, points });
+    let mut uniform = depth_uniform(res);
+    (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
+    let x = Vec3::ZERO;
+    let c = two_candidates(&points, x);
+    let w = [0.5, 0.5, 0.0, 0.0];
+    let up = super::glossy::AsSample {
+        l: Vec3::Z,
+        weight: Vec3::ONE,
+        lpdf: 0.0,
+    };
+    let shader = bare_shader(uniform, &points, &cubes);
+    assert!(shader.depth_search(0, x, Vec3::Z).1 < 0.0, "enclosed");
+    assert_eq!(
+        shader.depth_search(1, x, Vec3::Z).1,
+        1.0,
+        "under the ceiling"
+    );
+    // x + 10 z seen from (−0.1, 0, 0.1).
+    let want = Vec3::new(0.1, 0.0, 9.9);
+    for k in [0, 1] {
+        let (e, d) = shader.searched(&c, k, k, w, x, &up);
+        assert_eq!(e, 1, "candidate {k}");
+        assert!((d - want).length() < 0.05 * want.length(), "{k}: {d}");
+    }
+    let (e, d) = shader.searched(&c, 0, 0, [0.5, 0.0, 0.0, 0.0], x, &up);
+    assert_eq!((e, d), (0, Vec3::Z), "the other has no weight");
+    let both_enclosed = Candidates {
+        idx: [0, 0, INVALID_INDEX, INVALID_INDEX],
+        ..c
+    };
+    assert_eq!(
+        shader.searched(&both_enclosed, 0, 0, w, x, &up),
+        (0, Vec3::Z),
+        "no other sees it"
+    );
+
+    let (n, t, b, v) = (Vec3::Z, Vec3::X, Vec3::Y, Vec3::Z);
+    let estimate = |order: u32| {
+        let mut u = uniform;
+        u.order = order;
+        let shader = bare_shader(u, &points, &cubes);
+        let (e, ok) = shader.integrate(
+            &c,
+            0,
+            0,
+            0,
+            x,
+            n,
+            t,
+            b,
+            v,
+            1.0,
+            Vec3::ONE,
+            glam::Vec2::ZERO,
+            w,
+        );
+        assert!(ok);
+        e
+    };
+    let (point, searched) = (estimate(0), estimate(3));
+    assert!(point.x > 0.5 && point.z == 0.0, "{point}");
+    assert!(searched.z > 0.5 && searched.x == 0.0, "{searched}");
 }

@@ -263,9 +263,39 @@ impl<C: CubeTexels> Shader<'_, C> {
         self.sample_diffuse(xi1, xi2, n, t, b, nv)
     }
 
-    /// Per point visible, where sample `s` of candidate `k` (cube `cube`) is read, as
-    /// `stand_in`: the candidate whose cube is read and the direction from its point.
+    /// Per point visible, the candidate whose cube sample `s` of candidate `k` (cube `cube`)
+    /// reads (as `stand_in`).
     pub(super) fn stand_in(
+        &self,
+        c: &Candidates,
+        k: u32,
+        cube: u32,
+        w: [f32; 4],
+        x: Vec3,
+        s: &AsSample,
+    ) -> u32 {
+        let o = |cube: u32| x - self.samples[cube as usize];
+        let (mut best, mut best_w) = (k, 0.0f32);
+        if cube == self.uniform.env_cube || !self.depth_hidden(cube, o(cube), s.l) {
+            return best;
+        }
+        for j in 0..4 {
+            let other = c.idx[j];
+            if j as u32 == k || other == INVALID_INDEX || !(w[j] > best_w) {
+                continue;
+            }
+            if self.depth_hidden(other, o(other), s.l) {
+                continue;
+            }
+            best = j as u32;
+            best_w = w[j];
+        }
+        best
+    }
+
+    /// Per point searched, where sample `s` of candidate `k` (cube `cube`) is read, as
+    /// `searched`: the candidate whose cube is read and the direction from its point.
+    pub(super) fn searched(
         &self,
         c: &Candidates,
         k: u32,
@@ -339,27 +369,40 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if !(s.weight.max_element() > 0.0) {
                     continue;
                 }
-                let li = if u.order == 2 && u.depth_steps > 0 && cube != u.env_cube {
-                    let (e, d) = self.stand_in(c, j, cube, w, x, &s);
+                if u.order == 3 && u.depth_steps > 0 && cube != u.env_cube {
+                    let (e, d) = self.searched(c, j, cube, w, x, &s);
                     let read = if e == j { cube } else { c.idx[e as usize] };
-                    self.read_dir(read, d, self.sample_lod(s.l, s.lpdf))
+                    let li = self.read_dir(read, d, self.sample_lod(s.l, s.lpdf));
+                    acc += li.unwrap_or_else(|| {
+                        ok = false;
+                        Vec3::ZERO
+                    }) * s.weight;
+                    continue;
+                }
+                // A hidden sample reads its stand-in as a fresh one, leaving this row's seed.
+                let e = if u.order == 2 && u.depth_steps > 0 {
+                    self.stand_in(c, j, cube, w, x, &s)
                 } else {
-                    let li = self.sample_radiance(
-                        c,
-                        cube,
-                        wn,
-                        x,
-                        &s,
-                        fresh[k as usize],
-                        &mut seed[k as usize],
-                    );
-                    fresh[k as usize] = false;
-                    li
+                    j
                 };
-                acc += li.unwrap_or_else(|| {
-                    ok = false;
-                    Vec3::ZERO
-                }) * s.weight;
+                let own = e == j;
+                let (read, fresh_e) = if own {
+                    (cube, fresh[k as usize])
+                } else {
+                    (c.idx[e as usize], true)
+                };
+                let mut seed_e = if own { seed[k as usize] } else { 0.0 };
+                let li = self
+                    .sample_radiance(c, read, wn, x, &s, fresh_e, &mut seed_e)
+                    .unwrap_or_else(|| {
+                        ok = false;
+                        Vec3::ZERO
+                    });
+                if own {
+                    seed[k as usize] = seed_e;
+                    fresh[k as usize] = false;
+                }
+                acc += li * s.weight;
             }
         }
         (acc / u.m.max(1) as f32, ok)

@@ -113,6 +113,15 @@ fn depth_search(cube: u32, x: vec3<f32>, r: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(b.xyz, 1.0);
 }
 
+// Whether sample point `cube` cannot see the ray from x along l, as `depth_search`'s first
+// probe finds: the ray's point at x's own distance from p lies behind the surface p sees that
+// way. A face not resident, or nothing that way, counts as seen. o = x − p.
+fn depth_hidden(cube: u32, entry: u32, o: vec3<f32>, l: vec3<f32>) -> bool {
+    let d = o + l * length(o);
+    let seen = depth_toward(cube, entry, d, false);
+    return seen < FAR && length(d) >= seen;
+}
+
 // Where sample point `cube` sees the ray from x along l meet the scene, for a glossy sample:
 // the fixed-point iteration of distance impostors (Szirmay-Kalos et al. 2005). Each step reads
 // the distance D the sample point p stores towards its current guess and moves the guess to

@@ -7,7 +7,7 @@ import package::shade::bindings::{
 };
 import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
 import package::shade::cube::{lookup, lookup_levels, sample_lod};
-import package::shade::depth::{depth_iterate, depth_search};
+import package::shade::depth::{depth_hidden, depth_iterate, depth_search};
 import package::shade::random::{filter_rows, sample_xi};
 import package::shade::split_sum::{split_sum};
 import package::shading::constants::{GGX_DIELECTRIC_F0, PI, SH_AS_DIFFUSE, SH_COSINE};
@@ -187,7 +187,25 @@ struct Sums {
     ok: vec4<f32>,
 };
 
-// Per point visible (ORDER 2), where sample `s` of entry k is read: where k's sample point
+// Per point visible (ORDER 2), the entry whose cube sample `s` of entry k reads: k itself where
+// its sample point sees the sample's ray (`depth_hidden`) or it is the environment cube, else
+// the used entry of largest blend weight `w` whose point sees it (k where none does).
+fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, s: AsSample) -> u32 {
+    var best = k;
+    var best_w = 0.0;
+    let hidden = cubes[k] != P.env_cube && depth_hidden(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), s.l);
+    // A loop no invocation enters where k sees the sample: lavapipe runs an if's body whatever
+    // its condition, but skips a loop that no invocation enters.
+    for (var j = select(4u, 0u, hidden); j < 4u; j++) {
+        if (j == k || !used[j] || !(w[j] > best_w)) { continue; }
+        if (depth_hidden(cubes[j], entries[j], vec3<f32>(ox[j], oy[j], oz[j]), s.l)) { continue; }
+        best = j;
+        best_w = w[j];
+    }
+    return best;
+}
+
+// Per point searched (ORDER 3), where sample `s` of entry k is read: where k's sample point
 // sees the sample's ray meet the scene (`depth_search`), or where k's cannot (the search's
 // w < 0), where the used entry of largest blend weight `w` whose point sees it does (k's own
 // search where none does). `e`: the entry whose cube is read; `d`: the direction from its point.
@@ -196,12 +214,11 @@ struct Seen {
     d: vec3<f32>,
 };
 
-fn stand_in(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
     let h = depth_search(cubes[k], x, s.l);
     var best = Seen(k, h.xyz);
     var best_w = 0.0;
-    // A loop no invocation enters where k sees the sample: lavapipe runs an if's body whatever
-    // its condition, but skips a loop that no invocation enters.
+    // A loop no invocation enters where k sees the sample, as in `stand_in`.
     for (var j = select(4u, 0u, h.w < 0.0); j < 4u; j++) {
         if (j == k || !used[j] || !(w[j] > best_w)) { continue; }
         let q = depth_search(cubes[j], x, s.l);
@@ -213,21 +230,24 @@ fn stand_in(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f3
 }
 
 // Adds sample `s`'s radiance × weight to entry k of `sums`: `sample_radiance` of entry k's cube,
-// or with ORDER 2 where `stand_in` sees it. `fresh` and `seeds`: per entry, this kind of
-// sample's row state of `depth_iterate`; `w`: the entries' blend weights, which choose the
-// stand-in.
+// or with ORDER 2, where k's point cannot see the sample, of its `stand_in`'s, read as a fresh
+// sample that leaves k's row as it was; with ORDER 3 where `searched` sees it. `fresh` and `seeds`: per entry, this kind of sample's
+// row state of `depth_iterate`; `w`: the entries' blend weights, which choose the stand-in.
 // A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
 // slower with even a one-pass loop around the read (docs/measurements.md).
 fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
     var l: vec4<f32>;
-    if (ORDER == 2u && DEPTH && cubes[k] != P.env_cube) {
-        let seen = stand_in(k, cubes, used, x, w, s);
+    if (ORDER == 3u && DEPTH && cubes[k] != P.env_cube) {
+        let seen = searched(k, cubes, used, x, w, s);
         l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
     } else {
-        var seed = (*seeds)[k];
-        l = sample_radiance(cubes[k], entries[k], vec3<f32>(ox[k], oy[k], oz[k]), wn, x, s, lod, (*fresh)[k], &seed);
-        (*seeds)[k] = seed;
-        (*fresh)[k] = false;
+        var e = k;
+        if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s); }
+        let own = e == k;
+        var seed = select(0.0, (*seeds)[k], own);
+        l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
+        (*seeds)[k] = select((*seeds)[k], seed, own);
+        (*fresh)[k] = (*fresh)[k] && !own;
     }
     if (l.w == 0.0) { (*sums).ok[k] = 0.0; }
     (*sums).r[k] += l.r * s.weight.r;
@@ -242,7 +262,7 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4
 // all of them; the pbr mode's GGX samples are each candidate's own spiral. The diffuse term
 // 5.4 is compiled in only when R_d > 0 (override DIFFUSE). One loop with one call site:
 // lavapipe pays for every inlined copy whether it runs or not. `w`: the entries' blend weights
-// (ORDER 2's `stand_in`s).
+// (ORDER 2's `stand_in`s, ORDER 3's `searched`).
 fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, v: vec3<f32>, nv: f32, base: vec3<f32>, pbr: vec2<f32>, w: vec4<f32>) -> Sums {
     var out = Sums(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(1.0));
     var wn = vec4<f32>(0.0);
@@ -353,7 +373,8 @@ fn diffuse_irradiance(use_env: bool, n: vec3<f32>, nv: f32, base: vec3<f32>, pbr
 
 // Per point (order A): integrate at each candidate with its own random vectors, then blend
 // (4.7); the environment cube (integration 4) when no candidate is usable; per point visible
-// (ORDER 2) alike, a hidden sample read from a `stand_in`. Per direction (order B): one
+// (ORDER 2) alike, a hidden sample read from a `stand_in`, and per point searched (ORDER 3)
+// each sample read where `searched` sees it. Per direction (order B): one
 // integration over the blend. Both passes through one `integrate` call. With
 // SPLIT_SUM (the pbr mode's engine baseline) no Monte Carlo: `split_sum`.
 fn glossy(pixel: u32, x: vec3<f32>, n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, r: vec3<f32>, base: vec3<f32>, pbr: vec2<f32>) -> vec3<f32> {

@@ -230,6 +230,7 @@ pub fn glossy_cases(base: Knobs) -> Vec<(Knobs, String)> {
         (0.0, 0.6, Order::PerDirection),
         (0.5, 0.05, Order::PerPoint),
         (1.0, 0.3, Order::PerPointVisible),
+        (1.0, 0.3, Order::PerPointSearched),
     ] {
         let p = Knobs {
             mode: Mode::Pbr,
