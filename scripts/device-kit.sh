@@ -143,8 +143,8 @@ run() {
             OSLF_BENCH_FILTER="glossy ratio" OSLF_BENCH_CSV=$OUT/frame-$size.csv \
             step "frame-$size" 300 "$work/bin/frame-bench"
     done
-    # The glossy orders' frames (per point, per direction, per point visible) at the bench's
-    # own sizes: what per point visible and per direction cost on this device.
+    # The glossy orders' frames (per point, per direction, per point visible, per point
+    # searched) at the bench's own sizes: what the costlier orders cost on this device.
     OSLF_STORE=$work/$bench_store.oslf OSLF_BENCH_FILTER="glossy M=16, per" \
         OSLF_BENCH_CSV=$OUT/frame-orders.csv step frame-orders 300 "$work/bin/frame-bench"
     if ! $quick; then
