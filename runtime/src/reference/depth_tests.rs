@@ -290,20 +290,12 @@ impl Trace for Enclosed {
 /// ceiling (blue) where per point shows its enclosure (red).
 #[test]
 fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
-    let res = 16;
-    let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
-    let cubes = Traced(Enclosed { res, points });
-    let mut uniform = depth_uniform(res);
-    (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
+    let (points, cubes, uniform) = enclosed();
     let x = Vec3::ZERO;
     let o = |cube: usize| x - points[cube];
     let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
-    let up = super::glossy::AsSample {
-        l: Vec3::Z,
-        weight: Vec3::ONE,
-        lpdf: 0.0,
-    };
+    let up = up_sample();
     let shader = bare_shader(uniform, &points, &cubes);
     assert!(shader.depth_hidden(0, o(0), Vec3::Z));
     assert!(!shader.depth_hidden(1, o(1), Vec3::Z));
@@ -320,29 +312,7 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
         "no other sees it"
     );
 
-    let (n, t, b, v) = (Vec3::Z, Vec3::X, Vec3::Y, Vec3::Z);
-    let estimate = |order: u32| {
-        let mut u = uniform;
-        u.order = order;
-        let shader = bare_shader(u, &points, &cubes);
-        let (e, ok) = shader.integrate(
-            &c,
-            0,
-            0,
-            0,
-            x,
-            n,
-            t,
-            b,
-            v,
-            1.0,
-            Vec3::ONE,
-            glam::Vec2::ZERO,
-            w,
-        );
-        assert!(ok);
-        e
-    };
+    let estimate = |order: u32| enclosed_estimate(uniform, order, &points, &cubes, &c, w);
     let (point, visible) = (estimate(0), estimate(2));
     assert!(point.x > 0.5 && point.z == 0.0, "{point}");
     assert!(visible.z > 0.5 && visible.x == 0.0, "{visible}");
@@ -356,19 +326,11 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
 /// ceiling (blue) where per point shows its enclosure (red).
 #[test]
 fn per_point_searched_reads_where_a_point_that_sees_the_ray_meets_it() {
-    let res = 16;
-    let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
-    let cubes = Traced(Enclosed { res, points });
-    let mut uniform = depth_uniform(res);
-    (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
+    let (points, cubes, uniform) = enclosed();
     let x = Vec3::ZERO;
     let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
-    let up = super::glossy::AsSample {
-        l: Vec3::Z,
-        weight: Vec3::ONE,
-        lpdf: 0.0,
-    };
+    let up = up_sample();
     let shader = bare_shader(uniform, &points, &cubes);
     assert!(shader.depth_search(0, x, Vec3::Z).1 < 0.0, "enclosed");
     assert_eq!(
@@ -395,30 +357,59 @@ fn per_point_searched_reads_where_a_point_that_sees_the_ray_meets_it() {
         "no other sees it"
     );
 
-    let (n, t, b, v) = (Vec3::Z, Vec3::X, Vec3::Y, Vec3::Z);
-    let estimate = |order: u32| {
-        let mut u = uniform;
-        u.order = order;
-        let shader = bare_shader(u, &points, &cubes);
-        let (e, ok) = shader.integrate(
-            &c,
-            0,
-            0,
-            0,
-            x,
-            n,
-            t,
-            b,
-            v,
-            1.0,
-            Vec3::ONE,
-            glam::Vec2::ZERO,
-            w,
-        );
-        assert!(ok);
-        e
-    };
+    let estimate = |order: u32| enclosed_estimate(uniform, order, &points, &cubes, &c, w);
     let (point, searched) = (estimate(0), estimate(3));
     assert!(point.x > 0.5 && point.z == 0.0, "{point}");
     assert!(searched.z > 0.5 && searched.x == 0.0, "{searched}");
+}
+
+/// The first candidate's glossy estimate at the origin, normal +z, under `order`, in the
+/// `Enclosed` scenes' tests.
+fn enclosed_estimate(
+    mut uniform: crate::uniform::ShadeUniform,
+    order: u32,
+    points: &[Vec3; 2],
+    cubes: &Traced<Enclosed>,
+    c: &Candidates,
+    w: [f32; 4],
+) -> Vec3 {
+    uniform.order = order;
+    let shader = bare_shader(uniform, points, cubes);
+    let (n, t, b, v) = (Vec3::Z, Vec3::X, Vec3::Y, Vec3::Z);
+    let (e, ok) = shader.integrate(
+        c,
+        0,
+        0,
+        0,
+        Vec3::ZERO,
+        n,
+        t,
+        b,
+        v,
+        1.0,
+        Vec3::ONE,
+        glam::Vec2::ZERO,
+        w,
+    );
+    assert!(ok);
+    e
+}
+
+/// The `Enclosed` scene's two points (the enclosed one first), its cubes at 16², and a
+/// uniform for a near-mirror glossy lobe (n 10 000) of M = 4 without the diffuse term.
+fn enclosed() -> ([Vec3; 2], Traced<Enclosed>, crate::uniform::ShadeUniform) {
+    let res = 16;
+    let points = [Vec3::new(0.1, 0.0, 0.1), Vec3::new(-0.1, 0.0, 0.1)];
+    let mut uniform = depth_uniform(res);
+    (uniform.m, uniform.rd, uniform.nu, uniform.nv) = (4, 0.0, 10000.0, 10000.0);
+    (points, Traced(Enclosed { res, points }), uniform)
+}
+
+/// A glossy sample straight up (+z) of weight 1.
+fn up_sample() -> super::glossy::AsSample {
+    super::glossy::AsSample {
+        l: Vec3::Z,
+        weight: Vec3::ONE,
+        lpdf: 0.0,
+    }
 }

@@ -1,6 +1,7 @@
 //! Ashikhmin–Shirley (chapter 5) and glTF's metallic-roughness BRDF by Monte Carlo. As
 //! shade/glossy.wgsl, function for function.
 
+use std::cmp::Ordering;
 use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
@@ -275,22 +276,13 @@ impl<C: CubeTexels> Shader<'_, C> {
         s: &AsSample,
     ) -> u32 {
         let o = |cube: u32| x - self.samples[cube as usize];
-        let (mut best, mut best_w) = (k, 0.0f32);
         if cube == self.uniform.env_cube || !self.depth_hidden(cube, o(cube), s.l) {
-            return best;
+            return k;
         }
-        for j in 0..4 {
-            let other = c.idx[j];
-            if j as u32 == k || other == INVALID_INDEX || !(w[j] > best_w) {
-                continue;
-            }
-            if self.depth_hidden(other, o(other), s.l) {
-                continue;
-            }
-            best = j as u32;
-            best_w = w[j];
-        }
-        best
+        heaviest_other(c, k, w, |other| {
+            (!self.depth_hidden(other, o(other), s.l)).then_some(())
+        })
+        .map_or(k, |(j, ())| j)
     }
 
     /// Per point searched, where sample `s` of candidate `k` (cube `cube`) is read, as
@@ -305,24 +297,14 @@ impl<C: CubeTexels> Shader<'_, C> {
         s: &AsSample,
     ) -> (u32, Vec3) {
         let (d, seen) = self.depth_search(cube, x, s.l);
-        let mut best = (k, d);
-        let mut best_w = 0.0f32;
         if seen >= 0.0 {
-            return best;
+            return (k, d);
         }
-        for j in 0..4 {
-            let other = c.idx[j];
-            if j as u32 == k || other == INVALID_INDEX || !(w[j] > best_w) {
-                continue;
-            }
+        heaviest_other(c, k, w, |other| {
             let (d, seen) = self.depth_search(other, x, s.l);
-            if seen < 0.0 {
-                continue;
-            }
-            best = (j as u32, d);
-            best_w = w[j];
-        }
-        best
+            (seen >= 0.0).then_some(d)
+        })
+        .unwrap_or((k, d))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -542,4 +524,26 @@ impl<C: CubeTexels> Shader<'_, C> {
         )
         .0 + diffuse
     }
+}
+
+/// The candidate other than `k` of largest weight `w` (its first in index order on a tie) for
+/// which `pick` of its cube gives a value, with that value: `stand_in`'s and `searched`'s loop.
+fn heaviest_other<T>(
+    c: &Candidates,
+    k: u32,
+    w: [f32; 4],
+    mut pick: impl FnMut(u32) -> Option<T>,
+) -> Option<(u32, T)> {
+    let mut best = None;
+    let mut best_w = 0.0f32;
+    for (j, (&other, &wj)) in (0u32..).zip(c.idx.iter().zip(&w)) {
+        if j == k || other == INVALID_INDEX || wj.partial_cmp(&best_w) != Some(Ordering::Greater) {
+            continue;
+        }
+        if let Some(t) = pick(other) {
+            best = Some((j, t));
+            best_w = wj;
+        }
+    }
+    best
 }
