@@ -341,6 +341,8 @@ const LOOKUP_AGREE: f32 = 1.0;
 
 const HIT_AGREE: f32 = 0.25;
 
+const LOW_HIT: f32 = 0.25;
+
 fn pcg(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;
     let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
@@ -1331,8 +1333,12 @@ struct Seen {
     d: vec3<f32>
 }
 
-fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, n: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+    let p = samples[cubes[k]].xyz;
     let h = depth_search(cubes[k], x, s.l);
+    if (h.w > 0.0 && dot(p + h.xyz - x, s.l) * dot(s.l, n) < LOW_HIT * length(x - p)) {
+        return Seen(4u, s.l);
+    }
     var best = Seen(k, h.xyz);
     var best_w = 0.0;
     for (var j = select(4u, 0u, h.w < 0.0); j < 4u; j++) {
@@ -1349,13 +1355,17 @@ fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f3
     return best;
 }
 
-fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
+fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, n: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
     var l: vec4<f32>;
+    var plain = true;
     if (ORDER == 3u && DEPTH && cubes[k] != P.env_cube) {
-        let seen = searched(k, cubes, used, x, w, s);
-        l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
+        let seen = searched(k, cubes, used, x, n, w, s);
+        if (seen.e < 4u) {
+            l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
+            plain = false;
+        }
     }
-    else {
+    if (plain) {
         var e = k;
         if (ORDER == 2u && DEPTH) {
             e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s);
@@ -1425,10 +1435,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
-                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, spec, spec_lod, &spec_fresh, &spec_seed);
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, n, spec, spec_lod, &spec_fresh, &spec_seed);
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
-                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, diff, diff_lod, &diff_fresh, &diff_seed);
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, n, diff, diff_lod, &diff_fresh, &diff_seed);
             }
         }
     }

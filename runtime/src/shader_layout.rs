@@ -115,7 +115,7 @@ fn the_vertex_and_patch_records_match() {
 /// Every constant of shade.wgsl has the value of its Rust twin, and every one has a twin.
 #[test]
 fn shader_constants_are_the_rust_constants() {
-    let twins: [(&str, f64); 8] = [
+    let twins: [(&str, f64); 9] = [
         ("PBR_LOD_BIAS", f64::from(crate::reference::PBR_LOD_BIAS)),
         ("INVALID", f64::from(oslf_format::INVALID_INDEX)),
         ("FAR", f64::from(crate::face::FAR_DISTANCE)),
@@ -126,6 +126,7 @@ fn shader_constants_are_the_rust_constants() {
         ),
         ("LOOKUP_AGREE", f64::from(crate::reference::LOOKUP_AGREE)),
         ("HIT_AGREE", f64::from(crate::reference::HIT_AGREE)),
+        ("LOW_HIT", f64::from(crate::reference::LOW_HIT)),
         ("WORKGROUP", f64::from(WORKGROUP)),
     ];
     // The seam table is checked against the projection it encodes (reference::tests);

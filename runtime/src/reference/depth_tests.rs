@@ -341,19 +341,21 @@ fn per_point_searched_reads_where_a_point_that_sees_the_ray_meets_it() {
     // x + 10 z seen from (−0.1, 0, 0.1).
     let want = Vec3::new(0.1, 0.0, 9.9);
     for k in [0, 1] {
-        let (e, d) = shader.searched(&c, k, k, w, x, &up);
+        let (e, d) = shader.searched(&c, k, k, w, x, Vec3::Z, &up).unwrap();
         assert_eq!(e, 1, "candidate {k}");
         assert!((d - want).length() < 0.05 * want.length(), "{k}: {d}");
     }
-    let (e, d) = shader.searched(&c, 0, 0, [0.5, 0.0, 0.0, 0.0], x, &up);
+    let (e, d) = shader
+        .searched(&c, 0, 0, [0.5, 0.0, 0.0, 0.0], x, Vec3::Z, &up)
+        .unwrap();
     assert_eq!((e, d), (0, Vec3::Z), "the other has no weight");
     let both_enclosed = Candidates {
         idx: [0, 0, INVALID_INDEX, INVALID_INDEX],
         ..c
     };
     assert_eq!(
-        shader.searched(&both_enclosed, 0, 0, w, x, &up),
-        (0, Vec3::Z),
+        shader.searched(&both_enclosed, 0, 0, w, x, Vec3::Z, &up),
+        Some((0, Vec3::Z)),
         "no other sees it"
     );
 
@@ -412,4 +414,53 @@ fn up_sample() -> super::glossy::AsSample {
         weight: Vec3::ONE,
         lpdf: 0.0,
     }
+}
+
+/// Two sample points 0.1 above x = 0 and a wall at x = 0.5 (red; nothing elsewhere).
+struct Wall {
+    res: u32,
+    points: [Vec3; 2],
+}
+
+impl Trace for Wall {
+    fn trace(&self, cube: u32, face: usize, x: u32, y: u32) -> (f32, Vec3) {
+        let d = Vec3::from_array(oslf_format::cube::texel_direction(face, x, y, self.res));
+        let p = self.points[cube as usize];
+        if d.x <= 0.0 {
+            return (FAR_DISTANCE, Vec3::Z);
+        }
+        ((0.5 - p.x) / d.x * d.length(), Vec3::X)
+    }
+}
+
+/// Per point searched leaves a hit lower above x's tangent plane than LOW_HIT times the
+/// point's distance from x (the wall met by a ray 1° above the plane, 0.009 high, the point
+/// 0.1 away) to the per point read, and keeps a higher one (45°: 0.5 high).
+#[test]
+fn per_point_searched_leaves_a_low_hit_to_the_per_point_read() {
+    let res = 64;
+    let points = [Vec3::new(0.0, 0.0, 0.1), Vec3::new(0.0, 0.1, 0.1)];
+    let cubes = Traced(Wall { res, points });
+    let shader = bare_shader(depth_uniform(res), &points, &cubes);
+    let x = Vec3::ZERO;
+    let c = two_candidates(&points, x);
+    let w = [0.5, 0.5, 0.0, 0.0];
+    let sample = |l: Vec3| super::glossy::AsSample {
+        l: l.normalize(),
+        weight: Vec3::ONE,
+        lpdf: 0.0,
+    };
+    let low = sample(Vec3::new(1.0, 0.0, 0.0175));
+    assert_eq!(
+        shader.depth_search(0, x, low.l).1,
+        1.0,
+        "the search meets the wall"
+    );
+    assert_eq!(shader.searched(&c, 0, 0, w, x, Vec3::Z, &low), None);
+    let high = sample(Vec3::new(1.0, 0.0, 1.0));
+    let (e, d) = shader.searched(&c, 0, 0, w, x, Vec3::Z, &high).unwrap();
+    // The wall's point (0.5, 0, 0.5) seen from (0, 0, 0.1).
+    let want = Vec3::new(0.5, 0.0, 0.4);
+    assert_eq!(e, 0);
+    assert!((d - want).length() < 0.02, "{d}");
 }

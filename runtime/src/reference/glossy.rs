@@ -12,7 +12,7 @@ use oslf_shading::sh;
 
 use super::blend::Candidates;
 use super::random::filter_rows;
-use super::{CubeTexels, Shader};
+use super::{CubeTexels, Shader, LOW_HIT};
 
 pub(super) struct AsSample {
     pub(super) l: Vec3,
@@ -286,7 +286,10 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// Per point searched, where sample `s` of candidate `k` (cube `cube`) is read, as
-    /// `searched`: the candidate whose cube is read and the direction from its point.
+    /// `searched`: the candidate whose cube is read and the direction from its point; `None`
+    /// for a hit lower above x's tangent plane (normal `n`) than LOW_HIT times the point's
+    /// distance from x, which is read as per point reads it.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn searched(
         &self,
         c: &Candidates,
@@ -294,17 +297,22 @@ impl<C: CubeTexels> Shader<'_, C> {
         cube: u32,
         w: [f32; 4],
         x: Vec3,
+        n: Vec3,
         s: &AsSample,
-    ) -> (u32, Vec3) {
+    ) -> Option<(u32, Vec3)> {
+        let p = self.samples[cube as usize];
         let (d, seen) = self.depth_search(cube, x, s.l);
+        if seen > 0.0 && (p + d - x).dot(s.l) * s.l.dot(n) < LOW_HIT * (x - p).length() {
+            return None;
+        }
         if seen >= 0.0 {
-            return (k, d);
+            return Some((k, d));
         }
         heaviest_other(c, k, w, |other| {
             let (d, seen) = self.depth_search(other, x, s.l);
             (seen >= 0.0).then_some(d)
         })
-        .unwrap_or((k, d))
+        .or(Some((k, d)))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -351,8 +359,12 @@ impl<C: CubeTexels> Shader<'_, C> {
                 if !(s.weight.max_element() > 0.0) {
                     continue;
                 }
-                if u.order == 3 && u.depth_steps > 0 && cube != u.env_cube {
-                    let (e, d) = self.searched(c, j, cube, w, x, &s);
+                let seen = if u.order == 3 && u.depth_steps > 0 && cube != u.env_cube {
+                    self.searched(c, j, cube, w, x, n, &s)
+                } else {
+                    None
+                };
+                if let Some((e, d)) = seen {
                     let read = if e == j { cube } else { c.idx[e as usize] };
                     let li = self.read_dir(read, d, self.sample_lod(s.l, s.lpdf));
                     acc += li.unwrap_or_else(|| {

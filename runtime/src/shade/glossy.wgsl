@@ -2,7 +2,7 @@
 // Its CPU twin: reference/glossy.rs.
 
 import package::shade::bindings::{
-    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, IRRADIANCE, ORDER, P, PBR_LOD_BIAS, SOURCE,
+    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, IRRADIANCE, LOW_HIT, ORDER, P, PBR_LOD_BIAS, SOURCE,
     SPLIT_SUM, TERMS, samples, slots,
 };
 import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
@@ -208,14 +208,20 @@ fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: 
 // Per point searched (ORDER 3), where sample `s` of entry k is read: where k's sample point
 // sees the sample's ray meet the scene (`depth_search`), or where k's cannot (the search's
 // w < 0), where the used entry of largest blend weight `w` whose point sees it does (k's own
-// search where none does). `e`: the entry whose cube is read; `d`: the direction from its point.
+// search where none does). `e`: the entry whose cube is read, or 4 for a hit k's point sees
+// lower above x's tangent plane (normal n) than LOW_HIT times its distance from x: there the
+// sample is read as per point reads it. `d`: the direction from its point.
 struct Seen {
     e: u32,
     d: vec3<f32>,
 };
 
-fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, n: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
+    let p = samples[cubes[k]].xyz;
     let h = depth_search(cubes[k], x, s.l);
+    if (h.w > 0.0 && dot(p + h.xyz - x, s.l) * dot(s.l, n) < LOW_HIT * length(x - p)) {
+        return Seen(4u, s.l);
+    }
     var best = Seen(k, h.xyz);
     var best_w = 0.0;
     // A loop no invocation enters where k sees the sample, as in `stand_in`.
@@ -231,16 +237,22 @@ fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, w: vec4<f3
 
 // Adds sample `s`'s radiance × weight to entry k of `sums`: `sample_radiance` of entry k's cube,
 // or with ORDER 2, where k's point cannot see the sample, of its `stand_in`'s, read as a fresh
-// sample that leaves k's row as it was; with ORDER 3 where `searched` sees it. `fresh` and `seeds`: per entry, this kind of sample's
-// row state of `depth_iterate`; `w`: the entries' blend weights, which choose the stand-in.
+// sample that leaves k's row as it was; with ORDER 3 where `searched` sees it (x's normal n),
+// unless its hit is too low. `fresh` and `seeds`: per entry, this kind of sample's row state of
+// `depth_iterate`; `w`: the entries' blend weights, which choose the stand-in.
 // A function, not a loop over the two kinds of sample: lavapipe ran FIS frames markedly
 // slower with even a one-pass loop around the read (docs/measurements.md).
-fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
+fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: vec4<f32>, oy: vec4<f32>, oz: vec4<f32>, w: vec4<f32>, wn: vec4<f32>, x: vec3<f32>, n: vec3<f32>, s: AsSample, lod: f32, fresh: ptr<function, vec4<bool>>, seeds: ptr<function, vec4<f32>>) {
     var l: vec4<f32>;
+    var plain = true;
     if (ORDER == 3u && DEPTH && cubes[k] != P.env_cube) {
-        let seen = searched(k, cubes, used, x, w, s);
-        l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
-    } else {
+        let seen = searched(k, cubes, used, x, n, w, s);
+        if (seen.e < 4u) {
+            l = read_dir(cubes[seen.e], entries[seen.e], seen.d, lod);
+            plain = false;
+        }
+    }
+    if (plain) {
         var e = k;
         if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s); }
         let own = e == k;
@@ -315,10 +327,10 @@ fn integrate(cubes: vec4<u32>, used: vec4<bool>, j0: u32, pixel: u32, x: vec3<f3
             }
             drawn = true;
             if (max3(spec.weight) > 0.0) {
-                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, spec, spec_lod, &spec_fresh, &spec_seed);
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, n, spec, spec_lod, &spec_fresh, &spec_seed);
             }
             if (DIFFUSE && !IRRADIANCE && max3(diff.weight) > 0.0) {
-                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, diff, diff_lod, &diff_fresh, &diff_seed);
+                accumulate(&out, k, cubes, entries, used, ox, oy, oz, w, wn, x, n, diff, diff_lod, &diff_fresh, &diff_seed);
             }
         }
     }
