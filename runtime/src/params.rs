@@ -215,8 +215,10 @@ pub enum Order {
     PerPointVisible,
     /// Per point, but each sample read where its sample point sees the ray meet the scene by
     /// the mirror's search (depth-corrected lookups only), and a sample whose ray that point
-    /// cannot see where the candidate of largest blend weight that can sees it. About per
-    /// direction's cost: a full search per sample and candidate.
+    /// cannot see where the candidate of largest blend weight that can sees it; a hit that
+    /// lies lower above the surface than a quarter of the point's distance from it (the
+    /// object's own surface seen at a grazing angle) is read as per point reads it. About two
+    /// thirds of per direction's cost: a full search per sample and candidate.
     PerPointSearched,
 }
 
