@@ -93,8 +93,17 @@ impl ShadingArgs {
     }
 
     /// The parameters of `mode` with `blend` and the flags that mode has (the others are
-    /// not read), validated. Every flag's range is checked, whichever mode reads it.
+    /// not read), validated. Every flag's range is checked, whichever mode reads it; an order
+    /// that reads the distance channel is refused with `--no-depth` (it would integrate per
+    /// point).
     pub fn params(&self, mode: Mode, blend: Blend) -> Result<ShadingParams> {
+        if self.no_depth && matches!(self.order, Order::PerPointVisible | Order::PerPointSearched) {
+            return Err(RuntimeError::Parameter(format!(
+                "--order {} reads the distance channel and so needs depth-corrected lookups: \
+                 without them it is --order per-point; drop --no-depth or choose another order",
+                self.order.name()
+            )));
+        }
         let defaults = PbrMaterial::default();
         ShadingParts {
             phi_shader_deg: self.phi_shader,
@@ -434,6 +443,33 @@ mod tests {
             assert_eq!(args.blend_n(), want, "{flags:?}");
             let p = args.params(Mode::Mirror, Blend::Normal).unwrap();
             assert_eq!(p.blend(), Some((Blend::Normal, want)), "{flags:?}");
+        }
+    }
+
+    /// The orders that read the distance channel are refused with plain lookups, naming the
+    /// order and the flag; with depth-corrected lookups they are accepted.
+    #[test]
+    fn orders_that_read_distances_need_depth_corrected_lookups() {
+        use clap::Parser;
+        let parse = |flags: &[&str]| {
+            Shading::try_parse_from(std::iter::once("oslf").chain(flags.iter().copied()))
+                .unwrap()
+                .shading
+        };
+        for order in ["per-point-visible", "per-point-searched"] {
+            let e = parse(&["--order", order, "--no-depth"])
+                .params(Mode::Glossy, Blend::Normal)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(order) && e.contains("--no-depth"), "{e}");
+            assert!(parse(&["--order", order])
+                .params(Mode::Glossy, Blend::Normal)
+                .is_ok());
+        }
+        for order in ["per-point", "per-direction"] {
+            assert!(parse(&["--order", order, "--no-depth"])
+                .params(Mode::Glossy, Blend::Normal)
+                .is_ok());
         }
     }
 }
