@@ -241,6 +241,12 @@ impl Order {
         }
     }
 
+    /// Whether it reads the distance channel (per point visible, per point searched): without
+    /// depth-corrected lookups it integrates per point.
+    pub fn reads_distances(self) -> bool {
+        matches!(self, Order::PerPointVisible | Order::PerPointSearched)
+    }
+
     /// The shader's tag (`ORDER`): 0 per point, 1 per direction, 2 per point visible, 3 per
     /// point searched.
     pub fn tag(self) -> u32 {

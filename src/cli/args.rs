@@ -97,7 +97,7 @@ impl ShadingArgs {
     /// that reads the distance channel is refused with `--no-depth` (it would integrate per
     /// point).
     pub fn params(&self, mode: Mode, blend: Blend) -> Result<ShadingParams> {
-        if self.no_depth && matches!(self.order, Order::PerPointVisible | Order::PerPointSearched) {
+        if self.no_depth && self.order.reads_distances() {
             return Err(RuntimeError::Parameter(format!(
                 "--order {} reads the distance channel and so needs depth-corrected lookups: \
                  without them it is --order per-point; drop --no-depth or choose another order",

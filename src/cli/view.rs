@@ -10,7 +10,7 @@
 //! | D | depth-corrected lookups on ↔ off |
 //! | F | glossy filter: mip ↔ point |
 //! | G | next background: env, none (and the `--background` colour, if one was given) |
-//! | O | integration order: per point → per direction → per point visible → per point searched |
+//! | O | integration order: per point → per direction → per point visible → per point searched (without depth correction, per point ↔ per direction) |
 //! | Up / Down | blend power N × 2 / ÷ 2 |
 //! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
 //! | ] / [ | M × 2 / ÷ 2 |
@@ -425,12 +425,7 @@ impl App {
                 }
                 "f" => next_filter(p),
                 "g" => self.background = (self.background + 1) % self.backgrounds.len(),
-                "o" => {
-                    if let Ok(mc) = p.monte_carlo_mut() {
-                        let i = Order::ALL.iter().position(|&o| o == mc.order).unwrap_or(0);
-                        mc.order = Order::ALL[(i + 1) % Order::ALL.len()];
-                    }
-                }
+                "o" => next_order(p),
                 "u" | "j" | "i" | "k" => {
                     if let Ok(l) = p.lobe_mut() {
                         match c.as_str() {
@@ -504,6 +499,19 @@ fn next_source(p: &mut ShadingParams, parallax: bool) {
 
 /// Key F: filtered importance sampling, point sampling, and for the pbr mode over a probe the
 /// split-sum baseline.
+/// The O key: the next integration order of `Order::ALL`; without depth correction, past the
+/// orders that read distances (they would draw per point's frame under their own name).
+fn next_order(p: &mut ShadingParams) {
+    let depth = p.depth();
+    if let Ok(mc) = p.monte_carlo_mut() {
+        let i = Order::ALL.iter().position(|&o| o == mc.order).unwrap_or(0);
+        mc.order = (1..=Order::ALL.len())
+            .map(|k| Order::ALL[(i + k) % Order::ALL.len()])
+            .find(|o| depth || !o.reads_distances())
+            .unwrap_or(Order::PerPoint);
+    }
+}
+
 fn next_filter(p: &mut ShadingParams) {
     if let ShadingParams::Pbr(pbr) = p {
         match pbr.integration {
@@ -634,6 +642,42 @@ fn blit_modules() -> Vec<(String, String)> {
 
 #[cfg(test)]
 mod tests {
+    use oslf_runtime::{Mode, Order, ShadingParams};
+
+    /// O cycles every order with depth-corrected lookups, and only per point and per direction
+    /// without them.
+    #[test]
+    fn the_o_key_skips_orders_that_read_distances_without_depth() {
+        let cycle = |depth: bool| {
+            let mut p = ShadingParams::of_mode(Mode::Glossy);
+            p.set_depth(depth).unwrap();
+            (0..4)
+                .map(|_| {
+                    super::next_order(&mut p);
+                    p.monte_carlo_mut().unwrap().order
+                })
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            cycle(true),
+            [
+                Order::PerDirection,
+                Order::PerPointVisible,
+                Order::PerPointSearched,
+                Order::PerPoint
+            ]
+        );
+        assert_eq!(
+            cycle(false),
+            [
+                Order::PerDirection,
+                Order::PerPoint,
+                Order::PerDirection,
+                Order::PerPoint
+            ]
+        );
+    }
+
     /// The embedded blit shader is what its modules assemble to (`OSLF_BLESS=1` writes it).
     #[test]
     fn blit_shader_is_its_modules_assembled() {
