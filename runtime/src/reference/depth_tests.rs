@@ -295,7 +295,7 @@ fn per_point_visible_reads_a_hidden_sample_from_a_point_that_sees_it() {
     let o = |cube: usize| x - points[cube];
     let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
-    let up = up_sample();
+    let up = sample_along(Vec3::Z);
     let shader = bare_shader(uniform, &points, &cubes);
     assert!(shader.depth_hidden(0, o(0), Vec3::Z));
     assert!(!shader.depth_hidden(1, o(1), Vec3::Z));
@@ -330,7 +330,7 @@ fn per_point_searched_reads_where_a_point_that_sees_the_ray_meets_it() {
     let x = Vec3::ZERO;
     let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
-    let up = up_sample();
+    let up = sample_along(Vec3::Z);
     let shader = bare_shader(uniform, &points, &cubes);
     assert!(shader.depth_search(0, x, Vec3::Z).1 < 0.0, "enclosed");
     assert_eq!(
@@ -407,10 +407,10 @@ fn enclosed() -> ([Vec3; 2], Traced<Enclosed>, crate::uniform::ShadeUniform) {
     (points, Traced(Enclosed { res, points }), uniform)
 }
 
-/// A glossy sample straight up (+z) of weight 1.
-fn up_sample() -> super::glossy::AsSample {
+/// A glossy sample along `l` (normalized) of weight 1.
+fn sample_along(l: Vec3) -> super::glossy::AsSample {
     super::glossy::AsSample {
-        l: Vec3::Z,
+        l: l.normalize(),
         weight: Vec3::ONE,
         lpdf: 0.0,
     }
@@ -445,19 +445,14 @@ fn per_point_searched_leaves_a_low_hit_to_the_per_point_read() {
     let x = Vec3::ZERO;
     let c = two_candidates(&points, x);
     let w = [0.5, 0.5, 0.0, 0.0];
-    let sample = |l: Vec3| super::glossy::AsSample {
-        l: l.normalize(),
-        weight: Vec3::ONE,
-        lpdf: 0.0,
-    };
-    let low = sample(Vec3::new(1.0, 0.0, 0.0175));
+    let low = sample_along(Vec3::new(1.0, 0.0, 0.0175));
     assert_eq!(
         shader.depth_search(0, x, low.l).1,
         1.0,
         "the search meets the wall"
     );
     assert_eq!(shader.searched(&c, 0, 0, w, x, Vec3::Z, &low), None);
-    let high = sample(Vec3::new(1.0, 0.0, 1.0));
+    let high = sample_along(Vec3::new(1.0, 0.0, 1.0));
     let (e, d) = shader.searched(&c, 0, 0, w, x, Vec3::Z, &high).unwrap();
     // The wall's point (0.5, 0, 0.5) seen from (0, 0, 0.1).
     let want = Vec3::new(0.5, 0.0, 0.4);
