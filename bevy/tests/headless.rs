@@ -28,7 +28,7 @@ use bevy::render::view::Msaa;
 use bevy::shape::Cuboid;
 use bevy::transform::components::Transform;
 use oslf_bevy::{Mode, OslfCacheStats, OslfMessages, OslfObject, ShadingParams};
-use oslf_runtime::{CacheConfig, Camera, Gpu, RenderOptions, Renderer};
+use oslf_runtime::{CacheConfig, Camera, Gpu, Order, RenderOptions, Renderer};
 
 const W: u32 = 160;
 const H: u32 = 120;
@@ -448,6 +448,35 @@ fn damaged_and_missing_stores_are_said_once_and_draw_nothing() {
             "{messages:?}"
         );
     }
+}
+
+/// An order that reads distances without depth-corrected lookups is said once, naming the
+/// order, and draws nothing (rather than per point's frame under its name).
+#[test]
+fn an_order_that_reads_distances_without_depth_is_said_once_and_draws_nothing() {
+    let store = common::store_path();
+    let dir = store.parent().unwrap();
+    let (camera, _) = reference(&store, &params());
+    let mut bad = ShadingParams::of_mode(Mode::Glossy);
+    bad.set_depth(false).unwrap();
+    bad.monte_carlo_mut().unwrap().order = Order::PerPointSearched;
+    let setup = Setup {
+        params: bad,
+        ..setup_for(camera, Extra::None, true)
+    };
+    let mut app = app(dir, setup);
+    let pixels = run_and_capture(&mut app, 10);
+    let without = run_and_capture(
+        &mut self::app(dir, setup_for(camera, Extra::None, false)),
+        4,
+    );
+    assert_eq!(pixels, without, "nothing is drawn");
+    let messages = app.world().resource::<OslfMessages>().all();
+    assert_eq!(messages.len(), 1, "said once: {messages:?}");
+    assert!(
+        messages[0].contains("per-point-searched") && messages[0].contains("depth"),
+        "{messages:?}"
+    );
 }
 
 /// examples/orb.toml baked small into `dir` as `orb.oslf`: a glTF object whose roughness

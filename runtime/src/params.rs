@@ -242,7 +242,8 @@ impl Order {
     }
 
     /// Whether it reads the distance channel (per point visible, per point searched): without
-    /// depth-corrected lookups it integrates per point.
+    /// depth-corrected lookups ([`crate::ShadingParams::validate`]) or on a store baked without
+    /// distances (the renderer) it is refused.
     pub fn reads_distances(self) -> bool {
         matches!(self, Order::PerPointVisible | Order::PerPointSearched)
     }

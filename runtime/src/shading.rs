@@ -760,7 +760,8 @@ impl ShadingParams {
         RuntimeError::Parameter(format!("mode {} has no {what}", self.mode().name()))
     }
 
-    /// Errors naming the first parameter outside its range (NaN included).
+    /// Errors naming the first parameter outside its range (NaN included), or an integration
+    /// order that reads distances without depth-corrected lookups.
     pub fn validate(&self) -> Result<()> {
         let check = |name: &str, v: f32, lo: f32, hi: f32| {
             if v.is_finite() && v >= lo && v <= hi {
@@ -796,6 +797,13 @@ impl ShadingParams {
             }
         }
         if let Some(mc) = self.monte_carlo() {
+            if mc.order.reads_distances() && !self.depth() {
+                return Err(RuntimeError::Parameter(format!(
+                    "order {} reads the distance channel and so needs depth-corrected lookups \
+                     (depth = true): without them it would integrate per point",
+                    mc.order.name()
+                )));
+            }
             if !(1..=65536).contains(&mc.m) {
                 return Err(RuntimeError::Parameter(format!(
                     "M = {} must be in [1, 65536]",
@@ -861,5 +869,27 @@ mod tests {
             depth: true,
         });
         assert!(p.validate().unwrap_err().to_string().contains("phi_shader"));
+    }
+
+    /// The orders that read the distance channel are refused without depth-corrected lookups
+    /// (they would integrate per point under their own name); the others are not.
+    #[test]
+    fn orders_that_read_distances_need_depth() {
+        for mode in [Mode::Glossy, Mode::ReconGlossy, Mode::Pbr] {
+            for order in Order::ALL {
+                for depth in [true, false] {
+                    let mut p = ShadingParams::of_mode(mode);
+                    p.set_depth(depth).unwrap();
+                    p.monte_carlo_mut().unwrap().order = order;
+                    let r = p.validate();
+                    if order.reads_distances() && !depth {
+                        let e = r.unwrap_err().to_string();
+                        assert!(e.contains(order.name()) && e.contains("depth"), "{e}");
+                    } else {
+                        assert!(r.is_ok(), "{mode:?} {order:?} {depth}: {r:?}");
+                    }
+                }
+            }
+        }
     }
 }

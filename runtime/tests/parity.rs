@@ -6,7 +6,10 @@ use crate::common::knobs::Knobs;
 
 use common::{compare, open_store};
 use oslf_runtime::reference::StoreCubes;
-use oslf_runtime::{Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, Renderer, Source};
+use oslf_runtime::{
+    Blend, CacheConfig, GlossyFilter, Gpu, Mode, Order, RenderOptions, Renderer, RuntimeError,
+    Source,
+};
 
 const W: u32 = 96;
 const H: u32 = 72;
@@ -301,6 +304,42 @@ fn depth_correction_filtering_and_parallax_match_the_cpu_reference() {
             },
             label,
         );
+    }
+}
+
+/// On a store baked without distances, the orders that read them are a parameter error naming
+/// the order, not per point's frame under their name; the others render.
+#[test]
+fn orders_that_read_distances_are_refused_on_a_store_without_them() {
+    let store = oslf_format::Store::open(&common::store_path_without_distances()).unwrap();
+    assert!(!store.header().has_distance());
+    let mut r = Renderer::new(Gpu::headless().unwrap(), store, CacheConfig::default()).unwrap();
+    let camera = r.default_view();
+    let opts = RenderOptions {
+        width: 32,
+        height: 24,
+        ..Default::default()
+    };
+    for order in Order::ALL {
+        let params = Knobs {
+            mode: Mode::Glossy,
+            m: 4,
+            order,
+            ..Default::default()
+        }
+        .params();
+        match r.render(&camera, &params, &opts) {
+            Err(RuntimeError::Parameter(m)) if order.reads_distances() => {
+                assert!(
+                    m.contains(order.name()) && m.contains("distance channel"),
+                    "{m}"
+                )
+            }
+            Ok(frame) if !order.reads_distances() => {
+                assert!(common::all_finite(&frame.pixels), "{order:?}")
+            }
+            other => panic!("{order:?}: {:?}", other.map(|_| ())),
+        }
     }
 }
 

@@ -7,10 +7,10 @@
 //! | 1 … 6 | mode: recon, mirror, recon + mirror, glossy, recon + glossy, pbr |
 //! | B | next blend: distance, angle, avg, r, n |
 //! | E | next source: OSLF, environment-map baseline, parallax-corrected baseline (when the store has a proxy box to fit) |
-//! | D | depth-corrected lookups on ↔ off |
+//! | D | depth-corrected lookups on ↔ off (off, an order that reads distances gives way to per point) |
 //! | F | glossy filter: mip ↔ point |
 //! | G | next background: env, none (and the `--background` colour, if one was given) |
-//! | O | integration order: per point → per direction → per point visible → per point searched (without depth correction, per point ↔ per direction) |
+//! | O | integration order: per point → per direction → per point visible → per point searched (without depth correction or a store with distances, per point ↔ per direction) |
 //! | Up / Down | blend power N × 2 / ÷ 2 |
 //! | U / J, I / K | n_u, n_v × 2 / ÷ 2 |
 //! | ] / [ | M × 2 / ÷ 2 |
@@ -405,6 +405,10 @@ impl App {
                 .proxy_box(&ShadingParams::of_mode(Mode::Recon))
                 .is_some()
         });
+        let distances = self
+            .state
+            .as_ref()
+            .is_some_and(|s| s.renderer.constants().has_depth);
         let p = &mut self.params[self.mode];
         // A key for what the mode does not have changes nothing (the setters refuse it).
         match key {
@@ -420,12 +424,10 @@ impl App {
                     (Blend::ALL[(i + 1) % Blend::ALL.len()], n)
                 }),
                 "e" => next_source(p, parallax),
-                "d" => {
-                    let _ = p.set_depth(!p.depth());
-                }
+                "d" => toggle_depth(p),
                 "f" => next_filter(p),
                 "g" => self.background = (self.background + 1) % self.backgrounds.len(),
-                "o" => next_order(p),
+                "o" => next_order(p, distances),
                 "u" | "j" | "i" | "k" => {
                     if let Ok(l) = p.lobe_mut() {
                         match c.as_str() {
@@ -499,16 +501,30 @@ fn next_source(p: &mut ShadingParams, parallax: bool) {
 
 /// Key F: filtered importance sampling, point sampling, and for the pbr mode over a probe the
 /// split-sum baseline.
-/// The O key: the next integration order of `Order::ALL`; without depth correction, past the
-/// orders that read distances (they would draw per point's frame under their own name).
-fn next_order(p: &mut ShadingParams) {
-    let depth = p.depth();
+/// The O key: the next integration order of `Order::ALL`; without depth correction or a store
+/// with `distances`, past the orders that read distances (the renderer refuses them there).
+fn next_order(p: &mut ShadingParams, distances: bool) {
+    let depth = p.depth() && distances;
     if let Ok(mc) = p.monte_carlo_mut() {
         let i = Order::ALL.iter().position(|&o| o == mc.order).unwrap_or(0);
         mc.order = (1..=Order::ALL.len())
             .map(|k| Order::ALL[(i + k) % Order::ALL.len()])
             .find(|o| depth || !o.reads_distances())
             .unwrap_or(Order::PerPoint);
+    }
+}
+
+/// The D key: depth-corrected lookups on or off; turned off, an order that reads distances
+/// (refused without them) gives way to per point.
+fn toggle_depth(p: &mut ShadingParams) {
+    let on = !p.depth();
+    if p.set_depth(on).is_err() || on {
+        return;
+    }
+    if let Ok(mc) = p.monte_carlo_mut() {
+        if mc.order.reads_distances() {
+            mc.order = Order::PerPoint;
+        }
     }
 }
 
@@ -644,22 +660,23 @@ fn blit_modules() -> Vec<(String, String)> {
 mod tests {
     use oslf_runtime::{Mode, Order, ShadingParams};
 
-    /// O cycles every order with depth-corrected lookups, and only per point and per direction
-    /// without them.
+    /// O cycles every order with depth-corrected lookups on a store with distances, and only
+    /// per point and per direction without either.
     #[test]
     fn the_o_key_skips_orders_that_read_distances_without_depth() {
-        let cycle = |depth: bool| {
+        let cycle = |depth: bool, distances: bool| {
             let mut p = ShadingParams::of_mode(Mode::Glossy);
             p.set_depth(depth).unwrap();
             (0..4)
                 .map(|_| {
-                    super::next_order(&mut p);
+                    super::next_order(&mut p, distances);
+                    assert!(p.validate().is_ok() || !depth, "{p:?}");
                     p.monte_carlo_mut().unwrap().order
                 })
                 .collect::<Vec<_>>()
         };
         assert_eq!(
-            cycle(true),
+            cycle(true, true),
             [
                 Order::PerDirection,
                 Order::PerPointVisible,
@@ -667,15 +684,39 @@ mod tests {
                 Order::PerPoint
             ]
         );
-        assert_eq!(
-            cycle(false),
-            [
-                Order::PerDirection,
-                Order::PerPoint,
-                Order::PerDirection,
+        for (depth, distances) in [(false, true), (true, false), (false, false)] {
+            assert_eq!(
+                cycle(depth, distances),
+                [
+                    Order::PerDirection,
+                    Order::PerPoint,
+                    Order::PerDirection,
+                    Order::PerPoint
+                ]
+            );
+        }
+    }
+
+    /// D turned off gives an order that reads distances up for per point (it would be
+    /// refused), and leaves the others; turned on, the order stays.
+    #[test]
+    fn the_d_key_leaves_no_order_that_needs_depth() {
+        for order in Order::ALL {
+            let mut p = ShadingParams::of_mode(Mode::Pbr);
+            p.monte_carlo_mut().unwrap().order = order;
+            super::toggle_depth(&mut p);
+            assert!(!p.depth());
+            assert!(p.validate().is_ok(), "{order:?}");
+            let want = if order.reads_distances() {
                 Order::PerPoint
-            ]
-        );
+            } else {
+                order
+            };
+            assert_eq!(p.monte_carlo().unwrap().order, want);
+            super::toggle_depth(&mut p);
+            assert!(p.depth());
+            assert_eq!(p.monte_carlo().unwrap().order, want);
+        }
     }
 
     /// The embedded blit shader is what its modules assemble to (`OSLF_BLESS=1` writes it).

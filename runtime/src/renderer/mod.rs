@@ -541,10 +541,20 @@ impl Renderer {
         })
     }
 
-    /// Errors for parameters this store cannot shade: invalid values, the parallax baseline
-    /// without a proxy box, an environment background without an environment cube.
+    /// Errors for parameters this store cannot shade: invalid values, an order that reads
+    /// distances on a store without them, the parallax baseline without a proxy box, an
+    /// environment background without an environment cube.
     fn check_frame(&self, params: &ShadingParams, background: Background) -> Result<()> {
         params.validate()?;
+        if let Some(mc) = params.monte_carlo() {
+            if mc.order.reads_distances() && !self.constants.has_depth {
+                return Err(RuntimeError::Parameter(format!(
+                    "order {} reads the distance channel, and this store has none (bake it \
+                     with distance_channel = true, the default)",
+                    mc.order.name()
+                )));
+            }
+        }
         if params.source() == Source::Parallax && self.proxy_box(params).is_none() {
             return Err(RuntimeError::InvalidParam {
                 param: Param::ProxyBox,
