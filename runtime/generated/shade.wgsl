@@ -766,6 +766,10 @@ fn depth_lookup(cube: u32, h: vec4<f32>, lod: f32) -> vec4<f32> {
     return vec4<f32>(c, 1.0);
 }
 
+fn low_hit(p: vec3<f32>, h: vec4<f32>, x: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> bool {
+    return h.w > 0.0 && dot(p + h.xyz - x, l) * dot(l, n) < LOW_HIT * length(x - p);
+}
+
 fn bern3(t: f32) -> vec4<f32> {
     let s = 1.0 - t;
     return vec4<f32>(s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t);
@@ -950,7 +954,7 @@ fn blend_fetch(w: vec4<f32>, t: Tap) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32> {
+fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32, n: vec3<f32>, low: bool) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     var hidden = vec3<f32>(0.0);
@@ -962,6 +966,9 @@ fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32>
             var l = vec4<f32>(0.0);
             if (DEPTH) {
                 h = depth_search(cand.idx[j], x, dir);
+                if (low && low_hit(samples[cand.idx[j]].xyz, h, x, dir, n)) {
+                    h = vec4<f32>(dir, 0.0);
+                }
                 if (h.w > 0.0) {
                     near = min(near, dot(h.xyz + samples[cand.idx[j]].xyz - x, dir));
                 }
@@ -1127,7 +1134,7 @@ fn mirror(x: vec3<f32>, n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
         }
         let w = blend_weights(axis);
         if (DEPTH) {
-            b = blend_read(w, x, r, 0.0);
+            b = blend_read(w, x, r, 0.0, n, false);
         }
         else if (BLEND <= 1u) {
             var j = 0u;
@@ -1256,14 +1263,14 @@ fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n
     return out;
 }
 
-fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) -> vec4<f32> {
+fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, n: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) -> vec4<f32> {
     let l = s.l;
     if (ORDER == 1u && cube == INVALID) {
         var w = wn;
         if (BLEND != 4u) {
             w = blend_weights(l);
         }
-        let b = blend_read(w, x, l, lod);
+        let b = blend_read(w, x, l, lod, n, true);
         if (b.w > 0.0) {
             return b;
         }
@@ -1336,7 +1343,7 @@ struct Seen {
 fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, n: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
     let p = samples[cubes[k]].xyz;
     let h = depth_search(cubes[k], x, s.l);
-    if (h.w > 0.0 && dot(p + h.xyz - x, s.l) * dot(s.l, n) < LOW_HIT * length(x - p)) {
+    if (low_hit(p, h, x, s.l, n)) {
         return Seen(4u, s.l);
     }
     var best = Seen(k, h.xyz);
@@ -1372,7 +1379,7 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4
         }
         let own = e == k;
         var seed = select(0.0, (*seeds)[k], own);
-        l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
+        l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, n, s, lod, (*fresh)[k] || !own, &seed);
         (*seeds)[k] = select((*seeds)[k], seed, own);
         (*fresh)[k] = (*fresh)[k] && !own;
     }

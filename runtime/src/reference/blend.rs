@@ -3,6 +3,7 @@
 use glam::Vec3;
 use oslf_format::INVALID_INDEX;
 
+use super::depth::low_hit;
 use super::{CubeTexels, Shader, HIT_AGREE};
 
 /// Candidates of a texel: the sample map's four entries with their directions from x.
@@ -94,7 +95,8 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// Blended radiance towards `dir` for the ray from `x` at mip level `lod`, each candidate
-    /// depth-corrected when the uniform asks (as `blend_read`).
+    /// depth-corrected when the uniform asks, a `low_hit` left out where `low` gives x's normal
+    /// (as `blend_read`: `low` and `n`).
     pub(super) fn blend_read(
         &self,
         c: &Candidates,
@@ -102,6 +104,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         x: Vec3,
         dir: Vec3,
         lod: f32,
+        low: Option<Vec3>,
     ) -> Option<Vec3> {
         let depth = self.uniform.depth_steps > 0;
         let (mut acc, mut wsum, mut hidden, mut hsum) = (Vec3::ZERO, 0.0, Vec3::ZERO, 0.0);
@@ -109,9 +112,13 @@ impl<C: CubeTexels> Shader<'_, C> {
         for j in 0..4 {
             if w[j] > 0.0 {
                 let (l, status) = if depth {
-                    let h = self.depth_search(c.idx[j], x, dir);
+                    let mut h = self.depth_search(c.idx[j], x, dir);
+                    let p = self.samples[c.idx[j] as usize];
+                    if low.is_some_and(|n| low_hit(p, h, x, dir, n)) {
+                        h = (dir, 0.0);
+                    }
                     if h.1 > 0.0 {
-                        near = near.min((h.0 + self.samples[c.idx[j] as usize] - x).dot(dir));
+                        near = near.min((h.0 + p - x).dot(dir));
                     }
                     (self.depth_lookup(c.idx[j], h, lod), h.1)
                 } else {

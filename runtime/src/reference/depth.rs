@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 use glam::Vec3;
 
 use super::cube::{face_st, Tap};
-use super::{CubeTexels, Shader, DEPTH_ITERATIONS, DEPTH_REFINE, LOOKUP_AGREE};
+use super::{CubeTexels, Shader, DEPTH_ITERATIONS, DEPTH_REFINE, LOOKUP_AGREE, LOW_HIT};
 use crate::face::FAR_DISTANCE;
 
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
@@ -195,4 +195,11 @@ impl<C: CubeTexels> Shader<'_, C> {
         }
         Some(c)
     }
+}
+
+/// Whether `h`, sample point `p`'s `depth_search` result for the ray from `x` along `l`, is a
+/// hit lower above x's tangent plane (normal `n`) than LOW_HIT times p's distance from x (as
+/// `low_hit`).
+pub(super) fn low_hit(p: Vec3, h: (Vec3, f32), x: Vec3, l: Vec3, n: Vec3) -> bool {
+    h.1 > 0.0 && (p + h.0 - x).dot(l) * l.dot(n) < LOW_HIT * (x - p).length()
 }

@@ -243,22 +243,22 @@ fn depth_corrected_blends_agree_on_the_nearest_hit() {
     let c = two_candidates(&points, x);
     // Each candidate alone: the plate (the first), the ceiling (the second).
     let first = shader
-        .blend_read(&c, [1.0, 0.0, 0.0, 0.0], x, Vec3::Z, 0.0)
+        .blend_read(&c, [1.0, 0.0, 0.0, 0.0], x, Vec3::Z, 0.0, None)
         .unwrap();
     let second = shader
-        .blend_read(&c, [0.0, 1.0, 0.0, 0.0], x, Vec3::Z, 0.0)
+        .blend_read(&c, [0.0, 1.0, 0.0, 0.0], x, Vec3::Z, 0.0, None)
         .unwrap();
     assert!((first - Vec3::X).length() < 1e-5, "{first}");
     assert!((second - Vec3::Z).length() < 1e-5, "{second}");
     // Together, with the second weighted three times the first: the plate.
     let both = shader
-        .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, Vec3::Z, 0.0)
+        .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, Vec3::Z, 0.0, None)
         .unwrap();
     assert!((both - Vec3::X).length() < 1e-5, "{both}");
     // A ray past the plate's edge meets the ceiling for both.
     let past = Vec3::new(0.3, 0.0, 1.0).normalize();
     let both = shader
-        .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, past, 0.0)
+        .blend_read(&c, [0.25, 0.75, 0.0, 0.0], x, past, 0.0, None)
         .unwrap();
     assert!((both - Vec3::Z).length() < 1e-5, "{both}");
 }
@@ -416,7 +416,8 @@ fn sample_along(l: Vec3) -> super::glossy::AsSample {
     }
 }
 
-/// Two sample points 0.1 above x = 0 and a wall at x = 0.5 (red; nothing elsewhere).
+/// Two sample points 0.1 above x = 0 and a wall at x = 0.5 (red below z = 0.05, green above;
+/// nothing elsewhere).
 struct Wall {
     res: u32,
     points: [Vec3; 2],
@@ -429,15 +430,24 @@ impl Trace for Wall {
         if d.x <= 0.0 {
             return (FAR_DISTANCE, Vec3::Z);
         }
-        ((0.5 - p.x) / d.x * d.length(), Vec3::X)
+        let t = (0.5 - p.x) / d.x;
+        let colour = if p.z + t * d.z < 0.05 {
+            Vec3::X
+        } else {
+            Vec3::Y
+        };
+        (t * d.length(), colour)
     }
 }
 
 /// Per point searched leaves a hit lower above x's tangent plane than LOW_HIT times the
 /// point's distance from x (the wall met by a ray 1° above the plane, 0.009 high, the point
-/// 0.1 away) to the per point read, and keeps a higher one (45°: 0.5 high).
+/// 0.1 away) to the per point read, and keeps a higher one (45°: 0.5 high). Per direction's
+/// blend (`low` given) looks such a candidate up along the ray (the wall's green, above
+/// z = 0.05, where the points see it that way), where the mirror's (no `low`) reads the hit
+/// (red).
 #[test]
-fn per_point_searched_leaves_a_low_hit_to_the_per_point_read() {
+fn a_low_hit_is_read_as_if_the_search_had_not_met_it() {
     let res = 64;
     let points = [Vec3::new(0.0, 0.0, 0.1), Vec3::new(0.0, 0.1, 0.1)];
     let cubes = Traced(Wall { res, points });
@@ -458,4 +468,9 @@ fn per_point_searched_leaves_a_low_hit_to_the_per_point_read() {
     let want = Vec3::new(0.5, 0.0, 0.4);
     assert_eq!(e, 0);
     assert!((d - want).length() < 0.02, "{d}");
+    let read = |l: Vec3, low: Option<Vec3>| shader.blend_read(&c, w, x, l, 0.0, low).unwrap();
+    let (plain, hit) = (read(low.l, Some(Vec3::Z)), read(low.l, None));
+    assert!(plain.y > 0.99 && plain.x < 0.01, "per direction: {plain}");
+    assert!(hit.x > 0.99 && hit.y < 0.01, "the mirror: {hit}");
+    assert_eq!(read(high.l, Some(Vec3::Z)), read(high.l, None));
 }

@@ -11,8 +11,9 @@ use oslf_shading::ggx;
 use oslf_shading::sh;
 
 use super::blend::Candidates;
+use super::depth::low_hit;
 use super::random::filter_rows;
-use super::{CubeTexels, Shader, LOW_HIT};
+use super::{CubeTexels, Shader};
 
 pub(super) struct AsSample {
     pub(super) l: Vec3,
@@ -179,7 +180,7 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
-    /// `cube` = INVALID, the blend), as `sample_radiance`; `fresh` and `seed` as
+    /// `cube` = INVALID, the blend, `low_hit`s for x's normal `n` left out), as `sample_radiance`; `fresh` and `seed` as
     /// `depth_iterate`. `None` when a face was not available.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn sample_radiance(
@@ -188,6 +189,7 @@ impl<C: CubeTexels> Shader<'_, C> {
         cube: u32,
         wn: [f32; 4],
         x: Vec3,
+        n: Vec3,
         s: &AsSample,
         fresh: bool,
         seed: &mut f32,
@@ -201,7 +203,7 @@ impl<C: CubeTexels> Shader<'_, C> {
                 wn
             };
             return Some(
-                self.blend_read(c, w, x, s.l, lod)
+                self.blend_read(c, w, x, s.l, lod, Some(n))
                     .unwrap_or_else(|| self.env_read(x, s.l, lod)),
             );
         }
@@ -302,7 +304,7 @@ impl<C: CubeTexels> Shader<'_, C> {
     ) -> Option<(u32, Vec3)> {
         let p = self.samples[cube as usize];
         let (d, seen) = self.depth_search(cube, x, s.l);
-        if seen > 0.0 && (p + d - x).dot(s.l) * s.l.dot(n) < LOW_HIT * (x - p).length() {
+        if low_hit(p, (d, seen), x, s.l, n) {
             return None;
         }
         if seen >= 0.0 {
@@ -387,7 +389,7 @@ impl<C: CubeTexels> Shader<'_, C> {
                 };
                 let mut seed_e = if own { seed[k as usize] } else { 0.0 };
                 let li = self
-                    .sample_radiance(c, read, wn, x, &s, fresh_e, &mut seed_e)
+                    .sample_radiance(c, read, wn, x, n, &s, fresh_e, &mut seed_e)
                     .unwrap_or_else(|| {
                         ok = false;
                         Vec3::ZERO

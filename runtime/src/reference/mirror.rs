@@ -12,7 +12,7 @@ impl<C: CubeTexels> Shader<'_, C> {
             return self.env_read(x, r, 0.0);
         }
         let axis = if self.uniform.blend == 4 { n } else { r };
-        self.blend_read(c, self.blend_weights(c, axis), x, r, 0.0)
+        self.blend_read(c, self.blend_weights(c, axis), x, r, 0.0, None)
             .unwrap_or_else(|| self.env_read(x, r, 0.0))
     }
 }

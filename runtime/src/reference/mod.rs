@@ -63,8 +63,8 @@ pub(crate) const LOOKUP_AGREE: f32 = 1.0;
 /// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
 /// shade.wgsl).
 pub(crate) const HIT_AGREE: f32 = 0.25;
-/// Share of the candidate's distance from x above x's tangent plane below which a
-/// per-point-searched hit is read as per point reads it (LOW_HIT in shade.wgsl).
+/// Share of the candidate's distance from x above x's tangent plane below which a glossy
+/// sample's hit is not trusted (`low_hit`; LOW_HIT in shade.wgsl).
 pub(crate) const LOW_HIT: f32 = 0.25;
 
 /// Where the reference reads cube-map texels.

@@ -95,8 +95,9 @@ const LOOKUP_AGREE: f32 = 1.0;
 // A candidate sees the blend's common hit when its distance toward it lies within this many
 // depth_thickness (one texel angle) of the hit's (`blend_read`; reference/mod.rs HIT_AGREE).
 const HIT_AGREE: f32 = 0.25;
-// A per-point-searched hit lower than this share of the candidate's distance from x above x's
+// A glossy sample's hit lower than this share of the candidate's distance from x above x's
 // tangent plane is one the candidate sees its own surface at a grazing angle for, where a
-// texel's one distance cannot say where that surface ends: such a sample is read as per point
-// reads it (`searched`; reference/mod.rs LOW_HIT).
+// texel's one distance cannot say where that surface ends (`low_hit`; reference/mod.rs
+// LOW_HIT): per point searched reads such a sample as per point does, per direction with a
+// plain lookup.
 const LOW_HIT: f32 = 0.25;

@@ -5,7 +5,7 @@ import package::shade::bindings::{
     BLEND, DEPTH, HIT_AGREE, INVALID, P, SOURCE, sample_maps, samples, slots,
 };
 import package::shade::cube::{Tap, fetch, lookup_lod};
-import package::shade::depth::{depth_lookup, depth_missing, depth_search, depth_toward};
+import package::shade::depth::{depth_lookup, depth_missing, depth_search, depth_toward, low_hit};
 
 // Vectors, not arrays: lavapipe gives every local array that is indexed dynamically its own
 // scratch memory, initialized per invocation even where the code is never reached (a large
@@ -126,8 +126,10 @@ fn blend_fetch(w: vec4<f32>, t: Tap) -> vec4<f32> {
 // searches found (a thin occluder that one candidate's search resolves and another's steps
 // over is still there). Every candidate whose distance plane sees that point (within HIT_AGREE
 // depth_thickness) is looked up towards it, blended with its weight; the others are left out.
-// When none sees it, the blend of the candidates' own hits above.
-fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32> {
+// When none sees it, the blend of the candidates' own hits above. With `low` (a glossy sample
+// per direction; n: x's normal) a candidate's hit that is a `low_hit` counts as none: that
+// candidate is looked up along `dir` and its hit is not the common one.
+fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32, n: vec3<f32>, low: bool) -> vec4<f32> {
     var acc = vec3<f32>(0.0);
     var wsum = 0.0;
     var hidden = vec3<f32>(0.0);
@@ -139,6 +141,9 @@ fn blend_read(w: vec4<f32>, x: vec3<f32>, dir: vec3<f32>, lod: f32) -> vec4<f32>
             var l = vec4<f32>(0.0);
             if (DEPTH) {
                 h = depth_search(cand.idx[j], x, dir);
+                if (low && low_hit(samples[cand.idx[j]].xyz, h, x, dir, n)) {
+                    h = vec4<f32>(dir, 0.0);
+                }
                 if (h.w > 0.0) {
                     near = min(near, dot(h.xyz + samples[cand.idx[j]].xyz - x, dir));
                 }

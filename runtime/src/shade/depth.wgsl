@@ -2,7 +2,7 @@
 // Its CPU twin: reference/depth.rs.
 
 import package::shade::bindings::{
-    DEPTH_ITERATIONS, DEPTH_REFINE, FAR, LOOKUP_AGREE, P, samples, slots,
+    DEPTH_ITERATIONS, DEPTH_REFINE, FAR, LOOKUP_AGREE, LOW_HIT, P, samples, slots,
 };
 import package::shade::cube::{face_st, load_depth, load_texel, lookup_lod, place, tap};
 import package::shade::feedback::{mark_face};
@@ -199,4 +199,12 @@ fn depth_lookup(cube: u32, h: vec4<f32>, lod: f32) -> vec4<f32> {
     let c = load_texel(at.x, layer, c00, 0u) * w.x + load_texel(at.x, layer, c10, 0u) * w.y
         + load_texel(at.x, layer, c01, 0u) * w.z + load_texel(at.x, layer, c11, 0u) * w.w;
     return vec4<f32>(c, 1.0);
+}
+
+// Whether `h`, sample point p's `depth_search` hit for the ray from x along l, lies lower above
+// x's tangent plane (normal n) than LOW_HIT times p's distance from x: p then sees x's own
+// surface at a grazing angle, where its texels' one distance each cannot say where that
+// surface ends (the can's rim at 16²: docs/measurements.md).
+fn low_hit(p: vec3<f32>, h: vec4<f32>, x: vec3<f32>, l: vec3<f32>, n: vec3<f32>) -> bool {
+    return h.w > 0.0 && dot(p + h.xyz - x, l) * dot(l, n) < LOW_HIT * length(x - p);
 }

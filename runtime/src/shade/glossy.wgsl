@@ -2,12 +2,12 @@
 // Its CPU twin: reference/glossy.rs.
 
 import package::shade::bindings::{
-    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, IRRADIANCE, LOW_HIT, ORDER, P, PBR_LOD_BIAS, SOURCE,
+    BLEND, DEPTH, DIFFUSE, FILTER, INVALID, IRRADIANCE, ORDER, P, PBR_LOD_BIAS, SOURCE,
     SPLIT_SUM, TERMS, samples, slots,
 };
 import package::shade::blend::{blend_read, blend_weights, cand, env_dir, env_read};
 import package::shade::cube::{lookup, lookup_levels, sample_lod};
-import package::shade::depth::{depth_hidden, depth_iterate, depth_search};
+import package::shade::depth::{depth_hidden, depth_iterate, depth_search, low_hit};
 import package::shade::random::{filter_rows, sample_xi};
 import package::shade::split_sum::{split_sum};
 import package::shading::constants::{GGX_DIELECTRIC_F0, PI, SH_AS_DIFFUSE, SH_COSINE};
@@ -130,15 +130,15 @@ fn sample_diffuse(xi1: f32, r2: f32, n: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n
 
 // The radiance of sample `s` for the shaded point x: cube `cube` (depth-corrected for a
 // sample point with DEPTH, parallax-corrected for the environment cube with SOURCE 2), or (per
-// direction, cube = INVALID) the blend of the candidates with the environment cube where none
-// is resident; filtered at mip level `lod` (`sample_lod`) with FILTER. `.w` = 0 when a cube's
+// direction, cube = INVALID) the blend of the candidates (`low_hit`s left out; x's normal n)
+// with the environment cube where none is resident; filtered at mip level `lod` (`sample_lod`) with FILTER. `.w` = 0 when a cube's
 // face was not resident.
-fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) -> vec4<f32> {
+fn sample_radiance(cube: u32, entry: u32, o: vec3<f32>, wn: vec4<f32>, x: vec3<f32>, n: vec3<f32>, s: AsSample, lod: f32, fresh: bool, seed: ptr<function, f32>) -> vec4<f32> {
     let l = s.l;
     if (ORDER == 1u && cube == INVALID) {
         var w = wn;
         if (BLEND != 4u) { w = blend_weights(l); }
-        let b = blend_read(w, x, l, lod);
+        let b = blend_read(w, x, l, lod, n, true);
         if (b.w > 0.0) { return b; }
         return vec4<f32>(env_read(x, l, lod), 1.0);
     }
@@ -208,9 +208,9 @@ fn stand_in(k: u32, cubes: vec4<u32>, entries: vec4<u32>, used: vec4<bool>, ox: 
 // Per point searched (ORDER 3), where sample `s` of entry k is read: where k's sample point
 // sees the sample's ray meet the scene (`depth_search`), or where k's cannot (the search's
 // w < 0), where the used entry of largest blend weight `w` whose point sees it does (k's own
-// search where none does). `e`: the entry whose cube is read, or 4 for a hit k's point sees
-// lower above x's tangent plane (normal n) than LOW_HIT times its distance from x: there the
-// sample is read as per point reads it. `d`: the direction from its point.
+// search where none does). `e`: the entry whose cube is read, or 4 for a hit of k's that is a
+// `low_hit` (x's normal n): there the sample is read as per point reads it. `d`: the direction
+// from its point.
 struct Seen {
     e: u32,
     d: vec3<f32>,
@@ -219,7 +219,7 @@ struct Seen {
 fn searched(k: u32, cubes: vec4<u32>, used: vec4<bool>, x: vec3<f32>, n: vec3<f32>, w: vec4<f32>, s: AsSample) -> Seen {
     let p = samples[cubes[k]].xyz;
     let h = depth_search(cubes[k], x, s.l);
-    if (h.w > 0.0 && dot(p + h.xyz - x, s.l) * dot(s.l, n) < LOW_HIT * length(x - p)) {
+    if (low_hit(p, h, x, s.l, n)) {
         return Seen(4u, s.l);
     }
     var best = Seen(k, h.xyz);
@@ -257,7 +257,7 @@ fn accumulate(sums: ptr<function, Sums>, k: u32, cubes: vec4<u32>, entries: vec4
         if (ORDER == 2u && DEPTH) { e = stand_in(k, cubes, entries, used, ox, oy, oz, w, s); }
         let own = e == k;
         var seed = select(0.0, (*seeds)[k], own);
-        l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, s, lod, (*fresh)[k] || !own, &seed);
+        l = sample_radiance(cubes[e], entries[e], vec3<f32>(ox[e], oy[e], oz[e]), wn, x, n, s, lod, (*fresh)[k] || !own, &seed);
         (*seeds)[k] = select((*seeds)[k], seed, own);
         (*fresh)[k] = (*fresh)[k] && !own;
     }

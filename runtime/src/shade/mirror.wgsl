@@ -15,7 +15,7 @@ fn mirror(x: vec3<f32>, n: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
         if (BLEND == 4u) { axis = n; }
         let w = blend_weights(axis);
         if (DEPTH) {
-            b = blend_read(w, x, r, 0.0);
+            b = blend_read(w, x, r, 0.0, n, false);
         } else if (BLEND <= 1u) {
             // One candidate has weight 1: one lookup instead of four masked ones.
             var j = 0u;
