@@ -398,27 +398,8 @@ fn preflight_refuses_a_bake_too_slow_for_its_limit_before_any_work() {
 /// units with the digits a 66 mm can needs, on stderr and in the JSON report.
 #[test]
 fn a_scene_without_bake_settings_says_what_it_chose() {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/can.toml");
-    let out = oslf("bake")
-        .arg(&scene)
-        .arg("-o")
-        .arg(dir.join("can.oslf"))
-        .args([
-            "--max-cubes",
-            "1",
-            "--preview",
-            "none",
-            "--device",
-            "cpu",
-            "--report-json",
-        ])
-        .arg(dir.join("report.json"))
-        .output()
-        .unwrap();
+    let (out, report) = bake_example_quickly("can");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
     for key in [
         "chosen: epsilon = 0.00",
         "chosen: object \"Can\": sample_spacing = 0.00",
@@ -441,8 +422,6 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
         .parse()
         .unwrap();
     assert!((5e-4..5e-3).contains(&value), "{eps_line}");
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let chosen = report["chosen"].as_array().unwrap();
     assert_eq!(chosen.len(), 6, "{chosen:?}");
     assert!(chosen[0].as_str().unwrap().starts_with("epsilon = "));
@@ -459,4 +438,55 @@ fn a_scene_without_bake_settings_says_what_it_chose() {
     assert!(empty > 0, "{report}");
     assert_eq!(report["coverage"][0]["unseen_empty"], empty, "{report}");
     assert!(!stderr.contains("have no visible sample point"), "{stderr}");
+}
+
+/// examples/part.toml: a hard-surface part (flat faces, hard edges, no texture coordinates)
+/// with no `[bake]`. Its polished steel asks for 64² cubes; the bake lays out an atlas of its
+/// own; its flat bottom lies on the table top, inside the top's slab, where no view reaches:
+/// counted, not warned about.
+#[test]
+fn a_hard_surface_part_resting_flat_bakes_without_bake_settings() {
+    let (out, report) = bake_example_quickly("part");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stderr.contains("chosen: cube_resolution = 64"), "{stderr}");
+    assert!(stdout.contains("atlas          \"Part\": "), "{stdout}");
+    let empty = report["sample_maps"]["empty"].as_u64().unwrap();
+    let texels = report["sample_maps"]["texels"].as_u64().unwrap();
+    // The bottom: a fifth of the part's area.
+    assert!(empty * 10 > texels, "{report}");
+    assert_eq!(report["coverage"][0]["unseen_empty"], empty, "{report}");
+    assert!(!stderr.contains("have no visible sample point"), "{stderr}");
+}
+
+/// Bakes `examples/NAME.toml` as it is, but one cube map only, on the CPU, with its JSON
+/// report: the bake's output and the report.
+fn bake_example_quickly(name: &str) -> (std::process::Output, serde_json::Value) {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{name}.toml"));
+    let out = oslf("bake")
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join(format!("{name}.oslf")))
+        .args([
+            "--max-cubes",
+            "1",
+            "--preview",
+            "none",
+            "--device",
+            "cpu",
+            "--report-json",
+        ])
+        .arg(dir.join("report.json"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    (out, report)
 }

@@ -169,7 +169,9 @@ pub const UNSEEN_CONE_DEG: f32 = 80.0;
 
 /// Whether no view reaches the surface at `origin` (lifted off it along its unit normal `n`):
 /// each of `directions`, turned into `n`'s hemisphere, that lies within [`UNSEEN_CONE_DEG`] of
-/// `n` meets a surface within `reach`.
+/// `n` meets a surface within `reach`, or first meets one from behind (a surface facing the
+/// way the probe goes: `origin` lies inside a solid, as a face resting flat on a table top
+/// lies in the top's slab, which a grazing probe may cross farther than `reach`).
 pub fn enclosed(
     geometry: &impl Intersector,
     origin: Vec3,
@@ -185,8 +187,13 @@ pub fn enclosed(
             continue;
         }
         probed += 1;
-        if !geometry.occluded(&Ray::new(origin, d), reach) {
-            return false;
+        let ray = Ray::new(origin, d);
+        if geometry.occluded(&ray, reach) {
+            continue;
+        }
+        match geometry.intersect(&ray, f32::INFINITY) {
+            Some(hit) if hit.geometric_normal.dot(d) > 0.0 => {}
+            _ => return false,
         }
     }
     probed > 0

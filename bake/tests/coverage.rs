@@ -92,6 +92,28 @@ fn a_box_resting_on_a_slab_has_its_bottom_unseen_with_the_slab_named_and_located
     );
 }
 
+/// A slab thicker than the box is large: a probe from the box's bottom crosses it farther than
+/// the box's size whatever its direction, and still no view reaches the bottom (each probe
+/// first meets the slab from inside).
+#[test]
+fn a_box_resting_on_a_slab_thicker_than_itself_has_its_bottom_unseen() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let slab = "[[box]]\nsize = [8.0, 8.0, 3.0]\ntransform = { translate = [0.0, 0.0, -1.5] }\n\
+                material = { color = [0.5, 0.5, 0.5] }\n";
+    let report = bake_box(d, [1.0, -0.5, 0.0], 400, slab);
+    let c = the_box(&report);
+    assert!(c.empty > 0, "{c:?}");
+    let bottom = &c.places[0];
+    assert_eq!(
+        (bottom.cause, bottom.facing),
+        (Cause::Unseen, "-z"),
+        "{c:?}"
+    );
+    assert_eq!(c.unseen_empty, c.empty, "{c:?}");
+    assert_eq!(report.visible_empty(), 0, "{c:?}");
+}
+
 #[test]
 fn a_box_hovering_closer_than_epsilon_has_its_bottom_unseen_within_and_seen_at_the_edges() {
     let tmp = tempfile::tempdir().unwrap();
