@@ -167,12 +167,5 @@ fn main() {
             "material": 0,
         }]}],
     });
-    let glb = b.glb(doc);
-    std::fs::write(&out, &glb).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
-    println!(
-        "{} ({} bytes, {} triangles)",
-        out.display(),
-        glb.len(),
-        m.indices.len() / 3
-    );
+    b.write_glb(doc, &out, m.indices.len() / 3);
 }

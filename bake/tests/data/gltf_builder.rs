@@ -128,6 +128,18 @@ impl Builder {
         glb_from(&self.document(json, None), &self.bin)
     }
 
+    /// Writes the `.glb` of `json` to `out` for an example generator and says so with its
+    /// size and `triangles` (a failed write ends the generator, naming the path).
+    pub fn write_glb(&self, json: Value, out: &std::path::Path, triangles: usize) {
+        let glb = self.glb(json);
+        std::fs::write(out, &glb).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
+        println!(
+            "{} ({} bytes, {triangles} triangles)",
+            out.display(),
+            glb.len()
+        );
+    }
+
     /// `.gltf` text with the buffer inline as a data URI.
     pub fn gltf_embedded(&self, json: Value) -> Vec<u8> {
         let uri = format!(

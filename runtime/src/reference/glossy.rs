@@ -180,8 +180,9 @@ impl<C: CubeTexels> Shader<'_, C> {
     }
 
     /// The radiance of sample `s` for the shaded point `x` from `cube` (or, per direction,
-    /// `cube` = INVALID, the blend, `low_hit`s for x's normal `n` left out), as `sample_radiance`; `fresh` and `seed` as
-    /// `depth_iterate`. `None` when a face was not available.
+    /// `cube` = INVALID, the blend, `low_hit`s for x's normal `n` left out), as
+    /// `sample_radiance`; `fresh` and `seed` as `depth_iterate`. `None` when a face was not
+    /// available.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn sample_radiance(
         &self,
