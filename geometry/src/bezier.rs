@@ -20,6 +20,11 @@ pub const TEAPOT_BODY_PATCHES: Range<usize> = 0..28;
 /// Largest grid resolution [`BezierPatch::tessellation_level`] returns.
 pub const MAX_TESSELLATION_LEVEL: u32 = 256;
 
+/// How far [`BezierPatch::refine_hit`] may move a hit of a tessellation from its triangle, in
+/// the tessellation's tolerances: a chord lies within one tolerance of the patch along the
+/// normal, and a ray at 1/16 of grazing meets the patch within 16 of it along the ray.
+pub const REFINE_REACH: f32 = 16.0;
+
 /// A bicubic Bézier patch: 4×4 control points, `CP_ij` at index `4 * i + j`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BezierPatch {
@@ -69,15 +74,71 @@ impl BezierPatch {
     /// The surface point `x(u, v)`.
     #[allow(clippy::needless_range_loop)] // i, j are the CP_ij indices of Eq. 3.1
     pub fn eval(&self, u: f32, v: f32) -> Vec3 {
+        self.point(param(u), param(v)).as_vec3()
+    }
+
+    #[allow(clippy::needless_range_loop)] // i, j are the CP_ij indices of Eq. 3.1
+    fn point(&self, u: f64, v: f64) -> DVec3 {
         // Eq. 3.1, 3.3: x(u,v) = Σ_i Σ_j CP_ij B_i^3(u) B_j^3(v)
-        let (bu, bv) = (bernstein3(param(u)), bernstein3(param(v)));
+        let (bu, bv) = (bernstein3(u), bernstein3(v));
         let mut x = DVec3::ZERO;
         for i in 0..4 {
             for j in 0..4 {
                 x += self.p(i, j) * (bu[i] * bv[j]);
             }
         }
-        x.as_vec3()
+        x
+    }
+
+    /// The patch's own intersection with the ray `origin + t·dir` near a hit of its
+    /// tessellation at parameters `(u, v)`, point `near`: Newton's method on
+    /// `x(u, v) − near − s·dir = 0` from there, in double precision. Returns the refined
+    /// parameters and surface point, or `None` where it does not converge, leaves the patch's
+    /// domain `[0, 1]²` (the ray meets a neighbouring patch, or misses this one) or moves
+    /// farther than `max_move` from `near` (another sheet of the surface). The renderer's
+    /// G-buffer and the ground truth tessellate the patches to different tolerances; both
+    /// shade the surface point this finds, so that neither carries its chords' error into the
+    /// reflected ray (docs/measurements.md, "The exact surface under each pixel").
+    pub fn refine_hit(
+        &self,
+        near: Vec3,
+        dir: Vec3,
+        (u, v): (f32, f32),
+        max_move: f32,
+    ) -> Option<(f32, f32, Vec3)> {
+        const SLACK: f64 = 1e-4;
+        let (near, dir) = (near.as_dvec3(), dir.as_dvec3().normalize_or_zero());
+        let (mut u, mut v, mut s) = (param(u), param(v), 0.0);
+        let tol = 1e-9 * self.scale();
+        for _ in 0..16 {
+            let j = self.jet(u, v);
+            let f = self.point(u, v) - near - dir * s;
+            let (a, b, c) = (j.du, j.dv, -dir);
+            let det = a.dot(b.cross(c));
+            if !(det.abs() > 1e-300) {
+                return None;
+            }
+            // Cramer's rule for [∂x/∂u ∂x/∂v −dir]·(Δu, Δv, Δs) = −f.
+            let du = -f.dot(b.cross(c)) / det;
+            let dv = -a.dot(f.cross(c)) / det;
+            let ds = -a.dot(b.cross(f)) / det;
+            if !(du.is_finite() && dv.is_finite() && ds.is_finite()) {
+                return None;
+            }
+            u += du;
+            v += dv;
+            s += ds;
+            if !((-SLACK..=1.0 + SLACK).contains(&u) && (-SLACK..=1.0 + SLACK).contains(&v)) {
+                return None;
+            }
+            if (a * du + b * dv).length() <= tol && ds.abs() <= tol {
+                let (u, v) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
+                let x = self.point(u, v);
+                return ((x - near).length() <= f64::from(max_move))
+                    .then(|| (u as f32, v as f32, x.as_vec3()));
+            }
+        }
+        None
     }
 
     #[allow(clippy::needless_range_loop)] // i, j are the CP_ij indices
@@ -561,6 +622,72 @@ mod tests {
             // ∂v × ∂u = y × x = -z
             assert!((p.normal(u, v) + Vec3::Z).length() < 1e-6);
         }
+    }
+
+    /// Distance from `x` to the line `o + t·d` (`d` unit).
+    fn off_line(x: Vec3, o: Vec3, d: Vec3) -> f32 {
+        let w = x - o;
+        (w - d * w.dot(d)).length()
+    }
+
+    #[test]
+    fn a_chord_hit_refines_to_the_patch_on_the_same_ray() {
+        // Points on the flat triangles of a coarse (level 2) tessellation of the teapot's body,
+        // seen along tilted rays: the refined point lies on the ray and on the patch, far
+        // closer than the chord did, and its normal is the patch's there.
+        let mut refined = 0;
+        for patch in newell_teapot().iter().take(12) {
+            let mesh = patch.tessellate(2);
+            for tri in &mesh.triangles {
+                let [a, b, c] = tri.map(|i| i as usize);
+                let w = Vec3::new(0.2, 0.5, 0.3);
+                let at = |q: &[Vec3]| q[a] * w.x + q[b] * w.y + q[c] * w.z;
+                let flat = at(&mesh.positions);
+                let uv = mesh.uvs[a] * w.x + mesh.uvs[b] * w.y + mesh.uvs[c] * w.z;
+                let n = at(&mesh.normals).normalize();
+                let dir = (-n + n.any_orthonormal_vector() * 0.4).normalize();
+                let chord = (patch.eval(uv.x, uv.y) - flat).length();
+                let Some((u, v, x)) = patch.refine_hit(flat, dir, (uv.x, uv.y), 1.0) else {
+                    continue;
+                };
+                refined += 1;
+                assert!(
+                    off_line(x, flat, dir) < 1e-5,
+                    "off the ray by {}",
+                    off_line(x, flat, dir)
+                );
+                assert!((patch.eval(u, v) - x).length() < 1e-5);
+                assert!((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v));
+                assert!(
+                    (x - flat).length() < 4.0 * chord + 1e-4,
+                    "moved {}",
+                    (x - flat).length()
+                );
+            }
+        }
+        // Rays near a patch's border may leave it for its neighbour; most stay.
+        assert!(refined > 12 * 8 * 3 / 4, "{refined} of {} refined", 12 * 8);
+    }
+
+    #[test]
+    fn a_hit_with_no_surface_near_it_is_not_refined() {
+        let p = newell_teapot()[0];
+        let x = p.eval(0.5, 0.5);
+        let n = p.normal(0.5, 0.5);
+        // The ray along the tangent plane, 0.5 above the surface: the patch is not near.
+        let above = x + n * 0.5;
+        let t = p.partials(0.5, 0.5).0.normalize();
+        assert_eq!(p.refine_hit(above, t, (0.5, 0.5), 0.1), None);
+        // Straight down onto the patch from 0.5 above: found, unless limited to 0.1.
+        let (u, v, hit) = p.refine_hit(above, -n, (0.5, 0.5), 1.0).unwrap();
+        assert!((hit - x).length() < 1e-5 && (u - 0.5).abs() < 1e-5 && (v - 0.5).abs() < 1e-5);
+        assert_eq!(p.refine_hit(above, -n, (0.5, 0.5), 0.1), None);
+        // A degenerate patch and a zero direction.
+        assert_eq!(
+            BezierPatch::new([Vec3::ONE; 16]).refine_hit(Vec3::ONE, Vec3::Z, (0.5, 0.5), 1.0),
+            None
+        );
+        assert_eq!(p.refine_hit(x, Vec3::ZERO, (0.5, 0.5), 1.0), None);
     }
 
     #[test]

@@ -67,7 +67,7 @@ struct Params {
     min_metallic: f32,
     split_sum: u32,
     irradiance: u32,
-    pad1: u32,
+    surface_error: f32,
     pad2: u32
 }
 

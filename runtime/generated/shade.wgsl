@@ -190,7 +190,7 @@ struct Params {
     min_metallic: f32,
     split_sum: u32,
     irradiance: u32,
-    pad1: u32,
+    surface_error: f32,
     pad2: u32
 }
 
@@ -338,6 +338,14 @@ const DEPTH_REFINE: u32 = 6u;
 const DEPTH_ITERATIONS: u32 = 2u;
 
 const LOOKUP_AGREE: f32 = 1.0;
+
+const REFINE_STEPS: u32 = 4u;
+
+const REFINE_REACH: f32 = 16.0;
+
+const REFINE_SLACK: f32 = 0.0001;
+
+const REFINE_MISS: f32 = 0.1;
 
 const HIT_AGREE: f32 = 0.25;
 
@@ -780,6 +788,18 @@ fn bern2(t: f32) -> vec3<f32> {
     return vec3<f32>(s * s, 2.0 * t * s, t * t);
 }
 
+fn patch_point(p: u32, u: f32, v: f32, o: vec3<f32>) -> vec3<f32> {
+    let bu = bern3(u);
+    let bv = bern3(v);
+    var x = vec3<f32>(0.0);
+    for (var i = 0u; i < 4u; i++) {
+        for (var j = 0u; j < 4u; j++) {
+            x += (patches[p].cp[4u * i + j].xyz - o) * (bu[i] * bv[j]);
+        }
+    }
+    return x;
+}
+
 fn patch_du(p: u32, u: f32, v: f32) -> vec3<f32> {
     let bu = bern2(u);
     let bv = bern3(v);
@@ -804,6 +824,43 @@ fn patch_dv(p: u32, u: f32, v: f32) -> vec3<f32> {
         }
     }
     return dv * 3.0;
+}
+
+struct SurfacePoint {
+    x: vec3<f32>,
+    u: f32,
+    v: f32
+}
+
+fn surface_hit(p: u32, x: vec3<f32>, u: f32, v: f32, d: vec3<f32>) -> SurfacePoint {
+    var uu = u;
+    var vv = v;
+    var s = 0.0;
+    for (var k = 0u; k < REFINE_STEPS; k++) {
+        let a = patch_du(p, uu, vv);
+        let b = patch_dv(p, uu, vv);
+        let f = patch_point(p, uu, vv, x) - d * s;
+        let det = dot(a, cross(b, -d));
+        if (!(abs(det) > 1e-6 * length(a) * length(b))) {
+            return SurfacePoint(x, u, v);
+        }
+        uu -= dot(f, cross(b, -d)) / det;
+        vv -= dot(a, cross(f, -d)) / det;
+        s -= dot(a, cross(b, f)) / det;
+    }
+    let lo = -REFINE_SLACK;
+    let hi = 1.0 + REFINE_SLACK;
+    if (!(uu >= lo && uu <= hi && vv >= lo && vv <= hi)) {
+        return SurfacePoint(x, u, v);
+    }
+    let uc = clamp(uu, 0.0, 1.0);
+    let vc = clamp(vv, 0.0, 1.0);
+    let e = patch_point(p, uc, vc, x);
+    let miss = length(e - d * dot(e, d));
+    if (!(miss <= REFINE_MISS * P.surface_error && length(e) <= REFINE_REACH * P.surface_error)) {
+        return SurfacePoint(x, u, v);
+    }
+    return SurfacePoint(x + e, uc, vc);
 }
 
 fn patch_normal(p: u32, u: f32, v: f32, ni: vec3<f32>) -> vec3<f32> {
@@ -1801,9 +1858,10 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pid = u32(g0.w - 0.5);
-    let x = g0.xyz;
-    let u = g1.z;
-    let v_param = g1.w;
+    let hit = surface_hit(pid, g0.xyz, g1.z, g1.w, normalize(g0.xyz - P.camera_pos.xyz));
+    let x = hit.x;
+    let u = hit.u;
+    let v_param = hit.v;
     let n = patch_normal(pid, u, v_param, oct_decode(g1.xy));
     candidates(pid, u, v_param, x, n);
     mark_cube = cand.idx;

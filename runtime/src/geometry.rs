@@ -62,6 +62,10 @@ pub struct ObjectMesh {
     /// The G-buffer pass's draws: ranges of `indices` and the object each belongs to (whose
     /// textures it binds; all Bézier patches form one range, of the first Bézier object).
     pub draws: Vec<(std::ops::Range<u32>, u32)>,
+    /// The tolerance the patches were tessellated to: how far their flat triangles may lie
+    /// from the surface (the shading pass refines each pixel's point onto its patch within a
+    /// multiple of it; `surface_hit` in shade/patch.wgsl).
+    pub max_error: f32,
     /// Bounds of the control points and mesh vertices relative to `origin`.
     relative_lo: Vec3,
     relative_hi: Vec3,
@@ -142,6 +146,7 @@ impl ObjectMesh {
             vertices,
             indices,
             draws,
+            max_error,
             relative_lo,
             relative_hi,
         }

@@ -51,7 +51,7 @@ fn shade_fields() -> Vec<Field> {
         min_metallic,
         split_sum,
         irradiance,
-        pad1,
+        surface_error,
         pad2,
     })
 }
@@ -115,7 +115,7 @@ fn the_vertex_and_patch_records_match() {
 /// Every constant of shade.wgsl has the value of its Rust twin, and every one has a twin.
 #[test]
 fn shader_constants_are_the_rust_constants() {
-    let twins: [(&str, f64); 9] = [
+    let twins: [(&str, f64); 13] = [
         ("PBR_LOD_BIAS", f64::from(crate::reference::PBR_LOD_BIAS)),
         ("INVALID", f64::from(oslf_format::INVALID_INDEX)),
         ("FAR", f64::from(crate::face::FAR_DISTANCE)),
@@ -128,6 +128,13 @@ fn shader_constants_are_the_rust_constants() {
         ("HIT_AGREE", f64::from(crate::reference::HIT_AGREE)),
         ("LOW_HIT", f64::from(crate::reference::LOW_HIT)),
         ("WORKGROUP", f64::from(WORKGROUP)),
+        ("REFINE_STEPS", f64::from(crate::reference::REFINE_STEPS)),
+        (
+            "REFINE_REACH",
+            f64::from(oslf_geometry::bezier::REFINE_REACH),
+        ),
+        ("REFINE_SLACK", f64::from(crate::reference::REFINE_SLACK)),
+        ("REFINE_MISS", f64::from(crate::reference::REFINE_MISS)),
     ];
     // The seam table is checked against the projection it encodes (reference::tests);
     // oslf-shading's constants are its own (generated from their Rust values there).

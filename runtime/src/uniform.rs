@@ -104,8 +104,11 @@ oslf_gpu::gpu_struct! {
         /// `samples` of cube 0's first spherical-harmonic coefficient; else `u32::MAX` (the
         /// diffuse part is sampled from the cube maps).
         pub irradiance: u32,
+        /// How far the G-buffer's triangles may lie from the patches they tessellate (the
+        /// mesh's [`crate::geometry::ObjectMesh::max_error`]): the shading pass refines each
+        /// pixel's point onto its patch within [`oslf_geometry::bezier::REFINE_REACH`] of it.
+        pub surface_error: f32,
         /// Pad the block to WGSL's 16-byte struct alignment.
-        pub pad1: u32,
         pub pad2: u32,
     }
 }
@@ -134,6 +137,8 @@ pub struct StoreConstants {
     pub min_object_metallic: Option<f32>,
     /// Where `samples` holds the store's irradiance section (format 1.1), `None` if it has none.
     pub irradiance_base: Option<u32>,
+    /// The G-buffer tessellation's tolerance ([`crate::geometry::ObjectMesh::max_error`]).
+    pub surface_error: f32,
 }
 
 impl ShadeUniform {
@@ -230,7 +235,7 @@ impl ShadeUniform {
                 (DiffuseSource::Irradiance, Some(base)) => base,
                 _ => u32::MAX,
             },
-            pad1: 0,
+            surface_error: k.surface_error,
             pad2: 0,
         }
         .with_proxy_box(p.proxy_box().or(k.fitted_box), k.origin)

@@ -19,12 +19,15 @@
 //!   pixel), against the OSLF object's patches *alone*, tessellated as for the bake (error
 //!   below ε/50): the runtime draws the object and nothing else, so occluders between camera
 //!   and object are ignored here too. Alpha is 1 where the object is hit, 0 elsewhere.
-//! - Shading frame: the exact Bézier normal at the hit's (u, v) ([`BezierPatch::normal`]), and
-//!   the tangent from ∂x/∂u made orthogonal to it, as `shade.wgsl` does.
+//! - Shading point: where the pixel's ray meets the Bézier patch itself, refined from the
+//!   triangles' hit by Newton's method ([`BezierPatch::refine_hit`]), as the runtime's shading
+//!   pass refines its G-buffer's; the exact normal there ([`BezierPatch::normal`]), and the
+//!   tangent from ∂x/∂u made orthogonal to it, as `shade.wgsl` does.
 //! - The light the reflections see is the bake's: the same scene with the object in it as a
 //!   Lambertian surface (one level of self-reflection, as the OSLF represents), the same
-//!   `bounces`. Reflected rays leave from the hit point offset along the tessellation's
-//!   geometric normal ([`offset_origin`]) towards the viewer's side.
+//!   `bounces`. Reflected rays leave from the shading point offset along the tessellation's
+//!   geometric normal ([`offset_origin`]) towards the viewer's side, lifted to the triangle
+//!   where the patch lies below its chord.
 //!
 //! # Estimators
 //! `spp` samples per pixel. `Recon` averages `spp` paths from the hit; `Mirror` averages `spp`
@@ -46,7 +49,7 @@ use crate::integrator::{offset_origin, Integrator, RayStats};
 use crate::preview::primary_ray;
 use crate::progress::{self, Progress};
 use crate::ray::{Intersector, Ray, SurfaceHit};
-use oslf_geometry::bezier::BezierPatch;
+use oslf_geometry::bezier::{BezierPatch, REFINE_REACH};
 use oslf_geometry::Camera;
 use oslf_scene::material::Model;
 use oslf_scene::metallic_roughness::MetallicRoughness;
@@ -173,6 +176,9 @@ pub struct GroundTruth<'s> {
     /// normal texture, which then turns its shading normal.
     tangents: Vec<Option<MeshTangents>>,
     camera: Camera,
+    /// The patches' tessellation tolerance: how far a primary hit on the triangles may lie
+    /// from the patch itself (`BezierPatch::refine_hit` looks within a multiple of it).
+    max_error: f32,
     /// Where the renders report their rows (`None`: nowhere).
     progress: Option<Arc<dyn Progress>>,
 }
@@ -234,6 +240,7 @@ impl<'s> GroundTruth<'s> {
             colors,
             tangents,
             camera,
+            max_error,
             progress: None,
         })
     }
@@ -465,7 +472,14 @@ impl<'s> GroundTruth<'s> {
             return ([0.0; 4], Vec3::ZERO);
         };
         let spp = settings.spp.max(1);
-        let (u, v) = (hit.uv.x, hit.uv.y);
+        // A patch is shaded where the pixel's ray meets the patch itself, not its tessellation
+        // (as the runtime's shading pass does: `surface_hit` in shade/patch.wgsl).
+        let (u, v, position) = patch
+            .and_then(|p| {
+                let uv = (hit.uv.x, hit.uv.y);
+                p.refine_hit(hit.position, ray.dir, uv, REFINE_REACH * self.max_error)
+            })
+            .unwrap_or((hit.uv.x, hit.uv.y, hit.position));
         let n = match patch {
             Some(patch) => patch.normal(u, v),
             None => self.mapped_normal(pid, &hit),
@@ -475,7 +489,9 @@ impl<'s> GroundTruth<'s> {
         if ng.dot(view) < 0.0 {
             ng = -ng;
         }
-        let origin = offset_origin(hit.position, ng, hit.extent);
+        // Leave from above the triangles too, where the surface dips below its chord.
+        let lift = (hit.position - position).dot(ng).max(0.0);
+        let origin = offset_origin(position + ng * lift, ng, hit.extent);
         let mut sum = Vec3::ZERO;
         match term {
             Term::Recon => {

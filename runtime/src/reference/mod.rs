@@ -42,7 +42,9 @@ mod tests;
 
 pub use composite::{prepass_motion, prepass_normal};
 pub use cube::{face_point, face_st};
-pub use patch::{patch_du, patch_dv, patch_normal, tangent_frame};
+pub use patch::{
+    patch_du, patch_dv, patch_normal, patch_point, surface_hit, tangent_frame, SurfacePoint,
+};
 pub use random::{filter_rows, filter_xi, pcg};
 pub use seams::{seam_bilinear, seam_coords, seam_taps, SeamTaps};
 pub use store::StoreCubes;
@@ -60,6 +62,15 @@ pub(crate) const DEPTH_ITERATIONS: u32 = 2;
 /// Depth-thicknesses within which a texel of a depth-corrected lookup agrees with the hit, at
 /// most half its distance (LOOKUP_AGREE in shade.wgsl).
 pub(crate) const LOOKUP_AGREE: f32 = 1.0;
+/// Newton steps of the shading pass's refinement of a G-buffer hit onto its patch
+/// (`surface_hit`; REFINE_STEPS in shade.wgsl).
+pub(crate) const REFINE_STEPS: u32 = 4;
+/// How far outside [0, 1] a refined (u, v) may end before the ray counts as meeting another
+/// patch (REFINE_SLACK in shade.wgsl).
+pub(crate) const REFINE_SLACK: f32 = 1e-4;
+/// How far from the pixel's ray a refined point may end, in the G-buffer tessellation's
+/// tolerances, before the refinement counts as not converged (REFINE_MISS in shade.wgsl).
+pub(crate) const REFINE_MISS: f32 = 0.1;
 /// Depth-thicknesses within which a candidate sees the blend's common hit (HIT_AGREE in
 /// shade.wgsl).
 pub(crate) const HIT_AGREE: f32 = 0.25;

@@ -5,7 +5,7 @@ use glam::Vec3;
 use oslf_shading::color::srgb_to_linear;
 
 use super::material::unpack2x16unorm;
-use super::patch::{patch_du, patch_normal, tangent_frame};
+use super::patch::{patch_du, patch_normal, surface_hit, tangent_frame, SurfacePoint};
 use super::random::pcg;
 use super::{CubeTexels, GTexel, Shader};
 
@@ -89,12 +89,23 @@ impl<C: CubeTexels> Shader<'_, C> {
             return self.background(px, py);
         }
         let patch = (g.position_patch[3] - 0.5) as u32;
-        let x = Vec3::new(
+        let gx = Vec3::new(
             g.position_patch[0],
             g.position_patch[1],
             g.position_patch[2],
         );
-        let (pu, pv) = (g.normal_uv[2], g.normal_uv[3]);
+        let guv = (g.normal_uv[2], g.normal_uv[3]);
+        // The point on the patch itself, not on its triangles (the truth's shading point).
+        let d = (gx - Vec3::from_slice(&u.camera_pos[..3])).normalize();
+        let hit = self.patches.get(patch as usize).map_or(
+            SurfacePoint {
+                x: gx,
+                u: guv.0,
+                v: guv.1,
+            },
+            |p| surface_hit(p, gx, guv, d, u.surface_error),
+        );
+        let (x, pu, pv) = (hit.x, hit.u, hit.v);
         let ni = crate::geometry::oct_decode([g.normal_uv[0], g.normal_uv[1]]);
         let n = self
             .patches

@@ -22,6 +22,7 @@ pub(super) fn store_constants(env_cube: u32, cube_res: u32) -> crate::uniform::S
         fitted_box: None,
         min_object_metallic: None,
         irradiance_base: None,
+        surface_error: 0.0,
     }
 }
 
@@ -329,6 +330,62 @@ fn patch_normals_are_the_patchs_own_facing_as_the_vertex_normal() {
     assert!(compared > 100, "{compared}");
     let page = BezierPatch::new([Vec3::ZERO; 16]);
     assert_eq!(patch_normal(&page, 0.5, 0.5, Vec3::Y), Vec3::Y);
+}
+
+/// The shading pass's point is where the pixel's ray meets the patch itself (as the geometry
+/// crate's f64 `refine_hit` finds it, to f32 rounding), not where it meets the flat triangles
+/// of a tessellation up to `tol` off the surface; the G-buffer's point stays where there is no
+/// patch (an atlas page), no tolerance or no direction.
+#[test]
+fn a_gbuffer_point_refines_onto_its_patch_along_the_pixels_ray() {
+    use oslf_geometry::bezier::REFINE_REACH;
+    let teapot = oslf_geometry::bezier::newell_teapot();
+    let tol = 0.01; // the teapot is 6 units wide
+    let (mut refined, mut chord_sum, mut left_sum) = (0, 0.0f32, 0.0f32);
+    for p in teapot.iter().take(16) {
+        let mesh = p.tessellate(p.tessellation_level(tol));
+        for tri in mesh.triangles.iter().step_by(5) {
+            let [a, b, c] = tri.map(|i| i as usize);
+            let w = Vec3::new(0.3, 0.45, 0.25);
+            let flat = mesh.positions[a] * w.x + mesh.positions[b] * w.y + mesh.positions[c] * w.z;
+            let uv = mesh.uvs[a] * w.x + mesh.uvs[b] * w.y + mesh.uvs[c] * w.z;
+            let n = (mesh.normals[a] + mesh.normals[b] + mesh.normals[c]).normalize();
+            // A camera above the surface, looking down at 35° from its normal.
+            let d = (-n + n.any_orthonormal_vector() * 0.7).normalize();
+            let Some((eu, ev, exact)) = p.refine_hit(flat, d, (uv.x, uv.y), REFINE_REACH * tol)
+            else {
+                continue;
+            };
+            let hit = surface_hit(p, flat, (uv.x, uv.y), d, tol);
+            if hit.x == flat {
+                continue; // at a patch border, f32 and f64 may part
+            }
+            refined += 1;
+            chord_sum += (flat - exact).length();
+            left_sum += (hit.x - exact).length();
+            assert!((hit.x - exact).length() < 1e-4, "{} {exact}", hit.x);
+            assert!((hit.u - eu).abs() < 1e-4 && (hit.v - ev).abs() < 1e-4);
+        }
+    }
+    assert!(refined > 200, "{refined} refined");
+    assert!(
+        left_sum < 0.01 * chord_sum,
+        "{left_sum} left of {chord_sum}"
+    );
+    // Where it cannot refine, the G-buffer's point stays.
+    let p = &teapot[0];
+    let (x, uv) = (p.eval(0.4, 0.6), (0.4, 0.6));
+    let keep = SurfacePoint { x, u: 0.4, v: 0.6 };
+    let page = BezierPatch::new([Vec3::ZERO; 16]);
+    assert_eq!(surface_hit(&page, x, uv, -Vec3::Z, tol), keep);
+    let off = x + p.normal(0.4, 0.6) * 0.5;
+    let kept = SurfacePoint { x: off, ..keep };
+    assert_eq!(surface_hit(p, off, uv, -p.normal(0.4, 0.6), tol), kept);
+    assert_eq!(surface_hit(p, off, uv, -p.normal(0.4, 0.6), 0.0), kept);
+    assert_eq!(surface_hit(p, off, uv, Vec3::NAN, 1.0), kept);
+    // From 0.5 above along the normal it is found when the tolerance reaches that far.
+    let found = surface_hit(p, off, uv, -p.normal(0.4, 0.6), 0.1);
+    assert!((found.x - x).length() < 1e-4, "{found:?}");
 }
 
 /// The environment background is as continuous across face edges as inside a face: the

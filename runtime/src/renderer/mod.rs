@@ -225,6 +225,7 @@ pub(crate) fn store_constants(
         fitted_box: crate::probe::fit_proxy_box(store, mesh.origin).unwrap_or(None),
         min_object_metallic: min_object_metallic(store.meta()),
         irradiance_base: crate::buffers::irradiance_base(store),
+        surface_error: mesh.max_error,
     }
 }
 

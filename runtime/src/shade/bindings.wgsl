@@ -92,6 +92,14 @@ const DEPTH_ITERATIONS: u32 = 2u;
 // within this many depth_thickness of the hit's, at most half of it (`depth_lookup`;
 // reference/mod.rs LOOKUP_AGREE).
 const LOOKUP_AGREE: f32 = 1.0;
+// The shading pass's refinement of a G-buffer hit onto its patch (`surface_hit` in
+// patch.wgsl; reference/mod.rs REFINE_*): Newton steps; how far the refined point may lie from
+// the G-buffer's, in its tessellation's tolerances (oslf_geometry REFINE_REACH); how far its
+// (u, v) may leave [0, 1]; how far from the pixel's ray it may end, in those tolerances.
+const REFINE_STEPS: u32 = 4u;
+const REFINE_REACH: f32 = 16.0;
+const REFINE_SLACK: f32 = 1e-4;
+const REFINE_MISS: f32 = 0.1;
 // A candidate sees the blend's common hit when its distance toward it lies within this many
 // depth_thickness (one texel angle) of the hit's (`blend_read`; reference/mod.rs HIT_AGREE).
 const HIT_AGREE: f32 = 0.25;

@@ -1,7 +1,8 @@
-// Patch geometry: Bézier derivatives, the G-buffer normal of a patch, the tangent frame.
+// Patch geometry: Bézier points and derivatives, the pixel's point refined onto its patch,
+// the G-buffer normal of a patch, the tangent frame.
 // Its CPU twin: reference/patch.rs.
 
-import package::shade::bindings::{patches};
+import package::shade::bindings::{P, REFINE_MISS, REFINE_REACH, REFINE_SLACK, REFINE_STEPS, patches};
 
 fn bern3(t: f32) -> vec4<f32> {
     let s = 1.0 - t;
@@ -11,6 +12,20 @@ fn bern3(t: f32) -> vec4<f32> {
 fn bern2(t: f32) -> vec3<f32> {
     let s = 1.0 - t;
     return vec3<f32>(s * s, 2.0 * t * s, t * t);
+}
+
+// x(u, v) − o of patch p (Eq. 3.1) as Σ_i Σ_j (CP_ij − o) B_i(u) B_j(v): the Bernstein
+// weights sum to 1, and differences from a nearby o keep f32's precision.
+fn patch_point(p: u32, u: f32, v: f32, o: vec3<f32>) -> vec3<f32> {
+    let bu = bern3(u);
+    let bv = bern3(v);
+    var x = vec3<f32>(0.0);
+    for (var i = 0u; i < 4u; i++) {
+        for (var j = 0u; j < 4u; j++) {
+            x += (patches[p].cp[4u * i + j].xyz - o) * (bu[i] * bv[j]);
+        }
+    }
+    return x;
 }
 
 // ∂x/∂u of patch p at (u, v) through the hodograph (derivative of Eq. 3.1).
@@ -39,6 +54,51 @@ fn patch_dv(p: u32, u: f32, v: f32) -> vec3<f32> {
         }
     }
     return dv * 3.0;
+}
+
+// A pixel's shading point: on its patch, at parameters (u, v).
+struct SurfacePoint {
+    x: vec3<f32>,
+    u: f32,
+    v: f32,
+};
+
+// Where the pixel's ray (unit direction d) meets patch p itself near the G-buffer's point x at
+// (u, v), which lies on a flat triangle up to P.surface_error off the patch: REFINE_STEPS of
+// Newton's method on x(u, v) − x − s·d = 0 (as oslf_geometry's BezierPatch::refine_hit, which
+// the ground truth uses, in f64). The G-buffer's own point where that does not converge, ends
+// off [0, 1]² (the ray meets a neighbour, whose pixel it then is not) or farther than
+// REFINE_REACH tolerances away, and on mesh atlas pages (zero control points: no Jacobian).
+fn surface_hit(p: u32, x: vec3<f32>, u: f32, v: f32, d: vec3<f32>) -> SurfacePoint {
+    var uu = u;
+    var vv = v;
+    var s = 0.0;
+    for (var k = 0u; k < REFINE_STEPS; k++) {
+        let a = patch_du(p, uu, vv);
+        let b = patch_dv(p, uu, vv);
+        let f = patch_point(p, uu, vv, x) - d * s;
+        // Cramer's rule for [∂x/∂u ∂x/∂v −d]·(Δu, Δv, Δs) = −f.
+        let det = dot(a, cross(b, -d));
+        if (!(abs(det) > 1e-6 * length(a) * length(b))) {
+            return SurfacePoint(x, u, v);
+        }
+        uu -= dot(f, cross(b, -d)) / det;
+        vv -= dot(a, cross(f, -d)) / det;
+        s -= dot(a, cross(b, f)) / det;
+    }
+    let lo = -REFINE_SLACK;
+    let hi = 1.0 + REFINE_SLACK;
+    if (!(uu >= lo && uu <= hi && vv >= lo && vv <= hi)) {
+        return SurfacePoint(x, u, v);
+    }
+    let uc = clamp(uu, 0.0, 1.0);
+    let vc = clamp(vv, 0.0, 1.0);
+    let e = patch_point(p, uc, vc, x);
+    let miss = length(e - d * dot(e, d));
+    if (!(miss <= REFINE_MISS * P.surface_error && length(e) <= REFINE_REACH * P.surface_error)) {
+        return SurfacePoint(x, u, v);
+    }
+    return SurfacePoint(x + e, uc, vc);
 }
 
 // The shading normal at (u, v) of patch p: the patch's own, ∂x/∂u × ∂x/∂v, facing as the

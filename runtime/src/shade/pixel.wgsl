@@ -10,7 +10,7 @@ import package::shade::blend::{cand, candidates};
 import package::shade::feedback::{flush_marks, mark_bits, mark_cube, mark_env};
 import package::shade::glossy::{glossy};
 import package::shade::mirror::{mirror};
-import package::shade::patch::{patch_du, patch_normal, tangent_frame};
+import package::shade::patch::{patch_du, patch_normal, surface_hit, tangent_frame};
 import package::shade::random::{pcg};
 import package::shade::reconstruct::{recon};
 import package::shading::color::{srgb_to_linear};
@@ -81,9 +81,11 @@ fn shade(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pid = u32(g0.w - 0.5);
-    let x = g0.xyz;
-    let u = g1.z;
-    let v_param = g1.w;
+    // The point on the patch itself, not on its triangles (the truth's shading point).
+    let hit = surface_hit(pid, g0.xyz, g1.z, g1.w, normalize(g0.xyz - P.camera_pos.xyz));
+    let x = hit.x;
+    let u = hit.u;
+    let v_param = hit.v;
     let n = patch_normal(pid, u, v_param, oct_decode(g1.xy));
     candidates(pid, u, v_param, x, n);
     mark_cube = cand.idx;
