@@ -37,8 +37,10 @@
 //!   every mirror and glossy lookup is *depth-corrected*: each sample point's cube is traced as
 //!   a distance impostor to where the ray from the shaded point meets the scene, the candidates
 //!   agree on the nearest such hit, and each reads only the texels whose distances agree with
-//!   it; reconstruction averages the candidates that see the shaded point. Shading normals are
-//!   the patches' own (∂x/∂u × ∂x/∂v at the G-buffer's (u, v)). Glossy samples use
+//!   it; reconstruction averages the candidates that see the shaded point. Each patch pixel is shaded
+//!   where its ray meets the patch itself, refined from the G-buffer's triangle hit by Newton's
+//!   method (`surface_hit`, as the ground truth refines its own), with the patch's normal there
+//!   (∂x/∂u × ∂x/∂v). Glossy samples use
 //!   *filtered importance sampling* (Křivánek & Colbert 2008) over per-face mip chains
 //!   ([`face`]).
 //!
