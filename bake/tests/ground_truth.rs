@@ -296,3 +296,72 @@ fn bad_settings_are_errors() {
         .to_string();
     assert!(e.contains("n_u"), "{e}");
 }
+
+/// The teapot's body over a floor of glowing stripes (no sky, so every mirror path ends at an
+/// emitter or in the dark: no noise), its patches tessellated by the truth to `epsilon`/50.
+fn striped_floor_scene(epsilon: f32) -> Scene {
+    let mut text = String::from(
+        r#"
+[camera]
+position = [5.0, -5.0, 3.0]
+target = [0.0, 0.0, 0.8]
+vfov = 40.0
+
+[[plane]]
+size = [12.0, 12.0]
+transform = { translate = [0.0, 0.0, -0.1] }
+material = { color = [0.0, 0.0, 0.0], emission = [0.2, 0.3, 0.4] }
+
+[[object]]
+patches = "newell-teapot"
+select = [4, 12]
+material = { color = [0.5, 0.5, 0.5] }
+"#,
+    );
+    for k in 0..40 {
+        text += &format!(
+            "\n[[plane]]\nsize = [0.15, 12.0]\ntransform = {{ translate = [{}, 0.0, -0.09] }}\nmaterial = {{ color = [0.0, 0.0, 0.0], emission = [3.0, 2.0, 1.0] }}\n",
+            -6.0 + 0.3 * k as f32
+        );
+    }
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("striped.toml");
+    let mut scene = Scene::from_str(&text, &path, None).unwrap();
+    scene.bake.epsilon = epsilon;
+    scene
+}
+
+/// The truth shades the patch itself, not its tessellation: the mirror of the stripes in the
+/// body, whose reflected rays move with the shading point, is the same with triangles 0.04
+/// off the surface (ε = 2) as with triangles 10⁻⁴ off it (ε = 0.005). Shading the
+/// triangles' points instead moves the stripes' edges in one pixel in ten.
+#[test]
+fn the_mirror_does_not_depend_on_the_truths_tessellation() {
+    let settings = TruthSettings {
+        width: 96,
+        height: 72,
+        spp: 1,
+        seed: 3,
+    };
+    let render = |epsilon: f32| {
+        let scene = striped_floor_scene(epsilon);
+        let truth = GroundTruth::new(&scene, scene.camera.unwrap()).unwrap();
+        truth.render(Term::Mirror, &settings).unwrap().pixels
+    };
+    let (coarse, fine) = (render(2.0), render(0.005));
+    let (mut both, mut differ, mut bright) = (0, 0, 0);
+    for (c, f) in coarse.iter().zip(&fine) {
+        if c[3] != 1.0 || f[3] != 1.0 {
+            continue;
+        }
+        both += 1;
+        bright += usize::from(f[0] > 1.0);
+        if (0..3).any(|k| (c[k] - f[k]).abs() > 1e-3) {
+            differ += 1;
+        }
+    }
+    assert!(both > 1500, "the body covers {both} pixels");
+    assert!(bright > both / 20, "{bright} of {both} pixels see a stripe");
+    // 12 of 1 904 here (where a ray leaves its patch for a neighbour, the triangle's point
+    // stays); 184 with the triangles' points.
+    assert!(differ * 100 <= both, "{differ} of {both} pixels differ");
+}
