@@ -20,6 +20,11 @@ pub const TEAPOT_BODY_PATCHES: Range<usize> = 0..28;
 /// Largest grid resolution [`BezierPatch::tessellation_level`] returns.
 pub const MAX_TESSELLATION_LEVEL: u32 = 256;
 
+/// The tessellation error allowed for an OSLF object's patches, as a fraction of ε: the bake
+/// and the ground truth trace triangles within ε/50 of the surface, and the runtime's G-buffer
+/// rasterizes the same tessellation, so that the three agree on the object's outline.
+pub const TESSELLATION_ERROR: f32 = 1.0 / 50.0;
+
 /// How far [`BezierPatch::refine_hit`] may move a hit of a tessellation from its triangle, in
 /// the tessellation's tolerances: a chord lies within one tolerance of the patch along the
 /// normal, and a ray at 1/16 of grazing meets the patch within 16 of it along the ray.

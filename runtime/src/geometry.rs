@@ -6,6 +6,7 @@
 
 use glam::{DAffine3, DMat4, DVec3, Vec3};
 use oslf_format::Store;
+use oslf_geometry::bezier::TESSELLATION_ERROR;
 use oslf_geometry::BezierPatch;
 
 oslf_gpu::gpu_struct! {
@@ -73,10 +74,12 @@ pub struct ObjectMesh {
 
 impl ObjectMesh {
     /// The tessellation every view of `store` draws (the renderer's G-buffer, the web page,
-    /// an engine's proxy of the object): [`ObjectMesh::from_store`] within a twentieth of the
-    /// bake's ε, far below the sample points' offset from the surface.
+    /// an engine's proxy of the object): [`ObjectMesh::from_store`] within the bake's ε ×
+    /// [`TESSELLATION_ERROR`] (ε/50), the tessellation the bake and the ground truth trace, so
+    /// that the object's outline is theirs; the shading pass then refines each pixel's point
+    /// onto the patch itself.
     pub fn of_store(store: &Store) -> Self {
-        Self::from_store(store, store.meta().bake.epsilon / 20.0)
+        Self::from_store(store, store.meta().bake.epsilon * TESSELLATION_ERROR)
     }
 
     /// Tessellates every Bézier patch of `store` so that the flat triangles stay within

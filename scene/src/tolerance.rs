@@ -6,5 +6,6 @@
 /// works). The smallest ε a scene may ask for is twice this.
 pub const SELF_TOLERANCE: f32 = 1.0 / (1u32 << 21) as f32;
 
-/// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε.
-pub const TESSELLATION_ERROR: f32 = 1.0 / 50.0;
+/// Tessellation error allowed for ray tracing the OSLF object, as a fraction of ε (the
+/// runtime's G-buffer tessellates to it too).
+pub use oslf_geometry::bezier::TESSELLATION_ERROR;
