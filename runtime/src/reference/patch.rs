@@ -84,11 +84,12 @@ pub fn surface_hit(
         let b = patch_dv(p, uu, vv);
         let f = patch_point(p, uu, vv, x) - d * s;
         // Cramer's rule for [∂x/∂u ∂x/∂v −d]·(Δu, Δv, Δs) = −f.
-        let det = a.dot(b.cross(-d));
+        let bd = b.cross(-d);
+        let det = a.dot(bd);
         if !(det.abs() > 1e-6 * a.length() * b.length()) {
             return keep;
         }
-        uu -= f.dot(b.cross(-d)) / det;
+        uu -= f.dot(bd) / det;
         vv -= a.dot(f.cross(-d)) / det;
         s -= a.dot(b.cross(f)) / det;
     }

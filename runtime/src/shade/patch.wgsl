@@ -78,11 +78,12 @@ fn surface_hit(p: u32, x: vec3<f32>, u: f32, v: f32, d: vec3<f32>) -> SurfacePoi
         let b = patch_dv(p, uu, vv);
         let f = patch_point(p, uu, vv, x) - d * s;
         // Cramer's rule for [∂x/∂u ∂x/∂v −d]·(Δu, Δv, Δs) = −f.
-        let det = dot(a, cross(b, -d));
+        let bd = cross(b, -d);
+        let det = dot(a, bd);
         if (!(abs(det) > 1e-6 * length(a) * length(b))) {
             return SurfacePoint(x, u, v);
         }
-        uu -= dot(f, cross(b, -d)) / det;
+        uu -= dot(f, bd) / det;
         vv -= dot(a, cross(f, -d)) / det;
         s -= dot(a, cross(b, f)) / det;
     }
