@@ -237,3 +237,76 @@ fn a_second_reference_takes_the_references_noise_out_of_the_error() {
         "{err}"
     );
 }
+
+/// `oslf truth --cube-floor N` draws the mirror term as an N² cube map at each shaded point
+/// reads it: a coarser cube strays further from the truth; a floor at the bake's largest
+/// resolution is the truth within its noise; other modes and resolutions out of range are
+/// refused, naming the flag.
+#[test]
+fn the_cube_floor_approaches_the_truth_as_its_cube_grows() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let scene = lid_scene(dir);
+    let args = ["--spp", "16", "--width", "40", "--height", "30"];
+    let truth = read_exr(&mirror_truth(&scene, &args, &dir.join("t"))).1;
+    let floor = |n: &str, lookup: &str| {
+        let args = [
+            &args[..],
+            &["--cube-floor", n, "--cube-floor-lookup", lookup],
+        ]
+        .concat();
+        read_exr(&mirror_truth(
+            &scene,
+            &args,
+            &dir.join(format!("f{n}{lookup}")),
+        ))
+        .1
+    };
+    // Mean squared difference of the object's pixels' luminance from the truth's.
+    let error = |image: &[[f32; 4]]| {
+        let (mut sum, mut count) = (0.0f64, 0);
+        for (a, b) in image.iter().zip(&truth) {
+            assert!(a.iter().all(|c| c.is_finite()));
+            assert_eq!(a[3], b[3], "the object mask is the truth's");
+            if b[3] == 1.0 {
+                let y = |p: &[f32; 4]| f64::from(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]);
+                sum += (y(a) - y(b)).powi(2);
+                count += 1;
+            }
+        }
+        sum / f64::from(count)
+    };
+    let coarse = error(&floor("2", "bilinear"));
+    let medium = error(&floor("8", "bilinear"));
+    let fine = error(&floor("16384", "bilinear"));
+    let nearest = error(&floor("2", "nearest"));
+    assert!(coarse > 2.0 * medium, "2²: {coarse}, 8²: {medium}");
+    assert!(medium > 2.0 * fine, "8²: {medium}, 16384²: {fine}");
+    assert!(nearest > 2.0 * medium, "2² nearest: {nearest}");
+
+    for (extra, says) in [
+        (
+            &["--cube-floor", "0"][..],
+            "--cube-floor: cube floor resolution 0",
+        ),
+        (&["--cube-floor", "16385"][..], "16385 must be in 1..=16384"),
+        (
+            &["--cube-floor", "64", "-m", "recon,mirror"][..],
+            "mirror term only",
+        ),
+        (&["--cube-floor-lookup", "nearest"][..], "--cube-floor"),
+    ] {
+        let out = oslf("truth")
+            .arg(&scene)
+            .args(["--width", "8", "--height", "6", "-q", "-o"])
+            .arg(dir.join("bad"))
+            .args(extra)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(says),
+            "{extra:?}: {stderr}"
+        );
+    }
+}

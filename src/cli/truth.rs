@@ -7,6 +7,7 @@ use anyhow::bail;
 use glam::Vec3;
 use oslf_scene::scene::Scene;
 use oslf_trace::ashikhmin_shirley::AsLobe;
+use oslf_trace::cube_floor::{CubeFloor, FloorLookup};
 use oslf_trace::ground_truth::{compose, GroundTruth, Term, TruthImage, TruthSettings};
 use oslf_util::door::Door;
 use oslf_util::image_file;
@@ -67,6 +68,14 @@ pub struct Args {
     /// the object mask either way, so `oslf compare` is unaffected.
     #[arg(long, value_enum, default_value_t = TruthBackground::None)]
     background: TruthBackground,
+    /// Draw the mirror term as a noise-free cube map of N² texels a face, captured at each
+    /// shaded point itself, would give it: the floor of any store with N² cube maps, however
+    /// its points are placed (only with `-m mirror`; `oslf compare` it against the truth).
+    #[arg(long, value_name = "N")]
+    cube_floor: Option<u32>,
+    /// How --cube-floor's cube is read: `bilinear` (the runtime's lookup) or `nearest`.
+    #[arg(long, value_enum, default_value_t = CubeFloorLookup::Bilinear, requires = "cube_floor")]
+    cube_floor_lookup: CubeFloorLookup,
     /// Worker threads [default: all cores]; the images are identical for any count.
     #[arg(short = 'j', long)]
     threads: Option<usize>,
@@ -80,6 +89,13 @@ pub struct Args {
 enum TruthBackground {
     None,
     Scene,
+}
+
+/// `--cube-floor-lookup`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum CubeFloorLookup {
+    Bilinear,
+    Nearest,
 }
 
 const MODES: [&str; 6] = [
@@ -97,6 +113,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn render_all(args: &Args) -> anyhow::Result<()> {
     let modes = parse_modes(&args.modes)?;
+    let cube_floor = args.cube_floor.map(|resolution| CubeFloor {
+        resolution,
+        lookup: match args.cube_floor_lookup {
+            CubeFloorLookup::Bilinear => FloorLookup::Bilinear,
+            CubeFloorLookup::Nearest => FloorLookup::Nearest,
+        },
+    });
+    if let Some(floor) = &cube_floor {
+        floor
+            .validate()
+            .map_err(|e| anyhow::anyhow!("--cube-floor: {e}"))?;
+        if modes != ["mirror"] {
+            bail!(
+                "--cube-floor draws the mirror term only: pass -m mirror (--modes is {:?})",
+                args.modes
+            );
+        }
+    }
     // The terms' materials, checked before any work.
     let lobe = AsLobe {
         rs: args.rs,
@@ -144,7 +178,9 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
             args.scene.display()
         );
     };
-    let truth = GroundTruth::new(&scene, camera)?.with_progress(super::progress::bars(!args.quiet));
+    let truth = GroundTruth::new(&scene, camera)?
+        .with_progress(super::progress::bars(!args.quiet))
+        .with_cube_floor(cube_floor)?;
     let settings = TruthSettings {
         width: args.width,
         height: args.height,

@@ -45,6 +45,7 @@ use rayon::prelude::*;
 
 use crate::ashikhmin_shirley::AsLobe;
 use crate::bvh::{Instance, TriangleScene};
+use crate::cube_floor::CubeFloor;
 use crate::integrator::{offset_origin, Integrator, RayStats};
 use crate::preview::primary_ray;
 use crate::progress::{self, Progress};
@@ -181,6 +182,8 @@ pub struct GroundTruth<'s> {
     max_error: f32,
     /// Where the renders report their rows (`None`: nowhere).
     progress: Option<Arc<dyn Progress>>,
+    /// The mirror term read from a cube map at the shaded point ([`Self::with_cube_floor`]).
+    cube_floor: Option<CubeFloor>,
 }
 
 impl<'s> GroundTruth<'s> {
@@ -242,6 +245,7 @@ impl<'s> GroundTruth<'s> {
             camera,
             max_error,
             progress: None,
+            cube_floor: None,
         })
     }
 
@@ -249,6 +253,18 @@ impl<'s> GroundTruth<'s> {
     pub fn with_progress(mut self, progress: Option<Arc<dyn Progress>>) -> Self {
         self.progress = progress;
         self
+    }
+
+    /// Renders the mirror term as a cube map of `floor`'s resolution captured at each shaded
+    /// point would give it (see [`crate::cube_floor`]): the floor of any store at that
+    /// resolution. [`Self::render`] refuses the other terms while it is set. Errors, naming it,
+    /// for a resolution outside the bake's range.
+    pub fn with_cube_floor(mut self, floor: Option<CubeFloor>) -> Result<Self> {
+        if let Some(f) = &floor {
+            f.validate()?;
+        }
+        self.cube_floor = floor;
+        Ok(self)
     }
 
     fn integrator(&self) -> Integrator<'_, TriangleScene> {
@@ -264,6 +280,11 @@ impl<'s> GroundTruth<'s> {
             )));
         }
         term.validate()?;
+        if self.cube_floor.is_some() && term != Term::Mirror {
+            return Err(BakeError::Invalid(format!(
+                "the cube-map floor is the mirror term's; {term:?} has none"
+            )));
+        }
         let start = Instant::now();
         let progress = progress::or_silent(&self.progress);
         progress.start("rows", u64::from(h), 0);
@@ -502,8 +523,12 @@ impl<'s> GroundTruth<'s> {
             Term::Mirror => {
                 let r = (2.0 * n.dot(view) * n - view).normalize_or(n); // Eq. 2.4
                 for _ in 0..spp {
+                    let d = match &self.cube_floor {
+                        Some(floor) => floor.direction(r, rng),
+                        None => r,
+                    };
                     sum += integrator
-                        .radiance(&Ray::new(origin, r), rng, stats)
+                        .radiance(&Ray::new(origin, d), rng, stats)
                         .radiance;
                 }
             }

@@ -18,6 +18,7 @@
 //! | [`denoise`] | the bake-time filter that averages that noise away where it shows |
 //! | [`preview`] | path-traced images through a camera |
 //! | [`ground_truth`] | reference images of the diffuse object, the mirror term, the glossy terms |
+//! | [`cube_floor`] | the mirror term as a cube map at the shaded point would give it: any bake's floor |
 //! | [`ashikhmin_shirley`] | the thesis's glossy BRDF (chapter 5) and its sampling triplets |
 //! | [`progress`] | the `Progress` trait the long stages report to; tools draw it |
 //!
@@ -30,6 +31,7 @@
 pub mod ashikhmin_shirley;
 pub mod bvh;
 pub mod capture;
+pub mod cube_floor;
 pub mod denoise;
 pub mod ground_truth;
 pub mod integrator;
