@@ -35,7 +35,9 @@
 //! by ρ_s⟨n,l⟩ / p(l), the BRDF and its density evaluated separately ([`AsLobe::eval`],
 //! [`AsLobe::light_pdf`]). Surfaces seen from behind (⟨n,v⟩ ≤ 0) get no glossy light, as in the
 //! runtime. Every pixel has its own random stream keyed by (seed, term, x, y): the image does
-//! not depend on the number of threads.
+//! not depend on the number of threads. With [`GroundTruth::with_cube_floor`], `Mirror`'s paths
+//! leave along directions drawn from an N² cube map's lookup of r instead of r itself: the
+//! floor of any store at that resolution ([`crate::cube_floor`]).
 
 use std::sync::Arc;
 use std::time::Instant;
