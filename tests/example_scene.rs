@@ -19,6 +19,12 @@ fn every_preset_loads() {
     assert_eq!(thesis.bake.cube_resolution, 128);
     assert_ne!(thesis.bake.sample_count, quick.bake.sample_count);
     assert_eq!(load(Some("cube64")).bake.cube_resolution, 64);
+    let cube128 = load(Some("cube128")).bake;
+    assert_eq!(
+        (cube128.cube_resolution, cube128.samples_per_texel),
+        (128, 16)
+    );
+    assert_eq!(cube128.sample_count, quick.bake.sample_count);
     let compact = load(Some("thesis-compact"));
     assert_eq!(compact.bake.mantissa_bits, 3);
     let mut lossless = compact.bake.clone();
