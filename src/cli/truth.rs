@@ -113,24 +113,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn render_all(args: &Args) -> anyhow::Result<()> {
     let modes = parse_modes(&args.modes)?;
-    let cube_floor = args.cube_floor.map(|resolution| CubeFloor {
-        resolution,
-        lookup: match args.cube_floor_lookup {
-            CubeFloorLookup::Bilinear => FloorLookup::Bilinear,
-            CubeFloorLookup::Nearest => FloorLookup::Nearest,
-        },
-    });
-    if let Some(floor) = &cube_floor {
-        floor
-            .validate()
-            .map_err(|e| anyhow::anyhow!("--cube-floor: {e}"))?;
-        if modes != ["mirror"] {
-            bail!(
-                "--cube-floor draws the mirror term only: pass -m mirror (--modes is {:?})",
-                args.modes
-            );
-        }
-    }
+    let cube_floor = parse_cube_floor(args, &modes)?;
     // The terms' materials, checked before any work.
     let lobe = AsLobe {
         rs: args.rs,
@@ -246,6 +229,30 @@ fn render_all(args: &Args) -> anyhow::Result<()> {
         println!("{m:<13} {}", exr.display());
     }
     Ok(())
+}
+
+/// `--cube-floor` and its lookup, checked: a resolution the bake takes, the mirror mode alone.
+fn parse_cube_floor(args: &Args, modes: &[&str]) -> anyhow::Result<Option<CubeFloor>> {
+    let Some(resolution) = args.cube_floor else {
+        return Ok(None);
+    };
+    let floor = CubeFloor {
+        resolution,
+        lookup: match args.cube_floor_lookup {
+            CubeFloorLookup::Bilinear => FloorLookup::Bilinear,
+            CubeFloorLookup::Nearest => FloorLookup::Nearest,
+        },
+    };
+    floor
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--cube-floor: {e}"))?;
+    if modes != ["mirror"] {
+        bail!(
+            "--cube-floor draws the mirror term only: pass -m mirror (--modes is {:?})",
+            args.modes
+        );
+    }
+    Ok(Some(floor))
 }
 
 /// `--modes`: each mode once, in the order first named; an unknown one is an error.

@@ -525,10 +525,7 @@ impl<'s> GroundTruth<'s> {
             Term::Mirror => {
                 let r = (2.0 * n.dot(view) * n - view).normalize_or(n); // Eq. 2.4
                 for _ in 0..spp {
-                    let d = match &self.cube_floor {
-                        Some(floor) => floor.direction(r, rng),
-                        None => r,
-                    };
+                    let d = self.cube_floor.map_or(r, |floor| floor.direction(r, rng));
                     sum += integrator
                         .radiance(&Ray::new(origin, d), rng, stats)
                         .radiance;
